@@ -1,0 +1,28 @@
+/* context.h - headless GL contexts: EGL (device enumeration, GPU first,
+ * surfaceless Mesa fallback) and OSMesa. Both render into FBOs. */
+#pragma once
+#include <stdbool.h>
+
+#include "util.h"
+
+typedef enum sb_backend { SB_BACKEND_EGL, SB_BACKEND_OSMESA } sb_backend;
+
+typedef struct sb_context {
+    sb_backend backend;
+    void *egl_display, *egl_context;
+    void *osmesa_context;
+    void *osmesa_buffer;
+    char vendor[128], renderer[256], version[128];
+    char device[256];            /* which EGL device / platform was picked */
+    int gl_major, gl_minor;
+    bool software;               /* llvmpipe, softpipe, swrast */
+    bool has_timer_query, has_compute, has_geometry, has_vs_layer;
+} sb_context;
+
+bool sb_backend_parse(const char *s, sb_backend *out);
+const char *sb_backend_name(sb_backend b);
+/* Creates a GL 4.3+ core context and loads GL through glad. */
+bool sb_context_create(sb_context *c, sb_backend b, sb_err *err);
+void sb_context_destroy(sb_context *c);
+/* Lists the backends that can create a context here, into buf (", "-separated). */
+void sb_backends_available(char *buf, size_t len);

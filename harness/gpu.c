@@ -1,0 +1,250 @@
+/* gpu.c - scene upload, render target, programs, counted draw submission. */
+#include "gpu.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "shaders.h"
+#include "timing.h"
+
+unsigned long sb_gpu_readbacks;
+
+void sb_gpu_read_pixels(int x, int y, int w, int h, GLenum format, GLenum type, void *out) {
+    sb_gpu_readbacks++;
+    glReadPixels(x, y, w, h, format, type, out);
+}
+
+bool sb_gl_check(const char *where, sb_err *err) {
+    GLenum e = glGetError();
+    if (e == GL_NO_ERROR) return true;
+    while (glGetError() != GL_NO_ERROR) {}
+    const char *name = e == GL_INVALID_ENUM ? "GL_INVALID_ENUM" : e == GL_INVALID_VALUE ? "GL_INVALID_VALUE"
+                     : e == GL_INVALID_OPERATION ? "GL_INVALID_OPERATION" : e == GL_OUT_OF_MEMORY ? "GL_OUT_OF_MEMORY"
+                     : e == GL_INVALID_FRAMEBUFFER_OPERATION ? "GL_INVALID_FRAMEBUFFER_OPERATION" : "GL error";
+    return sb_fail(err, "%s: %s (0x%x)", where, name, e);
+}
+
+static GLuint compile(GLenum type, const char *label, const char *defines, const char *const *parts, int n,
+                      sb_err *err) {
+    const char *src[16];
+    int k = 0;
+    src[k++] = "#version 430 core\n";
+    src[k++] = defines ? defines : "";
+    src[k++] = sb_shader_common_glsl;
+    for (int i = 0; i < n && k < 16; i++) src[k++] = parts[i];
+    GLuint s = glCreateShader(type);
+    glShaderSource(s, k, src, NULL);
+    glCompileShader(s);
+    GLint ok = 0;
+    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+    if (!ok) {
+        char log[1024] = {0};
+        glGetShaderInfoLog(s, sizeof log, NULL, log);
+        glDeleteShader(s);
+        sb_fail(err, "%s: %s shader does not compile: %s", label, type == GL_VERTEX_SHADER ? "vertex" : "fragment",
+                log);
+        return 0;
+    }
+    return s;
+}
+
+GLuint sb_gpu_program(const char *label, const char *defines, const char *const *vs, int nvs,
+                      const char *const *fs, int nfs, sb_err *err) {
+    GLuint v = compile(GL_VERTEX_SHADER, label, defines, vs, nvs, err);
+    if (!v) return 0;
+    GLuint f = compile(GL_FRAGMENT_SHADER, label, defines, fs, nfs, err);
+    if (!f) {
+        glDeleteShader(v);
+        return 0;
+    }
+    GLuint p = glCreateProgram();
+    glAttachShader(p, v);
+    glAttachShader(p, f);
+    glLinkProgram(p);
+    glDeleteShader(v);
+    glDeleteShader(f);
+    GLint ok = 0;
+    glGetProgramiv(p, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        char log[1024] = {0};
+        glGetProgramInfoLog(p, sizeof log, NULL, log);
+        glDeleteProgram(p);
+        sb_fail(err, "%s: program does not link: %s", label, log);
+        return 0;
+    }
+    return p;
+}
+
+bool sb_final_prog_create(sb_final_prog *fp, const char *label, const char *vis_glsl, const char *defines,
+                          sb_err *err) {
+    const char *vs[] = {sb_shader_scene_vert};
+    const char *fs[] = {vis_glsl, sb_shader_final_frag};
+    fp->prog = sb_gpu_program(label, defines, vs, 1, fs, 2, err);
+    if (!fp->prog) return false;
+    fp->u_view = glGetUniformLocation(fp->prog, "u_view");
+    fp->u_proj = glGetUniformLocation(fp->prog, "u_proj");
+    fp->u_sun = glGetUniformLocation(fp->prog, "u_sun");
+    fp->u_color = glGetUniformLocation(fp->prog, "u_color");
+    return true;
+}
+
+void sb_final_prog_free(sb_final_prog *fp) {
+    if (fp->prog) glDeleteProgram(fp->prog);
+    fp->prog = 0;
+}
+
+static GLuint make_tex(GLenum internal, int w, int h) {
+    GLuint t;
+    glGenTextures(1, &t);
+    glBindTexture(GL_TEXTURE_2D, t);
+    glTexStorage2D(GL_TEXTURE_2D, 1, internal, w, h);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    return t;
+}
+
+bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int h, sb_v3 sun, sb_err *err) {
+    memset(g, 0, sizeof *g);
+    g->scene = s;
+    g->ctx = ctx;
+    g->width = w;
+    g->height = h;
+    g->sun = sb_v3_norm(sun);
+    g->test_bias_sign = 1;
+    glGenVertexArrays(1, &g->vao);
+    glBindVertexArray(g->vao);
+    glGenBuffers(1, &g->vbo);
+    glBindBuffer(GL_ARRAY_BUFFER, g->vbo);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)s->vertex_count * 6 * sizeof(float), s->vertices, GL_STATIC_DRAW);
+    glGenBuffers(1, &g->ibo);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g->ibo);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)s->index_count * sizeof(uint32_t), s->indices,
+                 GL_STATIC_DRAW);
+    glEnableVertexAttribArray(0);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 24, (void *)0);
+    glEnableVertexAttribArray(1);
+    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 24, (void *)12);
+
+    g->color_tex = make_tex(GL_RGBA8, w, h);
+    g->vis_tex = make_tex(GL_R8, w, h);
+    g->depth_tex = make_tex(GL_DEPTH_COMPONENT32F, w, h);
+    glGenFramebuffers(1, &g->fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, g->fbo);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, g->color_tex, 0);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, g->vis_tex, 0);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, g->depth_tex, 0);
+    const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    glDrawBuffers(2, bufs);
+    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
+        sb_gpu_free(g);
+        return sb_fail(err, "render target %dx%d is incomplete (out of memory or unsupported size?)", w, h);
+    }
+    const char *vs[] = {sb_shader_depth_vert};
+    const char *fs[] = {sb_shader_depth_frag};
+    g->depth_prog = sb_gpu_program("depth", NULL, vs, 1, fs, 1, err);
+    if (!g->depth_prog) {
+        sb_gpu_free(g);
+        return false;
+    }
+    g->depth_u_mvp = glGetUniformLocation(g->depth_prog, "u_mvp");
+    if (!sb_gl_check("creating GPU resources", err)) {
+        sb_gpu_free(g);
+        return false;
+    }
+    return true;
+}
+
+void sb_gpu_free(sb_gpu *g) {
+    if (g->depth_prog) glDeleteProgram(g->depth_prog);
+    if (g->fbo) glDeleteFramebuffers(1, &g->fbo);
+    GLuint tex[] = {g->color_tex, g->vis_tex, g->depth_tex};
+    glDeleteTextures(3, tex);
+    if (g->vbo) glDeleteBuffers(1, &g->vbo);
+    if (g->ibo) glDeleteBuffers(1, &g->ibo);
+    if (g->vao) glDeleteVertexArrays(1, &g->vao);
+    memset(g, 0, sizeof *g);
+}
+
+void sb_frustum_planes(sb_m4 m, double p[6][4]) {
+    const double *a = m.m;
+    for (int i = 0; i < 3; i++) {
+        for (int k = 0; k < 4; k++) {
+            p[2 * i][k] = a[k * 4 + 3] + a[k * 4 + i];
+            p[2 * i + 1][k] = a[k * 4 + 3] - a[k * 4 + i];
+        }
+    }
+    for (int i = 0; i < 6; i++) {
+        double l = sqrt(p[i][0] * p[i][0] + p[i][1] * p[i][1] + p[i][2] * p[i][2]);
+        if (l > 0)
+            for (int k = 0; k < 4; k++) p[i][k] /= l;
+    }
+}
+
+void sb_frame_setup(sb_frame *f, sb_gpu *g, const sb_camera *cam) {
+    memset(&f->counters, 0, sizeof f->counters);
+    f->gpu = g;
+    f->cam = *cam;
+    sb_v3 eye = sb_v3_sub(cam->pos, g->scene->origin);
+    f->view = sb_m4_view(eye, cam->right, cam->up, cam->forward);
+    f->proj = sb_m4_perspective(cam->fov_deg * SB_PI / 180, cam->aspect, cam->znear, cam->zfar);
+    f->view_proj = sb_m4_mul(f->proj, f->view);
+    sb_frustum_planes(f->view_proj, f->frustum);
+}
+
+void sb_stage_begin(sb_frame *f, sb_stage s) { sb_timer_stage_begin(f->timer, s); }
+void sb_stage_end(sb_frame *f, sb_stage s) { sb_timer_stage_end(f->timer, s); }
+
+typedef struct {
+    sb_frame *f;
+    GLint u_color;
+    bool shadow;
+} draw_ctx;
+
+static void draw_one(uint32_t d, void *user) {
+    draw_ctx *c = user;
+    const sb_draw *dr = &c->f->gpu->scene->draws[d];
+    if (c->u_color >= 0) glUniform4fv(c->u_color, 1, dr->color);
+    glDrawElements(GL_TRIANGLES, (GLsizei)dr->index_count, GL_UNSIGNED_INT,
+                   (void *)((size_t)dr->first_index * sizeof(uint32_t)));
+    c->f->counters.draw_calls++;
+    c->f->counters.triangles += dr->index_count / 3;
+    if (c->shadow) {
+        c->f->counters.shadow_draw_calls++;
+        c->f->counters.shadow_triangles += dr->index_count / 3;
+    }
+}
+
+void sb_final_pass(sb_frame *f, const sb_final_prog *fp) {
+    sb_gpu *g = f->gpu;
+    glBindFramebuffer(GL_FRAMEBUFFER, g->fbo);
+    glViewport(0, 0, g->width, g->height);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    glEnable(GL_CULL_FACE);
+    glCullFace(GL_BACK);
+    const float sky[4] = {0.55f, 0.7f, 0.9f, 1.0f}, one[4] = {1, 1, 1, 1};
+    glClearBufferfv(GL_COLOR, 0, sky);
+    glClearBufferfv(GL_COLOR, 1, one);
+    glClear(GL_DEPTH_BUFFER_BIT);
+    glUseProgram(fp->prog);
+    float m[16];
+    sb_m4_to_float(f->view, m);
+    glUniformMatrix4fv(fp->u_view, 1, GL_FALSE, m);
+    sb_m4_to_float(f->proj, m);
+    glUniformMatrix4fv(fp->u_proj, 1, GL_FALSE, m);
+    glUniform3f(fp->u_sun, (float)g->sun.x, (float)g->sun.y, (float)g->sun.z);
+    glBindVertexArray(g->vao);
+    draw_ctx c = {f, fp->u_color, false};
+    sb_bvh_cull(g->scene, (const double(*)[4])f->frustum, 6, draw_one, &c);
+    glDisable(GL_CULL_FACE);
+}
+
+uint32_t sb_draw_casters(sb_frame *f, const double (*planes)[4], int nplanes, const float light_vp[16]) {
+    sb_gpu *g = f->gpu;
+    glUseProgram(g->depth_prog);
+    glUniformMatrix4fv(g->depth_u_mvp, 1, GL_FALSE, light_vp);
+    glBindVertexArray(g->vao);
+    draw_ctx c = {f, -1, true};
+    return sb_bvh_cull(g->scene, planes, nplanes, draw_one, &c);
+}

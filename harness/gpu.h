@@ -1,0 +1,77 @@
+/* gpu.h - GL entry points (glad 2, generated at build time) and the GPU side
+ * of a run: scene buffers, the camera render target, shader programs, draw
+ * submission with counting, and the per-frame context techniques receive. */
+#pragma once
+#include "glad_gl.h"
+
+#include "context.h"
+#include "path.h"
+#include "scene.h"
+#include "technique.h"
+
+struct sb_timer;
+
+typedef struct sb_counters {
+    uint32_t draw_calls, shadow_draw_calls;
+    uint64_t triangles, shadow_triangles;
+    int cascades_rendered, cascades_skipped;
+} sb_counters;
+
+/* Shared program of the camera pass: scene.vert + final.frag + the technique's
+ * visibility function. */
+typedef struct sb_final_prog {
+    GLuint prog;
+    GLint u_view, u_proj, u_sun, u_color;
+} sb_final_prog;
+
+typedef struct sb_gpu {
+    const sb_scene *scene;
+    const sb_context *ctx;
+    int width, height;
+    sb_v3 sun;                          /* unit vector toward the sun */
+    GLuint vao, vbo, ibo;
+    GLuint fbo, color_tex, vis_tex, depth_tex;
+    GLuint depth_prog;                  /* shadow-map depth program */
+    GLint depth_u_mvp;
+    int test_bias_sign;                 /* test hook: -1 flips shadow bias (deliberately broken) */
+} sb_gpu;
+
+typedef struct sb_frame {
+    sb_gpu *gpu;
+    struct sb_timer *timer;
+    int index;
+    double progress;
+    sb_camera cam;                      /* world space */
+    sb_m4 view, proj, view_proj;        /* from origin-relative world */
+    double frustum[6][4];               /* camera planes, origin-relative */
+    sb_counters counters;
+} sb_frame;
+
+/* Readbacks go through these so a test can assert none happen in timed frames. */
+extern unsigned long sb_gpu_readbacks;
+void sb_gpu_read_pixels(int x, int y, int w, int h, GLenum format, GLenum type, void *out);
+
+bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *scene, int width, int height, sb_v3 sun,
+                 sb_err *err);
+void sb_gpu_free(sb_gpu *g);
+/* Compiles "#version 430 core" + defines + parts; the label names it in errors. */
+GLuint sb_gpu_program(const char *label, const char *defines, const char *const *vs, int nvs,
+                      const char *const *fs, int nfs, sb_err *err);
+/* The final-pass program with the technique's visibility GLSL. */
+bool sb_final_prog_create(sb_final_prog *fp, const char *label, const char *vis_glsl, const char *defines,
+                          sb_err *err);
+void sb_final_prog_free(sb_final_prog *fp);
+
+void sb_frame_setup(sb_frame *f, sb_gpu *g, const sb_camera *cam);
+void sb_stage_begin(sb_frame *f, sb_stage s);
+void sb_stage_end(sb_frame *f, sb_stage s);
+/* Draws every camera-visible draw into the render target with fp (already
+ * in use, technique uniforms set); clears first. Counts draws. */
+void sb_final_pass(sb_frame *f, const sb_final_prog *fp);
+/* Draws every caster whose AABB is inside all planes with the depth program
+ * and the given light view-projection; counts shadow draws/triangles. */
+uint32_t sb_draw_casters(sb_frame *f, const double (*planes)[4], int nplanes, const float light_vp[16]);
+/* Planes (inside: n·p + d >= 0) of a clip-space box of the matrix m (Gribb-Hartmann). */
+void sb_frustum_planes(sb_m4 m, double planes[6][4]);
+/* GL error check: returns false and fills err if one is pending. */
+bool sb_gl_check(const char *where, sb_err *err);

@@ -1,0 +1,71 @@
+/* run.h - the run loop: one run = scene x path x technique x parameters.
+ *
+ * A session holds what runs share (context, scene, path, GPU buffers); each
+ * run creates its technique, renders warm-up frames (discarded) and then the
+ * path's N frames, timing every stage, and writes one per-frame CSV and one
+ * summary row. A run that fails is recorded and the next one goes on. */
+#pragma once
+#include "context.h"
+#include "csv.h"
+#include "gpu.h"
+#include "spec.h"
+#include "timing.h"
+
+typedef struct sb_run_opts {
+    sb_backend backend;         /* default egl */
+    sb_timing_mode timing;      /* default auto */
+    int ring;                   /* query ring frames, default 3 */
+    int frames;                 /* default 60 */
+    int warmup;                 /* default 3 */
+    int width, height;          /* default 1280x720 */
+    bool sun_override;
+    double sun_az, sun_el;      /* degrees */
+    bool progress;              /* progress line on stderr */
+} sb_run_opts;
+
+void sb_run_opts_defaults(sb_run_opts *o);
+
+typedef struct sb_session {
+    sb_run_opts opts;
+    sb_context ctx;
+    sb_scene scene;
+    sb_path path;
+    sb_gpu gpu;
+    sb_timing_mode timing;      /* resolved */
+    char scene_name[256], path_name[256];
+} sb_session;
+
+/* Opens the context (if not already), loads scene and path, uploads buffers. */
+bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, const char *path, sb_err *err);
+void sb_session_close(sb_session *s);
+
+/* A live technique instance. */
+typedef struct sb_instance {
+    const sb_technique *tech;
+    sb_params params;
+    void *state;
+} sb_instance;
+
+bool sb_instance_create(sb_instance *in, sb_session *s, const sb_run_spec *spec, sb_err *err);
+void sb_instance_destroy(sb_instance *in, sb_session *s);
+/* Renders frame i of n (untimed unless f->timer is set by the caller). */
+void sb_render_frame(sb_session *s, sb_instance *in, sb_frame *f, int i, int n, struct sb_timer *timer);
+/* Why a technique cannot apply to this scene, or NULL. */
+const char *sb_skip_reason(const sb_session *s, const sb_technique *t);
+
+/* Summary rows of one invocation, rewritten atomically after every run. */
+typedef struct sb_summary {
+    char *path;
+    sb_csv rows;
+    int count, failed, skipped;
+} sb_summary;
+
+void sb_summary_open(sb_summary *sum, const char *path);
+bool sb_summary_flush(sb_summary *sum, sb_err *err);
+void sb_summary_free(sb_summary *sum);
+
+/* Runs one spec; writes DIR/<run_id>.csv and a summary row. Returns false if it failed. */
+bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_summary *sum, int index,
+                int total);
+/* run_id: hash of scene and path contents, technique, canonical parameters, frames, size, backend. */
+void sb_run_id(const sb_session *s, const sb_run_spec *spec, char out[17]);

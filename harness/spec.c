@@ -1,0 +1,94 @@
+/* spec.c - parsing and expanding technique specs. */
+#include "spec.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#define MAX_VALUES 16
+
+typedef struct {
+    int param;                  /* index into the technique's table */
+    int nvalues;
+    char values[MAX_VALUES][32];
+} axis;
+
+static void list_params(const sb_technique *t, char *out, size_t len) {
+    out[0] = 0;
+    for (int i = 0; i < t->param_count; i++) {
+        size_t n = strlen(out);
+        snprintf(out + n, len - n, "%s%s", i ? ", " : "", t->params[i].name);
+    }
+    if (!t->param_count) snprintf(out, len, "none");
+}
+
+static void list_techniques(char *out, size_t len) {
+    out[0] = 0;
+    for (int i = 0; i < sb_technique_count(); i++) {
+        size_t n = strlen(out);
+        snprintf(out + n, len - n, "%s%s", i ? ", " : "", sb_technique_at(i)->name);
+    }
+}
+
+bool sb_spec_expand(const char *spec, const char *where, sb_run_spec **runs, int *count, sb_err *err) {
+    char pre[256];
+    snprintf(pre, sizeof pre, "%s%s", where ? where : "", where ? ": " : "");
+    char buf[1024];
+    if (strlen(spec) >= sizeof buf) return sb_fail(err, "%sspec too long", pre);
+    snprintf(buf, sizeof buf, "%s", spec);
+    char *save = NULL;
+    char *name = strtok_r(buf, ":", &save);
+    if (!name || !*name) return sb_fail(err, "%sempty technique spec", pre);
+    const sb_technique *t = sb_technique_find(name);
+    if (!t) {
+        char names[512];
+        list_techniques(names, sizeof names);
+        return sb_fail(err, "%sunknown technique '%s' (known: %s)", pre, name, names);
+    }
+    axis axes[SB_MAX_PARAMS];
+    int naxes = 0;
+    for (char *opt = strtok_r(NULL, ":", &save); opt; opt = strtok_r(NULL, ":", &save)) {
+        char *eq = strchr(opt, '=');
+        if (!eq || eq == opt || !eq[1])
+            return sb_fail(err, "%s%s: option '%s' is not NAME=VALUE[,VALUE...]", pre, t->name, opt);
+        *eq = 0;
+        int pi = -1;
+        for (int i = 0; i < t->param_count; i++)
+            if (strcmp(t->params[i].name, opt) == 0) pi = i;
+        if (pi < 0) {
+            char valid[512];
+            list_params(t, valid, sizeof valid);
+            return sb_fail(err, "%s%s: unknown parameter '%s' (valid: %s)", pre, t->name, opt, valid);
+        }
+        for (int a = 0; a < naxes; a++)
+            if (axes[a].param == pi) return sb_fail(err, "%s%s: parameter '%s' given twice", pre, t->name, opt);
+        axis *ax = &axes[naxes++];
+        ax->param = pi;
+        ax->nvalues = 0;
+        char *vsave = NULL;
+        for (char *v = strtok_r(eq + 1, ",", &vsave); v; v = strtok_r(NULL, ",", &vsave)) {
+            if (ax->nvalues == MAX_VALUES) return sb_fail(err, "%s%s: too many values for '%s'", pre, t->name, opt);
+            sb_params probe;
+            sb_err e;
+            if (!sb_param_set(&probe, 0, &t->params[pi], v, t->name, &e)) return sb_fail(err, "%s%s", pre, e.msg);
+            snprintf(ax->values[ax->nvalues++], 32, "%s", v);
+        }
+        if (!ax->nvalues) return sb_fail(err, "%s%s: no value for '%s'", pre, t->name, opt);
+    }
+    int total = 1;
+    for (int a = 0; a < naxes; a++) total *= axes[a].nvalues;
+    *runs = realloc(*runs, (size_t)(*count + total) * sizeof **runs);
+    for (int r = 0; r < total; r++) {
+        sb_run_spec *rs = &(*runs)[*count + r];
+        rs->tech = t;
+        sb_params_defaults(&rs->params, t);
+        /* last axis varies fastest, like nested loops written in order */
+        int rem = r;
+        for (int a = naxes - 1; a >= 0; a--) {
+            int k = rem % axes[a].nvalues;
+            rem /= axes[a].nvalues;
+            sb_param_set(&rs->params, axes[a].param, &t->params[axes[a].param], axes[a].values[k], t->name, err);
+        }
+    }
+    *count += total;
+    return true;
+}

@@ -1,0 +1,149 @@
+/* timing.c - the query ring and sync timing. */
+#include "timing.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "gpu.h"
+
+bool sb_timing_parse(const char *s, sb_timing_mode *out) {
+    if (strcmp(s, "auto") == 0) *out = SB_TIMING_AUTO;
+    else if (strcmp(s, "queries") == 0) *out = SB_TIMING_QUERIES;
+    else if (strcmp(s, "sync") == 0) *out = SB_TIMING_SYNC;
+    else return false;
+    return true;
+}
+
+const char *sb_timing_name(sb_timing_mode m) {
+    return m == SB_TIMING_QUERIES ? "queries" : m == SB_TIMING_SYNC ? "sync" : "auto";
+}
+
+void sb_ring_init(sb_ring *r, int size) {
+    r->size = size < 1 ? 1 : size;
+    r->slot_frame = malloc((size_t)r->size * sizeof(int));
+    for (int i = 0; i < r->size; i++) r->slot_frame[i] = -1;
+}
+
+void sb_ring_free(sb_ring *r) {
+    free(r->slot_frame);
+    r->slot_frame = NULL;
+}
+
+int sb_ring_claim(sb_ring *r, int frame, int *slot) {
+    int s = frame % r->size;
+    int prev = r->slot_frame[s];
+    r->slot_frame[s] = frame;
+    *slot = s;
+    return prev;
+}
+
+int sb_ring_slot_of(const sb_ring *r, int frame) {
+    int s = frame % r->size;
+    return r->slot_frame[s] == frame ? s : -1;
+}
+
+void sb_timer_init(sb_timer *t, sb_timing_mode mode, int ring, int frames) {
+    memset(t, 0, sizeof *t);
+    t->mode = mode;
+    t->frames = frames;
+    t->current = -1;
+    t->times = calloc((size_t)frames, sizeof *t->times);
+    sb_ring_init(&t->ring, ring);
+    if (mode == SB_TIMING_QUERIES) {
+        size_t n = (size_t)t->ring.size * SB_STAGE_COUNT * 2;
+        t->queries = calloc(n, sizeof(unsigned));
+        glGenQueries((GLsizei)n, t->queries);
+        t->slot_mask = calloc((size_t)t->ring.size, sizeof(unsigned));
+    }
+}
+
+void sb_timer_free(sb_timer *t) {
+    if (t->queries) glDeleteQueries(t->ring.size * SB_STAGE_COUNT * 2, t->queries);
+    free(t->queries);
+    free(t->slot_mask);
+    free(t->times);
+    sb_ring_free(&t->ring);
+    memset(t, 0, sizeof *t);
+}
+
+static unsigned *slot_queries(sb_timer *t, int slot) { return t->queries + (size_t)slot * SB_STAGE_COUNT * 2; }
+
+/* Reads one slot's results into its frame's record. */
+static void collect(sb_timer *t, int frame, int slot, bool count_stalls) {
+    unsigned mask = t->slot_mask[slot];
+    unsigned *q = slot_queries(t, slot);
+    if (count_stalls && mask) {
+        /* the last query written in the slot is the latest; if it is ready all are */
+        int last = -1;
+        for (int s = 0; s < SB_STAGE_COUNT; s++)
+            if (mask & SB_STAGE_BIT(s)) last = s;
+        GLuint avail = 0;
+        glGetQueryObjectuiv(q[2 * last + 1], GL_QUERY_RESULT_AVAILABLE, &avail);
+        if (!avail) t->stalls++;
+    }
+    double w0 = sb_now_ms();
+    sb_stage_times *out = frame >= 0 && frame < t->frames ? &t->times[frame] : NULL;
+    for (int s = 0; s < SB_STAGE_COUNT; s++) {
+        if (!(mask & SB_STAGE_BIT(s))) continue;
+        GLuint64 a = 0, b = 0;
+        glGetQueryObjectui64v(q[2 * s], GL_QUERY_RESULT, &a);
+        glGetQueryObjectui64v(q[2 * s + 1], GL_QUERY_RESULT, &b);
+        if (out) {
+            out->ms[s] = (double)(b - a) * 1e-6;
+            out->mask |= SB_STAGE_BIT(s);
+        }
+    }
+    if (out) out->ready = true;
+    t->wait_ms += sb_now_ms() - w0;
+    t->slot_mask[slot] = 0;
+}
+
+void sb_timer_frame_begin(sb_timer *t, int frame) {
+    t->current = frame;
+    t->wait_ms = 0;
+    if (t->mode == SB_TIMING_QUERIES) {
+        int slot;
+        int prev = sb_ring_claim(&t->ring, frame, &slot);
+        if (prev >= 0) collect(t, prev, slot, true);
+        t->slot_mask[slot] = 0;
+    } else {
+        double w0 = sb_now_ms();
+        glFinish();
+        t->wait_ms += sb_now_ms() - w0;
+    }
+}
+
+void sb_timer_stage_begin(sb_timer *t, sb_stage s) {
+    if (t->mode == SB_TIMING_QUERIES) {
+        int slot = sb_ring_slot_of(&t->ring, t->current);
+        glQueryCounter(slot_queries(t, slot)[2 * s], GL_TIMESTAMP);
+    } else {
+        t->t0[s] = sb_now_ms();
+    }
+}
+
+void sb_timer_stage_end(sb_timer *t, sb_stage s) {
+    if (t->mode == SB_TIMING_QUERIES) {
+        int slot = sb_ring_slot_of(&t->ring, t->current);
+        glQueryCounter(slot_queries(t, slot)[2 * s + 1], GL_TIMESTAMP);
+        t->slot_mask[slot] |= SB_STAGE_BIT(s);
+    } else {
+        double w0 = sb_now_ms();
+        glFinish();
+        double now = sb_now_ms();
+        t->wait_ms += now - w0;
+        sb_stage_times *out = &t->times[t->current];
+        out->ms[s] += now - t->t0[s];
+        out->mask |= SB_STAGE_BIT(s);
+        out->ready = true;
+    }
+}
+
+void sb_timer_drain(sb_timer *t) {
+    if (t->mode != SB_TIMING_QUERIES) return;
+    for (int slot = 0; slot < t->ring.size; slot++) {
+        int f = t->ring.slot_frame[slot];
+        if (f >= 0) collect(t, f, slot, false);
+        t->ring.slot_frame[slot] = -1;
+    }
+}

@@ -1,0 +1,60 @@
+/* timing.h - per-stage GPU timing.
+ *
+ * queries: glQueryCounter(GL_TIMESTAMP) at stage boundaries, query objects in a
+ *   ring of `ring` frames. At the start of frame f the slot of frame f-ring is
+ *   read; if its results are not available yet the read would block: that is
+ *   counted as a stall (and then read anyway). The CPU never waits otherwise.
+ * sync: glFinish + CLOCK_MONOTONIC at stage boundaries. The only honest mode on
+ *   software rasterizers, whose timestamps do not cover rasterization.
+ * auto: sync on llvmpipe/softpipe/swrast, queries elsewhere. */
+#pragma once
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "technique.h"
+
+typedef enum sb_timing_mode { SB_TIMING_AUTO, SB_TIMING_QUERIES, SB_TIMING_SYNC } sb_timing_mode;
+
+bool sb_timing_parse(const char *s, sb_timing_mode *out);
+const char *sb_timing_name(sb_timing_mode m);
+
+/* The ring bookkeeping, separate from GL so it can be tested on its own. */
+typedef struct sb_ring {
+    int size;
+    int *slot_frame;    /* frame whose queries live in the slot, -1 if none */
+} sb_ring;
+
+void sb_ring_init(sb_ring *r, int size);
+void sb_ring_free(sb_ring *r);
+/* Claims the slot for `frame`; returns the frame previously held there that
+ * must be collected first (or -1). */
+int sb_ring_claim(sb_ring *r, int frame, int *slot);
+/* Slot holding `frame`, or -1. */
+int sb_ring_slot_of(const sb_ring *r, int frame);
+
+typedef struct sb_stage_times {
+    double ms[SB_STAGE_COUNT];
+    unsigned mask;      /* stages measured */
+    bool ready;
+} sb_stage_times;
+
+typedef struct sb_timer {
+    sb_timing_mode mode;        /* resolved: QUERIES or SYNC */
+    sb_ring ring;
+    unsigned *queries;          /* ring.size * SB_STAGE_COUNT * 2 */
+    unsigned *slot_mask;
+    sb_stage_times *times;      /* per frame, `frames` long */
+    int frames;
+    int current;
+    double t0[SB_STAGE_COUNT];
+    double wait_ms;             /* time this frame spent blocked on the GPU */
+    uint64_t stalls;            /* query reads that would have blocked */
+} sb_timer;
+
+void sb_timer_init(sb_timer *t, sb_timing_mode resolved, int ring, int frames);
+void sb_timer_free(sb_timer *t);
+void sb_timer_frame_begin(sb_timer *t, int frame);
+void sb_timer_stage_begin(sb_timer *t, sb_stage s);
+void sb_timer_stage_end(sb_timer *t, sb_stage s);
+/* Collects every outstanding frame (end of run; blocking, not counted as stalls). */
+void sb_timer_drain(sb_timer *t);

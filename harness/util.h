@@ -1,0 +1,37 @@
+/* util.h - small shared helpers: errors, files, hashing, clocks. */
+#pragma once
+#include <stdarg.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#define SB_ERR_LEN 512
+#define SB_COUNT(a) (sizeof(a) / sizeof((a)[0]))
+
+/* An error message buffer threaded through loaders and parsers. The message is
+ * one line, naming the file and place ("scene.glb: /meshes/0/...: expected ..."). */
+typedef struct sb_err {
+    char msg[SB_ERR_LEN];
+} sb_err;
+
+bool sb_fail(sb_err *e, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+void sb_log(const char *fmt, ...) __attribute__((format(printf, 1, 2)));   /* stderr, newline added */
+void sb_set_quiet(bool quiet);
+
+/* Reads a whole file; returns NULL and fills err on failure. *size excludes the added NUL. */
+char *sb_read_file(const char *path, size_t *size, sb_err *err);
+/* Writes data to path atomically (PATH.tmp, fsync, rename). */
+bool sb_write_file_atomic(const char *path, const void *data, size_t size, sb_err *err);
+bool sb_mkdir_p(const char *path, sb_err *err);
+
+uint64_t sb_fnv1a(uint64_t h, const void *data, size_t n);
+#define SB_FNV_SEED 1469598103934665603ull
+
+double sb_now_ms(void);          /* CLOCK_MONOTONIC in milliseconds */
+double sb_cpu_ms(void);          /* process CPU time in milliseconds */
+
+char *sb_strdup(const char *s);
+/* strtod/strtol wrappers that accept only a whole, finite number. */
+bool sb_parse_double(const char *s, double *out);
+bool sb_parse_int(const char *s, long *out);

@@ -1,0 +1,59 @@
+/* stats.c - mean, median, percentiles, standard deviation, t-interval. */
+#include "stats.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+static int cmp(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y ? 1 : 0;
+}
+
+double sb_percentile(const double *s, int n, double p) {
+    if (n <= 0) return NAN;
+    double pos = p * (n - 1);
+    int i = (int)floor(pos);
+    if (i >= n - 1) return s[n - 1];
+    double f = pos - i;
+    return s[i] + (s[i + 1] - s[i]) * f;
+}
+
+double sb_t975(int dof) {
+    static const double table[] = {NAN,    12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262,
+                                   2.228,  2.201,  2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093,
+                                   2.086,  2.080,  2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045,
+                                   2.042};
+    if (dof <= 0) return NAN;
+    if (dof <= 30) return table[dof];
+    /* Cornish-Fisher expansion around z = 1.959964 */
+    double z = 1.959964, d = dof;
+    return z + (z * z * z + z) / (4 * d) + (5 * pow(z, 5) + 16 * z * z * z + 3 * z) / (96 * d * d);
+}
+
+sb_stats sb_stats_compute(const double *v, int n) {
+    sb_stats s = {0, NAN, NAN, NAN, NAN, NAN, NAN};
+    double *c = malloc((size_t)(n > 0 ? n : 1) * sizeof(double));
+    int m = 0;
+    for (int i = 0; i < n; i++)
+        if (!isnan(v[i])) c[m++] = v[i];
+    s.n = m;
+    if (m == 0) {
+        free(c);
+        return s;
+    }
+    qsort(c, (size_t)m, sizeof(double), cmp);
+    double sum = 0;
+    for (int i = 0; i < m; i++) sum += c[i];
+    s.mean = sum / m;
+    s.median = sb_percentile(c, m, 0.5);
+    s.p95 = sb_percentile(c, m, 0.95);
+    s.p99 = sb_percentile(c, m, 0.99);
+    if (m > 1) {
+        double ss = 0;
+        for (int i = 0; i < m; i++) ss += (c[i] - s.mean) * (c[i] - s.mean);
+        s.std = sqrt(ss / (m - 1));
+        s.ci95 = sb_t975(m - 1) * s.std / sqrt((double)m);
+    }
+    free(c);
+    return s;
+}

@@ -1,0 +1,111 @@
+/* bvh.c - a bounding volume hierarchy over the scene's draws, and exact
+ * AABB-versus-planes culling over it. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "scene.h"
+
+#define SB_BVH_LEAF 2
+
+typedef struct {
+    sb_scene *s;
+    sb_bvh *b;
+    uint32_t cap;
+} builder;
+
+static double centre(const sb_aabb *b, int axis) {
+    const double *lo = &b->lo.x, *hi = &b->hi.x;
+    return 0.5 * (lo[axis] + hi[axis]);
+}
+
+static const sb_draw *g_sort_draws;
+static int g_sort_axis;
+static int cmp_draw(const void *a, const void *b) {
+    double ca = centre(&g_sort_draws[*(const uint32_t *)a].box, g_sort_axis);
+    double cb = centre(&g_sort_draws[*(const uint32_t *)b].box, g_sort_axis);
+    return ca < cb ? -1 : ca > cb ? 1 : 0;
+}
+
+static int32_t build(builder *bd, uint32_t first, uint32_t count) {
+    sb_bvh *b = bd->b;
+    if (b->node_count == bd->cap) {
+        bd->cap = bd->cap ? bd->cap * 2 : 64;
+        b->nodes = realloc(b->nodes, bd->cap * sizeof *b->nodes);
+    }
+    int32_t idx = (int32_t)b->node_count++;
+    sb_aabb box = bd->s->draws[b->items[first]].box;
+    sb_v3 clo = {1e300, 1e300, 1e300}, chi = {-1e300, -1e300, -1e300};
+    for (uint32_t i = first; i < first + count; i++) {
+        const sb_aabb *db = &bd->s->draws[b->items[i]].box;
+        box.lo = sb_v3_min(box.lo, db->lo);
+        box.hi = sb_v3_max(box.hi, db->hi);
+        sb_v3 c = sb_v3_scale(sb_v3_add(db->lo, db->hi), 0.5);
+        clo = sb_v3_min(clo, c);
+        chi = sb_v3_max(chi, c);
+    }
+    b->nodes[idx].box = box;
+    b->nodes[idx].first = first;
+    b->nodes[idx].count = count;
+    b->nodes[idx].left = b->nodes[idx].right = -1;
+    if (count <= SB_BVH_LEAF) return idx;
+    sb_v3 ext = sb_v3_sub(chi, clo);
+    int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : ext.y >= ext.z ? 1 : 2;
+    g_sort_draws = bd->s->draws;
+    g_sort_axis = axis;
+    qsort(b->items + first, count, sizeof(uint32_t), cmp_draw);
+    uint32_t half = count / 2;
+    int32_t l = build(bd, first, half);
+    int32_t r = build(bd, first + half, count - half);
+    b->nodes[idx].left = l;
+    b->nodes[idx].right = r;
+    return idx;
+}
+
+void sb_bvh_build(sb_scene *s) {
+    sb_bvh_free(&s->bvh);
+    if (s->draw_count == 0) return;
+    s->bvh.items = malloc(s->draw_count * sizeof(uint32_t));
+    for (uint32_t i = 0; i < s->draw_count; i++) s->bvh.items[i] = i;
+    builder bd = {s, &s->bvh, 0};
+    build(&bd, 0, s->draw_count);
+}
+
+void sb_bvh_free(sb_bvh *b) {
+    free(b->nodes);
+    free(b->items);
+    memset(b, 0, sizeof *b);
+}
+
+bool sb_aabb_outside_plane(const sb_aabb *b, const double p[4]) {
+    /* the box corner farthest along the plane normal */
+    double x = p[0] >= 0 ? b->hi.x : b->lo.x;
+    double y = p[1] >= 0 ? b->hi.y : b->lo.y;
+    double z = p[2] >= 0 ? b->hi.z : b->lo.z;
+    return p[0] * x + p[1] * y + p[2] * z + p[3] < 0;
+}
+
+static uint32_t cull(const sb_scene *s, int32_t n, const double (*planes)[4], int pc,
+                     sb_draw_visit visit, void *user) {
+    const sb_bvh_node *node = &s->bvh.nodes[n];
+    for (int i = 0; i < pc; i++)
+        if (sb_aabb_outside_plane(&node->box, planes[i])) return 0;
+    if (node->left < 0) {
+        uint32_t hits = 0;
+        for (uint32_t i = node->first; i < node->first + node->count; i++) {
+            uint32_t d = s->bvh.items[i];
+            bool out = false;
+            for (int k = 0; k < pc && !out; k++) out = sb_aabb_outside_plane(&s->draws[d].box, planes[k]);
+            if (out) continue;
+            visit(d, user);
+            hits++;
+        }
+        return hits;
+    }
+    return cull(s, node->left, planes, pc, visit, user) + cull(s, node->right, planes, pc, visit, user);
+}
+
+uint32_t sb_bvh_cull(const sb_scene *s, const double (*planes)[4], int plane_count,
+                     sb_draw_visit visit, void *user) {
+    if (!s->bvh.node_count) return 0;
+    return cull(s, 0, planes, plane_count, visit, user);
+}

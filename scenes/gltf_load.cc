@@ -1,0 +1,448 @@
+// gltf_load.cc - the tinygltf adapter: glTF 2.0 (.gltf/.glb) into the flat C
+// scene model, and animated glTF cameras into paths. The only C++ on the
+// scene side; everything it exposes is a C function.
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+#include <set>
+#include <algorithm>
+
+#include <tiny_gltf.h>
+
+extern "C" {
+#include "scene.h"
+#include "path.h"
+}
+
+namespace {
+
+struct ImageCounter {
+    unsigned skipped = 0;
+};
+
+// Shadows do not need textures: keep the bytes undecoded (webp included).
+bool skip_image(tinygltf::Image *, const int, std::string *, std::string *, int, int,
+                const unsigned char *, int, void *user) {
+    static_cast<ImageCounter *>(user)->skipped++;
+    return true;
+}
+
+std::string first_line(const std::string &s) {
+    std::string r = s.substr(0, s.find('\n'));
+    while (!r.empty() && (r.back() == '\r' || r.back() == ' ')) r.pop_back();
+    return r;
+}
+
+struct Ctx {
+    const char *file;
+    const tinygltf::Model *m;
+    sb_err *err;
+    bool fail(const std::string &where, const std::string &what) {
+        sb_fail(err, "%s: %s: %s", file, where.c_str(), what.c_str());
+        return false;
+    }
+};
+
+// Locates accessor data; checks every index and range against the buffers.
+bool accessor_view(Ctx &c, int acc_idx, const std::string &where, int want_type,
+                   const unsigned char **data, size_t *stride, size_t *count, int *ctype) {
+    const tinygltf::Model &m = *c.m;
+    if (acc_idx < 0 || acc_idx >= (int)m.accessors.size())
+        return c.fail(where, "accessor " + std::to_string(acc_idx) + " does not exist");
+    const tinygltf::Accessor &a = m.accessors[acc_idx];
+    std::string ap = "/accessors/" + std::to_string(acc_idx);
+    if (a.sparse.isSparse) return c.fail(ap, "sparse accessors are not supported");
+    if (want_type && a.type != want_type) return c.fail(ap, "unexpected accessor type");
+    if (a.bufferView < 0 || a.bufferView >= (int)m.bufferViews.size())
+        return c.fail(ap + "/bufferView", "missing or out of range");
+    const tinygltf::BufferView &bv = m.bufferViews[a.bufferView];
+    std::string bp = "/bufferViews/" + std::to_string(a.bufferView);
+    if (bv.buffer < 0 || bv.buffer >= (int)m.buffers.size())
+        return c.fail(bp + "/buffer", "missing or out of range");
+    const tinygltf::Buffer &b = m.buffers[bv.buffer];
+    if (bv.byteOffset + bv.byteLength > b.data.size())
+        return c.fail(bp, "range " + std::to_string(bv.byteOffset) + "+" + std::to_string(bv.byteLength) +
+                              " exceeds buffer " + std::to_string(bv.buffer) + " of " +
+                              std::to_string(b.data.size()) + " bytes");
+    int csize = tinygltf::GetComponentSizeInBytes(a.componentType);
+    int ncomp = tinygltf::GetNumComponentsInType(a.type);
+    if (csize <= 0 || ncomp <= 0) return c.fail(ap, "invalid componentType or type");
+    size_t elem = (size_t)csize * ncomp;
+    size_t st = bv.byteStride ? bv.byteStride : elem;
+    if (a.count > 0 && a.byteOffset + st * (a.count - 1) + elem > bv.byteLength)
+        return c.fail(ap, "count " + std::to_string(a.count) + " runs past the end of bufferView " +
+                              std::to_string(a.bufferView));
+    *data = b.data.data() + bv.byteOffset + a.byteOffset;
+    *stride = st;
+    *count = a.count;
+    *ctype = a.componentType;
+    return true;
+}
+
+bool read_vec(Ctx &c, int acc, const std::string &where, int ncomp, std::vector<double> &out) {
+    const unsigned char *d;
+    size_t stride, count;
+    int ctype;
+    int type = ncomp == 1 ? TINYGLTF_TYPE_SCALAR : ncomp == 3 ? TINYGLTF_TYPE_VEC3 : TINYGLTF_TYPE_VEC4;
+    if (!accessor_view(c, acc, where, type, &d, &stride, &count, &ctype)) return false;
+    if (ctype != TINYGLTF_COMPONENT_TYPE_FLOAT) return c.fail(where, "expected float components");
+    out.resize(count * ncomp);
+    for (size_t i = 0; i < count; i++) {
+        for (int k = 0; k < ncomp; k++) {
+            float f;
+            memcpy(&f, d + i * stride + 4 * k, 4);
+            if (!std::isfinite(f))
+                return c.fail(where, "element " + std::to_string(i) + " is " + (std::isnan(f) ? "NaN" : "Inf"));
+            out[i * ncomp + k] = f;
+        }
+    }
+    return true;
+}
+
+bool read_indices(Ctx &c, int acc, const std::string &where, std::vector<uint32_t> &out) {
+    const unsigned char *d;
+    size_t stride, count;
+    int ctype;
+    if (!accessor_view(c, acc, where, TINYGLTF_TYPE_SCALAR, &d, &stride, &count, &ctype)) return false;
+    out.resize(count);
+    for (size_t i = 0; i < count; i++) {
+        const unsigned char *p = d + i * stride;
+        switch (ctype) {
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: out[i] = p[0]; break;
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: { uint16_t v; memcpy(&v, p, 2); out[i] = v; break; }
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: { uint32_t v; memcpy(&v, p, 4); out[i] = v; break; }
+        default: return c.fail(where, "indices must be unsigned byte, short or int");
+        }
+    }
+    return true;
+}
+
+sb_m4 node_local(const tinygltf::Node &n) {
+    if (n.matrix.size() == 16) {
+        sb_m4 r;
+        for (int i = 0; i < 16; i++) r.m[i] = n.matrix[i];
+        return r;
+    }
+    sb_m4 t = sb_m4_identity(), r = sb_m4_identity(), s = sb_m4_identity();
+    if (n.translation.size() == 3) t = sb_m4_translate(sb_v3_make(n.translation[0], n.translation[1], n.translation[2]));
+    if (n.rotation.size() == 4)
+        r = sb_quat_to_m4(sb_quat_norm({n.rotation[0], n.rotation[1], n.rotation[2], n.rotation[3]}));
+    if (n.scale.size() == 3) s = sb_m4_scale(sb_v3_make(n.scale[0], n.scale[1], n.scale[2]));
+    return sb_m4_mul(t, sb_m4_mul(r, s));
+}
+
+struct Loader {
+    Ctx c;
+    sb_scene *s;
+    std::vector<int> depth_guard;
+    std::vector<sb_m4> world;   // per node, filled during traversal
+    std::vector<char> visited;
+
+    bool prim(int node, int mesh, int pi, const sb_m4 &w) {
+        const tinygltf::Model &m = *c.m;
+        const tinygltf::Primitive &p = m.meshes[mesh].primitives[pi];
+        std::string where = "/meshes/" + std::to_string(mesh) + "/primitives/" + std::to_string(pi);
+        if (p.mode < 0 || p.mode > 6) return c.fail(where + "/mode", "unsupported primitive mode " + std::to_string(p.mode));
+        if (p.mode < 4) return true; // points and lines neither cast nor receive shadows
+        auto pit = p.attributes.find("POSITION");
+        if (pit == p.attributes.end()) return c.fail(where + "/attributes", "no POSITION");
+        std::vector<double> pos, nrm;
+        if (!read_vec(c, pit->second, where + "/attributes/POSITION", 3, pos)) return false;
+        size_t nv = pos.size() / 3;
+        auto nit = p.attributes.find("NORMAL");
+        bool have_n = nit != p.attributes.end();
+        if (have_n) {
+            if (!read_vec(c, nit->second, where + "/attributes/NORMAL", 3, nrm)) return false;
+            if (nrm.size() != pos.size()) return c.fail(where + "/attributes/NORMAL", "count differs from POSITION");
+        }
+        std::vector<uint32_t> idx;
+        if (p.indices >= 0) {
+            if (!read_indices(c, p.indices, where + "/indices", idx)) return false;
+        } else {
+            idx.resize(nv);
+            for (size_t i = 0; i < nv; i++) idx[i] = (uint32_t)i;
+        }
+        for (size_t i = 0; i < idx.size(); i++)
+            if (idx[i] >= nv)
+                return c.fail(where + "/indices", "index " + std::to_string(idx[i]) + " at " + std::to_string(i) +
+                                                      " is out of range (" + std::to_string(nv) + " vertices)");
+        std::vector<uint32_t> tris;
+        if (p.mode == 4) {
+            tris.assign(idx.begin(), idx.begin() + (idx.size() / 3) * 3);
+        } else if (p.mode == 5) {
+            for (size_t i = 2; i < idx.size(); i++) {
+                if (i % 2 == 0) tris.insert(tris.end(), {idx[i - 2], idx[i - 1], idx[i]});
+                else tris.insert(tris.end(), {idx[i - 1], idx[i - 2], idx[i]});
+            }
+        } else {
+            for (size_t i = 2; i < idx.size(); i++) tris.insert(tris.end(), {idx[0], idx[i - 1], idx[i]});
+        }
+        if (tris.empty()) return true;
+        double det = w.m[0] * (w.m[5] * w.m[10] - w.m[9] * w.m[6]) - w.m[4] * (w.m[1] * w.m[10] - w.m[9] * w.m[2]) +
+                     w.m[8] * (w.m[1] * w.m[6] - w.m[5] * w.m[2]);
+        if (det < 0)
+            for (size_t i = 0; i < tris.size(); i += 3) std::swap(tris[i + 1], tris[i + 2]);
+        sb_m4 nm = sb_m4_identity();
+        if (have_n) {
+            sb_m4 inv;
+            if (sb_m4_invert(w, &inv)) { // inverse transpose of the upper 3x3
+                for (int r = 0; r < 3; r++)
+                    for (int col = 0; col < 3; col++) nm.m[col * 4 + r] = inv.m[r * 4 + col];
+            }
+        }
+        std::vector<double> wp(nv * 3), wn;
+        for (size_t v = 0; v < nv; v++) {
+            sb_v3 q = sb_m4_point(w, sb_v3_make(pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]));
+            wp[3 * v] = q.x; wp[3 * v + 1] = q.y; wp[3 * v + 2] = q.z;
+        }
+        if (have_n) {
+            wn.resize(nv * 3);
+            for (size_t v = 0; v < nv; v++) {
+                sb_v3 q = sb_m4_dir(nm, sb_v3_make(nrm[3 * v], nrm[3 * v + 1], nrm[3 * v + 2]));
+                wn[3 * v] = q.x; wn[3 * v + 1] = q.y; wn[3 * v + 2] = q.z;
+            }
+        }
+        sb_prim_desc d;
+        memset(&d, 0, sizeof d);
+        d.positions = wp.data();
+        d.normals = have_n ? wn.data() : nullptr;
+        d.vertex_count = (uint32_t)nv;
+        d.indices = tris.data();
+        d.index_count = (uint32_t)tris.size();
+        d.color[0] = d.color[1] = d.color[2] = d.color[3] = 1.0f;
+        d.node = (uint32_t)node;
+        if (p.material >= 0) {
+            if (p.material >= (int)m.materials.size())
+                return c.fail(where + "/material", "material " + std::to_string(p.material) + " does not exist");
+            const tinygltf::Material &mat = m.materials[p.material];
+            const auto &f = mat.pbrMetallicRoughness.baseColorFactor;
+            for (int k = 0; k < 4 && k < (int)f.size(); k++) d.color[k] = (float)f[k];
+            d.alpha_mask = mat.alphaMode == "MASK";
+            d.alpha_cutoff = (float)mat.alphaCutoff;
+        }
+        sb_scene_add_prim(s, &d);
+        return true;
+    }
+
+    bool node(int ni, const sb_m4 &parent, int depth) {
+        const tinygltf::Model &m = *c.m;
+        std::string where = "/nodes/" + std::to_string(ni);
+        if (ni < 0 || ni >= (int)m.nodes.size()) return c.fail(where, "node does not exist");
+        if (depth > 256 || visited[ni]) return c.fail(where, "node graph has a cycle or a node with two parents");
+        visited[ni] = 1;
+        const tinygltf::Node &n = m.nodes[ni];
+        if ((!n.matrix.empty() && n.matrix.size() != 16) || (!n.translation.empty() && n.translation.size() != 3) ||
+            (!n.rotation.empty() && n.rotation.size() != 4) || (!n.scale.empty() && n.scale.size() != 3))
+            return c.fail(where, "matrix/translation/rotation/scale has the wrong length");
+        sb_m4 w = sb_m4_mul(parent, node_local(n));
+        if (!sb_m4_finite(w)) return c.fail(where, "transform is not finite");
+        world[ni] = w;
+        if (n.mesh >= 0) {
+            if (n.mesh >= (int)m.meshes.size()) return c.fail(where + "/mesh", "mesh " + std::to_string(n.mesh) + " does not exist");
+            s->nodes_drawn++;
+            for (size_t pi = 0; pi < m.meshes[n.mesh].primitives.size(); pi++)
+                if (!prim(ni, n.mesh, (int)pi, w)) return false;
+        }
+        if (n.camera >= 0 && n.camera < (int)s->camera_count) s->cameras[n.camera].node = ni;
+        auto ext = n.extensions.find("KHR_lights_punctual");
+        if (ext != n.extensions.end() && ext->second.Has("light")) {
+            int li = ext->second.Get("light").GetNumberAsInt();
+            if (li < 0 || li >= (int)m.lights.size())
+                return c.fail(where + "/extensions/KHR_lights_punctual/light", "light " + std::to_string(li) + " does not exist");
+            const tinygltf::Light &L = m.lights[li];
+            sb_light l;
+            memset(&l, 0, sizeof l);
+            l.type = L.type == "directional" ? SB_LIGHT_DIRECTIONAL : L.type == "spot" ? SB_LIGHT_SPOT : SB_LIGHT_POINT;
+            l.position = sb_m4_point(w, sb_v3_make(0, 0, 0));
+            l.direction = sb_v3_norm(sb_m4_dir(w, sb_v3_make(0, 0, -1)));
+            for (int k = 0; k < 3; k++) l.color[k] = k < (int)L.color.size() ? (float)L.color[k] : 1.0f;
+            l.intensity = L.intensity;
+            l.range = L.range;
+            s->lights = (sb_light *)realloc(s->lights, (s->light_count + 1) * sizeof(sb_light));
+            s->lights[s->light_count++] = l;
+            if (l.type == SB_LIGHT_DIRECTIONAL && !s->has_sun) {
+                s->has_sun = true;
+                s->sun = sb_v3_scale(l.direction, -1);
+            }
+        }
+        for (int ch : n.children)
+            if (!node(ch, w, depth + 1)) return false;
+        return true;
+    }
+};
+
+bool load_model(const char *path, tinygltf::Model &model, ImageCounter *images, sb_err *err) {
+    tinygltf::TinyGLTF loader;
+    loader.SetImageLoader(skip_image, images);
+    std::string e, w;
+    size_t n = strlen(path);
+    bool glb = n > 4 && (strcmp(path + n - 4, ".glb") == 0 || strcmp(path + n - 4, ".GLB") == 0);
+    FILE *f = fopen(path, "rb");
+    if (!f) return sb_fail(err, "%s: cannot open: %s", path, strerror(errno));
+    fclose(f);
+    bool ok = glb ? loader.LoadBinaryFromFile(&model, &e, &w, path) : loader.LoadASCIIFromFile(&model, &e, &w, path);
+    if (!ok) return sb_fail(err, "%s: %s", path, e.empty() ? "not a valid glTF file" : first_line(e).c_str());
+    return true;
+}
+
+} // namespace
+
+extern "C" bool sb_gltf_load(sb_scene *s, const char *path, sb_err *err) {
+    tinygltf::Model model;
+    ImageCounter images;
+    try {
+        if (!load_model(path, model, &images, err)) return false;
+        Loader L{Ctx{path, &model, err}, s, {}, std::vector<sb_m4>(model.nodes.size()), std::vector<char>(model.nodes.size())};
+        s->camera_count = (uint32_t)model.cameras.size();
+        s->cameras = (sb_scene_camera *)calloc(s->camera_count ? s->camera_count : 1, sizeof(sb_scene_camera));
+        for (size_t i = 0; i < model.cameras.size(); i++) {
+            const tinygltf::Camera &cam = model.cameras[i];
+            s->cameras[i].node = -1;
+            if (cam.type == "perspective") {
+                s->cameras[i].yfov = cam.perspective.yfov;
+                s->cameras[i].znear = cam.perspective.znear;
+                s->cameras[i].zfar = cam.perspective.zfar;
+            }
+        }
+        std::vector<int> roots;
+        int sc = model.defaultScene >= 0 ? model.defaultScene : 0;
+        if (!model.scenes.empty()) {
+            if (sc >= (int)model.scenes.size()) return sb_fail(err, "%s: /scene: scene %d does not exist", path, sc);
+            roots = model.scenes[sc].nodes;
+        } else { // no scenes: every node without a parent is a root
+            std::vector<char> child(model.nodes.size());
+            for (auto &n : model.nodes)
+                for (int ch : n.children)
+                    if (ch >= 0 && ch < (int)child.size()) child[ch] = 1;
+            for (size_t i = 0; i < model.nodes.size(); i++)
+                if (!child[i]) roots.push_back((int)i);
+        }
+        for (int r : roots)
+            if (!L.node(r, sb_m4_identity(), 0)) return false;
+        s->images_skipped = images.skipped;
+        s->content_hash = SB_FNV_SEED;
+        size_t sz = 0;
+        sb_err e2;
+        char *bytes = sb_read_file(path, &sz, &e2);
+        if (bytes) {
+            s->content_hash = sb_fnv1a(s->content_hash, bytes, sz);
+            free(bytes);
+        }
+        for (auto &b : model.buffers) s->content_hash = sb_fnv1a(s->content_hash, b.data.data(), b.data.size());
+        if (images.skipped)
+            sb_log("%s: %u texture(s) not decoded (shadows need none)%s", path, images.skipped,
+                   model.extensionsRequired.empty() ? "" : "; required extensions ignored for geometry");
+        return true;
+    } catch (const std::exception &ex) {
+        return sb_fail(err, "%s: %s", path, ex.what());
+    }
+}
+
+// An animated glTF camera as a path: keys at every animation time of the
+// camera's node (translation/rotation channels), parent chain static.
+extern "C" bool sb_gltf_camera_path(sb_path *p, const char *path, int cam, sb_err *err) {
+    tinygltf::Model model;
+    ImageCounter images;
+    try {
+        if (!load_model(path, model, &images, err)) return false;
+        Ctx c{path, &model, err};
+        if (cam < 0 || cam >= (int)model.cameras.size())
+            return sb_fail(err, "%s#camera=%d: the file has %zu camera(s)", path, cam, model.cameras.size());
+        int cn = -1;
+        std::vector<int> parent(model.nodes.size(), -1);
+        for (size_t i = 0; i < model.nodes.size(); i++) {
+            if (model.nodes[i].camera == cam && cn < 0) cn = (int)i;
+            for (int ch : model.nodes[i].children)
+                if (ch >= 0 && ch < (int)parent.size()) parent[ch] = (int)i;
+        }
+        if (cn < 0) return sb_fail(err, "%s#camera=%d: no node uses this camera", path, cam);
+        sb_m4 pw = sb_m4_identity();
+        int depth = 0;
+        for (int q = parent[cn]; q >= 0 && depth < 256; q = parent[q], depth++)
+            pw = sb_m4_mul(node_local(model.nodes[q]), pw);
+        const tinygltf::Node &n = model.nodes[cn];
+        struct Chan { std::vector<double> in, out; int ncomp; bool step; };
+        Chan tr{{}, {}, 3, false}, rot{{}, {}, 4, false};
+        bool have_t = false, have_r = false;
+        for (size_t ai = 0; ai < model.animations.size(); ai++) {
+            const auto &an = model.animations[ai];
+            for (size_t ci = 0; ci < an.channels.size(); ci++) {
+                const auto &ch = an.channels[ci];
+                if (ch.target_node != cn) continue;
+                bool is_t = ch.target_path == "translation", is_r = ch.target_path == "rotation";
+                if (!is_t && !is_r) continue;
+                std::string where = "/animations/" + std::to_string(ai) + "/channels/" + std::to_string(ci);
+                if (ch.sampler < 0 || ch.sampler >= (int)an.samplers.size()) return c.fail(where, "sampler out of range");
+                const auto &smp = an.samplers[ch.sampler];
+                Chan &dst = is_t ? tr : rot;
+                if (!read_vec(c, smp.input, where + "/input", 1, dst.in)) return false;
+                if (!read_vec(c, smp.output, where + "/output", dst.ncomp, dst.out)) return false;
+                size_t k = dst.in.size();
+                if (smp.interpolation == "CUBICSPLINE") { // keep the values, drop the tangents
+                    if (dst.out.size() != 3 * k * dst.ncomp) return c.fail(where, "CUBICSPLINE output count mismatch");
+                    std::vector<double> v(k * dst.ncomp);
+                    for (size_t i = 0; i < k; i++)
+                        for (int j = 0; j < dst.ncomp; j++) v[i * dst.ncomp + j] = dst.out[(3 * i + 1) * dst.ncomp + j];
+                    dst.out = v;
+                }
+                if (dst.out.size() != k * dst.ncomp) return c.fail(where, "input and output counts differ");
+                for (size_t i = 1; i < k; i++)
+                    if (!(dst.in[i] > dst.in[i - 1])) return c.fail(where + "/input", "times must increase");
+                dst.step = smp.interpolation == "STEP";
+                (is_t ? have_t : have_r) = true;
+            }
+        }
+        std::set<double> times;
+        for (double t : tr.in) times.insert(t);
+        for (double t : rot.in) times.insert(t);
+        if (times.empty()) times.insert(0.0);
+        auto sample = [](const Chan &ch, double t, double *out) {
+            size_t k = ch.in.size();
+            size_t i = std::upper_bound(ch.in.begin(), ch.in.end(), t) - ch.in.begin();
+            if (i == 0 || i >= k || ch.step) {
+                size_t j = i == 0 ? 0 : i - 1;
+                for (int c2 = 0; c2 < ch.ncomp; c2++) out[c2] = ch.out[j * ch.ncomp + c2];
+                return;
+            }
+            double u = (t - ch.in[i - 1]) / (ch.in[i] - ch.in[i - 1]);
+            if (ch.ncomp == 4) {
+                const double *a = &ch.out[(i - 1) * 4], *b = &ch.out[i * 4];
+                sb_quat q = sb_quat_slerp(sb_quat_norm({a[0], a[1], a[2], a[3]}), sb_quat_norm({b[0], b[1], b[2], b[3]}), u);
+                out[0] = q.x; out[1] = q.y; out[2] = q.z; out[3] = q.w;
+            } else {
+                for (int c2 = 0; c2 < ch.ncomp; c2++)
+                    out[c2] = ch.out[(i - 1) * ch.ncomp + c2] * (1 - u) + ch.out[i * ch.ncomp + c2] * u;
+            }
+        };
+        const tinygltf::Camera &camera = model.cameras[cam];
+        p->fov_deg = camera.type == "perspective" && camera.perspective.yfov > 0 ? camera.perspective.yfov * 180 / SB_PI : 60;
+        if (camera.type == "perspective") {
+            p->znear = camera.perspective.znear;
+            p->zfar = camera.perspective.zfar;
+        }
+        p->key_count = (int)times.size();
+        p->keys = (sb_path_key *)calloc(p->key_count, sizeof(sb_path_key));
+        double t0 = *times.begin();
+        int ki = 0;
+        for (double t : times) {
+            tinygltf::Node local = n;
+            double v[4];
+            if (have_t) { sample(tr, t, v); local.translation = {v[0], v[1], v[2]}; local.matrix.clear(); }
+            if (have_r) { sample(rot, t, v); local.rotation = {v[0], v[1], v[2], v[3]}; local.matrix.clear(); }
+            sb_m4 w = sb_m4_mul(pw, node_local(local));
+            sb_path_key &k = p->keys[ki++];
+            k.t = t - t0;
+            k.pos = sb_m4_point(w, sb_v3_make(0, 0, 0));
+            sb_v3 f = sb_v3_norm(sb_m4_dir(w, sb_v3_make(0, 0, -1)));
+            sb_v3 u = sb_v3_norm(sb_m4_dir(w, sb_v3_make(0, 1, 0)));
+            k.rot = sb_quat_look(f, u);
+            if (!sb_v3_finite(k.pos)) return sb_fail(err, "%s#camera=%d: camera transform is not finite at t=%g", path, cam, t);
+        }
+        return true;
+    } catch (const std::exception &ex) {
+        return sb_fail(err, "%s: %s", path, ex.what());
+    }
+}

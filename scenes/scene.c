@@ -1,0 +1,265 @@
+/* scene.c - building the flat scene model, re-basing, chunking, bundled names. */
+#include "scene.h"
+
+#include <limits.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#define SB_CHUNK_TRIS 4096u
+
+bool sb_gltf_load(sb_scene *s, const char *path, sb_err *err); /* gltf_load.cc */
+
+void sb_scene_begin(sb_scene *s) {
+    memset(s, 0, sizeof *s);
+}
+
+static void *grow(void *p, uint32_t *cap, uint32_t need, size_t elem) {
+    if (need <= *cap) return p;
+    uint32_t c = *cap ? *cap : 1024;
+    while (c < need) c *= 2;
+    *cap = c;
+    return realloc(p, (size_t)c * elem);
+}
+
+void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p) {
+    uint32_t base = s->vertex_count;
+    uint32_t cap = s->build_cap;
+    s->build_pos = grow(s->build_pos, &cap, base + p->vertex_count, 3 * sizeof(double));
+    s->vertices = grow(s->vertices, &s->vertex_cap, base + p->vertex_count, 6 * sizeof(float));
+    s->build_cap = cap;
+    for (uint32_t v = 0; v < p->vertex_count; v++) {
+        memcpy(s->build_pos + 3 * (size_t)(base + v), p->positions + 3 * (size_t)v, 3 * sizeof(double));
+        float *out = s->vertices + 6 * (size_t)(base + v);
+        out[3] = out[4] = out[5] = 0;
+        if (p->normals) {
+            sb_v3 n = sb_v3_norm(sb_v3_make(p->normals[3 * v], p->normals[3 * v + 1], p->normals[3 * v + 2]));
+            out[3] = (float)n.x;
+            out[4] = (float)n.y;
+            out[5] = (float)n.z;
+        }
+    }
+    if (!p->normals) { /* area-weighted vertex normals from the faces */
+        for (uint32_t i = 0; i + 2 < p->index_count; i += 3) {
+            const double *a = p->positions + 3 * (size_t)p->indices[i];
+            const double *b = p->positions + 3 * (size_t)p->indices[i + 1];
+            const double *c = p->positions + 3 * (size_t)p->indices[i + 2];
+            sb_v3 n = sb_v3_cross(sb_v3_make(b[0] - a[0], b[1] - a[1], b[2] - a[2]),
+                                  sb_v3_make(c[0] - a[0], c[1] - a[1], c[2] - a[2]));
+            for (int k = 0; k < 3; k++) {
+                float *out = s->vertices + 6 * (size_t)(base + p->indices[i + k]);
+                out[3] += (float)n.x;
+                out[4] += (float)n.y;
+                out[5] += (float)n.z;
+            }
+        }
+        for (uint32_t v = 0; v < p->vertex_count; v++) {
+            float *out = s->vertices + 6 * (size_t)(base + v);
+            sb_v3 n = sb_v3_norm(sb_v3_make(out[3], out[4], out[5]));
+            out[3] = (float)n.x;
+            out[4] = (float)n.y;
+            out[5] = (float)n.z;
+        }
+    }
+    s->vertex_count += p->vertex_count;
+
+    uint32_t first = s->index_count;
+    s->indices = grow(s->indices, &s->index_cap, first + p->index_count, sizeof(uint32_t));
+    for (uint32_t i = 0; i < p->index_count; i++) s->indices[first + i] = base + p->indices[i];
+    s->index_count += p->index_count;
+
+    s->draws = grow(s->draws, &s->draw_cap, s->draw_count + 1, sizeof(sb_draw));
+    sb_draw *d = &s->draws[s->draw_count++];
+    memset(d, 0, sizeof *d);
+    d->first_index = first;
+    d->index_count = p->index_count;
+    memcpy(d->color, p->color, sizeof d->color);
+    d->alpha_mask = p->alpha_mask;
+    d->alpha_cutoff = p->alpha_cutoff;
+    d->node = p->node;
+    if (p->alpha_mask) s->alpha_mask_draws++;
+}
+
+/* ---- chunking: split a draw's triangles at the centroid median until small ---- */
+
+static const double *g_pos;
+static const uint32_t *g_idx;
+static int g_axis;
+
+static double tri_centre(uint32_t tri, int axis) {
+    const uint32_t *t = g_idx + 3 * (size_t)tri;
+    return g_pos[3 * (size_t)t[0] + axis] + g_pos[3 * (size_t)t[1] + axis] + g_pos[3 * (size_t)t[2] + axis];
+}
+
+static int cmp_tri(const void *a, const void *b) {
+    double ca = tri_centre(*(const uint32_t *)a, g_axis), cb = tri_centre(*(const uint32_t *)b, g_axis);
+    return ca < cb ? -1 : ca > cb ? 1 : 0;
+}
+
+static sb_aabb tri_range_box(const sb_scene *s, uint32_t first_index, uint32_t count) {
+    sb_aabb b = {{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
+    for (uint32_t i = first_index; i < first_index + count; i++) {
+        const double *p = s->build_pos + 3 * (size_t)s->indices[i];
+        sb_v3 v = {p[0], p[1], p[2]};
+        b.lo = sb_v3_min(b.lo, v);
+        b.hi = sb_v3_max(b.hi, v);
+    }
+    return b;
+}
+
+typedef struct {
+    uint32_t *first, *count;
+    uint32_t n, cap;
+} leaf_list;
+
+/* Orders triangles [tri_first, tri_first+n) of the index array spatially (median
+ * splits on the longest axis) and records each final run as a leaf. */
+static void split_order(sb_scene *s, uint32_t *order, uint32_t tri_first, uint32_t n, leaf_list *out) {
+    if (n <= SB_CHUNK_TRIS) {
+        uint32_t c1 = out->cap, c2 = out->cap;
+        out->first = grow(out->first, &c1, out->n + 1, sizeof(uint32_t));
+        out->count = grow(out->count, &c2, out->n + 1, sizeof(uint32_t));
+        out->cap = c1;
+        out->first[out->n] = tri_first;
+        out->count[out->n++] = n;
+        return;
+    }
+    sb_aabb b = tri_range_box(s, tri_first * 3, n * 3);
+    sb_v3 e = sb_v3_sub(b.hi, b.lo);
+    g_axis = e.x >= e.y && e.x >= e.z ? 0 : e.y >= e.z ? 1 : 2;
+    g_pos = s->build_pos;
+    g_idx = s->indices;
+    for (uint32_t i = 0; i < n; i++) order[i] = tri_first + i;
+    qsort(order, n, sizeof(uint32_t), cmp_tri);
+    uint32_t *tmp = malloc((size_t)n * 3 * sizeof(uint32_t));
+    for (uint32_t i = 0; i < n; i++) memcpy(tmp + 3 * (size_t)i, s->indices + 3 * (size_t)order[i], 12);
+    memcpy(s->indices + 3 * (size_t)tri_first, tmp, (size_t)n * 12);
+    free(tmp);
+    uint32_t half = n / 2;
+    split_order(s, order, tri_first, half, out);
+    split_order(s, order, tri_first + half, n - half, out);
+}
+
+static void chunk_draws(sb_scene *s) {
+    uint32_t n = s->draw_count;
+    for (uint32_t di = 0; di < n; di++) {
+        sb_draw d = s->draws[di];
+        uint32_t tris = d.index_count / 3;
+        if (tris <= SB_CHUNK_TRIS) continue;
+        uint32_t *order = malloc(tris * sizeof(uint32_t));
+        leaf_list leaves = {0};
+        split_order(s, order, d.first_index / 3, tris, &leaves);
+        free(order);
+        for (uint32_t c = 0; c < leaves.n; c++) {
+            sb_draw nd = d;
+            nd.first_index = 3 * leaves.first[c];
+            nd.index_count = 3 * leaves.count[c];
+            if (c == 0) {
+                s->draws[di] = nd;
+            } else {
+                s->draws = grow(s->draws, &s->draw_cap, s->draw_count + 1, sizeof(sb_draw));
+                s->draws[s->draw_count++] = nd;
+            }
+        }
+        free(leaves.first);
+        free(leaves.count);
+    }
+}
+
+bool sb_scene_finish(sb_scene *s, sb_err *err) {
+    if (s->index_count == 0) {
+        free(s->build_pos);
+        s->build_pos = NULL;
+        return sb_fail(err, "%s: the scene has no triangles reachable from its scene graph", s->file);
+    }
+    chunk_draws(s);
+    sb_aabb all = {{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
+    for (uint32_t i = 0; i < s->draw_count; i++) {
+        s->draws[i].box = tri_range_box(s, s->draws[i].first_index, s->draws[i].index_count);
+        all.lo = sb_v3_min(all.lo, s->draws[i].box.lo);
+        all.hi = sb_v3_max(all.hi, s->draws[i].box.hi);
+    }
+    s->origin = sb_v3_scale(sb_v3_add(all.lo, all.hi), 0.5);
+    for (uint32_t v = 0; v < s->vertex_count; v++) {
+        const double *p = s->build_pos + 3 * (size_t)v;
+        float *o = s->vertices + 6 * (size_t)v;
+        o[0] = (float)(p[0] - s->origin.x);
+        o[1] = (float)(p[1] - s->origin.y);
+        o[2] = (float)(p[2] - s->origin.z);
+    }
+    for (uint32_t i = 0; i < s->draw_count; i++) {
+        s->draws[i].box.lo = sb_v3_sub(s->draws[i].box.lo, s->origin);
+        s->draws[i].box.hi = sb_v3_sub(s->draws[i].box.hi, s->origin);
+    }
+    for (uint32_t i = 0; i < s->light_count; i++)
+        s->lights[i].position = sb_v3_sub(s->lights[i].position, s->origin);
+    s->bounds.lo = sb_v3_sub(all.lo, s->origin);
+    s->bounds.hi = sb_v3_sub(all.hi, s->origin);
+    free(s->build_pos);
+    s->build_pos = NULL;
+    sb_bvh_build(s);
+    return true;
+}
+
+uint64_t sb_scene_triangles(const sb_scene *s) { return s->index_count / 3; }
+
+static bool exe_dir(char *out, size_t len) {
+    char buf[PATH_MAX];
+    ssize_t n = readlink("/proc/self/exe", buf, sizeof buf - 1);
+    if (n <= 0) return false;
+    buf[n] = 0;
+    char *slash = strrchr(buf, '/');
+    if (!slash) return false;
+    *slash = 0;
+    if (strlen(buf) >= len) return false;
+    memcpy(out, buf, strlen(buf) + 1);
+    return true;
+}
+
+bool sb_resolve_bundled(const char *name, const char *ext, char *out, size_t outlen) {
+    if (strchr(name, '/') || strchr(name, '.')) return false;
+    char dirs[3][PATH_MAX];
+    int nd = 0;
+    const char *env = getenv("SB_DATA_DIR");
+    if (env) snprintf(dirs[nd++], PATH_MAX, "%s", env);
+    char ed[PATH_MAX - 64];
+    if (exe_dir(ed, sizeof ed)) {
+        snprintf(dirs[nd++], PATH_MAX, "%s", ed);
+        snprintf(dirs[nd++], PATH_MAX, "%s/../share/shadowbench", ed);
+    }
+    for (int i = 0; i < nd; i++) {
+        snprintf(out, outlen, "%s/%s%s", dirs[i], name, ext);
+        if (access(out, R_OK) == 0) return true;
+    }
+    return false;
+}
+
+bool sb_scene_load(sb_scene *s, const char *path, sb_err *err) {
+    char resolved[PATH_MAX];
+    if (sb_resolve_bundled(path, ".glb", resolved, sizeof resolved)) path = resolved;
+    double t0 = sb_now_ms();
+    sb_scene_begin(s);
+    s->file = sb_strdup(path);
+    if (!sb_gltf_load(s, path, err)) {
+        sb_scene_free(s);
+        return false;
+    }
+    if (!sb_scene_finish(s, err)) {
+        sb_scene_free(s);
+        return false;
+    }
+    s->load_ms = sb_now_ms() - t0;
+    return true;
+}
+
+void sb_scene_free(sb_scene *s) {
+    free(s->file);
+    free(s->vertices);
+    free(s->indices);
+    free(s->draws);
+    free(s->lights);
+    free(s->cameras);
+    free(s->build_pos);
+    sb_bvh_free(&s->bvh);
+    memset(s, 0, sizeof *s);
+}

@@ -1,0 +1,96 @@
+/* lightfit.c - orthographic light frustum fitting. */
+#include "lightfit.h"
+
+#include <string.h>
+
+sb_m4 sb_light_view(sb_v3 sun) {
+    sb_v3 fwd = sb_v3_scale(sb_v3_norm(sun), -1), right, up;
+    sb_basis(fwd, &right, &up);
+    return sb_m4_view(sb_v3_make(0, 0, 0), right, up, fwd);
+}
+
+void sb_frustum_corners(const sb_camera *cam, sb_v3 origin, double zn, double zf, sb_v3 out[8]) {
+    double ty = tan(cam->fov_deg * SB_PI / 360), tx = ty * cam->aspect;
+    sb_v3 eye = sb_v3_sub(cam->pos, origin);
+    for (int i = 0; i < 8; i++) {
+        double z = i < 4 ? zn : zf;
+        double sx = (i & 1) ? 1 : -1, sy = (i & 2) ? 1 : -1;
+        sb_v3 p = sb_v3_add(eye, sb_v3_scale(cam->forward, z));
+        p = sb_v3_add(p, sb_v3_scale(cam->right, sx * tx * z));
+        out[i] = sb_v3_add(p, sb_v3_scale(cam->up, sy * ty * z));
+    }
+}
+
+static void box_in_light(sb_m4 view, const sb_aabb *b, sb_v3 *lo, sb_v3 *hi) {
+    *lo = sb_v3_make(1e300, 1e300, 1e300);
+    *hi = sb_v3_make(-1e300, -1e300, -1e300);
+    for (int k = 0; k < 8; k++) {
+        sb_v3 q = sb_v3_make(k & 1 ? b->hi.x : b->lo.x, k & 2 ? b->hi.y : b->lo.y, k & 4 ? b->hi.z : b->lo.z);
+        sb_v3 l = sb_m4_point(view, q);
+        *lo = sb_v3_min(*lo, l);
+        *hi = sb_v3_max(*hi, l);
+    }
+}
+
+typedef struct {
+    const sb_scene *s;
+    sb_m4 view;
+    double zmax;
+} caster_scan;
+
+static void scan_caster(uint32_t d, void *user) {
+    caster_scan *c = user;
+    sb_v3 lo, hi;
+    box_in_light(c->view, &c->s->draws[d].box, &lo, &hi);
+    if (hi.z > c->zmax) c->zmax = hi.z;
+}
+
+void sb_light_fit_points(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int n, int res, sb_light_fit *out) {
+    memset(out, 0, sizeof *out);
+    out->view = sb_light_view(sun);
+    sb_v3 lo = {1e300, 1e300, 1e300}, hi = {-1e300, -1e300, -1e300};
+    for (int i = 0; i < n; i++) {
+        sb_v3 l = sb_m4_point(out->view, pts[i]);
+        lo = sb_v3_min(lo, l);
+        hi = sb_v3_max(hi, l);
+    }
+    sb_v3 slo, shi;
+    box_in_light(out->view, &s->bounds, &slo, &shi);
+    /* receivers are only where the scene is */
+    lo = sb_v3_max(lo, slo);
+    hi = sb_v3_min(hi, shi);
+    if (lo.x >= hi.x || lo.y >= hi.y || lo.z >= hi.z) {
+        out->empty = true;
+        lo = slo;
+        hi = shi;
+    }
+    /* a guard band of one texel on each side keeps filter taps inside */
+    double gx = (hi.x - lo.x) / res, gy = (hi.y - lo.y) / res;
+    lo.x -= gx; hi.x += gx;
+    lo.y -= gy; hi.y += gy;
+    /* extend toward the light to the farthest caster overlapping the window */
+    double side[5][4];
+    sb_m4 probe = sb_m4_mul(sb_m4_ortho(lo.x, hi.x, lo.y, hi.y, -shi.z, -lo.z), out->view);
+    double all[6][4];
+    sb_frustum_planes(probe, all);
+    memcpy(side, all, 4 * sizeof all[0]);      /* x and y planes */
+    memcpy(side[4], all[5], sizeof all[0]);    /* far plane: beyond the receivers */
+    caster_scan sc = {s, out->view, hi.z};
+    sb_bvh_cull(s, (const double(*)[4])side, 5, scan_caster, &sc);
+    double znear_l = sc.zmax, zfar_l = lo.z;   /* light space z: toward the light is +z */
+    double pad = 1e-4 * (znear_l - zfar_l) + 1e-9;
+    out->l = lo.x;
+    out->r = hi.x;
+    out->b = lo.y;
+    out->t = hi.y;
+    out->zn = -znear_l - pad;
+    out->zf = -zfar_l + pad;
+    out->proj = sb_m4_ortho(out->l, out->r, out->b, out->t, out->zn, out->zf);
+    out->view_proj = sb_m4_mul(out->proj, out->view);
+    sb_frustum_planes(out->view_proj, out->planes);
+    sb_m4 bias = sb_m4_identity();
+    bias.m[0] = bias.m[5] = bias.m[10] = 0.5;
+    bias.m[12] = bias.m[13] = bias.m[14] = 0.5;
+    out->shadow_mat = sb_m4_mul(bias, out->view_proj);
+    out->texel_world = fmax(out->r - out->l, out->t - out->b) / res;
+}

@@ -1,0 +1,23 @@
+/* lightfit.h - fitting an orthographic light frustum to receivers, in double.
+ * Shared by every directional-light shadow-map technique (sm now; the
+ * cascaded techniques fit one per slice with the same code). */
+#pragma once
+#include "gpu.h"
+
+typedef struct sb_light_fit {
+    sb_m4 view, proj, view_proj;     /* origin-relative world -> light clip */
+    sb_m4 shadow_mat;                /* -> [0,1]^3 texture space */
+    double planes[6][4];             /* the light volume (casters culled against it) */
+    double l, r, b, t, zn, zf;       /* light-space box: x/y window, near/far distance */
+    double texel_world;              /* world size of one shadow texel */
+    bool empty;                      /* no receiver inside the scene */
+} sb_light_fit;
+
+/* Light view looking along -sun from the origin, with a stable basis. */
+sb_m4 sb_light_view(sb_v3 sun);
+/* Corners of the camera frustum slice [znear, zfar] in origin-relative world. */
+void sb_frustum_corners(const sb_camera *cam, sb_v3 origin, double znear, double zfar, sb_v3 out[8]);
+/* Fits the light box to the receiver points (clipped to the scene bounds),
+ * extends it toward the light to the farthest caster overlapping its x/y
+ * window (BVH query), and sets the far plane at the receivers. */
+void sb_light_fit_points(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int n, int res, sb_light_fit *out);

@@ -1,0 +1,38 @@
+/* none.c - no shadows: the baseline every other cost is measured against. */
+#include "gpu.h"
+#include "shaders.h"
+
+typedef struct {
+    sb_final_prog fp;
+} none_state;
+
+static bool none_create(void *state, sb_gpu *gpu, const sb_params *p, sb_err *err) {
+    (void)gpu;
+    (void)p;
+    none_state *s = state;
+    return sb_final_prog_create(&s->fp, "none", sb_shader_vis_none_glsl, NULL, err);
+}
+
+static void none_frame(void *state, sb_frame *f) {
+    none_state *s = state;
+    sb_stage_begin(f, SB_STAGE_FINAL);
+    glUseProgram(s->fp.prog);
+    sb_final_pass(f, &s->fp);
+    sb_stage_end(f, SB_STAGE_FINAL);
+}
+
+static void none_destroy(void *state, sb_gpu *gpu) {
+    (void)gpu;
+    none_state *s = state;
+    sb_final_prog_free(&s->fp);
+}
+
+const sb_technique sb_technique_none = {
+    .name = "none",
+    .summary = "no shadows; the baseline cost of the camera pass",
+    .stages = SB_STAGE_BIT(SB_STAGE_FINAL),
+    .state_size = sizeof(none_state),
+    .create = none_create,
+    .frame = none_frame,
+    .destroy = none_destroy,
+};

@@ -1,0 +1,2 @@
+// depth.frag - depth only.
+void main() {}
