@@ -248,3 +248,26 @@ uint32_t sb_draw_casters(sb_frame *f, const double (*planes)[4], int nplanes, co
     draw_ctx c = {f, -1, true};
     return sb_bvh_cull(g->scene, planes, nplanes, draw_one, &c);
 }
+
+void sb_gpu_readback(sb_gpu *g, float *depth, unsigned char *vis, unsigned char *rgba) {
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, g->fbo);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    if (depth) sb_gpu_read_pixels(0, 0, g->width, g->height, GL_DEPTH_COMPONENT, GL_FLOAT, depth);
+    if (vis) {
+        glReadBuffer(GL_COLOR_ATTACHMENT1);
+        sb_gpu_read_pixels(0, 0, g->width, g->height, GL_RED, GL_UNSIGNED_BYTE, vis);
+    }
+    if (rgba) {
+        glReadBuffer(GL_COLOR_ATTACHMENT0);
+        sb_gpu_read_pixels(0, 0, g->width, g->height, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
+    }
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+}
+
+sb_v3 sb_frame_unproject(const sb_frame *f, double x, double y, double d) {
+    sb_m4 inv;
+    if (!sb_m4_invert(f->view_proj, &inv)) return sb_v3_make(NAN, NAN, NAN);
+    sb_v3 ndc = sb_v3_make(2 * (x + 0.5) / f->gpu->width - 1, 2 * (y + 0.5) / f->gpu->height - 1, 2 * d - 1);
+    return sb_v3_add(sb_m4_point(inv, ndc), f->gpu->scene->origin);
+}

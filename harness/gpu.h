@@ -75,3 +75,10 @@ uint32_t sb_draw_casters(sb_frame *f, const double (*planes)[4], int nplanes, co
 void sb_frustum_planes(sb_m4 m, double planes[6][4]);
 /* GL error check: returns false and fills err if one is pending. */
 bool sb_gl_check(const char *where, sb_err *err);
+
+/* Reads the last frame's targets (any pointer may be NULL): depth (float,
+ * window [0,1]), visibility (1 byte, 255 lit) and colour (RGBA8). Counted as
+ * readbacks; never called inside timed frames. Rows bottom-up as in GL. */
+void sb_gpu_readback(sb_gpu *g, float *depth, unsigned char *vis, unsigned char *rgba);
+/* World-space (absolute, double) point of pixel (x, y) at window depth d. */
+sb_v3 sb_frame_unproject(const sb_frame *f, double x, double y, double d);

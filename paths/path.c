@@ -100,9 +100,9 @@ bool sb_path_parse(sb_path *p, const char *name, const char *text, sb_err *err) 
             }
         }
         if (p->key_count > 0 && !(k.t > p->keys[p->key_count - 1].t)) {
+            double prev = p->keys[p->key_count - 1].t;
             sb_path_free(p);
-            return sb_fail(err, "%s:%d: time %g does not increase (previous key at %g)", name, lineno, k.t,
-                           p->keys[p->key_count - 1].t);
+            return sb_fail(err, "%s:%d: time %g does not increase (previous key at %g)", name, lineno, k.t, prev);
         }
         add_key(p, &cap, k);
     }
@@ -111,8 +111,9 @@ bool sb_path_parse(sb_path *p, const char *name, const char *text, sb_err *err) 
         return sb_fail(err, "%s: no keyframes (expected 'key' or 'look' lines)", name);
     }
     if (p->znear > 0 && p->zfar > 0 && p->zfar <= p->znear) {
+        double zn = p->znear, zf = p->zfar;
         sb_path_free(p);
-        return sb_fail(err, "%s: far (%g) must exceed near (%g)", name, p->zfar, p->znear);
+        return sb_fail(err, "%s: far (%g) must exceed near (%g)", name, zf, zn);
     }
     return true;
 }

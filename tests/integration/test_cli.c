@@ -1,0 +1,275 @@
+/* The command line end to end: output files, CSV contract, bad input. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "support.h"
+
+static char g_tmp[64];
+static char g_out[16384];
+
+static int sh(const char *fmt, ...) {
+    char cmd[8192];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(cmd, sizeof cmd, fmt, ap);
+    va_end(ap);
+    int rc = run_capture(cmd, g_out, sizeof g_out);
+    print_message("$ %s -> %d\n%s", cmd, rc, g_out);
+    return rc;
+}
+
+static int setup(void **st) {
+    (void)st;
+    snprintf(g_tmp, sizeof g_tmp, "/tmp/sbcliXXXXXX");
+    return mkdtemp(g_tmp) ? 0 : -1;
+}
+
+static int teardown(void **st) {
+    (void)st;
+    char cmd[128];
+    snprintf(cmd, sizeof cmd, "rm -rf %s", g_tmp);
+    return system(cmd) == 0 ? 0 : -1;
+}
+
+/* Splits a CSV line without quotes into fields (test data has none in these columns). */
+static int fields(char *line, char **out, int max) {
+    int n = 0;
+    char *p = line;
+    while (n < max) {
+        out[n++] = p;
+        char *c = strchr(p, ',');
+        if (!c) break;
+        *c = 0;
+        p = c + 1;
+    }
+    return n;
+}
+
+static int column(char **hdr, int n, const char *name) {
+    for (int i = 0; i < n; i++)
+        if (!strcmp(hdr[i], name)) return i;
+    fail_msg("no column %s", name);
+    return -1;
+}
+
+static void test_run_writes_csv(void **st) {
+    (void)st;
+    assert_int_equal(sh("%s run plane-box plane-box none sm:res=512 --frames 6 --warmup 1 --size 160x90 --out %s/r --quiet",
+                        test_binary(), g_tmp), 0);
+    char dir[4096];
+    size_t dl = strcspn(g_out, "\n");
+    assert_true(dl < sizeof dir);
+    memcpy(dir, g_out, dl);
+    dir[dl] = 0;
+    char path[4200];
+    snprintf(path, sizeof path, "%s/summary.csv", dir);
+    sb_err err;
+    char *sum = sb_read_file(path, NULL, &err);
+    assert_non_null(sum);
+    /* header + 2 rows */
+    int lines = 0;
+    for (char *p = sum; *p; p++) lines += *p == '\n';
+    assert_int_equal(lines, 3);
+    char *hdr_line = strtok(sum, "\n");
+    char *row1 = strtok(NULL, "\n");
+    char *row2 = strtok(NULL, "\n");
+    char *hdr[256], *r1[256], *r2[256];
+    char hcopy[16384];
+    snprintf(hcopy, sizeof hcopy, "%s", hdr_line);
+    int nh = fields(hcopy, hdr, 256);
+    /* the renderer column is quoted ("llvmpipe (LLVM ..., 256 bits)"): drop quotes' commas for this test */
+    for (char *p = row1; *p; p++) if (*p == '"') { char *q = strchr(p + 1, '"'); for (char *k = p; k < q; k++) if (*k == ',') *k = ';'; p = q; }
+    for (char *p = row2; *p; p++) if (*p == '"') { char *q = strchr(p + 1, '"'); for (char *k = p; k < q; k++) if (*k == ',') *k = ';'; p = q; }
+    assert_int_equal(fields(row1, r1, 256), nh);
+    assert_int_equal(fields(row2, r2, 256), nh);
+    assert_string_equal(r1[column(hdr, nh, "technique")], "none");
+    assert_string_equal(r2[column(hdr, nh, "technique")], "sm");
+    assert_string_equal(r1[column(hdr, nh, "status")], "ok");
+    assert_string_equal(r2[column(hdr, nh, "status")], "ok");
+    assert_string_equal(r1[column(hdr, nh, "timing")], "sync");
+    assert_string_equal(r1[column(hdr, nh, "cascade_ms_mean")], "");   /* none has no cascade stage */
+    assert_string_not_equal(r2[column(hdr, nh, "cascade_ms_mean")], "");
+    assert_string_equal(r2[column(hdr, nh, "shadow_draw_calls_mean")], "2");
+
+    /* per-frame CSV of `none`: 6 rows, empty cascade columns, final and gpu filled */
+    snprintf(path, sizeof path, "%s/%s.csv", dir, r1[column(hdr, nh, "run_id")]);
+    char *frames = sb_read_file(path, NULL, &err);
+    assert_non_null(frames);
+    char *line = strtok(frames, "\n");
+    char fh[4096];
+    snprintf(fh, sizeof fh, "%s", line);
+    char *fhdr[64], *fr[64];
+    int nf = fields(fh, fhdr, 64);
+    int rows = 0;
+    while ((line = strtok(NULL, "\n"))) {
+        assert_int_equal(fields(line, fr, 64), nf);
+        assert_string_equal(fr[column(fhdr, nf, "cascade_ms")], "");
+        assert_string_equal(fr[column(fhdr, nf, "cascades_rendered")], "");
+        assert_string_equal(fr[column(fhdr, nf, "zpass_ms")], "");
+        assert_string_not_equal(fr[column(fhdr, nf, "final_ms")], "");
+        assert_string_equal(fr[column(fhdr, nf, "shadow_draw_calls")], "0");
+        assert_int_equal(atoi(fr[column(fhdr, nf, "frame")]), rows);
+        rows++;
+    }
+    assert_int_equal(rows, 6);
+    /* nothing half-written left behind */
+    assert_int_not_equal(sh("ls %s/*.tmp", dir), 0);
+    free(frames);
+    free(sum);
+}
+
+static void expect_fail(const char *needle, const char *fmt, ...) {
+    char cmd[8192];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(cmd, sizeof cmd, fmt, ap);
+    va_end(ap);
+    int rc = sh("%s", cmd);
+    assert_int_not_equal(rc, 0);
+    assert_non_null(strstr(g_out, needle));
+    /* one line */
+    assert_true(strchr(g_out, '\n') == NULL || strchr(g_out, '\n') == g_out + strlen(g_out) - 1);
+}
+
+static void copy_bundled(const char *name, const char *dst) {
+    char cmd[8192];
+    snprintf(cmd, sizeof cmd, "cp %s/%s %s", getenv("SB_DATA_DIR"), name, dst);
+    assert_int_equal(system(cmd), 0);
+}
+
+static void test_truncated_glb(void **st) {
+    (void)st;
+    char f[256];
+    snprintf(f, sizeof f, "%s/trunc.glb", g_tmp);
+    copy_bundled("towers.glb", f);
+    assert_int_equal(truncate(f, 5000), 0);
+    expect_fail("trunc.glb", "%s run %s plane-box sm --frames 1 --out %s/x", test_binary(), f, g_tmp);
+    assert_int_equal(truncate(f, 10), 0);
+    expect_fail("trunc.glb", "%s run %s plane-box sm --frames 1 --out %s/x", test_binary(), f, g_tmp);
+}
+
+static void test_nan_vertex(void **st) {
+    (void)st;
+    char f[256];
+    snprintf(f, sizeof f, "%s/nan.glb", g_tmp);
+    copy_bundled("plane-box.glb", f);
+    /* the first float of the BIN chunk is mesh 0's first POSITION x */
+    FILE *fp = fopen(f, "r+b");
+    assert_non_null(fp);
+    uint32_t hdr[5];
+    assert_int_equal(fread(hdr, 4, 5, fp), 5);
+    long bin = 20 + (long)hdr[3] + 8;
+    float nan = NAN;
+    fseek(fp, bin, SEEK_SET);
+    fwrite(&nan, 4, 1, fp);
+    fclose(fp);
+    expect_fail("nan.glb: /meshes/0/primitives/0/attributes/POSITION: element 0 is NaN", "%s run %s plane-box sm --frames 1 --out %s/x",
+                test_binary(), f, g_tmp);
+}
+
+static void test_bad_index(void **st) {
+    (void)st;
+    char f[256];
+    snprintf(f, sizeof f, "%s/idx.glb", g_tmp);
+    copy_bundled("plane-box.glb", f);
+    /* mesh 0 indices follow its 24 positions and 24 normals */
+    FILE *fp = fopen(f, "r+b");
+    uint32_t hdr[5];
+    assert_int_equal(fread(hdr, 4, 5, fp), 5);
+    long bin = 20 + (long)hdr[3] + 8;
+    uint32_t bad = 9999;
+    fseek(fp, bin + 24 * 24 + 4 * 5, SEEK_SET);
+    fwrite(&bad, 4, 1, fp);
+    fclose(fp);
+    expect_fail("idx.glb: /meshes/0/primitives/0/indices: index 9999 at 5 is out of range (24 vertices)",
+                "%s run %s plane-box sm --frames 1 --out %s/x", test_binary(), f, g_tmp);
+}
+
+static void test_unknown_parameter(void **st) {
+    (void)st;
+    expect_fail("sm: unknown parameter 'rez' (valid: res, bias, slope, normal, filter)",
+                "%s run plane-box plane-box sm:rez=2 --out %s/x", test_binary(), g_tmp);
+    expect_fail("unknown technique 'smm'", "%s run plane-box plane-box smm --out %s/x", test_binary(), g_tmp);
+    /* rejected before anything is written */
+    assert_int_not_equal(access(g_out, F_OK), 0);
+}
+
+static void test_malformed_path(void **st) {
+    (void)st;
+    char f[256];
+    snprintf(f, sizeof f, "%s/bad.path", g_tmp);
+    FILE *fp = fopen(f, "w");
+    fprintf(fp, "fov 60\nlook 0  0 5 10  0 0 0\nlook 1  5 5 1O  0 0 0\n");
+    fclose(fp);
+    expect_fail("bad.path:3: '1O' is not a finite number", "%s run plane-box %s sm --out %s/x", test_binary(), f, g_tmp);
+}
+
+static void test_gltf_camera_path(void **st) {
+    (void)st;
+    /* a glTF whose camera node is animated along x: keys at t=0,1,2 at x=0,5,10 */
+    float data[12] = {0, 1, 2, 0, 1, 10, 5, 1, 10, 10, 1, 10};
+    static const char b64[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    const unsigned char *in = (const unsigned char *)data;
+    char enc[128] = {0};
+    int o = 0;
+    for (int i = 0; i < 48; i += 3) {
+        uint32_t v = (uint32_t)in[i] << 16 | (uint32_t)in[i + 1] << 8 | in[i + 2];
+        enc[o++] = b64[v >> 18 & 63];
+        enc[o++] = b64[v >> 12 & 63];
+        enc[o++] = b64[v >> 6 & 63];
+        enc[o++] = b64[v & 63];
+    }
+    char f[256];
+    snprintf(f, sizeof f, "%s/cam.gltf", g_tmp);
+    FILE *fp = fopen(f, "w");
+    fprintf(fp,
+            "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],"
+            "\"nodes\":[{\"camera\":0,\"translation\":[0,1,10]}],"
+            "\"cameras\":[{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.8,\"znear\":0.5,\"zfar\":300}}],"
+            "\"buffers\":[{\"byteLength\":48,\"uri\":\"data:application/octet-stream;base64,%s\"}],"
+            "\"bufferViews\":[{\"buffer\":0,\"byteOffset\":0,\"byteLength\":12},{\"buffer\":0,\"byteOffset\":12,\"byteLength\":36}],"
+            "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"SCALAR\",\"min\":[0],\"max\":[2]},"
+            "{\"bufferView\":1,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
+            "\"animations\":[{\"channels\":[{\"sampler\":0,\"target\":{\"node\":0,\"path\":\"translation\"}}],"
+            "\"samplers\":[{\"input\":0,\"output\":1}]}]}",
+            enc);
+    fclose(fp);
+    assert_int_equal(sh("%s path '%s#camera=0' --frames 3", test_binary(), f), 0);
+    char *line = strtok(g_out, "\n");
+    assert_non_null(strstr(line, "frame,progress,t,px"));
+    const double xs[3] = {0, 5, 10};
+    for (int i = 0; i < 3; i++) {
+        line = strtok(NULL, "\n");
+        assert_non_null(line);
+        char *fl[16];
+        assert_int_equal(fields(line, fl, 16), 13);
+        assert_true(fabs(atof(fl[3]) - xs[i]) < 1e-6);
+        assert_true(fabs(atof(fl[10]) - 0.8 * 180 / SB_PI) < 1e-3);   /* fov from the glTF camera */
+        assert_true(fabs(atof(fl[11]) - 0.5) < 1e-9);                  /* near */
+    }
+    expect_fail("#camera=3: the file has 1 camera(s)", "%s path '%s#camera=3'", test_binary(), f);
+}
+
+static void test_builtin_paths(void **st) {
+    (void)st;
+    assert_int_equal(sh("%s run plane-box auto sm:res=256 --frames 2 --warmup 0 --size 64x36 --out %s/a --quiet",
+                        test_binary(), g_tmp), 0);
+    assert_int_equal(sh("%s path orbit plane-box --frames 4", test_binary()), 0);
+    expect_fail("a built-in path needs a scene", "%s path orbit", test_binary());
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_run_writes_csv),   cmocka_unit_test(test_truncated_glb),
+        cmocka_unit_test(test_nan_vertex),       cmocka_unit_test(test_bad_index),
+        cmocka_unit_test(test_unknown_parameter), cmocka_unit_test(test_malformed_path),
+        cmocka_unit_test(test_gltf_camera_path), cmocka_unit_test(test_builtin_paths),
+    };
+    return cmocka_run_group_tests_name("cli", tests, setup, teardown);
+}

@@ -1,0 +1,91 @@
+/* Integration: real rendering on llvmpipe, checked against geometry.
+ * plane-box is a 2x2x2 box on a plane under a known sun; the analytic shadow
+ * is a ray/box test for every plane pixel the camera sees. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "support.h"
+
+static void check_backend(sb_backend b) {
+    sb_session s;
+    sb_err err;
+    assert_true(pb_open(&s, b, 640, 360, &err));
+    /* the sun comes from the file's KHR_lights_punctual light (azimuth 30, elevation 50) */
+    sb_v3 expect = sb_sun_dir(30, 50);
+    assert_true(s.scene.has_sun);
+    assert_true(sb_v3_len(sb_v3_sub(s.scene.sun, expect)) < 1e-6);
+    pb_result r;
+    assert_true(pb_render(&s, "sm:res=2048", &r, NULL, &err));
+    print_message("%s: plane %ld px, shadow exact %ld, sm %ld, mismatch %ld (%.3f%% of image)\n",
+                  sb_backend_name(b), r.plane, r.shadow_exact, r.shadow_tech, r.mismatch,
+                  100.0 * r.mismatch / r.pixels);
+    assert_true(r.plane > r.pixels / 4);              /* the camera sees the plane */
+    assert_true(r.shadow_exact > r.pixels / 100);     /* and a real shadow on it */
+    assert_true(r.mismatch < r.pixels / 100);         /* within 1% of the image */
+    long diff = labs(r.shadow_tech - r.shadow_exact);
+    assert_true(diff < r.pixels / 100);
+    /* none shadows nothing */
+    assert_true(pb_render(&s, "none", &r, NULL, &err));
+    assert_int_equal(r.shadow_tech, 0);
+    sb_session_close(&s);
+}
+
+static void test_sm_matches_analytic_egl(void **st) {
+    (void)st;
+    check_backend(SB_BACKEND_EGL);
+}
+
+static void test_sm_matches_analytic_osmesa(void **st) {
+    (void)st;
+    check_backend(SB_BACKEND_OSMESA);
+}
+
+static void test_low_resolution_is_worse(void **st) {
+    (void)st;
+    sb_session s;
+    sb_err err;
+    assert_true(pb_open(&s, SB_BACKEND_EGL, 640, 360, &err));
+    pb_result lo, hi;
+    assert_true(pb_render(&s, "sm:res=64:filter=none", &lo, NULL, &err));
+    assert_true(pb_render(&s, "sm:res=2048:filter=none", &hi, NULL, &err));
+    print_message("mismatch res=64 %ld, res=2048 %ld\n", lo.mismatch, hi.mismatch);
+    assert_true(lo.mismatch > 2 * hi.mismatch);
+    sb_session_close(&s);
+}
+
+static void test_backends_agree(void **st) {
+    (void)st;
+    const int w = 320, h = 180;
+    unsigned char *va = malloc((size_t)w * h), *vb = malloc((size_t)w * h);
+    sb_session a, b;
+    sb_err err;
+    pb_result ra, rb;
+    assert_true(pb_open(&a, SB_BACKEND_EGL, w, h, &err));
+    assert_true(pb_render(&a, "sm:res=1024:filter=pcf3", &ra, va, &err));
+    sb_session_close(&a);
+    assert_true(pb_open(&b, SB_BACKEND_OSMESA, w, h, &err));
+    assert_true(pb_render(&b, "sm:res=1024:filter=pcf3", &rb, vb, &err));
+    sb_session_close(&b);
+    long differ = 0;
+    for (int i = 0; i < w * h; i++) differ += abs((int)va[i] - (int)vb[i]) > 8;
+    print_message("egl vs osmesa: %ld of %d visibility pixels differ\n", differ, w * h);
+    assert_true(differ <= w * h / 1000);
+    assert_int_equal(ra.plane, rb.plane);
+    free(va);
+    free(vb);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_sm_matches_analytic_egl),
+        cmocka_unit_test(test_sm_matches_analytic_osmesa),
+        cmocka_unit_test(test_low_resolution_is_worse),
+        cmocka_unit_test(test_backends_agree),
+    };
+    return cmocka_run_group_tests_name("planebox", tests, NULL, NULL);
+}

@@ -1,0 +1,109 @@
+#include "support.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+
+const char *test_data(const char *name) {
+    static char buf[4][4096];
+    static int k;
+    const char *dir = getenv("SB_TEST_DATA");
+    k = (k + 1) % 4;
+    snprintf(buf[k], sizeof buf[k], "%s/%s", dir ? dir : "tests/data", name);
+    return buf[k];
+}
+
+const char *test_binary(void) {
+    const char *b = getenv("SB_BINARY");
+    return b ? b : "./shadowbench";
+}
+
+int run_capture(const char *cmd, char *out, size_t len) {
+    char full[8192];
+    snprintf(full, sizeof full, "%s 2>&1", cmd);
+    FILE *p = popen(full, "r");
+    if (!p) return -1;
+    size_t n = fread(out, 1, len - 1, p);
+    out[n] = 0;
+    int st = pclose(p);
+    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+bool pb_open(sb_session *s, sb_backend backend, int w, int h, sb_err *err) {
+    sb_run_opts o;
+    sb_run_opts_defaults(&o);
+    o.backend = backend;
+    o.width = w;
+    o.height = h;
+    o.frames = 1;
+    o.warmup = 0;
+    memset(s, 0, sizeof *s);
+    return sb_session_open(s, &o, "plane-box", test_data("planebox-fixed.path"), err);
+}
+
+bool pb_box_shadows(sb_v3 p, sb_v3 d) {
+    const double lo[3] = {-1, 0, -1}, hi[3] = {1, 2, 1};
+    const double o[3] = {p.x, p.y, p.z}, v[3] = {d.x, d.y, d.z};
+    double t0 = 1e-9, t1 = 1e300;
+    for (int a = 0; a < 3; a++) {
+        if (fabs(v[a]) < 1e-15) {
+            if (o[a] < lo[a] || o[a] > hi[a]) return false;
+            continue;
+        }
+        double ta = (lo[a] - o[a]) / v[a], tb = (hi[a] - o[a]) / v[a];
+        if (ta > tb) {
+            double t = ta;
+            ta = tb;
+            tb = t;
+        }
+        if (ta > t0) t0 = ta;
+        if (tb < t1) t1 = tb;
+        if (t0 > t1) return false;
+    }
+    return true;
+}
+
+bool pb_render(sb_session *s, const char *spec, pb_result *out, unsigned char *vis_out, sb_err *err) {
+    sb_run_spec *runs = NULL;
+    int n = 0;
+    if (!sb_spec_expand(spec, NULL, &runs, &n, err)) return false;
+    sb_instance in;
+    if (!sb_instance_create(&in, s, &runs[0], err)) {
+        free(runs);
+        return false;
+    }
+    sb_frame f;
+    memset(&f, 0, sizeof f);
+    sb_timer timer;
+    sb_timer_init(&timer, SB_TIMING_SYNC, 3, 1);
+    sb_timer_frame_begin(&timer, 0);
+    sb_render_frame(s, &in, &f, 0, 1, &timer);
+    int w = s->gpu.width, h = s->gpu.height;
+    float *depth = malloc(sizeof(float) * w * h);
+    unsigned char *vis = malloc((size_t)w * h);
+    sb_gpu_readback(&s->gpu, depth, vis, NULL);
+    memset(out, 0, sizeof *out);
+    out->pixels = (long)w * h;
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            float d = depth[y * w + x];
+            if (d >= 1.0f) continue;
+            sb_v3 p = sb_frame_unproject(&f, x, y, d);
+            if (fabs(p.y) > 0.02 || fabs(p.x) > 19.9 || fabs(p.z) > 19.9) continue;
+            if (fabs(p.x) <= 1 && fabs(p.z) <= 1) continue; /* under the box */
+            out->plane++;
+            bool tech = vis[y * w + x] < 128;
+            bool exact = pb_box_shadows(p, s->gpu.sun);
+            out->shadow_tech += tech;
+            out->shadow_exact += exact;
+            out->mismatch += tech != exact;
+        }
+    if (vis_out) memcpy(vis_out, vis, (size_t)w * h);
+    free(depth);
+    free(vis);
+    sb_timer_free(&timer);
+    sb_instance_destroy(&in, s);
+    free(runs);
+    return sb_gl_check("pb_render", err);
+}
