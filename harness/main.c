@@ -30,6 +30,7 @@ static void usage(FILE *f) {
             "  --warmup N             warm-up frames, excluded (default 3)\n"
             "  --size WxH             render size (default 1280x720)\n"
             "  --sun AZ,EL            sun azimuth and elevation in degrees (overrides the scene's)\n"
+            "  --images K             write colour and visibility PNGs of every K-th frame (untimed pass)\n"
             "  --out DIR              results folder (default results); each run command writes DIR/<UTC time>/\n"
             "  --progress             progress line on stderr (default when stderr is a terminal)\n"
             "  --quiet                no notices on stderr\n");
@@ -95,6 +96,9 @@ static int parse_cli(cli *c, int argc, char **argv) {
                 c->opts.sun_el < -90 || c->opts.sun_el > 90)
                 return bad("--sun %s: expected AZIMUTH,ELEVATION in degrees (elevation -90..90)", v);
             c->opts.sun_override = true;
+        } else if (!strcmp(a, "--images")) {
+            if (!sb_parse_int(v, &n) || n < 0 || n > 1000000) return bad("--images %s: expected a frame interval >= 0", v);
+            c->opts.images = (int)n;
         } else if (!strcmp(a, "--out")) {
             c->out = v;
         } else {

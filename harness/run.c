@@ -5,6 +5,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "image.h"
 #include "stats.h"
 
 void sb_run_opts_defaults(sb_run_opts *o) {
@@ -286,6 +287,34 @@ static void progress_line(const sb_session *s, int index, int total, const char 
     if (frame == frames) fputc('\n', stderr);
 }
 
+/* Untimed pass over the same frames: readbacks never touch the timed loop. */
+static bool write_images(sb_session *s, sb_instance *in, const char *out_dir, const char *run_id, sb_err *err) {
+    char dir[4200];
+    snprintf(dir, sizeof dir, "%s/images", out_dir);
+    if (!sb_mkdir_p(dir, err)) return false;
+    const int w = s->gpu.width, h = s->gpu.height, n = s->opts.frames;
+    unsigned char *rgba = malloc((size_t)w * h * 4), *vis = malloc((size_t)w * h);
+    sb_timer timer;
+    sb_timer_init(&timer, SB_TIMING_SYNC, 1, n);
+    bool ok = true;
+    for (int i = 0; ok && i < n; i += s->opts.images) {
+        sb_frame f;
+        memset(&f, 0, sizeof f);
+        sb_timer_frame_begin(&timer, i);
+        sb_render_frame(s, in, &f, i, n, &timer);
+        sb_gpu_readback(&s->gpu, NULL, vis, rgba);
+        char path[4400];
+        snprintf(path, sizeof path, "%s/%s_f%04d_color.png", dir, run_id, i);
+        ok = sb_image_write_u8(path, w, h, 4, rgba, err);
+        snprintf(path, sizeof path, "%s/%s_f%04d_vis.png", dir, run_id, i);
+        if (ok) ok = sb_image_write_u8(path, w, h, 1, vis, err);
+    }
+    sb_timer_free(&timer);
+    free(rgba);
+    free(vis);
+    return ok;
+}
+
 bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_summary *sum, int index,
                 int total) {
     char run_id[17], path[4096];
@@ -346,6 +375,7 @@ bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_
         ok = sb_csv_file_write(&cf, &rows, &err);
     }
     if (ok) ok = sb_gl_check(spec->tech->name, &err);
+    if (ok && s->opts.images > 0) ok = write_images(s, &in, out_dir, run_id, &err);
     if (ok) ok = sb_csv_file_commit(&cf, &err);
     else sb_csv_file_abort(&cf);
     sb_instance_destroy(&in, s);

@@ -21,6 +21,7 @@ typedef struct sb_run_opts {
     bool sun_override;
     double sun_az, sun_el;      /* degrees */
     bool progress;              /* progress line on stderr */
+    int images;                 /* write images of every K-th frame (0: none), untimed pass */
 } sb_run_opts;
 
 void sb_run_opts_defaults(sb_run_opts *o);
