@@ -332,6 +332,9 @@ extern "C" bool sb_gltf_load(sb_scene *s, const char *path, sb_err *err) {
             free(bytes);
         }
         for (auto &b : model.buffers) s->content_hash = sb_fnv1a(s->content_hash, b.data.data(), b.data.size());
+        if (s->alpha_mask_draws)
+            sb_log("%s: %u alpha-masked primitive(s) are drawn as opaque casters (alpha textures are not applied)",
+                   path, s->alpha_mask_draws);
         if (images.skipped)
             sb_log("%s: %u texture(s) not decoded (shadows need none)%s", path, images.skipped,
                    model.extensionsRequired.empty() ? "" : "; required extensions ignored for geometry");

@@ -264,12 +264,87 @@ static void test_builtin_paths(void **st) {
     expect_fail("a built-in path needs a scene", "%s path orbit", test_binary());
 }
 
+/* Reads column `name` of every row of the first per-frame CSV in a run folder. */
+static int read_column(const char *dir, const char *name, char vals[][32], int max) {
+    char cmd[4400];
+    snprintf(cmd, sizeof cmd, "ls %s/*.csv | grep -v summary | head -1", dir);
+    char file[4096];
+    assert_int_equal(run_capture(cmd, file, sizeof file), 0);
+    file[strcspn(file, "\n")] = 0;
+    sb_err err;
+    char *text = sb_read_file(file, NULL, &err);
+    assert_non_null(text);
+    char *save = NULL;
+    char *line = strtok_r(text, "\n", &save);
+    char *hdr[64], hbuf[4096];
+    snprintf(hbuf, sizeof hbuf, "%s", line);
+    int nh = fields(hbuf, hdr, 64), col = column(hdr, nh, name), n = 0;
+    while ((line = strtok_r(NULL, "\n", &save)) && n < max) {
+        char *f[64];
+        fields(line, f, 64);
+        snprintf(vals[n++], 32, "%s", f[col]);
+    }
+    free(text);
+    return n;
+}
+
+static void run_dir(char *dir, size_t len, const char *fmt, ...) {
+    char cmd[8192];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(cmd, sizeof cmd, fmt, ap);
+    va_end(ap);
+    assert_int_equal(sh("%s", cmd), 0);
+    size_t dl = strcspn(g_out, "\n");
+    assert_true(dl < len);
+    memcpy(dir, g_out, dl);
+    dir[dl] = 0;
+}
+
+static void test_backends_same_draw_calls(void **st) {
+    (void)st;
+    char a[4096], b[4096];
+    run_dir(a, sizeof a, "%s run towers towers sm:res=512 --frames 8 --warmup 0 --size 160x90 --backend egl --out %s/egl --quiet",
+            test_binary(), g_tmp);
+    run_dir(b, sizeof b, "%s run towers towers sm:res=512 --frames 8 --warmup 0 --size 160x90 --backend osmesa --out %s/osm --quiet",
+            test_binary(), g_tmp);
+    const char *cols[] = {"draw_calls", "shadow_draw_calls", "triangles", "shadow_triangles", "cascades_rendered"};
+    for (size_t c = 0; c < sizeof cols / sizeof cols[0]; c++) {
+        char va[16][32], vb[16][32];
+        int na = read_column(a, cols[c], va, 16), nb = read_column(b, cols[c], vb, 16);
+        assert_int_equal(na, 8);
+        assert_int_equal(nb, 8);
+        for (int i = 0; i < na; i++) assert_string_equal(va[i], vb[i]);
+    }
+}
+
+static void test_query_timing(void **st) {
+    (void)st;
+    for (int ring = 1; ring <= 3; ring += 2) {
+        char d[4096];
+        run_dir(d, sizeof d, "%s run plane-box plane-box sm:res=256 --frames 7 --warmup 2 --size 64x36 --timing queries --ring %d --out %s/q --quiet",
+                test_binary(), ring, g_tmp);
+        char v[16][32], fr[16][32];
+        assert_int_equal(read_column(d, "cascade_ms", v, 16), 7);
+        assert_int_equal(read_column(d, "frame", fr, 16), 7);
+        for (int i = 0; i < 7; i++) {
+            assert_string_not_equal(v[i], "");
+            assert_true(atof(v[i]) >= 0);
+            assert_int_equal(atoi(fr[i]), i);   /* rows in frame order although results arrive late */
+        }
+        char cmd[4400];
+        snprintf(cmd, sizeof cmd, "grep -c ',queries,' %s/summary.csv", d);
+        assert_int_equal(sh("%s", cmd), 0);
+    }
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_run_writes_csv),   cmocka_unit_test(test_truncated_glb),
         cmocka_unit_test(test_nan_vertex),       cmocka_unit_test(test_bad_index),
         cmocka_unit_test(test_unknown_parameter), cmocka_unit_test(test_malformed_path),
         cmocka_unit_test(test_gltf_camera_path), cmocka_unit_test(test_builtin_paths),
+        cmocka_unit_test(test_backends_same_draw_calls), cmocka_unit_test(test_query_timing),
     };
     return cmocka_run_group_tests_name("cli", tests, setup, teardown);
 }
