@@ -41,28 +41,26 @@ static GLuint compile(GLenum type, const char *label, const char *defines, const
         char log[1024] = {0};
         glGetShaderInfoLog(s, sizeof log, NULL, log);
         glDeleteShader(s);
-        sb_fail(err, "%s: %s shader does not compile: %s", label, type == GL_VERTEX_SHADER ? "vertex" : "fragment",
-                log);
+        const char *kind = type == GL_VERTEX_SHADER ? "vertex" : type == GL_GEOMETRY_SHADER ? "geometry"
+                         : type == GL_COMPUTE_SHADER ? "compute" : "fragment";
+        sb_fail(err, "%s: %s shader does not compile: %s", label, kind, log);
         return 0;
     }
     return s;
 }
 
-GLuint sb_gpu_program(const char *label, const char *defines, const char *const *vs, int nvs,
-                      const char *const *fs, int nfs, sb_err *err) {
-    GLuint v = compile(GL_VERTEX_SHADER, label, defines, vs, nvs, err);
-    if (!v) return 0;
-    GLuint f = compile(GL_FRAGMENT_SHADER, label, defines, fs, nfs, err);
-    if (!f) {
-        glDeleteShader(v);
-        return 0;
-    }
+GLuint sb_gpu_link(const char *label, const char *defines, const sb_shader_src *stages, int nstages, sb_err *err) {
     GLuint p = glCreateProgram();
-    glAttachShader(p, v);
-    glAttachShader(p, f);
+    for (int i = 0; i < nstages; i++) {
+        GLuint s = compile(stages[i].type, label, defines, stages[i].parts, stages[i].count, err);
+        if (!s) {
+            glDeleteProgram(p);
+            return 0;
+        }
+        glAttachShader(p, s);
+        glDeleteShader(s);
+    }
     glLinkProgram(p);
-    glDeleteShader(v);
-    glDeleteShader(f);
     GLint ok = 0;
     glGetProgramiv(p, GL_LINK_STATUS, &ok);
     if (!ok) {
@@ -73,6 +71,12 @@ GLuint sb_gpu_program(const char *label, const char *defines, const char *const 
         return 0;
     }
     return p;
+}
+
+GLuint sb_gpu_program(const char *label, const char *defines, const char *const *vs, int nvs,
+                      const char *const *fs, int nfs, sb_err *err) {
+    const sb_shader_src st[] = {{GL_VERTEX_SHADER, vs, nvs}, {GL_FRAGMENT_SHADER, fs, nfs}};
+    return sb_gpu_link(label, defines, st, 2, err);
 }
 
 bool sb_final_prog_create(sb_final_prog *fp, const char *label, const char *vis_glsl, const char *defines,
@@ -139,14 +143,16 @@ bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int
         sb_gpu_free(g);
         return sb_fail(err, "render target %dx%d is incomplete (out of memory or unsupported size?)", w, h);
     }
-    const char *vs[] = {sb_shader_depth_vert};
+    const char *vs[] = {sb_shader_scene_vert};
     const char *fs[] = {sb_shader_depth_frag};
-    g->depth_prog = sb_gpu_program("depth", NULL, vs, 1, fs, 1, err);
-    if (!g->depth_prog) {
+    g->zpass_prog = sb_gpu_program("zpass", NULL, vs, 1, fs, 1, err);
+    if (!g->zpass_prog) {
         sb_gpu_free(g);
         return false;
     }
-    g->depth_u_mvp = glGetUniformLocation(g->depth_prog, "u_mvp");
+    g->zpass_u_view = glGetUniformLocation(g->zpass_prog, "u_view");
+    g->zpass_u_proj = glGetUniformLocation(g->zpass_prog, "u_proj");
+    g->scratch = malloc((s->draw_count + 1) * sizeof(uint32_t));
     if (!sb_gl_check("creating GPU resources", err)) {
         sb_gpu_free(g);
         return false;
@@ -155,7 +161,8 @@ bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int
 }
 
 void sb_gpu_free(sb_gpu *g) {
-    if (g->depth_prog) glDeleteProgram(g->depth_prog);
+    if (g->zpass_prog) glDeleteProgram(g->zpass_prog);
+    free(g->scratch);
     if (g->fbo) glDeleteFramebuffers(1, &g->fbo);
     GLuint tex[] = {g->color_tex, g->vis_tex, g->depth_tex};
     glDeleteTextures(3, tex);
@@ -191,30 +198,36 @@ void sb_frame_setup(sb_frame *f, sb_gpu *g, const sb_camera *cam) {
     sb_frustum_planes(f->view_proj, f->frustum);
 }
 
-void sb_stage_begin(sb_frame *f, sb_stage s) { sb_timer_stage_begin(f->timer, s); }
+void sb_stage_begin(sb_frame *f, sb_stage s) {
+    f->stage = s;
+    sb_timer_stage_begin(f->timer, s);
+}
 void sb_stage_end(sb_frame *f, sb_stage s) { sb_timer_stage_end(f->timer, s); }
 
-typedef struct {
-    sb_frame *f;
-    GLint u_color;
-    bool shadow;
-} draw_ctx;
-
-static void draw_one(uint32_t d, void *user) {
-    draw_ctx *c = user;
-    const sb_draw *dr = &c->f->gpu->scene->draws[d];
-    if (c->u_color >= 0) glUniform4fv(c->u_color, 1, dr->color);
-    glDrawElements(GL_TRIANGLES, (GLsizei)dr->index_count, GL_UNSIGNED_INT,
-                   (void *)((size_t)dr->first_index * sizeof(uint32_t)));
-    c->f->counters.draw_calls++;
-    c->f->counters.triangles += dr->index_count / 3;
-    if (c->shadow) {
-        c->f->counters.shadow_draw_calls++;
-        c->f->counters.shadow_triangles += dr->index_count / 3;
+void sb_submit(sb_frame *f, uint32_t d, int instances) {
+    const sb_draw *dr = &f->gpu->scene->draws[d];
+    const void *offset = (const void *)((size_t)dr->first_index * sizeof(uint32_t));
+    if (instances > 1) glDrawElementsInstanced(GL_TRIANGLES, (GLsizei)dr->index_count, GL_UNSIGNED_INT, offset, instances);
+    else glDrawElements(GL_TRIANGLES, (GLsizei)dr->index_count, GL_UNSIGNED_INT, offset);
+    uint64_t tris = (uint64_t)(dr->index_count / 3) * (instances > 1 ? instances : 1);
+    f->counters.draw_calls++;
+    f->counters.stage_draw_calls[f->stage]++;
+    f->counters.triangles += tris;
+    if (f->stage == SB_STAGE_CASCADE || f->stage == SB_STAGE_VOLUMES) {
+        f->counters.shadow_draw_calls++;
+        f->counters.shadow_triangles += tris;
     }
 }
 
-void sb_final_pass(sb_frame *f, const sb_final_prog *fp) {
+static void set_camera_uniforms(const sb_frame *f, GLint u_view, GLint u_proj) {
+    float m[16];
+    sb_m4_to_float(f->view, m);
+    glUniformMatrix4fv(u_view, 1, GL_FALSE, m);
+    sb_m4_to_float(f->proj, m);
+    glUniformMatrix4fv(u_proj, 1, GL_FALSE, m);
+}
+
+void sb_zpass(sb_frame *f) {
     sb_gpu *g = f->gpu;
     glBindFramebuffer(GL_FRAMEBUFFER, g->fbo);
     glViewport(0, 0, g->width, g->height);
@@ -223,30 +236,42 @@ void sb_final_pass(sb_frame *f, const sb_final_prog *fp) {
     glDepthMask(GL_TRUE);
     glEnable(GL_CULL_FACE);
     glCullFace(GL_BACK);
-    const float sky[4] = {0.55f, 0.7f, 0.9f, 1.0f}, one[4] = {1, 1, 1, 1};
-    glClearBufferfv(GL_COLOR, 0, sky);
-    glClearBufferfv(GL_COLOR, 1, one);
+    glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
     glClear(GL_DEPTH_BUFFER_BIT);
-    glUseProgram(fp->prog);
-    float m[16];
-    sb_m4_to_float(f->view, m);
-    glUniformMatrix4fv(fp->u_view, 1, GL_FALSE, m);
-    sb_m4_to_float(f->proj, m);
-    glUniformMatrix4fv(fp->u_proj, 1, GL_FALSE, m);
-    glUniform3f(fp->u_sun, (float)g->sun.x, (float)g->sun.y, (float)g->sun.z);
+    glUseProgram(g->zpass_prog);
+    set_camera_uniforms(f, g->zpass_u_view, g->zpass_u_proj);
     glBindVertexArray(g->vao);
-    draw_ctx c = {f, fp->u_color, false};
-    sb_bvh_cull(g->scene, (const double(*)[4])f->frustum, 6, draw_one, &c);
+    uint32_t n = sb_bvh_collect(g->scene, (const double(*)[4])f->frustum, 6, g->scratch);
+    for (uint32_t i = 0; i < n; i++) sb_submit(f, g->scratch[i], 1);
+    glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
     glDisable(GL_CULL_FACE);
 }
 
-uint32_t sb_draw_casters(sb_frame *f, const double (*planes)[4], int nplanes, const float light_vp[16]) {
+void sb_final_pass(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
     sb_gpu *g = f->gpu;
-    glUseProgram(g->depth_prog);
-    glUniformMatrix4fv(g->depth_u_mvp, 1, GL_FALSE, light_vp);
+    glBindFramebuffer(GL_FRAMEBUFFER, g->fbo);
+    glViewport(0, 0, g->width, g->height);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(reuse_depth ? GL_LEQUAL : GL_LESS);
+    glDepthMask(reuse_depth ? GL_FALSE : GL_TRUE);
+    glEnable(GL_CULL_FACE);
+    glCullFace(GL_BACK);
+    const float sky[4] = {0.55f, 0.7f, 0.9f, 1.0f}, one[4] = {1, 1, 1, 1};
+    glClearBufferfv(GL_COLOR, 0, sky);
+    glClearBufferfv(GL_COLOR, 1, one);
+    if (!reuse_depth) glClear(GL_DEPTH_BUFFER_BIT);
+    glUseProgram(fp->prog);
+    set_camera_uniforms(f, fp->u_view, fp->u_proj);
+    glUniform3f(fp->u_sun, (float)g->sun.x, (float)g->sun.y, (float)g->sun.z);
     glBindVertexArray(g->vao);
-    draw_ctx c = {f, -1, true};
-    return sb_bvh_cull(g->scene, planes, nplanes, draw_one, &c);
+    uint32_t n = sb_bvh_collect(g->scene, (const double(*)[4])f->frustum, 6, g->scratch);
+    for (uint32_t i = 0; i < n; i++) {
+        const sb_draw *dr = &g->scene->draws[g->scratch[i]];
+        if (fp->u_color >= 0) glUniform4fv(fp->u_color, 1, dr->color);
+        sb_submit(f, g->scratch[i], 1);
+    }
+    glDisable(GL_CULL_FACE);
+    glDepthMask(GL_TRUE);
 }
 
 void sb_gpu_readback(sb_gpu *g, float *depth, unsigned char *vis, unsigned char *rgba) {

@@ -11,10 +11,15 @@
 
 struct sb_timer;
 
+#define SB_MAX_CASCADES 8
+
 typedef struct sb_counters {
-    uint32_t draw_calls, shadow_draw_calls;
-    uint64_t triangles, shadow_triangles;
+    uint32_t draw_calls, shadow_draw_calls;         /* shadow: cascade and volumes stages */
+    uint32_t stage_draw_calls[SB_STAGE_COUNT];
+    uint64_t triangles, shadow_triangles;           /* triangles x instances submitted */
     int cascades_rendered, cascades_skipped;
+    int split_count;                                /* cascades whose far split is known this frame */
+    double splits[SB_MAX_CASCADES];                 /* view-space far distance of each cascade */
 } sb_counters;
 
 /* Shared program of the camera pass: scene.vert + final.frag + the technique's
@@ -31,8 +36,9 @@ typedef struct sb_gpu {
     sb_v3 sun;                          /* unit vector toward the sun */
     GLuint vao, vbo, ibo;
     GLuint fbo, color_tex, vis_tex, depth_tex;
-    GLuint depth_prog;                  /* shadow-map depth program */
-    GLint depth_u_mvp;
+    GLuint zpass_prog;                  /* camera depth-only program (same vertex shader as the final pass) */
+    GLint zpass_u_view, zpass_u_proj;
+    uint32_t *scratch;                  /* draw_count entries, for culling results */
     int test_bias_sign;                 /* test hook: -1 flips shadow bias (deliberately broken) */
 } sb_gpu;
 
@@ -44,6 +50,7 @@ typedef struct sb_frame {
     sb_camera cam;                      /* world space */
     sb_m4 view, proj, view_proj;        /* from origin-relative world */
     double frustum[6][4];               /* camera planes, origin-relative */
+    sb_stage stage;                     /* the stage being recorded (for draw counts) */
     sb_counters counters;
 } sb_frame;
 
@@ -54,7 +61,17 @@ void sb_gpu_read_pixels(int x, int y, int w, int h, GLenum format, GLenum type, 
 bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *scene, int width, int height, sb_v3 sun,
                  sb_err *err);
 void sb_gpu_free(sb_gpu *g);
-/* Compiles "#version 430 core" + defines + parts; the label names it in errors. */
+/* One shader stage: its type and the source parts after the common prefix. */
+typedef struct sb_shader_src {
+    GLenum type;
+    const char *const *parts;
+    int count;
+} sb_shader_src;
+
+/* Compiles each stage as "#version 430 core" + defines + common.glsl + parts
+ * and links them; the label names the program in errors. */
+GLuint sb_gpu_link(const char *label, const char *defines, const sb_shader_src *stages, int nstages, sb_err *err);
+/* Vertex + fragment shortcut of sb_gpu_link. */
 GLuint sb_gpu_program(const char *label, const char *defines, const char *const *vs, int nvs,
                       const char *const *fs, int nfs, sb_err *err);
 /* The final-pass program with the technique's visibility GLSL. */
@@ -66,11 +83,14 @@ void sb_frame_setup(sb_frame *f, sb_gpu *g, const sb_camera *cam);
 void sb_stage_begin(sb_frame *f, sb_stage s);
 void sb_stage_end(sb_frame *f, sb_stage s);
 /* Draws every camera-visible draw into the render target with fp (already
- * in use, technique uniforms set); clears first. Counts draws. */
-void sb_final_pass(sb_frame *f, const sb_final_prog *fp);
-/* Draws every caster whose AABB is inside all planes with the depth program
- * and the given light view-projection; counts shadow draws/triangles. */
-uint32_t sb_draw_casters(sb_frame *f, const double (*planes)[4], int nplanes, const float light_vp[16]);
+ * in use, technique uniforms set). Clears colour, visibility and, unless
+ * reuse_depth (a z-pass filled it; tested with LEQUAL), depth. Counts draws. */
+void sb_final_pass(sb_frame *f, const sb_final_prog *fp, bool reuse_depth);
+/* Depth-only camera pass into the render target's depth (the z-pass). */
+void sb_zpass(sb_frame *f);
+/* Issues one draw (instanced when instances > 1) with whatever program is
+ * bound, and counts it in the current stage. */
+void sb_submit(sb_frame *f, uint32_t draw, int instances);
 /* Planes (inside: n·p + d >= 0) of a clip-space box of the matrix m (Gribb-Hartmann). */
 void sb_frustum_planes(sb_m4 m, double planes[6][4]);
 /* GL error check: returns false and fills err if one is pending. */

@@ -109,3 +109,18 @@ uint32_t sb_bvh_cull(const sb_scene *s, const double (*planes)[4], int plane_cou
     if (!s->bvh.node_count) return 0;
     return cull(s, 0, planes, plane_count, visit, user);
 }
+
+typedef struct {
+    uint32_t *out, n;
+} collector;
+
+static void collect(uint32_t d, void *user) {
+    collector *c = user;
+    c->out[c->n++] = d;
+}
+
+uint32_t sb_bvh_collect(const sb_scene *s, const double (*planes)[4], int plane_count, uint32_t *out) {
+    collector c = {out, 0};
+    sb_bvh_cull(s, planes, plane_count, collect, &c);
+    return c.n;
+}

@@ -116,6 +116,8 @@ bool sb_scene_finish(sb_scene *s, sb_err *err);
 typedef void (*sb_draw_visit)(uint32_t draw, void *user);
 uint32_t sb_bvh_cull(const sb_scene *s, const double (*planes)[4], int plane_count,
                      sb_draw_visit visit, void *user);
+/* Collects the draws sb_bvh_cull would visit into out (draw_count capacity); returns how many. */
+uint32_t sb_bvh_collect(const sb_scene *s, const double (*planes)[4], int plane_count, uint32_t *out);
 bool sb_aabb_outside_plane(const sb_aabb *b, const double plane[4]);
 void sb_bvh_build(sb_scene *s);
 void sb_bvh_free(sb_bvh *b);

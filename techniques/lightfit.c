@@ -45,6 +45,34 @@ static void scan_caster(uint32_t d, void *user) {
     if (hi.z > c->zmax) c->zmax = hi.z;
 }
 
+/* Completes a fit from a light-space x/y window and the receivers' z range:
+ * extends toward the light to the farthest caster over the window (BVH). */
+static void finish_fit(const sb_scene *s, sb_v3 lo, sb_v3 hi, double shi_z, int res, sb_light_fit *out) {
+    double side[5][4], all[6][4];
+    sb_m4 probe = sb_m4_mul(sb_m4_ortho(lo.x, hi.x, lo.y, hi.y, -shi_z, -lo.z), out->view);
+    sb_frustum_planes(probe, all);
+    memcpy(side, all, 4 * sizeof all[0]);      /* x and y planes */
+    memcpy(side[4], all[5], sizeof all[0]);    /* far plane: not beyond the receivers */
+    caster_scan sc = {s, out->view, hi.z};
+    sb_bvh_cull(s, (const double(*)[4])side, 5, scan_caster, &sc);
+    double znear_l = sc.zmax, zfar_l = lo.z;   /* light space z: toward the light is +z */
+    double pad = 1e-4 * (znear_l - zfar_l) + 1e-9;
+    out->l = lo.x;
+    out->r = hi.x;
+    out->b = lo.y;
+    out->t = hi.y;
+    out->zn = -znear_l - pad;
+    out->zf = -zfar_l + pad;
+    out->proj = sb_m4_ortho(out->l, out->r, out->b, out->t, out->zn, out->zf);
+    out->view_proj = sb_m4_mul(out->proj, out->view);
+    sb_frustum_planes(out->view_proj, out->planes);
+    sb_m4 bias = sb_m4_identity();
+    bias.m[0] = bias.m[5] = bias.m[10] = 0.5;
+    bias.m[12] = bias.m[13] = bias.m[14] = 0.5;
+    out->shadow_mat = sb_m4_mul(bias, out->view_proj);
+    out->texel_world = fmax(out->r - out->l, out->t - out->b) / res;
+}
+
 void sb_light_fit_points(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int n, int res, sb_light_fit *out) {
     memset(out, 0, sizeof *out);
     out->view = sb_light_view(sun);
@@ -68,29 +96,29 @@ void sb_light_fit_points(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int n, 
     double gx = (hi.x - lo.x) / res, gy = (hi.y - lo.y) / res;
     lo.x -= gx; hi.x += gx;
     lo.y -= gy; hi.y += gy;
-    /* extend toward the light to the farthest caster overlapping the window */
-    double side[5][4];
-    sb_m4 probe = sb_m4_mul(sb_m4_ortho(lo.x, hi.x, lo.y, hi.y, -shi.z, -lo.z), out->view);
-    double all[6][4];
-    sb_frustum_planes(probe, all);
-    memcpy(side, all, 4 * sizeof all[0]);      /* x and y planes */
-    memcpy(side[4], all[5], sizeof all[0]);    /* far plane: beyond the receivers */
-    caster_scan sc = {s, out->view, hi.z};
-    sb_bvh_cull(s, (const double(*)[4])side, 5, scan_caster, &sc);
-    double znear_l = sc.zmax, zfar_l = lo.z;   /* light space z: toward the light is +z */
-    double pad = 1e-4 * (znear_l - zfar_l) + 1e-9;
-    out->l = lo.x;
-    out->r = hi.x;
-    out->b = lo.y;
-    out->t = hi.y;
-    out->zn = -znear_l - pad;
-    out->zf = -zfar_l + pad;
-    out->proj = sb_m4_ortho(out->l, out->r, out->b, out->t, out->zn, out->zf);
-    out->view_proj = sb_m4_mul(out->proj, out->view);
-    sb_frustum_planes(out->view_proj, out->planes);
-    sb_m4 bias = sb_m4_identity();
-    bias.m[0] = bias.m[5] = bias.m[10] = 0.5;
-    bias.m[12] = bias.m[13] = bias.m[14] = 0.5;
-    out->shadow_mat = sb_m4_mul(bias, out->view_proj);
-    out->texel_world = fmax(out->r - out->l, out->t - out->b) / res;
+    finish_fit(s, lo, hi, shi.z, res, out);
+}
+
+void sb_light_fit_stable(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int n, int res, sb_light_fit *out) {
+    memset(out, 0, sizeof *out);
+    out->view = sb_light_view(sun);
+    /* a bounding sphere of the slice: its size does not change when the camera rotates */
+    sb_v3 c = {0, 0, 0};
+    for (int i = 0; i < n; i++) c = sb_v3_add(c, pts[i]);
+    c = sb_v3_scale(c, 1.0 / n);
+    double r = 0;
+    for (int i = 0; i < n; i++) r = fmax(r, sb_v3_len(sb_v3_sub(pts[i], c)));
+    /* quantise the radius so rounding noise cannot change the texel size */
+    double q = pow(2.0, floor(log2(r)) - 8);
+    r = ceil(r / q) * q;
+    double texel = 2 * r / res;
+    sb_v3 cl = sb_m4_point(out->view, c);
+    /* snap the window origin to whole texels: a translating camera moves it by whole texels only */
+    cl.x = floor(cl.x / texel) * texel;
+    cl.y = floor(cl.y / texel) * texel;
+    sb_v3 slo, shi;
+    box_in_light(out->view, &s->bounds, &slo, &shi);
+    /* depth spans the scene: a range that followed the camera would move every depth value */
+    sb_v3 lo = {cl.x - r, cl.y - r, slo.z}, hi = {cl.x + r, cl.y + r, shi.z};
+    finish_fit(s, lo, hi, shi.z, res, out);
 }

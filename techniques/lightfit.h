@@ -21,3 +21,6 @@ void sb_frustum_corners(const sb_camera *cam, sb_v3 origin, double znear, double
  * extends it toward the light to the farthest caster overlapping its x/y
  * window (BVH query), and sets the far plane at the receivers. */
 void sb_light_fit_points(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int n, int res, sb_light_fit *out);
+/* Stable variant: a bounding sphere of the points (rotation-invariant size)
+ * whose light-space window is snapped to whole texels (no shimmer). */
+void sb_light_fit_stable(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int n, int res, sb_light_fit *out);

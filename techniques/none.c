@@ -17,7 +17,7 @@ static void none_frame(void *state, sb_frame *f) {
     none_state *s = state;
     sb_stage_begin(f, SB_STAGE_FINAL);
     glUseProgram(s->fp.prog);
-    sb_final_pass(f, &s->fp);
+    sb_final_pass(f, &s->fp, false);
     sb_stage_end(f, SB_STAGE_FINAL);
 }
 

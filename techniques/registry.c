@@ -7,8 +7,9 @@
 
 extern const sb_technique sb_technique_none;
 extern const sb_technique sb_technique_sm;
+extern const sb_technique sb_technique_pssm;
 
-static const sb_technique *const all[] = {&sb_technique_none, &sb_technique_sm};
+static const sb_technique *const all[] = {&sb_technique_none, &sb_technique_sm, &sb_technique_pssm};
 
 const char *const sb_stage_names[SB_STAGE_COUNT] = {"zpass", "minmax", "cascade", "final", "volumes", "rays"};
 

@@ -1,4 +1,5 @@
-// scene.vert - camera pass: positions are relative to the scene origin.
+// scene.vert - camera pass (and the z-pass, which must produce the same depth:
+// gl_Position is invariant). Positions are relative to the scene origin.
 layout(location = 0) in vec3 a_pos;
 layout(location = 1) in vec3 a_nrm;
 uniform mat4 u_view;
@@ -6,6 +7,7 @@ uniform mat4 u_proj;
 out vec3 v_pos;
 out vec3 v_nrm;
 out float v_view_z;
+invariant gl_Position;
 void main() {
     vec4 vp = u_view * vec4(a_pos, 1.0);
     v_pos = a_pos;

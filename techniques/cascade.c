@@ -1,0 +1,250 @@
+/* cascade.c - shared cascade machinery (see cascade.h). */
+#include "cascade.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "shaders.h"
+
+void sb_split_distances(double lambda, int m, double n, double f, double *out) {
+    out[0] = n;
+    for (int i = 1; i < m; i++) {
+        double lg = n * pow(f / n, (double)i / m);
+        double un = n + (f - n) * i / m;
+        out[i] = lambda * lg + (1 - lambda) * un;
+    }
+    out[m] = f;
+}
+
+static bool has_param(const sb_params *p, const char *name) { return !isnan(sb_param_num(p, name)); }
+
+bool sb_csm_create(sb_csm *c, sb_gpu *g, const sb_params *p, const char *name, sb_err *err) {
+    memset(c, 0, sizeof *c);
+    c->gpu = g;
+    c->res = (int)sb_param_num(p, "res");
+    c->count = has_param(p, "cascades") ? (int)sb_param_num(p, "cascades") : 1;
+    c->filter = sb_param_choice(p, "filter");
+    c->select = has_param(p, "select") ? sb_param_choice(p, "select") : 0;
+    c->blend = has_param(p, "blend") ? sb_param_num(p, "blend") : 0;
+    c->stable = sb_param_choice(p, "stable") == 1;
+    c->bias = sb_param_num(p, "bias");
+    c->slope = sb_param_num(p, "slope");
+    c->normal = sb_param_num(p, "normal");
+    int depth = sb_param_choice(p, "depth");
+    c->depth_format = depth == 0 ? GL_DEPTH_COMPONENT16 : depth == 1 ? GL_DEPTH_COMPONENT24 : GL_DEPTH_COMPONENT32F;
+    int layered = has_param(p, "layered") ? sb_param_choice(p, "layered") : 0;
+    const sb_context *ctx = g->ctx;
+    if (layered == 3) layered = ctx->has_vs_layer ? SB_LAYERED_VS : SB_LAYERED_GS; /* on: the best available */
+    if (layered == SB_LAYERED_VS && !ctx->has_vs_layer)
+        return sb_fail(err, "%s:layered=vs needs GL_ARB_shader_viewport_layer_array, which %s lacks", name,
+                       ctx->renderer);
+    c->layered = layered;
+    GLint max_size = 0, max_layers = 0;
+    glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
+    glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &max_layers);
+    if (c->res > max_size) return sb_fail(err, "%s:res=%d exceeds GL_MAX_TEXTURE_SIZE %d", name, c->res, max_size);
+    c->mask = calloc(g->scene->draw_count + 1, 1);
+
+    glGenTextures(1, &c->tex);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, c->tex);
+    glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, c->depth_format, c->res, c->res, c->count);
+    GLint filt = c->filter == 0 || c->filter == 2 || c->filter == 3 ? GL_NEAREST : GL_LINEAR;
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, filt);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, filt);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+    glGenFramebuffers(1, &c->fbo_all);
+    glBindFramebuffer(GL_FRAMEBUFFER, c->fbo_all);
+    glFramebufferTexture(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, c->tex, 0);
+    glDrawBuffer(GL_NONE);
+    glReadBuffer(GL_NONE);
+    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        return sb_fail(err, "%s:res=%d:cascades=%d: layered shadow framebuffer is incomplete", name, c->res, c->count);
+    glGenFramebuffers(c->count, c->fbo_layer);
+    for (int k = 0; k < c->count; k++) {
+        glBindFramebuffer(GL_FRAMEBUFFER, c->fbo_layer[k]);
+        glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, c->tex, 0, k);
+        glDrawBuffer(GL_NONE);
+        glReadBuffer(GL_NONE);
+    }
+    glGenBuffers(1, &c->block);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, c->block);
+    glBufferData(GL_SHADER_STORAGE_BUFFER, sizeof(sb_cascade_block), NULL, GL_DYNAMIC_DRAW);
+
+    const char *fs_depth[] = {sb_shader_depth_frag};
+    const char *vs_cascade[] = {sb_shader_csm_block_glsl, sb_shader_csm_depth_vert};
+    const sb_shader_src per[] = {{GL_VERTEX_SHADER, vs_cascade, 2}, {GL_FRAGMENT_SHADER, fs_depth, 1}};
+    c->prog_cascade = sb_gpu_link("cascade depth", NULL, per, 2, err);
+    if (!c->prog_cascade) return false;
+    c->u_cascade = glGetUniformLocation(c->prog_cascade, "u_cascade");
+    if (c->layered == SB_LAYERED_GS) {
+        const char *vs[] = {sb_shader_csm_layer_gs_vert};
+        const char *gs[] = {sb_shader_csm_block_glsl, sb_shader_csm_layer_geom};
+        const sb_shader_src st[] = {{GL_VERTEX_SHADER, vs, 1}, {GL_GEOMETRY_SHADER, gs, 2},
+                                    {GL_FRAGMENT_SHADER, fs_depth, 1}};
+        c->prog_gs = sb_gpu_link("layered (geometry shader)", NULL, st, 3, err);
+        if (!c->prog_gs) return false;
+        c->u_mask_gs = glGetUniformLocation(c->prog_gs, "u_mask");
+    } else if (c->layered == SB_LAYERED_VS) {
+        const char *vs[] = {sb_shader_csm_block_glsl, sb_shader_csm_layer_vs_vert};
+        const sb_shader_src st[] = {{GL_VERTEX_SHADER, vs, 2}, {GL_FRAGMENT_SHADER, fs_depth, 1}};
+        c->prog_vs = sb_gpu_link("layered (vertex shader)", "#extension GL_ARB_shader_viewport_layer_array : require\n",
+                                 st, 2, err);
+        if (!c->prog_vs) return false;
+        c->u_mask_vs = glGetUniformLocation(c->prog_vs, "u_mask");
+    }
+    char defines[128];
+    snprintf(defines, sizeof defines, "#define SB_FILTER %d\n#define SB_SELECT %d\n", c->filter, c->select);
+    char vis[16384];
+    snprintf(vis, sizeof vis, "%s%s", sb_shader_csm_block_glsl, sb_shader_vis_csm_glsl);
+    if (!sb_final_prog_create(&c->fp, name, vis, defines, err)) return false;
+    c->u_shadow = glGetUniformLocation(c->fp.prog, "u_shadow");
+    c->u_bias = glGetUniformLocation(c->fp.prog, "u_bias");
+    c->u_normal = glGetUniformLocation(c->fp.prog, "u_normal");
+    c->u_blend = glGetUniformLocation(c->fp.prog, "u_blend");
+    c->u_light = glGetUniformLocation(c->fp.prog, "u_light");
+    c->u_texel = glGetUniformLocation(c->fp.prog, "u_texel");
+    return sb_gl_check(name, err);
+}
+
+void sb_csm_destroy(sb_csm *c) {
+    sb_final_prog_free(&c->fp);
+    GLuint progs[] = {c->prog_cascade, c->prog_gs, c->prog_vs};
+    for (size_t i = 0; i < SB_COUNT(progs); i++)
+        if (progs[i]) glDeleteProgram(progs[i]);
+    if (c->fbo_all) glDeleteFramebuffers(1, &c->fbo_all);
+    if (c->fbo_layer[0]) glDeleteFramebuffers(c->count, c->fbo_layer);
+    if (c->tex) glDeleteTextures(1, &c->tex);
+    if (c->block) glDeleteBuffers(1, &c->block);
+    free(c->mask);
+    memset(c, 0, sizeof *c);
+}
+
+void sb_csm_fit_slice(const sb_csm *c, const sb_frame *f, double zn, double zf, sb_light_fit *out) {
+    const sb_scene *s = f->gpu->scene;
+    sb_v3 corners[8];
+    sb_frustum_corners(&f->cam, s->origin, zn, zf, corners);
+    if (c->stable) sb_light_fit_stable(s, f->gpu->sun, corners, 8, c->res, out);
+    else sb_light_fit_points(s, f->gpu->sun, corners, 8, c->res, out);
+}
+
+/* Is any draw (a receiver) inside the camera frustum between view depths zn and zf? */
+static bool slice_has_receivers(const sb_frame *f, double zn, double zf) {
+    double planes[6][4];
+    memcpy(planes, f->frustum, sizeof planes);
+    /* replace near/far (4, 5) with the slice's planes: forward·(p - eye) in [zn, zf] */
+    sb_v3 eye = sb_v3_sub(f->cam.pos, f->gpu->scene->origin), fw = f->cam.forward;
+    double d = sb_v3_dot(fw, eye);
+    planes[4][0] = fw.x; planes[4][1] = fw.y; planes[4][2] = fw.z; planes[4][3] = -d - zn;
+    planes[5][0] = -fw.x; planes[5][1] = -fw.y; planes[5][2] = -fw.z; planes[5][3] = d + zf;
+    return sb_bvh_collect(f->gpu->scene, (const double(*)[4])planes, 6, f->gpu->scratch) > 0;
+}
+
+static void block_put(sb_csm *c, int k, const sb_light_fit *fit, double zn, double zf, bool active) {
+    sb_m4_to_float(fit->view_proj, c->cpu.light_vp[k]);
+    sb_m4_to_float(fit->shadow_mat, c->cpu.shadow_mat[k]);
+    c->cpu.cascade[k][0] = (float)zn;
+    c->cpu.cascade[k][1] = (float)zf;
+    c->cpu.cascade[k][2] = (float)fit->texel_world;
+    c->cpu.cascade[k][3] = (float)(fit->zf - fit->zn);
+    c->cpu.flags[k][0] = active ? 1.0f : 0.0f;
+}
+
+void sb_csm_fit(sb_csm *c, sb_frame *f, const double *splits) {
+    memset(&c->cpu, 0, sizeof c->cpu);
+    c->cpu.info[0] = (float)c->count;
+    for (int k = 0; k <= c->count; k++) c->splits[k] = splits[k];
+    f->counters.split_count = c->count;
+    for (int k = 0; k < c->count; k++) {
+        double zn = splits[k], zf = splits[k + 1];
+        f->counters.splits[k] = zf;
+        c->active[k] = zf > zn && slice_has_receivers(f, zn, zf);
+        if (c->active[k]) sb_csm_fit_slice(c, f, zn, zf, &c->fit[k]);
+        else memset(&c->fit[k], 0, sizeof c->fit[k]);
+        block_put(c, k, &c->fit[k], zn, zf, c->active[k]);
+    }
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, c->block);
+    glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof c->cpu, &c->cpu);
+}
+
+uint32_t sb_csm_cull(sb_csm *c, sb_frame *f, const sb_light_fit *bound) {
+    const sb_scene *s = f->gpu->scene;
+    memset(c->mask, 0, s->draw_count);
+    uint32_t *list = f->gpu->scratch;
+    for (int k = 0; k < c->count; k++) {
+        if (!bound && !c->active[k]) continue;
+        const sb_light_fit *fit = bound ? bound : &c->fit[k];
+        uint32_t n = sb_bvh_collect(s, (const double(*)[4])fit->planes, 6, list);
+        for (uint32_t i = 0; i < n; i++) c->mask[list[i]] |= (uint8_t)(1u << k);
+    }
+    uint32_t casters = 0;
+    for (uint32_t d = 0; d < s->draw_count; d++) casters += c->mask[d] != 0;
+    return casters;
+}
+
+static int popcount8(unsigned m) {
+    int n = 0;
+    for (; m; m &= m - 1) n++;
+    return n;
+}
+
+void sb_csm_render(sb_csm *c, sb_frame *f) {
+    sb_gpu *g = f->gpu;
+    const sb_scene *s = g->scene;
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, c->block);
+    glBindFramebuffer(GL_FRAMEBUFFER, c->fbo_all);
+    glViewport(0, 0, c->res, c->res);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    glClear(GL_DEPTH_BUFFER_BIT);   /* every layer */
+    glEnable(GL_DEPTH_CLAMP);
+    if (c->slope > 0) {
+        glEnable(GL_POLYGON_OFFSET_FILL);
+        glPolygonOffset((float)(c->slope * g->test_bias_sign), 0.0f);
+    }
+    glBindVertexArray(g->vao);
+    int rendered = 0;
+    for (int k = 0; k < c->count; k++) rendered += c->active[k];
+    f->counters.cascades_rendered = rendered;
+    f->counters.cascades_skipped = c->count - rendered;
+    if (c->layered == SB_LAYERED_OFF) {
+        glUseProgram(c->prog_cascade);
+        for (int k = 0; k < c->count; k++) {
+            if (!c->active[k]) continue;
+            glBindFramebuffer(GL_FRAMEBUFFER, c->fbo_layer[k]);
+            glUniform1i(c->u_cascade, k);
+            for (uint32_t d = 0; d < s->draw_count; d++)
+                if (c->mask[d] & (1u << k)) sb_submit(f, d, 1);
+        }
+    } else {
+        bool gs = c->layered == SB_LAYERED_GS;
+        glUseProgram(gs ? c->prog_gs : c->prog_vs);
+        GLint u_mask = gs ? c->u_mask_gs : c->u_mask_vs;
+        for (uint32_t d = 0; d < s->draw_count; d++) {
+            unsigned m = c->mask[d];
+            if (!m) continue;
+            glUniform1ui(u_mask, m);
+            sb_submit(f, d, gs ? 1 : popcount8(m));
+        }
+    }
+    glDisable(GL_POLYGON_OFFSET_FILL);
+    glDisable(GL_DEPTH_CLAMP);
+}
+
+void sb_csm_final(sb_csm *c, sb_frame *f, bool reuse_depth) {
+    sb_gpu *g = f->gpu;
+    glUseProgram(c->fp.prog);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, c->block);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, c->tex);
+    glUniform1i(c->u_shadow, 0);
+    glUniform1f(c->u_bias, (float)(g->test_bias_sign * c->bias));
+    glUniform1f(c->u_normal, (float)(g->test_bias_sign * c->normal));
+    glUniform1f(c->u_blend, (float)c->blend);
+    glUniform3f(c->u_light, (float)g->sun.x, (float)g->sun.y, (float)g->sun.z);
+    glUniform2f(c->u_texel, 1.0f / c->res, 1.0f / c->res);
+    sb_final_pass(f, &c->fp, reuse_depth);
+}

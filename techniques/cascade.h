@@ -1,0 +1,78 @@
+/* cascade.h - the shared cascade machinery, written once: split schemes,
+ * per-slice light fits (lightfit.c), stabilisation, receiver checks, exact
+ * caster culling per cascade over the BVH, layered or per-cascade submission
+ * into one 2D-array shadow map, and the final-pass lookup (vis_csm.glsl).
+ * sm is one cascade over the whole view; pssm and sdsm differ only in where
+ * their splits come from. */
+#pragma once
+#include "lightfit.h"
+
+/* Parameters every shadow-map technique has. */
+#define SB_SHADOWMAP_PARAMS                                                                                    \
+    {"res", SB_PARAM_INT, "2048", 64, 16384, NULL, "shadow map resolution (texels per side, per cascade)"},     \
+    {"depth", SB_PARAM_ENUM, "32f", 0, 0, "16|24|32f", "shadow map depth format"},                             \
+    {"bias", SB_PARAM_FLOAT, "1", 0, 100, NULL, "constant depth bias, in shadow texels of world size"},        \
+    {"slope", SB_PARAM_FLOAT, "2", 0, 100, NULL, "slope-scaled bias (glPolygonOffset factor)"},                \
+    {"normal", SB_PARAM_FLOAT, "1", 0, 100, NULL, "normal offset, in shadow texels"},                          \
+    {"filter", SB_PARAM_ENUM, "hw", 0, 0, "none|hw|pcf3|pcf5|poisson16", "shadow filter"},                     \
+    {"stable", SB_PARAM_ENUM, "off", 0, 0, "off|on", "sphere fit and texel snapping: no shimmer when moving"}
+
+/* Parameters of the cascaded techniques. */
+#define SB_CASCADE_PARAMS                                                                                      \
+    {"cascades", SB_PARAM_INT, "4", 1, 8, NULL, "number of cascades"},                                         \
+    {"select", SB_PARAM_ENUM, "interval", 0, 0, "interval|map", "cascade selection: by view depth or by map"}, \
+    {"blend", SB_PARAM_FLOAT, "0", 0, 0.5, NULL, "blend band between cascades (fraction of a cascade)"},       \
+    {"layered", SB_PARAM_ENUM, "off", 0, 0, "off|gs|vs|on",                                                    \
+     "per-cascade draws, or one draw per caster routed by a geometry shader / vertex-shader gl_Layer"}
+
+enum { SB_LAYERED_OFF, SB_LAYERED_GS, SB_LAYERED_VS };
+enum { SB_SPLIT_UNIFORM, SB_SPLIT_LOG, SB_SPLIT_PRACTICAL };
+
+/* Split distances out[0..m] over [n, f]: practical = lambda*log + (1-lambda)*uniform. */
+void sb_split_distances(double lambda, int m, double n, double f, double *out);
+
+/* The cascade block as the GPU sees it (std430, csm_block.glsl). */
+typedef struct sb_cascade_block {
+    float light_vp[SB_MAX_CASCADES][16];
+    float shadow_mat[SB_MAX_CASCADES][16];
+    float cascade[SB_MAX_CASCADES][4];   /* near split, far split, texel world size, depth range */
+    float flags[SB_MAX_CASCADES][4];     /* x: rendered */
+    float info[4];                       /* x: count */
+} sb_cascade_block;
+
+typedef struct sb_csm {
+    sb_gpu *gpu;
+    int res, count, filter, select, layered, stable;
+    double bias, slope, normal, blend;
+    GLenum depth_format;
+    GLuint tex, fbo_all, fbo_layer[SB_MAX_CASCADES];
+    GLuint block;                         /* SSBO, binding 0 */
+    GLuint prog_cascade, prog_gs, prog_vs;
+    GLint u_cascade, u_mask_gs, u_mask_vs;
+    sb_final_prog fp;
+    GLint u_shadow, u_bias, u_normal, u_blend, u_light, u_texel;
+    /* this frame */
+    double splits[SB_MAX_CASCADES + 1];
+    sb_light_fit fit[SB_MAX_CASCADES];
+    bool active[SB_MAX_CASCADES];
+    uint8_t *mask;                        /* per draw: cascades it is a caster of */
+    sb_cascade_block cpu;
+} sb_csm;
+
+/* Reads the shadow-map (and, if present, cascade) parameters; cascades
+ * defaults to 1 when the technique has no `cascades` parameter. */
+bool sb_csm_create(sb_csm *c, sb_gpu *g, const sb_params *p, const char *name, sb_err *err);
+void sb_csm_destroy(sb_csm *c);
+/* CPU fits: cascade k covers view depth [splits[k], splits[k+1]]; a slice
+ * with no receiver in view is skipped. Uploads the cascade block and records
+ * splits in the frame's counters. */
+void sb_csm_fit(sb_csm *c, sb_frame *f, const double *splits);
+/* Light-space fit for one slice (exposed for tests): sphere + snapping when stable. */
+void sb_csm_fit_slice(const sb_csm *c, const sb_frame *f, double zn, double zf, sb_light_fit *out);
+/* Per-cascade caster culling into c->mask; cascades whose block was written by
+ * the GPU (gpu_fits) are culled against `bound` instead. Returns casters. */
+uint32_t sb_csm_cull(sb_csm *c, sb_frame *f, const sb_light_fit *bound);
+/* The cascade stage's draws: layered or per cascade, into the array map. */
+void sb_csm_render(sb_csm *c, sb_frame *f);
+/* The final pass with the cascade lookup. */
+void sb_csm_final(sb_csm *c, sb_frame *f, bool reuse_depth);

@@ -1,0 +1,24 @@
+// csm_layer.geom - layered shadow pass: each caster is drawn once; every
+// triangle is routed (gl_Layer) to each cascade whose map it touches.
+layout(triangles) in;
+layout(triangle_strip, max_vertices = 24) out;
+in vec3 g_pos[];
+uniform uint u_mask;    // cascades this caster's bounds intersect (CPU culling)
+void main() {
+    int n = int(sb_info.x);
+    for (int c = 0; c < n; c++) {
+        if (((u_mask >> uint(c)) & 1u) == 0u || sb_flags[c].x < 0.5) continue;
+        vec4 p0 = sb_light_vp[c] * vec4(g_pos[0], 1.0);
+        vec4 p1 = sb_light_vp[c] * vec4(g_pos[1], 1.0);
+        vec4 p2 = sb_light_vp[c] * vec4(g_pos[2], 1.0);
+        // orthographic: w = 1; skip triangles entirely outside one side of the map
+        if (p0.x > 1.0 && p1.x > 1.0 && p2.x > 1.0) continue;
+        if (p0.x < -1.0 && p1.x < -1.0 && p2.x < -1.0) continue;
+        if (p0.y > 1.0 && p1.y > 1.0 && p2.y > 1.0) continue;
+        if (p0.y < -1.0 && p1.y < -1.0 && p2.y < -1.0) continue;
+        gl_Layer = c; gl_Position = p0; EmitVertex();
+        gl_Layer = c; gl_Position = p1; EmitVertex();
+        gl_Layer = c; gl_Position = p2; EmitVertex();
+        EndPrimitive();
+    }
+}

@@ -1,0 +1,70 @@
+// vis_csm.glsl - shadow lookup for every shadow-map technique (sm is one cascade).
+// SB_FILTER: 0 none (1 nearest tap), 1 hw (bilinear 2x2 compare), 2 pcf3, 3 pcf5, 4 poisson16
+// SB_SELECT: 0 interval (by view depth), 1 map (first map that contains the point)
+uniform sampler2DArrayShadow u_shadow;
+uniform float u_bias;       // constant bias, in shadow texels
+uniform float u_normal;     // normal offset, in shadow texels
+uniform float u_blend;      // blend band, fraction of a cascade's depth range
+uniform vec3 u_light;       // toward the light
+uniform vec2 u_texel;       // 1 / shadow map size
+
+float sb_tap(vec3 c, float layer, vec2 off) {
+    return texture(u_shadow, vec4(c.xy + off * u_texel, layer, c.z));
+}
+
+float sb_lookup(int k, vec3 p, vec3 n) {
+    float texel = sb_cascade[k].z;
+    float cosl = clamp(dot(n, u_light), -1.0, 1.0);
+    vec3 q = p + n * (u_normal * texel * sqrt(1.0 - cosl * cosl));
+    vec3 c = (sb_shadow_mat[k] * vec4(q, 1.0)).xyz;
+    if (c.x < 0.0 || c.x > 1.0 || c.y < 0.0 || c.y > 1.0 || c.z > 1.0) return 1.0;
+    c.z -= u_bias * texel / sb_cascade[k].w;
+    float layer = float(k);
+#if SB_FILTER == 0 || SB_FILTER == 1
+    return sb_tap(c, layer, vec2(0.0));
+#elif SB_FILTER == 2 || SB_FILTER == 3
+    const int r = SB_FILTER == 2 ? 1 : 2;
+    float sum = 0.0;
+    for (int y = -r; y <= r; y++)
+        for (int x = -r; x <= r; x++) sum += sb_tap(c, layer, vec2(x, y));
+    return sum / float((2 * r + 1) * (2 * r + 1));
+#else
+    const vec2 disk[16] = vec2[](
+        vec2(-0.942, -0.399), vec2(0.946, -0.769), vec2(-0.094, -0.929), vec2(0.345, 0.294),
+        vec2(-0.916, 0.458), vec2(-0.815, -0.879), vec2(-0.383, 0.277), vec2(0.975, 0.756),
+        vec2(0.443, -0.975), vec2(0.537, -0.474), vec2(-0.265, -0.419), vec2(0.792, 0.191),
+        vec2(-0.242, 0.997), vec2(-0.814, 0.914), vec2(0.200, 0.786), vec2(0.144, -0.141));
+    float sum = 0.0;
+    for (int i = 0; i < 16; i++) sum += sb_tap(c, layer, disk[i] * 1.5);
+    return sum / 16.0;
+#endif
+}
+
+int sb_select(vec3 p, float view_z) {
+    int n = int(sb_info.x);
+#if SB_SELECT == 0
+    for (int k = 0; k < n; k++)
+        if (view_z <= sb_cascade[k].y && sb_flags[k].x > 0.5) return k;
+#else
+    for (int k = 0; k < n; k++) {
+        if (sb_flags[k].x < 0.5) continue;
+        vec3 c = (sb_shadow_mat[k] * vec4(p, 1.0)).xyz;
+        vec2 m = 2.0 * u_texel;   // keep filter taps inside the map
+        if (all(greaterThanEqual(c.xy, m)) && all(lessThanEqual(c.xy, 1.0 - m)) && c.z <= 1.0 && c.z >= 0.0) return k;
+    }
+#endif
+    return -1;
+}
+
+float sb_visibility(vec3 p, vec3 n, float view_z) {
+    int k = sb_select(p, view_z);
+    if (k < 0) return 1.0;
+    float v = sb_lookup(k, p, n);
+    int count = int(sb_info.x);
+    if (u_blend > 0.0 && k + 1 < count && sb_flags[k + 1].x > 0.5) {
+        float band = u_blend * (sb_cascade[k].y - sb_cascade[k].x);
+        float start = sb_cascade[k].y - band;
+        if (view_z > start) v = mix(v, sb_lookup(k + 1, p, n), clamp((view_z - start) / band, 0.0, 1.0));
+    }
+    return v;
+}
