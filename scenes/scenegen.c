@@ -324,11 +324,12 @@ static int gen_towers(const char *dir) {
     rc |= write_text(p,
                      "# towers: down a narrow street between skyscrapers, then up above the roofs (25 s)\n"
                      "fov 60\n"
-                     "look 0    -0.0 2 -120    0 3 -60\n"
-                     "look 6    0.0 2 -40      0 4 20\n"
-                     "look 12   0.0 3 30       40 10 60\n"
-                     "look 18   20 60 80       0 20 0\n"
-                     "look 25   120 200 200    0 0 0\n");
+                     "look 0    0 4 -120    0 4 -60\n"
+                     "look 5    0 4 -60     0 5 0\n"
+                     "look 10   0 5 0       10 8 60\n"
+                     "look 14   2 20 40     20 15 80\n"
+                     "look 19   20 80 90    0 20 0\n"
+                     "look 25   120 200 200 0 0 0\n");
     return rc;
 }
 
