@@ -40,12 +40,14 @@ typedef struct sb_gpu {
     GLint zpass_u_view, zpass_u_proj;
     uint32_t *scratch;                  /* draw_count entries, for culling results */
     int test_bias_sign;                 /* test hook: -1 flips shadow bias (deliberately broken) */
+    int run_frames;                     /* frames the current run will render (warm-up included) */
 } sb_gpu;
 
 typedef struct sb_frame {
     sb_gpu *gpu;
     struct sb_timer *timer;
-    int index;
+    int index;                          /* frame of the path */
+    int seq;                            /* position in the run (warm-up frames first) */
     double progress;
     sb_camera cam;                      /* world space */
     sb_m4 view, proj, view_proj;        /* from origin-relative world */

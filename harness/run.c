@@ -95,13 +95,18 @@ void sb_instance_destroy(sb_instance *in, sb_session *s) {
     in->state = NULL;
 }
 
-void sb_render_frame(sb_session *s, sb_instance *in, sb_frame *f, int i, int n, sb_timer *timer) {
-    sb_camera cam = sb_path_camera(&s->path, i, n, (double)s->opts.width / s->opts.height, &s->scene);
+void sb_render_camera(sb_session *s, sb_instance *in, sb_frame *f, const sb_camera *cam, int seq, sb_timer *timer) {
     f->timer = timer;
+    f->seq = seq;
+    sb_frame_setup(f, &s->gpu, cam);
+    in->tech->frame(in->state, f);
+}
+
+void sb_render_frame(sb_session *s, sb_instance *in, sb_frame *f, int i, int n, int seq, sb_timer *timer) {
+    sb_camera cam = sb_path_camera(&s->path, i, n, (double)s->opts.width / s->opts.height, &s->scene);
     f->index = i;
     f->progress = sb_path_progress(i, n);
-    sb_frame_setup(f, &s->gpu, &cam);
-    in->tech->frame(in->state, f);
+    sb_render_camera(s, in, f, &cam, seq, timer);
 }
 
 void sb_run_id(const sb_session *s, const sb_run_spec *spec, char out[17]) {
@@ -181,6 +186,17 @@ static void frame_header(sb_csv *c) {
     sb_csv_str(c, "gpu_ms");
     sb_csv_str(c, "cpu_ms");
     sb_csv_str(c, "wall_ms");
+    for (int s = 0; s < SB_STAGE_COUNT; s++) {
+        if (s == SB_STAGE_MINMAX || s == SB_STAGE_RAYS) continue; /* stages that draw nothing */
+        char name[40];
+        snprintf(name, sizeof name, "%s_draw_calls", sb_stage_names[s]);
+        sb_csv_str(c, name);
+    }
+    for (int k = 0; k < SB_MAX_CASCADES; k++) {
+        char name[16];
+        snprintf(name, sizeof name, "split_%d", k + 1);
+        sb_csv_str(c, name);
+    }
     sb_csv_end_row(c);
 }
 
@@ -212,6 +228,15 @@ static void frame_row(sb_csv *c, int frame, const frame_rec *r, const sb_stage_t
     sb_csv_num(c, frame_gpu_ms(t));
     sb_csv_num(c, r->cpu_ms);
     sb_csv_num(c, r->wall_ms);
+    for (int s = 0; s < SB_STAGE_COUNT; s++) {
+        if (s == SB_STAGE_MINMAX || s == SB_STAGE_RAYS) continue;
+        if (stages & SB_STAGE_BIT(s)) sb_csv_int(c, r->counters.stage_draw_calls[s]);
+        else sb_csv_empty(c);
+    }
+    for (int k = 0; k < SB_MAX_CASCADES; k++) {
+        if (k < r->counters.split_count) sb_csv_num(c, r->counters.splits[k]);
+        else sb_csv_empty(c);
+    }
     sb_csv_end_row(c);
 }
 
@@ -301,7 +326,7 @@ static bool write_images(sb_session *s, sb_instance *in, const char *out_dir, co
         sb_frame f;
         memset(&f, 0, sizeof f);
         sb_timer_frame_begin(&timer, i);
-        sb_render_frame(s, in, &f, i, n, &timer);
+        sb_render_frame(s, in, &f, i, n, i, &timer);
         sb_gpu_readback(&s->gpu, NULL, vis, rgba);
         char path[4400];
         snprintf(path, sizeof path, "%s/%s_f%04d_color.png", dir, run_id, i);
@@ -328,6 +353,7 @@ bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_
     }
     sb_err err = {{0}};
     sb_instance in;
+    s->gpu.run_frames = s->opts.frames + s->opts.warmup;
     if (!sb_instance_create(&in, s, spec, &err)) {
         sb_log("run %s (%s): failed: %s", run_id, spec->tech->name, err.msg);
         summary_row(sum, s, spec, run_id, "failed", err.msg, NULL, NULL, 0, 0, (sb_now_ms() - t_run) / 1e3, 0);
@@ -353,7 +379,7 @@ bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_
         sb_timer_frame_begin(&timer, i);
         sb_frame f;
         memset(&f, 0, sizeof f);
-        sb_render_frame(s, &in, &f, pf, N, &timer);
+        sb_render_frame(s, &in, &f, pf, N, i, &timer);
         if (timer.mode == SB_TIMING_QUERIES) glFlush();
         double w1 = sb_now_ms();
         recs[i].progress = f.progress;
@@ -361,7 +387,8 @@ bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_
         recs[i].wall_ms = w1 - w0;
         recs[i].cpu_ms = recs[i].wall_ms - timer.wait_ms;
         frames_wall += recs[i].wall_ms;
-        while (written < total_frames && timer.times[written].ready) {
+        /* techniques with counters known only after the run write their rows at the end */
+        while (!spec->tech->collect && written < total_frames && timer.times[written].ready) {
             frame_row(&rows, written - W, &recs[written], &timer.times[written], spec->tech->stages);
             written++;
         }
@@ -369,6 +396,8 @@ bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_
         if (i >= W) progress_line(s, index, total, spec->tech->name, i - W + 1, N, t_run);
     }
     sb_timer_drain(&timer);
+    if (ok && spec->tech->collect)
+        for (int i = W; i < total_frames; i++) spec->tech->collect(in.state, i, &recs[i].counters);
     if (ok) {
         for (; written < total_frames; written++)
             frame_row(&rows, written - W, &recs[written], &timer.times[written], spec->tech->stages);

@@ -49,8 +49,11 @@ typedef struct sb_instance {
 
 bool sb_instance_create(sb_instance *in, sb_session *s, const sb_run_spec *spec, sb_err *err);
 void sb_instance_destroy(sb_instance *in, sb_session *s);
-/* Renders frame i of n (untimed unless f->timer is set by the caller). */
-void sb_render_frame(sb_session *s, sb_instance *in, sb_frame *f, int i, int n, struct sb_timer *timer);
+/* Renders frame i of n of the path as the run's seq-th frame, timed by timer. */
+void sb_render_frame(sb_session *s, sb_instance *in, sb_frame *f, int i, int n, int seq, struct sb_timer *timer);
+/* Renders an explicit camera (tests, stress cases). */
+void sb_render_camera(sb_session *s, sb_instance *in, sb_frame *f, const sb_camera *cam, int seq,
+                      struct sb_timer *timer);
 /* Why a technique cannot apply to this scene, or NULL. */
 const char *sb_skip_reason(const sb_session *s, const sb_technique *t);
 

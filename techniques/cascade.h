@@ -40,6 +40,8 @@ typedef struct sb_cascade_block {
     float info[4];                       /* x: count */
 } sb_cascade_block;
 
+/* Techniques built on the machinery keep their sb_csm as the first member of
+ * their state, so tests can read the shadow maps of any of them. */
 typedef struct sb_csm {
     sb_gpu *gpu;
     int res, count, filter, select, layered, stable;

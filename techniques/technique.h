@@ -58,6 +58,7 @@ void sb_params_canonical(const sb_params *p, char *out, size_t len);
 
 struct sb_gpu;
 struct sb_frame;
+struct sb_counters;
 
 typedef struct sb_technique {
     const char *name;
@@ -69,6 +70,9 @@ typedef struct sb_technique {
     size_t state_size;
     bool (*create)(void *state, struct sb_gpu *gpu, const sb_params *p, sb_err *err);
     void (*frame)(void *state, struct sb_frame *f);
+    /* optional: fills counters known only after the run (read back from the
+     * GPU once, outside the timed frames); seq is the frame's run sequence index */
+    void (*collect)(void *state, int seq, struct sb_counters *out);
     void (*destroy)(void *state, struct sb_gpu *gpu);
 } sb_technique;
 

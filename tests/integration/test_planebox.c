@@ -58,6 +58,27 @@ static void test_low_resolution_is_worse(void **st) {
     sb_session_close(&s);
 }
 
+static void test_cascaded_match_analytic(void **st) {
+    (void)st;
+    sb_session s;
+    sb_err err;
+    assert_true(pb_open(&s, SB_BACKEND_EGL, 640, 360, &err));
+    const char *specs[] = {"pssm:res=1024", "pssm:res=1024:layered=gs:stable=on", "sdsm:res=1024",
+                           "sdsm:res=1024:splits=cpu:latency=0", "sdsm:res=1024:tight=on:partition=histogram",
+                           "pssm:res=1024:select=map:blend=0.2:filter=pcf3"};
+    for (size_t i = 0; i < sizeof specs / sizeof specs[0]; i++) {
+        pb_result r;
+        bool ok = pb_render(&s, specs[i], &r, NULL, &err);
+        if (!ok) print_error("%s\n", err.msg);
+        assert_true(ok);
+        print_message("%s: shadow exact %ld, technique %ld, mismatch %ld (%.3f%% of image)\n", specs[i], r.shadow_exact,
+                      r.shadow_tech, r.mismatch, 100.0 * r.mismatch / r.pixels);
+        assert_true(r.shadow_exact > r.pixels / 100);
+        assert_true(r.mismatch < r.pixels / 100);
+    }
+    sb_session_close(&s);
+}
+
 static void test_backends_agree(void **st) {
     (void)st;
     const int w = 320, h = 180;
@@ -86,6 +107,7 @@ int main(void) {
         cmocka_unit_test(test_sm_matches_analytic_osmesa),
         cmocka_unit_test(test_low_resolution_is_worse),
         cmocka_unit_test(test_backends_agree),
+        cmocka_unit_test(test_cascaded_match_analytic),
     };
     return cmocka_run_group_tests_name("planebox", tests, NULL, NULL);
 }

@@ -78,7 +78,7 @@ bool pb_render(sb_session *s, const char *spec, pb_result *out, unsigned char *v
     sb_timer timer;
     sb_timer_init(&timer, SB_TIMING_SYNC, 3, 1);
     sb_timer_frame_begin(&timer, 0);
-    sb_render_frame(s, &in, &f, 0, 1, &timer);
+    sb_render_frame(s, &in, &f, 0, 1, 0, &timer);
     int w = s->gpu.width, h = s->gpu.height;
     float *depth = malloc(sizeof(float) * w * h);
     unsigned char *vis = malloc((size_t)w * h);

@@ -1,0 +1,352 @@
+/* sdsm.c - sample distribution shadow maps (Lauritzen, Salvi & Lefohn 2011).
+ * The pixels decide the splits: a camera depth pre-pass (zpass, reused by
+ * the final pass), a compute reduction to the visible [z_min, z_max] and a
+ * log-depth histogram (minmax), partitions over that range (log, or from the
+ * histogram: no split in empty depth), optionally tight per-partition x/y
+ * bounds from the samples, and one shadow map per non-empty partition.
+ *
+ * splits=gpu (default): compute shaders write the partitions and light
+ * matrices straight into the cascade block the shadow and final passes read;
+ * the CPU never reads anything back in the frame loop. Casters are culled on
+ * the CPU against the whole view's light volume (it cannot know the GPU's
+ * partitions), and empty partitions are skipped on the GPU.
+ * splits=cpu: the statistics are read back `latency` frames late (0 stalls:
+ * how the Brno thesis did it, which is why its cascade time included the CPU
+ * waiting) and the CPU fits and culls per cascade like PSSM. */
+#include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cascade.h"
+#include "shaders.h"
+
+static const sb_param_def sdsm_params[] = {
+    SB_SHADOWMAP_PARAMS,
+    SB_CASCADE_PARAMS,
+    {"partition", SB_PARAM_ENUM, "log", 0, 0, "log|histogram", "partitions of [z_min, z_max]"},
+    {"tight", SB_PARAM_ENUM, "off", 0, 0, "off|on", "per-partition light-space x/y bounds from the samples (splits=gpu)"},
+    {"splits", SB_PARAM_ENUM, "gpu", 0, 0, "gpu|cpu", "where partitions and light matrices are computed"},
+    {"latency", SB_PARAM_INT, "1", 0, 2, NULL, "splits=cpu: frames between the reduction and its readback"},
+    {"guard", SB_PARAM_FLOAT, "2", 0, 64, NULL, "guard band around tight bounds, in texels"},
+};
+
+#define HIST 64
+
+/* CPU mirror of SbDepthStats (std430). */
+typedef struct depth_stats {
+    uint32_t zmin, zmax, samples, pad;
+    uint32_t hist[HIST];
+    uint32_t part_count[8];
+    uint32_t bounds[8][4];
+} depth_stats;
+
+typedef struct {
+    sb_csm csm;
+    int partition, tight, gpu, latency;
+    double guard;
+    GLuint stats;               /* SSBO binding 1 */
+    GLuint ring;                /* splits=cpu: latency+1 copies of the statistics */
+    GLuint history;             /* splits=gpu: per-frame copy of the cascade block's splits and flags */
+    int history_frames;
+    GLuint reduce, splits_prog, bounds, matrices;
+    GLint r_depth, r_near, r_far;
+    GLint s_count, s_partition, s_hist_counts, s_near, s_far;
+    GLint b_depth, b_inv, b_light, b_near, b_far;
+    GLint m_light, m_eye, m_right, m_up, m_fwd, m_tan, m_lo, m_hi, m_tight, m_res, m_guard, m_near, m_far;
+} sdsm_state;
+
+static float unorder(uint32_t u) {
+    uint32_t b = (u & 0x80000000u) ? (u & 0x7fffffffu) : ~u;
+    float f;
+    memcpy(&f, &b, 4);
+    return f;
+}
+
+/* Partitions of [zmin, zmax] (same algorithm as sdsm_splits.comp). */
+void sdsm_partition(int m, int histogram, double zmin, double zmax, double near, double far, const uint32_t *hist,
+                    double *s);
+void sdsm_partition(int m, int histogram, double zmin, double zmax, double near, double far, const uint32_t *hist,
+                    double *s) {
+    double la = log(zmin), lb = log(zmax);
+    s[0] = zmin;
+    s[m] = zmax;
+    for (int i = 1; i < m; i++) s[i] = exp(la + (lb - la) * i / m);
+    if (!histogram) return;
+    double l0 = log(near), w = (log(far) - l0) / HIST, total = 0;
+    for (int b = 0; b < HIST; b++)
+        if (hist[b]) total += fmax(fmin(l0 + (b + 1) * w, lb) - fmax(l0 + b * w, la), 0);
+    if (total <= 0) return;
+    for (int i = 1; i < m; i++) {
+        double target = total * i / m, acc = 0;
+        for (int b = 0; b < HIST; b++) {
+            if (!hist[b]) continue;
+            double lo = fmax(l0 + b * w, la), len = fmax(fmin(l0 + (b + 1) * w, lb) - lo, 0);
+            if (len > 0 && acc + len >= target) {
+                s[i] = exp(lo + (target - acc));
+                break;
+            }
+            acc += len;
+        }
+    }
+}
+
+static GLuint compute(const char *label, const char *src, const char *defines, sb_err *err) {
+    const char *parts[] = {sb_shader_csm_block_glsl, sb_shader_sdsm_common_glsl, src};
+    const sb_shader_src st[] = {{GL_COMPUTE_SHADER, parts, 3}};
+    return sb_gpu_link(label, defines, st, 1, err);
+}
+
+static bool sdsm_create(void *state, sb_gpu *gpu, const sb_params *p, sb_err *err) {
+    sdsm_state *s = state;
+    s->partition = sb_param_choice(p, "partition");
+    s->tight = sb_param_choice(p, "tight");
+    s->gpu = sb_param_choice(p, "splits") == 0;
+    s->latency = (int)sb_param_num(p, "latency");
+    s->guard = sb_param_num(p, "guard");
+    if (s->tight && !s->gpu)
+        return sb_fail(err, "sdsm:tight=on needs splits=gpu (the sample bounds depend on this frame's partitions)");
+    if (!sb_csm_create(&s->csm, gpu, p, "sdsm", err)) return false;
+    const char *rw = "#define SB_CASCADE_ACCESS\n";
+    if (!(s->reduce = compute("sdsm reduce", sb_shader_sdsm_reduce_comp, NULL, err))) return false;
+    s->r_depth = glGetUniformLocation(s->reduce, "u_depth");
+    s->r_near = glGetUniformLocation(s->reduce, "u_near");
+    s->r_far = glGetUniformLocation(s->reduce, "u_far");
+    if (s->gpu) {
+        if (!(s->splits_prog = compute("sdsm splits", sb_shader_sdsm_splits_comp, rw, err))) return false;
+        if (!(s->bounds = compute("sdsm bounds", sb_shader_sdsm_bounds_comp, NULL, err))) return false;
+        if (!(s->matrices = compute("sdsm matrices", sb_shader_sdsm_matrices_comp, rw, err))) return false;
+        s->s_count = glGetUniformLocation(s->splits_prog, "u_count");
+        s->s_partition = glGetUniformLocation(s->splits_prog, "u_partition");
+        s->s_hist_counts = glGetUniformLocation(s->splits_prog, "u_hist_counts");
+        s->s_near = glGetUniformLocation(s->splits_prog, "u_near");
+        s->s_far = glGetUniformLocation(s->splits_prog, "u_far");
+        s->b_depth = glGetUniformLocation(s->bounds, "u_depth");
+        s->b_inv = glGetUniformLocation(s->bounds, "u_inv_view_proj");
+        s->b_light = glGetUniformLocation(s->bounds, "u_light_view");
+        s->b_near = glGetUniformLocation(s->bounds, "u_near");
+        s->b_far = glGetUniformLocation(s->bounds, "u_far");
+        const char *names[] = {"u_light_view", "u_eye", "u_right", "u_up", "u_fwd", "u_tan", "u_scene_lo",
+                               "u_scene_hi", "u_tight", "u_res", "u_guard", "u_near", "u_far"};
+        GLint *locs[] = {&s->m_light, &s->m_eye, &s->m_right, &s->m_up, &s->m_fwd, &s->m_tan, &s->m_lo,
+                         &s->m_hi, &s->m_tight, &s->m_res, &s->m_guard, &s->m_near, &s->m_far};
+        for (size_t i = 0; i < SB_COUNT(names); i++) *locs[i] = glGetUniformLocation(s->matrices, names[i]);
+        s->history_frames = gpu->run_frames > 0 ? gpu->run_frames : 1;
+        glGenBuffers(1, &s->history);
+        glBindBuffer(GL_COPY_WRITE_BUFFER, s->history);
+        glBufferData(GL_COPY_WRITE_BUFFER, (GLsizeiptr)s->history_frames * 256, NULL, GL_STREAM_READ);
+    } else {
+        glGenBuffers(1, &s->ring);
+        glBindBuffer(GL_COPY_WRITE_BUFFER, s->ring);
+        glBufferData(GL_COPY_WRITE_BUFFER, (GLsizeiptr)(s->latency + 1) * sizeof(depth_stats), NULL, GL_STREAM_READ);
+    }
+    glGenBuffers(1, &s->stats);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, s->stats);
+    glBufferData(GL_SHADER_STORAGE_BUFFER, sizeof(depth_stats), NULL, GL_DYNAMIC_COPY);
+    return sb_gl_check("sdsm", err);
+}
+
+static void reset_stats(sdsm_state *s) {
+    depth_stats init;
+    memset(&init, 0, sizeof init);
+    init.zmin = 0xffffffffu;
+    for (int k = 0; k < 8; k++) init.bounds[k][0] = init.bounds[k][1] = 0xffffffffu;
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, s->stats);
+    glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof init, &init);
+}
+
+static void dispatch_pixels(const sb_gpu *g) {
+    glDispatchCompute((GLuint)(g->width + 15) / 16, (GLuint)(g->height + 15) / 16, 1);
+}
+
+/* tight=on: per-partition sample counts and light-space bounds, a second pass over the pixels. */
+static void tight_bounds(sdsm_state *s, sb_frame *f, sb_m4 light_view) {
+    float m[16];
+    sb_m4 inv;
+    glUseProgram(s->bounds);
+    glUniform1i(s->b_depth, 1);
+    sb_m4_invert(f->view_proj, &inv);
+    sb_m4_to_float(inv, m);
+    glUniformMatrix4fv(s->b_inv, 1, GL_FALSE, m);
+    sb_m4_to_float(light_view, m);
+    glUniformMatrix4fv(s->b_light, 1, GL_FALSE, m);
+    glUniform1f(s->b_near, (float)f->cam.znear);
+    glUniform1f(s->b_far, (float)f->cam.zfar);
+    dispatch_pixels(f->gpu);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+}
+
+/* splits=gpu: partitions, per-partition counts/bounds and light matrices, all on the GPU. */
+static void gpu_splits(sdsm_state *s, sb_frame *f) {
+    sb_gpu *g = f->gpu;
+    sb_csm *c = &s->csm;
+    float nearf = (float)f->cam.znear, farf = (float)f->cam.zfar;
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    glUseProgram(s->splits_prog);
+    glUniform1i(s->s_count, c->count);
+    glUniform1i(s->s_partition, s->partition);
+    glUniform1i(s->s_hist_counts, !s->tight);
+    glUniform1f(s->s_near, nearf);
+    glUniform1f(s->s_far, farf);
+    glDispatchCompute(1, 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+
+    sb_m4 light_view = sb_light_view(g->sun);
+    float m[16];
+    if (s->tight) tight_bounds(s, f, light_view);
+    sb_m4_to_float(light_view, m);
+    glUseProgram(s->matrices);
+    glUniformMatrix4fv(s->m_light, 1, GL_FALSE, m);
+    sb_v3 eye = sb_v3_sub(f->cam.pos, g->scene->origin);
+    glUniform3f(s->m_eye, (float)eye.x, (float)eye.y, (float)eye.z);
+    glUniform3f(s->m_right, (float)f->cam.right.x, (float)f->cam.right.y, (float)f->cam.right.z);
+    glUniform3f(s->m_up, (float)f->cam.up.x, (float)f->cam.up.y, (float)f->cam.up.z);
+    glUniform3f(s->m_fwd, (float)f->cam.forward.x, (float)f->cam.forward.y, (float)f->cam.forward.z);
+    double ty = tan(f->cam.fov_deg * SB_PI / 360);
+    glUniform2f(s->m_tan, (float)(ty * f->cam.aspect), (float)ty);
+    sb_v3 lo = {1e300, 1e300, 1e300}, hi = {-1e300, -1e300, -1e300};
+    for (int k = 0; k < 8; k++) {
+        const sb_aabb *b = &g->scene->bounds;
+        sb_v3 q = sb_m4_point(light_view, sb_v3_make(k & 1 ? b->hi.x : b->lo.x, k & 2 ? b->hi.y : b->lo.y,
+                                                      k & 4 ? b->hi.z : b->lo.z));
+        lo = sb_v3_min(lo, q);
+        hi = sb_v3_max(hi, q);
+    }
+    glUniform3f(s->m_lo, (float)lo.x, (float)lo.y, (float)lo.z);
+    glUniform3f(s->m_hi, (float)hi.x, (float)hi.y, (float)hi.z);
+    glUniform1i(s->m_tight, s->tight);
+    glUniform1f(s->m_res, (float)c->res);
+    glUniform1f(s->m_guard, (float)(s->tight ? s->guard : 1.0));
+    glDispatchCompute(1, 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_UNIFORM_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    /* keep this frame's splits and flags for the CSV, on the GPU (read after the run) */
+    if (f->seq < s->history_frames) {
+        glBindBuffer(GL_COPY_READ_BUFFER, c->block);
+        glBindBuffer(GL_COPY_WRITE_BUFFER, s->history);
+        glCopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER, offsetof(sb_cascade_block, cascade),
+                            (GLintptr)f->seq * 256, 256);
+    }
+}
+
+/* splits=cpu: the statistics of `latency` frames ago, read back now. */
+static void cpu_splits(sdsm_state *s, sb_frame *f) {
+    sb_csm *c = &s->csm;
+    double splits[SB_MAX_CASCADES + 1];
+    depth_stats st;
+    bool have = f->seq >= s->latency;
+    if (have) {
+        glBindBuffer(GL_COPY_READ_BUFFER, s->ring);
+        sb_gpu_readbacks++;
+        glGetBufferSubData(GL_COPY_READ_BUFFER, (GLintptr)((f->seq - s->latency) % (s->latency + 1)) * (GLintptr)sizeof st,
+                           sizeof st, &st);
+    }
+    if (have && st.samples == 0) { /* all sky: nothing to shadow */
+        for (int k = 0; k <= c->count; k++) splits[k] = f->cam.znear;
+    } else if (have) {
+        double zmin = unorder(st.zmin), zmax = fmax(unorder(st.zmax), zmin * 1.0001);
+        sdsm_partition(c->count, s->partition, zmin, zmax, f->cam.znear, f->cam.zfar, st.hist, splits);
+    } else { /* before the first readback: the whole view, logarithmically */
+        sb_split_distances(1.0, c->count, f->cam.znear, f->cam.zfar, splits);
+    }
+    sb_csm_fit(c, f, splits);
+}
+
+static void sdsm_frame(void *state, sb_frame *f) {
+    sdsm_state *s = state;
+    sb_gpu *g = f->gpu;
+    sb_csm *c = &s->csm;
+
+    sb_stage_begin(f, SB_STAGE_ZPASS);
+    sb_zpass(f);
+    sb_stage_end(f, SB_STAGE_ZPASS);
+
+    sb_stage_begin(f, SB_STAGE_MINMAX);
+    reset_stats(s);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, c->block);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, s->stats);
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D, g->depth_tex);
+    glUseProgram(s->reduce);
+    glUniform1i(s->r_depth, 1);
+    glUniform1f(s->r_near, (float)f->cam.znear);
+    glUniform1f(s->r_far, (float)f->cam.zfar);
+    dispatch_pixels(g);
+    if (s->gpu) {
+        gpu_splits(s, f);
+    } else {
+        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        glBindBuffer(GL_COPY_READ_BUFFER, s->stats);
+        glBindBuffer(GL_COPY_WRITE_BUFFER, s->ring);
+        glCopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER, 0,
+                            (GLintptr)(f->seq % (s->latency + 1)) * (GLintptr)sizeof(depth_stats), sizeof(depth_stats));
+    }
+    glActiveTexture(GL_TEXTURE0);
+    sb_stage_end(f, SB_STAGE_MINMAX);
+
+    sb_stage_begin(f, SB_STAGE_CASCADE);
+    if (s->gpu) {
+        /* the GPU's partitions are unknown here: cull against the whole view's light volume */
+        sb_v3 corners[8];
+        sb_light_fit bound;
+        sb_frustum_corners(&f->cam, g->scene->origin, f->cam.znear, f->cam.zfar, corners);
+        sb_light_fit_points(g->scene, g->sun, corners, 8, c->res, &bound);
+        for (int k = 0; k < c->count; k++) c->active[k] = !bound.empty; /* a view without scene: nothing casts */
+        sb_csm_cull(c, f, bound.empty ? NULL : &bound);
+    } else {
+        cpu_splits(s, f);   /* latency=0 waits here for this frame's reduction */
+        sb_csm_cull(c, f, NULL);
+    }
+    sb_csm_render(c, f);
+    if (s->gpu) { /* rendered/skipped and splits are known after the run (collect) */
+        f->counters.cascades_rendered = f->counters.cascades_skipped = 0;
+    }
+    sb_stage_end(f, SB_STAGE_CASCADE);
+
+    sb_stage_begin(f, SB_STAGE_FINAL);
+    sb_csm_final(c, f, true);
+    sb_stage_end(f, SB_STAGE_FINAL);
+}
+
+/* splits=gpu: after the timed frames, one readback of every frame's splits and flags. */
+static void sdsm_collect(void *state, int seq, sb_counters *out) {
+    sdsm_state *s = state;
+    if (!s->gpu || seq >= s->history_frames) return;
+    float block[64];
+    glBindBuffer(GL_COPY_READ_BUFFER, s->history);
+    sb_gpu_readbacks++;
+    glGetBufferSubData(GL_COPY_READ_BUFFER, (GLintptr)seq * 256, 256, block);
+    int rendered = 0;
+    out->split_count = s->csm.count;
+    for (int k = 0; k < s->csm.count; k++) {
+        out->splits[k] = block[4 * k + 1];          /* cascade[k].y: far split */
+        rendered += block[32 + 4 * k] > 0.5f;       /* flags[k].x */
+    }
+    out->cascades_rendered = rendered;
+    out->cascades_skipped = s->csm.count - rendered;
+}
+
+static void sdsm_destroy(void *state, sb_gpu *gpu) {
+    (void)gpu;
+    sdsm_state *s = state;
+    GLuint progs[] = {s->reduce, s->splits_prog, s->bounds, s->matrices};
+    for (size_t i = 0; i < SB_COUNT(progs); i++)
+        if (progs[i]) glDeleteProgram(progs[i]);
+    GLuint bufs[] = {s->stats, s->ring, s->history};
+    for (size_t i = 0; i < SB_COUNT(bufs); i++)
+        if (bufs[i]) glDeleteBuffers(1, &bufs[i]);
+    sb_csm_destroy(&s->csm);
+}
+
+const sb_technique sb_technique_sdsm = {
+    .name = "sdsm",
+    .summary = "sample distribution shadow maps (Lauritzen, Salvi & Lefohn 2011)",
+    .params = sdsm_params,
+    .param_count = (int)SB_COUNT(sdsm_params),
+    .stages = SB_STAGE_BIT(SB_STAGE_ZPASS) | SB_STAGE_BIT(SB_STAGE_MINMAX) | SB_STAGE_BIT(SB_STAGE_CASCADE) |
+              SB_STAGE_BIT(SB_STAGE_FINAL),
+    .needs = SB_NEEDS_SUN,
+    .state_size = sizeof(sdsm_state),
+    .create = sdsm_create,
+    .frame = sdsm_frame,
+    .collect = sdsm_collect,
+    .destroy = sdsm_destroy,
+};
