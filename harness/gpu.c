@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "reference.h"
 #include "shaders.h"
 #include "timing.h"
 
@@ -132,10 +133,14 @@ bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int
     g->color_tex = make_tex(GL_RGBA8, w, h);
     g->vis_tex = make_tex(GL_R8, w, h);
     g->depth_tex = make_tex(GL_DEPTH_COMPONENT32F, w, h);
+    g->pos_tex = make_tex(GL_RGBA32F, w, h);
+    g->aux_tex = make_tex(GL_RGBA32F, w, h);
     glGenFramebuffers(1, &g->fbo);
     glBindFramebuffer(GL_FRAMEBUFFER, g->fbo);
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, g->color_tex, 0);
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, g->vis_tex, 0);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT2, GL_TEXTURE_2D, g->pos_tex, 0);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT3, GL_TEXTURE_2D, g->aux_tex, 0);
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, g->depth_tex, 0);
     const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
     glDrawBuffers(2, bufs);
@@ -164,8 +169,12 @@ void sb_gpu_free(sb_gpu *g) {
     if (g->zpass_prog) glDeleteProgram(g->zpass_prog);
     free(g->scratch);
     if (g->fbo) glDeleteFramebuffers(1, &g->fbo);
-    GLuint tex[] = {g->color_tex, g->vis_tex, g->depth_tex};
-    glDeleteTextures(3, tex);
+    GLuint tex[] = {g->color_tex, g->vis_tex, g->depth_tex, g->pos_tex, g->aux_tex};
+    glDeleteTextures(5, tex);
+    if (g->ref) {
+        sb_reference_free(g->ref);
+        free(g->ref);
+    }
     if (g->vbo) glDeleteBuffers(1, &g->vbo);
     if (g->ibo) glDeleteBuffers(1, &g->ibo);
     if (g->vao) glDeleteVertexArrays(1, &g->vao);
@@ -256,9 +265,15 @@ void sb_final_pass(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
     glDepthMask(reuse_depth ? GL_FALSE : GL_TRUE);
     glEnable(GL_CULL_FACE);
     glCullFace(GL_BACK);
-    const float sky[4] = {0.55f, 0.7f, 0.9f, 1.0f}, one[4] = {1, 1, 1, 1};
+    const float sky[4] = {0.55f, 0.7f, 0.9f, 1.0f}, one[4] = {1, 1, 1, 1}, none[4] = {0, 0, 0, -1};
+    const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3};
+    glDrawBuffers(g->eval ? 4 : 2, bufs);
     glClearBufferfv(GL_COLOR, 0, sky);
     glClearBufferfv(GL_COLOR, 1, one);
+    if (g->eval) {
+        glClearBufferfv(GL_COLOR, 2, none);
+        glClearBufferfv(GL_COLOR, 3, none);
+    }
     if (!reuse_depth) glClear(GL_DEPTH_BUFFER_BIT);
     glUseProgram(fp->prog);
     set_camera_uniforms(f, fp->u_view, fp->u_proj);
@@ -295,4 +310,30 @@ sb_v3 sb_frame_unproject(const sb_frame *f, double x, double y, double d) {
     if (!sb_m4_invert(f->view_proj, &inv)) return sb_v3_make(NAN, NAN, NAN);
     sb_v3 ndc = sb_v3_make(2 * (x + 0.5) / f->gpu->width - 1, 2 * (y + 0.5) / f->gpu->height - 1, 2 * d - 1);
     return sb_v3_add(sb_m4_point(inv, ndc), f->gpu->scene->origin);
+}
+
+void sb_gpu_readback_eval(sb_gpu *g, float *pos, float *aux) {
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, g->fbo);
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    if (pos) {
+        glReadBuffer(GL_COLOR_ATTACHMENT2);
+        sb_gpu_read_pixels(0, 0, g->width, g->height, GL_RGBA, GL_FLOAT, pos);
+    }
+    if (aux) {
+        glReadBuffer(GL_COLOR_ATTACHMENT3);
+        sb_gpu_read_pixels(0, 0, g->width, g->height, GL_RGBA, GL_FLOAT, aux);
+    }
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+}
+
+sb_reference *sb_gpu_reference(sb_gpu *g, sb_err *err) {
+    if (g->ref) return g->ref;
+    sb_reference *r = calloc(1, sizeof *r);
+    if (!sb_reference_build(r, g->scene, err)) {
+        free(r);
+        return NULL;
+    }
+    g->ref = r;
+    return r;
 }

@@ -36,6 +36,9 @@ typedef struct sb_gpu {
     sb_v3 sun;                          /* unit vector toward the sun */
     GLuint vao, vbo, ibo;
     GLuint fbo, color_tex, vis_tex, depth_tex;
+    GLuint pos_tex, aux_tex;            /* evaluation targets (position, normal + cascade) */
+    bool eval;                          /* evaluation pass: the final pass writes all four targets */
+    struct sb_reference *ref;           /* exact reference, built on first use (sb_gpu_reference) */
     GLuint zpass_prog;                  /* camera depth-only program (same vertex shader as the final pass) */
     GLint zpass_u_view, zpass_u_proj;
     uint32_t *scratch;                  /* draw_count entries, for culling results */
@@ -102,5 +105,9 @@ bool sb_gl_check(const char *where, sb_err *err);
  * window [0,1]), visibility (1 byte, 255 lit) and colour (RGBA8). Counted as
  * readbacks; never called inside timed frames. Rows bottom-up as in GL. */
 void sb_gpu_readback(sb_gpu *g, float *depth, unsigned char *vis, unsigned char *rgba);
+/* Reads the evaluation targets (4 floats a pixel each; either may be NULL). */
+void sb_gpu_readback_eval(sb_gpu *g, float *pos, float *aux);
+/* The scene's Embree reference, built once per session on first use (NULL on failure). */
+struct sb_reference *sb_gpu_reference(sb_gpu *g, sb_err *err);
 /* World-space (absolute, double) point of pixel (x, y) at window depth d. */
 sb_v3 sb_frame_unproject(const sb_frame *f, double x, double y, double d);

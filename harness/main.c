@@ -30,7 +30,13 @@ static void usage(FILE *f) {
             "  --warmup N             warm-up frames, excluded (default 3)\n"
             "  --size WxH             render size (default 1280x720)\n"
             "  --sun AZ,EL            sun azimuth and elevation in degrees (overrides the scene's)\n"
-            "  --images K             write colour and visibility PNGs of every K-th frame (untimed pass)\n"
+            "  --error-every K        shadow error against the exact ray-cast reference on every K-th frame\n"
+            "                         (default 10; 0 off), in an untimed pass after the timed frames\n"
+            "  --images K             images of every K-th frame: colour, visibility, reference, error, cascades\n"
+            "  --repeat K             run the path K times (default 1)\n"
+            "  --target-ci PCT        repeat the path until the 95%% CI of mean gpu_ms is within PCT%% of it\n"
+            "  --max-repeat N         at most N repetitions for --target-ci (default 10)\n"
+            "  --threads N            reference ray-casting threads (default: all cores)\n"
             "  --out DIR              results folder (default results); each run command writes DIR/<UTC time>/\n"
             "  --progress             progress line on stderr (default when stderr is a terminal)\n"
             "  --quiet                no notices on stderr\n");
@@ -99,6 +105,21 @@ static int parse_cli(cli *c, int argc, char **argv) {
         } else if (!strcmp(a, "--images")) {
             if (!sb_parse_int(v, &n) || n < 0 || n > 1000000) return bad("--images %s: expected a frame interval >= 0", v);
             c->opts.images = (int)n;
+        } else if (!strcmp(a, "--error-every")) {
+            if (!sb_parse_int(v, &n) || n < 0 || n > 1000000) return bad("--error-every %s: expected a frame interval >= 0", v);
+            c->opts.error_every = (int)n;
+        } else if (!strcmp(a, "--repeat")) {
+            if (!sb_parse_int(v, &n) || n < 1 || n > 1000) return bad("--repeat %s: expected 1..1000", v);
+            c->opts.repeat = (int)n;
+        } else if (!strcmp(a, "--target-ci")) {
+            if (!sb_parse_double(v, &c->opts.target_ci) || c->opts.target_ci <= 0 || c->opts.target_ci > 100)
+                return bad("--target-ci %s: expected a percentage in (0, 100]", v);
+        } else if (!strcmp(a, "--max-repeat")) {
+            if (!sb_parse_int(v, &n) || n < 1 || n > 1000) return bad("--max-repeat %s: expected 1..1000", v);
+            c->opts.max_repeat = (int)n;
+        } else if (!strcmp(a, "--threads")) {
+            if (!sb_parse_int(v, &n) || n < 1 || n > 16) return bad("--threads %s: expected 1..16", v);
+            c->opts.threads = (int)n;
         } else if (!strcmp(a, "--out")) {
             c->out = v;
         } else {

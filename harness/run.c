@@ -6,7 +6,10 @@
 #include <unistd.h>
 
 #include "image.h"
+#include "report.h"
 #include "stats.h"
+
+bool sb_timed_frames_active;
 
 void sb_run_opts_defaults(sb_run_opts *o) {
     memset(o, 0, sizeof *o);
@@ -17,6 +20,11 @@ void sb_run_opts_defaults(sb_run_opts *o) {
     o->warmup = 3;
     o->width = 1280;
     o->height = 720;
+    o->error_every = 10;
+    o->repeat = 1;
+    o->max_repeat = 10;
+    long cpus = sysconf(_SC_NPROCESSORS_ONLN);
+    o->threads = cpus > 0 ? (int)cpus : 1;
 }
 
 static void base_name(const char *path, char *out, size_t len) {
@@ -126,34 +134,12 @@ void sb_run_id(const sb_session *s, const sb_run_spec *spec, char out[17]) {
     snprintf(out, 17, "%016llx", (unsigned long long)h);
 }
 
-/* ---- summary ---- */
-
-#define N_SUMMARY_STAGES (SB_STAGE_COUNT + 3) /* stages, gpu, cpu, wall */
-static const char *summary_stage_name(int k) {
-    static const char *extra[] = {"gpu", "cpu", "wall"};
-    return k < SB_STAGE_COUNT ? sb_stage_names[k] : extra[k - SB_STAGE_COUNT];
-}
-
-static void summary_header(sb_csv *c) {
-    const char *cols[] = {"run_id", "scene", "path", "technique", "params", "backend", "renderer", "timing",
-                          "frames", "warmup", "width", "height", "status", "reason", "stalls", "scene_triangles",
-                          "load_ms", "run_wall_s", "harness_share", "draw_calls_mean", "shadow_draw_calls_mean",
-                          "shadow_triangles_mean", "cascades_rendered_mean", "cascades_skipped_mean"};
-    for (size_t i = 0; i < SB_COUNT(cols); i++) sb_csv_str(c, cols[i]);
-    const char *st[] = {"mean", "median", "p95", "p99", "std", "ci95"};
-    for (int k = 0; k < N_SUMMARY_STAGES; k++)
-        for (size_t j = 0; j < SB_COUNT(st); j++) {
-            char name[64];
-            snprintf(name, sizeof name, "%s_ms_%s", summary_stage_name(k), st[j]);
-            sb_csv_str(c, name);
-        }
-    sb_csv_end_row(c);
-}
+/* ---- summary file ---- */
 
 void sb_summary_open(sb_summary *sum, const char *path) {
     memset(sum, 0, sizeof *sum);
     sum->path = sb_strdup(path);
-    summary_header(&sum->rows);
+    sb_report_summary_header(&sum->rows);
 }
 
 bool sb_summary_flush(sb_summary *sum, sb_err *err) {
@@ -166,142 +152,6 @@ void sb_summary_free(sb_summary *sum) {
     memset(sum, 0, sizeof *sum);
 }
 
-/* ---- per-frame CSV ---- */
-
-typedef struct frame_rec {
-    double progress;
-    sb_counters counters;
-    double cpu_ms, wall_ms;
-} frame_rec;
-
-static void frame_header(sb_csv *c) {
-    const char *cols[] = {"frame", "progress", "draw_calls", "shadow_draw_calls", "triangles", "shadow_triangles",
-                          "cascades_rendered", "cascades_skipped"};
-    for (size_t i = 0; i < SB_COUNT(cols); i++) sb_csv_str(c, cols[i]);
-    for (int s = 0; s < SB_STAGE_COUNT; s++) {
-        char name[32];
-        snprintf(name, sizeof name, "%s_ms", sb_stage_names[s]);
-        sb_csv_str(c, name);
-    }
-    sb_csv_str(c, "gpu_ms");
-    sb_csv_str(c, "cpu_ms");
-    sb_csv_str(c, "wall_ms");
-    for (int s = 0; s < SB_STAGE_COUNT; s++) {
-        if (s == SB_STAGE_MINMAX || s == SB_STAGE_RAYS) continue; /* stages that draw nothing */
-        char name[40];
-        snprintf(name, sizeof name, "%s_draw_calls", sb_stage_names[s]);
-        sb_csv_str(c, name);
-    }
-    for (int k = 0; k < SB_MAX_CASCADES; k++) {
-        char name[16];
-        snprintf(name, sizeof name, "split_%d", k + 1);
-        sb_csv_str(c, name);
-    }
-    sb_csv_end_row(c);
-}
-
-static double frame_gpu_ms(const sb_stage_times *t) {
-    double sum = 0;
-    for (int s = 0; s < SB_STAGE_COUNT; s++)
-        if (t->mask & SB_STAGE_BIT(s)) sum += t->ms[s];
-    return sum;
-}
-
-static void frame_row(sb_csv *c, int frame, const frame_rec *r, const sb_stage_times *t, unsigned stages) {
-    sb_csv_int(c, frame);
-    sb_csv_num(c, r->progress);
-    sb_csv_int(c, r->counters.draw_calls);
-    sb_csv_int(c, r->counters.shadow_draw_calls);
-    sb_csv_int(c, (long long)r->counters.triangles);
-    sb_csv_int(c, (long long)r->counters.shadow_triangles);
-    if (stages & SB_STAGE_BIT(SB_STAGE_CASCADE)) {
-        sb_csv_int(c, r->counters.cascades_rendered);
-        sb_csv_int(c, r->counters.cascades_skipped);
-    } else {
-        sb_csv_empty(c);
-        sb_csv_empty(c);
-    }
-    for (int s = 0; s < SB_STAGE_COUNT; s++) {
-        if ((stages & SB_STAGE_BIT(s)) && (t->mask & SB_STAGE_BIT(s))) sb_csv_num(c, t->ms[s]);
-        else sb_csv_empty(c);
-    }
-    sb_csv_num(c, frame_gpu_ms(t));
-    sb_csv_num(c, r->cpu_ms);
-    sb_csv_num(c, r->wall_ms);
-    for (int s = 0; s < SB_STAGE_COUNT; s++) {
-        if (s == SB_STAGE_MINMAX || s == SB_STAGE_RAYS) continue;
-        if (stages & SB_STAGE_BIT(s)) sb_csv_int(c, r->counters.stage_draw_calls[s]);
-        else sb_csv_empty(c);
-    }
-    for (int k = 0; k < SB_MAX_CASCADES; k++) {
-        if (k < r->counters.split_count) sb_csv_num(c, r->counters.splits[k]);
-        else sb_csv_empty(c);
-    }
-    sb_csv_end_row(c);
-}
-
-static void summary_row(sb_summary *sum, const sb_session *s, const sb_run_spec *spec, const char *run_id,
-                        const char *status, const char *reason, const sb_timer *t, const frame_rec *recs,
-                        int first, int n, double run_wall_s, double frames_wall_ms) {
-    sb_csv *c = &sum->rows;
-    char params[1024];
-    sb_params_canonical(&spec->params, params, sizeof params);
-    sb_csv_str(c, run_id);
-    sb_csv_str(c, s->scene_name);
-    sb_csv_str(c, s->path_name);
-    sb_csv_str(c, spec->tech->name);
-    sb_csv_str(c, params);
-    sb_csv_str(c, sb_backend_name(s->opts.backend));
-    sb_csv_str(c, s->ctx.renderer);
-    sb_csv_str(c, sb_timing_name(s->timing));
-    sb_csv_int(c, s->opts.frames);
-    sb_csv_int(c, s->opts.warmup);
-    sb_csv_int(c, s->opts.width);
-    sb_csv_int(c, s->opts.height);
-    sb_csv_str(c, status);
-    sb_csv_str(c, reason);
-    sb_csv_int(c, t ? (long long)t->stalls : 0);
-    sb_csv_int(c, (long long)sb_scene_triangles(&s->scene));
-    sb_csv_num(c, s->scene.load_ms);
-    sb_csv_num(c, run_wall_s);
-    sb_csv_num(c, run_wall_s > 0 && t ? 1.0 - frames_wall_ms / (run_wall_s * 1e3) : NAN);
-    double *v = malloc((size_t)(n > 0 ? n : 1) * sizeof(double));
-    for (int field = 0; field < 5; field++) {
-        for (int i = 0; i < n; i++) {
-            const sb_counters *k = &recs[first + i].counters;
-            v[i] = field == 0 ? k->draw_calls : field == 1 ? k->shadow_draw_calls : field == 2 ? (double)k->shadow_triangles
-                 : field == 3 ? k->cascades_rendered : k->cascades_skipped;
-        }
-        bool has_cascades = spec->tech->stages & SB_STAGE_BIT(SB_STAGE_CASCADE);
-        if (field >= 3 && !has_cascades) sb_csv_empty(c);
-        else sb_csv_num(c, t && n ? sb_stats_compute(v, n).mean : NAN);
-    }
-    for (int k = 0; k < N_SUMMARY_STAGES; k++) {
-        for (int i = 0; i < n; i++) {
-            const sb_stage_times *st = t ? &t->times[first + i] : NULL;
-            const frame_rec *r = &recs[first + i];
-            if (!st) v[i] = NAN;
-            else if (k < SB_STAGE_COUNT)
-                v[i] = (spec->tech->stages & SB_STAGE_BIT(k)) && (st->mask & SB_STAGE_BIT(k)) ? st->ms[k] : NAN;
-            else if (k == SB_STAGE_COUNT) v[i] = frame_gpu_ms(st);
-            else if (k == SB_STAGE_COUNT + 1) v[i] = r->cpu_ms;
-            else v[i] = r->wall_ms;
-        }
-        sb_stats st = sb_stats_compute(v, t ? n : 0);
-        sb_csv_num(c, st.mean);
-        sb_csv_num(c, st.median);
-        sb_csv_num(c, st.p95);
-        sb_csv_num(c, st.p99);
-        sb_csv_num(c, st.std);
-        sb_csv_num(c, st.ci95);
-    }
-    free(v);
-    sb_csv_end_row(c);
-    sum->count++;
-    if (strcmp(status, "failed") == 0) sum->failed++;
-    if (strcmp(status, "skipped") == 0) sum->skipped++;
-}
-
 static void progress_line(const sb_session *s, int index, int total, const char *tech, int frame, int frames,
                           double t0) {
     if (!s->opts.progress) return;
@@ -312,69 +162,125 @@ static void progress_line(const sb_session *s, int index, int total, const char 
     if (frame == frames) fputc('\n', stderr);
 }
 
-/* Untimed pass over the same frames: readbacks never touch the timed loop. */
-static bool write_images(sb_session *s, sb_instance *in, const char *out_dir, const char *run_id, sb_err *err) {
+/* ---- the untimed evaluation pass: error against the reference, images ---- */
+
+static bool eval_frame_wanted(const sb_run_opts *o, int pf) {
+    return (o->error_every > 0 && pf % o->error_every == 0) || (o->images > 0 && pf % o->images == 0);
+}
+
+/* Re-renders the selected path frames with the evaluation targets bound and
+ * reads them back: nothing here runs inside a timed frame. */
+static bool evaluate(sb_session *s, sb_instance *in, const char *out_dir, const char *run_id, sb_frame_rec *recs,
+                     sb_run_info *info, sb_err *err) {
+    const int w = s->gpu.width, h = s->gpu.height, n = s->opts.frames, np = w * h;
+    sb_reference *ref = sb_gpu_reference(&s->gpu, err);
+    if (!ref) return false;
     char dir[4200];
     snprintf(dir, sizeof dir, "%s/images", out_dir);
-    if (!sb_mkdir_p(dir, err)) return false;
-    const int w = s->gpu.width, h = s->gpu.height, n = s->opts.frames;
-    unsigned char *rgba = malloc((size_t)w * h * 4), *vis = malloc((size_t)w * h);
+    if (s->opts.images > 0 && !sb_mkdir_p(dir, err)) return false;
+    unsigned char *rgba = malloc((size_t)np * 4), *vis = malloc((size_t)np), *refvis = malloc((size_t)np);
+    float *pos = malloc(sizeof(float) * 4 * (size_t)np), *aux = malloc(sizeof(float) * 4 * (size_t)np);
     sb_timer timer;
-    sb_timer_init(&timer, SB_TIMING_SYNC, 1, n);
+    sb_timer_init(&timer, SB_TIMING_SYNC, 1, 3);
     bool ok = true;
-    for (int i = 0; ok && i < n; i += s->opts.images) {
-        sb_frame f;
-        memset(&f, 0, sizeof f);
-        sb_timer_frame_begin(&timer, i);
-        sb_render_frame(s, in, &f, i, n, i, &timer);
+    int seq = s->gpu.run_frames;   /* after the timed frames */
+    for (int pf = 0; ok && pf < n; pf++) {
+        if (!eval_frame_wanted(&s->opts, pf)) continue;
+        /* a temporal technique's frame depends on the frames before it: replay two */
+        for (int k = in->tech->temporal ? 2 : 0; k >= 0; k--) {
+            if (pf - k < 0) continue;
+            sb_frame f;
+            memset(&f, 0, sizeof f);
+            s->gpu.eval = k == 0;
+            sb_timer_frame_begin(&timer, 0);
+            sb_render_frame(s, in, &f, pf - k, n, seq++, &timer);
+        }
+        s->gpu.eval = false;
         sb_gpu_readback(&s->gpu, NULL, vis, rgba);
-        char path[4400];
-        snprintf(path, sizeof path, "%s/%s_f%04d_color.png", dir, run_id, i);
-        ok = sb_image_write_u8(path, w, h, 4, rgba, err);
-        snprintf(path, sizeof path, "%s/%s_f%04d_vis.png", dir, run_id, i);
-        if (ok) ok = sb_image_write_u8(path, w, h, 1, vis, err);
+        sb_gpu_readback_eval(&s->gpu, pos, aux);
+        sb_frame_rec *r = &recs[pf];
+        sb_camera cam = sb_path_camera(&s->path, pf, n, (double)w / h, &s->scene);
+        sb_evaluate_frame(ref, s->gpu.sun, sb_v3_sub(cam.pos, s->scene.origin), w, h, pos, aux, vis, refvis, &r->err,
+                          s->opts.threads);
+        if (s->opts.error_every > 0 && pf % s->opts.error_every == 0) {
+            r->evaluated = true;
+            info->rays += r->err.rays;
+            info->ray_ms += r->err.ray_ms;
+        }
+        if (s->opts.images > 0 && pf % s->opts.images == 0)
+            ok = sb_images_write_frame(dir, run_id, pf, w, h, rgba, vis, refvis, pos, aux, err);
     }
+    if (ok) ok = sb_gl_check("evaluation pass", err);
     sb_timer_free(&timer);
     free(rgba);
     free(vis);
+    free(refvis);
+    free(pos);
+    free(aux);
     return ok;
 }
 
+/* ---- one run ---- */
+
 bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_summary *sum, int index,
                 int total) {
-    char run_id[17], path[4096];
+    char run_id[17], path[4096], params[1024];
     sb_run_id(s, spec, run_id);
+    sb_params_canonical(&spec->params, params, sizeof params);
     snprintf(path, sizeof path, "%s/%s.csv", out_dir, run_id);
+    const sb_run_opts *o = &s->opts;
+    sb_run_info info = {
+        .run_id = run_id, .scene = s->scene_name, .path = s->path_name, .technique = spec->tech->name,
+        .params = params, .backend = sb_backend_name(o->backend), .renderer = s->ctx.renderer,
+        .timing = sb_timing_name(s->timing), .status = "ok", .reason = "", .frames = o->frames,
+        .warmup = o->warmup, .width = o->width, .height = o->height, .target_ci = o->target_ci,
+        .scene_triangles = sb_scene_triangles(&s->scene), .load_ms = s->scene.load_ms,
+    };
+    const unsigned stages = spec->tech->stages;
     double t_run = sb_now_ms();
     const char *skip = sb_skip_reason(s, spec->tech);
     if (skip) {
-        summary_row(sum, s, spec, run_id, "skipped", skip, NULL, NULL, 0, 0, 0, 0);
+        info.status = "skipped";
+        info.reason = skip;
+        sb_report_summary_row(&sum->rows, &info, stages, NULL, NULL, 0);
+        sum->count++;
+        sum->skipped++;
         return true;
     }
+    const int N = o->frames, W = o->warmup;
+    const int max_repeat = o->target_ci > 0 ? o->max_repeat : o->repeat;
+    const int capacity = W + N * max_repeat;
     sb_err err = {{0}};
     sb_instance in;
-    s->gpu.run_frames = s->opts.frames + s->opts.warmup;
+    s->gpu.run_frames = capacity;
     if (!sb_instance_create(&in, s, spec, &err)) {
         sb_log("run %s (%s): failed: %s", run_id, spec->tech->name, err.msg);
-        summary_row(sum, s, spec, run_id, "failed", err.msg, NULL, NULL, 0, 0, (sb_now_ms() - t_run) / 1e3, 0);
+        info.status = "failed";
+        info.reason = err.msg;
+        info.run_wall_s = (sb_now_ms() - t_run) / 1e3;
+        sb_report_summary_row(&sum->rows, &info, stages, NULL, NULL, 0);
+        sum->count++;
+        sum->failed++;
         return false;
     }
-    const int N = s->opts.frames, W = s->opts.warmup, total_frames = N + W;
     sb_timer timer;
-    sb_timer_init(&timer, s->timing, s->opts.ring, total_frames);
-    frame_rec *recs = calloc((size_t)total_frames, sizeof *recs);
+    sb_timer_init(&timer, s->timing, o->ring, capacity);
+    sb_frame_rec *recs = calloc((size_t)capacity, sizeof *recs);
     sb_csv rows = {0};
     sb_csv_file cf;
     bool ok = sb_csv_file_open(&cf, path, &err);
     if (ok) {
-        frame_header(&rows);
+        sb_report_frame_header(&rows);
         ok = sb_csv_file_write(&cf, &rows, &err);
     }
-    int written = W; /* next measured frame to write */
-    double frames_wall = 0;
-    for (int i = 0; ok && i < total_frames; i++) {
+    /* rows stream out as their timings arrive, unless something is only known
+       after the timed frames (GPU-side counters, error evaluation) */
+    const bool stream = !spec->tech->collect && o->error_every == 0;
+    int written = W, done = 0, repeats = 0;
+    sb_timed_frames_active = true;
+    for (int i = 0; ok && i < capacity; i++) {
         /* warm-up frames replay the path's first frames and are discarded */
-        int pf = i < W ? i % N : i - W;
+        int pf = i < W ? i % N : (i - W) % N;
         double w0 = sb_now_ms();
         sb_timer_frame_begin(&timer, i);
         sb_frame f;
@@ -382,39 +288,55 @@ bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_
         sb_render_frame(s, &in, &f, pf, N, i, &timer);
         if (timer.mode == SB_TIMING_QUERIES) glFlush();
         double w1 = sb_now_ms();
-        recs[i].progress = f.progress;
-        recs[i].counters = f.counters;
-        recs[i].wall_ms = w1 - w0;
-        recs[i].cpu_ms = recs[i].wall_ms - timer.wait_ms;
-        frames_wall += recs[i].wall_ms;
-        /* techniques with counters known only after the run write their rows at the end */
-        while (!spec->tech->collect && written < total_frames && timer.times[written].ready) {
-            frame_row(&rows, written - W, &recs[written], &timer.times[written], spec->tech->stages);
+        sb_frame_rec *r = &recs[i];
+        r->frame = pf;
+        r->repeat = i < W ? -1 : (i - W) / N;
+        r->progress = f.progress;
+        r->counters = f.counters;
+        r->wall_ms = w1 - w0;
+        r->cpu_ms = r->wall_ms - timer.wait_ms;
+        if (i >= W) info.frames_wall_ms += r->wall_ms;
+        done = i + 1;
+        while (stream && written < done && timer.times[written].ready) {
+            sb_report_frame_row(&rows, &recs[written], &timer.times[written], stages);
             written++;
         }
         if (rows.len > 65536) ok = sb_csv_file_write(&cf, &rows, &err);
-        if (i >= W) progress_line(s, index, total, spec->tech->name, i - W + 1, N, t_run);
+        if (i >= W) progress_line(s, index, total, spec->tech->name, (i - W) % N + 1, N, t_run);
+        if (i >= W && (i - W) % N == N - 1) { /* a repetition of the path is complete */
+            repeats++;
+            if (o->target_ci > 0) {
+                sb_timer_drain(&timer); /* between repetitions, never inside a frame */
+                double ci = sb_report_gpu_ci_pct(timer.times + W, done - W);
+                if (ci <= o->target_ci) break;
+            }
+        }
     }
     sb_timer_drain(&timer);
+    sb_timed_frames_active = false;
+    const int measured = done - W;
     if (ok && spec->tech->collect)
-        for (int i = W; i < total_frames; i++) spec->tech->collect(in.state, i, &recs[i].counters);
+        for (int i = W; i < done; i++) spec->tech->collect(in.state, i, &recs[i].counters);
+    if (ok && (o->error_every > 0 || o->images > 0)) ok = evaluate(s, &in, out_dir, run_id, recs + W, &info, &err);
     if (ok) {
-        for (; written < total_frames; written++)
-            frame_row(&rows, written - W, &recs[written], &timer.times[written], spec->tech->stages);
+        for (; written < done; written++) sb_report_frame_row(&rows, &recs[written], &timer.times[written], stages);
         ok = sb_csv_file_write(&cf, &rows, &err);
     }
     if (ok) ok = sb_gl_check(spec->tech->name, &err);
-    if (ok && s->opts.images > 0) ok = write_images(s, &in, out_dir, run_id, &err);
     if (ok) ok = sb_csv_file_commit(&cf, &err);
     else sb_csv_file_abort(&cf);
     sb_instance_destroy(&in, s);
-    double run_wall_s = (sb_now_ms() - t_run) / 1e3;
-    if (ok) {
-        summary_row(sum, s, spec, run_id, "ok", "", &timer, recs, W, N, run_wall_s, frames_wall);
-    } else {
+    info.run_wall_s = (sb_now_ms() - t_run) / 1e3;
+    info.repeats = repeats;
+    info.stalls = timer.stalls;
+    if (!ok) {
         sb_log("run %s (%s): failed: %s", run_id, spec->tech->name, err.msg);
-        summary_row(sum, s, spec, run_id, "failed", err.msg, NULL, NULL, 0, 0, run_wall_s, 0);
+        info.status = "failed";
+        info.reason = err.msg;
+        sum->failed++;
     }
+    sb_report_summary_row(&sum->rows, &info, stages, ok ? recs + W : NULL, timer.times + W, measured);
+    sum->count++;
     sb_csv_free(&rows);
     free(recs);
     sb_timer_free(&timer);

@@ -22,9 +22,18 @@ typedef struct sb_run_opts {
     double sun_az, sun_el;      /* degrees */
     bool progress;              /* progress line on stderr */
     int images;                 /* write images of every K-th frame (0: none), untimed pass */
+    int error_every;            /* evaluate the error of every K-th frame (0: off), untimed pass; default 10 */
+    int repeat;                 /* repetitions of the path (default 1) */
+    double target_ci;           /* percent: repeat until the gpu_ms CI half-width is within it (0: off) */
+    int max_repeat;             /* cap for target_ci (default 10) */
+    int threads;                /* reference ray-casting threads (default: all cores) */
 } sb_run_opts;
 
 void sb_run_opts_defaults(sb_run_opts *o);
+
+/* True while the timed frames of a run are being rendered (instrumentation:
+ * tests assert that nothing is read back then). */
+extern bool sb_timed_frames_active;
 
 typedef struct sb_session {
     sb_run_opts opts;

@@ -10,3 +10,13 @@
 bool sb_image_write_u8(const char *path, int w, int h, int channels, const unsigned char *pixels, sb_err *err);
 /* channels 1..4 of floats (EXR for float data) */
 bool sb_image_write_f32(const char *path, int w, int h, int channels, const float *pixels, sb_err *err);
+
+/* The images of one evaluated frame, DIR/<run_id>_fNNNN_<kind>.<ext>:
+ * color.png, vis.png (technique visibility), ref.png (reference: white lit,
+ * black shadowed, grey not evaluated), error.png (false shadow red, false
+ * light blue, agreement in grey), cascades.png (cascade 0 red, 1 green,
+ * 2 blue, 3 cyan, 4 magenta, 5 orange, 6 violet, 7 white, outside every map
+ * yellow) and texel_px.exr (shadow texels per pixel, float). */
+bool sb_images_write_frame(const char *dir, const char *run_id, int frame, int w, int h, const unsigned char *rgba,
+                           const unsigned char *vis, const unsigned char *ref, const float *pos, const float *aux,
+                           sb_err *err);

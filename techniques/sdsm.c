@@ -344,6 +344,7 @@ const sb_technique sb_technique_sdsm = {
     .stages = SB_STAGE_BIT(SB_STAGE_ZPASS) | SB_STAGE_BIT(SB_STAGE_MINMAX) | SB_STAGE_BIT(SB_STAGE_CASCADE) |
               SB_STAGE_BIT(SB_STAGE_FINAL),
     .needs = SB_NEEDS_SUN,
+    .temporal = true,
     .state_size = sizeof(sdsm_state),
     .create = sdsm_create,
     .frame = sdsm_frame,

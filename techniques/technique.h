@@ -67,6 +67,7 @@ typedef struct sb_technique {
     int param_count;
     unsigned stages;        /* SB_STAGE_BIT()s it reports */
     unsigned needs;         /* SB_NEEDS_* */
+    bool temporal;          /* a frame depends on earlier frames (re-rendered before an evaluated one) */
     size_t state_size;
     bool (*create)(void *state, struct sb_gpu *gpu, const sb_params *p, sb_err *err);
     void (*frame)(void *state, struct sb_frame *f);

@@ -1,2 +1,6 @@
 // common.glsl - prepended to every shadowbench shader after #version and defines.
 #define SB_PI 3.14159265358979
+// Set by a technique's sb_visibility() for error evaluation: shadow texels per
+// screen pixel of the map actually used, and that map's cascade (-1: none).
+float sb_out_texel_px;
+float sb_out_cascade;

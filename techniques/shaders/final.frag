@@ -1,6 +1,7 @@
 // final.frag - shared camera pass. The technique's GLSL, linked before this,
 // defines sb_visibility(): 1 lit ... 0 shadowed. It is written, unshaded, to
-// the visibility target that error metrics and images read.
+// the visibility target that error metrics and images read. Targets 2 and 3
+// are bound only in the (untimed) evaluation pass.
 in vec3 v_pos;
 in vec3 v_nrm;
 in float v_view_z;
@@ -8,10 +9,18 @@ uniform vec3 u_sun;
 uniform vec4 u_color;
 layout(location = 0) out vec4 o_color;
 layout(location = 1) out float o_vis;
+layout(location = 2) out vec4 o_pos;   // origin-relative position, shadow texels per pixel
+layout(location = 3) out vec4 o_aux;   // geometric normal (facing the viewer), cascade index
 void main() {
+    sb_out_texel_px = -1.0;
+    sb_out_cascade = -1.0;
     vec3 n = normalize(v_nrm);
     float ndl = dot(n, u_sun);
     float vis = sb_visibility(v_pos, n, v_view_z);
     o_vis = vis;
     o_color = vec4(u_color.rgb * (0.3 + 0.7 * max(ndl, 0.0) * vis), 1.0);
+    vec3 ng = normalize(cross(dFdx(v_pos), dFdy(v_pos)));
+    if (dot(ng, n) < 0.0) ng = -ng;
+    o_pos = vec4(v_pos, sb_out_texel_px);
+    o_aux = vec4(ng, sb_out_cascade);
 }

@@ -107,3 +107,39 @@ bool pb_render(sb_session *s, const char *spec, pb_result *out, unsigned char *v
     free(runs);
     return sb_gl_check("pb_render", err);
 }
+
+bool eval_frame(sb_session *s, const char *spec, int i, int n, sb_error_metrics *m, float *pos_out, unsigned char *ref_out,
+                sb_err *err) {
+    sb_run_spec *runs = NULL;
+    int nr = 0;
+    if (!sb_spec_expand(spec, NULL, &runs, &nr, err)) return false;
+    sb_instance in;
+    bool ok = sb_instance_create(&in, s, &runs[0], err);
+    free(runs);
+    if (!ok) return false;
+    sb_reference *ref = sb_gpu_reference(&s->gpu, err);
+    if (!ref) return false;
+    int w = s->gpu.width, h = s->gpu.height;
+    sb_timer t;
+    sb_timer_init(&t, SB_TIMING_SYNC, 1, 1);
+    sb_timer_frame_begin(&t, 0);
+    sb_frame f;
+    memset(&f, 0, sizeof f);
+    s->gpu.eval = true;
+    sb_render_frame(s, &in, &f, i, n, 0, &t);
+    s->gpu.eval = false;
+    unsigned char *vis = malloc((size_t)w * h), *refv = malloc((size_t)w * h);
+    float *pos = malloc(sizeof(float) * 4 * w * h), *aux = malloc(sizeof(float) * 4 * w * h);
+    sb_gpu_readback(&s->gpu, NULL, vis, NULL);
+    sb_gpu_readback_eval(&s->gpu, pos, aux);
+    sb_evaluate_frame(ref, s->gpu.sun, sb_v3_sub(f.cam.pos, s->scene.origin), w, h, pos, aux, vis, refv, m, 2);
+    if (pos_out) memcpy(pos_out, pos, sizeof(float) * 4 * w * h);
+    if (ref_out) memcpy(ref_out, refv, (size_t)w * h);
+    free(vis);
+    free(refv);
+    free(pos);
+    free(aux);
+    sb_timer_free(&t);
+    sb_instance_destroy(&in, s);
+    return sb_gl_check(spec, err);
+}

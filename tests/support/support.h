@@ -2,6 +2,7 @@
 #pragma once
 #include <stdbool.h>
 
+#include "error.h"
 #include "run.h"
 
 /* Classification of a rendered plane-box frame against the analytic shadow. */
@@ -17,6 +18,10 @@ typedef struct pb_result {
 bool pb_open(sb_session *s, sb_backend backend, int w, int h, sb_err *err);
 /* Renders frame 0 with the spec and classifies it. */
 bool pb_render(sb_session *s, const char *spec, pb_result *out, unsigned char *vis_out, sb_err *err);
+/* Renders path frame i of n with the spec in evaluation mode and measures its
+ * error against the reference; pos (w*h*4 floats) and ref (w*h) optional. */
+bool eval_frame(sb_session *s, const char *spec, int i, int n, sb_error_metrics *m, float *pos, unsigned char *ref,
+                sb_err *err);
 /* Does a ray from p toward the sun hit the box [-1,1]x[0,2]x[-1,1]? */
 bool pb_box_shadows(sb_v3 p, sb_v3 sun);
 /* Path of a file in the source tree's tests/data. */

@@ -1,0 +1,35 @@
+/* reference.h - exact shadows by ray casting (Embree 3): the ground truth
+ * every technique's error is measured against, and the `raycast` technique. */
+#pragma once
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "scene.h"
+
+typedef struct sb_reference {
+    void *device, *scene;       /* RTCDevice, RTCScene */
+    double build_ms;
+    float eps_scene;            /* a length relative to the scene size, for ray offsets */
+} sb_reference;
+
+/* Builds an Embree scene of every triangle (all of them cast). */
+bool sb_reference_build(sb_reference *r, const sb_scene *s, sb_err *err);
+void sb_reference_free(sb_reference *r);
+
+/* A point to test: origin-relative position, geometric normal facing the
+ * viewer (may be zero), and how far the point may be off the true surface
+ * (the ray starts that far out along the normal, and toward the light). */
+typedef struct sb_ref_point {
+    float p[3], n[3];
+    float eps;
+} sb_ref_point;
+
+/* The error bound of a float position relative to the origin, rasterized at
+ * distance `dist` from the camera: a few ulps of the larger of the two. */
+float sb_ref_position_eps(const sb_reference *r, const float p[3], float dist);
+
+/* Visibility of the directional light `sun` (unit vector toward it) at each
+ * point: 1 lit, 0 shadowed. Runs on `threads` threads; returns the number of
+ * rays cast. */
+uint64_t sb_reference_visibility(const sb_reference *r, sb_v3 sun, const sb_ref_point *pts, int n,
+                                 unsigned char *vis, int threads);

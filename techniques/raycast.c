@@ -1,0 +1,140 @@
+/* raycast.c - ray-cast shadows (the Zagreb thesis), exact: a depth pre-pass,
+ * then for every pixel the world position is reconstructed in double and an
+ * Embree occlusion ray is cast toward the sun (offset from the surface by an
+ * epsilon that grows with distance, and limited to the scene; the thesis's
+ * version had neither), and the camera pass reads the result. It is the
+ * reference every technique is measured against, with a cost of its own:
+ * its readback and rays are the `rays` stage. */
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "gpu.h"
+#include "reference.h"
+#include "shaders.h"
+
+static const sb_param_def raycast_params[] = {
+    {"threads", SB_PARAM_INT, "0", 0, 16, NULL, "ray-casting threads (0: all cores)"},
+};
+
+typedef struct {
+    sb_final_prog fp;
+    GLint u_rays;
+    GLuint tex;
+    int threads;
+    float *depth;
+    sb_ref_point *pts;
+    int *pix;
+    unsigned char *hits, *vis;
+} raycast_state;
+
+static bool raycast_create(void *state, sb_gpu *g, const sb_params *p, sb_err *err) {
+    raycast_state *s = state;
+    s->threads = (int)sb_param_num(p, "threads");
+    if (s->threads == 0) {
+        long n = sysconf(_SC_NPROCESSORS_ONLN);
+        s->threads = n > 0 ? (int)n : 1;
+    }
+    if (!sb_gpu_reference(g, err)) return false;
+    int n = g->width * g->height;
+    s->depth = malloc(sizeof(float) * (size_t)n);
+    s->pts = malloc(sizeof(sb_ref_point) * (size_t)n);
+    s->pix = malloc(sizeof(int) * (size_t)n);
+    s->hits = malloc((size_t)n);
+    s->vis = malloc((size_t)n);
+    glGenTextures(1, &s->tex);
+    glBindTexture(GL_TEXTURE_2D, s->tex);
+    glTexStorage2D(GL_TEXTURE_2D, 1, GL_R8, g->width, g->height);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    if (!sb_final_prog_create(&s->fp, "raycast", sb_shader_vis_raycast_glsl, NULL, err)) return false;
+    s->u_rays = glGetUniformLocation(s->fp.prog, "u_rays");
+    return sb_gl_check("raycast", err);
+}
+
+static void raycast_frame(void *state, sb_frame *f) {
+    raycast_state *s = state;
+    sb_gpu *g = f->gpu;
+    const int w = g->width, h = g->height;
+
+    sb_stage_begin(f, SB_STAGE_ZPASS);
+    sb_zpass(f);
+    sb_stage_end(f, SB_STAGE_ZPASS);
+
+    sb_stage_begin(f, SB_STAGE_RAYS);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, g->fbo);
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    sb_gpu_read_pixels(0, 0, w, h, GL_DEPTH_COMPONENT, GL_FLOAT, s->depth);
+    sb_m4 inv;
+    sb_m4_invert(f->view_proj, &inv);
+    sb_v3 eye = sb_v3_sub(f->cam.pos, g->scene->origin);
+    int m = 0;
+    memset(s->vis, 255, (size_t)w * h);
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            float d = s->depth[y * w + x];
+            if (d >= 1.0f) continue;
+#define SB_AT(px, py, dd) sb_m4_point(inv, sb_v3_make(2 * ((px) + 0.5) / w - 1, 2 * ((py) + 0.5) / h - 1, 2 * (double)(dd) - 1))
+            sb_v3 p = SB_AT(x, y, d);
+            /* normal from the neighbours whose depth is closest (never across an edge) */
+            int xo = x + 1 < w ? 1 : -1, yo = y + 1 < h ? 1 : -1;
+            if (x > 0 && x + 1 < w && fabsf(s->depth[y * w + x - 1] - d) < fabsf(s->depth[y * w + x + 1] - d)) xo = -1;
+            if (y > 0 && y + 1 < h && fabsf(s->depth[(y - 1) * w + x] - d) < fabsf(s->depth[(y + 1) * w + x] - d)) yo = -1;
+            sb_v3 px = SB_AT(x + xo, y, s->depth[y * w + x + xo]), py = SB_AT(x, y + yo, s->depth[(y + yo) * w + x]);
+#undef SB_AT
+            sb_v3 n = sb_v3_norm(sb_v3_cross(sb_v3_sub(px, p), sb_v3_sub(py, p)));
+            if (sb_v3_dot(n, sb_v3_sub(eye, p)) < 0) n = sb_v3_scale(n, -1);
+            sb_ref_point *q = &s->pts[m];
+            q->p[0] = (float)p.x;
+            q->p[1] = (float)p.y;
+            q->p[2] = (float)p.z;
+            q->n[0] = (float)n.x;
+            q->n[1] = (float)n.y;
+            q->n[2] = (float)n.z;
+            /* a depth-buffer position is off along the view ray by up to
+               z^2 (f-n)/(n f) per unit of depth: a few ulps of d */
+            double z = sb_v3_dot(sb_v3_sub(p, eye), f->cam.forward), zn = f->cam.znear, zf = f->cam.zfar;
+            double depth_err = z * z * (zf - zn) / (zn * zf) * ldexp(1.0, -22);
+            q->eps = fmaxf(sb_ref_position_eps(g->ref, q->p, (float)z), (float)depth_err);
+            s->pix[m++] = y * w + x;
+        }
+    sb_reference_visibility(g->ref, g->sun, s->pts, m, s->hits, s->threads);
+    for (int k = 0; k < m; k++) s->vis[s->pix[k]] = s->hits[k] ? 255 : 0;
+    glBindTexture(GL_TEXTURE_2D, s->tex);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, w, h, GL_RED, GL_UNSIGNED_BYTE, s->vis);
+    sb_stage_end(f, SB_STAGE_RAYS);
+
+    sb_stage_begin(f, SB_STAGE_FINAL);
+    glUseProgram(s->fp.prog);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, s->tex);
+    glUniform1i(s->u_rays, 0);
+    sb_final_pass(f, &s->fp, true);
+    sb_stage_end(f, SB_STAGE_FINAL);
+}
+
+static void raycast_destroy(void *state, sb_gpu *g) {
+    (void)g;
+    raycast_state *s = state;
+    sb_final_prog_free(&s->fp);
+    if (s->tex) glDeleteTextures(1, &s->tex);
+    free(s->depth);
+    free(s->pts);
+    free(s->pix);
+    free(s->hits);
+    free(s->vis);
+}
+
+const sb_technique sb_technique_raycast = {
+    .name = "raycast",
+    .summary = "exact ray-cast shadows on the CPU (Embree), shaded on the GPU: the reference row",
+    .params = raycast_params,
+    .param_count = (int)SB_COUNT(raycast_params),
+    .stages = SB_STAGE_BIT(SB_STAGE_ZPASS) | SB_STAGE_BIT(SB_STAGE_RAYS) | SB_STAGE_BIT(SB_STAGE_FINAL),
+    .needs = SB_NEEDS_SUN,
+    .state_size = sizeof(raycast_state),
+    .create = raycast_create,
+    .frame = raycast_frame,
+    .destroy = raycast_destroy,
+};

@@ -1,0 +1,234 @@
+/* Accuracy: the Embree reference against analytic geometry, error metrics
+ * that respond to resolution and to a deliberately broken technique, and an
+ * evaluation that never touches the timed frames. */
+#define _DEFAULT_SOURCE
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "reference.h"
+#include "support.h"
+
+static void test_reference_matches_analytic(void **st) {
+    (void)st;
+    sb_session s;
+    sb_err err;
+    assert_true(pb_open(&s, SB_BACKEND_EGL, 640, 360, &err));
+    const int n = 640 * 360;
+    float *pos = malloc(sizeof(float) * 4 * n);
+    unsigned char *ref = malloc(n);
+    sb_error_metrics m;
+    assert_true(eval_frame(&s, "none", 0, 1, &m, pos, ref, &err));
+    long plane = 0, mismatch = 0, false_shadow = 0, shadow = 0;
+    for (int i = 0; i < n; i++) {
+        if (ref[i] == 128) continue;   /* not evaluated */
+        sb_v3 p = sb_v3_add(sb_v3_make(pos[4 * i], pos[4 * i + 1], pos[4 * i + 2]), s.scene.origin);
+        if (fabs(p.y) > 1e-3 || (fabs(p.x) <= 1 && fabs(p.z) <= 1)) continue;   /* the plane, outside the box */
+        plane++;
+        bool exact = pb_box_shadows(p, s.gpu.sun), r = ref[i] == 0;
+        shadow += exact;
+        mismatch += exact != r;
+        false_shadow += r && !exact;
+    }
+    print_message("plane %ld px, analytic shadow %ld, reference mismatch %ld (%.4f%%), false shadow %ld; %llu rays in %.1f ms\n",
+                  plane, shadow, mismatch, 100.0 * mismatch / plane, false_shadow, (unsigned long long)m.rays, m.ray_ms);
+    assert_true(plane > n / 4 && shadow > plane / 100);
+    assert_true(mismatch * 1000 <= plane * 2);   /* within 0.2% of the plane's pixels */
+    assert_true(false_shadow * 10000 <= plane);  /* no self-intersection on the lit plane */
+    /* `none` shadows nothing: its error is the share of shadowed pixels */
+    assert_true(fabs(m.false_lit - m.err_rate) < 1e-12 && m.false_shadow == 0);
+    free(pos);
+    free(ref);
+    sb_session_close(&s);
+}
+
+static sb_session g_towers;
+
+static int open_towers(void) {
+    sb_run_opts o;
+    sb_run_opts_defaults(&o);
+    o.width = 480;
+    o.height = 270;
+    sb_err err;
+    memset(&g_towers, 0, sizeof g_towers);
+    return sb_session_open(&g_towers, &o, "towers", "towers", &err) ? 0 : -1;
+}
+
+static void test_error_falls_with_resolution(void **st) {
+    (void)st;
+    assert_int_equal(open_towers(), 0);
+    const int res[] = {512, 1024, 2048, 4096};
+    double err_rate[4], res_err[4];
+    for (int k = 0; k < 4; k++) {
+        char spec[64];
+        snprintf(spec, sizeof spec, "sm:res=%d:filter=none", res[k]);
+        sb_error_metrics m;
+        sb_err err;
+        assert_true(eval_frame(&g_towers, spec, 9, 12, &m, NULL, NULL, &err));
+        err_rate[k] = m.err_rate;
+        res_err[k] = m.res_err_mean;
+        print_message("%s: err_rate %.5f res_err_mean %.3f texel_px_p95 %.3f (%ld px)\n", spec, m.err_rate,
+                      m.res_err_mean, m.texel_px_p95, m.pixels);
+    }
+    for (int k = 1; k < 4; k++) {
+        assert_true(err_rate[k] < err_rate[k - 1]);
+        assert_true(res_err[k] < res_err[k - 1]);
+    }
+    /* the exact technique is (nearly) exact */
+    sb_error_metrics m;
+    sb_err err;
+    assert_true(eval_frame(&g_towers, "raycast", 9, 12, &m, NULL, NULL, &err));
+    print_message("raycast: err_rate %.5f\n", m.err_rate);
+    assert_true(m.err_rate < 0.002 && m.err_rate < err_rate[3]);
+}
+
+static void test_broken_bias_is_detected(void **st) {
+    (void)st;
+    sb_error_metrics good, bad;
+    sb_err err;
+    assert_true(eval_frame(&g_towers, "sm:res=2048", 9, 12, &good, NULL, NULL, &err));
+    g_towers.gpu.test_bias_sign = -1;   /* test-only: the bias pushes into the surface */
+    assert_true(eval_frame(&g_towers, "sm:res=2048", 9, 12, &bad, NULL, NULL, &err));
+    g_towers.gpu.test_bias_sign = 1;
+    print_message("bias sign flipped: err_rate %.4f (false shadow %.4f) against %.4f\n", bad.err_rate,
+                  bad.false_shadow, good.err_rate);
+    assert_true(bad.err_rate > 0.05);
+    assert_true(bad.err_rate > 10 * good.err_rate);
+    assert_true(bad.false_shadow > bad.false_lit);   /* acne: surfaces shadow themselves */
+}
+
+/* Readbacks counted through the loader while the timed frames run. */
+static unsigned long g_timed_reads;
+static PFNGLREADPIXELSPROC o_readpix;
+static PFNGLGETBUFFERSUBDATAPROC o_getbuf;
+static PFNGLGETTEXIMAGEPROC o_getteximg;
+static void GLAD_API_PTR c_readpix(GLint a, GLint b, GLsizei c, GLsizei d, GLenum e, GLenum f, void *g) {
+    g_timed_reads += sb_timed_frames_active;
+    o_readpix(a, b, c, d, e, f, g);
+}
+static void GLAD_API_PTR c_getbuf(GLenum a, GLintptr b, GLsizeiptr c, void *d) {
+    g_timed_reads += sb_timed_frames_active;
+    o_getbuf(a, b, c, d);
+}
+static void GLAD_API_PTR c_getteximg(GLenum a, GLint b, GLenum c, GLenum d, void *e) {
+    g_timed_reads += sb_timed_frames_active;
+    o_getteximg(a, b, c, d, e);
+}
+
+static char *read_column(const char *csv, const char *name) {
+    /* returns the column's values joined by ';' (no quoting in these columns) */
+    char *text = strdup(csv), *save = NULL, *out = calloc(1, 65536);
+    char *line = strtok_r(text, "\n", &save);
+    int col = -1, k = 0;
+    for (char *p = line, *f; (f = strsep(&p, ",")); k++)
+        if (!strcmp(f, name)) col = k;
+    assert_true(col >= 0);
+    while ((line = strtok_r(NULL, "\n", &save))) {
+        k = 0;
+        for (char *p = line, *f; (f = strsep(&p, ",")); k++)
+            if (k == col) {
+                strcat(out, f);
+                strcat(out, ";");
+            }
+    }
+    free(text);
+    return out;
+}
+
+static void test_evaluation_does_not_touch_timed_frames(void **st) {
+    (void)st;
+    char dir[] = "/tmp/sbaccXXXXXX";
+    assert_non_null(mkdtemp(dir));
+    o_readpix = glad_glReadPixels;
+    glad_glReadPixels = c_readpix;
+    o_getbuf = glad_glGetBufferSubData;
+    glad_glGetBufferSubData = c_getbuf;
+    o_getteximg = glad_glGetTexImage;
+    glad_glGetTexImage = c_getteximg;
+    char *csv[2];
+    const char *specs[] = {"sm:res=1024", "sdsm:res=1024"};
+    for (int sp = 0; sp < 2; sp++) {
+        for (int e = 0; e < 2; e++) {
+            g_towers.opts.frames = 8;
+            g_towers.opts.warmup = 1;
+            g_towers.opts.error_every = e ? 2 : 0;
+            sb_run_spec *runs = NULL;
+            int n = 0;
+            sb_err err;
+            assert_true(sb_spec_expand(specs[sp], NULL, &runs, &n, &err));
+            char out[64], sum_path[128];
+            snprintf(out, sizeof out, "%s/%d%d", dir, sp, e);
+            assert_true(sb_mkdir_p(out, &err));
+            snprintf(sum_path, sizeof sum_path, "%s/summary.csv", out);
+            sb_summary sum;
+            sb_summary_open(&sum, sum_path);
+            g_timed_reads = 0;
+            assert_true(sb_run_one(&g_towers, &runs[0], out, &sum, 0, 1));
+            print_message("%s error-every %d: %lu readbacks in timed frames\n", specs[sp], e ? 2 : 0, g_timed_reads);
+            assert_int_equal(g_timed_reads, 0);
+            char run_id[17], path[256];
+            sb_run_id(&g_towers, &runs[0], run_id);
+            snprintf(path, sizeof path, "%s/%s.csv", out, run_id);
+            csv[e] = sb_read_file(path, NULL, &err);
+            assert_non_null(csv[e]);
+            sb_summary_free(&sum);
+            free(runs);
+        }
+        /* the same timed frames either way; only the error columns differ */
+        const char *same[] = {"frame", "repeat", "progress", "draw_calls", "shadow_draw_calls", "split_1"};
+        for (size_t k = 0; k < sizeof same / sizeof same[0]; k++) {
+            char *a = read_column(csv[0], same[k]), *b = read_column(csv[1], same[k]);
+            assert_string_equal(a, b);
+            free(a);
+            free(b);
+        }
+        char *e0 = read_column(csv[0], "err_rate"), *e1 = read_column(csv[1], "err_rate");
+        print_message("err_rate without evaluation: %s\nwith: %s\n", e0, e1);
+        assert_string_equal(e0, ";;;;;;;;");
+        assert_string_not_equal(e1, ";;;;;;;;");
+        free(e0);
+        free(e1);
+        free(csv[0]);
+        free(csv[1]);
+    }
+    { /* the hook does see readbacks in timed frames: SDSM reading its splits back without latency */
+        sb_run_spec *runs = NULL;
+        int n = 0;
+        sb_err err;
+        assert_true(sb_spec_expand("sdsm:res=512:splits=cpu:latency=0", NULL, &runs, &n, &err));
+        char out[64], sum_path[128];
+        snprintf(out, sizeof out, "%s/cpu", dir);
+        assert_true(sb_mkdir_p(out, &err));
+        snprintf(sum_path, sizeof sum_path, "%s/summary.csv", out);
+        sb_summary sum;
+        sb_summary_open(&sum, sum_path);
+        g_towers.opts.error_every = 0;
+        g_timed_reads = 0;
+        assert_true(sb_run_one(&g_towers, &runs[0], out, &sum, 0, 1));
+        print_message("sdsm splits=cpu:latency=0: %lu readbacks in 9 timed frames\n", g_timed_reads);
+        assert_int_equal(g_timed_reads, 9);
+        sb_summary_free(&sum);
+        free(runs);
+    }
+    glad_glReadPixels = o_readpix;
+    glad_glGetBufferSubData = o_getbuf;
+    glad_glGetTexImage = o_getteximg;
+    char cmd[64];
+    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+    assert_int_equal(system(cmd), 0);
+    sb_session_close(&g_towers);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_reference_matches_analytic),
+        cmocka_unit_test(test_error_falls_with_resolution),
+        cmocka_unit_test(test_broken_bias_is_detected),
+        cmocka_unit_test(test_evaluation_does_not_touch_timed_frames),
+    };
+    return cmocka_run_group_tests_name("accuracy", tests, NULL, NULL);
+}
