@@ -338,6 +338,53 @@ static void test_query_timing(void **st) {
     }
 }
 
+static int summary_int(const char *dir, const char *name) {
+    char path[4200];
+    snprintf(path, sizeof path, "%s/summary.csv", dir);
+    sb_err err;
+    char *text = sb_read_file(path, NULL, &err);
+    assert_non_null(text);
+    char *nl = strchr(text, '\n');
+    *nl = 0;
+    char *row = nl + 1;
+    /* the renderer column is quoted: blank out commas inside quotes */
+    for (char *p = row; *p; p++)
+        if (*p == '"') {
+            char *q = strchr(p + 1, '"');
+            for (char *k = p; k < q; k++)
+                if (*k == ',') *k = ';';
+            p = q;
+        }
+    char *hdr[256], *f[256];
+    int nh = fields(text, hdr, 256);
+    fields(row, f, 256);
+    int v = atoi(f[column(hdr, nh, name)]);
+    free(text);
+    return v;
+}
+
+static void test_repeats_and_target_ci(void **st) {
+    (void)st;
+    char d[4096];
+    run_dir(d, sizeof d, "%s run plane-box plane-box sm:res=256 --frames 5 --warmup 0 --size 64x36 --repeat 3 --error-every 0 --out %s/rep --quiet",
+            test_binary(), g_tmp);
+    char rep[32][32], fr[32][32];
+    assert_int_equal(read_column(d, "repeat", rep, 32), 15);
+    assert_int_equal(read_column(d, "frame", fr, 32), 15);
+    for (int i = 0; i < 15; i++) {
+        assert_int_equal(atoi(rep[i]), i / 5);
+        assert_int_equal(atoi(fr[i]), i % 5);
+    }
+    assert_int_equal(summary_int(d, "repeats"), 3);
+    /* an unreachable target stops at --max-repeat; a loose one at the first repetition */
+    run_dir(d, sizeof d, "%s run plane-box plane-box sm:res=256 --frames 4 --warmup 0 --size 64x36 --target-ci 0.0001 --max-repeat 2 --error-every 0 --out %s/ci --quiet",
+            test_binary(), g_tmp);
+    assert_int_equal(summary_int(d, "repeats"), 2);
+    run_dir(d, sizeof d, "%s run plane-box plane-box sm:res=256 --frames 10 --warmup 3 --size 64x36 --target-ci 100 --max-repeat 5 --error-every 0 --out %s/ci2 --quiet",
+            test_binary(), g_tmp);
+    assert_int_equal(summary_int(d, "repeats"), 1);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_run_writes_csv),   cmocka_unit_test(test_truncated_glb),
@@ -345,6 +392,7 @@ int main(void) {
         cmocka_unit_test(test_unknown_parameter), cmocka_unit_test(test_malformed_path),
         cmocka_unit_test(test_gltf_camera_path), cmocka_unit_test(test_builtin_paths),
         cmocka_unit_test(test_backends_same_draw_calls), cmocka_unit_test(test_query_timing),
+        cmocka_unit_test(test_repeats_and_target_ci),
     };
     return cmocka_run_group_tests_name("cli", tests, setup, teardown);
 }
