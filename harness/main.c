@@ -4,9 +4,15 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "run.h"
+#include <sys/utsname.h>
 
-#define SB_VERSION "0.1.0"
+#include "batch.h"
+#include "compare.h"
+#include "report.h"
+#include "run.h"
+#include "table.h"
+#include "version.h"
+
 
 static void usage(FILE *f) {
     fprintf(f,
@@ -47,6 +53,13 @@ typedef struct cli {
     const char *out;
     const char *pos[256];
     int npos;
+    const char *run_opts[128];  /* the run options as given, NAME VALUE pairs (batch: they beat defaults) */
+    int nrun_opts;
+    const char *resume, *shard, *metrics, *format, *pair;
+    double threshold;
+    bool dry_run;
+    int argc;
+    char **argv;
 } cli;
 
 static int bad(const char *fmt, const char *a) {
@@ -60,10 +73,12 @@ static int parse_cli(cli *c, int argc, char **argv) {
     sb_run_opts_defaults(&c->opts);
     c->opts.progress = isatty(2);
     c->out = "results";
+    c->threshold = 5;
+    c->argc = argc;
+    c->argv = argv;
     for (int i = 2; i < argc; i++) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
-        long n;
         if (strncmp(a, "--", 2) != 0) {
             if (c->npos == 256) return bad("too many arguments%s", "");
             c->pos[c->npos++] = a;
@@ -71,57 +86,34 @@ static int parse_cli(cli *c, int argc, char **argv) {
         }
         if (!strcmp(a, "--progress")) { c->opts.progress = true; continue; }
         if (!strcmp(a, "--quiet")) { sb_set_quiet(true); c->opts.progress = false; continue; }
+        if (!strcmp(a, "--dry-run")) { c->dry_run = true; continue; }
         if (!v) return bad("%s needs a value", a);
         i++;
-        if (!strcmp(a, "--backend")) {
-            if (!sb_backend_parse(v, &c->opts.backend)) return bad("--backend %s: expected egl or osmesa", v);
-        } else if (!strcmp(a, "--timing")) {
-            if (!sb_timing_parse(v, &c->opts.timing)) return bad("--timing %s: expected auto, queries or sync", v);
-        } else if (!strcmp(a, "--ring")) {
-            if (!sb_parse_int(v, &n) || n < 1 || n > 16) return bad("--ring %s: expected 1..16", v);
-            c->opts.ring = (int)n;
-        } else if (!strcmp(a, "--frames")) {
-            if (!sb_parse_int(v, &n) || n < 1 || n > 1000000) return bad("--frames %s: expected 1..1000000", v);
-            c->opts.frames = (int)n;
-        } else if (!strcmp(a, "--warmup")) {
-            if (!sb_parse_int(v, &n) || n < 0 || n > 10000) return bad("--warmup %s: expected 0..10000", v);
-            c->opts.warmup = (int)n;
-        } else if (!strcmp(a, "--size")) {
-            int w, h;
-            char extra;
-            if (sscanf(v, "%dx%d%c", &w, &h, &extra) != 2 || w < 1 || h < 1 || w > 16384 || h > 16384)
-                return bad("--size %s: expected WxH, e.g. 1280x720", v);
-            c->opts.width = w;
-            c->opts.height = h;
-        } else if (!strcmp(a, "--sun")) {
-            char buf[64];
-            snprintf(buf, sizeof buf, "%s", v);
-            char *comma = strchr(buf, ',');
-            if (comma) *comma = 0;
-            if (!comma || !sb_parse_double(buf, &c->opts.sun_az) || !sb_parse_double(comma + 1, &c->opts.sun_el) ||
-                c->opts.sun_el < -90 || c->opts.sun_el > 90)
-                return bad("--sun %s: expected AZIMUTH,ELEVATION in degrees (elevation -90..90)", v);
-            c->opts.sun_override = true;
-        } else if (!strcmp(a, "--images")) {
-            if (!sb_parse_int(v, &n) || n < 0 || n > 1000000) return bad("--images %s: expected a frame interval >= 0", v);
-            c->opts.images = (int)n;
-        } else if (!strcmp(a, "--error-every")) {
-            if (!sb_parse_int(v, &n) || n < 0 || n > 1000000) return bad("--error-every %s: expected a frame interval >= 0", v);
-            c->opts.error_every = (int)n;
-        } else if (!strcmp(a, "--repeat")) {
-            if (!sb_parse_int(v, &n) || n < 1 || n > 1000) return bad("--repeat %s: expected 1..1000", v);
-            c->opts.repeat = (int)n;
-        } else if (!strcmp(a, "--target-ci")) {
-            if (!sb_parse_double(v, &c->opts.target_ci) || c->opts.target_ci <= 0 || c->opts.target_ci > 100)
-                return bad("--target-ci %s: expected a percentage in (0, 100]", v);
-        } else if (!strcmp(a, "--max-repeat")) {
-            if (!sb_parse_int(v, &n) || n < 1 || n > 1000) return bad("--max-repeat %s: expected 1..1000", v);
-            c->opts.max_repeat = (int)n;
-        } else if (!strcmp(a, "--threads")) {
-            if (!sb_parse_int(v, &n) || n < 1 || n > 16) return bad("--threads %s: expected 1..16", v);
-            c->opts.threads = (int)n;
-        } else if (!strcmp(a, "--out")) {
+        sb_err err;
+        int rc = sb_run_opts_set(&c->opts, a, v, &err);
+        if (rc < 0) return bad("%s", err.msg);
+        if (rc > 0) {
+            if (c->nrun_opts + 2 <= 128) {
+                c->run_opts[c->nrun_opts++] = a;
+                c->run_opts[c->nrun_opts++] = v;
+            }
+            continue;
+        }
+        if (!strcmp(a, "--out")) {
             c->out = v;
+        } else if (!strcmp(a, "--resume")) {
+            c->resume = v;
+        } else if (!strcmp(a, "--shard")) {
+            c->shard = v;
+        } else if (!strcmp(a, "--metric")) {
+            c->metrics = v;
+        } else if (!strcmp(a, "--format")) {
+            c->format = v;
+        } else if (!strcmp(a, "--pair")) {
+            c->pair = v;
+        } else if (!strcmp(a, "--threshold")) {
+            if (!sb_parse_double(v, &c->threshold) || c->threshold < 0)
+                return bad("--threshold %s: expected a percentage >= 0", v);
         } else {
             return bad("unknown option %s (see shadowbench --help)", a);
         }
@@ -250,7 +242,7 @@ static int cmd_run(const cli *c) {
     sb_summary sum;
     sb_summary_open(&sum, sum_path);
     for (int i = 0; i < nruns; i++) {
-        sb_run_one(&s, &runs[i], dir, &sum, i, nruns);
+        sb_run_one(&s, &runs[i], dir, &sum, i, i, nruns);
         if (!sb_summary_flush(&sum, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
     }
     printf("%s\n", dir);
@@ -261,6 +253,244 @@ static int cmd_run(const cli *c) {
     sb_session_close(&s);
     free(runs);
     return rc;
+}
+
+/* ---- batch ---- */
+
+static void cpu_model(char *out, size_t len) {
+    snprintf(out, len, "unknown");
+    FILE *f = fopen("/proc/cpuinfo", "r");
+    if (!f) return;
+    char line[512];
+    while (fgets(line, sizeof line, f))
+        if (!strncmp(line, "model name", 10)) {
+            char *colon = strchr(line, ':');
+            if (colon) {
+                snprintf(out, len, "%s", colon + 2);
+                out[strcspn(out, "\n")] = 0;
+            }
+            break;
+        }
+    fclose(f);
+}
+
+static bool write_meta(const cli *c, const char *dir, const sb_context *ctx, const sb_batch *b, int selected,
+                       sb_err *err) {
+    char buf[8192], cmd[2048] = {0}, cpu[256], date[64];
+    for (int i = 0; i < c->argc; i++) {
+        size_t l = strlen(cmd);
+        snprintf(cmd + l, sizeof cmd - l, "%s%s", i ? " " : "", c->argv[i]);
+    }
+    cpu_model(cpu, sizeof cpu);
+    struct utsname u;
+    uname(&u);
+    time_t now = time(NULL);
+    struct tm tm;
+    gmtime_r(&now, &tm);
+    strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    int n = snprintf(buf, sizeof buf,
+                     "command: %s\nversion: %s\ncommit: %s\ndate: %s\nbatch: %s\nruns: %d of %d%s%s\n"
+                     "backend: %s (%s)\ngl_vendor: %s\ngl_renderer: %s\ngl_version: %s\ncpu: %s\ncores: %ld\n"
+                     "kernel: %s %s %s\n",
+                     cmd, SB_VERSION, SB_GIT_COMMIT, date, b ? b->file : "-", selected, b ? b->nruns : selected,
+                     c->shard ? ", shard " : "", c->shard ? c->shard : "", sb_backend_name(ctx->backend), ctx->device,
+                     ctx->vendor, ctx->renderer, ctx->version, cpu, cores, u.sysname, u.release, u.machine);
+    char path[4200];
+    snprintf(path, sizeof path, "%s/meta", dir);
+    return sb_write_file_atomic(path, buf, (size_t)n, err);
+}
+
+static int cmd_batch(const cli *c) {
+    if (c->npos != 1) return bad("usage: shadowbench batch FILE [--shard I/N] [--resume DIR] [--dry-run]%s", "");
+    sb_err err;
+    sb_run_opts base;
+    sb_run_opts_defaults(&base);
+    base.progress = c->opts.progress;
+    sb_batch b;
+    if (!sb_batch_load(&b, c->pos[0], &base, c->run_opts, c->nrun_opts, &err)) {
+        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        return 2;
+    }
+    bool *selected = malloc((size_t)(b.nruns ? b.nruns : 1));
+    memset(selected, 1, (size_t)(b.nruns ? b.nruns : 1));
+    if (c->shard) {
+        int si, sn;
+        char extra;
+        if (sscanf(c->shard, "%d/%d%c", &si, &sn, &extra) != 2 || sn < 1 || si < 1 || si > sn) {
+            sb_batch_free(&b);
+            free(selected);
+            return bad("--shard %s: expected I/N with 1 <= I <= N", c->shard);
+        }
+        sb_batch_shard(&b, si, sn, selected);
+    }
+    int nsel = 0;
+    for (int i = 0; i < b.nruns; i++) nsel += selected[i];
+    if (c->dry_run) {
+        printf("index,run_id,scene,path,technique,params,cost\n");
+        for (int i = 0; i < b.nruns; i++) {
+            if (!selected[i]) continue;
+            const sb_batch_run *r = &b.runs[i];
+            char params[1024];
+            sb_params_canonical(&r->spec.params, params, sizeof params);
+            printf("%d,%s,%s,%s,%s,%s,%.3g\n", r->index, r->run_id, b.scenes[r->scene].name,
+                   b.scenes[r->scene].path_label, r->spec.tech->name, params, r->cost);
+        }
+        fprintf(stderr, "%d run(s)%s of %d in the matrix of %s\n", nsel, c->shard ? " in this shard" : "", b.nruns,
+                b.file);
+        sb_batch_free(&b);
+        free(selected);
+        return 0;
+    }
+    char dir[4096];
+    if (c->resume) {
+        snprintf(dir, sizeof dir, "%s", c->resume);
+        if (access(dir, W_OK) != 0) {
+            sb_batch_free(&b);
+            free(selected);
+            return bad("--resume %s: no such results folder", c->resume);
+        }
+    } else {
+        char base_dir[4096];
+        snprintf(base_dir, sizeof base_dir, "%s/%s", c->out, b.name);
+        if (!make_out_dir(base_dir, dir, sizeof dir, &err)) {
+            fprintf(stderr, "shadowbench: %s\n", err.msg);
+            sb_batch_free(&b);
+            free(selected);
+            return 1;
+        }
+    }
+    sb_session s;
+    memset(&s, 0, sizeof s);
+    if (!sb_context_create(&s.ctx, b.opts.backend, &err)) {
+        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        sb_batch_free(&b);
+        free(selected);
+        return 1;
+    }
+    if (!write_meta(c, dir, &s.ctx, &b, nsel, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
+    char sum_path[4200];
+    snprintf(sum_path, sizeof sum_path, "%s/summary.csv", dir);
+    sb_summary sum;
+    sb_summary_open(&sum, sum_path);
+    bool *done = calloc((size_t)(b.nruns ? b.nruns : 1), 1);
+    if (c->resume) { /* keep the complete runs: a summary row and the committed per-frame CSV */
+        sb_table old;
+        if (sb_table_load(&old, sum_path, &err)) {
+            for (int r = 0; r < old.nrows; r++) {
+                const char *id = sb_table_get(&old, r, "run_id"), *st = sb_table_get(&old, r, "status");
+                for (int i = 0; i < b.nruns; i++) {
+                    if (!selected[i] || done[i] || strcmp(b.runs[i].run_id, id)) continue;
+                    char csv[4400];
+                    snprintf(csv, sizeof csv, "%s/%s.csv", dir, id);
+                    bool complete = !strcmp(st, "skipped") || (!strcmp(st, "ok") && access(csv, R_OK) == 0);
+                    if (!complete) continue;
+                    done[i] = true;
+                    sb_csv_line(&sum.rows, old.lines[r]); /* the row as it was */
+                    sum.count++;
+                    if (!strcmp(st, "skipped")) sum.skipped++;
+                }
+            }
+            sb_table_free(&old);
+        }
+    }
+    int todo = 0, k = 0;
+    for (int i = 0; i < b.nruns; i++) todo += selected[i] && !done[i];
+    if (c->resume) sb_log("resuming %s: %d run(s) complete, %d to do", dir, nsel - todo, todo);
+    if (!sb_summary_flush(&sum, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
+    for (int sc = 0; sc < b.nscenes; sc++) {
+        bool any = false;
+        for (int i = 0; i < b.nruns; i++) any |= b.runs[i].scene == sc && selected[i] && !done[i];
+        if (!any) continue;
+        sb_batch_scene *bs = &b.scenes[sc];
+        bool open = sb_session_open(&s, &b.opts, bs->file, bs->path_file, &err);
+        if (open) {
+            snprintf(s.scene_name, sizeof s.scene_name, "%s", bs->name);
+            snprintf(s.path_name, sizeof s.path_name, "%s", bs->path_label);
+        } else {
+            fprintf(stderr, "shadowbench: %s\n", err.msg);
+        }
+        for (int i = 0; i < b.nruns; i++) {
+            if (b.runs[i].scene != sc || !selected[i] || done[i]) continue;
+            if (open) {
+                sb_run_one(&s, &b.runs[i].spec, dir, &sum, b.runs[i].index, k, todo);
+            } else { /* the scene could not be opened: its runs fail, the batch goes on */
+                char params[1024];
+                sb_params_canonical(&b.runs[i].spec.params, params, sizeof params);
+                sb_run_info info = {.run_id = b.runs[i].run_id, .run_index = b.runs[i].index, .scene = bs->name,
+                                    .path = bs->path_label, .technique = b.runs[i].spec.tech->name, .params = params,
+                                    .backend = sb_backend_name(b.opts.backend), .renderer = s.ctx.renderer,
+                                    .timing = sb_timing_name(b.opts.timing), .status = "failed", .reason = err.msg,
+                                    .frames = b.opts.frames, .warmup = b.opts.warmup, .width = b.opts.width,
+                                    .height = b.opts.height};
+                sb_report_summary_row(&sum.rows, &info, b.runs[i].spec.tech->stages, NULL, NULL, 0);
+                sum.count++;
+                sum.failed++;
+            }
+            k++;
+            if (!sb_summary_flush(&sum, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
+        }
+        if (open) sb_session_close_scene(&s);
+    }
+    printf("%s\n", dir);
+    sb_log("%d run(s): %d ok, %d failed, %d skipped; results in %s", sum.count, sum.count - sum.failed - sum.skipped,
+           sum.failed, sum.skipped, dir);
+    int rc = sum.failed ? 1 : 0;
+    sb_summary_free(&sum);
+    sb_context_destroy(&s.ctx);
+    sb_batch_free(&b);
+    free(selected);
+    free(done);
+    return rc;
+}
+
+/* ---- compare and merge ---- */
+
+static int cmd_compare(const cli *c) {
+    sb_compare_opts o;
+    memset(&o, 0, sizeof o);
+    o.threshold_pct = c->threshold;
+    o.pair = c->pair;
+    char metrics[1024];
+    if (c->metrics) {
+        snprintf(metrics, sizeof metrics, "%s", c->metrics);
+        for (char *t = strtok(metrics, ","); t && o.nmetrics < 32; t = strtok(NULL, ",")) o.metrics[o.nmetrics++] = t;
+    }
+    if (c->format) {
+        if (!strcmp(c->format, "text")) o.format = SB_FORMAT_TEXT;
+        else if (!strcmp(c->format, "csv")) o.format = SB_FORMAT_CSV;
+        else if (!strcmp(c->format, "markdown")) o.format = SB_FORMAT_MARKDOWN;
+        else return bad("--format %s: expected text, csv or markdown", c->format);
+    }
+    sb_err err;
+    if (c->pair) {
+        if (c->npos != 1) return bad("usage: shadowbench compare RESULTS --pair KEY=A,B%s", "");
+        int n = sb_compare_pairs(c->pos[0], &o, stdout, &err);
+        if (n < 0) {
+            fprintf(stderr, "shadowbench: %s\n", err.msg);
+            return 2;
+        }
+        return 0;
+    }
+    if (c->npos != 2) return bad("usage: shadowbench compare BASE NEW [--metric M,...] [--threshold PCT]%s", "");
+    int n = sb_compare(c->pos[0], c->pos[1], &o, stdout, &err);
+    if (n < 0) {
+        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        return 2;
+    }
+    return n > 0 ? 1 : 0;
+}
+
+static int cmd_merge(const cli *c) {
+    if (c->npos < 1 || !strcmp(c->out, "results"))
+        return bad("usage: shadowbench merge DIR... --out MERGED_DIR%s", "");
+    sb_err err;
+    if (!sb_merge(c->pos, c->npos, c->out, &err)) {
+        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        return 1;
+    }
+    printf("%s\n", c->out);
+    return 0;
 }
 
 int main(int argc, char **argv) {
@@ -281,7 +511,9 @@ int main(int argc, char **argv) {
     if (!strcmp(cmd, "techniques")) return cmd_techniques();
     if (!strcmp(cmd, "info")) return cmd_info(&c);
     if (!strcmp(cmd, "path")) return cmd_path(&c);
-    if (!strcmp(cmd, "batch") || !strcmp(cmd, "compare") || !strcmp(cmd, "merge") || !strcmp(cmd, "stress"))
-        return bad("'%s' is not built yet", cmd);
+    if (!strcmp(cmd, "batch")) return cmd_batch(&c);
+    if (!strcmp(cmd, "compare")) return cmd_compare(&c);
+    if (!strcmp(cmd, "merge")) return cmd_merge(&c);
+    if (!strcmp(cmd, "stress")) return bad("'%s' is not built yet", cmd);
     return bad("unknown command '%s' (see shadowbench --help)", cmd);
 }

@@ -27,6 +27,65 @@ void sb_run_opts_defaults(sb_run_opts *o) {
     o->threads = cpus > 0 ? (int)cpus : 1;
 }
 
+int sb_run_opts_set(sb_run_opts *o, const char *a, const char *v, sb_err *err) {
+    long n;
+    if (!v) return sb_fail(err, "%s needs a value", a), -1;
+    if (!strcmp(a, "--backend")) {
+        if (!sb_backend_parse(v, &o->backend)) return sb_fail(err, "--backend %s: expected egl or osmesa", v), -1;
+    } else if (!strcmp(a, "--timing")) {
+        if (!sb_timing_parse(v, &o->timing)) return sb_fail(err, "--timing %s: expected auto, queries or sync", v), -1;
+    } else if (!strcmp(a, "--ring")) {
+        if (!sb_parse_int(v, &n) || n < 1 || n > 16) return sb_fail(err, "--ring %s: expected 1..16", v), -1;
+        o->ring = (int)n;
+    } else if (!strcmp(a, "--frames")) {
+        if (!sb_parse_int(v, &n) || n < 1 || n > 1000000) return sb_fail(err, "--frames %s: expected 1..1000000", v), -1;
+        o->frames = (int)n;
+    } else if (!strcmp(a, "--warmup")) {
+        if (!sb_parse_int(v, &n) || n < 0 || n > 10000) return sb_fail(err, "--warmup %s: expected 0..10000", v), -1;
+        o->warmup = (int)n;
+    } else if (!strcmp(a, "--size")) {
+        int w, h;
+        char extra;
+        if (sscanf(v, "%dx%d%c", &w, &h, &extra) != 2 || w < 1 || h < 1 || w > 16384 || h > 16384)
+            return sb_fail(err, "--size %s: expected WxH, e.g. 1280x720", v), -1;
+        o->width = w;
+        o->height = h;
+    } else if (!strcmp(a, "--sun")) {
+        char buf[64];
+        snprintf(buf, sizeof buf, "%s", v);
+        char *comma = strchr(buf, ',');
+        if (comma) *comma = 0;
+        if (!comma || !sb_parse_double(buf, &o->sun_az) || !sb_parse_double(comma + 1, &o->sun_el) ||
+            o->sun_el < -90 || o->sun_el > 90)
+            return sb_fail(err, "--sun %s: expected AZIMUTH,ELEVATION in degrees (elevation -90..90)", v), -1;
+        o->sun_override = true;
+    } else if (!strcmp(a, "--images")) {
+        if (!sb_parse_int(v, &n) || n < 0 || n > 1000000) return sb_fail(err, "--images %s: expected a frame interval >= 0", v), -1;
+        o->images = (int)n;
+    } else if (!strcmp(a, "--error-every")) {
+        if (!sb_parse_int(v, &n) || n < 0 || n > 1000000) return sb_fail(err, "--error-every %s: expected a frame interval >= 0", v), -1;
+        o->error_every = (int)n;
+    } else if (!strcmp(a, "--repeat")) {
+        if (!sb_parse_int(v, &n) || n < 1 || n > 1000) return sb_fail(err, "--repeat %s: expected 1..1000", v), -1;
+        o->repeat = (int)n;
+    } else if (!strcmp(a, "--target-ci")) {
+        if (!sb_parse_double(v, &o->target_ci) || o->target_ci <= 0 || o->target_ci > 100)
+            return sb_fail(err, "--target-ci %s: expected a percentage in (0, 100]", v), -1;
+    } else if (!strcmp(a, "--max-repeat")) {
+        if (!sb_parse_int(v, &n) || n < 1 || n > 1000) return sb_fail(err, "--max-repeat %s: expected 1..1000", v), -1;
+        o->max_repeat = (int)n;
+    } else if (!strcmp(a, "--threads")) {
+        if (!sb_parse_int(v, &n) || n < 1 || n > 16) return sb_fail(err, "--threads %s: expected 1..16", v), -1;
+        o->threads = (int)n;
+} else if (!strcmp(a, "--run-timeout")) {
+        if (!sb_parse_double(v, &o->run_timeout_s) || o->run_timeout_s < 0)
+            return sb_fail(err, "--run-timeout %s: expected seconds >= 0", v), -1;
+    } else {
+        return 0;
+    }
+    return 1;
+}
+
 static void base_name(const char *path, char *out, size_t len) {
     const char *b = strrchr(path, '/');
     b = b ? b + 1 : path;
@@ -63,6 +122,12 @@ bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, con
         s->timing = SB_TIMING_SYNC;
     }
     return true;
+}
+
+void sb_session_close_scene(sb_session *s) {
+    sb_gpu_free(&s->gpu);
+    sb_path_free(&s->path);
+    sb_scene_free(&s->scene);
 }
 
 void sb_session_close(sb_session *s) {
@@ -222,15 +287,15 @@ static bool evaluate(sb_session *s, sb_instance *in, const char *out_dir, const 
 
 /* ---- one run ---- */
 
-bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_summary *sum, int index,
-                int total) {
+bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_summary *sum, int run_index,
+                int index, int total) {
     char run_id[17], path[4096], params[1024];
     sb_run_id(s, spec, run_id);
     sb_params_canonical(&spec->params, params, sizeof params);
     snprintf(path, sizeof path, "%s/%s.csv", out_dir, run_id);
     const sb_run_opts *o = &s->opts;
     sb_run_info info = {
-        .run_id = run_id, .scene = s->scene_name, .path = s->path_name, .technique = spec->tech->name,
+        .run_id = run_id, .run_index = run_index, .scene = s->scene_name, .path = s->path_name, .technique = spec->tech->name,
         .params = params, .backend = sb_backend_name(o->backend), .renderer = s->ctx.renderer,
         .timing = sb_timing_name(s->timing), .status = "ok", .reason = "", .frames = o->frames,
         .warmup = o->warmup, .width = o->width, .height = o->height, .target_ci = o->target_ci,
@@ -302,6 +367,9 @@ bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_
             written++;
         }
         if (rows.len > 65536) ok = sb_csv_file_write(&cf, &rows, &err);
+        if (ok && o->run_timeout_s > 0 && sb_now_ms() - t_run > o->run_timeout_s * 1e3)
+            ok = sb_fail(&err, "timeout: the run took longer than %g s (frame %d of %d)", o->run_timeout_s, i + 1,
+                         capacity);
         if (i >= W) progress_line(s, index, total, spec->tech->name, (i - W) % N + 1, N, t_run);
         if (i >= W && (i - W) % N == N - 1) { /* a repetition of the path is complete */
             repeats++;

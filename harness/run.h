@@ -27,9 +27,13 @@ typedef struct sb_run_opts {
     double target_ci;           /* percent: repeat until the gpu_ms CI half-width is within it (0: off) */
     int max_repeat;             /* cap for target_ci (default 10) */
     int threads;                /* reference ray-casting threads (default: all cores) */
+    double run_timeout_s;       /* a run taking longer fails with a timeout (0: none) */
 } sb_run_opts;
 
 void sb_run_opts_defaults(sb_run_opts *o);
+/* Sets one option (--frames, --size, ...) from text: 1 set, 0 not a run
+ * option, -1 bad value (err says which and what was expected). */
+int sb_run_opts_set(sb_run_opts *o, const char *name, const char *value, sb_err *err);
 
 /* True while the timed frames of a run are being rendered (instrumentation:
  * tests assert that nothing is read back then). */
@@ -77,8 +81,11 @@ void sb_summary_open(sb_summary *sum, const char *path);
 bool sb_summary_flush(sb_summary *sum, sb_err *err);
 void sb_summary_free(sb_summary *sum);
 
-/* Runs one spec; writes DIR/<run_id>.csv and a summary row. Returns false if it failed. */
-bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_summary *sum, int index,
-                int total);
+/* Runs one spec; writes DIR/<run_id>.csv and a summary row. run_index is its
+ * place in the matrix; progress shows "run i of n". Returns false if it failed. */
+bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_summary *sum, int run_index, int i,
+                int n);
+/* Frees the scene, path and GPU buffers but keeps the context (next scene of a batch). */
+void sb_session_close_scene(sb_session *s);
 /* run_id: hash of scene and path contents, technique, canonical parameters, frames, size, backend. */
 void sb_run_id(const sb_session *s, const sb_run_spec *spec, char out[17]);

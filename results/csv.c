@@ -60,6 +60,12 @@ void sb_csv_end_row(sb_csv *c) {
     c->fields = 0;
 }
 
+void sb_csv_line(sb_csv *c, const char *row) {
+    put(c, row, strlen(row));
+    put(c, "\n", 1);
+    c->fields = 0;
+}
+
 void sb_csv_reset(sb_csv *c) {
     c->len = 0;
     c->fields = 0;

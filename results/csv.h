@@ -18,6 +18,7 @@ void sb_csv_num(sb_csv *c, double v);               /* NaN -> empty field */
 void sb_csv_int(sb_csv *c, long long v);
 void sb_csv_empty(sb_csv *c);
 void sb_csv_end_row(sb_csv *c);
+void sb_csv_line(sb_csv *c, const char *row);       /* appends an already formatted row */
 void sb_csv_reset(sb_csv *c);
 void sb_csv_free(sb_csv *c);
 

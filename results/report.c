@@ -99,7 +99,7 @@ static const char *const counter_cols[] = {"draw_calls_mean", "shadow_draw_calls
                                            "cascades_rendered_mean", "cascades_skipped_mean"};
 
 void sb_report_summary_header(sb_csv *c) {
-    const char *cols[] = {"run_id", "scene", "path", "technique", "params", "backend", "renderer", "timing",
+    const char *cols[] = {"run_id", "run_index", "scene", "path", "technique", "params", "backend", "renderer", "timing",
                           "frames", "warmup", "width", "height", "status", "reason", "repeats", "target_ci_pct",
                           "gpu_ci_pct", "stalls", "scene_triangles", "load_ms", "run_wall_s", "harness_share"};
     for (size_t i = 0; i < SB_COUNT(cols); i++) sb_csv_str(c, cols[i]);
@@ -134,6 +134,7 @@ void sb_report_summary_row(sb_csv *c, const sb_run_info *in, unsigned stages, co
                            const sb_stage_times *times, int n) {
     if (!recs) n = 0;
     sb_csv_str(c, in->run_id);
+    sb_csv_int(c, in->run_index);
     sb_csv_str(c, in->scene);
     sb_csv_str(c, in->path);
     sb_csv_str(c, in->technique);

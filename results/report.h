@@ -19,6 +19,7 @@ void sb_report_frame_row(sb_csv *c, const sb_frame_rec *r, const sb_stage_times 
 
 typedef struct sb_run_info {
     const char *run_id, *scene, *path, *technique, *params, *backend, *renderer, *timing, *status, *reason;
+    int run_index;              /* position in the expanded matrix */
     int frames, warmup, width, height, repeats;
     double target_ci;           /* percent, 0: none */
     uint64_t stalls, scene_triangles;

@@ -167,7 +167,7 @@ static void test_evaluation_does_not_touch_timed_frames(void **st) {
             sb_summary sum;
             sb_summary_open(&sum, sum_path);
             g_timed_reads = 0;
-            assert_true(sb_run_one(&g_towers, &runs[0], out, &sum, 0, 1));
+            assert_true(sb_run_one(&g_towers, &runs[0], out, &sum, 0, 0, 1));
             print_message("%s error-every %d: %lu readbacks in timed frames\n", specs[sp], e ? 2 : 0, g_timed_reads);
             assert_int_equal(g_timed_reads, 0);
             char run_id[17], path[256];
@@ -208,7 +208,7 @@ static void test_evaluation_does_not_touch_timed_frames(void **st) {
         sb_summary_open(&sum, sum_path);
         g_towers.opts.error_every = 0;
         g_timed_reads = 0;
-        assert_true(sb_run_one(&g_towers, &runs[0], out, &sum, 0, 1));
+        assert_true(sb_run_one(&g_towers, &runs[0], out, &sum, 0, 0, 1));
         print_message("sdsm splits=cpu:latency=0: %lu readbacks in 9 timed frames\n", g_timed_reads);
         assert_int_equal(g_timed_reads, 9);
         sb_summary_free(&sum);

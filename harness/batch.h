@@ -1,0 +1,57 @@
+/* batch.h - batch files: the nightly matrix of scenes, paths and specs.
+ *
+ *   # comment
+ *   scene NAME FILE [PATH-NAME]     a scene (file or bundled name) and, optionally, its path
+ *   path  NAME FILE                 a path (file, bundled name, auto, orbit, FILE.glb#camera=K)
+ *   defaults OPTION...              options for every run (--frames 30 --error-every 5 ...)
+ *   [@SCENE[,SCENE...]] SPEC...     run lines: glmark2-style specs; comma lists make a grid
+ *
+ * A scene runs along the path named in its line, else the path with its own
+ * name, else `auto`. Every run line applies to every scene unless it starts
+ * with @ and a list of scene names. The matrix is scenes (in file order) x
+ * run lines (in order) x each line's grid, which fixes the run order and
+ * every run_id. Every error names file:line. */
+#pragma once
+#include "run.h"
+
+typedef struct sb_batch_scene {
+    char *name, *file, *path_name;
+    int line;
+    sb_scene scene;             /* loaded (no GL) for run ids and costs */
+    sb_path path;
+    char path_file[1024];
+    char path_label[256];       /* the path's name in the batch, or its file (auto) */
+} sb_batch_scene;
+
+typedef struct sb_batch_path {
+    char *name, *file;
+    int line;
+} sb_batch_path;
+
+typedef struct sb_batch_run {
+    int index;                  /* position in the full matrix */
+    int scene;                  /* index into scenes */
+    sb_run_spec spec;
+    char run_id[17];
+    double cost;                /* estimated work, for balancing shards */
+} sb_batch_run;
+
+typedef struct sb_batch {
+    char *file, *name;          /* name: file name without directory and extension */
+    sb_run_opts opts;           /* defaults applied */
+    sb_batch_scene *scenes;
+    int nscenes;
+    sb_batch_path *paths;
+    int npaths;
+    sb_batch_run *runs;
+    int nruns;
+} sb_batch;
+
+/* Parses and validates the whole file (techniques, parameters, options),
+ * loads every scene and path (no GL) and expands the matrix. `base` holds
+ * the command line's options, which override the file's defaults. */
+bool sb_batch_load(sb_batch *b, const char *file, const sb_run_opts *base, const char *const *cli_opts, int ncli,
+                   sb_err *err);
+void sb_batch_free(sb_batch *b);
+/* Deterministic, cost-balanced share I of N (1-based): marks runs out of the share. */
+void sb_batch_shard(const sb_batch *b, int shard, int nshards, bool *selected);

@@ -1,0 +1,350 @@
+/* compare.c - compare, pairs and merge over summary tables. */
+#include "compare.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "csv.h"
+#include "table.h"
+
+static const char *const default_metrics[] = {"final_ms", "cascade_ms", "gpu_ms", "shadow_draw_calls", "err_rate"};
+
+static bool load_summary(sb_table *t, const char *where, sb_err *err) {
+    struct stat st;
+    char path[4200];
+    if (stat(where, &st) == 0 && S_ISDIR(st.st_mode)) snprintf(path, sizeof path, "%s/summary.csv", where);
+    else snprintf(path, sizeof path, "%s", where);
+    if (!sb_table_load(t, path, err)) return false;
+    const char *need[] = {"run_id", "scene", "path", "technique", "params", "status"};
+    for (size_t i = 0; i < SB_COUNT(need); i++)
+        if (sb_table_col(t, need[i]) < 0) {
+            sb_table_free(t);
+            return sb_fail(err, "%s: not a shadowbench summary (no '%s' column)", path, need[i]);
+        }
+    return true;
+}
+
+static int cmp_str(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
+
+/* "b=2:a=1" -> "a=1:b=2" */
+static void sorted_params(const char *params, char *out, size_t len) {
+    char buf[2048], *items[64];
+    int n = 0;
+    snprintf(buf, sizeof buf, "%s", params);
+    for (char *t = strtok(buf, ":"); t && n < 64; t = strtok(NULL, ":")) items[n++] = t;
+    qsort(items, (size_t)n, sizeof(char *), cmp_str);
+    out[0] = 0;
+    for (int i = 0; i < n; i++) {
+        size_t l = strlen(out);
+        snprintf(out + l, len - l, "%s%s", i ? ":" : "", items[i]);
+    }
+}
+
+static void run_key(const sb_table *t, int r, char *out, size_t len) {
+    char p[2048];
+    sorted_params(sb_table_get(t, r, "params"), p, sizeof p);
+    snprintf(out, len, "%s|%s|%s|%s", sb_table_get(t, r, "scene"), sb_table_get(t, r, "path"),
+             sb_table_get(t, r, "technique"), p);
+}
+
+typedef struct {
+    double center, mean, ci;    /* ci NaN when the metric has none */
+    bool ok;
+} metric_value;
+
+static double num(const char *s) {
+    double v;
+    return *s && sb_parse_double(s, &v) ? v : NAN;
+}
+
+static metric_value metric(const sb_table *t, int r, const char *m) {
+    metric_value v = {NAN, NAN, NAN, false};
+    char col[128];
+    snprintf(col, sizeof col, "%s_median", m);
+    if (sb_table_col(t, col) >= 0) { /* a timing: median, and the mean's confidence interval */
+        v.center = num(sb_table_get(t, r, col));
+        snprintf(col, sizeof col, "%s_mean", m);
+        v.mean = num(sb_table_get(t, r, col));
+        snprintf(col, sizeof col, "%s_ci95", m);
+        v.ci = num(sb_table_get(t, r, col));
+    } else {
+        snprintf(col, sizeof col, "%s_mean", m);
+        if (sb_table_col(t, col) < 0) snprintf(col, sizeof col, "%s", m);
+        if (sb_table_col(t, col) < 0) return v;
+        v.center = v.mean = num(sb_table_get(t, r, col));
+    }
+    v.ok = !isnan(v.center);
+    return v;
+}
+
+static bool known_metric(const sb_table *t, const char *m) {
+    char col[128];
+    const char *suffix[] = {"_median", "_mean", ""};
+    for (size_t i = 0; i < SB_COUNT(suffix); i++) {
+        snprintf(col, sizeof col, "%s%s", m, suffix[i]);
+        if (sb_table_col(t, col) >= 0) return true;
+    }
+    return false;
+}
+
+static void header(FILE *out, int format, const char *a, const char *b) {
+    if (format == SB_FORMAT_CSV)
+        fprintf(out, "scene,path,technique,params,metric,%s,%s,ratio,verdict\n", a, b);
+    else if (format == SB_FORMAT_MARKDOWN)
+        fprintf(out, "| scene | path | technique | params | metric | %s | %s | ratio | verdict |\n|---|---|---|---|---|---:|---:|---:|---|\n", a, b);
+}
+
+static void row(FILE *out, int format, const sb_table *t, int r, const char *params, const char *m, double a, double b,
+                const char *verdict) {
+    double ratio = a != 0 ? b / a : (b == 0 ? 1 : INFINITY);
+    const char *scene = sb_table_get(t, r, "scene"), *path = sb_table_get(t, r, "path"),
+               *tech = sb_table_get(t, r, "technique");
+    if (format == SB_FORMAT_CSV) {
+        sb_csv c = {0};
+        sb_csv_str(&c, scene);
+        sb_csv_str(&c, path);
+        sb_csv_str(&c, tech);
+        sb_csv_str(&c, params);
+        sb_csv_str(&c, m);
+        sb_csv_num(&c, a);
+        sb_csv_num(&c, b);
+        sb_csv_num(&c, ratio);
+        sb_csv_str(&c, verdict);
+        sb_csv_end_row(&c);
+        fputs(c.buf, out);
+        sb_csv_free(&c);
+    } else if (format == SB_FORMAT_MARKDOWN) {
+        fprintf(out, "| %s | %s | %s | `%s` | %s | %.4g | %.4g | %.3f | %s |\n", scene, path, tech, params, m, a, b,
+                ratio, verdict);
+    } else {
+        fprintf(out, "%-10s %-10s %-8s %-44s %-18s %12.4g %12.4g %7.3f  %s\n", scene, path, tech, params, m, a, b, ratio,
+                verdict);
+    }
+}
+
+int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FILE *out, sb_err *err) {
+    sb_table A, B;
+    if (!load_summary(&A, base, err)) return -1;
+    if (!load_summary(&B, next, err)) {
+        sb_table_free(&A);
+        return -1;
+    }
+    const char *const *metrics = o->nmetrics ? o->metrics : default_metrics;
+    int nm = o->nmetrics ? o->nmetrics : (int)SB_COUNT(default_metrics);
+    for (int k = 0; k < nm; k++)
+        if (!known_metric(&A, metrics[k])) {
+            sb_fail(err, "unknown metric '%s' (summary columns give e.g. final_ms, gpu_ms, shadow_draw_calls, err_rate)",
+                    metrics[k]);
+            sb_table_free(&A);
+            sb_table_free(&B);
+            return -1;
+        }
+    double thr = o->threshold_pct / 100.0;
+    int regressions = 0, matched = 0;
+    header(out, o->format, "base", "new");
+    for (int rb = 0; rb < B.nrows; rb++) {
+        if (strcmp(sb_table_get(&B, rb, "status"), "ok")) continue;
+        char kb[4096], ka[4096];
+        run_key(&B, rb, kb, sizeof kb);
+        int ra = -1;
+        for (int r = 0; r < A.nrows && ra < 0; r++) {
+            if (strcmp(sb_table_get(&A, r, "status"), "ok")) continue;
+            run_key(&A, r, ka, sizeof ka);
+            if (!strcmp(ka, kb)) ra = r;
+        }
+        if (ra < 0) continue;
+        matched++;
+        char params[2048];
+        sorted_params(sb_table_get(&B, rb, "params"), params, sizeof params);
+        for (int k = 0; k < nm; k++) {
+            metric_value a = metric(&A, ra, metrics[k]), b = metric(&B, rb, metrics[k]);
+            if (!a.ok || !b.ok) continue;
+            bool worse = b.center > a.center * (1 + thr) + 1e-12;
+            /* timings also need the confidence intervals of the means apart */
+            bool separated = isnan(a.ci) || isnan(b.ci) || b.mean - b.ci > a.mean + a.ci;
+            bool regressed = worse && separated;
+            regressions += regressed;
+            row(out, o->format, &B, rb, params, metrics[k], a.center, b.center,
+                regressed ? "REGRESSED" : worse ? "worse, within noise" : "ok");
+        }
+    }
+    if (o->format == SB_FORMAT_TEXT)
+        fprintf(out, "%d run(s) matched, %d regression(s) beyond %.3g%%\n", matched, regressions, o->threshold_pct);
+    sb_table_free(&A);
+    sb_table_free(&B);
+    if (matched == 0) {
+        sb_fail(err, "no runs of %s match %s (same scene, path, technique and parameters)", next, base);
+        return -1;
+    }
+    return regressions;
+}
+
+/* value of key in a params string, into out; false if absent */
+static bool param_value(const char *params, const char *key, char *out, size_t len) {
+    size_t kl = strlen(key);
+    for (const char *p = params; p && *p;) {
+        const char *end = strchr(p, ':');
+        size_t n = end ? (size_t)(end - p) : strlen(p);
+        if (n > kl && !strncmp(p, key, kl) && p[kl] == '=') {
+            snprintf(out, len, "%.*s", (int)(n - kl - 1), p + kl + 1);
+            return true;
+        }
+        p = end ? end + 1 : NULL;
+    }
+    return false;
+}
+
+/* Do two params strings agree on every key both have, other than `skip`? */
+static bool agree(const char *a, const char *b, const char *skip) {
+    char buf[2048];
+    snprintf(buf, sizeof buf, "%s", a);
+    for (char *t = strtok(buf, ":"); t; t = strtok(NULL, ":")) {
+        char *eq = strchr(t, '=');
+        if (!eq) continue;
+        *eq = 0;
+        if (skip && !strcmp(t, skip)) continue;
+        char v[256];
+        if (param_value(b, t, v, sizeof v) && strcmp(v, eq + 1)) return false;
+    }
+    return true;
+}
+
+int sb_compare_pairs(const char *dir, const sb_compare_opts *o, FILE *out, sb_err *err) {
+    char key[128], va[128], vb[128];
+    const char *eq = o->pair ? strchr(o->pair, '=') : NULL;
+    const char *comma = eq ? strchr(eq, ',') : NULL;
+    if (!eq || !comma || eq == o->pair)
+        return sb_fail(err, "--pair %s: expected KEY=A,B (e.g. technique=pssm,sdsm or layered=off,gs)",
+                       o->pair ? o->pair : ""), -1;
+    snprintf(key, sizeof key, "%.*s", (int)(eq - o->pair), o->pair);
+    snprintf(va, sizeof va, "%.*s", (int)(comma - eq - 1), eq + 1);
+    snprintf(vb, sizeof vb, "%s", comma + 1);
+    sb_table t;
+    if (!load_summary(&t, dir, err)) return -1;
+    const char *const *metrics = o->nmetrics ? o->metrics : default_metrics;
+    int nm = o->nmetrics ? o->nmetrics : (int)SB_COUNT(default_metrics);
+    bool by_tech = !strcmp(key, "technique");
+    header(out, o->format, va, vb);
+    int pairs = 0;
+    for (int ra = 0; ra < t.nrows; ra++) {
+        const char *pa = sb_table_get(&t, ra, "params");
+        char v[256];
+        if (strcmp(sb_table_get(&t, ra, "status"), "ok")) continue;
+        if (by_tech ? strcmp(sb_table_get(&t, ra, "technique"), va) : !param_value(pa, key, v, sizeof v) || strcmp(v, va))
+            continue;
+        for (int rb = 0; rb < t.nrows; rb++) {
+            const char *pb = sb_table_get(&t, rb, "params");
+            if (rb == ra || strcmp(sb_table_get(&t, rb, "status"), "ok")) continue;
+            if (strcmp(sb_table_get(&t, ra, "scene"), sb_table_get(&t, rb, "scene")) ||
+                strcmp(sb_table_get(&t, ra, "path"), sb_table_get(&t, rb, "path")))
+                continue;
+            if (by_tech) {
+                if (strcmp(sb_table_get(&t, rb, "technique"), vb) || !agree(pa, pb, NULL)) continue;
+            } else {
+                if (strcmp(sb_table_get(&t, ra, "technique"), sb_table_get(&t, rb, "technique"))) continue;
+                if (!param_value(pb, key, v, sizeof v) || strcmp(v, vb) || !agree(pa, pb, key)) continue;
+            }
+            pairs++;
+            char params[2048];
+            sorted_params(pa, params, sizeof params);
+            for (int k = 0; k < nm; k++) {
+                metric_value a = metric(&t, ra, metrics[k]), b = metric(&t, rb, metrics[k]);
+                if (a.ok && b.ok) row(out, o->format, &t, ra, params, metrics[k], a.center, b.center, "");
+            }
+        }
+    }
+    if (o->format == SB_FORMAT_TEXT) fprintf(out, "%d pair(s) %s=%s against %s=%s\n", pairs, key, vb, key, va);
+    sb_table_free(&t);
+    return pairs;
+}
+
+static bool copy_file(const char *from, const char *to, sb_err *err) {
+    size_t n;
+    char *data = sb_read_file(from, &n, err);
+    if (!data) return false;
+    bool ok = sb_write_file_atomic(to, data, n, err);
+    free(data);
+    return ok;
+}
+
+typedef struct {
+    double index;
+    const char *line;
+} merged_row;
+
+static int by_index(const void *a, const void *b) {
+    const merged_row *x = a, *y = b;
+    return x->index < y->index ? -1 : x->index > y->index ? 1 : 0;
+}
+
+bool sb_merge(const char *const *dirs, int n, const char *out_dir, sb_err *err) {
+    if (!sb_mkdir_p(out_dir, err)) return false;
+    sb_table *t = calloc((size_t)n, sizeof *t);
+    merged_row *rows = NULL;
+    int nrows = 0;
+    bool ok = true;
+    char *hdr_line = NULL;
+    for (int i = 0; ok && i < n; i++) {
+        if (!(ok = load_summary(&t[i], dirs[i], err))) break;
+        if (sb_table_col(&t[i], "run_index") < 0) ok = sb_fail(err, "%s: summary has no run_index column", dirs[i]);
+        char hdr[8192] = {0};
+        for (int c = 0; c < t[i].cols; c++) {
+            size_t l = strlen(hdr);
+            snprintf(hdr + l, sizeof hdr - l, "%s%s", c ? "," : "", t[i].header[c]);
+        }
+        if (!hdr_line) hdr_line = sb_strdup(hdr);
+        else if (ok && strcmp(hdr_line, hdr)) ok = sb_fail(err, "%s: summary columns differ from %s's", dirs[i], dirs[0]);
+        for (int r = 0; ok && r < t[i].nrows; r++) {
+            const char *id = sb_table_get(&t[i], r, "run_id");
+            for (int k = 0; k < nrows; k++)
+                if (!strncmp(rows[k].line, id, strlen(id)) && rows[k].line[strlen(id)] == ',')
+                    ok = sb_fail(err, "%s: run %s is also in another folder", dirs[i], id);
+            rows = realloc(rows, (size_t)(nrows + 1) * sizeof *rows);
+            rows[nrows++] = (merged_row){num(sb_table_get(&t[i], r, "run_index")), t[i].lines[r]};
+            char from[4400], to[4400];
+            snprintf(from, sizeof from, "%s/%s.csv", dirs[i], id);
+            snprintf(to, sizeof to, "%s/%s.csv", out_dir, id);
+            FILE *f = fopen(from, "r");
+            if (f) {
+                fclose(f);
+                ok = copy_file(from, to, err);
+            }
+        }
+        char from[4400], to[4400];
+        snprintf(from, sizeof from, "%s/meta", dirs[i]);
+        snprintf(to, sizeof to, "%s/meta.%d", out_dir, i + 1);
+        FILE *f = fopen(from, "r");
+        if (ok && f) {
+            fclose(f);
+            ok = copy_file(from, to, err);
+        }
+    }
+    if (ok) {
+        qsort(rows, (size_t)nrows, sizeof *rows, by_index);
+        size_t len = strlen(hdr_line);
+        size_t total = len + 2;
+        for (int k = 0; k < nrows; k++) total += strlen(rows[k].line) + 1;
+        char *text = malloc(total + 1), *p = text;
+        memcpy(p, hdr_line, len);
+        p += len;
+        *p++ = '\n';
+        for (int k = 0; k < nrows; k++) {
+            size_t l = strlen(rows[k].line);
+            memcpy(p, rows[k].line, l);
+            p += l;
+            *p++ = '\n';
+        }
+        char path[4200];
+        snprintf(path, sizeof path, "%s/summary.csv", out_dir);
+        ok = sb_write_file_atomic(path, text, (size_t)(p - text), err);
+        free(text);
+    }
+    for (int i = 0; i < n; i++) sb_table_free(&t[i]);
+    free(t);
+    free(rows);
+    free(hdr_line);
+    return ok;
+}

@@ -1,0 +1,30 @@
+/* compare.h - regression checks between results sets, pairs within one set,
+ * and merging shard outputs. */
+#pragma once
+#include <stdio.h>
+
+#include "util.h"
+
+enum { SB_FORMAT_TEXT, SB_FORMAT_CSV, SB_FORMAT_MARKDOWN };
+
+typedef struct sb_compare_opts {
+    const char *metrics[32];    /* default: final_ms, cascade_ms, gpu_ms, shadow_draw_calls, err_rate */
+    int nmetrics;
+    double threshold_pct;       /* default 5 */
+    int format;
+    const char *pair;           /* "technique=pssm,sdsm" or "layered=off,gs"; NULL for BASE/NEW */
+} sb_compare_opts;
+
+/* Compares NEW against BASE (results folders or summary.csv files): runs are
+ * joined by scene, path, technique and parameters (in any order). A metric
+ * regresses when it is worse by more than the threshold and, for timings, the
+ * two 95% confidence intervals of the mean do not overlap. Returns the number
+ * of regressions, or -1 with err set. */
+int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FILE *out, sb_err *err);
+/* Pairs runs within one results set that differ only in the given parameter
+ * (or technique, matching the parameters both techniques have). Returns the
+ * number of pairs, or -1. */
+int sb_compare_pairs(const char *dir, const sb_compare_opts *o, FILE *out, sb_err *err);
+/* Merges results folders (shards) into out_dir: per-run CSVs copied, summary
+ * rows in matrix order (run_index). */
+bool sb_merge(const char *const *dirs, int n, const char *out_dir, sb_err *err);
