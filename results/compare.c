@@ -132,8 +132,14 @@ int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FIL
         sb_table_free(&A);
         return -1;
     }
-    const char *const *metrics = o->nmetrics ? o->metrics : default_metrics;
-    int nm = o->nmetrics ? o->nmetrics : (int)SB_COUNT(default_metrics);
+    const char *metrics[32];
+    int nm = 0;
+    if (o->nmetrics) {
+        for (int k = 0; k < o->nmetrics; k++) metrics[nm++] = o->metrics[k];
+    } else { /* the defaults this summary has */
+        for (size_t k = 0; k < SB_COUNT(default_metrics); k++)
+            if (known_metric(&A, default_metrics[k])) metrics[nm++] = default_metrics[k];
+    }
     for (int k = 0; k < nm; k++)
         if (!known_metric(&A, metrics[k])) {
             sb_fail(err, "unknown metric '%s' (summary columns give e.g. final_ms, gpu_ms, shadow_draw_calls, err_rate)",

@@ -1,0 +1,312 @@
+/* Nightly batches end to end through the command line: resume after SIGKILL,
+ * shards merged, compare's exit codes, bad batch files rejected up front. */
+#define _DEFAULT_SOURCE
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "support.h"
+#include "table.h"
+
+static char g_tmp[64];
+static char g_out[65536];
+
+static int sh(const char *fmt, ...) {
+    char cmd[8192];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(cmd, sizeof cmd, fmt, ap);
+    va_end(ap);
+    int rc = run_capture(cmd, g_out, sizeof g_out);
+    print_message("$ %s -> %d\n%.2000s", cmd, rc, g_out);
+    return rc;
+}
+
+static void write_text(const char *path, const char *text) {
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs(text, f);
+    fclose(f);
+}
+
+static const char *BATCH =
+    "# a small nightly\n"
+    "scene pb plane-box\n"
+    "scene towers towers\n"
+    "path pb plane-box\n"
+    "path towers towers\n"
+    "defaults --frames 6 --warmup 1 --size 96x54 --error-every 3\n"
+    "none\n"
+    "sm:res=256,512:filter=none,pcf3\n"
+    "@towers pssm:res=256:cascades=2:layered=off,gs\n";
+
+static int setup(void **st) {
+    (void)st;
+    snprintf(g_tmp, sizeof g_tmp, "/tmp/sbbatchXXXXXX");
+    if (!mkdtemp(g_tmp)) return -1;
+    char p[128];
+    snprintf(p, sizeof p, "%s/nightly.bench", g_tmp);
+    write_text(p, BATCH);
+    return 0;
+}
+
+static int teardown(void **st) {
+    (void)st;
+    char cmd[128];
+    snprintf(cmd, sizeof cmd, "rm -rf %s", g_tmp);
+    return system(cmd) == 0 ? 0 : -1;
+}
+
+static void last_line(char *dir, size_t len) {
+    char *nl = strrchr(g_out, '\n');
+    if (nl && nl[1] == 0) *nl = 0;
+    char *start = strrchr(g_out, '\n');
+    start = start ? start + 1 : g_out;
+    size_t n = strlen(start);
+    assert_true(n < len);
+    memcpy(dir, start, n + 1);
+}
+
+/* "run_id status rows" for every summary row, sorted, as one string */
+static void fingerprint(const char *dir, char *out, size_t len) {
+    char path[4200];
+    snprintf(path, sizeof path, "%s/summary.csv", dir);
+    sb_table t;
+    sb_err err;
+    assert_true(sb_table_load(&t, path, &err));
+    char *items[64];
+    int n = 0;
+    for (int r = 0; r < t.nrows && n < 64; r++) {
+        const char *id = sb_table_get(&t, r, "run_id");
+        char csv[8400];
+        snprintf(csv, sizeof csv, "%s/%s.csv", dir, id);
+        sb_table f;
+        int rows = -1;
+        char draws[256] = "";
+        if (sb_table_load(&f, csv, &err)) {
+            rows = f.nrows;
+            for (int k = 0; k < f.nrows; k++) strncat(draws, sb_table_get(&f, k, "draw_calls"), 200 - strlen(draws));
+            sb_table_free(&f);
+        }
+        items[n] = malloc(512);
+        snprintf(items[n++], 512, "%s %s %s %d %s", id, sb_table_get(&t, r, "run_index"), sb_table_get(&t, r, "status"),
+                 rows, draws);
+    }
+    for (int i = 0; i < n; i++) /* sort */
+        for (int j = i + 1; j < n; j++)
+            if (strcmp(items[i], items[j]) > 0) {
+                char *x = items[i];
+                items[i] = items[j];
+                items[j] = x;
+            }
+    out[0] = 0;
+    for (int i = 0; i < n; i++) {
+        strncat(out, items[i], len - strlen(out) - 2);
+        strcat(out, "\n");
+        free(items[i]);
+    }
+    sb_table_free(&t);
+}
+
+static char g_full[8192];
+
+static void test_dry_run_and_full_batch(void **st) {
+    (void)st;
+    assert_int_equal(sh("%s batch %s/nightly.bench --dry-run", test_binary(), g_tmp), 0);
+    assert_non_null(strstr(g_out, "12 run(s) of 12 in the matrix"));
+    assert_int_equal(sh("%s batch %s/nightly.bench --out %s/full --quiet", test_binary(), g_tmp, g_tmp), 0);
+    char dir[4096];
+    last_line(dir, sizeof dir);
+    fingerprint(dir, g_full, sizeof g_full);
+    print_message("uninterrupted:\n%s", g_full);
+    assert_non_null(strstr(g_full, " ok 6 "));
+    char meta[4200];
+    snprintf(meta, sizeof meta, "%s/meta", dir);
+    sb_err err;
+    char *m = sb_read_file(meta, NULL, &err);
+    assert_non_null(m);
+    assert_non_null(strstr(m, "gl_renderer: "));
+    assert_non_null(strstr(m, "commit: "));
+    assert_non_null(strstr(m, "kernel: "));
+    free(m);
+}
+
+static void test_kill_and_resume(void **st) {
+    (void)st;
+    char out[128];
+    snprintf(out, sizeof out, "%s/killed", g_tmp);
+    pid_t pid = fork();
+    if (pid == 0) {
+        char bench[128];
+        snprintf(bench, sizeof bench, "%s/nightly.bench", g_tmp);
+        if (!freopen("/dev/null", "w", stdout) || !freopen("/dev/null", "w", stderr)) _exit(126);
+        execl(test_binary(), test_binary(), "batch", bench, "--out", out, "--quiet", (char *)NULL);
+        _exit(127);
+    }
+    /* kill -9 in the middle: once some runs are in the summary, at a moment that
+       is as likely as any to fall inside a run's frames or its file writes */
+    char cmd[256], dir[4096] = "";
+    snprintf(cmd, sizeof cmd, "ls -d %s/nightly/* 2>/dev/null | head -1", out);
+    int rows = 0;
+    for (int t = 0; t < 600 && rows < 4; t++) {
+        usleep(20000);
+        if (!dir[0]) {
+            run_capture(cmd, dir, sizeof dir);
+            dir[strcspn(dir, "\n")] = 0;
+            continue;
+        }
+        char path[4400];
+        snprintf(path, sizeof path, "%s/summary.csv", dir);
+        sb_err e;
+        char *text = sb_read_file(path, NULL, &e);
+        rows = 0;
+        for (char *p = text; p && *p; p++) rows += *p == '\n';
+        rows -= rows > 0; /* header */
+        free(text);
+    }
+    usleep(120000);
+    kill(pid, SIGKILL);
+    int status;
+    waitpid(pid, &status, 0);
+    assert_true(WIFSIGNALED(status));
+    assert_true(dir[0] != 0);
+    /* whatever was left: every per-run CSV without .tmp is complete (6 rows) */
+    snprintf(cmd, sizeof cmd, "cd %s && ls", dir);
+    sh("%s", cmd);
+    sb_table t;
+    sb_err err;
+    char path[4400];
+    snprintf(path, sizeof path, "%s/summary.csv", dir);
+    int before = sb_table_load(&t, path, &err) ? t.nrows : 0;
+    if (before) sb_table_free(&t);
+    print_message("killed with %d run(s) in the summary\n", before);
+    assert_true(before < 12);
+    /* resume the first (killed) folder twice: the second resume has nothing left to do */
+    assert_int_equal(sh("%s batch %s/nightly.bench --resume %s", test_binary(), g_tmp, dir), 0);
+    assert_non_null(strstr(g_out, "to do"));
+    char resumed[8192];
+    fingerprint(dir, resumed, sizeof resumed);
+    assert_string_equal(resumed, g_full);
+    assert_int_equal(sh("%s batch %s/nightly.bench --resume %s", test_binary(), g_tmp, dir), 0);
+    assert_non_null(strstr(g_out, "12 run(s) complete, 0 to do"));
+    assert_int_not_equal(sh("ls %s/*.tmp", dir), 0);
+}
+
+static void test_shards_merge_to_the_whole(void **st) {
+    (void)st;
+    char d1[4096], d2[4096];
+    assert_int_equal(sh("%s batch %s/nightly.bench --shard 1/2 --out %s/s1 --quiet", test_binary(), g_tmp, g_tmp), 0);
+    last_line(d1, sizeof d1);
+    assert_int_equal(sh("%s batch %s/nightly.bench --shard 2/2 --out %s/s2 --quiet", test_binary(), g_tmp, g_tmp), 0);
+    last_line(d2, sizeof d2);
+    assert_int_equal(sh("%s merge %s %s --out %s/merged", test_binary(), d1, d2, g_tmp), 0);
+    char merged[128], fp[8192];
+    snprintf(merged, sizeof merged, "%s/merged", g_tmp);
+    fingerprint(merged, fp, sizeof fp);
+    assert_string_equal(fp, g_full);
+    /* rows are in matrix order */
+    sb_table t;
+    sb_err err;
+    char path[256];
+    snprintf(path, sizeof path, "%s/summary.csv", merged);
+    assert_true(sb_table_load(&t, path, &err));
+    for (int r = 0; r < t.nrows; r++) assert_int_equal(atoi(sb_table_get(&t, r, "run_index")), r);
+    sb_table_free(&t);
+}
+
+static const char *SUMMARY_HDR =
+    "run_id,run_index,scene,path,technique,params,status,final_ms_mean,final_ms_median,final_ms_ci95,"
+    "shadow_draw_calls_mean,err_rate_mean\n";
+
+static void test_compare_exit_codes(void **st) {
+    (void)st;
+    char base[128], slow[128], same[128];
+    snprintf(base, sizeof base, "%s/base.csv", g_tmp);
+    snprintf(slow, sizeof slow, "%s/slow.csv", g_tmp);
+    snprintf(same, sizeof same, "%s/same.csv", g_tmp);
+    char text[2048];
+    snprintf(text, sizeof text, "%sa,0,desert,desert,sdsm,res=1024:layered=gs:cascades=4,ok,10.0,10.0,0.15,100,0.01\n", SUMMARY_HDR);
+    write_text(base, text);
+    /* 10% slower, parameters written in another order */
+    snprintf(text, sizeof text, "%sb,0,desert,desert,sdsm,cascades=4:layered=gs:res=1024,ok,11.0,11.0,0.15,100,0.01\n", SUMMARY_HDR);
+    write_text(slow, text);
+    /* 1% slower: within the threshold and the noise */
+    snprintf(text, sizeof text, "%sc,0,desert,desert,sdsm,layered=gs:res=1024:cascades=4,ok,10.1,10.1,0.15,100,0.01\n", SUMMARY_HDR);
+    write_text(same, text);
+    assert_int_equal(sh("%s compare %s %s", test_binary(), base, slow), 1);
+    assert_non_null(strstr(g_out, "REGRESSED"));
+    assert_non_null(strstr(g_out, "1 run(s) matched, 1 regression(s)"));
+    assert_int_equal(sh("%s compare %s %s", test_binary(), base, same), 0);
+    assert_non_null(strstr(g_out, "1 run(s) matched, 0 regression(s)"));
+    /* a wide confidence interval makes 10% noise, not a regression */
+    snprintf(text, sizeof text, "%sd,0,desert,desert,sdsm,cascades=4:layered=gs:res=1024,ok,11.0,11.0,1.5,100,0.01\n", SUMMARY_HDR);
+    write_text(slow, text);
+    assert_int_equal(sh("%s compare %s %s --format markdown", test_binary(), base, slow), 0);
+    assert_non_null(strstr(g_out, "worse, within noise"));
+    /* more draw calls regress without an interval */
+    snprintf(text, sizeof text, "%se,0,desert,desert,sdsm,cascades=4:layered=gs:res=1024,ok,10.0,10.0,0.15,120,0.01\n", SUMMARY_HDR);
+    write_text(slow, text);
+    assert_int_equal(sh("%s compare %s %s --metric shadow_draw_calls --format csv", test_binary(), base, slow), 1);
+    assert_int_equal(sh("%s compare %s %s --metric nosuch", test_binary(), base, slow), 2);
+    assert_non_null(strstr(g_out, "unknown metric 'nosuch'"));
+}
+
+static void test_compare_real_runs_and_pairs(void **st) {
+    (void)st;
+    char dir[4096];
+    assert_int_equal(sh("ls -d %s/full/nightly/*", g_tmp), 0);
+    last_line(dir, sizeof dir);
+    assert_int_equal(sh("%s compare %s %s", test_binary(), dir, dir), 0);
+    assert_non_null(strstr(g_out, "12 run(s) matched, 0 regression(s)"));
+    assert_int_equal(sh("%s compare %s --pair layered=off,gs", test_binary(), dir), 0);
+    assert_non_null(strstr(g_out, "1 pair(s) layered=gs against layered=off"));
+    assert_int_equal(sh("%s compare %s --pair filter=none,pcf3", test_binary(), dir), 0);
+    assert_non_null(strstr(g_out, "4 pair(s) filter=pcf3 against filter=none"));
+    assert_int_equal(sh("%s compare %s --pair technique=none,sm", test_binary(), dir), 0);
+    assert_non_null(strstr(g_out, "8 pair(s) technique=sm against technique=none"));
+    assert_int_equal(sh("%s compare %s --pair technique=sm,pssm", test_binary(), dir), 0);
+}
+
+static void expect_rejected(const char *body, const char *needle) {
+    char p[128];
+    snprintf(p, sizeof p, "%s/bad.bench", g_tmp);
+    write_text(p, body);
+    assert_int_equal(sh("%s batch %s --out %s/bad", test_binary(), p, g_tmp), 2);
+    assert_non_null(strstr(g_out, needle));
+    char d[128];
+    snprintf(d, sizeof d, "%s/bad", g_tmp);
+    assert_int_not_equal(access(d, F_OK), 0);   /* nothing rendered, nothing written */
+}
+
+static void test_bad_batch_files(void **st) {
+    (void)st;
+    expect_rejected("scene a plane-box\nsmm:res=2\n", "bad.bench:2: unknown technique 'smm'");
+    expect_rejected("scene a plane-box\nsm:rez=2\n", "bad.bench:2: sm: unknown parameter 'rez'");
+    expect_rejected("scene a plane-box\nsm:res=1,2\n", "bad.bench:2: sm:res=1: out of range");
+    expect_rejected("scene a plane-box\ndefaults --frames many\nnone\n", "bad.bench:2: --frames many: expected");
+    expect_rejected("scene a plane-box\ndefaults --nope 1\nnone\n", "bad.bench:2: '--nope' is not a run option");
+    expect_rejected("scene a\nnone\n", "bad.bench:1: expected 'scene NAME FILE [PATH-NAME]'");
+    expect_rejected("scene a plane-box\n@b none\n", "bad.bench:2: no scene named 'b'");
+    expect_rejected("scene a plane-box nopath\nnone\n", "bad.bench:1: no path named 'nopath'");
+    expect_rejected("scene a /nonexistent.glb\nnone\n", "bad.bench:1: /nonexistent.glb: cannot open");
+    expect_rejected("scene a plane-box\n", "no run lines");
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_dry_run_and_full_batch),
+        cmocka_unit_test(test_kill_and_resume),
+        cmocka_unit_test(test_shards_merge_to_the_whole),
+        cmocka_unit_test(test_compare_exit_codes),
+        cmocka_unit_test(test_compare_real_runs_and_pairs),
+        cmocka_unit_test(test_bad_batch_files),
+    };
+    return cmocka_run_group_tests_name("batch", tests, setup, teardown);
+}
