@@ -375,7 +375,7 @@ bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_
             repeats++;
             if (o->target_ci > 0) {
                 sb_timer_drain(&timer); /* between repetitions, never inside a frame */
-                double ci = sb_report_gpu_ci_pct(timer.times + W, done - W);
+                double ci = sb_report_gpu_ci_pct(timer.times + W, done - W, N);
                 if (ci <= o->target_ci) break;
             }
         }

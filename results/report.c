@@ -122,10 +122,19 @@ void sb_report_summary_header(sb_csv *c) {
     sb_csv_end_row(c);
 }
 
-double sb_report_gpu_ci_pct(const sb_stage_times *times, int n) {
+double sb_report_gpu_ci_pct(const sb_stage_times *times, int n, int per_repeat) {
     double *v = malloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
-    for (int i = 0; i < n; i++) v[i] = gpu_ms(&times[i]);
-    sb_stats st = sb_stats_compute(v, n);
+    int m = 0;
+    if (per_repeat > 0 && n >= 2 * per_repeat) {
+        for (int r = 0; r + per_repeat <= n; r += per_repeat) {
+            double sum = 0;
+            for (int i = r; i < r + per_repeat; i++) sum += gpu_ms(&times[i]);
+            v[m++] = sum / per_repeat;
+        }
+    } else {
+        for (int i = 0; i < n; i++) v[m++] = gpu_ms(&times[i]);
+    }
+    sb_stats st = sb_stats_compute(v, m);
     free(v);
     return st.mean > 0 ? 100.0 * st.ci95 / st.mean : NAN;
 }
@@ -150,7 +159,7 @@ void sb_report_summary_row(sb_csv *c, const sb_run_info *in, unsigned stages, co
     sb_csv_str(c, in->reason);
     sb_csv_int(c, n ? in->repeats : 0);
     sb_csv_num(c, in->target_ci > 0 ? in->target_ci : NAN);
-    sb_csv_num(c, n ? sb_report_gpu_ci_pct(times, n) : NAN);
+    sb_csv_num(c, n ? sb_report_gpu_ci_pct(times, n, in->frames) : NAN);
     sb_csv_int(c, (long long)in->stalls);
     sb_csv_int(c, (long long)in->scene_triangles);
     sb_csv_num(c, in->load_ms);

@@ -32,5 +32,9 @@ void sb_report_summary_header(sb_csv *c);
 /* recs/times: the n measured frames (NULL for a run that failed or was skipped). */
 void sb_report_summary_row(sb_csv *c, const sb_run_info *info, unsigned stages, const sb_frame_rec *recs,
                            const sb_stage_times *times, int n);
-/* Relative half-width (percent) of the 95% CI of the mean gpu_ms over n frames. */
-double sb_report_gpu_ci_pct(const sb_stage_times *times, int n);
+/* Relative half-width (percent) of the 95% confidence interval of the mean
+ * gpu_ms. With two or more complete repetitions of the path (per_repeat frames
+ * each) the samples are the repetitions' means: that measures how well the
+ * path's time is known, not how much frames differ along the path. With one,
+ * the samples are the frames. */
+double sb_report_gpu_ci_pct(const sb_stage_times *times, int n, int per_repeat);

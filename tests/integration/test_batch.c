@@ -274,6 +274,28 @@ static void test_compare_real_runs_and_pairs(void **st) {
     assert_int_equal(sh("%s compare %s --pair technique=sm,pssm", test_binary(), dir), 0);
 }
 
+static void test_plots(void **st) {
+    (void)st;
+    char dir[4096];
+    assert_int_equal(sh("ls -d %s/full/nightly/*", g_tmp), 0);
+    last_line(dir, sizeof dir);
+    const char *src = getenv("SB_SOURCE_ROOT");
+    assert_int_equal(sh("%s/scripts/plot %s", src ? src : ".", dir), 0);
+    const char *want[] = {"towers-frame-time.png", "towers-draw-calls.png", "towers-stages.png", "pb-stages.png",
+                          "pareto.png"};
+    for (size_t i = 0; i < sizeof want / sizeof want[0]; i++) {
+        char p[4400];
+        snprintf(p, sizeof p, "%s/plots/%s", dir, want[i]);
+        FILE *f = fopen(p, "rb");
+        assert_non_null(f);
+        unsigned char sig[8] = {0};
+        assert_int_equal(fread(sig, 1, 8, f), 8);
+        fclose(f);
+        assert_int_equal(sig[1], 'P');   /* a PNG */
+        assert_int_equal(sig[2], 'N');
+    }
+}
+
 static void expect_rejected(const char *body, const char *needle) {
     char p[128];
     snprintf(p, sizeof p, "%s/bad.bench", g_tmp);
@@ -307,6 +329,7 @@ int main(void) {
         cmocka_unit_test(test_compare_exit_codes),
         cmocka_unit_test(test_compare_real_runs_and_pairs),
         cmocka_unit_test(test_bad_batch_files),
+        cmocka_unit_test(test_plots),
     };
     return cmocka_run_group_tests_name("batch", tests, setup, teardown);
 }
