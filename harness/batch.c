@@ -54,8 +54,8 @@ static double run_cost(const sb_batch *b, const sb_batch_scene *sc, const sb_run
     return per_frame * (b->opts.frames + b->opts.warmup) * (b->opts.error_every > 0 ? 1.2 : 1.0);
 }
 
-bool sb_batch_load(sb_batch *b, const char *file, const sb_run_opts *base, const char *const *cli_opts, int ncli,
-                   sb_err *err) {
+static bool batch_build(sb_batch *b, const char *file, char *text, const sb_run_opts *base,
+                        const char *const *cli_opts, int ncli, bool load, sb_err *err) {
     memset(b, 0, sizeof *b);
     b->file = sb_strdup(file);
     const char *slash = strrchr(file, '/');
@@ -63,8 +63,6 @@ bool sb_batch_load(sb_batch *b, const char *file, const sb_run_opts *base, const
     char *dot = strrchr(b->name, '.');
     if (dot && dot != b->name) *dot = 0;
     b->opts = *base;
-    char *text = sb_read_file(file, NULL, err);
-    if (!text) return false;
     run_line *lines = NULL;
     int nlines = 0;
     bool ok = true;
@@ -151,8 +149,13 @@ bool sb_batch_load(sb_batch *b, const char *file, const sb_run_opts *base, const
             for (char *t = strtok(buf, ","); ok && t; t = strtok(NULL, ","))
                 if (find_scene(b, t) < 0) ok = sb_fail(err, "%s:%d: no scene named '%s'", file, lines[l].line, t);
         }
+    for (int i = 0; ok && !load && i < b->nscenes; i++) {
+        const char *pname = b->scenes[i].path_name;
+        if (pname && find_path(b, pname) < 0)
+            ok = sb_fail(err, "%s:%d: no path named '%s'", file, b->scenes[i].line, pname);
+    }
     /* scenes and paths (no GL): contents decide run ids, sizes decide costs */
-    for (int i = 0; ok && i < b->nscenes; i++) {
+    for (int i = 0; ok && load && i < b->nscenes; i++) {
         sb_batch_scene *sc = &b->scenes[i];
         sb_err e;
         if (!sb_scene_load(&sc->scene, sc->file, &e)) {
@@ -173,7 +176,7 @@ bool sb_batch_load(sb_batch *b, const char *file, const sb_run_opts *base, const
         }
     }
     /* the matrix */
-    for (int i = 0; ok && i < b->nscenes; i++) {
+    for (int i = 0; ok && load && i < b->nscenes; i++) {
         sb_batch_scene *sc = &b->scenes[i];
         sb_session ids;     /* just what sb_run_id reads */
         memset(&ids, 0, sizeof ids);
@@ -204,8 +207,27 @@ bool sb_batch_load(sb_batch *b, const char *file, const sb_run_opts *base, const
         for (int k = 0; k < lines[l].nspecs; k++) free(lines[l].specs[k]);
     }
     free(lines);
-    free(text);
     if (!ok) sb_batch_free(b);
+    return ok;
+}
+
+bool sb_batch_load(sb_batch *b, const char *file, const sb_run_opts *base, const char *const *cli_opts, int ncli,
+                   sb_err *err) {
+    char *text = sb_read_file(file, NULL, err);
+    if (!text) return false;
+    bool ok = batch_build(b, file, text, base, cli_opts, ncli, true, err);
+    free(text);
+    return ok;
+}
+
+bool sb_batch_check(const char *name, const char *text, sb_err *err) {
+    sb_run_opts o;
+    sb_run_opts_defaults(&o);
+    sb_batch b;
+    char *copy = sb_strdup(text);
+    bool ok = batch_build(&b, name, copy, &o, NULL, 0, false, err);
+    if (ok) sb_batch_free(&b);
+    free(copy);
     return ok;
 }
 

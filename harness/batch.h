@@ -53,5 +53,8 @@ typedef struct sb_batch {
 bool sb_batch_load(sb_batch *b, const char *file, const sb_run_opts *base, const char *const *cli_opts, int ncli,
                    sb_err *err);
 void sb_batch_free(sb_batch *b);
+/* Parses and validates the text alone (no scene or path is loaded): for
+ * fuzzing and quick checks. */
+bool sb_batch_check(const char *name, const char *text, sb_err *err);
 /* Deterministic, cost-balanced share I of N (1-based): marks runs out of the share. */
 void sb_batch_shard(const sb_batch *b, int shard, int nshards, bool *selected);

@@ -10,6 +10,7 @@
 #include "compare.h"
 #include "report.h"
 #include "run.h"
+#include "stress.h"
 #include "table.h"
 #include "version.h"
 
@@ -444,6 +445,31 @@ static int cmd_batch(const cli *c) {
     return rc;
 }
 
+/* ---- stress ---- */
+
+static int cmd_stress(const cli *c) {
+    if (c->npos > 1) return bad("usage: shadowbench stress [CASE-SUBSTRING] [--frames N] [--size WxH]%s", "");
+    sb_run_opts o = c->opts;
+    bool frames_given = false, size_given = false;
+    for (int i = 0; i < c->nrun_opts; i += 2) {
+        frames_given |= !strcmp(c->run_opts[i], "--frames");
+        size_given |= !strcmp(c->run_opts[i], "--size");
+    }
+    if (!frames_given) o.frames = 3;
+    if (!size_given) {
+        o.width = 320;
+        o.height = 180;
+    }
+    o.warmup = 0;
+    sb_err err;
+    int failures = sb_stress_run(&o, c->npos ? c->pos[0] : NULL, stdout, &err);
+    if (failures < 0) {
+        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        return 2;
+    }
+    return failures ? 1 : 0;
+}
+
 /* ---- compare and merge ---- */
 
 static int cmd_compare(const cli *c) {
@@ -514,6 +540,6 @@ int main(int argc, char **argv) {
     if (!strcmp(cmd, "batch")) return cmd_batch(&c);
     if (!strcmp(cmd, "compare")) return cmd_compare(&c);
     if (!strcmp(cmd, "merge")) return cmd_merge(&c);
-    if (!strcmp(cmd, "stress")) return bad("'%s' is not built yet", cmd);
+    if (!strcmp(cmd, "stress")) return cmd_stress(&c);
     return bad("unknown command '%s' (see shadowbench --help)", cmd);
 }

@@ -44,12 +44,19 @@ bool sb_path_parse(sb_path *p, const char *name, const char *text, sb_err *err) 
         for (char *t = strtok(buf, " \t\r,"); t && nt < 16; t = strtok(NULL, " \t\r,")) tok[nt++] = t;
         if (nt == 0) continue;
         double v[16];
-        for (int i = 1; i < nt; i++)
+        for (int i = 1; i < nt; i++) {
             if (!sb_parse_double(tok[i], &v[i])) {
                 sb_path_free(p);
                 return sb_fail(err, "%s:%d: '%s' is not a finite number (field %d of '%s')", name, lineno, tok[i], i + 1,
                                tok[0]);
             }
+            /* beyond this, interpolation overflows (found by fuzzing); far beyond any scene */
+            if (fabs(v[i]) > SB_PATH_MAX_COORD) {
+                sb_path_free(p);
+                return sb_fail(err, "%s:%d: '%s' is out of range (field %d of '%s': |value| <= %g)", name, lineno,
+                               tok[i], i + 1, tok[0], SB_PATH_MAX_COORD);
+            }
+        }
         if (strcmp(tok[0], "fov") == 0 || strcmp(tok[0], "near") == 0 || strcmp(tok[0], "far") == 0) {
             if (nt != 2 || v[1] <= 0 || (tok[0][0] == 'f' && tok[0][1] == 'o' && v[1] >= 179)) {
                 sb_path_free(p);

@@ -20,6 +20,9 @@
 #include "sbmath.h"
 #include "util.h"
 
+/* Largest magnitude of a time or coordinate in a path file. */
+#define SB_PATH_MAX_COORD 1e12
+
 typedef struct sb_path_key {
     double t;
     sb_v3 pos;              /* world space */

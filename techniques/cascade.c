@@ -124,6 +124,21 @@ void sb_csm_destroy(sb_csm *c) {
 
 void sb_csm_fit_slice(const sb_csm *c, const sb_frame *f, double zn, double zf, sb_light_fit *out) {
     const sb_scene *s = f->gpu->scene;
+    /* only the part of the slice where the scene can be: a far plane far beyond
+       the scene must not spread a (stable, sphere-fitted) map over empty space */
+    sb_v3 eye = sb_v3_sub(f->cam.pos, s->origin);
+    double dmin = 1e300, dmax = -1e300;
+    for (int k = 0; k < 8; k++) {
+        sb_v3 q = sb_v3_make(k & 1 ? s->bounds.hi.x : s->bounds.lo.x, k & 2 ? s->bounds.hi.y : s->bounds.lo.y,
+                             k & 4 ? s->bounds.hi.z : s->bounds.lo.z);
+        double d = sb_v3_dot(sb_v3_sub(q, eye), f->cam.forward);
+        dmin = fmin(dmin, d);
+        dmax = fmax(dmax, d);
+    }
+    if (dmax > zn && dmin < zf) {
+        zn = fmax(zn, dmin);
+        zf = fmin(zf, dmax);
+    }
     sb_v3 corners[8];
     sb_frustum_corners(&f->cam, s->origin, zn, zf, corners);
     if (c->stable) sb_light_fit_stable(s, f->gpu->sun, corners, 8, c->res, out);

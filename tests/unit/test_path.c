@@ -111,6 +111,8 @@ static void test_malformed_lines(void **st) {
     expect_error("key 0 0 0 0 0 0 0 0\n", "bad.path:1: orientation quaternion has zero length");
     expect_error("# nothing\n", "no keyframes");
     expect_error("key 0 nan 0 0 0 0 0 1\n", "bad.path:1:");
+    /* found by fuzzing (tests/fuzz/regressions/path): a coordinate whose interpolation overflowed */
+    expect_error("look 0 0 6e39 12 0 0.5 0\nlook 4 10 6 6 0 0.5 0\n", "bad.path:1: '6e39' is out of range");
 }
 
 int main(void) {

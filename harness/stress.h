@@ -1,0 +1,12 @@
+/* stress.h - the numerical-stability battery (`shadowbench stress`). */
+#pragma once
+#include <stdio.h>
+
+#include "run.h"
+
+/* Builds every case (glTF scenes and paths written to a temporary folder and
+ * read back through the normal loaders), runs every technique on each, and
+ * prints one row per technique x case. Returns the number of failures, or -1
+ * if the battery itself could not run. `only` (may be NULL) limits the cases
+ * to names containing it. */
+int sb_stress_run(const sb_run_opts *opts, const char *only, FILE *out, sb_err *err);

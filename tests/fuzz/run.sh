@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Runs one libFuzzer harness for a few seconds over its seed corpus (and, for
+# glTF, the real scenes in ../shared/scenes), then replays the regression
+# inputs of crashes found before. Prints the executions; non-zero on a crash.
+#   run.sh FUZZER NAME SOURCE_ROOT SECONDS
+set -euo pipefail
+start=$PWD
+fuzzer=$(realpath "$1") name=$2 src=$3 secs=${4:-5}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+mkdir -p "$work/corpus"
+cp "$src/tests/fuzz/corpus/$name"/* "$work/corpus/" 2>/dev/null || true
+extra=()
+if [[ $name == gltf && -d $src/../shared/scenes ]]; then
+  for f in "$src"/../shared/scenes/*/*.glb "$src"/../shared/scenes/*/*.gltf; do
+    [[ -f $f ]] && cp "$f" "$work/corpus/"
+  done
+fi
+if [[ -d $src/tests/fuzz/regressions/$name ]] && ls "$src/tests/fuzz/regressions/$name"/* >/dev/null 2>&1; then
+  "$fuzzer" "$src/tests/fuzz/regressions/$name"/* 2>&1 | tail -n 3
+fi
+cd "$work"
+"$fuzzer" -max_total_time="$secs" -max_len=262144 -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
+  corpus > log 2>&1 || {
+    tail -n 40 log
+    mkdir -p "$start/fuzz-crashes/$name" && cp crash-* leak-* timeout-* oom-* "$start/fuzz-crashes/$name/" 2>/dev/null || true
+    echo "inputs kept in $start/fuzz-crashes/$name"
+    exit 1
+  }
+grep -E "^stat::number_of_executed_units|^Done" log | head -n 2
+echo "fuzz $name: ok"
