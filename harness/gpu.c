@@ -236,15 +236,20 @@ static void set_camera_uniforms(const sb_frame *f, GLint u_view, GLint u_proj) {
     glUniformMatrix4fv(u_proj, 1, GL_FALSE, m);
 }
 
-void sb_zpass(sb_frame *f) {
-    sb_gpu *g = f->gpu;
+/* The camera's render target with depth testing and back-face culling. */
+static void bind_camera_target(sb_gpu *g, GLenum depth_func, bool depth_write) {
     glBindFramebuffer(GL_FRAMEBUFFER, g->fbo);
     glViewport(0, 0, g->width, g->height);
     glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    glDepthMask(GL_TRUE);
+    glDepthFunc(depth_func);
+    glDepthMask(depth_write ? GL_TRUE : GL_FALSE);
     glEnable(GL_CULL_FACE);
     glCullFace(GL_BACK);
+}
+
+void sb_zpass(sb_frame *f) {
+    sb_gpu *g = f->gpu;
+    bind_camera_target(g, GL_LESS, true);
     glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
     glClear(GL_DEPTH_BUFFER_BIT);
     glUseProgram(g->zpass_prog);
@@ -258,13 +263,7 @@ void sb_zpass(sb_frame *f) {
 
 void sb_final_pass(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
     sb_gpu *g = f->gpu;
-    glBindFramebuffer(GL_FRAMEBUFFER, g->fbo);
-    glViewport(0, 0, g->width, g->height);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(reuse_depth ? GL_LEQUAL : GL_LESS);
-    glDepthMask(reuse_depth ? GL_FALSE : GL_TRUE);
-    glEnable(GL_CULL_FACE);
-    glCullFace(GL_BACK);
+    bind_camera_target(g, reuse_depth ? GL_LEQUAL : GL_LESS, !reuse_depth);
     const float sky[4] = {0.55f, 0.7f, 0.9f, 1.0f}, one[4] = {1, 1, 1, 1}, none[4] = {0, 0, 0, -1};
     const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3};
     glDrawBuffers(g->eval ? 4 : 2, bufs);

@@ -249,6 +249,17 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
     glDisable(GL_DEPTH_CLAMP);
 }
 
+void sb_csm_frame(sb_csm *c, sb_frame *f, const double *splits) {
+    sb_csm_fit(c, f, splits);
+    sb_stage_begin(f, SB_STAGE_CASCADE);
+    sb_csm_cull(c, f, NULL);
+    sb_csm_render(c, f);
+    sb_stage_end(f, SB_STAGE_CASCADE);
+    sb_stage_begin(f, SB_STAGE_FINAL);
+    sb_csm_final(c, f, false);
+    sb_stage_end(f, SB_STAGE_FINAL);
+}
+
 void sb_csm_final(sb_csm *c, sb_frame *f, bool reuse_depth) {
     sb_gpu *g = f->gpu;
     glUseProgram(c->fp.prog);

@@ -78,3 +78,6 @@ uint32_t sb_csm_cull(sb_csm *c, sb_frame *f, const sb_light_fit *bound);
 void sb_csm_render(sb_csm *c, sb_frame *f);
 /* The final pass with the cascade lookup. */
 void sb_csm_final(sb_csm *c, sb_frame *f, bool reuse_depth);
+/* A whole frame from CPU splits: fit, then the cascade stage (cull, render)
+ * and the final stage. sm and pssm are this with their own splits. */
+void sb_csm_frame(sb_csm *c, sb_frame *f, const double *splits);

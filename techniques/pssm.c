@@ -26,14 +26,7 @@ static void pssm_frame(void *state, sb_frame *f) {
     pssm_state *s = state;
     double splits[SB_MAX_CASCADES + 1];
     sb_split_distances(s->lambda, s->csm.count, f->cam.znear, f->cam.zfar, splits);
-    sb_csm_fit(&s->csm, f, splits);
-    sb_stage_begin(f, SB_STAGE_CASCADE);
-    sb_csm_cull(&s->csm, f, NULL);
-    sb_csm_render(&s->csm, f);
-    sb_stage_end(f, SB_STAGE_CASCADE);
-    sb_stage_begin(f, SB_STAGE_FINAL);
-    sb_csm_final(&s->csm, f, false);
-    sb_stage_end(f, SB_STAGE_FINAL);
+    sb_csm_frame(&s->csm, f, splits);
 }
 
 static void pssm_destroy(void *state, sb_gpu *gpu) {

@@ -19,14 +19,7 @@ static bool sm_create(void *state, sb_gpu *gpu, const sb_params *p, sb_err *err)
 static void sm_frame(void *state, sb_frame *f) {
     sm_state *s = state;
     double splits[2] = {f->cam.znear, f->cam.zfar};
-    sb_csm_fit(&s->csm, f, splits);
-    sb_stage_begin(f, SB_STAGE_CASCADE);
-    sb_csm_cull(&s->csm, f, NULL);
-    sb_csm_render(&s->csm, f);
-    sb_stage_end(f, SB_STAGE_CASCADE);
-    sb_stage_begin(f, SB_STAGE_FINAL);
-    sb_csm_final(&s->csm, f, false);
-    sb_stage_end(f, SB_STAGE_FINAL);
+    sb_csm_frame(&s->csm, f, splits);
 }
 
 static void sm_destroy(void *state, sb_gpu *gpu) {
