@@ -132,7 +132,7 @@ bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int
 
     g->color_tex = make_tex(GL_RGBA8, w, h);
     g->vis_tex = make_tex(GL_R8, w, h);
-    g->depth_tex = make_tex(GL_DEPTH_COMPONENT32F, w, h);
+    g->depth_tex = make_tex(GL_DEPTH32F_STENCIL8, w, h);   /* stencil: shadow volumes */
     g->pos_tex = make_tex(GL_RGBA32F, w, h);
     g->aux_tex = make_tex(GL_RGBA32F, w, h);
     glGenFramebuffers(1, &g->fbo);
@@ -141,7 +141,7 @@ bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, g->vis_tex, 0);
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT2, GL_TEXTURE_2D, g->pos_tex, 0);
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT3, GL_TEXTURE_2D, g->aux_tex, 0);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, g->depth_tex, 0);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_TEXTURE_2D, g->depth_tex, 0);
     const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
     glDrawBuffers(2, bufs);
     if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
@@ -218,7 +218,11 @@ void sb_submit(sb_frame *f, uint32_t d, int instances) {
     const void *offset = (const void *)((size_t)dr->first_index * sizeof(uint32_t));
     if (instances > 1) glDrawElementsInstanced(GL_TRIANGLES, (GLsizei)dr->index_count, GL_UNSIGNED_INT, offset, instances);
     else glDrawElements(GL_TRIANGLES, (GLsizei)dr->index_count, GL_UNSIGNED_INT, offset);
-    uint64_t tris = (uint64_t)(dr->index_count / 3) * (instances > 1 ? instances : 1);
+    sb_count_draw(f, dr->index_count / 3, instances);
+}
+
+void sb_count_draw(sb_frame *f, uint64_t triangles, int instances) {
+    uint64_t tris = triangles * (uint64_t)(instances > 1 ? instances : 1);
     f->counters.draw_calls++;
     f->counters.stage_draw_calls[f->stage]++;
     f->counters.triangles += tris;
@@ -251,7 +255,9 @@ void sb_zpass(sb_frame *f) {
     sb_gpu *g = f->gpu;
     bind_camera_target(g, GL_LESS, true);
     glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
-    glClear(GL_DEPTH_BUFFER_BIT);
+    glStencilMask(0xff);
+    glClearStencil(0);
+    glClear(GL_DEPTH_BUFFER_BIT | GL_STENCIL_BUFFER_BIT);
     glUseProgram(g->zpass_prog);
     set_camera_uniforms(f, g->zpass_u_view, g->zpass_u_proj);
     glBindVertexArray(g->vao);
@@ -261,12 +267,16 @@ void sb_zpass(sb_frame *f) {
     glDisable(GL_CULL_FACE);
 }
 
-void sb_final_pass(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
-    sb_gpu *g = f->gpu;
+static void final_targets(sb_gpu *g, bool reuse_depth) {
     bind_camera_target(g, reuse_depth ? GL_LEQUAL : GL_LESS, !reuse_depth);
-    const float sky[4] = {0.55f, 0.7f, 0.9f, 1.0f}, one[4] = {1, 1, 1, 1}, none[4] = {0, 0, 0, -1};
     const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3};
     glDrawBuffers(g->eval ? 4 : 2, bufs);
+}
+
+void sb_final_pass(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
+    sb_gpu *g = f->gpu;
+    final_targets(g, reuse_depth);
+    const float sky[4] = {0.55f, 0.7f, 0.9f, 1.0f}, one[4] = {1, 1, 1, 1}, none[4] = {0, 0, 0, -1};
     glClearBufferfv(GL_COLOR, 0, sky);
     glClearBufferfv(GL_COLOR, 1, one);
     if (g->eval) {
@@ -274,6 +284,12 @@ void sb_final_pass(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
         glClearBufferfv(GL_COLOR, 3, none);
     }
     if (!reuse_depth) glClear(GL_DEPTH_BUFFER_BIT);
+    sb_final_draw(f, fp, reuse_depth);
+}
+
+void sb_final_draw(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
+    sb_gpu *g = f->gpu;
+    final_targets(g, reuse_depth);
     glUseProgram(fp->prog);
     set_camera_uniforms(f, fp->u_view, fp->u_proj);
     glUniform3f(fp->u_sun, (float)g->sun.x, (float)g->sun.y, (float)g->sun.z);

@@ -91,11 +91,15 @@ void sb_stage_end(sb_frame *f, sb_stage s);
  * in use, technique uniforms set). Clears colour, visibility and, unless
  * reuse_depth (a z-pass filled it; tested with LEQUAL), depth. Counts draws. */
 void sb_final_pass(sb_frame *f, const sb_final_prog *fp, bool reuse_depth);
+/* The same draws without clearing anything (a second pass over the frame). */
+void sb_final_draw(sb_frame *f, const sb_final_prog *fp, bool reuse_depth);
 /* Depth-only camera pass into the render target's depth (the z-pass). */
 void sb_zpass(sb_frame *f);
 /* Issues one draw (instanced when instances > 1) with whatever program is
  * bound, and counts it in the current stage. */
 void sb_submit(sb_frame *f, uint32_t draw, int instances);
+/* Counts a draw issued by the technique itself (its own geometry). */
+void sb_count_draw(sb_frame *f, uint64_t triangles, int instances);
 /* Planes (inside: n·p + d >= 0) of a clip-space box of the matrix m (Gribb-Hartmann). */
 void sb_frustum_planes(sb_m4 m, double planes[6][4]);
 /* GL error check: returns false and fills err if one is pending. */
