@@ -139,6 +139,8 @@ void sb_session_close(sb_session *s) {
 }
 
 const char *sb_skip_reason(const sb_session *s, const sb_technique *t) {
+    if ((t->needs & SB_NEEDS_PLANE) && s->scene.plane_count == 0)
+        return "the scene has no large planar receiver";
     if (t->needs & SB_NEEDS_POINT_LIGHT) {
         bool any = false;
         for (uint32_t i = 0; i < s->scene.light_count; i++) any |= s->scene.lights[i].type != SB_LIGHT_DIRECTIONAL;
@@ -360,7 +362,7 @@ bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_
         r->counters = f.counters;
         r->wall_ms = w1 - w0;
         r->cpu_ms = r->wall_ms - timer.wait_ms;
-        if (i >= W) info.frames_wall_ms += r->wall_ms;
+        info.frames_wall_ms += r->wall_ms; /* warm-up frames render too */
         done = i + 1;
         while (stream && written < done && timer.times[written].ready) {
             sb_report_frame_row(&rows, &recs[written], &timer.times[written], stages);

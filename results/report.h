@@ -23,7 +23,7 @@ typedef struct sb_run_info {
     int frames, warmup, width, height, repeats;
     double target_ci;           /* percent, 0: none */
     uint64_t stalls, scene_triangles;
-    double load_ms, run_wall_s, frames_wall_ms;
+    double load_ms, run_wall_s, frames_wall_ms;   /* frames: every rendered frame, warm-up included */
     uint64_t rays;
     double ray_ms;
 } sb_run_info;

@@ -198,7 +198,75 @@ bool sb_scene_finish(sb_scene *s, sb_err *err) {
     free(s->build_pos);
     s->build_pos = NULL;
     sb_bvh_build(s);
+    sb_scene_find_planes(s);
     return true;
+}
+
+typedef struct {
+    int64_t key[4];     /* quantised plane */
+    uint32_t tri;
+    double area;
+} plane_tri;
+
+static int cmp_plane_tri(const void *a, const void *b) {
+    const plane_tri *x = a, *y = b;
+    for (int k = 0; k < 4; k++)
+        if (x->key[k] != y->key[k]) return x->key[k] < y->key[k] ? -1 : 1;
+    return x->tri < y->tri ? -1 : x->tri > y->tri;
+}
+
+void sb_scene_find_planes(sb_scene *s) {
+    uint32_t ntri = s->index_count / 3;
+    sb_v3 ext = sb_v3_sub(s->bounds.hi, s->bounds.lo);
+    double face = fmax(ext.x * ext.y, fmax(ext.y * ext.z, ext.x * ext.z)), diag = sb_v3_len(ext);
+    if (ntri == 0 || face <= 0) return;
+    plane_tri *pt = malloc(sizeof *pt * ntri);
+    uint32_t m = 0;
+    for (uint32_t t = 0; t < ntri; t++) {
+        const float *a = s->vertices + 6 * (size_t)s->indices[3 * t], *b = s->vertices + 6 * (size_t)s->indices[3 * t + 1],
+                    *c = s->vertices + 6 * (size_t)s->indices[3 * t + 2];
+        sb_v3 n = sb_v3_cross(sb_v3_make(b[0] - a[0], b[1] - a[1], b[2] - a[2]),
+                              sb_v3_make(c[0] - a[0], c[1] - a[1], c[2] - a[2]));
+        double area = 0.5 * sb_v3_len(n);
+        if (area <= 0) continue;
+        n = sb_v3_norm(n);
+        double d = -(n.x * a[0] + n.y * a[1] + n.z * a[2]);
+        pt[m++] = (plane_tri){{llround(n.x * 1e3), llround(n.y * 1e3), llround(n.z * 1e3), llround(d / diag * 1e4)},
+                              t, area};
+    }
+    qsort(pt, m, sizeof *pt, cmp_plane_tri);
+    for (uint32_t i = 0; i < m;) {
+        uint32_t j = i;
+        double area = 0;
+        while (j < m && !memcmp(pt[j].key, pt[i].key, sizeof pt[i].key)) area += pt[j++].area;
+        if (area >= 0.1 * face) {
+            /* keep the largest SB_MAX_PLANES */
+            int slot = -1;
+            if (s->plane_count < SB_MAX_PLANES) slot = (int)s->plane_count++;
+            else
+                for (int k = 0; k < SB_MAX_PLANES; k++)
+                    if (s->planes[k].area < area && (slot < 0 || s->planes[k].area < s->planes[slot].area)) slot = k;
+            if (slot >= 0) {
+                sb_plane *p = &s->planes[slot];
+                free(p->tris);
+                const uint32_t t0 = pt[i].tri;
+                const float *a = s->vertices + 6 * (size_t)s->indices[3 * t0], *b = s->vertices + 6 * (size_t)s->indices[3 * t0 + 1],
+                            *c = s->vertices + 6 * (size_t)s->indices[3 * t0 + 2];
+                sb_v3 n = sb_v3_norm(sb_v3_cross(sb_v3_make(b[0] - a[0], b[1] - a[1], b[2] - a[2]),
+                                                 sb_v3_make(c[0] - a[0], c[1] - a[1], c[2] - a[2])));
+                p->n[0] = n.x;
+                p->n[1] = n.y;
+                p->n[2] = n.z;
+                p->d = -(n.x * a[0] + n.y * a[1] + n.z * a[2]);
+                p->area = area;
+                p->tri_count = j - i;
+                p->tris = malloc(sizeof(uint32_t) * p->tri_count);
+                for (uint32_t k = i; k < j; k++) p->tris[k - i] = pt[k].tri;
+            }
+        }
+        i = j;
+    }
+    free(pt);
 }
 
 uint64_t sb_scene_triangles(const sb_scene *s) { return s->index_count / 3; }
@@ -260,6 +328,7 @@ void sb_scene_free(sb_scene *s) {
     free(s->lights);
     free(s->cameras);
     free(s->build_pos);
+    for (uint32_t i = 0; i < s->plane_count; i++) free(s->planes[i].tris);
     sb_bvh_free(&s->bvh);
     memset(s, 0, sizeof *s);
 }

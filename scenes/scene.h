@@ -54,6 +54,16 @@ typedef struct sb_scene_camera {
     int node;                    /* node that carries it, -1 if none */
 } sb_scene_camera;
 
+/* A large planar receiver found at load (planar projected shadows use them):
+ * n·p + d = 0 in origin-relative coordinates, n facing up the light side. */
+#define SB_MAX_PLANES 4
+typedef struct sb_plane {
+    double n[3], d;
+    double area;
+    uint32_t *tris;              /* triangle numbers (index / 3) on the plane */
+    uint32_t tri_count;
+} sb_plane;
+
 typedef struct sb_scene {
     char *file;
     sb_v3 origin;                /* world position of the local frame */
@@ -78,6 +88,8 @@ typedef struct sb_scene {
     uint32_t images_skipped;     /* textures present but not decoded */
     uint32_t alpha_mask_draws;
     uint32_t nodes_drawn;        /* node instances with a mesh reached from the scene graph */
+    sb_plane planes[SB_MAX_PLANES];
+    uint32_t plane_count;
 
     /* builder scratch, freed by sb_scene_finish */
     double *build_pos;
@@ -108,6 +120,9 @@ typedef struct sb_prim_desc {
 
 void sb_scene_begin(sb_scene *s);
 void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p);
+/* Finds the large planar receivers (a plane holding at least 10% of the area of
+ * the bounds' largest face); called by sb_scene_finish. */
+void sb_scene_find_planes(sb_scene *s);
 /* Re-bases to the centre, splits big draws into spatial chunks, builds AABBs and the BVH. */
 bool sb_scene_finish(sb_scene *s, sb_err *err);
 

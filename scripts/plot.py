@@ -137,6 +137,7 @@ def main(root):
                 ax.annotate(p[3], (p[1], p[2]), fontsize=6, color=c)
         ax.set_xscale("log")
         ax.set_yscale("symlog", linthresh=1e-4)
+        ax.set_ylim(bottom=0)
         ax.set_xlabel("median frame time, ms (gpu_ms)")
         ax.set_ylabel("err_rate (mean over evaluated frames)")
         ax.set_title("time against error: Pareto front per scene")

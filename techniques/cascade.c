@@ -30,6 +30,7 @@ bool sb_csm_create(sb_csm *c, sb_gpu *g, const sb_params *p, const char *name, s
     c->bias = sb_param_num(p, "bias");
     c->slope = sb_param_num(p, "slope");
     c->normal = sb_param_num(p, "normal");
+    c->sun_size = sb_param_num(p, "sun_size");
     int depth = sb_param_choice(p, "depth");
     c->depth_format = depth == 0 ? GL_DEPTH_COMPONENT16 : depth == 1 ? GL_DEPTH_COMPONENT24 : GL_DEPTH_COMPONENT32F;
     int layered = has_param(p, "layered") ? sb_param_choice(p, "layered") : 0;
@@ -48,7 +49,7 @@ bool sb_csm_create(sb_csm *c, sb_gpu *g, const sb_params *p, const char *name, s
     glGenTextures(1, &c->tex);
     glBindTexture(GL_TEXTURE_2D_ARRAY, c->tex);
     glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, c->depth_format, c->res, c->res, c->count);
-    GLint filt = c->filter == 0 || c->filter == 2 || c->filter == 3 ? GL_NEAREST : GL_LINEAR;
+    GLint filt = c->filter == 0 || c->filter == 2 || c->filter == 3 ? GL_NEAREST : GL_LINEAR; /* pcss: bilinear taps */
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, filt);
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, filt);
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
@@ -106,6 +107,14 @@ bool sb_csm_create(sb_csm *c, sb_gpu *g, const sb_params *p, const char *name, s
     c->u_blend = glGetUniformLocation(c->fp.prog, "u_blend");
     c->u_light = glGetUniformLocation(c->fp.prog, "u_light");
     c->u_texel = glGetUniformLocation(c->fp.prog, "u_texel");
+    c->u_depth_raw = glGetUniformLocation(c->fp.prog, "u_depth_raw");
+    c->u_sun_tan = glGetUniformLocation(c->fp.prog, "u_sun_tan");
+    glGenSamplers(1, &c->raw_sampler);
+    glSamplerParameteri(c->raw_sampler, GL_TEXTURE_COMPARE_MODE, GL_NONE);
+    glSamplerParameteri(c->raw_sampler, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glSamplerParameteri(c->raw_sampler, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glSamplerParameteri(c->raw_sampler, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glSamplerParameteri(c->raw_sampler, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
     return sb_gl_check(name, err);
 }
 
@@ -118,6 +127,7 @@ void sb_csm_destroy(sb_csm *c) {
     if (c->fbo_layer[0]) glDeleteFramebuffers(c->count, c->fbo_layer);
     if (c->tex) glDeleteTextures(1, &c->tex);
     if (c->block) glDeleteBuffers(1, &c->block);
+    if (c->raw_sampler) glDeleteSamplers(1, &c->raw_sampler);
     free(c->mask);
     memset(c, 0, sizeof *c);
 }
@@ -272,5 +282,13 @@ void sb_csm_final(sb_csm *c, sb_frame *f, bool reuse_depth) {
     glUniform1f(c->u_blend, (float)c->blend);
     glUniform3f(c->u_light, (float)g->sun.x, (float)g->sun.y, (float)g->sun.z);
     glUniform2f(c->u_texel, 1.0f / c->res, 1.0f / c->res);
+    /* the same texture on unit 2 through a sampler without comparison */
+    glActiveTexture(GL_TEXTURE2);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, c->tex);
+    glBindSampler(2, c->raw_sampler);
+    glUniform1i(c->u_depth_raw, 2);
+    glUniform1f(c->u_sun_tan, (float)tan(c->sun_size * SB_PI / 180));
+    glActiveTexture(GL_TEXTURE0);
     sb_final_pass(f, &c->fp, reuse_depth);
+    glBindSampler(2, 0);
 }

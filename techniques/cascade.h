@@ -14,7 +14,8 @@
     {"bias", SB_PARAM_FLOAT, "1", 0, 100, NULL, "constant depth bias, in shadow texels of world size"},        \
     {"slope", SB_PARAM_FLOAT, "2", 0, 100, NULL, "slope-scaled bias (glPolygonOffset factor)"},                \
     {"normal", SB_PARAM_FLOAT, "1", 0, 100, NULL, "normal offset, in shadow texels"},                          \
-    {"filter", SB_PARAM_ENUM, "hw", 0, 0, "none|hw|pcf3|pcf5|poisson16", "shadow filter"},                     \
+    {"filter", SB_PARAM_ENUM, "hw", 0, 0, "none|hw|pcf3|pcf5|poisson16|pcss", "shadow filter"},                \
+    {"sun_size", SB_PARAM_FLOAT, "0.53", 0, 10, NULL, "pcss: angular diameter of the sun, degrees"},          \
     {"stable", SB_PARAM_ENUM, "off", 0, 0, "off|on", "sphere fit and texel snapping: no shimmer when moving"}
 
 /* Parameters of the cascaded techniques. */
@@ -45,7 +46,9 @@ typedef struct sb_cascade_block {
 typedef struct sb_csm {
     sb_gpu *gpu;
     int res, count, filter, select, layered, stable;
-    double bias, slope, normal, blend;
+    double bias, slope, normal, blend, sun_size;
+    GLuint raw_sampler;                   /* the map without comparison, for PCSS's blocker search */
+    GLint u_depth_raw, u_sun_tan;
     GLenum depth_format;
     GLuint tex, fbo_all, fbo_layer[SB_MAX_CASCADES];
     GLuint block;                         /* SSBO, binding 0 */

@@ -11,9 +11,11 @@ extern const sb_technique sb_technique_pssm;
 extern const sb_technique sb_technique_sdsm;
 extern const sb_technique sb_technique_raycast;
 extern const sb_technique sb_technique_volumes;
+extern const sb_technique sb_technique_planar;
 
-static const sb_technique *const all[] = {&sb_technique_none, &sb_technique_sm,      &sb_technique_pssm,
-                                          &sb_technique_sdsm, &sb_technique_raycast, &sb_technique_volumes};
+static const sb_technique *const all[] = {&sb_technique_none,    &sb_technique_sm,      &sb_technique_pssm,
+                                          &sb_technique_sdsm,    &sb_technique_raycast, &sb_technique_volumes,
+                                          &sb_technique_planar};
 
 const char *const sb_stage_names[SB_STAGE_COUNT] = {"zpass", "minmax", "cascade", "final", "volumes", "rays"};
 

@@ -1,5 +1,6 @@
 // vis_csm.glsl - shadow lookup for every shadow-map technique (sm is one cascade).
-// SB_FILTER: 0 none (1 nearest tap), 1 hw (bilinear 2x2 compare), 2 pcf3, 3 pcf5, 4 poisson16
+// SB_FILTER: 0 none (1 nearest tap), 1 hw (bilinear 2x2 compare), 2 pcf3, 3 pcf5, 4 poisson16,
+//           5 pcss (blocker search, then a Poisson PCF kernel as wide as the penumbra)
 // SB_SELECT: 0 interval (by view depth), 1 map (first map that contains the point)
 uniform sampler2DArrayShadow u_shadow;
 uniform float u_bias;       // constant bias, in shadow texels
@@ -7,6 +8,14 @@ uniform float u_normal;     // normal offset, in shadow texels
 uniform float u_blend;      // blend band, fraction of a cascade's depth range
 uniform vec3 u_light;       // toward the light
 uniform vec2 u_texel;       // 1 / shadow map size
+uniform sampler2DArray u_depth_raw;     // the same map without comparison (PCSS blocker search)
+uniform float u_sun_tan;                // tan of the sun's angular diameter (PCSS)
+
+const vec2 sb_disk[16] = vec2[](
+    vec2(-0.942, -0.399), vec2(0.946, -0.769), vec2(-0.094, -0.929), vec2(0.345, 0.294),
+    vec2(-0.916, 0.458), vec2(-0.815, -0.879), vec2(-0.383, 0.277), vec2(0.975, 0.756),
+    vec2(0.443, -0.975), vec2(0.537, -0.474), vec2(-0.265, -0.419), vec2(0.792, 0.191),
+    vec2(-0.242, 0.997), vec2(-0.814, 0.914), vec2(0.200, 0.786), vec2(0.144, -0.141));
 
 float sb_tap(vec3 c, float layer, vec2 off) {
     return texture(u_shadow, vec4(c.xy + off * u_texel, layer, c.z));
@@ -28,14 +37,27 @@ float sb_lookup(int k, vec3 p, vec3 n) {
     for (int y = -r; y <= r; y++)
         for (int x = -r; x <= r; x++) sum += sb_tap(c, layer, vec2(x, y));
     return sum / float((2 * r + 1) * (2 * r + 1));
-#else
-    const vec2 disk[16] = vec2[](
-        vec2(-0.942, -0.399), vec2(0.946, -0.769), vec2(-0.094, -0.929), vec2(0.345, 0.294),
-        vec2(-0.916, 0.458), vec2(-0.815, -0.879), vec2(-0.383, 0.277), vec2(0.975, 0.756),
-        vec2(0.443, -0.975), vec2(0.537, -0.474), vec2(-0.265, -0.419), vec2(0.792, 0.191),
-        vec2(-0.242, 0.997), vec2(-0.814, 0.914), vec2(0.200, 0.786), vec2(0.144, -0.141));
+#elif SB_FILTER == 4
     float sum = 0.0;
-    for (int i = 0; i < 16; i++) sum += sb_tap(c, layer, disk[i] * 1.5);
+    for (int i = 0; i < 16; i++) sum += sb_tap(c, layer, sb_disk[i] * 1.5);
+    return sum / 16.0;
+#else
+    // PCSS (Fernando 2005) for a directional light: the penumbra is
+    // (receiver - blocker distance) x tan(sun diameter); depths are linear in
+    // an orthographic map, so distances are depth differences x the depth range.
+    float range = sb_cascade[k].w;
+    float search = max(u_sun_tan * range * 0.25 / texel, 1.0);    // texels: blockers up to a quarter range away
+    search = min(search, 32.0);
+    float blockers = 0.0, depth_sum = 0.0;
+    for (int i = 0; i < 16; i++) {
+        float d = texture(u_depth_raw, vec3(c.xy + sb_disk[i] * search * u_texel, layer)).r;
+        if (d < c.z) { blockers += 1.0; depth_sum += d; }
+    }
+    if (blockers == 0.0) return 1.0;
+    float penumbra = (c.z - depth_sum / blockers) * range * u_sun_tan / texel;   // texels
+    float radius = clamp(penumbra * 0.5, 0.5, 32.0);
+    float sum = 0.0;
+    for (int i = 0; i < 16; i++) sum += sb_tap(c, layer, sb_disk[i] * radius);
     return sum / 16.0;
 #endif
 }

@@ -79,6 +79,28 @@ static void test_cascaded_match_analytic(void **st) {
     sb_session_close(&s);
 }
 
+static void test_pcss_converges_to_hard(void **st) {
+    (void)st;
+    sb_session s;
+    sb_err err;
+    assert_true(pb_open(&s, SB_BACKEND_EGL, 640, 360, &err));
+    sb_error_metrics hard, zero, soft, wide;
+    assert_true(eval_frame(&s, "sm:filter=none", 0, 1, &hard, NULL, NULL, &err));
+    assert_true(eval_frame(&s, "sm:filter=pcss:sun_size=0", 0, 1, &zero, NULL, NULL, &err));
+    assert_true(eval_frame(&s, "sm:filter=pcss:sun_size=1", 0, 1, &soft, NULL, NULL, &err));
+    assert_true(eval_frame(&s, "sm:filter=pcss:sun_size=4", 0, 1, &wide, NULL, NULL, &err));
+    print_message("pcss vis_mae: hard %.5f, sun 0 %.5f, 1 deg %.5f, 4 deg %.5f; err_rate %.5f %.5f %.5f %.5f\n",
+                  hard.vis_mae, zero.vis_mae, soft.vis_mae, wide.vis_mae, hard.err_rate, zero.err_rate, soft.err_rate,
+                  wide.err_rate);
+    /* a point-sized sun gives the hard shadow; a wider one widens the penumbra */
+    assert_true(fabs(zero.vis_mae - hard.vis_mae) < 0.002);
+    assert_true(zero.err_rate < 0.005);
+    assert_true(soft.vis_mae > zero.vis_mae);
+    assert_true(wide.vis_mae > soft.vis_mae);
+    assert_true(wide.err_rate < 0.05);   /* the binary state stays mostly right */
+    sb_session_close(&s);
+}
+
 static void test_backends_agree(void **st) {
     (void)st;
     const int w = 320, h = 180;
@@ -108,6 +130,7 @@ int main(void) {
         cmocka_unit_test(test_low_resolution_is_worse),
         cmocka_unit_test(test_backends_agree),
         cmocka_unit_test(test_cascaded_match_analytic),
+        cmocka_unit_test(test_pcss_converges_to_hard),
     };
     return cmocka_run_group_tests_name("planebox", tests, NULL, NULL);
 }

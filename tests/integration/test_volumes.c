@@ -64,8 +64,35 @@ static void test_camera_inside_volume(void **st) {
     unlink(path);
 }
 
+static void test_planar(void **st) {
+    (void)st;
+    sb_session s;
+    sb_err err;
+    assert_true(pb_open(&s, SB_BACKEND_EGL, 640, 360, &err));
+    assert_true(s.scene.plane_count >= 1);
+    pb_result r;
+    assert_true(pb_render(&s, "planar", &r, NULL, &err));
+    print_message("planar: shadow exact %ld, planar %ld, mismatch %ld (%.3f%% of image)\n", r.shadow_exact,
+                  r.shadow_tech, r.mismatch, 100.0 * r.mismatch / r.pixels);
+    assert_true(r.shadow_exact > r.pixels / 100);
+    assert_true(r.mismatch * 1000 < r.pixels * 2);
+    sb_session_close(&s);
+    /* the terrain of desert has no large plane: the technique is skipped with the reason */
+    sb_run_opts o;
+    sb_run_opts_defaults(&o);
+    o.width = 64;
+    o.height = 36;
+    memset(&s, 0, sizeof s);
+    assert_true(sb_session_open(&s, &o, "desert", "desert", &err));
+    const char *why = sb_skip_reason(&s, sb_technique_find("planar"));
+    assert_non_null(why);
+    assert_string_equal(why, "the scene has no large planar receiver");
+    assert_null(sb_skip_reason(&s, sb_technique_find("volumes")));
+    sb_session_close(&s);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_volumes_match_analytic),
-                                       cmocka_unit_test(test_camera_inside_volume)};
+                                       cmocka_unit_test(test_camera_inside_volume), cmocka_unit_test(test_planar)};
     return cmocka_run_group_tests_name("volumes", tests, NULL, NULL);
 }
