@@ -258,9 +258,10 @@ static void run_row(sb_session *s, const char *spec, int frames, row_result *r) 
                     continue;
                 }
                 const float *sm = blk.shadow_mat[k];
-                double x = sm[0] * q[0] + sm[4] * q[1] + sm[8] * q[2] + sm[12];
-                double y = sm[1] * q[0] + sm[5] * q[1] + sm[9] * q[2] + sm[13];
-                double z = sm[2] * q[0] + sm[6] * q[1] + sm[10] * q[2] + sm[14];
+                double hw = sm[3] * q[0] + sm[7] * q[1] + sm[11] * q[2] + sm[15];
+                double x = (sm[0] * q[0] + sm[4] * q[1] + sm[8] * q[2] + sm[12]) / hw;
+                double y = (sm[1] * q[0] + sm[5] * q[1] + sm[9] * q[2] + sm[13]) / hw;
+                double z = (sm[2] * q[0] + sm[6] * q[1] + sm[10] * q[2] + sm[14]) / hw;
                 const double tol = 1e-3;
                 if (x < -tol || x > 1 + tol || y < -tol || y > 1 + tol || z < -tol || z > 1 + tol) r->coverage_misses++;
             }

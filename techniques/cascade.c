@@ -27,6 +27,11 @@ bool sb_csm_create(sb_csm *c, sb_gpu *g, const sb_params *p, const char *name, s
     c->select = has_param(p, "select") ? sb_param_choice(p, "select") : 0;
     c->blend = has_param(p, "blend") ? sb_param_num(p, "blend") : 0;
     c->stable = sb_param_choice(p, "stable") == 1;
+    c->warp = has_param(p, "warp") ? sb_param_choice(p, "warp") : 0;
+    c->min_angle = has_param(p, "min_angle") ? sb_param_num(p, "min_angle") : 5;
+    if (c->warp && c->stable)
+        return sb_fail(err, "%s: stable=on cannot be combined with a perspective warp (a warped map follows the camera)",
+                       name);
     c->bias = sb_param_num(p, "bias");
     c->slope = sb_param_num(p, "slope");
     c->normal = sb_param_num(p, "normal");
@@ -151,7 +156,8 @@ void sb_csm_fit_slice(const sb_csm *c, const sb_frame *f, double zn, double zf, 
     }
     sb_v3 corners[8];
     sb_frustum_corners(&f->cam, s->origin, zn, zf, corners);
-    if (c->stable) sb_light_fit_stable(s, f->gpu->sun, corners, 8, c->res, out);
+    if (c->warp) sb_light_fit_lispsm(s, f->gpu->sun, eye, f->cam.forward, zn, zf, corners, 8, c->res, c->min_angle, out);
+    else if (c->stable) sb_light_fit_stable(s, f->gpu->sun, corners, 8, c->res, out);
     else sb_light_fit_points(s, f->gpu->sun, corners, 8, c->res, out);
 }
 
@@ -175,6 +181,7 @@ static void block_put(sb_csm *c, int k, const sb_light_fit *fit, double zn, doub
     c->cpu.cascade[k][2] = (float)fit->texel_world;
     c->cpu.cascade[k][3] = (float)(fit->zf - fit->zn);
     c->cpu.flags[k][0] = active ? 1.0f : 0.0f;
+    c->cpu.flags[k][1] = fit->warped ? 1.0f : 0.0f;
 }
 
 void sb_csm_fit(sb_csm *c, sb_frame *f, const double *splits) {

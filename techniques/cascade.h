@@ -24,7 +24,8 @@
     {"select", SB_PARAM_ENUM, "interval", 0, 0, "interval|map", "cascade selection: by view depth or by map"}, \
     {"blend", SB_PARAM_FLOAT, "0", 0, 0.5, NULL, "blend band between cascades (fraction of a cascade)"},       \
     {"layered", SB_PARAM_ENUM, "off", 0, 0, "off|gs|vs|on",                                                    \
-     "per-cascade draws, or one draw per caster routed by a geometry shader / vertex-shader gl_Layer"}
+     "per-cascade draws, or one draw per caster routed by a geometry shader / vertex-shader gl_Layer"},        \
+    {"warp", SB_PARAM_ENUM, "none", 0, 0, "none|lispsm", "perspective warp of each cascade (LiSPSM)"}
 
 enum { SB_LAYERED_OFF, SB_LAYERED_GS, SB_LAYERED_VS };
 enum { SB_SPLIT_UNIFORM, SB_SPLIT_LOG, SB_SPLIT_PRACTICAL };
@@ -45,7 +46,8 @@ typedef struct sb_cascade_block {
  * their state, so tests can read the shadow maps of any of them. */
 typedef struct sb_csm {
     sb_gpu *gpu;
-    int res, count, filter, select, layered, stable;
+    int res, count, filter, select, layered, stable, warp;
+    double min_angle;                     /* LiSPSM falls back to uniform below this view/light angle */
     double bias, slope, normal, blend, sun_size;
     GLuint raw_sampler;                   /* the map without comparison, for PCSS's blocker search */
     GLint u_depth_raw, u_sun_tan;

@@ -122,3 +122,86 @@ void sb_light_fit_stable(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int n, 
     sb_v3 lo = {cl.x - r, cl.y - r, slo.z}, hi = {cl.x + r, cl.y + r, shi.z};
     finish_fit(s, lo, hi, shi.z, res, out);
 }
+
+void sb_light_fit_lispsm(const sb_scene *s, sb_v3 sun, sb_v3 eye, sb_v3 forward, double zn, double zf,
+                         const sb_v3 *pts, int n, int res, double min_gamma_deg, sb_light_fit *out) {
+    sun = sb_v3_norm(sun);
+    double cos_g = sb_v3_dot(sb_v3_norm(forward), sun), sin_g = sqrt(fmax(0, 1 - cos_g * cos_g));
+    if (sin_g < sin(min_gamma_deg * SB_PI / 180) || zn <= 0) { /* view along the light: no useful warp */
+        sb_light_fit_points(s, sun, pts, n, res, out);
+        return;
+    }
+    /* the uniform fit first: its caster extension and receiver window bound the body */
+    sb_light_fit_points(s, sun, pts, n, res, out);
+    if (out->empty) return;
+    /* light view whose up axis is the view direction projected perpendicular to the light */
+    sb_v3 fwd = sb_v3_scale(sun, -1);
+    sb_v3 up = sb_v3_norm(sb_v3_sub(forward, sb_v3_scale(fwd, sb_v3_dot(forward, fwd))));
+    sb_v3 right = sb_v3_norm(sb_v3_cross(fwd, up));
+    up = sb_v3_cross(right, fwd);
+    sb_m4 lv = sb_m4_view(sb_v3_make(0, 0, 0), right, up, fwd);
+    /* body: the slice corners inside the scene, and the same points pushed toward the light to the
+       farthest caster (so every caster over the receivers is inside the warped frustum) */
+    sb_v3 blo = {1e300, 1e300, 1e300}, bhi = {-1e300, -1e300, -1e300};
+    for (int i = 0; i < n; i++) {
+        sb_v3 q = sb_m4_point(lv, pts[i]);
+        blo = sb_v3_min(blo, q);
+        bhi = sb_v3_max(bhi, q);
+    }
+    sb_v3 slo = {1e300, 1e300, 1e300}, shi = {-1e300, -1e300, -1e300};
+    for (int k = 0; k < 8; k++) {
+        sb_v3 q = sb_m4_point(lv, sb_v3_make(k & 1 ? s->bounds.hi.x : s->bounds.lo.x, k & 2 ? s->bounds.hi.y : s->bounds.lo.y,
+                                             k & 4 ? s->bounds.hi.z : s->bounds.lo.z));
+        slo = sb_v3_min(slo, q);
+        shi = sb_v3_max(shi, q);
+    }
+    blo = sb_v3_max(blo, slo);
+    bhi = sb_v3_min(bhi, shi);
+    if (blo.x >= bhi.x || blo.y >= bhi.y) return; /* keep the uniform fit */
+    double zmax = shi.z + 1e-4 * (shi.z - slo.z), zmin = blo.z;
+    double d = bhi.y - blo.y;
+    double nopt = (zn + sqrt(zn * zf)) / sin_g;
+    nopt = fmax(nopt, 1e-4 * d);
+    /* the warp's centre: below the body along y, at the camera's x */
+    sb_v3 eye_l = sb_m4_point(lv, eye);
+    double cx = fmin(fmax(eye_l.x, blo.x), bhi.x), cy = blo.y - nopt;
+    double nn = nopt, ff = nopt + d;
+    sb_m4 t = sb_m4_translate(sb_v3_make(-cx, -cy, 0));
+    sb_m4 p = {{0}};
+    /* x' = x, y' = (f+n)/(f-n) y - 2fn/(f-n), z' = z, w = y: a perspective along +y */
+    p.m[0] = 1;
+    p.m[5] = (ff + nn) / (ff - nn);
+    p.m[13] = -2 * ff * nn / (ff - nn);
+    p.m[10] = 1;
+    p.m[7] = 1;
+    sb_m4 warp = sb_m4_mul(p, sb_m4_mul(t, lv));
+    sb_v3 wlo = {1e300, 1e300, 1e300}, whi = {-1e300, -1e300, -1e300};
+    for (int k = 0; k < 8; k++) {
+        sb_v3 q = sb_v3_make(k & 1 ? bhi.x : blo.x, k & 2 ? bhi.y : blo.y, k & 4 ? zmax : zmin);
+        /* back to world to warp: invert lv (orthonormal) */
+        sb_m4 inv;
+        sb_m4_invert(lv, &inv);
+        sb_v3 w = sb_m4_point(warp, sb_m4_point(inv, q));
+        wlo = sb_v3_min(wlo, w);
+        whi = sb_v3_max(whi, w);
+    }
+    if (!(whi.x > wlo.x && whi.y > wlo.y && whi.z > wlo.z)) return;
+    /* ortho fit of the warped body: z toward the light is +z, so near = -zmax */
+    sb_m4 o = sb_m4_ortho(wlo.x, whi.x, wlo.y, whi.y, -whi.z, -wlo.z);
+    sb_m4 vp = sb_m4_mul(o, warp);
+    if (!sb_m4_finite(vp)) return;
+    out->view = lv;
+    out->proj = sb_m4_mul(o, sb_m4_mul(p, t));
+    out->view_proj = vp;
+    sb_frustum_planes(vp, out->planes);
+    sb_m4 bias = sb_m4_identity();
+    bias.m[0] = bias.m[5] = bias.m[10] = 0.5;
+    bias.m[12] = bias.m[13] = bias.m[14] = 0.5;
+    out->shadow_mat = sb_m4_mul(bias, vp);
+    /* texel and depth scales for bias: the body's extent spread over the map (an average) */
+    out->texel_world = fmax(bhi.x - blo.x, d) / res;
+    out->zn = -zmax;
+    out->zf = -zmin;
+    out->warped = true;
+    out->n_opt = nopt;
+}

@@ -11,6 +11,8 @@ typedef struct sb_light_fit {
     double l, r, b, t, zn, zf;       /* light-space box: x/y window, near/far distance */
     double texel_world;              /* world size of one shadow texel */
     bool empty;                      /* no receiver inside the scene */
+    bool warped;                     /* a LiSPSM perspective warp is in the matrices */
+    double n_opt;                    /* LiSPSM: distance of the warp's centre to the body */
 } sb_light_fit;
 
 /* Light view looking along -sun from the origin, with a stable basis. */
@@ -21,6 +23,13 @@ void sb_frustum_corners(const sb_camera *cam, sb_v3 origin, double znear, double
  * extends it toward the light to the farthest caster overlapping its x/y
  * window (BVH query), and sets the far plane at the receivers. */
 void sb_light_fit_points(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int n, int res, sb_light_fit *out);
+/* LiSPSM (Wimmer et al. 2004): a perspective warp in light space along the
+ * view direction's projection, with n_opt = (zn + sqrt(zn zf)) / sin(gamma)
+ * (gamma: angle between view and light directions); below `min_gamma_deg`
+ * it falls back to the uniform fit. pts: the slice's 8 corners; eye and
+ * forward: the camera (origin-relative). */
+void sb_light_fit_lispsm(const sb_scene *s, sb_v3 sun, sb_v3 eye, sb_v3 forward, double zn, double zf,
+                         const sb_v3 *pts, int n, int res, double min_gamma_deg, sb_light_fit *out);
 /* Stable variant: a bounding sphere of the points (rotation-invariant size)
  * whose light-space window is snapped to whole texels (no shimmer). */
 void sb_light_fit_stable(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int n, int res, sb_light_fit *out);

@@ -103,6 +103,8 @@ static bool sdsm_create(void *state, sb_gpu *gpu, const sb_params *p, sb_err *er
     s->gpu = sb_param_choice(p, "splits") == 0;
     s->latency = (int)sb_param_num(p, "latency");
     s->guard = sb_param_num(p, "guard");
+    if (s->gpu && sb_param_choice(p, "warp") != 0)
+        return sb_fail(err, "sdsm:warp=lispsm needs splits=cpu (the GPU fits are not warped)");
     if (s->tight && !s->gpu)
         return sb_fail(err, "sdsm:tight=on needs splits=gpu (the sample bounds depend on this frame's partitions)");
     if (!sb_csm_create(&s->csm, gpu, p, "sdsm", err)) return false;

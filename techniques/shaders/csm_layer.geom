@@ -11,11 +11,11 @@ void main() {
         vec4 p0 = sb_light_vp[c] * vec4(g_pos[0], 1.0);
         vec4 p1 = sb_light_vp[c] * vec4(g_pos[1], 1.0);
         vec4 p2 = sb_light_vp[c] * vec4(g_pos[2], 1.0);
-        // orthographic: w = 1; skip triangles entirely outside one side of the map
-        if (p0.x > 1.0 && p1.x > 1.0 && p2.x > 1.0) continue;
-        if (p0.x < -1.0 && p1.x < -1.0 && p2.x < -1.0) continue;
-        if (p0.y > 1.0 && p1.y > 1.0 && p2.y > 1.0) continue;
-        if (p0.y < -1.0 && p1.y < -1.0 && p2.y < -1.0) continue;
+        // skip triangles entirely outside one side of the map (w > 0: ortho, or a warp in front of its centre)
+        if (p0.x > p0.w && p1.x > p1.w && p2.x > p2.w) continue;
+        if (p0.x < -p0.w && p1.x < -p1.w && p2.x < -p2.w) continue;
+        if (p0.y > p0.w && p1.y > p1.w && p2.y > p2.w) continue;
+        if (p0.y < -p0.w && p1.y < -p1.w && p2.y < -p2.w) continue;
         gl_Layer = c; gl_Position = p0; EmitVertex();
         gl_Layer = c; gl_Position = p1; EmitVertex();
         gl_Layer = c; gl_Position = p2; EmitVertex();

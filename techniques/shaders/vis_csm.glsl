@@ -21,13 +21,32 @@ float sb_tap(vec3 c, float layer, vec2 off) {
     return texture(u_shadow, vec4(c.xy + off * u_texel, layer, c.z));
 }
 
+vec2 sb_map_uv(int k, vec3 p) {
+    vec4 h = sb_shadow_mat[k] * vec4(p, 1.0);
+    return h.xy / h.w;
+}
+
 float sb_lookup(int k, vec3 p, vec3 n) {
     float texel = sb_cascade[k].z;
+    bool warped = sb_flags[k].y > 0.5;
+    if (warped) {
+        // a warped map's texels differ across it: measure the local texel size (world units)
+        // across the light direction, so bias and normal offset scale with it (Novosibirsk fix (d))
+        vec3 t1 = normalize(cross(u_light, abs(u_light.y) < 0.99 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0)));
+        vec3 t2 = cross(u_light, t1);
+        vec2 uv0 = sb_map_uv(k, p);
+        float d1 = length(sb_map_uv(k, p + t1 * texel) - uv0), d2 = length(sb_map_uv(k, p + t2 * texel) - uv0);
+        float texels_per_unit = max(d1, d2) / u_texel.x / texel;
+        texel = 1.0 / max(texels_per_unit, 1e-20);
+    }
     float cosl = clamp(dot(n, u_light), -1.0, 1.0);
     vec3 q = p + n * (u_normal * texel * sqrt(1.0 - cosl * cosl));
-    vec3 c = (sb_shadow_mat[k] * vec4(q, 1.0)).xyz;
+    // a warped map's depth is not linear in distance: bias in world space instead (toward the light)
+    if (warped) q += u_light * (u_bias * texel);
+    vec4 h = sb_shadow_mat[k] * vec4(q, 1.0);   // projective for warped (LiSPSM) maps
+    vec3 c = h.xyz / h.w;
     if (c.x < 0.0 || c.x > 1.0 || c.y < 0.0 || c.y > 1.0 || c.z > 1.0) return 1.0;
-    c.z -= u_bias * texel / sb_cascade[k].w;
+    if (!warped) c.z -= u_bias * texel / sb_cascade[k].w;
     float layer = float(k);
 #if SB_FILTER == 0 || SB_FILTER == 1
     return sb_tap(c, layer, vec2(0.0));
@@ -70,7 +89,8 @@ int sb_select(vec3 p, float view_z) {
 #else
     for (int k = 0; k < n; k++) {
         if (sb_flags[k].x < 0.5) continue;
-        vec3 c = (sb_shadow_mat[k] * vec4(p, 1.0)).xyz;
+        vec4 h = sb_shadow_mat[k] * vec4(p, 1.0);
+        vec3 c = h.xyz / h.w;
         vec2 m = 2.0 * u_texel;   // keep filter taps inside the map
         if (all(greaterThanEqual(c.xy, m)) && all(lessThanEqual(c.xy, 1.0 - m)) && c.z <= 1.0 && c.z >= 0.0) return k;
     }
@@ -81,7 +101,8 @@ int sb_select(vec3 p, float view_z) {
 float sb_visibility(vec3 p, vec3 n, float view_z) {
     int k = sb_select(p, view_z);
     // resolution: texels of the selected map per screen pixel (derivatives in uniform control flow)
-    vec2 uv = (sb_shadow_mat[max(k, 0)] * vec4(p, 1.0)).xy / u_texel;
+    vec4 h = sb_shadow_mat[max(k, 0)] * vec4(p, 1.0);
+    vec2 uv = h.xy / h.w / u_texel;
     sb_out_texel_px = k < 0 ? -1.0 : max(length(dFdx(uv)), length(dFdy(uv)));
     sb_out_cascade = float(k);
     if (k < 0) return 1.0;

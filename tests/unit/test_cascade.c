@@ -108,9 +108,12 @@ static bool in_box(sb_v3 p, const sb_aabb *b) {
     return p.x >= b->lo.x && p.y >= b->lo.y && p.z >= b->lo.z && p.x <= b->hi.x && p.y <= b->hi.y && p.z <= b->hi.z;
 }
 
-static void coverage(const char *scene, int stable) {
+static void coverage(const char *scene, int stable, int warp) {
     rig r;
     rig_open(&r, scene, stable);
+    r.csm.warp = warp;
+    r.csm.min_angle = 5;
+    int warped = 0;
     srand(5);
     long samples = 0;
     for (int trial = 0; trial < 40; trial++) {
@@ -118,7 +121,11 @@ static void coverage(const char *scene, int stable) {
         const sb_camera *cam = &r.frame.cam;
         double splits[9];
         sb_split_distances(0.5, 4, cam->znear, cam->zfar, splits);
-        for (int k = 0; k < 4; k++) sb_csm_fit_slice(&r.csm, &r.frame, splits[k], splits[k + 1], &r.csm.fit[k]);
+        for (int k = 0; k < 4; k++) {
+            sb_csm_fit_slice(&r.csm, &r.frame, splits[k], splits[k + 1], &r.csm.fit[k]);
+            assert_true(sb_m4_finite(r.csm.fit[k].shadow_mat));
+            warped += r.csm.fit[k].warped;
+        }
         double ty = tan(cam->fov_deg * SB_PI / 360), tx = ty * cam->aspect;
         sb_v3 eye = sb_v3_sub(cam->pos, r.scene.origin);
         for (int i = 0; i < 3000; i++) {
@@ -134,14 +141,15 @@ static void coverage(const char *scene, int stable) {
             while (k < 3 && z > splits[k + 1]) k++;
             sb_v3 c = sb_m4_point(r.csm.fit[k].shadow_mat, p);
             if (!(c.x >= 0 && c.x <= 1 && c.y >= 0 && c.y <= 1 && c.z >= 0 && c.z <= 1))
-                fail_msg("%s stable=%d: sample at view depth %g outside cascade %d: (%g, %g, %g)", scene, stable, z, k,
-                         c.x, c.y, c.z);
+                fail_msg("%s stable=%d warp=%d: sample at view depth %g outside cascade %d: (%g, %g, %g)", scene, stable,
+                         warp, z, k, c.x, c.y, c.z);
             samples++;
         }
     }
-    print_message("%s stable=%d: %ld visible samples inside the light frustum of their cascade\n", scene, stable,
-                  samples);
+    print_message("%s stable=%d warp=%d: %ld visible samples inside the light frustum of their cascade (%d warped fits)\n",
+                  scene, stable, warp, samples, warped);
     assert_true(samples > 1000);
+    if (warp) assert_true(warped > 0);
     rig_close(&r);
 }
 
@@ -149,8 +157,9 @@ static void test_coverage(void **st) {
     (void)st;
     const char *scenes[] = {"desert", "towers", "overhangs"};
     for (int i = 0; i < 3; i++) {
-        coverage(scenes[i], 0);
-        coverage(scenes[i], 1);
+        coverage(scenes[i], 0, 0);
+        coverage(scenes[i], 1, 0);
+        coverage(scenes[i], 0, 1);   /* LiSPSM: the warped (projective) maps cover their slices too */
     }
 }
 
@@ -213,12 +222,41 @@ static void test_culling_conservative_and_tight(void **st) {
     culling("desert");
 }
 
+static void test_lispsm_fallback(void **st) {
+    (void)st;
+    sb_scene s;
+    sb_err err;
+    assert_true(sb_scene_load(&s, "towers", &err));
+    sb_v3 sun = sb_sun_dir(200, 55);
+    const double angles[] = {0, 0.5, 4.9, 5.1, 30, 90, 150, 179.9, 180};
+    for (size_t i = 0; i < SB_COUNT(angles); i++) {
+        /* a view direction at `angle` from the direction toward the sun */
+        sb_v3 right, up;
+        sb_basis(sun, &right, &up);
+        double a = angles[i] * SB_PI / 180;
+        sb_v3 fwd = sb_v3_add(sb_v3_scale(sun, cos(a)), sb_v3_scale(up, sin(a)));
+        sb_v3 pts[8];
+        for (int k = 0; k < 8; k++)
+            pts[k] = sb_v3_make(k & 1 ? 20 : -20, k & 2 ? 10 : -5, k & 4 ? 30 : -30);
+        sb_light_fit fit;
+        sb_light_fit_lispsm(&s, sun, sb_v3_make(0, 5, 0), fwd, 0.5, 200, pts, 8, 1024, 5, &fit);
+        double gamma = angles[i] > 90 ? 180 - angles[i] : angles[i];
+        print_message("view at %5.1f deg from the light: %s (n_opt %.3g)\n", angles[i], fit.warped ? "warped" : "uniform",
+                      fit.n_opt);
+        assert_true(sb_m4_finite(fit.shadow_mat) && sb_m4_finite(fit.view_proj));
+        assert_int_equal(fit.warped, gamma > 5);   /* the fallback engages below 5 degrees, in both directions */
+        for (int e = 0; e < 16; e++) assert_false(isnan(fit.shadow_mat.m[e]));
+    }
+    sb_scene_free(&s);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_split_schemes),
         cmocka_unit_test(test_sdsm_partitions),
         cmocka_unit_test(test_coverage),
         cmocka_unit_test(test_culling_conservative_and_tight),
+        cmocka_unit_test(test_lispsm_fallback),
     };
     return cmocka_run_group_tests_name("cascade", tests, NULL, NULL);
 }
