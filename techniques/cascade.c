@@ -29,6 +29,10 @@ bool sb_csm_create(sb_csm *c, sb_gpu *g, const sb_params *p, const char *name, s
     c->stable = sb_param_choice(p, "stable") == 1;
     c->warp = has_param(p, "warp") ? sb_param_choice(p, "warp") : 0;
     c->min_angle = has_param(p, "min_angle") ? sb_param_num(p, "min_angle") : 5;
+    c->format = sb_param_choice(p, "format");
+    c->blur = (int)sb_param_num(p, "blur");
+    c->bleed = sb_param_num(p, "bleed");
+    c->exponent = sb_param_num(p, "exponent");
     if (c->warp && c->stable)
         return sb_fail(err, "%s: stable=on cannot be combined with a perspective warp (a warped map follows the camera)",
                        name);
@@ -61,10 +65,25 @@ bool sb_csm_create(sb_csm *c, sb_gpu *g, const sb_params *p, const char *name, s
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+    if (c->format) { /* filtered formats: moments beside the depth the rasterizer tests with */
+        GLuint m[2];
+        glGenTextures(2, m);
+        c->moments = m[0];
+        c->moments_tmp = m[1];
+        for (int i = 0; i < 2; i++) {
+            glBindTexture(GL_TEXTURE_2D_ARRAY, m[i]);
+            glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_RGBA32F, c->res, c->res, c->count);
+            glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+            glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+            glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+            glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+        }
+    }
     glGenFramebuffers(1, &c->fbo_all);
     glBindFramebuffer(GL_FRAMEBUFFER, c->fbo_all);
     glFramebufferTexture(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, c->tex, 0);
-    glDrawBuffer(GL_NONE);
+    if (c->format) glFramebufferTexture(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, c->moments, 0);
+    glDrawBuffer(c->format ? GL_COLOR_ATTACHMENT0 : GL_NONE);
     glReadBuffer(GL_NONE);
     if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
         return sb_fail(err, "%s:res=%d:cascades=%d: layered shadow framebuffer is incomplete", name, c->res, c->count);
@@ -72,17 +91,20 @@ bool sb_csm_create(sb_csm *c, sb_gpu *g, const sb_params *p, const char *name, s
     for (int k = 0; k < c->count; k++) {
         glBindFramebuffer(GL_FRAMEBUFFER, c->fbo_layer[k]);
         glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, c->tex, 0, k);
-        glDrawBuffer(GL_NONE);
+        if (c->format) glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, c->moments, 0, k);
+        glDrawBuffer(c->format ? GL_COLOR_ATTACHMENT0 : GL_NONE);
         glReadBuffer(GL_NONE);
     }
     glGenBuffers(1, &c->block);
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, c->block);
     glBufferData(GL_SHADER_STORAGE_BUFFER, sizeof(sb_cascade_block), NULL, GL_DYNAMIC_DRAW);
 
-    const char *fs_depth[] = {sb_shader_depth_frag};
+    const char *fs_depth[] = {c->format ? sb_shader_moments_frag : sb_shader_depth_frag};
+    char fmt_define[64];
+    snprintf(fmt_define, sizeof fmt_define, "#define SB_FORMAT %d\n", c->format);
     const char *vs_cascade[] = {sb_shader_csm_block_glsl, sb_shader_csm_depth_vert};
     const sb_shader_src per[] = {{GL_VERTEX_SHADER, vs_cascade, 2}, {GL_FRAGMENT_SHADER, fs_depth, 1}};
-    c->prog_cascade = sb_gpu_link("cascade depth", NULL, per, 2, err);
+    c->prog_cascade = sb_gpu_link("cascade depth", fmt_define, per, 2, err);
     if (!c->prog_cascade) return false;
     c->u_cascade = glGetUniformLocation(c->prog_cascade, "u_cascade");
     if (c->layered == SB_LAYERED_GS) {
@@ -90,19 +112,32 @@ bool sb_csm_create(sb_csm *c, sb_gpu *g, const sb_params *p, const char *name, s
         const char *gs[] = {sb_shader_csm_block_glsl, sb_shader_csm_layer_geom};
         const sb_shader_src st[] = {{GL_VERTEX_SHADER, vs, 1}, {GL_GEOMETRY_SHADER, gs, 2},
                                     {GL_FRAGMENT_SHADER, fs_depth, 1}};
-        c->prog_gs = sb_gpu_link("layered (geometry shader)", NULL, st, 3, err);
+        c->prog_gs = sb_gpu_link("layered (geometry shader)", fmt_define, st, 3, err);
         if (!c->prog_gs) return false;
         c->u_mask_gs = glGetUniformLocation(c->prog_gs, "u_mask");
     } else if (c->layered == SB_LAYERED_VS) {
         const char *vs[] = {sb_shader_csm_block_glsl, sb_shader_csm_layer_vs_vert};
         const sb_shader_src st[] = {{GL_VERTEX_SHADER, vs, 2}, {GL_FRAGMENT_SHADER, fs_depth, 1}};
-        c->prog_vs = sb_gpu_link("layered (vertex shader)", "#extension GL_ARB_shader_viewport_layer_array : require\n",
-                                 st, 2, err);
+        char defs[160];
+        snprintf(defs, sizeof defs, "#extension GL_ARB_shader_viewport_layer_array : require\n%s", fmt_define);
+        c->prog_vs = sb_gpu_link("layered (vertex shader)", defs, st, 2, err);
         if (!c->prog_vs) return false;
         c->u_mask_vs = glGetUniformLocation(c->prog_vs, "u_mask");
     }
+    GLuint progs3[3] = {c->prog_cascade, c->prog_gs, c->prog_vs};
+    for (int i = 0; i < 3; i++) c->d_exponent[i] = progs3[i] ? glGetUniformLocation(progs3[i], "u_exponent") : -1;
+    if (c->format && c->blur > 0) {
+        const char *cs[] = {sb_shader_blur_comp};
+        const sb_shader_src st[] = {{GL_COMPUTE_SHADER, cs, 1}};
+        c->blur_prog = sb_gpu_link("moments blur", NULL, st, 1, err);
+        if (!c->blur_prog) return false;
+        c->b_dir = glGetUniformLocation(c->blur_prog, "u_dir");
+        c->b_radius = glGetUniformLocation(c->blur_prog, "u_radius");
+        c->b_layer = glGetUniformLocation(c->blur_prog, "u_layer");
+    }
     char defines[128];
-    snprintf(defines, sizeof defines, "#define SB_FILTER %d\n#define SB_SELECT %d\n", c->filter, c->select);
+    snprintf(defines, sizeof defines, "#define SB_FILTER %d\n#define SB_SELECT %d\n#define SB_FORMAT %d\n", c->filter,
+             c->select, c->format);
     char vis[16384];
     snprintf(vis, sizeof vis, "%s%s", sb_shader_csm_block_glsl, sb_shader_vis_csm_glsl);
     if (!sb_final_prog_create(&c->fp, name, vis, defines, err)) return false;
@@ -113,6 +148,9 @@ bool sb_csm_create(sb_csm *c, sb_gpu *g, const sb_params *p, const char *name, s
     c->u_light = glGetUniformLocation(c->fp.prog, "u_light");
     c->u_texel = glGetUniformLocation(c->fp.prog, "u_texel");
     c->u_depth_raw = glGetUniformLocation(c->fp.prog, "u_depth_raw");
+    c->u_moments = glGetUniformLocation(c->fp.prog, "u_moments");
+    c->u_bleed = glGetUniformLocation(c->fp.prog, "u_bleed");
+    c->u_exponent = glGetUniformLocation(c->fp.prog, "u_exponent");
     c->u_sun_tan = glGetUniformLocation(c->fp.prog, "u_sun_tan");
     glGenSamplers(1, &c->raw_sampler);
     glSamplerParameteri(c->raw_sampler, GL_TEXTURE_COMPARE_MODE, GL_NONE);
@@ -133,6 +171,9 @@ void sb_csm_destroy(sb_csm *c) {
     if (c->tex) glDeleteTextures(1, &c->tex);
     if (c->block) glDeleteBuffers(1, &c->block);
     if (c->raw_sampler) glDeleteSamplers(1, &c->raw_sampler);
+    if (c->blur_prog) glDeleteProgram(c->blur_prog);
+    GLuint m[2] = {c->moments, c->moments_tmp};
+    if (c->moments) glDeleteTextures(2, m);
     free(c->mask);
     memset(c, 0, sizeof *c);
 }
@@ -231,6 +272,11 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
     glDepthMask(GL_TRUE);
+    if (c->format) { /* moments of the far plane: nothing occludes */
+        const float z = 1.0f, e = (float)exp(c->exponent);
+        const float far[4] = {c->format == 2 ? e : z, z, z, z};
+        glClearBufferfv(GL_COLOR, 0, far);
+    }
     glClear(GL_DEPTH_BUFFER_BIT);   /* every layer */
     glEnable(GL_DEPTH_CLAMP);
     if (c->slope > 0) {
@@ -238,6 +284,12 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
         glPolygonOffset((float)(c->slope * g->test_bias_sign), 0.0f);
     }
     glBindVertexArray(g->vao);
+    GLuint progs3[3] = {c->prog_cascade, c->prog_gs, c->prog_vs};
+    for (int i = 0; i < 3; i++)
+        if (progs3[i] && c->d_exponent[i] >= 0) {
+            glUseProgram(progs3[i]);
+            glUniform1f(c->d_exponent[i], (float)c->exponent);
+        }
     int rendered = 0;
     for (int k = 0; k < c->count; k++) rendered += c->active[k];
     f->counters.cascades_rendered = rendered;
@@ -264,6 +316,22 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
     }
     glDisable(GL_POLYGON_OFFSET_FILL);
     glDisable(GL_DEPTH_CLAMP);
+    if (c->format && c->blur > 0) { /* separable Gaussian per rendered layer: moments -> tmp -> moments */
+        glUseProgram(c->blur_prog);
+        glUniform1i(c->b_radius, c->blur);
+        for (int k = 0; k < c->count; k++) {
+            if (!c->active[k]) continue;
+            glUniform1i(c->b_layer, k);
+            for (int pass = 0; pass < 2; pass++) {
+                glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
+                glBindImageTexture(0, pass ? c->moments_tmp : c->moments, 0, GL_TRUE, 0, GL_READ_ONLY, GL_RGBA32F);
+                glBindImageTexture(1, pass ? c->moments : c->moments_tmp, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+                glUniform2i(c->b_dir, pass ? 0 : 1, pass ? 1 : 0);
+                glDispatchCompute((GLuint)(c->res + 15) / 16, (GLuint)(c->res + 15) / 16, 1);
+            }
+        }
+        glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
+    }
 }
 
 void sb_csm_frame(sb_csm *c, sb_frame *f, const double *splits) {
@@ -295,6 +363,13 @@ void sb_csm_final(sb_csm *c, sb_frame *f, bool reuse_depth) {
     glBindSampler(2, c->raw_sampler);
     glUniform1i(c->u_depth_raw, 2);
     glUniform1f(c->u_sun_tan, (float)tan(c->sun_size * SB_PI / 180));
+    if (c->format) {
+        glActiveTexture(GL_TEXTURE3);
+        glBindTexture(GL_TEXTURE_2D_ARRAY, c->moments);
+        glUniform1i(c->u_moments, 3);
+        glUniform1f(c->u_bleed, (float)c->bleed);
+        glUniform1f(c->u_exponent, (float)c->exponent);
+    }
     glActiveTexture(GL_TEXTURE0);
     sb_final_pass(f, &c->fp, reuse_depth);
     glBindSampler(2, 0);

@@ -16,7 +16,11 @@
     {"normal", SB_PARAM_FLOAT, "1", 0, 100, NULL, "normal offset, in shadow texels"},                          \
     {"filter", SB_PARAM_ENUM, "hw", 0, 0, "none|hw|pcf3|pcf5|poisson16|pcss", "shadow filter"},                \
     {"sun_size", SB_PARAM_FLOAT, "0.53", 0, 10, NULL, "pcss: angular diameter of the sun, degrees"},          \
-    {"stable", SB_PARAM_ENUM, "off", 0, 0, "off|on", "sphere fit and texel snapping: no shimmer when moving"}
+    {"stable", SB_PARAM_ENUM, "off", 0, 0, "off|on", "sphere fit and texel snapping: no shimmer when moving"},  \
+    {"format", SB_PARAM_ENUM, "depth", 0, 0, "depth|vsm|esm|msm", "what the map stores: depth, or filterable moments"}, \
+    {"blur", SB_PARAM_INT, "2", 0, 16, NULL, "vsm/esm/msm: Gaussian blur radius of the moments, texels"},      \
+    {"bleed", SB_PARAM_FLOAT, "0.2", 0, 0.95, NULL, "vsm/msm: light-bleeding reduction"},                      \
+    {"exponent", SB_PARAM_FLOAT, "80", 1, 85, NULL, "esm: exponent c of exp(c z)"}
 
 /* Parameters of the cascaded techniques. */
 #define SB_CASCADE_PARAMS                                                                                      \
@@ -47,6 +51,12 @@ typedef struct sb_cascade_block {
 typedef struct sb_csm {
     sb_gpu *gpu;
     int res, count, filter, select, layered, stable, warp;
+    int format, blur;                     /* 0 depth, 1 vsm, 2 esm, 3 msm; blur radius in texels */
+    double bleed, exponent;
+    GLuint moments, moments_tmp;          /* RGBA32F arrays (filtered formats) */
+    GLuint blur_prog;
+    GLint b_dir, b_radius, b_layer;
+    GLint u_moments, u_bleed, u_exponent, d_exponent[3];
     double min_angle;                     /* LiSPSM falls back to uniform below this view/light angle */
     double bias, slope, normal, blend, sun_size;
     GLuint raw_sampler;                   /* the map without comparison, for PCSS's blocker search */

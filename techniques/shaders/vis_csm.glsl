@@ -21,6 +21,52 @@ float sb_tap(vec3 c, float layer, vec2 off) {
     return texture(u_shadow, vec4(c.xy + off * u_texel, layer, c.z));
 }
 
+// Filtered formats (SB_FORMAT 1 vsm, 2 esm, 3 msm): visibility from the blurred moments.
+uniform sampler2DArray u_moments;
+uniform float u_bleed;      // light-bleeding reduction (vsm, msm)
+uniform float u_exponent;   // esm
+
+float sb_reduce_bleed(float p) { return clamp((p - u_bleed) / (1.0 - u_bleed), 0.0, 1.0); }
+
+float sb_filtered(vec3 c, float layer) {
+    vec4 m = texture(u_moments, vec3(c.xy, layer));
+    float z = c.z;
+#if SB_FORMAT == 1
+    // Chebyshev's one-sided bound (Donnelly & Lauritzen 2006)
+    if (z <= m.x) return 1.0;
+    float var = max(m.y - m.x * m.x, 1e-7);
+    float d = z - m.x;
+    return sb_reduce_bleed(var / (var + d * d));
+#elif SB_FORMAT == 2
+    // exp(c (occluder - receiver)) (Annen et al. 2008)
+    return clamp(m.x * exp(-u_exponent * z), 0.0, 1.0);
+#else
+    // four moments, Hamburger bound (Peters & Klein 2015): a Cholesky solve of the 3x3
+    // Hankel system, the roots of the resulting quadratic, and the bound from them
+    vec4 b = mix(m, vec4(0.5, 0.5, 0.5, 0.5), 3e-5);
+    float l32d22 = -b.x * b.y + b.z;
+    float d22 = -b.x * b.x + b.y;
+    float var2 = -b.y * b.y + b.w;
+    float d33d22 = var2 * d22 - l32d22 * l32d22;
+    float inv_d22 = 1.0 / d22;
+    float l32 = l32d22 * inv_d22;
+    vec3 q = vec3(1.0, z, z * z);
+    q.y -= b.x;
+    q.z -= b.y + l32 * q.y;
+    q.y *= inv_d22;
+    q.z *= d22 / d33d22;
+    q.y -= l32 * q.z;
+    q.x -= dot(q.yz, b.xy);
+    float pp = q.y / q.z, qq = q.x / q.z;
+    float r = sqrt(max(pp * pp * 0.25 - qq, 0.0));
+    float z2 = -pp * 0.5 - r, z3 = -pp * 0.5 + r;
+    vec4 sw = z3 < z ? vec4(z2, z, 1.0, 1.0) : (z2 < z ? vec4(z, z2, 0.0, 1.0) : vec4(0.0));
+    float quotient = (sw.x * z3 - b.x * (sw.x + z3) + b.y) / ((z3 - sw.y) * (z - z2));
+    float shadow = clamp(sw.z + sw.w * quotient, 0.0, 1.0);
+    return sb_reduce_bleed(1.0 - shadow);
+#endif
+}
+
 vec2 sb_map_uv(int k, vec3 p) {
     vec4 h = sb_shadow_mat[k] * vec4(p, 1.0);
     return h.xy / h.w;
@@ -48,7 +94,9 @@ float sb_lookup(int k, vec3 p, vec3 n) {
     if (c.x < 0.0 || c.x > 1.0 || c.y < 0.0 || c.y > 1.0 || c.z > 1.0) return 1.0;
     if (!warped) c.z -= u_bias * texel / sb_cascade[k].w;
     float layer = float(k);
-#if SB_FILTER == 0 || SB_FILTER == 1
+#if SB_FORMAT != 0
+    return sb_filtered(c, layer);
+#elif SB_FILTER == 0 || SB_FILTER == 1
     return sb_tap(c, layer, vec2(0.0));
 #elif SB_FILTER == 2 || SB_FILTER == 3
     const int r = SB_FILTER == 2 ? 1 : 2;

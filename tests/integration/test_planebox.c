@@ -102,6 +102,35 @@ static void test_pcss_converges_to_hard(void **st) {
     sb_session_close(&s);
 }
 
+static void test_filtered_formats_converge(void **st) {
+    (void)st;
+    sb_session s;
+    sb_err err;
+    assert_true(pb_open(&s, SB_BACKEND_EGL, 640, 360, &err));
+    sb_error_metrics hard;
+    assert_true(eval_frame(&s, "sm:res=1024:filter=none", 0, 1, &hard, NULL, NULL, &err));
+    const char *formats[] = {"vsm", "esm", "msm"};
+    for (int i = 0; i < 3; i++) {
+        sb_error_metrics m[3];
+        const int blur[3] = {0, 2, 6};
+        for (int b = 0; b < 3; b++) {
+            char spec[96];
+            snprintf(spec, sizeof spec, "sm:res=1024:format=%s:blur=%d:bleed=0", formats[i], blur[b]);
+            bool ok = eval_frame(&s, spec, 0, 1, &m[b], NULL, NULL, &err);
+            if (!ok) print_error("%s\n", err.msg);
+            assert_true(ok);
+        }
+        print_message("%s: vis_mae blur 0 %.5f, 2 %.5f, 6 %.5f (hard %.5f); err_rate %.5f %.5f %.5f (hard %.5f)\n",
+                      formats[i], m[0].vis_mae, m[1].vis_mae, m[2].vis_mae, hard.vis_mae, m[0].err_rate, m[1].err_rate,
+                      m[2].err_rate, hard.err_rate);
+        /* no filter width: the hard result; wider filters: softer edges */
+        assert_true(m[0].err_rate < hard.err_rate + 0.003);
+        assert_true(fabs(m[0].vis_mae - hard.vis_mae) < 0.004);
+        assert_true(m[2].vis_mae > m[0].vis_mae);
+    }
+    sb_session_close(&s);
+}
+
 static void test_backends_agree(void **st) {
     (void)st;
     const int w = 320, h = 180;
@@ -132,6 +161,7 @@ int main(void) {
         cmocka_unit_test(test_backends_agree),
         cmocka_unit_test(test_cascaded_match_analytic),
         cmocka_unit_test(test_pcss_converges_to_hard),
+        cmocka_unit_test(test_filtered_formats_converge),
     };
     return cmocka_run_group_tests_name("planebox", tests, NULL, NULL);
 }
