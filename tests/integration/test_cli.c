@@ -193,7 +193,7 @@ static void test_bad_index(void **st) {
 
 static void test_unknown_parameter(void **st) {
     (void)st;
-    expect_fail("sm: unknown parameter 'rez' (valid: res, depth, bias, slope, normal, filter, sun_size, stable)",
+    expect_fail("sm: unknown parameter 'rez' (valid: res, depth, bias, slope, normal, filter, sun_size, stable, format, blur, bleed, exponent)",
                 "%s run plane-box plane-box sm:rez=2 --out %s/x", test_binary(), g_tmp);
     expect_fail("unknown technique 'smm'", "%s run plane-box plane-box smm --out %s/x", test_binary(), g_tmp);
     /* rejected before anything is written */

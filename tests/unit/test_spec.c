@@ -18,9 +18,9 @@ static void test_grid(void **st) {
     assert_int_equal(n, 6);
     char c[512];
     sb_params_canonical(&runs[0].params, c, sizeof c);
-    assert_string_equal(c, "res=512:depth=32f:bias=1:slope=2:normal=1:filter=none:sun_size=0.53:stable=off");
+    assert_string_equal(c, "res=512:depth=32f:bias=1:slope=2:normal=1:filter=none:sun_size=0.53:stable=off:format=depth:blur=2:bleed=0.2:exponent=80");
     sb_params_canonical(&runs[5].params, c, sizeof c);
-    assert_string_equal(c, "res=2048:depth=32f:bias=1:slope=2:normal=1:filter=pcf3:sun_size=0.53:stable=off");
+    assert_string_equal(c, "res=2048:depth=32f:bias=1:slope=2:normal=1:filter=pcf3:sun_size=0.53:stable=off:format=depth:blur=2:bleed=0.2:exponent=80");
     assert_int_equal(sb_param_choice(&runs[5].params, "filter"), 2);
     assert_true(sb_param_num(&runs[1].params, "res") == 512);
     assert_true(sb_spec_expand("none", NULL, &runs, &n, &err));
@@ -43,7 +43,7 @@ static void expect_error(const char *spec, const char *needle) {
 static void test_errors(void **st) {
     (void)st;
     expect_error("nosuch:res=1", "unknown technique 'nosuch'");
-    expect_error("sm:rez=1024", "unknown parameter 'rez' (valid: res, depth, bias, slope, normal, filter, sun_size, stable)");
+    expect_error("sm:rez=1024", "unknown parameter 'rez' (valid: res, depth, bias, slope, normal, filter, sun_size, stable, format, blur, bleed, exponent)");
     expect_error("sm:res=100000", "out of range");
     expect_error("sm:res=10.5", "expected an integer");
     expect_error("sm:filter=gauss", "expected one of none|hw|pcf3|pcf5|poisson16|pcss");
