@@ -88,7 +88,7 @@ bool sb_final_prog_create(sb_final_prog *fp, const char *label, const char *vis_
     if (!fp->prog) return false;
     fp->u_view = glGetUniformLocation(fp->prog, "u_view");
     fp->u_proj = glGetUniformLocation(fp->prog, "u_proj");
-    fp->u_sun = glGetUniformLocation(fp->prog, "u_sun");
+    fp->u_light = glGetUniformLocation(fp->prog, "u_shade_light");
     fp->u_color = glGetUniformLocation(fp->prog, "u_color");
     return true;
 }
@@ -205,6 +205,10 @@ void sb_frame_setup(sb_frame *f, sb_gpu *g, const sb_camera *cam) {
     f->proj = sb_m4_perspective(cam->fov_deg * SB_PI / 180, cam->aspect, cam->znear, cam->zfar);
     f->view_proj = sb_m4_mul(f->proj, f->view);
     sb_frustum_planes(f->view_proj, f->frustum);
+    g->shade_light[0] = g->sun.x;
+    g->shade_light[1] = g->sun.y;
+    g->shade_light[2] = g->sun.z;
+    g->shade_light[3] = 0;
 }
 
 void sb_stage_begin(sb_frame *f, sb_stage s) {
@@ -292,7 +296,8 @@ void sb_final_draw(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
     final_targets(g, reuse_depth);
     glUseProgram(fp->prog);
     set_camera_uniforms(f, fp->u_view, fp->u_proj);
-    glUniform3f(fp->u_sun, (float)g->sun.x, (float)g->sun.y, (float)g->sun.z);
+    glUniform4f(fp->u_light, (float)g->shade_light[0], (float)g->shade_light[1], (float)g->shade_light[2],
+                (float)g->shade_light[3]);
     glBindVertexArray(g->vao);
     uint32_t n = sb_bvh_collect(g->scene, (const double(*)[4])f->frustum, 6, g->scratch);
     for (uint32_t i = 0; i < n; i++) {

@@ -26,7 +26,7 @@ typedef struct sb_counters {
  * visibility function. */
 typedef struct sb_final_prog {
     GLuint prog;
-    GLint u_view, u_proj, u_sun, u_color;
+    GLint u_view, u_proj, u_light, u_color;
 } sb_final_prog;
 
 typedef struct sb_gpu {
@@ -34,6 +34,9 @@ typedef struct sb_gpu {
     const sb_context *ctx;
     int width, height;
     sb_v3 sun;                          /* unit vector toward the sun */
+    double shade_light[4];              /* the light the final pass shades and is evaluated against:
+                                           xyz toward the sun (w 0) or a point light's position (w 1);
+                                           the sun unless a technique sets it in its frame */
     GLuint vao, vbo, ibo;
     GLuint fbo, color_tex, vis_tex, depth_tex;
     GLuint pos_tex, aux_tex;            /* evaluation targets (position, normal + cascade) */

@@ -139,6 +139,10 @@ void sb_session_close(sb_session *s) {
 }
 
 const char *sb_skip_reason(const sb_session *s, const sb_technique *t) {
+    bool point = false;
+    for (uint32_t i = 0; i < s->scene.light_count; i++) point |= s->scene.lights[i].type != SB_LIGHT_DIRECTIONAL;
+    if ((t->needs & SB_NEEDS_SUN) && !s->scene.has_sun && point && !s->opts.sun_override)
+        return "the scene is lit by point lights only (no sun); --sun AZ,EL adds one";
     if ((t->needs & SB_NEEDS_PLANE) && s->scene.plane_count == 0)
         return "the scene has no large planar receiver";
     if (t->needs & SB_NEEDS_POINT_LIGHT) {
@@ -267,7 +271,7 @@ static bool evaluate(sb_session *s, sb_instance *in, const char *out_dir, const 
         sb_gpu_readback_eval(&s->gpu, pos, aux);
         sb_frame_rec *r = &recs[pf];
         sb_camera cam = sb_path_camera(&s->path, pf, n, (double)w / h, &s->scene);
-        sb_evaluate_frame(ref, s->gpu.sun, sb_v3_sub(cam.pos, s->scene.origin), w, h, pos, aux, vis, refvis, &r->err,
+        sb_evaluate_frame(ref, s->gpu.shade_light, sb_v3_sub(cam.pos, s->scene.origin), w, h, pos, aux, vis, refvis, &r->err,
                           s->opts.threads);
         if (s->opts.error_every > 0 && pf % s->opts.error_every == 0) {
             r->evaluated = true;

@@ -240,7 +240,7 @@ static void run_row(sb_session *s, const char *spec, int frames, row_result *r) 
             }
         }
         sb_error_metrics em;
-        sb_evaluate_frame(ref, s->gpu.sun, sb_v3_sub(f.cam.pos, s->scene.origin), w, h, pos, aux, vis, refv, &em, 2);
+        sb_evaluate_frame(ref, s->gpu.shade_light, sb_v3_sub(f.cam.pos, s->scene.origin), w, h, pos, aux, vis, refv, &em, 2);
         if (!isfinite(em.err_rate) || !isfinite(em.vis_mae)) fail(r, "error metric %s is not finite", "");
         err_sum += em.err_rate;
         if (cascades) { /* coverage: the cascade a sample used contains it */

@@ -11,7 +11,7 @@ static int cmp_double(const void *a, const void *b) {
     return x < y ? -1 : x > y ? 1 : 0;
 }
 
-void sb_evaluate_frame(const sb_reference *r, sb_v3 sun, sb_v3 eye, int w, int h, const float *pos,
+void sb_evaluate_frame(const sb_reference *r, const double light[4], sb_v3 eye, int w, int h, const float *pos,
                        const float *aux, const unsigned char *vis, unsigned char *ref_out, sb_error_metrics *out,
                        int threads) {
     memset(out, 0, sizeof *out);
@@ -24,7 +24,10 @@ void sb_evaluate_frame(const sb_reference *r, sb_v3 sun, sb_v3 eye, int w, int h
         if (ref_out) ref_out[i] = 128;
         double nl = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
         if (nl < 0.5) continue;                                   /* sky */
-        if (a[0] * sun.x + a[1] * sun.y + a[2] * sun.z <= 0) continue;   /* facing away from the light */
+        double L[3] = {light[0], light[1], light[2]};
+        if (light[3] > 0.5)
+            for (int k = 0; k < 3; k++) L[k] -= p[k];
+        if (a[0] * L[0] + a[1] * L[1] + a[2] * L[2] <= 0) continue;   /* facing away from the light */
         sb_ref_point *q = &pts[m];
         memcpy(q->p, p, sizeof q->p);
         memcpy(q->n, a, sizeof q->n);
@@ -33,7 +36,7 @@ void sb_evaluate_frame(const sb_reference *r, sb_v3 sun, sb_v3 eye, int w, int h
     }
     unsigned char *ref = malloc((size_t)(m > 0 ? m : 1));
     double t0 = sb_now_ms();
-    out->rays = sb_reference_visibility(r, sun, pts, m, ref, threads);
+    out->rays = sb_reference_visibility_light(r, light, pts, m, ref, threads);
     out->ray_ms = sb_now_ms() - t0;
     double *res_err = malloc(sizeof(double) * (size_t)(m > 0 ? m : 1));
     double *texel = malloc(sizeof(double) * (size_t)(m > 0 ? m : 1));

@@ -20,7 +20,8 @@ typedef struct sb_error_metrics {
 
 /* pos/aux: the evaluation targets (4 floats a pixel); vis: the technique's
  * visibility target; ref_out (optional, w*h): 255 lit, 0 shadowed, 128 not
- * evaluated. eye: camera position relative to the scene origin. */
-void sb_evaluate_frame(const sb_reference *r, sb_v3 sun, sb_v3 eye, int w, int h, const float *pos,
+ * evaluated. eye: camera position relative to the scene origin. light: as
+ * sb_reference_visibility_light (the technique's shaded light). */
+void sb_evaluate_frame(const sb_reference *r, const double light[4], sb_v3 eye, int w, int h, const float *pos,
                        const float *aux, const unsigned char *vis, unsigned char *ref_out, sb_error_metrics *out,
                        int threads);

@@ -54,6 +54,7 @@ float sb_ref_position_eps(const sb_reference *r, const float p[3], float dist) {
 typedef struct {
     const sb_reference *r;
     float sun[3];
+    bool point;                 /* sun holds a point light's position */
     const sb_ref_point *pts;
     unsigned char *vis;
     int first, count;
@@ -66,15 +67,26 @@ static void *work(void *arg) {
     for (int i = j->first; i < j->first + j->count; i++) {
         const sb_ref_point *q = &j->pts[i];
         float eps = q->eps;
+        float L[3] = {j->sun[0], j->sun[1], j->sun[2]}, far = INFINITY;
+        if (j->point) {
+            float d[3] = {j->sun[0] - q->p[0], j->sun[1] - q->p[1], j->sun[2] - q->p[2]};
+            float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            if (len <= 0) {
+                j->vis[i] = 1;
+                continue;
+            }
+            for (int k = 0; k < 3; k++) L[k] = d[k] / len;
+            far = len - 2 * eps;
+        }
         struct RTCRay ray;
-        ray.org_x = q->p[0] + (q->n[0] + j->sun[0]) * eps;
-        ray.org_y = q->p[1] + (q->n[1] + j->sun[1]) * eps;
-        ray.org_z = q->p[2] + (q->n[2] + j->sun[2]) * eps;
-        ray.dir_x = j->sun[0];
-        ray.dir_y = j->sun[1];
-        ray.dir_z = j->sun[2];
+        ray.org_x = q->p[0] + (q->n[0] + L[0]) * eps;
+        ray.org_y = q->p[1] + (q->n[1] + L[1]) * eps;
+        ray.org_z = q->p[2] + (q->n[2] + L[2]) * eps;
+        ray.dir_x = L[0];
+        ray.dir_y = L[1];
+        ray.dir_z = L[2];
         ray.tnear = 0;
-        ray.tfar = INFINITY;
+        ray.tfar = far > 0 ? far : 0;
         ray.time = 0;
         ray.mask = 0xffffffffu;
         ray.id = 0;
@@ -87,13 +99,19 @@ static void *work(void *arg) {
 
 uint64_t sb_reference_visibility(const sb_reference *r, sb_v3 sun, const sb_ref_point *pts, int n,
                                  unsigned char *vis, int threads) {
+    const double light[4] = {sun.x, sun.y, sun.z, 0};
+    return sb_reference_visibility_light(r, light, pts, n, vis, threads);
+}
+
+uint64_t sb_reference_visibility_light(const sb_reference *r, const double light[4], const sb_ref_point *pts, int n,
+                                       unsigned char *vis, int threads) {
     if (threads < 1) threads = 1;
     if (threads > 16) threads = 16;
     pthread_t th[16];
     job jobs[16];
     int per = (n + threads - 1) / threads;
     for (int t = 0; t < threads; t++) {
-        jobs[t] = (job){r, {(float)sun.x, (float)sun.y, (float)sun.z}, pts, vis, t * per, 0};
+        jobs[t] = (job){r, {(float)light[0], (float)light[1], (float)light[2]}, light[3] > 0.5, pts, vis, t * per, 0};
         int end = (t + 1) * per < n ? (t + 1) * per : n;
         jobs[t].count = end > jobs[t].first ? end - jobs[t].first : 0;
         if (t > 0) pthread_create(&th[t], NULL, work, &jobs[t]);

@@ -33,3 +33,7 @@ float sb_ref_position_eps(const sb_reference *r, const float p[3], float dist);
  * rays cast. */
 uint64_t sb_reference_visibility(const sb_reference *r, sb_v3 sun, const sb_ref_point *pts, int n,
                                  unsigned char *vis, int threads);
+/* The same toward any light: light[3] 0: xyz toward the sun; 1: xyz a point
+ * light's position (origin-relative; rays stop short of it). */
+uint64_t sb_reference_visibility_light(const sb_reference *r, const double light[4], const sb_ref_point *pts, int n,
+                                       unsigned char *vis, int threads);

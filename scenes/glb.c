@@ -131,10 +131,25 @@ int sb_glb_write(sb_glb_scene *s, const char *path) {
             s->offset.y, s->offset.z);
         put(&roots, "%s%d", i ? "," : "", i);
     }
-    sb_quat q = sb_quat_look(sb_v3_scale(s->sun, -1), fabs(s->sun.y) > 0.99 ? sb_v3_make(0, 0, 1) : sb_v3_make(0, 1, 0));
-    put(&nodes, ",{\"name\":\"sun\",\"rotation\":[%.12g,%.12g,%.12g,%.12g],"
-                "\"extensions\":{\"KHR_lights_punctual\":{\"light\":0}}}", q.x, q.y, q.z, q.w);
-    put(&roots, ",%d", s->n);
+    str lights = {0};
+    int nl = 0, nn = s->n;
+    if (!s->no_sun) {
+        sb_quat q = sb_quat_look(sb_v3_scale(s->sun, -1), fabs(s->sun.y) > 0.99 ? sb_v3_make(0, 0, 1) : sb_v3_make(0, 1, 0));
+        put(&nodes, ",{\"name\":\"sun\",\"rotation\":[%.12g,%.12g,%.12g,%.12g],"
+                    "\"extensions\":{\"KHR_lights_punctual\":{\"light\":%d}}}", q.x, q.y, q.z, q.w, nl);
+        put(&lights, "{\"type\":\"directional\",\"name\":\"sun\",\"color\":[1,0.97,0.9],\"intensity\":3}");
+        put(&roots, ",%d", nn++);
+        nl++;
+    }
+    for (int i = 0; i < s->nlamps; i++) {
+        sb_v3 p = sb_v3_add(s->lamps[i], s->offset);
+        put(&nodes, ",{\"name\":\"lamp%d\",\"translation\":[%.17g,%.17g,%.17g],"
+                    "\"extensions\":{\"KHR_lights_punctual\":{\"light\":%d}}}", i, p.x, p.y, p.z, nl);
+        put(&lights, "%s{\"type\":\"point\",\"name\":\"lamp%d\",\"color\":[1,0.85,0.6],\"intensity\":40}",
+            nl ? "," : "", i);
+        put(&roots, ",%d", nn++);
+        nl++;
+    }
     str mats = {0};
     for (size_t i = 0; i < sizeof materials / sizeof materials[0]; i++)
         put(&mats, "%s{\"pbrMetallicRoughness\":{\"baseColorFactor\":[%g,%g,%g,%g],\"metallicFactor\":0}}",
@@ -142,11 +157,10 @@ int sb_glb_write(sb_glb_scene *s, const char *path) {
     put(&js,
         "{\"asset\":{\"version\":\"2.0\",\"generator\":\"shadowbench scenegen\"},"
         "\"extensionsUsed\":[\"KHR_lights_punctual\"],"
-        "\"extensions\":{\"KHR_lights_punctual\":{\"lights\":[{\"type\":\"directional\",\"name\":\"sun\","
-        "\"color\":[1,0.97,0.9],\"intensity\":3}]}},"
+        "\"extensions\":{\"KHR_lights_punctual\":{\"lights\":[%s]}},"
         "\"scene\":0,\"scenes\":[{\"nodes\":[%s]}],\"nodes\":[%s],\"meshes\":[%s],\"materials\":[%s],"
         "\"accessors\":[%s],\"bufferViews\":[%s],\"buffers\":[{\"byteLength\":%zu}]}",
-        roots.s, nodes.s, meshes.s, mats.s, acc.s, views.s, bin_len);
+        lights.s ? lights.s : "", roots.s, nodes.s, meshes.s, mats.s, acc.s, views.s, bin_len);
     while (js.len % 4) put(&js, " ");
     uint32_t json_len = (uint32_t)js.len, bin_pad = (uint32_t)((4 - bin_len % 4) % 4);
     uint32_t total = 12 + 8 + json_len + 8 + (uint32_t)bin_len + bin_pad;
@@ -167,6 +181,7 @@ int sb_glb_write(sb_glb_scene *s, const char *path) {
     fwrite(zeros, 1, bin_pad, f);
     int rc = fclose(f) == 0 ? 0 : 1;
     free(bin);
+    free(lights.s);
     free(js.s); free(acc.s); free(views.s); free(meshes.s); free(nodes.s); free(roots.s); free(mats.s);
     for (int i = 0; i < s->n; i++) {
         free(s->meshes[i].pos);

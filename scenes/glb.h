@@ -20,6 +20,9 @@ typedef struct sb_glb_scene {
     int n, cap;
     sb_v3 sun;                  /* toward the sun */
     sb_v3 offset;               /* translation of every mesh node (double precision in the JSON) */
+    bool no_sun;                /* a night scene: point lights only */
+    sb_v3 lamps[16];            /* point lights (KHR_lights_punctual), positions */
+    int nlamps;
 } sb_glb_scene;
 
 sb_glb_mesh *sb_glb_new_mesh(sb_glb_scene *s, int material);

@@ -77,6 +77,26 @@ static int gen_plane_box(const char *dir) {
     return rc;
 }
 
+/* plane-box with a lamp (a point light) beside the box, and the sun */
+static int gen_plane_box_lamp(const char *dir) {
+    sb_glb_scene s = {0};
+    s.sun = sb_sun_dir(30, 50);
+    sb_glb_box(sb_glb_new_mesh(&s, 0), -20, -0.5, -20, 20, 0, 20);
+    sb_glb_box(sb_glb_new_mesh(&s, 1), -1, 0, -1, 1, 2, 1);
+    s.lamps[s.nlamps++] = sb_v3_make(2.5, 3.5, 1.5);
+    char p[4096];
+    snprintf(p, sizeof p, "%s/plane-box-lamp.glb", dir);
+    int rc = sb_glb_write(&s, p);
+    snprintf(p, sizeof p, "%s/plane-box-lamp.path", dir);
+    rc |= write_text(p,
+                     "# plane-box-lamp: around the box, lit by the lamp\n"
+                     "fov 60\n"
+                     "look 0   -7 6 -6    0 0.5 0\n"
+                     "look 4   -8 5 3     0 0.5 0\n"
+                     "look 8   -3 7 -9    0 0.5 0\n");
+    return rc;
+}
+
 static int gen_desert(const char *dir) {
     sb_glb_scene s = {0};
     s.sun = sb_sun_dir(120, 35);
@@ -151,6 +171,47 @@ static int gen_towers(const char *dir) {
     return rc;
 }
 
+/* towers at night: no sun, street lamps along the path's street */
+static int gen_towers_night(const char *dir) {
+    sb_glb_scene s = {0};
+    s.no_sun = true;
+    g_seed = 2;
+    sb_glb_box(sb_glb_new_mesh(&s, 0), -160, -1, -160, 160, 0, 160);
+    const int blocks = 8;
+    const double pitch = 26, street = 6, half = blocks * pitch / 2;
+    for (int bj = 0; bj < blocks; bj++)
+        for (int bi = 0; bi < blocks; bi++) {
+            sb_glb_mesh *m = sb_glb_new_mesh(&s, 3);
+            double bx = -half + bi * pitch + street / 2, bz = -half + bj * pitch + street / 2;
+            double lot = (pitch - street) / 2;
+            for (int k = 0; k < 4; k++) {
+                double lx = bx + (k & 1) * lot + 0.5, lz = bz + (k >> 1) * lot + 0.5, w = lot - 1;
+                double h = 40 + 110 * rnd() * rnd();
+                sb_glb_box(m, lx, 0, lz, lx + w, h * 0.5, lz + w);
+                sb_glb_box(m, lx + 1, h * 0.5, lz + 1, lx + w - 1, h * 0.8, lz + w - 1);
+                sb_glb_box(m, lx + 2.5, h * 0.8, lz + 2.5, lx + w - 2.5, h, lz + w - 2.5);
+            }
+        }
+    /* lamps on posts along the street at x = 0, and their posts */
+    sb_glb_mesh *posts = sb_glb_new_mesh(&s, 4);
+    for (int i = 0; i < 6; i++) {
+        double z = -90 + 36 * i;
+        sb_glb_box(posts, 1.6, 0, z - 0.1, 1.8, 5.5, z + 0.1);
+        s.lamps[s.nlamps++] = sb_v3_make(1.2, 6, z);
+    }
+    char p[4096];
+    snprintf(p, sizeof p, "%s/towers-night.glb", dir);
+    int rc = sb_glb_write(&s, p);
+    snprintf(p, sizeof p, "%s/towers-night.path", dir);
+    rc |= write_text(p,
+                     "# towers-night: down the lamp-lit street\n"
+                     "fov 60\n"
+                     "look 0    -1.5 3 -120   0 3 -60\n"
+                     "look 8    -1.5 3 -60    0 2 0\n"
+                     "look 16   -1.5 4 0      1 2 60\n");
+    return rc;
+}
+
 static int gen_overhangs(const char *dir) {
     sb_glb_scene s = {0};
     s.sun = sb_sun_dir(60, 30);
@@ -197,5 +258,6 @@ int main(int argc, char **argv) {
         fprintf(stderr, "usage: scenegen OUTDIR\n");
         return 2;
     }
-    return gen_plane_box(argv[1]) | gen_desert(argv[1]) | gen_towers(argv[1]) | gen_overhangs(argv[1]);
+    return gen_plane_box(argv[1]) | gen_plane_box_lamp(argv[1]) | gen_desert(argv[1]) | gen_towers(argv[1]) |
+           gen_towers_night(argv[1]) | gen_overhangs(argv[1]);
 }

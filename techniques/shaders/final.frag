@@ -5,7 +5,7 @@
 in vec3 v_pos;
 in vec3 v_nrm;
 in float v_view_z;
-uniform vec3 u_sun;
+uniform vec4 u_shade_light;   // xyz toward the sun (w 0), or a point light's position (w 1)
 uniform vec4 u_color;
 layout(location = 0) out vec4 o_color;
 layout(location = 1) out float o_vis;
@@ -15,7 +15,8 @@ void main() {
     sb_out_texel_px = -1.0;
     sb_out_cascade = -1.0;
     vec3 n = normalize(v_nrm);
-    float ndl = dot(n, u_sun);
+    vec3 L = u_shade_light.w > 0.5 ? normalize(u_shade_light.xyz - v_pos) : u_shade_light.xyz;
+    float ndl = dot(n, L);
     float vis = sb_visibility(v_pos, n, v_view_z);
     o_vis = vis;
     o_color = vec4(u_color.rgb * (0.3 + 0.7 * max(ndl, 0.0) * vis), 1.0);

@@ -91,8 +91,103 @@ static void test_planar(void **st) {
     sb_session_close(&s);
 }
 
+/* Does the segment from p to the lamp cross the box [-1,1]x[0,2]x[-1,1]? */
+static bool box_blocks_lamp(sb_v3 p, sb_v3 lamp) {
+    const double lo[3] = {-1, 0, -1}, hi[3] = {1, 2, 1};
+    const double o[3] = {p.x, p.y, p.z}, v[3] = {lamp.x - p.x, lamp.y - p.y, lamp.z - p.z};
+    double t0 = 1e-9, t1 = 1 - 1e-9;
+    for (int a = 0; a < 3; a++) {
+        if (fabs(v[a]) < 1e-15) {
+            if (o[a] < lo[a] || o[a] > hi[a]) return false;
+            continue;
+        }
+        double ta = (lo[a] - o[a]) / v[a], tb = (hi[a] - o[a]) / v[a];
+        if (ta > tb) {
+            double t = ta;
+            ta = tb;
+            tb = t;
+        }
+        t0 = fmax(t0, ta);
+        t1 = fmin(t1, tb);
+        if (t0 > t1) return false;
+    }
+    return true;
+}
+
+static void test_point_light_cube(void **st) {
+    (void)st;
+    sb_run_opts o;
+    sb_run_opts_defaults(&o);
+    o.width = 640;
+    o.height = 360;
+    sb_session s;
+    memset(&s, 0, sizeof s);
+    sb_err err;
+    assert_true(sb_session_open(&s, &o, "plane-box-lamp", test_data("planebox-fixed.path"), &err));
+    assert_true(s.scene.light_count == 2 && s.scene.lights[1].type == SB_LIGHT_POINT);
+    sb_v3 lamp = sb_v3_add(s.scene.lights[1].position, s.scene.origin);
+    assert_true(sb_v3_len(sb_v3_sub(lamp, sb_v3_make(2.5, 3.5, 1.5))) < 1e-6);
+    const char *specs[] = {"cube", "cube:layered=gs", "cube:layered=vs", "cube:filter=pcf:res=2048"};
+    const int w = 640, h = 360;
+    float *depth = malloc(sizeof(float) * w * h);
+    unsigned char *vis = malloc((size_t)w * h);
+    for (int k = 0; k < 4; k++) {
+        sb_run_spec *runs = NULL;
+        int n = 0;
+        assert_true(sb_spec_expand(specs[k], NULL, &runs, &n, &err));
+        sb_instance in;
+        assert_true(sb_instance_create(&in, &s, &runs[0], &err));
+        sb_timer t;
+        sb_timer_init(&t, SB_TIMING_SYNC, 1, 1);
+        sb_timer_frame_begin(&t, 0);
+        sb_frame f;
+        memset(&f, 0, sizeof f);
+        sb_render_frame(&s, &in, &f, 0, 1, 0, &t);
+        sb_gpu_readback(&s.gpu, depth, vis, NULL);
+        long plane = 0, exact = 0, tech = 0, mismatch = 0;
+        for (int y = 0; y < h; y++)
+            for (int x = 0; x < w; x++) {
+                float d = depth[y * w + x];
+                if (d >= 1.0f) continue;
+                sb_v3 p = sb_frame_unproject(&f, x, y, d);
+                if (fabs(p.y) > 0.02 || fabs(p.x) > 19.9 || fabs(p.z) > 19.9 || (fabs(p.x) <= 1 && fabs(p.z) <= 1)) continue;
+                plane++;
+                bool a = box_blocks_lamp(p, lamp), b = vis[y * w + x] < 128;
+                exact += a;
+                tech += b;
+                mismatch += a != b;
+            }
+        print_message("%s: plane %ld px, analytic point-light shadow %ld, cube %ld, mismatch %ld (%.3f%% of image), "
+                      "shadow draws %u\n", specs[k], plane, exact, tech, mismatch, 100.0 * mismatch / (w * h),
+                      f.counters.shadow_draw_calls);
+        assert_true(exact > w * h / 50);
+        assert_true(mismatch * 100 < w * h);   /* within 1% of the image */
+        sb_timer_free(&t);
+        sb_instance_destroy(&in, &s);
+        free(runs);
+    }
+    free(depth);
+    free(vis);
+    /* the sun techniques still shade the sun here; without a point light, cube is skipped */
+    assert_null(sb_skip_reason(&s, sb_technique_find("sm")));
+    sb_session_close(&s);
+    memset(&s, 0, sizeof s);
+    assert_true(sb_session_open(&s, &o, "plane-box", "plane-box", &err));
+    assert_string_equal(sb_skip_reason(&s, sb_technique_find("cube")), "the scene has no point or spot light");
+    sb_session_close(&s);
+    /* a night scene (lamps, no sun): sun techniques are skipped with the reason */
+    memset(&s, 0, sizeof s);
+    o.width = 64;
+    o.height = 36;
+    assert_true(sb_session_open(&s, &o, "towers-night", "towers-night", &err));
+    assert_non_null(strstr(sb_skip_reason(&s, sb_technique_find("pssm")), "point lights only"));
+    assert_null(sb_skip_reason(&s, sb_technique_find("cube")));
+    sb_session_close(&s);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_volumes_match_analytic),
-                                       cmocka_unit_test(test_camera_inside_volume), cmocka_unit_test(test_planar)};
+                                       cmocka_unit_test(test_camera_inside_volume), cmocka_unit_test(test_planar),
+                                       cmocka_unit_test(test_point_light_cube)};
     return cmocka_run_group_tests_name("volumes", tests, NULL, NULL);
 }

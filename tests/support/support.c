@@ -132,7 +132,7 @@ bool eval_frame(sb_session *s, const char *spec, int i, int n, sb_error_metrics 
     float *pos = malloc(sizeof(float) * 4 * w * h), *aux = malloc(sizeof(float) * 4 * w * h);
     sb_gpu_readback(&s->gpu, NULL, vis, NULL);
     sb_gpu_readback_eval(&s->gpu, pos, aux);
-    sb_evaluate_frame(ref, s->gpu.sun, sb_v3_sub(f.cam.pos, s->scene.origin), w, h, pos, aux, vis, refv, m, 2);
+    sb_evaluate_frame(ref, s->gpu.shade_light, sb_v3_sub(f.cam.pos, s->scene.origin), w, h, pos, aux, vis, refv, m, 2);
     if (pos_out) memcpy(pos_out, pos, sizeof(float) * 4 * w * h);
     if (ref_out) memcpy(ref_out, refv, (size_t)w * h);
     free(vis);

@@ -1,0 +1,212 @@
+/* cube.c - point-light shadows with a depth cube map: six 90-degree
+ * perspective faces around the lamp, rendered per face (casters culled per
+ * face frustum over the BVH) or in one layered pass (a geometry shader routes
+ * each triangle to the faces it touches, or instancing with gl_Layer from the
+ * vertex shader), the same `layered=` choice as cascades. The final pass
+ * shades and shadows the lamp; evaluation casts the reference rays to it. */
+#include <string.h>
+
+#include "gpu.h"
+#include "shaders.h"
+
+static const sb_param_def cube_params[] = {
+    {"res", SB_PARAM_INT, "1024", 64, 8192, NULL, "cube face resolution"},
+    {"light", SB_PARAM_INT, "0", 0, 15, NULL, "which point or spot light of the scene (in file order)"},
+    {"bias", SB_PARAM_FLOAT, "1.5", 0, 100, NULL, "constant bias, in texels at the point's distance"},
+    {"slope", SB_PARAM_FLOAT, "2", 0, 100, NULL, "slope-scaled bias (glPolygonOffset factor)"},
+    {"normal", SB_PARAM_FLOAT, "1", 0, 100, NULL, "normal offset, in texels"},
+    {"filter", SB_PARAM_ENUM, "hw", 0, 0, "none|hw|pcf", "shadow filter"},
+    {"layered", SB_PARAM_ENUM, "off", 0, 0, "off|gs|vs|on", "six passes, or one layered pass"},
+};
+
+typedef struct {
+    int res, filter, layered;
+    double bias, slope, normal;
+    sb_v3 lamp;                 /* origin-relative */
+    double near, far;
+    GLuint tex, fbo_all, fbo_face[6];
+    GLuint prog_face, prog_gs, prog_vs;
+    GLint u_vp, u_face_vp_gs, u_face_vp_vs;
+    sb_m4 face_vp[6];
+    double planes[6][6][4];
+    sb_final_prog fp;
+    GLint u_cube, u_lamp, u_near, u_far, u_res, u_bias, u_normal;
+} cube_state;
+
+static const double face_dir[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+static const double face_up[6][3] = {{0, -1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}, {0, -1, 0}, {0, -1, 0}};
+
+static bool cube_create(void *state, sb_gpu *g, const sb_params *p, sb_err *err) {
+    cube_state *s = state;
+    s->res = (int)sb_param_num(p, "res");
+    s->bias = sb_param_num(p, "bias");
+    s->slope = sb_param_num(p, "slope");
+    s->normal = sb_param_num(p, "normal");
+    s->filter = sb_param_choice(p, "filter");
+    int layered = sb_param_choice(p, "layered");
+    if (layered == 3) layered = g->ctx->has_vs_layer ? 2 : 1;
+    if (layered == 2 && !g->ctx->has_vs_layer)
+        return sb_fail(err, "cube:layered=vs needs GL_ARB_shader_viewport_layer_array, which %s lacks", g->ctx->renderer);
+    s->layered = layered;
+    int want = (int)sb_param_num(p, "light"), k = 0;
+    const sb_light *lamp = NULL;
+    for (uint32_t i = 0; i < g->scene->light_count; i++)
+        if (g->scene->lights[i].type != SB_LIGHT_DIRECTIONAL && k++ == want) lamp = &g->scene->lights[i];
+    if (!lamp) return sb_fail(err, "cube:light=%d: the scene has %d point or spot light(s)", want, k);
+    s->lamp = lamp->position;
+    sb_v3 ext = sb_v3_sub(g->scene->bounds.hi, g->scene->bounds.lo);
+    double diag = sb_v3_len(ext);
+    s->far = lamp->range > 0 ? lamp->range : 2 * diag;
+    s->near = fmax(s->far * 1e-4, 1e-6);
+    sb_m4 proj = sb_m4_perspective(SB_PI / 2, 1, s->near, s->far);
+    for (int f = 0; f < 6; f++) {
+        sb_v3 dir = sb_v3_make(face_dir[f][0], face_dir[f][1], face_dir[f][2]);
+        sb_v3 up = sb_v3_make(face_up[f][0], face_up[f][1], face_up[f][2]);
+        s->face_vp[f] = sb_m4_mul(proj, sb_m4_look_at(s->lamp, sb_v3_add(s->lamp, dir), up));
+        sb_frustum_planes(s->face_vp[f], s->planes[f]);
+    }
+    glGenTextures(1, &s->tex);
+    glBindTexture(GL_TEXTURE_CUBE_MAP, s->tex);
+    glTexStorage2D(GL_TEXTURE_CUBE_MAP, 1, GL_DEPTH_COMPONENT32F, s->res, s->res);
+    GLint filt = s->filter == 0 ? GL_NEAREST : GL_LINEAR;
+    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, filt);
+    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MAG_FILTER, filt);
+    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+    glGenFramebuffers(1, &s->fbo_all);
+    glBindFramebuffer(GL_FRAMEBUFFER, s->fbo_all);
+    glFramebufferTexture(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, s->tex, 0);
+    glDrawBuffer(GL_NONE);
+    glReadBuffer(GL_NONE);
+    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        return sb_fail(err, "cube:res=%d: layered cube framebuffer is incomplete", s->res);
+    glGenFramebuffers(6, s->fbo_face);
+    for (int f = 0; f < 6; f++) {
+        glBindFramebuffer(GL_FRAMEBUFFER, s->fbo_face[f]);
+        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_CUBE_MAP_POSITIVE_X + f, s->tex, 0);
+        glDrawBuffer(GL_NONE);
+        glReadBuffer(GL_NONE);
+    }
+    const char *fs[] = {sb_shader_depth_frag};
+    const char *vs_face[] = {sb_shader_cube_depth_vert};
+    s->prog_face = sb_gpu_program("cube face", NULL, vs_face, 1, fs, 1, err);
+    if (!s->prog_face) return false;
+    s->u_vp = glGetUniformLocation(s->prog_face, "u_vp");
+    if (s->layered == 1) {
+        const char *vs[] = {sb_shader_csm_layer_gs_vert}, *gs[] = {sb_shader_cube_layer_geom};
+        const sb_shader_src st[] = {{GL_VERTEX_SHADER, vs, 1}, {GL_GEOMETRY_SHADER, gs, 1}, {GL_FRAGMENT_SHADER, fs, 1}};
+        if (!(s->prog_gs = sb_gpu_link("cube layered (geometry shader)", NULL, st, 3, err))) return false;
+        s->u_face_vp_gs = glGetUniformLocation(s->prog_gs, "u_face_vp");
+    } else if (s->layered == 2) {
+        static const char vs_src[] =
+            "layout(location = 0) in vec3 a_pos;\n"
+            "uniform mat4 u_face_vp[6];\n"
+            "void main() { gl_Layer = gl_InstanceID; gl_Position = u_face_vp[gl_InstanceID] * vec4(a_pos, 1.0); }\n";
+        const char *vs[] = {vs_src};
+        const sb_shader_src st[] = {{GL_VERTEX_SHADER, vs, 1}, {GL_FRAGMENT_SHADER, fs, 1}};
+        if (!(s->prog_vs = sb_gpu_link("cube layered (vertex shader)",
+                                       "#extension GL_ARB_shader_viewport_layer_array : require\n", st, 2, err)))
+            return false;
+        s->u_face_vp_vs = glGetUniformLocation(s->prog_vs, "u_face_vp");
+    }
+    char defines[64];
+    snprintf(defines, sizeof defines, "#define SB_FILTER %d\n", s->filter);
+    if (!sb_final_prog_create(&s->fp, "cube", sb_shader_vis_cube_glsl, defines, err)) return false;
+    const char *names[] = {"u_cube", "u_lamp", "u_near", "u_far", "u_res", "u_bias", "u_normal"};
+    GLint *locs[] = {&s->u_cube, &s->u_lamp, &s->u_near, &s->u_far, &s->u_res, &s->u_bias, &s->u_normal};
+    for (size_t i = 0; i < SB_COUNT(names); i++) *locs[i] = glGetUniformLocation(s->fp.prog, names[i]);
+    return sb_gl_check("cube", err);
+}
+
+static void cube_frame(void *state, sb_frame *f) {
+    cube_state *s = state;
+    sb_gpu *g = f->gpu;
+    const sb_scene *sc = g->scene;
+    sb_stage_begin(f, SB_STAGE_CASCADE);
+    glBindFramebuffer(GL_FRAMEBUFFER, s->fbo_all);
+    glViewport(0, 0, s->res, s->res);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    glClear(GL_DEPTH_BUFFER_BIT);
+    glDisable(GL_CULL_FACE);
+    if (s->slope > 0) {
+        glEnable(GL_POLYGON_OFFSET_FILL);
+        glPolygonOffset((float)(s->slope * g->test_bias_sign), 0.0f);
+    }
+    glBindVertexArray(g->vao);
+    float m[6][16];
+    for (int k = 0; k < 6; k++) sb_m4_to_float(s->face_vp[k], m[k]);
+    int faces = 0;
+    if (s->layered == 0) {
+        glUseProgram(s->prog_face);
+        for (int k = 0; k < 6; k++) {
+            uint32_t n = sb_bvh_collect(sc, (const double(*)[4])s->planes[k], 6, g->scratch);
+            if (!n) continue;
+            faces++;
+            glBindFramebuffer(GL_FRAMEBUFFER, s->fbo_face[k]);
+            glUniformMatrix4fv(s->u_vp, 1, GL_FALSE, m[k]);
+            for (uint32_t i = 0; i < n; i++) sb_submit(f, g->scratch[i], 1);
+        }
+    } else {
+        /* casters within the lamp's range: the box around it */
+        double box[6][4] = {{1, 0, 0, -(s->lamp.x - s->far)}, {-1, 0, 0, s->lamp.x + s->far},
+                            {0, 1, 0, -(s->lamp.y - s->far)}, {0, -1, 0, s->lamp.y + s->far},
+                            {0, 0, 1, -(s->lamp.z - s->far)}, {0, 0, -1, s->lamp.z + s->far}};
+        uint32_t n = sb_bvh_collect(sc, (const double(*)[4])box, 6, g->scratch);
+        bool gs = s->layered == 1;
+        glUseProgram(gs ? s->prog_gs : s->prog_vs);
+        glUniformMatrix4fv(gs ? s->u_face_vp_gs : s->u_face_vp_vs, 6, GL_FALSE, &m[0][0]);
+        for (uint32_t i = 0; i < n; i++) sb_submit(f, g->scratch[i], gs ? 1 : 6);
+        faces = n ? 6 : 0;
+    }
+    glDisable(GL_POLYGON_OFFSET_FILL);
+    f->counters.cascades_rendered = faces;
+    f->counters.cascades_skipped = 6 - faces;
+    sb_stage_end(f, SB_STAGE_CASCADE);
+
+    sb_stage_begin(f, SB_STAGE_FINAL);
+    g->shade_light[0] = s->lamp.x;
+    g->shade_light[1] = s->lamp.y;
+    g->shade_light[2] = s->lamp.z;
+    g->shade_light[3] = 1;
+    glUseProgram(s->fp.prog);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_CUBE_MAP, s->tex);
+    glUniform1i(s->u_cube, 0);
+    glUniform3f(s->u_lamp, (float)s->lamp.x, (float)s->lamp.y, (float)s->lamp.z);
+    glUniform1f(s->u_near, (float)s->near);
+    glUniform1f(s->u_far, (float)s->far);
+    glUniform1f(s->u_res, (float)s->res);
+    glUniform1f(s->u_bias, (float)(g->test_bias_sign * s->bias));
+    glUniform1f(s->u_normal, (float)(g->test_bias_sign * s->normal));
+    sb_final_pass(f, &s->fp, false);
+    sb_stage_end(f, SB_STAGE_FINAL);
+}
+
+static void cube_destroy(void *state, sb_gpu *g) {
+    (void)g;
+    cube_state *s = state;
+    sb_final_prog_free(&s->fp);
+    GLuint progs[] = {s->prog_face, s->prog_gs, s->prog_vs};
+    for (int i = 0; i < 3; i++)
+        if (progs[i]) glDeleteProgram(progs[i]);
+    if (s->fbo_all) glDeleteFramebuffers(1, &s->fbo_all);
+    if (s->fbo_face[0]) glDeleteFramebuffers(6, s->fbo_face);
+    if (s->tex) glDeleteTextures(1, &s->tex);
+}
+
+const sb_technique sb_technique_cube = {
+    .name = "cube",
+    .summary = "point-light shadows with a depth cube map (six faces, per face or layered)",
+    .params = cube_params,
+    .param_count = (int)SB_COUNT(cube_params),
+    .stages = SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_FINAL),
+    .needs = SB_NEEDS_POINT_LIGHT,
+    .state_size = sizeof(cube_state),
+    .create = cube_create,
+    .frame = cube_frame,
+    .destroy = cube_destroy,
+};
