@@ -127,11 +127,14 @@ static void test_point_light_cube(void **st) {
     assert_true(s.scene.light_count == 2 && s.scene.lights[1].type == SB_LIGHT_POINT);
     sb_v3 lamp = sb_v3_add(s.scene.lights[1].position, s.scene.origin);
     assert_true(sb_v3_len(sb_v3_sub(lamp, sb_v3_make(2.5, 3.5, 1.5))) < 1e-6);
-    const char *specs[] = {"cube", "cube:layered=gs", "cube:layered=vs", "cube:filter=pcf:res=2048"};
+    /* per-technique tolerance, in % of the image: dual paraboloids bend the box's large faces
+       (the paraboloid projection is not linear), so they get more room */
+    const char *specs[] = {"cube", "cube:layered=gs", "cube:layered=vs", "cube:filter=pcf:res=2048", "dpsm"};
+    const double tolerance_pct[] = {1, 1, 1, 1, 3};
     const int w = 640, h = 360;
     float *depth = malloc(sizeof(float) * w * h);
     unsigned char *vis = malloc((size_t)w * h);
-    for (int k = 0; k < 4; k++) {
+    for (int k = 0; k < 5; k++) {
         sb_run_spec *runs = NULL;
         int n = 0;
         assert_true(sb_spec_expand(specs[k], NULL, &runs, &n, &err));
@@ -161,7 +164,7 @@ static void test_point_light_cube(void **st) {
                       "shadow draws %u\n", specs[k], plane, exact, tech, mismatch, 100.0 * mismatch / (w * h),
                       f.counters.shadow_draw_calls);
         assert_true(exact > w * h / 50);
-        assert_true(mismatch * 100 < w * h);   /* within 1% of the image */
+        assert_true(mismatch * 100 < tolerance_pct[k] * w * h);
         sb_timer_free(&t);
         sb_instance_destroy(&in, &s);
         free(runs);

@@ -1,0 +1,162 @@
+/* dpsm.c - dual-paraboloid shadow maps (Brabec, Annen & Seidel 2002) for a
+ * point light: two maps, each a hemisphere projected onto a paraboloid in the
+ * vertex shader (one pass per hemisphere, clipped at its rim), storing the
+ * linear distance to the lamp. Cheaper than a cube (two passes, not six);
+ * large triangles that span much of a hemisphere bend, since the paraboloid
+ * projection is not linear: the error metric shows what that costs. The
+ * front hemisphere looks down (-Y). */
+#include <string.h>
+
+#include "gpu.h"
+#include "shaders.h"
+
+static const sb_param_def dpsm_params[] = {
+    {"res", SB_PARAM_INT, "1024", 64, 8192, NULL, "resolution of each paraboloid map"},
+    {"light", SB_PARAM_INT, "0", 0, 15, NULL, "which point or spot light of the scene (in file order)"},
+    {"bias", SB_PARAM_FLOAT, "1.5", 0, 100, NULL, "constant bias, in texels at the point's distance"},
+    {"slope", SB_PARAM_FLOAT, "2", 0, 100, NULL, "slope-scaled bias (glPolygonOffset factor)"},
+    {"normal", SB_PARAM_FLOAT, "1", 0, 100, NULL, "normal offset, in texels"},
+    {"filter", SB_PARAM_ENUM, "hw", 0, 0, "none|hw", "shadow filter"},
+};
+
+typedef struct {
+    int res, filter;
+    double bias, slope, normal, near, far;
+    sb_v3 lamp;
+    float frame[9];
+    GLuint tex, fbo[2], prog;
+    GLint d_lamp, d_frame, d_side, d_near, d_far;
+    sb_final_prog fp;
+    GLint u_maps, u_lamp, u_frame, u_near, u_far, u_res, u_bias, u_normal;
+} dpsm_state;
+
+static bool dpsm_create(void *state, sb_gpu *g, const sb_params *p, sb_err *err) {
+    dpsm_state *s = state;
+    s->res = (int)sb_param_num(p, "res");
+    s->bias = sb_param_num(p, "bias");
+    s->slope = sb_param_num(p, "slope");
+    s->normal = sb_param_num(p, "normal");
+    s->filter = sb_param_choice(p, "filter");
+    int want = (int)sb_param_num(p, "light"), k = 0;
+    const sb_light *lamp = NULL;
+    for (uint32_t i = 0; i < g->scene->light_count; i++)
+        if (g->scene->lights[i].type != SB_LIGHT_DIRECTIONAL && k++ == want) lamp = &g->scene->lights[i];
+    if (!lamp) return sb_fail(err, "dpsm:light=%d: the scene has %d point or spot light(s)", want, k);
+    s->lamp = lamp->position;
+    double diag = sb_v3_len(sb_v3_sub(g->scene->bounds.hi, g->scene->bounds.lo));
+    s->far = lamp->range > 0 ? lamp->range : 2 * diag;
+    s->near = fmax(s->far * 1e-5, 1e-7);
+    /* lamp frame: x = +X, y = +Z, z = -Y (the front hemisphere looks down); rows of a world -> frame matrix */
+    const float fr[9] = {1, 0, 0, 0, 0, -1, 0, 1, 0}; /* column-major mat3: columns are the images of x, y, z */
+    memcpy(s->frame, fr, sizeof fr);
+    glGenTextures(1, &s->tex);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, s->tex);
+    glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_DEPTH_COMPONENT32F, s->res, s->res, 2);
+    GLint filt = s->filter == 0 ? GL_NEAREST : GL_LINEAR;
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, filt);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, filt);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+    glGenFramebuffers(2, s->fbo);
+    for (int i = 0; i < 2; i++) {
+        glBindFramebuffer(GL_FRAMEBUFFER, s->fbo[i]);
+        glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, s->tex, 0, i);
+        glDrawBuffer(GL_NONE);
+        glReadBuffer(GL_NONE);
+        if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+            return sb_fail(err, "dpsm:res=%d: framebuffer is incomplete", s->res);
+    }
+    const char *vs[] = {sb_shader_dpsm_vert}, *fs[] = {sb_shader_depth_frag};
+    if (!(s->prog = sb_gpu_program("dpsm", NULL, vs, 1, fs, 1, err))) return false;
+    s->d_lamp = glGetUniformLocation(s->prog, "u_lamp");
+    s->d_frame = glGetUniformLocation(s->prog, "u_frame");
+    s->d_side = glGetUniformLocation(s->prog, "u_side");
+    s->d_near = glGetUniformLocation(s->prog, "u_near");
+    s->d_far = glGetUniformLocation(s->prog, "u_far");
+    if (!sb_final_prog_create(&s->fp, "dpsm", sb_shader_vis_dpsm_glsl, NULL, err)) return false;
+    const char *names[] = {"u_maps", "u_lamp", "u_frame", "u_near", "u_far", "u_res", "u_bias", "u_normal"};
+    GLint *locs[] = {&s->u_maps, &s->u_lamp, &s->u_frame, &s->u_near, &s->u_far, &s->u_res, &s->u_bias, &s->u_normal};
+    for (size_t i = 0; i < SB_COUNT(names); i++) *locs[i] = glGetUniformLocation(s->fp.prog, names[i]);
+    return sb_gl_check("dpsm", err);
+}
+
+static void dpsm_frame(void *state, sb_frame *f) {
+    dpsm_state *s = state;
+    sb_gpu *g = f->gpu;
+    const sb_scene *sc = g->scene;
+    sb_stage_begin(f, SB_STAGE_CASCADE);
+    double box[6][4] = {{1, 0, 0, -(s->lamp.x - s->far)}, {-1, 0, 0, s->lamp.x + s->far},
+                        {0, 1, 0, -(s->lamp.y - s->far)}, {0, -1, 0, s->lamp.y + s->far},
+                        {0, 0, 1, -(s->lamp.z - s->far)}, {0, 0, -1, s->lamp.z + s->far}};
+    uint32_t n = sb_bvh_collect(sc, (const double(*)[4])box, 6, g->scratch);
+    glUseProgram(s->prog);
+    glUniform3f(s->d_lamp, (float)s->lamp.x, (float)s->lamp.y, (float)s->lamp.z);
+    glUniformMatrix3fv(s->d_frame, 1, GL_FALSE, s->frame);
+    glUniform1f(s->d_near, (float)s->near);
+    glUniform1f(s->d_far, (float)s->far);
+    glViewport(0, 0, s->res, s->res);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    glDisable(GL_CULL_FACE);
+    glEnable(GL_CLIP_DISTANCE0);
+    if (s->slope > 0) {
+        glEnable(GL_POLYGON_OFFSET_FILL);
+        glPolygonOffset((float)(s->slope * g->test_bias_sign), 0.0f);
+    }
+    glBindVertexArray(g->vao);
+    for (int side = 0; side < 2; side++) {
+        glBindFramebuffer(GL_FRAMEBUFFER, s->fbo[side]);
+        glClear(GL_DEPTH_BUFFER_BIT);
+        glUniform1f(s->d_side, side ? -1.0f : 1.0f);
+        for (uint32_t i = 0; i < n; i++) sb_submit(f, g->scratch[i], 1);
+    }
+    glDisable(GL_CLIP_DISTANCE0);
+    glDisable(GL_POLYGON_OFFSET_FILL);
+    f->counters.cascades_rendered = n ? 2 : 0;
+    f->counters.cascades_skipped = n ? 0 : 2;
+    sb_stage_end(f, SB_STAGE_CASCADE);
+
+    sb_stage_begin(f, SB_STAGE_FINAL);
+    g->shade_light[0] = s->lamp.x;
+    g->shade_light[1] = s->lamp.y;
+    g->shade_light[2] = s->lamp.z;
+    g->shade_light[3] = 1;
+    glUseProgram(s->fp.prog);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, s->tex);
+    glUniform1i(s->u_maps, 0);
+    glUniform3f(s->u_lamp, (float)s->lamp.x, (float)s->lamp.y, (float)s->lamp.z);
+    glUniformMatrix3fv(s->u_frame, 1, GL_FALSE, s->frame);
+    glUniform1f(s->u_near, (float)s->near);
+    glUniform1f(s->u_far, (float)s->far);
+    glUniform1f(s->u_res, (float)s->res);
+    glUniform1f(s->u_bias, (float)(g->test_bias_sign * s->bias));
+    glUniform1f(s->u_normal, (float)(g->test_bias_sign * s->normal));
+    sb_final_pass(f, &s->fp, false);
+    sb_stage_end(f, SB_STAGE_FINAL);
+}
+
+static void dpsm_destroy(void *state, sb_gpu *g) {
+    (void)g;
+    dpsm_state *s = state;
+    sb_final_prog_free(&s->fp);
+    if (s->prog) glDeleteProgram(s->prog);
+    if (s->fbo[0]) glDeleteFramebuffers(2, s->fbo);
+    if (s->tex) glDeleteTextures(1, &s->tex);
+}
+
+const sb_technique sb_technique_dpsm = {
+    .name = "dpsm",
+    .summary = "point-light shadows with dual-paraboloid maps (Brabec et al. 2002)",
+    .params = dpsm_params,
+    .param_count = (int)SB_COUNT(dpsm_params),
+    .stages = SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_FINAL),
+    .needs = SB_NEEDS_POINT_LIGHT,
+    .state_size = sizeof(dpsm_state),
+    .create = dpsm_create,
+    .frame = dpsm_frame,
+    .destroy = dpsm_destroy,
+};
