@@ -60,8 +60,11 @@ static const stress_case cases[] = {
     {"path-180-flips", 1, 0, 30, 50, GEO_BOXES, CAM_FLIPS, 0, 0, 0.005, false},
 };
 
+/* Shadow volumes are not in the battery: they need closed casters, and the
+ * degenerate/huge case (open, zero-area and 1e5-wide triangles) breaks them
+ * (err_rate 0.77 when tried); they report open casters when created. */
 static const char *const techniques[] = {"none", "sm", "pssm", "pssm:stable=on", "sdsm", "sdsm:splits=cpu:latency=0",
-                                         "raycast"};
+                                         "lispsm", "pssm:format=msm", "raycast"};
 
 static sb_v3 offset_of(const stress_case *c) { return sb_v3_scale(sb_v3_norm(sb_v3_make(1, 0.3, -0.7)), c->offset); }
 
@@ -322,6 +325,8 @@ int sb_stress_run(const sb_run_opts *opts, const char *only, FILE *out, sb_err *
             run_row(&s, techniques[t], o.frames, &r);
             bool raycast = !strcmp(techniques[t], "raycast"), none = !strcmp(techniques[t], "none");
             double bound = c->relative ? 2 * base_err[t] + 0.001 : raycast ? c->bound / 5 + 0.001 : c->bound;
+            /* one warped map over the whole view gives the far field fewer texels: twice the room */
+            if (!strcmp(techniques[t], "lispsm") && !c->relative) bound *= 2;
             if (!none && r.pass && !(r.err_rate <= bound)) {
                 char m[96];
                 snprintf(m, sizeof m, "%.4f above the bound %.4f", r.err_rate, bound);
