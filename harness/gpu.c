@@ -357,3 +357,39 @@ sb_reference *sb_gpu_reference(sb_gpu *g, sb_err *err) {
     g->ref = r;
     return r;
 }
+
+const sb_light *sb_point_light(const sb_scene *s, int index, int *count) {
+    const sb_light *found = NULL;
+    int k = 0;
+    for (uint32_t i = 0; i < s->light_count; i++)
+        if (s->lights[i].type != SB_LIGHT_DIRECTIONAL && k++ == index) found = &s->lights[i];
+    if (count) *count = k;
+    return found;
+}
+
+void sb_range_planes(sb_v3 c, double r, double p[6][4]) {
+    const double box[6][4] = {{1, 0, 0, -(c.x - r)}, {-1, 0, 0, c.x + r}, {0, 1, 0, -(c.y - r)},
+                              {0, -1, 0, c.y + r},   {0, 0, 1, -(c.z - r)}, {0, 0, -1, c.z + r}};
+    memcpy(p, box, sizeof box);
+}
+
+void sb_shade_point_light(sb_gpu *g, sb_v3 pos) {
+    g->shade_light[0] = pos.x;
+    g->shade_light[1] = pos.y;
+    g->shade_light[2] = pos.z;
+    g->shade_light[3] = 1;
+}
+
+void sb_final_pass_stencil(sb_frame *f, const sb_final_prog *fp, GLint u_lit, GLuint mask) {
+    glEnable(GL_STENCIL_TEST);
+    glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
+    glStencilFunc(GL_EQUAL, 0, mask);
+    glUseProgram(fp->prog);
+    glUniform1f(u_lit, 1.0f);
+    sb_final_pass(f, fp, true);     /* clears colour, keeps depth and stencil */
+    glStencilFunc(GL_NOTEQUAL, 0, mask);
+    glUseProgram(fp->prog);
+    glUniform1f(u_lit, 0.0f);
+    sb_final_draw(f, fp, true);     /* the same draws again, without clearing */
+    glDisable(GL_STENCIL_TEST);
+}

@@ -101,6 +101,17 @@ void sb_zpass(sb_frame *f);
 /* Issues one draw (instanced when instances > 1) with whatever program is
  * bound, and counts it in the current stage. */
 void sb_submit(sb_frame *f, uint32_t draw, int instances);
+/* Point lights: the index-th point or spot light of the scene (NULL if there is
+ * none; *count says how many there are); the planes of the cube of half-size
+ * r around c (casters within a lamp's range); and making the final pass shade
+ * a point light. */
+const sb_light *sb_point_light(const sb_scene *s, int index, int *count);
+void sb_range_planes(sb_v3 c, double r, double planes[6][4]);
+void sb_shade_point_light(sb_gpu *g, sb_v3 pos);
+/* The final pass split by the stencil (shadow volumes, planar shadows): where
+ * (stencil & mask) == 0 it is drawn lit (u_lit 1), elsewhere in shadow (0).
+ * Depth from the z-pass is reused; the stencil is left enabled off afterwards. */
+void sb_final_pass_stencil(sb_frame *f, const sb_final_prog *fp, GLint u_lit, GLuint mask);
 /* Counts a draw issued by the technique itself (its own geometry). */
 void sb_count_draw(sb_frame *f, uint64_t triangles, int instances);
 /* Planes (inside: n·p + d >= 0) of a clip-space box of the matrix m (Gribb-Hartmann). */

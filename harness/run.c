@@ -139,17 +139,12 @@ void sb_session_close(sb_session *s) {
 }
 
 const char *sb_skip_reason(const sb_session *s, const sb_technique *t) {
-    bool point = false;
-    for (uint32_t i = 0; i < s->scene.light_count; i++) point |= s->scene.lights[i].type != SB_LIGHT_DIRECTIONAL;
+    bool point = sb_point_light(&s->scene, 0, NULL) != NULL;
     if ((t->needs & SB_NEEDS_SUN) && !s->scene.has_sun && point && !s->opts.sun_override)
         return "the scene is lit by point lights only (no sun); --sun AZ,EL adds one";
     if ((t->needs & SB_NEEDS_PLANE) && s->scene.plane_count == 0)
         return "the scene has no large planar receiver";
-    if (t->needs & SB_NEEDS_POINT_LIGHT) {
-        bool any = false;
-        for (uint32_t i = 0; i < s->scene.light_count; i++) any |= s->scene.lights[i].type != SB_LIGHT_DIRECTIONAL;
-        if (!any) return "the scene has no point or spot light";
-    }
+    if ((t->needs & SB_NEEDS_POINT_LIGHT) && !point) return "the scene has no point or spot light";
     return NULL;
 }
 

@@ -133,16 +133,15 @@ static int gen_desert(const char *dir) {
     return rc;
 }
 
-static int gen_towers(const char *dir) {
-    sb_glb_scene s = {0};
-    s.sun = sb_sun_dir(200, 55);
+/* the towers' ground and skyscrapers (with setbacks), shared by the day and night scenes */
+static void towers_buildings(sb_glb_scene *s) {
     g_seed = 2;
-    sb_glb_box(sb_glb_new_mesh(&s, 0), -160, -1, -160, 160, 0, 160);
+    sb_glb_box(sb_glb_new_mesh(s, 0), -160, -1, -160, 160, 0, 160);
     const int blocks = 8;
     const double pitch = 26, street = 6, half = blocks * pitch / 2;
     for (int bj = 0; bj < blocks; bj++)
         for (int bi = 0; bi < blocks; bi++) {
-            sb_glb_mesh *m = sb_glb_new_mesh(&s, 3);
+            sb_glb_mesh *m = sb_glb_new_mesh(s, 3);
             double bx = -half + bi * pitch + street / 2, bz = -half + bj * pitch + street / 2;
             double lot = (pitch - street) / 2;
             for (int k = 0; k < 4; k++) {
@@ -154,6 +153,12 @@ static int gen_towers(const char *dir) {
                 sb_glb_box(m, lx + 2.5, h * 0.8, lz + 2.5, lx + w - 2.5, h, lz + w - 2.5);
             }
         }
+}
+
+static int gen_towers(const char *dir) {
+    sb_glb_scene s = {0};
+    s.sun = sb_sun_dir(200, 55);
+    towers_buildings(&s);
     char p[4096];
     snprintf(p, sizeof p, "%s/towers.glb", dir);
     int rc = sb_glb_write(&s, p);
@@ -175,23 +180,7 @@ static int gen_towers(const char *dir) {
 static int gen_towers_night(const char *dir) {
     sb_glb_scene s = {0};
     s.no_sun = true;
-    g_seed = 2;
-    sb_glb_box(sb_glb_new_mesh(&s, 0), -160, -1, -160, 160, 0, 160);
-    const int blocks = 8;
-    const double pitch = 26, street = 6, half = blocks * pitch / 2;
-    for (int bj = 0; bj < blocks; bj++)
-        for (int bi = 0; bi < blocks; bi++) {
-            sb_glb_mesh *m = sb_glb_new_mesh(&s, 3);
-            double bx = -half + bi * pitch + street / 2, bz = -half + bj * pitch + street / 2;
-            double lot = (pitch - street) / 2;
-            for (int k = 0; k < 4; k++) {
-                double lx = bx + (k & 1) * lot + 0.5, lz = bz + (k >> 1) * lot + 0.5, w = lot - 1;
-                double h = 40 + 110 * rnd() * rnd();
-                sb_glb_box(m, lx, 0, lz, lx + w, h * 0.5, lz + w);
-                sb_glb_box(m, lx + 1, h * 0.5, lz + 1, lx + w - 1, h * 0.8, lz + w - 1);
-                sb_glb_box(m, lx + 2.5, h * 0.8, lz + 2.5, lx + w - 2.5, h, lz + w - 2.5);
-            }
-        }
+    towers_buildings(&s);
     /* lamps on posts along the street at x = 0, and their posts */
     sb_glb_mesh *posts = sb_glb_new_mesh(&s, 4);
     for (int i = 0; i < 6; i++) {

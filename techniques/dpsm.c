@@ -38,9 +38,7 @@ static bool dpsm_create(void *state, sb_gpu *g, const sb_params *p, sb_err *err)
     s->normal = sb_param_num(p, "normal");
     s->filter = sb_param_choice(p, "filter");
     int want = (int)sb_param_num(p, "light"), k = 0;
-    const sb_light *lamp = NULL;
-    for (uint32_t i = 0; i < g->scene->light_count; i++)
-        if (g->scene->lights[i].type != SB_LIGHT_DIRECTIONAL && k++ == want) lamp = &g->scene->lights[i];
+    const sb_light *lamp = sb_point_light(g->scene, want, &k);
     if (!lamp) return sb_fail(err, "dpsm:light=%d: the scene has %d point or spot light(s)", want, k);
     s->lamp = lamp->position;
     double diag = sb_v3_len(sb_v3_sub(g->scene->bounds.hi, g->scene->bounds.lo));
@@ -87,9 +85,8 @@ static void dpsm_frame(void *state, sb_frame *f) {
     sb_gpu *g = f->gpu;
     const sb_scene *sc = g->scene;
     sb_stage_begin(f, SB_STAGE_CASCADE);
-    double box[6][4] = {{1, 0, 0, -(s->lamp.x - s->far)}, {-1, 0, 0, s->lamp.x + s->far},
-                        {0, 1, 0, -(s->lamp.y - s->far)}, {0, -1, 0, s->lamp.y + s->far},
-                        {0, 0, 1, -(s->lamp.z - s->far)}, {0, 0, -1, s->lamp.z + s->far}};
+    double box[6][4];
+    sb_range_planes(s->lamp, s->far, box);
     uint32_t n = sb_bvh_collect(sc, (const double(*)[4])box, 6, g->scratch);
     glUseProgram(s->prog);
     glUniform3f(s->d_lamp, (float)s->lamp.x, (float)s->lamp.y, (float)s->lamp.z);
@@ -120,10 +117,7 @@ static void dpsm_frame(void *state, sb_frame *f) {
     sb_stage_end(f, SB_STAGE_CASCADE);
 
     sb_stage_begin(f, SB_STAGE_FINAL);
-    g->shade_light[0] = s->lamp.x;
-    g->shade_light[1] = s->lamp.y;
-    g->shade_light[2] = s->lamp.z;
-    g->shade_light[3] = 1;
+    sb_shade_point_light(g, s->lamp);
     glUseProgram(s->fp.prog);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D_ARRAY, s->tex);

@@ -131,16 +131,7 @@ static void planar_frame(void *state, sb_frame *f) {
     sb_stage_end(f, SB_STAGE_VOLUMES);
 
     sb_stage_begin(f, SB_STAGE_FINAL);
-    glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
-    glStencilFunc(GL_EQUAL, 0, 0x80);
-    glUseProgram(s->fp.prog);
-    glUniform1f(s->u_lit, 1.0f);
-    sb_final_pass(f, &s->fp, true);
-    glStencilFunc(GL_NOTEQUAL, 0, 0x80);
-    glUseProgram(s->fp.prog);
-    glUniform1f(s->u_lit, 0.0f);
-    sb_final_draw(f, &s->fp, true);
-    glDisable(GL_STENCIL_TEST);
+    sb_final_pass_stencil(f, &s->fp, s->u_lit, 0x80);   /* the shadow bit */
     sb_stage_end(f, SB_STAGE_FINAL);
 }
 

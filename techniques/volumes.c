@@ -249,16 +249,7 @@ static void volumes_frame(void *state, sb_frame *f) {
     sb_stage_end(f, SB_STAGE_VOLUMES);
 
     sb_stage_begin(f, SB_STAGE_FINAL);
-    glUseProgram(s->fp.prog);
-    glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
-    glStencilFunc(GL_EQUAL, 0, 0xff);
-    glUniform1f(s->u_lit, 1.0f);
-    sb_final_pass(f, &s->fp, true);     /* clears colour, keeps depth and stencil */
-    glStencilFunc(GL_NOTEQUAL, 0, 0xff);
-    glUseProgram(s->fp.prog);
-    glUniform1f(s->u_lit, 0.0f);
-    sb_final_draw(f, &s->fp, true);     /* the same pass again, without clearing */
-    glDisable(GL_STENCIL_TEST);
+    sb_final_pass_stencil(f, &s->fp, s->u_lit, 0xff);
     sb_stage_end(f, SB_STAGE_FINAL);
 }
 

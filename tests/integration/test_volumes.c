@@ -91,28 +91,8 @@ static void test_planar(void **st) {
     sb_session_close(&s);
 }
 
-/* Does the segment from p to the lamp cross the box [-1,1]x[0,2]x[-1,1]? */
-static bool box_blocks_lamp(sb_v3 p, sb_v3 lamp) {
-    const double lo[3] = {-1, 0, -1}, hi[3] = {1, 2, 1};
-    const double o[3] = {p.x, p.y, p.z}, v[3] = {lamp.x - p.x, lamp.y - p.y, lamp.z - p.z};
-    double t0 = 1e-9, t1 = 1 - 1e-9;
-    for (int a = 0; a < 3; a++) {
-        if (fabs(v[a]) < 1e-15) {
-            if (o[a] < lo[a] || o[a] > hi[a]) return false;
-            continue;
-        }
-        double ta = (lo[a] - o[a]) / v[a], tb = (hi[a] - o[a]) / v[a];
-        if (ta > tb) {
-            double t = ta;
-            ta = tb;
-            tb = t;
-        }
-        t0 = fmax(t0, ta);
-        t1 = fmin(t1, tb);
-        if (t0 > t1) return false;
-    }
-    return true;
-}
+/* Does the segment from p to the lamp cross the box? */
+static bool box_blocks_lamp(sb_v3 p, sb_v3 lamp) { return pb_box_blocks(p, sb_v3_sub(lamp, p), 1 - 1e-9); }
 
 static void test_point_light_cube(void **st) {
     (void)st;

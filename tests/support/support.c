@@ -42,10 +42,12 @@ bool pb_open(sb_session *s, sb_backend backend, int w, int h, sb_err *err) {
     return sb_session_open(s, &o, "plane-box", test_data("planebox-fixed.path"), err);
 }
 
-bool pb_box_shadows(sb_v3 p, sb_v3 d) {
+bool pb_box_shadows(sb_v3 p, sb_v3 d) { return pb_box_blocks(p, d, 1e300); }
+
+bool pb_box_blocks(sb_v3 p, sb_v3 d, double tmax) {
     const double lo[3] = {-1, 0, -1}, hi[3] = {1, 2, 1};
     const double o[3] = {p.x, p.y, p.z}, v[3] = {d.x, d.y, d.z};
-    double t0 = 1e-9, t1 = 1e300;
+    double t0 = 1e-9, t1 = tmax;
     for (int a = 0; a < 3; a++) {
         if (fabs(v[a]) < 1e-15) {
             if (o[a] < lo[a] || o[a] > hi[a]) return false;

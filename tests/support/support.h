@@ -24,6 +24,8 @@ bool eval_frame(sb_session *s, const char *spec, int i, int n, sb_error_metrics 
                 sb_err *err);
 /* Does a ray from p toward the sun hit the box [-1,1]x[0,2]x[-1,1]? */
 bool pb_box_shadows(sb_v3 p, sb_v3 sun);
+/* Does the segment p + t d, t in (0, tmax), cross that box? */
+bool pb_box_blocks(sb_v3 p, sb_v3 d, double tmax);
 /* Path of a file in the source tree's tests/data. */
 const char *test_data(const char *name);
 /* Path of the built shadowbench binary. */
