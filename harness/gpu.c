@@ -90,6 +90,7 @@ bool sb_final_prog_create(sb_final_prog *fp, const char *label, const char *vis_
     fp->u_proj = glGetUniformLocation(fp->prog, "u_proj");
     fp->u_light = glGetUniformLocation(fp->prog, "u_shade_light");
     fp->u_color = glGetUniformLocation(fp->prog, "u_color");
+    fp->u_eval = glGetUniformLocation(fp->prog, "sb_eval");
     return true;
 }
 
@@ -298,6 +299,7 @@ void sb_final_draw(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
     set_camera_uniforms(f, fp->u_view, fp->u_proj);
     glUniform4f(fp->u_light, (float)g->shade_light[0], (float)g->shade_light[1], (float)g->shade_light[2],
                 (float)g->shade_light[3]);
+    glUniform1i(fp->u_eval, g->eval);
     glBindVertexArray(g->vao);
     uint32_t n = sb_bvh_collect(g->scene, (const double(*)[4])f->frustum, 6, g->scratch);
     for (uint32_t i = 0; i < n; i++) {

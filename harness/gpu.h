@@ -26,7 +26,7 @@ typedef struct sb_counters {
  * visibility function. */
 typedef struct sb_final_prog {
     GLuint prog;
-    GLint u_view, u_proj, u_light, u_color;
+    GLint u_view, u_proj, u_light, u_color, u_eval;
 } sb_final_prog;
 
 typedef struct sb_gpu {

@@ -20,8 +20,10 @@ void main() {
     float vis = sb_visibility(v_pos, n, v_view_z);
     o_vis = vis;
     o_color = vec4(u_color.rgb * (0.3 + 0.7 * max(ndl, 0.0) * vis), 1.0);
-    vec3 ng = normalize(cross(dFdx(v_pos), dFdy(v_pos)));
-    if (dot(ng, n) < 0.0) ng = -ng;
-    o_pos = vec4(v_pos, sb_out_texel_px);
-    o_aux = vec4(ng, sb_out_cascade);
+    if (sb_eval) {
+        vec3 ng = normalize(cross(dFdx(v_pos), dFdy(v_pos)));
+        if (dot(ng, n) < 0.0) ng = -ng;
+        o_pos = vec4(v_pos, sb_out_texel_px);
+        o_aux = vec4(ng, sb_out_cascade);
+    }
 }

@@ -148,11 +148,14 @@ int sb_select(vec3 p, float view_z) {
 
 float sb_visibility(vec3 p, vec3 n, float view_z) {
     int k = sb_select(p, view_z);
-    // resolution: texels of the selected map per screen pixel (derivatives in uniform control flow)
-    vec4 h = sb_shadow_mat[max(k, 0)] * vec4(p, 1.0);
-    vec2 uv = h.xy / h.w / u_texel;
-    sb_out_texel_px = k < 0 ? -1.0 : max(length(dFdx(uv)), length(dFdy(uv)));
-    sb_out_cascade = float(k);
+    if (sb_eval) {
+        // resolution: texels of the selected map per screen pixel (a uniform branch, so
+        // the derivatives are in uniform control flow)
+        vec4 h = sb_shadow_mat[max(k, 0)] * vec4(p, 1.0);
+        vec2 uv = h.xy / h.w / u_texel;
+        sb_out_texel_px = k < 0 ? -1.0 : max(length(dFdx(uv)), length(dFdy(uv)));
+        sb_out_cascade = float(k);
+    }
     if (k < 0) return 1.0;
     float v = sb_lookup(k, p, n);
     int count = int(sb_info.x);
