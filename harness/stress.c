@@ -64,7 +64,7 @@ static const stress_case cases[] = {
  * degenerate/huge case (open, zero-area and 1e5-wide triangles) breaks them
  * (err_rate 0.77 when tried); they report open casters when created. */
 static const char *const techniques[] = {"none", "sm", "pssm", "pssm:stable=on", "sdsm", "sdsm:splits=cpu:latency=0",
-                                         "lispsm", "pssm:format=msm", "raycast"};
+                                         "lispsm", "tsm", "pssm:format=msm", "raycast"};
 
 static sb_v3 offset_of(const stress_case *c) { return sb_v3_scale(sb_v3_norm(sb_v3_make(1, 0.3, -0.7)), c->offset); }
 

@@ -29,6 +29,7 @@ bool sb_csm_create(sb_csm *c, sb_gpu *g, const sb_params *p, const char *name, s
     c->stable = sb_param_choice(p, "stable") == 1;
     c->warp = has_param(p, "warp") ? sb_param_choice(p, "warp") : 0;
     c->min_angle = has_param(p, "min_angle") ? sb_param_num(p, "min_angle") : 5;
+    c->focus = has_param(p, "focus") ? sb_param_num(p, "focus") : 0.3;
     c->format = sb_param_choice(p, "format");
     c->blur = (int)sb_param_num(p, "blur");
     c->bleed = sb_param_num(p, "bleed");
@@ -197,7 +198,8 @@ void sb_csm_fit_slice(const sb_csm *c, const sb_frame *f, double zn, double zf, 
     }
     sb_v3 corners[8];
     sb_frustum_corners(&f->cam, s->origin, zn, zf, corners);
-    if (c->warp) sb_light_fit_lispsm(s, f->gpu->sun, eye, f->cam.forward, zn, zf, corners, 8, c->res, c->min_angle, out);
+    if (c->warp == 1) sb_light_fit_lispsm(s, f->gpu->sun, eye, f->cam.forward, zn, zf, corners, 8, c->res, c->min_angle, out);
+    else if (c->warp == 2) sb_light_fit_tsm(s, f->gpu->sun, corners, c->res, c->focus, out);
     else if (c->stable) sb_light_fit_stable(s, f->gpu->sun, corners, 8, c->res, out);
     else sb_light_fit_points(s, f->gpu->sun, corners, 8, c->res, out);
 }

@@ -29,7 +29,7 @@
     {"blend", SB_PARAM_FLOAT, "0", 0, 0.5, NULL, "blend band between cascades (fraction of a cascade)"},       \
     {"layered", SB_PARAM_ENUM, "off", 0, 0, "off|gs|vs|on",                                                    \
      "per-cascade draws, or one draw per caster routed by a geometry shader / vertex-shader gl_Layer"},        \
-    {"warp", SB_PARAM_ENUM, "none", 0, 0, "none|lispsm", "perspective warp of each cascade (LiSPSM)"}
+    {"warp", SB_PARAM_ENUM, "none", 0, 0, "none|lispsm|tsm", "perspective warp of each cascade (LiSPSM, TSM)"}
 
 enum { SB_LAYERED_OFF, SB_LAYERED_GS, SB_LAYERED_VS };
 enum { SB_SPLIT_UNIFORM, SB_SPLIT_LOG, SB_SPLIT_PRACTICAL };
@@ -58,6 +58,7 @@ typedef struct sb_csm {
     GLint b_dir, b_radius, b_layer;
     GLint u_moments, u_bleed, u_exponent, d_exponent[3];
     double min_angle;                     /* LiSPSM falls back to uniform below this view/light angle */
+    double focus;                         /* TSM: share of the footprint mapped to 80% of the map */
     double bias, slope, normal, blend, sun_size;
     GLuint raw_sampler;                   /* the map without comparison, for PCSS's blocker search */
     GLint u_depth_raw, u_sun_tan;

@@ -205,3 +205,121 @@ void sb_light_fit_lispsm(const sb_scene *s, sb_v3 sun, sb_v3 eye, sb_v3 forward,
     out->warped = true;
     out->n_opt = nopt;
 }
+
+/* Solves the 3x3 homography H (row-major) with H src[i] ~ dst[i], i < 4. */
+static bool homography(const double src[4][2], const double dst[4][2], double H[9]) {
+    double A[8][9];
+    for (int i = 0; i < 4; i++) {
+        double x = src[i][0], y = src[i][1], u = dst[i][0], v = dst[i][1];
+        double r1[9] = {x, y, 1, 0, 0, 0, -u * x, -u * y, u};
+        double r2[9] = {0, 0, 0, x, y, 1, -v * x, -v * y, v};
+        memcpy(A[2 * i], r1, sizeof r1);
+        memcpy(A[2 * i + 1], r2, sizeof r2);
+    }
+    for (int c = 0; c < 8; c++) { /* Gaussian elimination with partial pivoting; h8 = 1 */
+        int piv = c;
+        for (int r = c + 1; r < 8; r++)
+            if (fabs(A[r][c]) > fabs(A[piv][c])) piv = r;
+        if (fabs(A[piv][c]) < 1e-14) return false;
+        for (int k = 0; k < 9; k++) {
+            double t = A[c][k];
+            A[c][k] = A[piv][k];
+            A[piv][k] = t;
+        }
+        for (int r = 0; r < 8; r++) {
+            if (r == c) continue;
+            double f = A[r][c] / A[c][c];
+            for (int k = c; k < 9; k++) A[r][k] -= f * A[c][k];
+        }
+    }
+    for (int i = 0; i < 8; i++) H[i] = A[i][8] / A[i][i];
+    H[8] = 1;
+    return true;
+}
+
+void sb_light_fit_tsm(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int res, double focus, sb_light_fit *out) {
+    sb_light_fit_points(s, sun, pts, 8, res, out);
+    if (out->empty) return;
+    /* the footprint in the uniform map's [-1,1]^2 */
+    double q[8][2];
+    for (int i = 0; i < 8; i++) {
+        sb_v3 c = sb_m4_point(out->view_proj, pts[i]);
+        q[i][0] = c.x;
+        q[i][1] = c.y;
+    }
+    double nc[2] = {0, 0}, fc[2] = {0, 0};
+    for (int i = 0; i < 4; i++)
+        for (int k = 0; k < 2; k++) {
+            nc[k] += q[i][k] / 4;
+            fc[k] += q[4 + i][k] / 4;
+        }
+    double ax[2] = {fc[0] - nc[0], fc[1] - nc[1]}, len = hypot(ax[0], ax[1]);
+    if (len < 1e-6) return; /* looking along the light: no trapezoid, keep the uniform map */
+    ax[0] /= len;
+    ax[1] /= len;
+    double px[2] = {-ax[1], ax[0]};
+    /* footprint in the centre-line frame: t along the line from the near centre, u across */
+    double tmin = 1e300, tmax = -1e300;
+    for (int i = 0; i < 8; i++) {
+        double t = (q[i][0] - nc[0]) * ax[0] + (q[i][1] - nc[1]) * ax[1];
+        tmin = fmin(tmin, t);
+        tmax = fmax(tmax, t);
+    }
+    double lambda = tmax - tmin;
+    /* the 80% rule: the focus point (focus of the way from top to base) lands on the 80% line */
+    double delta = focus * lambda, xi = -0.6;
+    double eta = (lambda * delta + lambda * delta * xi) / (lambda - 2 * delta - lambda * xi);
+    if (!(eta > 0) || !isfinite(eta)) return;
+    double vt = tmin - eta; /* the vanishing point on the centre line */
+    /* side lines from the vanishing point through the widest footprint points */
+    double slope = 0;
+    for (int i = 0; i < 8; i++) {
+        double t = (q[i][0] - nc[0]) * ax[0] + (q[i][1] - nc[1]) * ax[1];
+        double u = (q[i][0] - nc[0]) * px[0] + (q[i][1] - nc[1]) * px[1];
+        slope = fmax(slope, fabs(u) / fmax(t - vt, 1e-12));
+    }
+    /* trapezoid corners (t, u): top (near) then base (far), back to the map's x,y */
+    double tc[4][2] = {{tmin, -slope * (tmin - vt)}, {tmin, slope * (tmin - vt)}, {tmax, slope * (tmax - vt)},
+                       {tmax, -slope * (tmax - vt)}};
+    double src[4][2], dst[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+    for (int i = 0; i < 4; i++) {
+        src[i][0] = nc[0] + ax[0] * tc[i][0] + px[0] * tc[i][1];
+        src[i][1] = nc[1] + ax[1] * tc[i][0] + px[1] * tc[i][1];
+    }
+    double H[9];
+    if (!homography(src, dst, H)) return;
+    /* embed: (x, y, w) by H, z passes through (depth stays monotonic along each light ray) */
+    sb_m4 T = {{0}};
+    T.m[0] = H[0]; T.m[4] = H[1]; T.m[12] = H[2];
+    T.m[1] = H[3]; T.m[5] = H[4]; T.m[13] = H[5];
+    T.m[3] = H[6]; T.m[7] = H[7]; T.m[15] = H[8];
+    T.m[10] = 1;
+    sb_m4 warp = sb_m4_mul(T, out->view_proj);
+    /* the depth of the extended light box after the warp: refit z to [-1, 1] */
+    double zlo = 1e300, zhi = -1e300;
+    for (int i = 0; i < 8; i++) {
+        for (int e = 0; e < 2; e++) {
+            /* the uniform light box's corners over this footprint point: near and far depth */
+            sb_v3 c = sb_m4_point(out->view_proj, pts[i]);
+            sb_m4 inv;
+            if (!sb_m4_invert(out->view_proj, &inv)) return;
+            sb_v3 w = sb_m4_point(inv, sb_v3_make(c.x, c.y, e ? 1 : -1));
+            sb_v3 z = sb_m4_point(warp, w);
+            zlo = fmin(zlo, z.z);
+            zhi = fmax(zhi, z.z);
+        }
+    }
+    if (!(zhi > zlo)) return;
+    sb_m4 fitz = sb_m4_identity();
+    fitz.m[10] = 2 / (zhi - zlo);
+    fitz.m[14] = -(zhi + zlo) / (zhi - zlo);
+    sb_m4 vp = sb_m4_mul(fitz, warp);
+    if (!sb_m4_finite(vp)) return;
+    out->view_proj = vp;
+    sb_frustum_planes(vp, out->planes);
+    sb_m4 bias = sb_m4_identity();
+    bias.m[0] = bias.m[5] = bias.m[10] = 0.5;
+    bias.m[12] = bias.m[13] = bias.m[14] = 0.5;
+    out->shadow_mat = sb_m4_mul(bias, vp);
+    out->warped = true;
+}

@@ -78,6 +78,21 @@ static void test_error_falls_with_resolution(void **st) {
         assert_true(err_rate[k] < err_rate[k - 1]);
         assert_true(res_err[k] < res_err[k - 1]);
     }
+    /* along the street (frames 0, 3, 6) a trapezoidal warp beats the uniform map of the same size */
+    double e_sm = 0, e_tsm = 0, r_sm = 0, r_tsm = 0;
+    for (int fr = 0; fr <= 6; fr += 3) {
+        sb_error_metrics a, b;
+        sb_err e2;
+        assert_true(eval_frame(&g_towers, "sm:res=2048:filter=none", fr, 12, &a, NULL, NULL, &e2));
+        assert_true(eval_frame(&g_towers, "tsm:res=2048:filter=none", fr, 12, &b, NULL, NULL, &e2));
+        e_sm += a.err_rate;
+        e_tsm += b.err_rate;
+        r_sm += a.res_err_mean;
+        r_tsm += b.res_err_mean;
+    }
+    print_message("frames 0,3,6: err_rate sm %.5f tsm %.5f; res_err_mean sm %.3f tsm %.3f\n", e_sm / 3, e_tsm / 3,
+                  r_sm / 3, r_tsm / 3);
+    assert_true(e_tsm < e_sm && r_tsm < r_sm);
     /* the exact technique is (nearly) exact */
     sb_error_metrics m;
     sb_err err;

@@ -66,7 +66,8 @@ static void test_cascaded_match_analytic(void **st) {
     const char *specs[] = {"pssm:res=1024", "pssm:res=1024:layered=gs:stable=on", "sdsm:res=1024",
                            "sdsm:res=1024:splits=cpu:latency=0", "sdsm:res=1024:tight=on:partition=histogram",
                            "pssm:res=1024:select=map:blend=0.2:filter=pcf3", "lispsm:res=1024",
-                           "pssm:res=1024:warp=lispsm", "sdsm:res=1024:splits=cpu:warp=lispsm"};
+                           "pssm:res=1024:warp=lispsm", "sdsm:res=1024:splits=cpu:warp=lispsm", "tsm:res=1024",
+                           "pssm:res=1024:warp=tsm:layered=gs"};
     for (size_t i = 0; i < sizeof specs / sizeof specs[0]; i++) {
         pb_result r;
         bool ok = pb_render(&s, specs[i], &r, NULL, &err);

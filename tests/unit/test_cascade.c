@@ -113,6 +113,7 @@ static void coverage(const char *scene, int stable, int warp) {
     rig_open(&r, scene, stable);
     r.csm.warp = warp;
     r.csm.min_angle = 5;
+    r.csm.focus = 0.3;
     int warped = 0;
     srand(5);
     long samples = 0;
@@ -160,6 +161,7 @@ static void test_coverage(void **st) {
         coverage(scenes[i], 0, 0);
         coverage(scenes[i], 1, 0);
         coverage(scenes[i], 0, 1);   /* LiSPSM: the warped (projective) maps cover their slices too */
+        coverage(scenes[i], 0, 2);   /* TSM */
     }
 }
 
