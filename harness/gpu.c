@@ -237,7 +237,7 @@ void sb_count_draw(sb_frame *f, uint64_t triangles, int instances) {
     }
 }
 
-static void set_camera_uniforms(const sb_frame *f, GLint u_view, GLint u_proj) {
+void sb_set_camera_uniforms(const sb_frame *f, GLint u_view, GLint u_proj) {
     float m[16];
     sb_m4_to_float(f->view, m);
     glUniformMatrix4fv(u_view, 1, GL_FALSE, m);
@@ -264,7 +264,7 @@ void sb_zpass(sb_frame *f) {
     glClearStencil(0);
     glClear(GL_DEPTH_BUFFER_BIT | GL_STENCIL_BUFFER_BIT);
     glUseProgram(g->zpass_prog);
-    set_camera_uniforms(f, g->zpass_u_view, g->zpass_u_proj);
+    sb_set_camera_uniforms(f, g->zpass_u_view, g->zpass_u_proj);
     glBindVertexArray(g->vao);
     uint32_t n = sb_bvh_collect(g->scene, (const double(*)[4])f->frustum, 6, g->scratch);
     for (uint32_t i = 0; i < n; i++) sb_submit(f, g->scratch[i], 1);
@@ -296,7 +296,7 @@ void sb_final_draw(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
     sb_gpu *g = f->gpu;
     final_targets(g, reuse_depth);
     glUseProgram(fp->prog);
-    set_camera_uniforms(f, fp->u_view, fp->u_proj);
+    sb_set_camera_uniforms(f, fp->u_view, fp->u_proj);
     glUniform4f(fp->u_light, (float)g->shade_light[0], (float)g->shade_light[1], (float)g->shade_light[2],
                 (float)g->shade_light[3]);
     glUniform1i(fp->u_eval, g->eval);

@@ -112,6 +112,8 @@ void sb_shade_point_light(sb_gpu *g, sb_v3 pos);
  * (stencil & mask) == 0 it is drawn lit (u_lit 1), elsewhere in shadow (0).
  * Depth from the z-pass is reused; the stencil is left enabled off afterwards. */
 void sb_final_pass_stencil(sb_frame *f, const sb_final_prog *fp, GLint u_lit, GLuint mask);
+/* Uploads the frame's camera view and projection (float) to the bound program. */
+void sb_set_camera_uniforms(const sb_frame *f, GLint u_view, GLint u_proj);
 /* Counts a draw issued by the technique itself (its own geometry). */
 void sb_count_draw(sb_frame *f, uint64_t triangles, int instances);
 /* Planes (inside: n·p + d >= 0) of a clip-space box of the matrix m (Gribb-Hartmann). */

@@ -72,14 +72,6 @@ static bool planar_create(void *state, sb_gpu *g, const sb_params *p, sb_err *er
     return sb_gl_check("planar", err);
 }
 
-static void camera(const sb_frame *f, GLint u_view, GLint u_proj) {
-    float m[16];
-    sb_m4_to_float(f->view, m);
-    glUniformMatrix4fv(u_view, 1, GL_FALSE, m);
-    sb_m4_to_float(f->proj, m);
-    glUniformMatrix4fv(u_proj, 1, GL_FALSE, m);
-}
-
 static void planar_frame(void *state, sb_frame *f) {
     planar_state *s = state;
     sb_gpu *g = f->gpu;
@@ -107,7 +99,7 @@ static void planar_frame(void *state, sb_frame *f) {
         glStencilFunc(GL_ALWAYS, id, 0x7f);
         glStencilOp(GL_KEEP, GL_KEEP, GL_REPLACE);
         glUseProgram(s->prog_mark);
-        camera(f, s->m_view, s->m_proj);
+        sb_set_camera_uniforms(f, s->m_view, s->m_proj);
         glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, s->plane_ibo[k]);
         glDrawElements(GL_TRIANGLES, (GLsizei)(3 * sc->planes[k].tri_count), GL_UNSIGNED_INT, 0);
         sb_count_draw(f, sc->planes[k].tri_count, 1);
@@ -118,7 +110,7 @@ static void planar_frame(void *state, sb_frame *f) {
         glStencilFunc(GL_EQUAL, 0x80 | id, 0x7f);
         glStencilOp(GL_KEEP, GL_KEEP, GL_REPLACE);
         glUseProgram(s->prog_flat);
-        camera(f, s->f_view, s->f_proj);
+        sb_set_camera_uniforms(f, s->f_view, s->f_proj);
         glUniformMatrix4fv(s->f_flatten, 1, GL_FALSE, s->flatten[k]);
         const sb_plane *pl = &sc->planes[k];
         glUniform4f(s->f_plane, (float)pl->n[0], (float)pl->n[1], (float)pl->n[2], (float)pl->d);

@@ -230,11 +230,7 @@ static void volumes_frame(void *state, sb_frame *f) {
         glStencilOpSeparate(GL_BACK, GL_KEEP, GL_KEEP, GL_DECR_WRAP);
     }
     glUseProgram(s->prog);
-    float m[16];
-    sb_m4_to_float(f->view, m);
-    glUniformMatrix4fv(s->u_view, 1, GL_FALSE, m);
-    sb_m4_to_float(f->proj, m);
-    glUniformMatrix4fv(s->u_proj, 1, GL_FALSE, m);
+    sb_set_camera_uniforms(f, s->u_view, s->u_proj);
     glBindVertexArray(s->vao);
     for (uint32_t d = 0; d < sc->draw_count; d++) {
         /* z-pass needs the sides only; z-fail closes the volume with the light cap */
