@@ -18,6 +18,7 @@ typedef struct sb_counters {
     uint32_t stage_draw_calls[SB_STAGE_COUNT];
     uint64_t triangles, shadow_triangles;           /* triangles x instances submitted */
     int cascades_rendered, cascades_skipped;
+    int warp_fallbacks;                             /* warped maps (psm, lispsm, tsm) that used the uniform fit */
     int split_count;                                /* cascades whose far split is known this frame */
     double splits[SB_MAX_CASCADES];                 /* view-space far distance of each cascade */
 } sb_counters;

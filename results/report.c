@@ -21,7 +21,7 @@ static double error_field(const sb_error_metrics *e, int k) {
 
 void sb_report_frame_header(sb_csv *c) {
     const char *cols[] = {"frame", "repeat", "progress", "draw_calls", "shadow_draw_calls", "triangles",
-                          "shadow_triangles", "cascades_rendered", "cascades_skipped"};
+                          "shadow_triangles", "cascades_rendered", "cascades_skipped", "warp_fallbacks"};
     for (size_t i = 0; i < SB_COUNT(cols); i++) sb_csv_str(c, cols[i]);
     char name[40];
     for (int s = 0; s < SB_STAGE_COUNT; s++) {
@@ -63,7 +63,9 @@ void sb_report_frame_row(sb_csv *c, const sb_frame_rec *r, const sb_stage_times 
     if (stages & SB_STAGE_BIT(SB_STAGE_CASCADE)) {
         sb_csv_int(c, r->counters.cascades_rendered);
         sb_csv_int(c, r->counters.cascades_skipped);
+        sb_csv_int(c, r->counters.warp_fallbacks);
     } else {
+        sb_csv_empty(c);
         sb_csv_empty(c);
         sb_csv_empty(c);
     }
@@ -96,7 +98,7 @@ static const char *summary_stage_name(int k) {
 }
 
 static const char *const counter_cols[] = {"draw_calls_mean", "shadow_draw_calls_mean", "shadow_triangles_mean",
-                                           "cascades_rendered_mean", "cascades_skipped_mean"};
+                                           "cascades_rendered_mean", "cascades_skipped_mean", "warp_fallbacks_mean"};
 
 void sb_report_summary_header(sb_csv *c) {
     const char *cols[] = {"run_id", "run_index", "scene", "path", "technique", "params", "backend", "renderer", "timing",
@@ -171,7 +173,7 @@ void sb_report_summary_row(sb_csv *c, const sb_run_info *in, unsigned stages, co
         for (int i = 0; i < n; i++) {
             const sb_counters *k = &recs[i].counters;
             v[i] = field == 0 ? k->draw_calls : field == 1 ? k->shadow_draw_calls : field == 2 ? (double)k->shadow_triangles
-                 : field == 3 ? k->cascades_rendered : k->cascades_skipped;
+                 : field == 3 ? k->cascades_rendered : field == 4 ? k->cascades_skipped : k->warp_fallbacks;
         }
         if (field >= 3 && !has_cascades) sb_csv_empty(c);
         else sb_csv_num(c, n ? sb_stats_compute(v, n).mean : NAN);
