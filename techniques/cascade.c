@@ -19,12 +19,17 @@ void sb_split_distances(double lambda, int m, double n, double f, double *out) {
 static bool has_param(const sb_params *p, const char *name) { return !isnan(sb_param_num(p, name)); }
 
 bool sb_csm_create(sb_csm *c, sb_gpu *g, const sb_params *p, const char *name, sb_err *err) {
+    return sb_csm_create_desc(c, g, p, name, &(sb_csm_desc){0}, err);
+}
+
+bool sb_csm_create_desc(sb_csm *c, sb_gpu *g, const sb_params *p, const char *name, const sb_csm_desc *desc,
+                        sb_err *err) {
     memset(c, 0, sizeof *c);
     c->gpu = g;
     c->res = (int)sb_param_num(p, "res");
-    c->count = has_param(p, "cascades") ? (int)sb_param_num(p, "cascades") : 1;
+    c->count = desc->maps ? desc->maps : has_param(p, "cascades") ? (int)sb_param_num(p, "cascades") : 1;
     c->filter = sb_param_choice(p, "filter");
-    c->select = has_param(p, "select") ? sb_param_choice(p, "select") : 0;
+    c->select = desc->select_map ? 1 : has_param(p, "select") ? sb_param_choice(p, "select") : 0;
     c->blend = has_param(p, "blend") ? sb_param_num(p, "blend") : 0;
     c->stable = sb_param_choice(p, "stable") == 1;
     c->warp = has_param(p, "warp") ? sb_param_choice(p, "warp") : 0;
@@ -227,9 +232,15 @@ static void block_put(sb_csm *c, int k, const sb_light_fit *fit, double zn, doub
     c->cpu.flags[k][1] = fit->warped ? 1.0f : 0.0f;
 }
 
-void sb_csm_fit(sb_csm *c, sb_frame *f, const double *splits) {
+void sb_csm_upload(sb_csm *c, const double *zn, const double *zf) {
     memset(&c->cpu, 0, sizeof c->cpu);
     c->cpu.info[0] = (float)c->count;
+    for (int k = 0; k < c->count; k++) block_put(c, k, &c->fit[k], zn[k], zf[k], c->active[k]);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, c->block);
+    glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof c->cpu, &c->cpu);
+}
+
+void sb_csm_fit(sb_csm *c, sb_frame *f, const double *splits) {
     for (int k = 0; k <= c->count; k++) c->splits[k] = splits[k];
     f->counters.split_count = c->count;
     for (int k = 0; k < c->count; k++) {
@@ -238,10 +249,9 @@ void sb_csm_fit(sb_csm *c, sb_frame *f, const double *splits) {
         c->active[k] = zf > zn && slice_has_receivers(f, zn, zf);
         if (c->active[k]) sb_csm_fit_slice(c, f, zn, zf, &c->fit[k]);
         else memset(&c->fit[k], 0, sizeof c->fit[k]);
-        block_put(c, k, &c->fit[k], zn, zf, c->active[k]);
+        f->counters.warp_fallbacks += c->warp && c->active[k] && !c->fit[k].warped;
     }
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, c->block);
-    glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof c->cpu, &c->cpu);
+    sb_csm_upload(c, splits, splits + 1);
 }
 
 uint32_t sb_csm_cull(sb_csm *c, sb_frame *f, const sb_light_fit *bound) {
@@ -280,7 +290,7 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
         glClearBufferfv(GL_COLOR, 0, far);
     }
     glClear(GL_DEPTH_BUFFER_BIT);   /* every layer */
-    glEnable(GL_DEPTH_CLAMP);
+    if (!c->no_clamp) glEnable(GL_DEPTH_CLAMP);   /* casters toward the light stay, at depth 0 */
     if (c->slope > 0) {
         glEnable(GL_POLYGON_OFFSET_FILL);
         glPolygonOffset((float)(c->slope * g->test_bias_sign), 0.0f);

@@ -57,6 +57,7 @@ typedef struct sb_csm {
     GLuint blur_prog;
     GLint b_dir, b_radius, b_layer;
     GLint u_moments, u_bleed, u_exponent, d_exponent[3];
+    bool no_clamp;                        /* clip casters at the near plane (PSM's naive ordering) */
     double min_angle;                     /* LiSPSM falls back to uniform below this view/light angle */
     double focus;                         /* TSM: share of the footprint mapped to 80% of the map */
     double bias, slope, normal, blend, sun_size;
@@ -80,11 +81,21 @@ typedef struct sb_csm {
 /* Reads the shadow-map (and, if present, cascade) parameters; cascades
  * defaults to 1 when the technique has no `cascades` parameter. */
 bool sb_csm_create(sb_csm *c, sb_gpu *g, const sb_params *p, const char *name, sb_err *err);
+/* What a technique decides instead of its parameters (zero: from the parameters). */
+typedef struct sb_csm_desc {
+    int maps;               /* layers of the array map (PSM's cube: 6) */
+    bool select_map;        /* select by map: the first map that holds the point */
+} sb_csm_desc;
+bool sb_csm_create_desc(sb_csm *c, sb_gpu *g, const sb_params *p, const char *name, const sb_csm_desc *desc,
+                        sb_err *err);
 void sb_csm_destroy(sb_csm *c);
 /* CPU fits: cascade k covers view depth [splits[k], splits[k+1]]; a slice
  * with no receiver in view is skipped. Uploads the cascade block and records
  * splits in the frame's counters. */
 void sb_csm_fit(sb_csm *c, sb_frame *f, const double *splits);
+/* Writes the cascade block from c->fit and c->active; map k covers view
+ * depth [zn[k], zf[k]] (interval selection). */
+void sb_csm_upload(sb_csm *c, const double *zn, const double *zf);
 /* Light-space fit for one slice (exposed for tests): sphere + snapping when stable. */
 void sb_csm_fit_slice(const sb_csm *c, const sb_frame *f, double zn, double zf, sb_light_fit *out);
 /* Per-cascade caster culling into c->mask; cascades whose block was written by

@@ -138,6 +138,7 @@ int sb_select(vec3 p, float view_z) {
     for (int k = 0; k < n; k++) {
         if (sb_flags[k].x < 0.5) continue;
         vec4 h = sb_shadow_mat[k] * vec4(p, 1.0);
+        if (h.w <= 0.0) continue;  // behind a perspective map's centre (PSM's cube faces)
         vec3 c = h.xyz / h.w;
         vec2 m = 2.0 * u_texel;   // keep filter taps inside the map
         if (all(greaterThanEqual(c.xy, m)) && all(lessThanEqual(c.xy, 1.0 - m)) && c.z <= 1.0 && c.z >= 0.0) return k;
