@@ -1,6 +1,7 @@
 /* lightfit.c - orthographic light frustum fitting. */
 #include "lightfit.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 sb_m4 sb_light_view(sb_v3 sun) {
@@ -322,4 +323,388 @@ void sb_light_fit_tsm(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int res, d
     bias.m[12] = bias.m[13] = bias.m[14] = 0.5;
     out->shadow_mat = sb_m4_mul(bias, vp);
     out->warped = true;
+}
+
+/* ---- PSM ---------------------------------------------------------------- */
+
+static void m4_v4(sb_m4 m, const double in[4], double out[4]) {
+    for (int r = 0; r < 4; r++) out[r] = m.m[r] * in[0] + m.m[4 + r] * in[1] + m.m[8 + r] * in[2] + m.m[12 + r] * in[3];
+}
+
+static double v3_at(sb_v3 v, int i) { return i == 0 ? v.x : i == 1 ? v.y : v.z; }
+static void v3_set(sb_v3 *v, int i, double x) {
+    if (i == 0) v->x = x;
+    else if (i == 1) v->y = x;
+    else v->z = x;
+}
+static double plane_eval(const double p[4], sb_v3 v) { return p[0] * v.x + p[1] * v.y + p[2] * v.z + p[3]; }
+
+typedef struct {
+    sb_v3 *p;
+    int n, cap;
+} point_list;
+
+static void points_push(point_list *l, sb_v3 p) {
+    if (l->n == l->cap) {
+        int cap = l->cap ? 2 * l->cap : 256;
+        sb_v3 *np = realloc(l->p, sizeof *np * (size_t)cap);
+        if (!np) return;   /* out of memory: the fit uses the points it has */
+        l->p = np;
+        l->cap = cap;
+    }
+    l->p[l->n++] = p;
+}
+
+/* Sutherland-Hodgman: the part of the convex polygon in[n] inside the plane. */
+static int clip_polygon(const sb_v3 *in, int n, const double pl[4], sb_v3 *out) {
+    int m = 0;
+    for (int i = 0; i < n; i++) {
+        sb_v3 a = in[i], b = in[(i + 1) % n];
+        double da = plane_eval(pl, a), db = plane_eval(pl, b);
+        if (da >= 0) out[m++] = a;
+        if ((da >= 0) != (db >= 0)) out[m++] = sb_v3_lerp(a, b, da / (da - db));
+    }
+    return m;
+}
+
+typedef struct {
+    uint32_t draw;
+    double depth;           /* nearest view depth of its box inside the frustum */
+} draw_depth;
+
+typedef struct {
+    const sb_scene *s;
+    const double (*planes)[4];
+    const sb_v3 *corners;
+    point_list *out;
+    sb_v3 eye, fwd;
+    draw_depth *near;       /* optional: per draw, the box's nearest depth */
+    uint32_t near_count;
+} receiver_scan;
+
+/* The vertices of (draw box ∩ view frustum): every box face clipped by the six
+ * planes, and the frustum corners inside the box. */
+static void scan_receiver(uint32_t d, void *user) {
+    receiver_scan *r = user;
+    const sb_aabb *b = &r->s->draws[d].box;
+    int first = r->out->n;
+    for (int axis = 0; axis < 3; axis++)
+        for (int side = 0; side < 2; side++) {
+            int u = (axis + 1) % 3, v = (axis + 2) % 3;
+            sb_v3 poly[2][16];
+            for (int k = 0; k < 4; k++) {
+                sb_v3 q = b->lo;
+                v3_set(&q, axis, v3_at(side ? b->hi : b->lo, axis));
+                v3_set(&q, u, v3_at(k == 1 || k == 2 ? b->hi : b->lo, u));
+                v3_set(&q, v, v3_at(k >= 2 ? b->hi : b->lo, v));
+                poly[0][k] = q;
+            }
+            int n = 4, cur = 0;
+            for (int p = 0; p < 6 && n > 0; p++) {
+                n = clip_polygon(poly[cur], n, r->planes[p], poly[1 - cur]);
+                cur = 1 - cur;
+            }
+            for (int k = 0; k < n; k++) points_push(r->out, poly[cur][k]);
+        }
+    double eps = 1e-9 * (1 + sb_v3_len(sb_v3_sub(b->hi, b->lo)));
+    for (int k = 0; k < 8; k++) {
+        sb_v3 c = r->corners[k];
+        if (c.x >= b->lo.x - eps && c.y >= b->lo.y - eps && c.z >= b->lo.z - eps && c.x <= b->hi.x + eps &&
+            c.y <= b->hi.y + eps && c.z <= b->hi.z + eps)
+            points_push(r->out, c);
+    }
+    if (r->near && r->out->n > first) {
+        double dmin = 1e300;
+        for (int i = first; i < r->out->n; i++) dmin = fmin(dmin, sb_v3_dot(sb_v3_sub(r->out->p[i], r->eye), r->fwd));
+        r->near[r->near_count++] = (draw_depth){d, dmin};
+    }
+}
+
+static int by_depth(const void *a, const void *b) {
+    double x = ((const draw_depth *)a)->depth, y = ((const draw_depth *)b)->depth;
+    return x < y ? -1 : x > y;
+}
+
+/* The nearest view depth of a front-facing triangle inside the frustum (what
+ * the camera pass can show; it culls back faces), refining draws in the order
+ * of their boxes' nearest depth until no box can be nearer. Boxes alone put
+ * the near plane at the camera whenever it is inside a draw's box. */
+static double nearest_receiver(const sb_scene *s, const double (*planes)[4], sb_v3 eye, sb_v3 fwd, draw_depth *near,
+                               uint32_t n) {
+    qsort(near, n, sizeof *near, by_depth);
+    double best = 1e300;
+    for (uint32_t k = 0; k < n && near[k].depth < best; k++) {
+        const sb_draw *dr = &s->draws[near[k].draw];
+        for (uint32_t i = 0; i + 2 < dr->index_count; i += 3) {
+            sb_v3 poly[2][16];
+            for (int v = 0; v < 3; v++) {
+                const float *p = s->vertices + 6 * (size_t)s->indices[dr->first_index + i + v];
+                poly[0][v] = sb_v3_make(p[0], p[1], p[2]);
+            }
+            sb_v3 nrm = sb_v3_cross(sb_v3_sub(poly[0][1], poly[0][0]), sb_v3_sub(poly[0][2], poly[0][0]));
+            if (sb_v3_dot(nrm, sb_v3_sub(eye, poly[0][0])) <= 0) continue; /* back face (or edge-on) */
+            int m = 3, cur = 0;
+            for (int pl = 0; pl < 6 && m > 0; pl++) {
+                m = clip_polygon(poly[cur], m, planes[pl], poly[1 - cur]);
+                cur = 1 - cur;
+            }
+            for (int v = 0; v < m; v++) best = fmin(best, sb_v3_dot(sb_v3_sub(poly[cur][v], eye), fwd));
+        }
+    }
+    return best;
+}
+
+/* Light view in PPS as a linear map of homogeneous PPS points: x' = r·(x - l w),
+ * y' = u·(x - l w), z' = a·(x - l w), w' = w (z' > 0 in front of the light). */
+static sb_m4 pps_light_view(sb_v3 l, sb_v3 r, sb_v3 u, sb_v3 a) {
+    sb_m4 m = sb_m4_identity();
+    sb_v3 rows[3] = {r, u, a};
+    for (int i = 0; i < 3; i++) {
+        m.m[0 + i] = rows[i].x;
+        m.m[4 + i] = rows[i].y;
+        m.m[8 + i] = rows[i].z;
+        m.m[12 + i] = -sb_v3_dot(rows[i], l);
+    }
+    return m;
+}
+
+/* Perspective from the light over the window [u0,u1]x[v0,v1] (x'/z', y'/z'),
+ * w_clip = z'. Depth, by case (a, n, f distances along the axis):
+ *   inverted:       z_ndc = a / z'              (near -a, far a; Novosibirsk)
+ *   inverted naive: z_ndc = 2n / z' - 1         (near n, far at infinity, reversed)
+ *   ordinary:       z_ndc = (f+n)/(f-n) - 2fn / ((f-n) z') */
+enum { DEPTH_INVERSE, DEPTH_NAIVE, DEPTH_ORDINARY };
+static sb_m4 pps_light_proj(double u0, double u1, double v0, double v1, int kind, double n, double f) {
+    sb_m4 p = {{0}};
+    p.m[0] = 2 / (u1 - u0);
+    p.m[8] = -(u1 + u0) / (u1 - u0);
+    p.m[5] = 2 / (v1 - v0);
+    p.m[9] = -(v1 + v0) / (v1 - v0);
+    p.m[11] = 1;
+    if (kind == DEPTH_INVERSE) {
+        p.m[14] = n;
+    } else if (kind == DEPTH_NAIVE) {
+        p.m[10] = -1;
+        p.m[14] = 2 * n;
+    } else {
+        p.m[10] = (f + n) / (f - n);
+        p.m[14] = -2 * f * n / (f - n);
+    }
+    return p;
+}
+
+static void psm_finish(sb_light_fit *out, sb_m4 light_view, sb_m4 light_proj, bool keep_near, double texel) {
+    out->view = light_view;
+    out->proj = light_proj;
+    out->view_proj = sb_m4_mul(light_proj, light_view);
+    sb_frustum_planes(out->view_proj, out->planes);
+    if (!keep_near) { /* casters toward the light are clamped, not culled */
+        out->planes[4][0] = out->planes[4][1] = out->planes[4][2] = 0;
+        out->planes[4][3] = 1;
+    }
+    sb_m4 bias = sb_m4_identity();
+    bias.m[0] = bias.m[5] = bias.m[10] = 0.5;
+    bias.m[12] = bias.m[13] = bias.m[14] = 0.5;
+    out->shadow_mat = sb_m4_mul(bias, out->view_proj);
+    out->texel_world = texel;
+    out->zn = 0;
+    out->zf = 1;
+    out->warped = true;
+    out->empty = !sb_m4_finite(out->shadow_mat);
+}
+
+int sb_light_fit_psm(const sb_scene *s, sb_v3 sun, const sb_camera *cam, const sb_psm_desc *d, sb_light_fit out[6],
+                     sb_psm_info *info) {
+    int nfit = d->cube ? 6 : 1;
+    memset(out, 0, sizeof *out * (size_t)nfit);
+    memset(info, 0, sizeof *info);
+    for (int k = 0; k < nfit; k++) out[k].empty = true;
+    sun = sb_v3_norm(sun);
+    sb_v3 eye = sb_v3_sub(cam->pos, s->origin), fwd = cam->forward;
+    double fovy = cam->fov_deg * SB_PI / 180;
+    /* receivers: the visible draw boxes clipped to the view frustum */
+    sb_m4 cam_vp = sb_m4_mul(sb_m4_perspective(fovy, cam->aspect, cam->znear, cam->zfar),
+                             sb_m4_view(eye, cam->right, cam->up, fwd));
+    double planes[6][4];
+    sb_frustum_planes(cam_vp, planes);
+    sb_v3 corners[8];
+    sb_frustum_corners(cam, s->origin, cam->znear, cam->zfar, corners);
+    point_list pts = {0};
+    draw_depth *near = malloc(sizeof *near * (s->draw_count + 1));
+    receiver_scan rs = {s, (const double(*)[4])planes, corners, &pts, eye, fwd, near, 0};
+    sb_bvh_cull(s, (const double(*)[4])planes, 6, scan_receiver, &rs);
+    double znear = near ? nearest_receiver(s, (const double(*)[4])planes, eye, fwd, near, rs.near_count) : cam->znear;
+    free(near);
+    if (pts.n == 0 || znear >= 1e300) { /* nothing the camera can see */
+        free(pts.p);
+        return nfit;
+    }
+    if (znear > cam->znear) { /* the receivers' boxes again, cut at the nearest visible receiver */
+        double zcut = fmax(cam->znear, znear * (1 - 1e-3));
+        planes[4][0] = fwd.x;
+        planes[4][1] = fwd.y;
+        planes[4][2] = fwd.z;
+        planes[4][3] = -sb_v3_dot(fwd, eye) - zcut;
+        sb_frustum_corners(cam, s->origin, zcut, cam->zfar, corners);
+        pts.n = 0;
+        rs.near = NULL;
+        sb_bvh_cull(s, (const double(*)[4])planes, 6, scan_receiver, &rs);
+        if (pts.n == 0) {
+            free(pts.p);
+            return nfit;
+        }
+    }
+    /* the PPS camera: near and far pushed to the receivers */
+    double zmin = 1e300, zmax = -1e300;
+    sb_v3 wlo = {1e300, 1e300, 1e300}, whi = {-1e300, -1e300, -1e300};
+    for (int i = 0; i < pts.n; i++) {
+        double z = sb_v3_dot(sb_v3_sub(pts.p[i], eye), fwd);
+        zmin = fmin(zmin, z);
+        zmax = fmax(zmax, z);
+        wlo = sb_v3_min(wlo, pts.p[i]);
+        whi = sb_v3_max(whi, pts.p[i]);
+    }
+    double n1 = fmax(cam->znear, zmin * (1 - 1e-3)), f1 = fmax(zmax * (1 + 1e-3), n1 * 1.001);
+    double shift = 0;
+    if (d->behind == SB_PSM_SHIFT) { /* every caster in front of the moved camera */
+        double cmin = 1e300;
+        for (int k = 0; k < 8; k++) {
+            sb_v3 q = sb_v3_make(k & 1 ? s->bounds.hi.x : s->bounds.lo.x, k & 2 ? s->bounds.hi.y : s->bounds.lo.y,
+                                 k & 4 ? s->bounds.hi.z : s->bounds.lo.z);
+            cmin = fmin(cmin, sb_v3_dot(sb_v3_sub(q, eye), fwd));
+        }
+        shift = fmax(0, 1e-3 * f1 - cmin);
+    }
+    info->shift = shift;
+    info->znear = n1 + shift;
+    info->zfar = f1 + shift;
+    sb_m4 C = sb_m4_mul(sb_m4_perspective(fovy, cam->aspect, n1 + shift, f1 + shift),
+                        sb_m4_view(sb_v3_sub(eye, sb_v3_scale(fwd, shift)), cam->right, cam->up, fwd));
+    const double sun4[4] = {sun.x, sun.y, sun.z, 0};
+    double L[4];
+    m4_v4(C, sun4, L);
+    info->inverted = L[3] < 0;
+    for (int i = 0; i < pts.n; i++) pts.p[i] = sb_m4_point(C, pts.p[i]); /* all in front: w > 0 */
+    sb_v3 plo = {1e300, 1e300, 1e300}, phi = {-1e300, -1e300, -1e300}, centre = {0, 0, 0};
+    for (int i = 0; i < pts.n; i++) {
+        plo = sb_v3_min(plo, pts.p[i]);
+        phi = sb_v3_max(phi, pts.p[i]);
+        centre = sb_v3_add(centre, sb_v3_scale(pts.p[i], 1.0 / pts.n));
+    }
+    double texel = fmax(whi.x - wlo.x, fmax(whi.y - wlo.y, whi.z - wlo.z)) / d->res;
+    double lxyz = sqrt(L[0] * L[0] + L[1] * L[1] + L[2] * L[2]);
+    bool naive = d->behind == SB_PSM_NAIVE && info->inverted;
+    int depth = info->inverted ? (naive ? DEPTH_NAIVE : DEPTH_INVERSE) : DEPTH_ORDINARY;
+
+    if (fabs(L[3]) * 1e7 <= lxyz) {
+        /* the sun perpendicular to the view: still a directional light in PPS, an
+           orthographic map there (w_clip = the camera's w) */
+        info->ortho = true;
+        sb_v3 dir = sb_v3_make(L[0] / lxyz, L[1] / lxyz, L[2] / lxyz);
+        sb_m4 lv = sb_light_view(dir);
+        sb_v3 lo = {1e300, 1e300, 1e300}, hi = {-1e300, -1e300, -1e300};
+        for (int i = 0; i < pts.n; i++) {
+            sb_v3 q = sb_m4_point(lv, pts.p[i]);
+            lo = sb_v3_min(lo, q);
+            hi = sb_v3_max(hi, q);
+        }
+        double ztop = hi.z; /* toward the light: the unit cube's extent, casters beyond clamp to 0 */
+        for (int k = 0; k < 8; k++)
+            ztop = fmax(ztop, sb_m4_point(lv, sb_v3_make(k & 1 ? 1 : -1, k & 2 ? 1 : -1, k & 4 ? 1 : -1)).z);
+        double gx = 2 * (hi.x - lo.x) / d->res + 1e-12, gy = 2 * (hi.y - lo.y) / d->res + 1e-12;
+        double pad = 1e-4 * (ztop - lo.z) + 1e-12;
+        sb_m4 o = sb_m4_ortho(lo.x - gx, hi.x + gx, lo.y - gy, hi.y + gy, -ztop - pad, -lo.z + pad);
+        psm_finish(&out[0], sb_m4_mul(lv, C), o, false, texel);
+        free(pts.p);
+        return nfit;
+    }
+    sb_v3 l = sb_v3_make(L[0] / L[3], L[1] / L[3], L[2] / L[3]);
+    info->light = l;
+
+    if (!d->cube) {
+        sb_v3 axis = sb_v3_norm(sb_v3_sub(centre, l)), r, u;
+        sb_basis(axis, &r, &u);
+        double u0 = 1e300, u1 = -1e300, v0 = 1e300, v1 = -1e300, z0 = 1e300, z1 = -1e300;
+        bool wide = false;
+        for (int i = 0; i < pts.n && !wide; i++) {
+            sb_v3 q = sb_v3_sub(pts.p[i], l);
+            double z = sb_v3_dot(q, axis);
+            if (z <= 1e-9 * sb_v3_len(q)) wide = true;
+            u0 = fmin(u0, sb_v3_dot(q, r) / z);
+            u1 = fmax(u1, sb_v3_dot(q, r) / z);
+            v0 = fmin(v0, sb_v3_dot(q, u) / z);
+            v1 = fmax(v1, sb_v3_dot(q, u) / z);
+            z0 = fmin(z0, z);
+            z1 = fmax(z1, z);
+        }
+        double lim = tan((d->max_half_fov_deg > 0 ? d->max_half_fov_deg : 80) * SB_PI / 180);
+        if (wide || fmax(fmax(-u0, u1), fmax(-v0, v1)) > lim) {
+            /* no single frustum from l holds the receivers: the uniform map */
+            info->fallback = true;
+            sb_v3 sc[8];
+            sb_frustum_corners(cam, s->origin, n1, f1, sc);
+            sb_light_fit_points(s, sun, sc, 8, d->res, &out[0]);
+            free(pts.p);
+            return nfit;
+        }
+        double gu = 2 * (u1 - u0) / d->res, gv = 2 * (v1 - v0) / d->res;
+        double nn = depth == DEPTH_ORDINARY ? 0.5 * z0 : z0 * (1 - 1e-4);
+        sb_m4 lp = pps_light_proj(u0 - gu, u1 + gu, v0 - gv, v1 + gv, depth, nn, z1 * (1 + 1e-4));
+        psm_finish(&out[0], sb_m4_mul(pps_light_view(l, r, u, axis), C), lp, naive, texel);
+        free(pts.p);
+        return nfit;
+    }
+
+    /* cube: a 90-degree face (plus a guard band) per PPS axis, where receivers are;
+       when every receiver is in front of a face's plane, the face's window and
+       depth are fitted to them (a face that holds them all is the single map) */
+    double g1 = 1 + 4.0 / d->res;
+    sb_v3 near_pt = sb_v3_max(plo, sb_v3_min(l, phi));   /* closest point of the receivers' box to l */
+    double dist = sb_v3_len(sb_v3_sub(near_pt, l)), far = 0;
+    for (int i = 0; i < pts.n; i++) far = fmax(far, sb_v3_len(sb_v3_sub(pts.p[i], l)));
+    for (int k = 0; k < 6; k++) {
+        sb_v3 axis = {0, 0, 0}, r, u;
+        v3_set(&axis, k / 2, k & 1 ? -1 : 1);
+        sb_basis(axis, &r, &u);
+        /* a face is needed unless one of its pyramid's planes has every receiver outside */
+        bool sep[5] = {true, true, true, true, true}, front = true;
+        double u0 = 1e300, u1 = -1e300, v0 = 1e300, v1 = -1e300, z0 = 1e300, z1 = -1e300;
+        for (int i = 0; i < pts.n; i++) {
+            sb_v3 q = sb_v3_sub(pts.p[i], l);
+            double z = sb_v3_dot(q, axis), x = sb_v3_dot(q, r), y = sb_v3_dot(q, u);
+            if (z > 0) sep[0] = false;
+            if (x <= g1 * z) sep[1] = false;
+            if (x >= -g1 * z) sep[2] = false;
+            if (y <= g1 * z) sep[3] = false;
+            if (y >= -g1 * z) sep[4] = false;
+            if (z <= 1e-9 * sb_v3_len(q)) {
+                front = false;
+                continue;
+            }
+            u0 = fmin(u0, x / z);
+            u1 = fmax(u1, x / z);
+            v0 = fmin(v0, y / z);
+            v1 = fmax(v1, y / z);
+            z0 = fmin(z0, z);
+            z1 = fmax(z1, z);
+        }
+        if (sep[0] || sep[1] || sep[2] || sep[3] || sep[4]) continue;
+        double zlo = dist / sqrt(1 + 2 * g1 * g1), zhi = far; /* z' bounds of any receiver inside the face */
+        double w[4] = {-g1, g1, -g1, g1};
+        if (front) {
+            double gu = 2 * (u1 - u0) / d->res, gv = 2 * (v1 - v0) / d->res;
+            w[0] = fmax(w[0], u0 - gu);
+            w[1] = fmin(w[1], u1 + gu);
+            w[2] = fmax(w[2], v0 - gv);
+            w[3] = fmin(w[3], v1 + gv);
+            zlo = z0;
+            zhi = z1;
+        }
+        if (!(zlo > 0) || !(w[1] > w[0]) || !(w[3] > w[2])) continue;
+        double nn = depth == DEPTH_ORDINARY ? 0.5 * zlo : zlo * (1 - 1e-4);
+        sb_m4 lp = pps_light_proj(w[0], w[1], w[2], w[3], depth, nn, zhi * (1 + 1e-4));
+        psm_finish(&out[k], sb_m4_mul(pps_light_view(l, r, u, axis), C), lp, naive, texel);
+    }
+    free(pts.p);
+    return nfit;
 }

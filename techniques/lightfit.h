@@ -39,3 +39,41 @@ void sb_light_fit_tsm(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int res, d
 /* Stable variant: a bounding sphere of the points (rotation-invariant size)
  * whose light-space window is snapped to whole texels (no shimmer). */
 void sb_light_fit_stable(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int n, int res, sb_light_fit *out);
+
+/* PSM (Stamminger & Drettakis 2002) with the Novosibirsk paper's fixes: the
+ * map is built in the post-projective space (PPS) of a camera whose near and
+ * far planes are pushed to the visible receivers, where the sun is a point
+ * light l = P (sun, 0). `behind` decides what happens to casters behind the
+ * camera when the sun is behind it (l "inverted", w < 0):
+ *   SB_PSM_INVERSE  depth z_ndc = a / z' (near -a, far a): one function of 1/z'
+ *                   orders both sides of the plane at infinity, so casters
+ *                   behind the camera land in front of every receiver;
+ *   SB_PSM_SHIFT    the original fix: the PPS camera is moved back until every
+ *                   caster is in front of it (costs resolution);
+ *   SB_PSM_NAIVE    an ordinary near plane at the receivers' side: casters
+ *                   behind the camera are clipped (for comparison only).
+ * The light frustum is fitted to the receivers (visible draw boxes clipped to
+ * the view frustum). Single map: one fit, the uniform fit instead (info
+ * fallback) when the receivers need a frustum wider than max_half_fov_deg
+ * (light nearly along the view). cube: six 90-degree faces around l, fits
+ * flagged empty where no receiver is. Returns the number of fits (1 or 6);
+ * every fit is empty when no receiver is in view. Fits leave the near plane
+ * out of the culling planes: casters toward the light are clamped to depth 0
+ * (GL_DEPTH_CLAMP), except naive with an inverted light, which clips them. */
+enum { SB_PSM_INVERSE, SB_PSM_SHIFT, SB_PSM_NAIVE };
+typedef struct sb_psm_desc {
+    int behind;                 /* SB_PSM_* */
+    bool cube;
+    int res;
+    double max_half_fov_deg;    /* single map: 0 means 80 */
+} sb_psm_desc;
+typedef struct sb_psm_info {
+    bool inverted;              /* the sun is behind the camera: l has w < 0 */
+    bool ortho;                 /* the sun is perpendicular to the view: a directional light in PPS */
+    bool fallback;              /* single map too wide: the uniform fit was used */
+    double shift;               /* SB_PSM_SHIFT: how far the PPS camera moved back */
+    double znear, zfar;         /* the PPS camera's pushed planes */
+    sb_v3 light;                /* l in PPS (finite unless ortho) */
+} sb_psm_info;
+int sb_light_fit_psm(const sb_scene *s, sb_v3 sun, const sb_camera *cam, const sb_psm_desc *d, sb_light_fit out[6],
+                     sb_psm_info *info);

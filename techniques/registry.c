@@ -16,11 +16,12 @@ extern const sb_technique sb_technique_lispsm;
 extern const sb_technique sb_technique_cube;
 extern const sb_technique sb_technique_dpsm;
 extern const sb_technique sb_technique_tsm;
+extern const sb_technique sb_technique_psm;
 
 static const sb_technique *const all[] = {&sb_technique_none,    &sb_technique_sm,      &sb_technique_pssm,
                                           &sb_technique_sdsm,    &sb_technique_raycast, &sb_technique_volumes,
                                           &sb_technique_planar, &sb_technique_lispsm,  &sb_technique_cube,
-                                          &sb_technique_dpsm,   &sb_technique_tsm};
+                                          &sb_technique_dpsm,   &sb_technique_tsm,     &sb_technique_psm};
 
 const char *const sb_stage_names[SB_STAGE_COUNT] = {"zpass", "minmax", "cascade", "final", "volumes", "rays"};
 

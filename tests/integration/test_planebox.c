@@ -67,7 +67,8 @@ static void test_cascaded_match_analytic(void **st) {
                            "sdsm:res=1024:splits=cpu:latency=0", "sdsm:res=1024:tight=on:partition=histogram",
                            "pssm:res=1024:select=map:blend=0.2:filter=pcf3", "lispsm:res=1024",
                            "pssm:res=1024:warp=lispsm", "sdsm:res=1024:splits=cpu:warp=lispsm", "tsm:res=1024",
-                           "pssm:res=1024:warp=tsm:layered=gs"};
+                           "pssm:res=1024:warp=tsm:layered=gs", "psm:res=1024", "psm:res=1024:cube=on",
+                           "psm:res=1024:cube=on:layered=gs", "psm:res=1024:behind=shift"};
     for (size_t i = 0; i < sizeof specs / sizeof specs[0]; i++) {
         pb_result r;
         bool ok = pb_render(&s, specs[i], &r, NULL, &err);
@@ -132,6 +133,49 @@ static void test_filtered_formats_converge(void **st) {
     sb_session_close(&s);
 }
 
+/* The sun low behind a low camera whose plane the box is behind: the box's
+ * shadow falls forward over most of the view (tests/data/planebox-behind.path).
+ * In the camera's post-projective space the sun is an inverted point light and
+ * the box lies beyond the plane at infinity. PSM's inverse projection orders
+ * it in front of every receiver; the naive ordering (an ordinary near plane)
+ * clips it and loses the shadow; the virtual camera shift keeps it at a cost in
+ * resolution. Checked against the analytic shadow and the ray-cast reference. */
+static void test_psm_sun_behind_camera(void **st) {
+    (void)st;
+    sb_session s;
+    sb_err err;
+    assert_true(pb_open_view(&s, SB_BACKEND_EGL, 480, 270, "planebox-behind.path", 30, 20, &err));
+    /* the setup is what it claims: every box corner behind the camera, the sun behind too */
+    sb_camera cam = sb_path_camera(&s.path, 0, 1, 480.0 / 270, &s.scene);
+    for (int k = 0; k < 8; k++) {
+        sb_v3 c = sb_v3_make(k & 1 ? 1 : -1, k & 2 ? 2 : 0, k & 4 ? 1 : -1);
+        assert_true(sb_v3_dot(sb_v3_sub(c, cam.pos), cam.forward) < 0);
+    }
+    assert_true(sb_v3_dot(s.gpu.sun, cam.forward) < 0);
+    const char *specs[] = {"psm", "psm:behind=shift", "psm:cube=on", "psm:behind=naive"};
+    pb_result r[4];
+    sb_error_metrics m[4];
+    for (int i = 0; i < 4; i++) {
+        bool ok = pb_render(&s, specs[i], &r[i], NULL, &err) && eval_frame(&s, specs[i], 0, 1, &m[i], NULL, NULL, &err);
+        if (!ok) print_error("%s\n", err.msg);
+        assert_true(ok);
+        print_message("%-18s analytic: shadow %ld, technique %ld, mismatch %ld (%.3f%%); reference: err_rate %.5f, "
+                      "res_err_mean %.3f\n", specs[i], r[i].shadow_exact, r[i].shadow_tech, r[i].mismatch,
+                      100.0 * r[i].mismatch / r[i].pixels, m[i].err_rate, m[i].res_err_mean);
+    }
+    assert_true(r[0].shadow_exact > r[0].pixels / 4);   /* the shadow fills much of the view */
+    for (int i = 0; i < 3; i++) {
+        assert_true(r[i].mismatch < r[i].pixels / 200);
+        assert_true(m[i].err_rate < 0.002);
+    }
+    /* the shift costs resolution: coarser texels than the inverse projection */
+    assert_true(m[1].res_err_mean > m[0].res_err_mean + 0.1);
+    /* the naive ordering loses (nearly) the whole shadow */
+    assert_true(r[3].mismatch > r[3].shadow_exact / 2);
+    assert_true(m[3].err_rate > 0.3);
+    sb_session_close(&s);
+}
+
 static void test_backends_agree(void **st) {
     (void)st;
     const int w = 320, h = 180;
@@ -161,6 +205,7 @@ int main(void) {
         cmocka_unit_test(test_low_resolution_is_worse),
         cmocka_unit_test(test_backends_agree),
         cmocka_unit_test(test_cascaded_match_analytic),
+        cmocka_unit_test(test_psm_sun_behind_camera),
         cmocka_unit_test(test_pcss_converges_to_hard),
         cmocka_unit_test(test_filtered_formats_converge),
     };

@@ -1,5 +1,6 @@
 #include "support.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -31,6 +32,11 @@ int run_capture(const char *cmd, char *out, size_t len) {
 }
 
 bool pb_open(sb_session *s, sb_backend backend, int w, int h, sb_err *err) {
+    return pb_open_view(s, backend, w, h, "planebox-fixed.path", NAN, NAN, err);
+}
+
+bool pb_open_view(sb_session *s, sb_backend backend, int w, int h, const char *path, double sun_az, double sun_el,
+                  sb_err *err) {
     sb_run_opts o;
     sb_run_opts_defaults(&o);
     o.backend = backend;
@@ -38,8 +44,13 @@ bool pb_open(sb_session *s, sb_backend backend, int w, int h, sb_err *err) {
     o.height = h;
     o.frames = 1;
     o.warmup = 0;
+    if (!isnan(sun_az)) {
+        o.sun_override = true;
+        o.sun_az = sun_az;
+        o.sun_el = sun_el;
+    }
     memset(s, 0, sizeof *s);
-    return sb_session_open(s, &o, "plane-box", test_data("planebox-fixed.path"), err);
+    return sb_session_open(s, &o, "plane-box", test_data(path), err);
 }
 
 bool pb_box_shadows(sb_v3 p, sb_v3 d) { return pb_box_blocks(p, d, 1e300); }

@@ -16,6 +16,9 @@ typedef struct pb_result {
 
 /* Opens plane-box with the fixed camera in tests/data/planebox-fixed.path. */
 bool pb_open(sb_session *s, sb_backend backend, int w, int h, sb_err *err);
+/* The same with another camera (a path in tests/data) and sun (NAN: the file's). */
+bool pb_open_view(sb_session *s, sb_backend backend, int w, int h, const char *path, double sun_az, double sun_el,
+                  sb_err *err);
 /* Renders frame 0 with the spec and classifies it. */
 bool pb_render(sb_session *s, const char *spec, pb_result *out, unsigned char *vis_out, sb_err *err);
 /* Renders path frame i of n with the spec in evaluation mode and measures its

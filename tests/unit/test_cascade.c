@@ -252,6 +252,157 @@ static void test_lispsm_fallback(void **st) {
     sb_scene_free(&s);
 }
 
+static sb_camera look_camera(sb_v3 pos, sb_v3 target) {
+    sb_camera c;
+    memset(&c, 0, sizeof c);
+    c.pos = pos;
+    c.rot = sb_quat_look(sb_v3_sub(target, pos), sb_v3_make(0, 1, 0));
+    c.right = sb_quat_rotate(c.rot, sb_v3_make(1, 0, 0));
+    c.up = sb_quat_rotate(c.rot, sb_v3_make(0, 1, 0));
+    c.forward = sb_quat_rotate(c.rot, sb_v3_make(0, 0, -1));
+    c.fov_deg = 60;
+    c.aspect = 16.0 / 9;
+    c.znear = 0.05;
+    c.zfar = 60;
+    return c;
+}
+
+/* Shadow-map coordinates of an origin-relative point: xyz / w, and w. */
+static double shadow_coord(const sb_light_fit *f, sb_v3 p, sb_v3 *out) {
+    const double *m = f->shadow_mat.m;
+    double h[4];
+    for (int r = 0; r < 4; r++) h[r] = m[r] * p.x + m[4 + r] * p.y + m[8 + r] * p.z + m[12 + r];
+    *out = sb_v3_make(h[0] / h[3], h[1] / h[3], h[2] / h[3]);
+    return h[3];
+}
+
+/* Is the world point on plane-box's ground inside the camera frustum? */
+static bool in_view(const sb_camera *c, sb_v3 p) {
+    sb_v3 d = sb_v3_sub(p, c->pos);
+    double z = sb_v3_dot(d, c->forward), ty = tan(c->fov_deg * SB_PI / 360);
+    return z > 0.3 && z < c->zfar && fabs(sb_v3_dot(d, c->right)) < z * ty * c->aspect &&
+           fabs(sb_v3_dot(d, c->up)) < z * ty;
+}
+
+/* Entry distance of the ray p + t d into plane-box's box [-1,1]x[0,2]x[-1,1], or -1. */
+static double box_entry(sb_v3 p, sb_v3 d) {
+    const double lo[3] = {-1, 0, -1}, hi[3] = {1, 2, 1}, o[3] = {p.x, p.y, p.z}, v[3] = {d.x, d.y, d.z};
+    double t0 = 1e-9, t1 = 1e300;
+    for (int a = 0; a < 3; a++) {
+        if (fabs(v[a]) < 1e-15) {
+            if (o[a] < lo[a] || o[a] > hi[a]) return -1;
+            continue;
+        }
+        double ta = (lo[a] - o[a]) / v[a], tb = (hi[a] - o[a]) / v[a];
+        t0 = fmax(t0, fmin(ta, tb));
+        t1 = fmin(t1, fmax(ta, tb));
+    }
+    return t0 <= t1 ? t0 : -1;
+}
+
+/* PSM with the sun behind the camera (the camera of tests/data/planebox-behind.path):
+ * for every shadowed ground point in view, the box point that shadows it lies
+ * behind the camera, on the same map texel; the inverse projection gives it a
+ * smaller depth than the receiver, the naive ordering a depth below 0 (clipped
+ * at the near plane, so the shadow is lost). */
+static void test_psm_behind_camera_order(void **st) {
+    (void)st;
+    sb_scene s;
+    sb_err err;
+    assert_true(sb_scene_load(&s, "plane-box", &err));
+    sb_camera cam = look_camera(sb_v3_make(-2, 0.3, -3.75), sb_v3_make(-2.97, 0.126, -3.579));
+    sb_v3 sun = sb_sun_dir(30, 20);
+    sb_light_fit inv[6], naive[6];
+    sb_psm_info ii, ni;
+    assert_int_equal(sb_light_fit_psm(&s, sun, &cam, &(sb_psm_desc){.behind = SB_PSM_INVERSE, .res = 2048}, inv, &ii), 1);
+    assert_int_equal(sb_light_fit_psm(&s, sun, &cam, &(sb_psm_desc){.behind = SB_PSM_NAIVE, .res = 2048}, naive, &ni), 1);
+    assert_true(ii.inverted && !ii.fallback && !ii.ortho && !inv[0].empty && inv[0].warped);
+    assert_true(sb_m4_finite(inv[0].shadow_mat) && sb_m4_finite(naive[0].shadow_mat));
+    int checked = 0, clipped = 0;
+    for (double x = -12; x <= 12; x += 0.05)
+        for (double z = -12; z <= 12; z += 0.05) {
+            sb_v3 p = sb_v3_make(x, 0, z);
+            double t = box_entry(p, sun);
+            if (!in_view(&cam, p) || t < 0 || (fabs(x) <= 1 && fabs(z) <= 1)) continue;
+            sb_v3 q = sb_v3_add(p, sb_v3_scale(sun, t + 1e-3));   /* inside the caster */
+            assert_true(sb_v3_dot(sb_v3_sub(q, cam.pos), cam.forward) < 0);
+            sb_v3 pr = sb_v3_sub(p, s.origin), qr = sb_v3_sub(q, s.origin), cp, cq;
+            assert_true(shadow_coord(&inv[0], pr, &cp) > 0 && shadow_coord(&inv[0], qr, &cq) > 0);
+            assert_true(cp.x >= 0 && cp.x <= 1 && cp.y >= 0 && cp.y <= 1 && cp.z >= 0 && cp.z <= 1);
+            assert_true(fabs(cp.x - cq.x) < 1e-6 && fabs(cp.y - cq.y) < 1e-6);
+            assert_true(cq.z < cp.z);                            /* the caster is nearer the light */
+            assert_true(shadow_coord(&naive[0], pr, &cp) > 0 && shadow_coord(&naive[0], qr, &cq) > 0);
+            assert_true(cp.z >= 0 && cp.z <= 1);
+            clipped += cq.z < 0;
+            checked++;
+        }
+    print_message("%d shadowed receivers in view, casters behind the camera; naive ordering clips %d of them\n", checked,
+                  clipped);
+    assert_true(checked > 100);
+    assert_int_equal(clipped, checked);
+    sb_scene_free(&s);
+}
+
+/* Every ground point in view maps into an active map (a cube face when cube=on). */
+static void check_coverage(const sb_scene *s, const sb_camera *cam, const sb_light_fit *fits, int n) {
+    int covered = 0, total = 0;
+    for (double x = -20; x <= 20; x += 0.5)
+        for (double z = -20; z <= 20; z += 0.5) {
+            sb_v3 p = sb_v3_make(x, 0, z);
+            if (!in_view(cam, p) || (fabs(x) <= 1 && fabs(z) <= 1)) continue;
+            total++;
+            for (int k = 0; k < n; k++) {
+                sb_v3 c;
+                if (fits[k].empty || shadow_coord(&fits[k], sb_v3_sub(p, s->origin), &c) <= 0) continue;
+                if (c.x >= 0 && c.x <= 1 && c.y >= 0 && c.y <= 1 && c.z >= 0 && c.z <= 1) {
+                    covered++;
+                    break;
+                }
+            }
+        }
+    assert_true(total > 50);
+    assert_int_equal(covered, total);
+}
+
+/* The sun right behind the camera: the light sits in the middle of the view in
+ * PPS, so one frustum from it needs a wide angle (past max_fov the single map
+ * falls back to the uniform map), the cube's faces share it; the sun across the
+ * view: a directional light in PPS (orthographic map). */
+static void test_psm_cube_and_limits(void **st) {
+    (void)st;
+    sb_scene s;
+    sb_err err;
+    assert_true(sb_scene_load(&s, "plane-box", &err));
+    for (int back = 0; back < 2; back++) {
+        sb_v3 sun = sb_sun_dir(30, 50);
+        sb_v3 target = sb_v3_make(0, 1, 0);
+        sb_v3 along = sb_v3_norm(sb_v3_cross(sun, sb_v3_make(0, 1, 0)));  /* horizontal, across the sun */
+        sb_camera cam = look_camera(sb_v3_add(target, sb_v3_scale(back ? sun : along, 8)), target);
+        sb_light_fit single[6], cube[6];
+        sb_psm_info si, ci;
+        assert_int_equal(sb_light_fit_psm(&s, sun, &cam, &(sb_psm_desc){.res = 2048}, single, &si), 1);
+        assert_int_equal(sb_light_fit_psm(&s, sun, &cam, &(sb_psm_desc){.res = 2048, .cube = true}, cube, &ci), 6);
+        int faces = 0;
+        for (int k = 0; k < 6; k++) faces += !cube[k].empty;
+        print_message("sun %s: single map %s; cube: %d faces\n", back ? "behind the camera" : "across the view",
+                      si.fallback ? "fell back to uniform" : si.ortho ? "orthographic in PPS" : "perspective", faces);
+        if (back) {
+            assert_true(si.inverted && !si.ortho);
+            assert_true(faces >= 2);
+            sb_light_fit narrow[6];
+            sb_psm_info ni;
+            sb_light_fit_psm(&s, sun, &cam, &(sb_psm_desc){.res = 2048, .max_half_fov_deg = 30}, narrow, &ni);
+            assert_true(ni.fallback && !narrow[0].warped);
+            check_coverage(&s, &cam, narrow, 1);
+        } else {
+            assert_true(si.ortho && !si.fallback);
+        }
+        check_coverage(&s, &cam, single, 1);
+        check_coverage(&s, &cam, cube, 6);
+    }
+    sb_scene_free(&s);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_split_schemes),
@@ -259,6 +410,8 @@ int main(void) {
         cmocka_unit_test(test_coverage),
         cmocka_unit_test(test_culling_conservative_and_tight),
         cmocka_unit_test(test_lispsm_fallback),
+        cmocka_unit_test(test_psm_behind_camera_order),
+        cmocka_unit_test(test_psm_cube_and_limits),
     };
     return cmocka_run_group_tests_name("cascade", tests, NULL, NULL);
 }
