@@ -64,7 +64,7 @@ static const stress_case cases[] = {
  * degenerate/huge case (open, zero-area and 1e5-wide triangles) breaks them
  * (err_rate 0.77 when tried); they report open casters when created. */
 static const char *const techniques[] = {"none", "sm", "pssm", "pssm:stable=on", "sdsm", "sdsm:splits=cpu:latency=0",
-                                         "lispsm", "tsm", "pssm:format=msm", "raycast"};
+                                         "lispsm", "tsm", "psm", "psm:cube=on", "pssm:format=msm", "raycast"};
 
 static sb_v3 offset_of(const stress_case *c) { return sb_v3_scale(sb_v3_norm(sb_v3_make(1, 0.3, -0.7)), c->offset); }
 
@@ -287,6 +287,8 @@ static void run_row(sb_session *s, const char *spec, int frames, row_result *r) 
 }
 
 int sb_stress_run(const sb_run_opts *opts, const char *only, FILE *out, sb_err *err) {
+    /* SB_STRESS_KEEP=1 keeps each case's .glb and .path, to rerun a failing case with `run --images` */
+    bool keep = getenv("SB_STRESS_KEEP") != NULL;
     char dir[] = "/tmp/shadowbench-stress-XXXXXX";
     if (!mkdtemp(dir)) return sb_fail(err, "cannot create a temporary folder for the stress scenes"), -1;
     sb_session s;
@@ -341,10 +343,13 @@ int sb_stress_run(const sb_run_opts *opts, const char *only, FILE *out, sb_err *
             fflush(out);
         }
         sb_session_close_scene(&s);
-        unlink(scene);
-        unlink(path);
+        if (!keep) {
+            unlink(scene);
+            unlink(path);
+        }
     }
-    rmdir(dir);
+    if (keep) fprintf(out, "scenes and paths kept in %s (SB_STRESS_KEEP)\n", dir);
+    else rmdir(dir);
     sb_context_destroy(&s.ctx);
     fprintf(out, "%d failure(s)\n", failures);
     return failures;
