@@ -35,6 +35,7 @@ typedef struct sb_gpu {
     const sb_context *ctx;
     int width, height;
     sb_v3 sun;                          /* unit vector toward the sun */
+    bool has_sun;                       /* the scene has one, or --sun gave one (else `sun` is a default) */
     double shade_light[4];              /* the light the final pass shades and is evaluated against:
                                            xyz toward the sun (w 0) or a point light's position (w 1);
                                            the sun unless a technique sets it in its frame */

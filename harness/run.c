@@ -110,7 +110,9 @@ bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, con
     base_name(path, s->path_name, sizeof s->path_name);
     sb_v3 sun = s->scene.has_sun ? s->scene.sun : sb_sun_dir(135, 40);
     if (o->sun_override) sun = sb_sun_dir(o->sun_az, o->sun_el);
-    if (!sb_gpu_init(&s->gpu, &s->ctx, &s->scene, o->width, o->height, sun, err)) {
+    bool init_ok = sb_gpu_init(&s->gpu, &s->ctx, &s->scene, o->width, o->height, sun, err);
+    s->gpu.has_sun = s->scene.has_sun || o->sun_override;
+    if (!init_ok) {
         sb_path_free(&s->path);
         sb_scene_free(&s->scene);
         return false;

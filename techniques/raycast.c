@@ -4,7 +4,9 @@
  * epsilon that grows with distance, and limited to the scene; the thesis's
  * version had neither), and the camera pass reads the result. It is the
  * reference every technique is measured against, with a cost of its own:
- * its readback and rays are the `rays` stage. */
+ * its readback and rays are the `rays` stage. On a scene lit only by point
+ * lights it casts toward the first of them (or the one `light` names), so the
+ * point-light techniques have their reference row too. */
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -15,6 +17,8 @@
 
 static const sb_param_def raycast_params[] = {
     {"threads", SB_PARAM_INT, "0", 0, 16, NULL, "ray-casting threads (0: all cores)"},
+    {"light", SB_PARAM_INT, "-1", -1, 64, NULL,
+     "-1: the sun (a scene lit only by point lights: its first point light); K: the K-th point or spot light"},
 };
 
 typedef struct {
@@ -22,6 +26,8 @@ typedef struct {
     GLint u_rays;
     GLuint tex;
     int threads;
+    bool point;             /* toward a point light, not the sun */
+    sb_v3 lamp;
     float *depth;
     sb_ref_point *pts;
     int *pix;
@@ -34,6 +40,14 @@ static bool raycast_create(void *state, sb_gpu *g, const sb_params *p, sb_err *e
     if (s->threads == 0) {
         long n = sysconf(_SC_NPROCESSORS_ONLN);
         s->threads = n > 0 ? (int)n : 1;
+    }
+    int want = (int)sb_param_num(p, "light"), k = 0;
+    if (want < 0 && !g->has_sun && sb_point_light(g->scene, 0, NULL)) want = 0;
+    if (want >= 0) {
+        const sb_light *lamp = sb_point_light(g->scene, want, &k);
+        if (!lamp) return sb_fail(err, "raycast:light=%d: the scene has %d point or spot light(s)", want, k);
+        s->point = true;
+        s->lamp = lamp->position;
     }
     if (!sb_gpu_reference(g, err)) return false;
     int n = g->width * g->height;
@@ -56,6 +70,7 @@ static void raycast_frame(void *state, sb_frame *f) {
     raycast_state *s = state;
     sb_gpu *g = f->gpu;
     const int w = g->width, h = g->height;
+    if (s->point) sb_shade_point_light(g, s->lamp);
 
     sb_stage_begin(f, SB_STAGE_ZPASS);
     sb_zpass(f);
@@ -98,7 +113,7 @@ static void raycast_frame(void *state, sb_frame *f) {
             q->eps = fmaxf(sb_ref_position_eps(g->ref, q->p, (float)z), (float)depth_err);
             s->pix[m++] = y * w + x;
         }
-    sb_reference_visibility(g->ref, g->sun, s->pts, m, s->hits, s->threads);
+    sb_reference_visibility_light(g->ref, g->shade_light, s->pts, m, s->hits, s->threads);
     for (int k = 0; k < m; k++) s->vis[s->pix[k]] = s->hits[k] ? 255 : 0;
     glBindTexture(GL_TEXTURE_2D, s->tex);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
@@ -132,7 +147,7 @@ const sb_technique sb_technique_raycast = {
     .params = raycast_params,
     .param_count = (int)SB_COUNT(raycast_params),
     .stages = SB_STAGE_BIT(SB_STAGE_ZPASS) | SB_STAGE_BIT(SB_STAGE_RAYS) | SB_STAGE_BIT(SB_STAGE_FINAL),
-    .needs = SB_NEEDS_SUN,
+    .needs = 0,
     .state_size = sizeof(raycast_state),
     .create = raycast_create,
     .frame = raycast_frame,
