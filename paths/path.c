@@ -246,14 +246,31 @@ void sb_path_eval(const sb_path *p, double t, sb_v3 *pos, sb_quat *rot, double *
 
 double sb_path_progress(int i, int n) { return n > 1 ? (double)i / (n - 1) : 0.0; }
 
+static void camera_axes(sb_camera *c) {
+    c->rot = sb_quat_norm(c->rot);
+    c->right = sb_quat_rotate(c->rot, sb_v3_make(1, 0, 0));
+    c->up = sb_quat_rotate(c->rot, sb_v3_make(0, 1, 0));
+    c->forward = sb_quat_rotate(c->rot, sb_v3_make(0, 0, -1));
+}
+
+sb_camera sb_camera_look(sb_v3 pos, sb_v3 dir, double fov_deg, double aspect, double znear, double zfar) {
+    sb_camera c;
+    memset(&c, 0, sizeof c);
+    c.pos = pos;
+    c.rot = sb_quat_look(dir, sb_v3_make(0, 1, 0));
+    camera_axes(&c);
+    c.fov_deg = fov_deg;
+    c.aspect = aspect;
+    c.znear = znear;
+    c.zfar = zfar;
+    return c;
+}
+
 sb_camera sb_path_camera(const sb_path *p, int i, int n, double aspect, const sb_scene *s) {
     sb_camera c;
     memset(&c, 0, sizeof c);
     sb_path_eval(p, sb_path_progress(i, n) * sb_path_duration(p), &c.pos, &c.rot, &c.fov_deg);
-    c.rot = sb_quat_norm(c.rot);
-    c.right = sb_quat_rotate(c.rot, sb_v3_make(1, 0, 0));
-    c.up = sb_quat_rotate(c.rot, sb_v3_make(0, 1, 0));
-    c.forward = sb_quat_rotate(c.rot, sb_v3_make(0, 0, -1));
+    camera_axes(&c);
     c.aspect = aspect;
     c.znear = p->znear;
     c.zfar = p->zfar;

@@ -348,6 +348,10 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
 
 void sb_csm_frame(sb_csm *c, sb_frame *f, const double *splits) {
     sb_csm_fit(c, f, splits);
+    sb_csm_draw(c, f);
+}
+
+void sb_csm_draw(sb_csm *c, sb_frame *f) {
     sb_stage_begin(f, SB_STAGE_CASCADE);
     sb_csm_cull(c, f, NULL);
     sb_csm_render(c, f);

@@ -108,3 +108,5 @@ void sb_csm_final(sb_csm *c, sb_frame *f, bool reuse_depth);
 /* A whole frame from CPU splits: fit, then the cascade stage (cull, render)
  * and the final stage. sm and pssm are this with their own splits. */
 void sb_csm_frame(sb_csm *c, sb_frame *f, const double *splits);
+/* The cascade stage (cull, render) and the final stage, for fits already uploaded. */
+void sb_csm_draw(sb_csm *c, sb_frame *f);

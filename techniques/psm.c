@@ -66,13 +66,7 @@ static void psm_frame(void *state, sb_frame *f) {
     f->counters.split_count = 1;
     f->counters.splits[0] = info.zfar;
     sb_csm_upload(c, zn, zf);
-    sb_stage_begin(f, SB_STAGE_CASCADE);
-    sb_csm_cull(c, f, NULL);
-    sb_csm_render(c, f);
-    sb_stage_end(f, SB_STAGE_CASCADE);
-    sb_stage_begin(f, SB_STAGE_FINAL);
-    sb_csm_final(c, f, false);
-    sb_stage_end(f, SB_STAGE_FINAL);
+    sb_csm_draw(c, f);
 }
 
 static void psm_destroy(void *state, sb_gpu *gpu) {

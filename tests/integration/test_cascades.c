@@ -166,18 +166,7 @@ static void test_sdsm_gpu_splits_read_nothing_back(void **st) {
 }
 
 static sb_camera camera_at(sb_v3 pos, sb_v3 dir, double far) {
-    sb_camera c;
-    memset(&c, 0, sizeof c);
-    c.pos = pos;
-    c.rot = sb_quat_look(dir, sb_v3_make(0, 1, 0));
-    c.right = sb_quat_rotate(c.rot, sb_v3_make(1, 0, 0));
-    c.up = sb_quat_rotate(c.rot, sb_v3_make(0, 1, 0));
-    c.forward = sb_quat_rotate(c.rot, sb_v3_make(0, 0, -1));
-    c.fov_deg = 60;
-    c.aspect = 320.0 / 180;
-    c.znear = 0.5;
-    c.zfar = far;
-    return c;
+    return sb_camera_look(pos, dir, 60, 320.0 / 180, 0.5, far);
 }
 
 static void test_all_sky_frame(void **st) {

@@ -70,18 +70,10 @@ typedef struct {
 static void rig_camera(rig *r, double far_scale) {
     const sb_scene *s = &r->scene;
     sb_v3 ext = sb_v3_sub(s->bounds.hi, s->bounds.lo);
-    sb_camera cam;
-    memset(&cam, 0, sizeof cam);
-    cam.pos = sb_v3_add(s->origin, sb_v3_make((urand() - 0.5) * ext.x, s->bounds.lo.y + (0.05 + urand()) * ext.y,
-                                              (urand() - 0.5) * ext.z));
-    cam.rot = sb_quat_look(sb_v3_make(urand() - 0.5, -urand() * 0.6, urand() - 0.5), sb_v3_make(0, 1, 0));
-    cam.right = sb_quat_rotate(cam.rot, sb_v3_make(1, 0, 0));
-    cam.up = sb_quat_rotate(cam.rot, sb_v3_make(0, 1, 0));
-    cam.forward = sb_quat_rotate(cam.rot, sb_v3_make(0, 0, -1));
-    cam.fov_deg = 60;
-    cam.aspect = 16.0 / 9;
-    cam.znear = 0.1;
-    cam.zfar = sb_v3_len(ext) * far_scale;
+    sb_v3 pos = sb_v3_add(s->origin, sb_v3_make((urand() - 0.5) * ext.x, s->bounds.lo.y + (0.05 + urand()) * ext.y,
+                                                (urand() - 0.5) * ext.z));
+    sb_v3 dir = sb_v3_make(urand() - 0.5, -urand() * 0.6, urand() - 0.5);
+    sb_camera cam = sb_camera_look(pos, dir, 60, 16.0 / 9, 0.1, sb_v3_len(ext) * far_scale);
     r->gpu.sun = sb_sun_dir(urand() * 360, 3 + urand() * 87);
     sb_frame_setup(&r->frame, &r->gpu, &cam);
 }
@@ -253,18 +245,7 @@ static void test_lispsm_fallback(void **st) {
 }
 
 static sb_camera look_camera(sb_v3 pos, sb_v3 target) {
-    sb_camera c;
-    memset(&c, 0, sizeof c);
-    c.pos = pos;
-    c.rot = sb_quat_look(sb_v3_sub(target, pos), sb_v3_make(0, 1, 0));
-    c.right = sb_quat_rotate(c.rot, sb_v3_make(1, 0, 0));
-    c.up = sb_quat_rotate(c.rot, sb_v3_make(0, 1, 0));
-    c.forward = sb_quat_rotate(c.rot, sb_v3_make(0, 0, -1));
-    c.fov_deg = 60;
-    c.aspect = 16.0 / 9;
-    c.znear = 0.05;
-    c.zfar = 60;
-    return c;
+    return sb_camera_look(pos, sb_v3_sub(target, pos), 60, 16.0 / 9, 0.05, 60);
 }
 
 /* Shadow-map coordinates of an origin-relative point: xyz / w, and w. */

@@ -21,18 +21,10 @@ static void check_scene(const char *name) {
     sb_v3 ext = sb_v3_sub(s.bounds.hi, s.bounds.lo);
     int checked = 0;
     for (int trial = 0; trial < 50; trial++) {
-        sb_camera cam;
-        memset(&cam, 0, sizeof cam);
-        cam.pos = sb_v3_add(s.origin, sb_v3_make((urand() - 0.5) * ext.x, s.bounds.lo.y + urand() * ext.y * 1.5,
-                                                  (urand() - 0.5) * ext.z));
-        cam.rot = sb_quat_look(sb_v3_make(urand() - 0.5, -urand() * 0.5, urand() - 0.5), sb_v3_make(0, 1, 0));
-        cam.right = sb_quat_rotate(cam.rot, sb_v3_make(1, 0, 0));
-        cam.up = sb_quat_rotate(cam.rot, sb_v3_make(0, 1, 0));
-        cam.forward = sb_quat_rotate(cam.rot, sb_v3_make(0, 0, -1));
-        cam.fov_deg = 60;
-        cam.aspect = 16.0 / 9;
-        cam.znear = 0.1;
-        cam.zfar = sb_v3_len(ext);
+        sb_v3 pos = sb_v3_add(s.origin, sb_v3_make((urand() - 0.5) * ext.x, s.bounds.lo.y + urand() * ext.y * 1.5,
+                                                    (urand() - 0.5) * ext.z));
+        sb_v3 dir = sb_v3_make(urand() - 0.5, -urand() * 0.5, urand() - 0.5);
+        sb_camera cam = sb_camera_look(pos, dir, 60, 16.0 / 9, 0.1, sb_v3_len(ext));
         sb_v3 sun = sb_sun_dir(urand() * 360, 5 + urand() * 85);
         sb_v3 corners[8];
         sb_frustum_corners(&cam, s.origin, cam.znear, cam.zfar, corners);
