@@ -327,8 +327,6 @@ int sb_stress_run(const sb_run_opts *opts, const char *only, FILE *out, sb_err *
             run_row(&s, techniques[t], o.frames, &r);
             bool raycast = !strcmp(techniques[t], "raycast"), none = !strcmp(techniques[t], "none");
             double bound = c->relative ? 2 * base_err[t] + 0.001 : raycast ? c->bound / 5 + 0.001 : c->bound;
-            /* one warped map over the whole view gives the far field fewer texels: twice the room */
-            if (!strcmp(techniques[t], "lispsm") && !c->relative) bound *= 2;
             if (!none && r.pass && !(r.err_rate <= bound)) {
                 char m[96];
                 snprintf(m, sizeof m, "%.4f above the bound %.4f", r.err_rate, bound);

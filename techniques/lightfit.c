@@ -124,6 +124,95 @@ void sb_light_fit_stable(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int n, 
     finish_fit(s, lo, hi, shi.z, res, out);
 }
 
+/* ---- convex clipping: what receivers a frustum can see ------------------ */
+
+static void m4_v4(sb_m4 m, const double in[4], double out[4]) {
+    for (int r = 0; r < 4; r++) out[r] = m.m[r] * in[0] + m.m[4 + r] * in[1] + m.m[8 + r] * in[2] + m.m[12 + r] * in[3];
+}
+
+static double v3_at(sb_v3 v, int i) { return i == 0 ? v.x : i == 1 ? v.y : v.z; }
+static void v3_set(sb_v3 *v, int i, double x) {
+    if (i == 0) v->x = x;
+    else if (i == 1) v->y = x;
+    else v->z = x;
+}
+static double plane_eval(const double p[4], sb_v3 v) { return p[0] * v.x + p[1] * v.y + p[2] * v.z + p[3]; }
+
+typedef struct {
+    sb_v3 *p;
+    int n, cap;
+} point_list;
+
+static void points_push(point_list *l, sb_v3 p) {
+    if (l->n == l->cap) {
+        int cap = l->cap ? 2 * l->cap : 256;
+        sb_v3 *np = realloc(l->p, sizeof *np * (size_t)cap);
+        if (!np) return;   /* out of memory: the fit uses the points it has */
+        l->p = np;
+        l->cap = cap;
+    }
+    l->p[l->n++] = p;
+}
+
+/* Sutherland-Hodgman: the part of the convex polygon in[n] inside the plane. */
+static int clip_polygon(const sb_v3 *in, int n, const double pl[4], sb_v3 *out) {
+    int m = 0;
+    for (int i = 0; i < n; i++) {
+        sb_v3 a = in[i], b = in[(i + 1) % n];
+        double da = plane_eval(pl, a), db = plane_eval(pl, b);
+        if (da >= 0) out[m++] = a;
+        if ((da >= 0) != (db >= 0)) out[m++] = sb_v3_lerp(a, b, da / (da - db));
+    }
+    return m;
+}
+
+/* The vertices of (box ∩ convex frustum): every box face clipped by the six
+ * planes (Sutherland-Hodgman), and the frustum's corners inside the box. */
+static void box_clip_vertices(const sb_aabb *b, const double (*planes)[4], const sb_v3 corners[8], point_list *out) {
+    for (int axis = 0; axis < 3; axis++)
+        for (int side = 0; side < 2; side++) {
+            int u = (axis + 1) % 3, v = (axis + 2) % 3;
+            sb_v3 poly[2][16];
+            for (int k = 0; k < 4; k++) {
+                sb_v3 q = b->lo;
+                v3_set(&q, axis, v3_at(side ? b->hi : b->lo, axis));
+                v3_set(&q, u, v3_at(k == 1 || k == 2 ? b->hi : b->lo, u));
+                v3_set(&q, v, v3_at(k >= 2 ? b->hi : b->lo, v));
+                poly[0][k] = q;
+            }
+            int n = 4, cur = 0;
+            for (int p = 0; p < 6 && n > 0; p++) {
+                n = clip_polygon(poly[cur], n, planes[p], poly[1 - cur]);
+                cur = 1 - cur;
+            }
+            for (int k = 0; k < n; k++) points_push(out, poly[cur][k]);
+        }
+    double eps = 1e-9 * (1 + sb_v3_len(sb_v3_sub(b->hi, b->lo)));
+    for (int k = 0; k < 8; k++) {
+        sb_v3 c = corners[k];
+        if (c.x >= b->lo.x - eps && c.y >= b->lo.y - eps && c.z >= b->lo.z - eps && c.x <= b->hi.x + eps &&
+            c.y <= b->hi.y + eps && c.z <= b->hi.z + eps)
+            points_push(out, c);
+    }
+}
+
+/* Inward planes of the frustum slice with corners[8] (near four, then far four,
+ * bit 0: right, bit 1: up, as sb_frustum_corners orders them). */
+static void slice_planes(const sb_v3 c[8], double planes[6][4]) {
+    static const int quads[6][3] = {{0, 2, 4}, {1, 5, 3}, {0, 4, 1}, {2, 3, 6}, {0, 1, 2}, {4, 6, 5}};
+    sb_v3 centre = {0, 0, 0};
+    for (int k = 0; k < 8; k++) centre = sb_v3_add(centre, sb_v3_scale(c[k], 0.125));
+    for (int i = 0; i < 6; i++) {
+        sb_v3 a = c[quads[i][0]], b = c[quads[i][1]], d = c[quads[i][2]];
+        sb_v3 n = sb_v3_norm(sb_v3_cross(sb_v3_sub(b, a), sb_v3_sub(d, a)));
+        if (sb_v3_dot(n, sb_v3_sub(centre, a)) < 0) n = sb_v3_scale(n, -1);
+        planes[i][0] = n.x;
+        planes[i][1] = n.y;
+        planes[i][2] = n.z;
+        planes[i][3] = -sb_v3_dot(n, a);
+    }
+}
+
 void sb_light_fit_lispsm(const sb_scene *s, sb_v3 sun, sb_v3 eye, sb_v3 forward, double zn, double zf,
                          const sb_v3 *pts, int n, int res, double min_gamma_deg, sb_light_fit *out) {
     sun = sb_v3_norm(sun);
@@ -141,13 +230,20 @@ void sb_light_fit_lispsm(const sb_scene *s, sb_v3 sun, sb_v3 eye, sb_v3 forward,
     sb_v3 right = sb_v3_norm(sb_v3_cross(fwd, up));
     up = sb_v3_cross(right, fwd);
     sb_m4 lv = sb_m4_view(sb_v3_make(0, 0, 0), right, up, fwd);
-    /* body: the slice corners inside the scene, and the same points pushed toward the light to the
-       farthest caster (so every caster over the receivers is inside the warped frustum) */
+    /* body: the slice clipped to the scene's box (its vertices), and the same points pushed toward
+       the light to the top of the scene (so every caster over the receivers is inside the warped
+       frustum). The warp is fitted to these points: the box's corners would widen the near end of
+       the map to the whole body and waste the resolution the warp gives it. */
+    if (n != 8) return; /* keep the uniform fit */
+    double planes[6][4];
+    slice_planes(pts, planes);
+    point_list body = {0};
+    box_clip_vertices(&s->bounds, (const double(*)[4])planes, pts, &body);
     sb_v3 blo = {1e300, 1e300, 1e300}, bhi = {-1e300, -1e300, -1e300};
-    for (int i = 0; i < n; i++) {
-        sb_v3 q = sb_m4_point(lv, pts[i]);
-        blo = sb_v3_min(blo, q);
-        bhi = sb_v3_max(bhi, q);
+    for (int i = 0; i < body.n; i++) {
+        body.p[i] = sb_m4_point(lv, body.p[i]);
+        blo = sb_v3_min(blo, body.p[i]);
+        bhi = sb_v3_max(bhi, body.p[i]);
     }
     sb_v3 slo = {1e300, 1e300, 1e300}, shi = {-1e300, -1e300, -1e300};
     for (int k = 0; k < 8; k++) {
@@ -156,9 +252,10 @@ void sb_light_fit_lispsm(const sb_scene *s, sb_v3 sun, sb_v3 eye, sb_v3 forward,
         slo = sb_v3_min(slo, q);
         shi = sb_v3_max(shi, q);
     }
-    blo = sb_v3_max(blo, slo);
-    bhi = sb_v3_min(bhi, shi);
-    if (blo.x >= bhi.x || blo.y >= bhi.y) return; /* keep the uniform fit */
+    if (body.n == 0 || !(blo.x < bhi.x && blo.y < bhi.y)) { /* keep the uniform fit */
+        free(body.p);
+        return;
+    }
     double zmax = shi.z + 1e-4 * (shi.z - slo.z), zmin = blo.z;
     double d = bhi.y - blo.y;
     double nopt = (zn + sqrt(zn * zf)) / sin_g;
@@ -175,17 +272,18 @@ void sb_light_fit_lispsm(const sb_scene *s, sb_v3 sun, sb_v3 eye, sb_v3 forward,
     p.m[13] = -2 * ff * nn / (ff - nn);
     p.m[10] = 1;
     p.m[7] = 1;
-    sb_m4 warp = sb_m4_mul(p, sb_m4_mul(t, lv));
+    sb_m4 pt = sb_m4_mul(p, t);
     sb_v3 wlo = {1e300, 1e300, 1e300}, whi = {-1e300, -1e300, -1e300};
-    for (int k = 0; k < 8; k++) {
-        sb_v3 q = sb_v3_make(k & 1 ? bhi.x : blo.x, k & 2 ? bhi.y : blo.y, k & 4 ? zmax : zmin);
-        /* back to world to warp: invert lv (orthonormal) */
-        sb_m4 inv;
-        sb_m4_invert(lv, &inv);
-        sb_v3 w = sb_m4_point(warp, sb_m4_point(inv, q));
-        wlo = sb_v3_min(wlo, w);
-        whi = sb_v3_max(whi, w);
-    }
+    for (int i = 0; i < body.n; i++)
+        for (int e = 0; e < 2; e++) {
+            sb_v3 q = body.p[i];
+            if (e) q.z = zmax;
+            sb_v3 w = sb_m4_point(pt, q);
+            wlo = sb_v3_min(wlo, w);
+            whi = sb_v3_max(whi, w);
+        }
+    free(body.p);
+    sb_m4 warp = sb_m4_mul(pt, lv);
     if (!(whi.x > wlo.x && whi.y > wlo.y && whi.z > wlo.z)) return;
     /* ortho fit of the warped body: z toward the light is +z, so near = -zmax */
     sb_m4 o = sb_m4_ortho(wlo.x, whi.x, wlo.y, whi.y, -whi.z, -wlo.z);
@@ -327,46 +425,6 @@ void sb_light_fit_tsm(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int res, d
 
 /* ---- PSM ---------------------------------------------------------------- */
 
-static void m4_v4(sb_m4 m, const double in[4], double out[4]) {
-    for (int r = 0; r < 4; r++) out[r] = m.m[r] * in[0] + m.m[4 + r] * in[1] + m.m[8 + r] * in[2] + m.m[12 + r] * in[3];
-}
-
-static double v3_at(sb_v3 v, int i) { return i == 0 ? v.x : i == 1 ? v.y : v.z; }
-static void v3_set(sb_v3 *v, int i, double x) {
-    if (i == 0) v->x = x;
-    else if (i == 1) v->y = x;
-    else v->z = x;
-}
-static double plane_eval(const double p[4], sb_v3 v) { return p[0] * v.x + p[1] * v.y + p[2] * v.z + p[3]; }
-
-typedef struct {
-    sb_v3 *p;
-    int n, cap;
-} point_list;
-
-static void points_push(point_list *l, sb_v3 p) {
-    if (l->n == l->cap) {
-        int cap = l->cap ? 2 * l->cap : 256;
-        sb_v3 *np = realloc(l->p, sizeof *np * (size_t)cap);
-        if (!np) return;   /* out of memory: the fit uses the points it has */
-        l->p = np;
-        l->cap = cap;
-    }
-    l->p[l->n++] = p;
-}
-
-/* Sutherland-Hodgman: the part of the convex polygon in[n] inside the plane. */
-static int clip_polygon(const sb_v3 *in, int n, const double pl[4], sb_v3 *out) {
-    int m = 0;
-    for (int i = 0; i < n; i++) {
-        sb_v3 a = in[i], b = in[(i + 1) % n];
-        double da = plane_eval(pl, a), db = plane_eval(pl, b);
-        if (da >= 0) out[m++] = a;
-        if ((da >= 0) != (db >= 0)) out[m++] = sb_v3_lerp(a, b, da / (da - db));
-    }
-    return m;
-}
-
 typedef struct {
     uint32_t draw;
     double depth;           /* nearest view depth of its box inside the frustum */
@@ -382,37 +440,11 @@ typedef struct {
     uint32_t near_count;
 } receiver_scan;
 
-/* The vertices of (draw box ∩ view frustum): every box face clipped by the six
- * planes, and the frustum corners inside the box. */
+/* The vertices of (draw box ∩ view frustum). */
 static void scan_receiver(uint32_t d, void *user) {
     receiver_scan *r = user;
-    const sb_aabb *b = &r->s->draws[d].box;
     int first = r->out->n;
-    for (int axis = 0; axis < 3; axis++)
-        for (int side = 0; side < 2; side++) {
-            int u = (axis + 1) % 3, v = (axis + 2) % 3;
-            sb_v3 poly[2][16];
-            for (int k = 0; k < 4; k++) {
-                sb_v3 q = b->lo;
-                v3_set(&q, axis, v3_at(side ? b->hi : b->lo, axis));
-                v3_set(&q, u, v3_at(k == 1 || k == 2 ? b->hi : b->lo, u));
-                v3_set(&q, v, v3_at(k >= 2 ? b->hi : b->lo, v));
-                poly[0][k] = q;
-            }
-            int n = 4, cur = 0;
-            for (int p = 0; p < 6 && n > 0; p++) {
-                n = clip_polygon(poly[cur], n, r->planes[p], poly[1 - cur]);
-                cur = 1 - cur;
-            }
-            for (int k = 0; k < n; k++) points_push(r->out, poly[cur][k]);
-        }
-    double eps = 1e-9 * (1 + sb_v3_len(sb_v3_sub(b->hi, b->lo)));
-    for (int k = 0; k < 8; k++) {
-        sb_v3 c = r->corners[k];
-        if (c.x >= b->lo.x - eps && c.y >= b->lo.y - eps && c.z >= b->lo.z - eps && c.x <= b->hi.x + eps &&
-            c.y <= b->hi.y + eps && c.z <= b->hi.z + eps)
-            points_push(r->out, c);
-    }
+    box_clip_vertices(&r->s->draws[d].box, r->planes, r->corners, r->out);
     if (r->near && r->out->n > first) {
         double dmin = 1e300;
         for (int i = first; i < r->out->n; i++) dmin = fmin(dmin, sb_v3_dot(sb_v3_sub(r->out->p[i], r->eye), r->fwd));
