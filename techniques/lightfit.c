@@ -357,10 +357,34 @@ void sb_light_fit_tsm(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int res, d
     ax[0] /= len;
     ax[1] /= len;
     double px[2] = {-ax[1], ax[0]};
+    /* the footprint of what can be seen: the slice clipped to the scene's box (the frustum's
+       corners reach far beyond a scene whose far plane is loose, and the trapezoid would spend
+       the map there) */
+    double planes[6][4];
+    slice_planes(pts, planes);
+    point_list body = {0};
+    box_clip_vertices(&s->bounds, (const double(*)[4])planes, pts, &body);
+    int nb = body.n ? body.n : 8;
+    double (*fp)[2] = malloc(sizeof *fp * (size_t)nb);
+    if (!fp) {
+        free(body.p);
+        return;
+    }
+    for (int i = 0; i < nb; i++) {
+        if (body.n) {
+            sb_v3 c = sb_m4_point(out->view_proj, body.p[i]);
+            fp[i][0] = c.x;
+            fp[i][1] = c.y;
+        } else {
+            fp[i][0] = q[i][0];
+            fp[i][1] = q[i][1];
+        }
+    }
+    free(body.p);
     /* footprint in the centre-line frame: t along the line from the near centre, u across */
     double tmin = 1e300, tmax = -1e300;
-    for (int i = 0; i < 8; i++) {
-        double t = (q[i][0] - nc[0]) * ax[0] + (q[i][1] - nc[1]) * ax[1];
+    for (int i = 0; i < nb; i++) {
+        double t = (fp[i][0] - nc[0]) * ax[0] + (fp[i][1] - nc[1]) * ax[1];
         tmin = fmin(tmin, t);
         tmax = fmax(tmax, t);
     }
@@ -368,15 +392,19 @@ void sb_light_fit_tsm(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int res, d
     /* the 80% rule: the focus point (focus of the way from top to base) lands on the 80% line */
     double delta = focus * lambda, xi = -0.6;
     double eta = (lambda * delta + lambda * delta * xi) / (lambda - 2 * delta - lambda * xi);
-    if (!(eta > 0) || !isfinite(eta)) return;
+    if (!(eta > 0) || !isfinite(eta) || !(lambda > 0)) {
+        free(fp);
+        return;
+    }
     double vt = tmin - eta; /* the vanishing point on the centre line */
     /* side lines from the vanishing point through the widest footprint points */
     double slope = 0;
-    for (int i = 0; i < 8; i++) {
-        double t = (q[i][0] - nc[0]) * ax[0] + (q[i][1] - nc[1]) * ax[1];
-        double u = (q[i][0] - nc[0]) * px[0] + (q[i][1] - nc[1]) * px[1];
+    for (int i = 0; i < nb; i++) {
+        double t = (fp[i][0] - nc[0]) * ax[0] + (fp[i][1] - nc[1]) * ax[1];
+        double u = (fp[i][0] - nc[0]) * px[0] + (fp[i][1] - nc[1]) * px[1];
         slope = fmax(slope, fabs(u) / fmax(t - vt, 1e-12));
     }
+    free(fp);
     /* trapezoid corners (t, u): top (near) then base (far), back to the map's x,y */
     double tc[4][2] = {{tmin, -slope * (tmin - vt)}, {tmin, slope * (tmin - vt)}, {tmax, slope * (tmax - vt)},
                        {tmax, -slope * (tmax - vt)}};
