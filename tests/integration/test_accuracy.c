@@ -49,13 +49,8 @@ static void test_reference_matches_analytic(void **st) {
 static sb_session g_towers;
 
 static int open_towers(void) {
-    sb_run_opts o;
-    sb_run_opts_defaults(&o);
-    o.width = 480;
-    o.height = 270;
     sb_err err;
-    memset(&g_towers, 0, sizeof g_towers);
-    return sb_session_open(&g_towers, &o, "towers", "towers", &err) ? 0 : -1;
+    return test_open(&g_towers, "towers", "towers", 480, 270, &err) ? 0 : -1;
 }
 
 static void test_error_falls_with_resolution(void **st) {
@@ -245,14 +240,9 @@ static void test_evaluation_does_not_touch_timed_frames(void **st) {
  * seen, each warp has well under half the uniform map's error. */
 static void test_warps_fit_the_visible_scene(void **st) {
     (void)st;
-    sb_run_opts o;
-    sb_run_opts_defaults(&o);
-    o.width = 480;
-    o.height = 270;
     sb_session s;
     sb_err err;
-    memset(&s, 0, sizeof s);
-    assert_true(sb_session_open(&s, &o, "overhangs", "overhangs", &err));
+    assert_true(test_open(&s, "overhangs", "overhangs", 480, 270, &err));
     const char *specs[] = {"sm:res=2048:filter=none", "tsm:res=2048:filter=none", "lispsm:res=2048:filter=none"};
     double e[3] = {0};
     for (int fr = 0; fr <= 6; fr += 3)

@@ -42,14 +42,9 @@ static void test_camera_inside_volume(void **st) {
     assert_non_null(f);
     fprintf(f, "look 0  %.17g %.17g %.17g  -4 0 -4.5\n", eye.x, eye.y, eye.z);
     fclose(f);
-    sb_run_opts o;
-    sb_run_opts_defaults(&o);
-    o.width = 480;
-    o.height = 270;
     sb_session s;
-    memset(&s, 0, sizeof s);
     sb_err err;
-    assert_true(sb_session_open(&s, &o, "plane-box", path, &err));
+    assert_true(test_open(&s, "plane-box", path, 480, 270, &err));
     sb_error_metrics zpass, zfail, autom;
     assert_true(eval_frame(&s, "volumes:mode=zpass", 0, 1, &zpass, NULL, NULL, &err));
     assert_true(eval_frame(&s, "volumes:mode=zfail", 0, 1, &zfail, NULL, NULL, &err));
@@ -78,12 +73,7 @@ static void test_planar(void **st) {
     assert_true(r.mismatch * 1000 < r.pixels * 2);
     sb_session_close(&s);
     /* the terrain of desert has no large plane: the technique is skipped with the reason */
-    sb_run_opts o;
-    sb_run_opts_defaults(&o);
-    o.width = 64;
-    o.height = 36;
-    memset(&s, 0, sizeof s);
-    assert_true(sb_session_open(&s, &o, "desert", "desert", &err));
+    assert_true(test_open(&s, "desert", "desert", 64, 36, &err));
     const char *why = sb_skip_reason(&s, sb_technique_find("planar"));
     assert_non_null(why);
     assert_string_equal(why, "the scene has no large planar receiver");

@@ -31,6 +31,15 @@ int run_capture(const char *cmd, char *out, size_t len) {
     return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
 
+bool test_open(sb_session *s, const char *scene, const char *path, int w, int h, sb_err *err) {
+    sb_run_opts o;
+    sb_run_opts_defaults(&o);
+    o.width = w;
+    o.height = h;
+    memset(s, 0, sizeof *s);
+    return sb_session_open(s, &o, scene, path, err);
+}
+
 bool pb_open(sb_session *s, sb_backend backend, int w, int h, sb_err *err) {
     return pb_open_view(s, backend, w, h, "planebox-fixed.path", NAN, NAN, err);
 }

@@ -14,6 +14,8 @@ typedef struct pb_result {
     long mismatch;          /* plane pixels where they differ */
 } pb_result;
 
+/* Opens a scene and path (bundled names or files) at w x h, other options default. */
+bool test_open(sb_session *s, const char *scene, const char *path, int w, int h, sb_err *err);
 /* Opens plane-box with the fixed camera in tests/data/planebox-fixed.path. */
 bool pb_open(sb_session *s, sb_backend backend, int w, int h, sb_err *err);
 /* The same with another camera (a path in tests/data) and sun (NAN: the file's). */
