@@ -197,6 +197,22 @@ void sb_frustum_planes(sb_m4 m, double p[6][4]) {
     }
 }
 
+GLuint sb_shadow_texture(GLenum target, GLenum format, int res, int layers, bool linear) {
+    GLuint tex;
+    glGenTextures(1, &tex);
+    glBindTexture(target, tex);
+    if (target == GL_TEXTURE_CUBE_MAP) glTexStorage2D(target, 1, format, res, res);
+    else glTexStorage3D(target, 1, format, res, res, layers);
+    GLint filt = linear ? GL_LINEAR : GL_NEAREST;
+    glTexParameteri(target, GL_TEXTURE_MIN_FILTER, filt);
+    glTexParameteri(target, GL_TEXTURE_MAG_FILTER, filt);
+    glTexParameteri(target, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(target, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glTexParameteri(target, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+    glTexParameteri(target, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+    return tex;
+}
+
 void sb_frame_setup(sb_frame *f, sb_gpu *g, const sb_camera *cam) {
     memset(&f->counters, 0, sizeof f->counters);
     f->gpu = g;

@@ -78,6 +78,9 @@ typedef struct sb_shader_src {
     int count;
 } sb_shader_src;
 
+/* A depth texture with hardware comparison (LEQUAL), clamped to its edge:
+ * GL_TEXTURE_2D_ARRAY with `layers` layers, or GL_TEXTURE_CUBE_MAP (layers ignored). */
+GLuint sb_shadow_texture(GLenum target, GLenum format, int res, int layers, bool linear);
 /* Compiles each stage as "#version 430 core" + defines + common.glsl + parts
  * and links them; the label names the program in errors. */
 GLuint sb_gpu_link(const char *label, const char *defines, const sb_shader_src *stages, int nstages, sb_err *err);

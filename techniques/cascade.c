@@ -61,16 +61,8 @@ bool sb_csm_create_desc(sb_csm *c, sb_gpu *g, const sb_params *p, const char *na
     if (c->res > max_size) return sb_fail(err, "%s:res=%d exceeds GL_MAX_TEXTURE_SIZE %d", name, c->res, max_size);
     c->mask = calloc(g->scene->draw_count + 1, 1);
 
-    glGenTextures(1, &c->tex);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, c->tex);
-    glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, c->depth_format, c->res, c->res, c->count);
-    GLint filt = c->filter == 0 || c->filter == 2 || c->filter == 3 ? GL_NEAREST : GL_LINEAR; /* pcss: bilinear taps */
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, filt);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, filt);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+    bool bilinear = !(c->filter == 0 || c->filter == 2 || c->filter == 3); /* hw compare, poisson, pcss taps */
+    c->tex = sb_shadow_texture(GL_TEXTURE_2D_ARRAY, c->depth_format, c->res, c->count, bilinear);
     if (c->format) { /* filtered formats: moments beside the depth the rasterizer tests with */
         GLuint m[2];
         glGenTextures(2, m);

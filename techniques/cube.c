@@ -63,16 +63,7 @@ static bool cube_create(void *state, sb_gpu *g, const sb_params *p, sb_err *err)
         s->face_vp[f] = sb_m4_mul(proj, sb_m4_look_at(s->lamp, sb_v3_add(s->lamp, dir), up));
         sb_frustum_planes(s->face_vp[f], s->planes[f]);
     }
-    glGenTextures(1, &s->tex);
-    glBindTexture(GL_TEXTURE_CUBE_MAP, s->tex);
-    glTexStorage2D(GL_TEXTURE_CUBE_MAP, 1, GL_DEPTH_COMPONENT32F, s->res, s->res);
-    GLint filt = s->filter == 0 ? GL_NEAREST : GL_LINEAR;
-    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, filt);
-    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MAG_FILTER, filt);
-    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
-    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+    s->tex = sb_shadow_texture(GL_TEXTURE_CUBE_MAP, GL_DEPTH_COMPONENT32F, s->res, 6, s->filter != 0);
     glGenFramebuffers(1, &s->fbo_all);
     glBindFramebuffer(GL_FRAMEBUFFER, s->fbo_all);
     glFramebufferTexture(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, s->tex, 0);

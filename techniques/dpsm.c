@@ -47,16 +47,7 @@ static bool dpsm_create(void *state, sb_gpu *g, const sb_params *p, sb_err *err)
     /* lamp frame: x = +X, y = +Z, z = -Y (the front hemisphere looks down); rows of a world -> frame matrix */
     const float fr[9] = {1, 0, 0, 0, 0, -1, 0, 1, 0}; /* column-major mat3: columns are the images of x, y, z */
     memcpy(s->frame, fr, sizeof fr);
-    glGenTextures(1, &s->tex);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, s->tex);
-    glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_DEPTH_COMPONENT32F, s->res, s->res, 2);
-    GLint filt = s->filter == 0 ? GL_NEAREST : GL_LINEAR;
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, filt);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, filt);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+    s->tex = sb_shadow_texture(GL_TEXTURE_2D_ARRAY, GL_DEPTH_COMPONENT32F, s->res, 2, s->filter != 0);
     glGenFramebuffers(2, s->fbo);
     for (int i = 0; i < 2; i++) {
         glBindFramebuffer(GL_FRAMEBUFFER, s->fbo[i]);

@@ -22,6 +22,14 @@ void sb_frustum_corners(const sb_camera *cam, sb_v3 origin, double zn, double zf
     }
 }
 
+/* Light clip space [-1,1]^3 -> shadow-map texture space [0,1]^3. */
+static sb_m4 shadow_from_clip(sb_m4 view_proj) {
+    sb_m4 bias = sb_m4_identity();
+    bias.m[0] = bias.m[5] = bias.m[10] = 0.5;
+    bias.m[12] = bias.m[13] = bias.m[14] = 0.5;
+    return sb_m4_mul(bias, view_proj);
+}
+
 static void box_in_light(sb_m4 view, const sb_aabb *b, sb_v3 *lo, sb_v3 *hi) {
     *lo = sb_v3_make(1e300, 1e300, 1e300);
     *hi = sb_v3_make(-1e300, -1e300, -1e300);
@@ -67,10 +75,7 @@ static void finish_fit(const sb_scene *s, sb_v3 lo, sb_v3 hi, double shi_z, int 
     out->proj = sb_m4_ortho(out->l, out->r, out->b, out->t, out->zn, out->zf);
     out->view_proj = sb_m4_mul(out->proj, out->view);
     sb_frustum_planes(out->view_proj, out->planes);
-    sb_m4 bias = sb_m4_identity();
-    bias.m[0] = bias.m[5] = bias.m[10] = 0.5;
-    bias.m[12] = bias.m[13] = bias.m[14] = 0.5;
-    out->shadow_mat = sb_m4_mul(bias, out->view_proj);
+    out->shadow_mat = shadow_from_clip(out->view_proj);
     out->texel_world = fmax(out->r - out->l, out->t - out->b) / res;
 }
 
@@ -293,10 +298,7 @@ void sb_light_fit_lispsm(const sb_scene *s, sb_v3 sun, sb_v3 eye, sb_v3 forward,
     out->proj = sb_m4_mul(o, sb_m4_mul(p, t));
     out->view_proj = vp;
     sb_frustum_planes(vp, out->planes);
-    sb_m4 bias = sb_m4_identity();
-    bias.m[0] = bias.m[5] = bias.m[10] = 0.5;
-    bias.m[12] = bias.m[13] = bias.m[14] = 0.5;
-    out->shadow_mat = sb_m4_mul(bias, vp);
+    out->shadow_mat = shadow_from_clip(vp);
     /* texel and depth scales for bias: the body's extent spread over the map (an average) */
     out->texel_world = fmax(bhi.x - blo.x, d) / res;
     out->zn = -zmax;
@@ -444,10 +446,7 @@ void sb_light_fit_tsm(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int res, d
     if (!sb_m4_finite(vp)) return;
     out->view_proj = vp;
     sb_frustum_planes(vp, out->planes);
-    sb_m4 bias = sb_m4_identity();
-    bias.m[0] = bias.m[5] = bias.m[10] = 0.5;
-    bias.m[12] = bias.m[13] = bias.m[14] = 0.5;
-    out->shadow_mat = sb_m4_mul(bias, vp);
+    out->shadow_mat = shadow_from_clip(vp);
     out->warped = true;
 }
 
@@ -562,10 +561,7 @@ static void psm_finish(sb_light_fit *out, sb_m4 light_view, sb_m4 light_proj, bo
         out->planes[4][0] = out->planes[4][1] = out->planes[4][2] = 0;
         out->planes[4][3] = 1;
     }
-    sb_m4 bias = sb_m4_identity();
-    bias.m[0] = bias.m[5] = bias.m[10] = 0.5;
-    bias.m[12] = bias.m[13] = bias.m[14] = 0.5;
-    out->shadow_mat = sb_m4_mul(bias, out->view_proj);
+    out->shadow_mat = shadow_from_clip(out->view_proj);
     out->texel_world = texel;
     out->zn = 0;
     out->zf = 1;
