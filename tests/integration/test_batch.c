@@ -18,16 +18,7 @@
 static char g_tmp[64];
 static char g_out[65536];
 
-static int sh(const char *fmt, ...) {
-    char cmd[8192];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(cmd, sizeof cmd, fmt, ap);
-    va_end(ap);
-    int rc = run_capture(cmd, g_out, sizeof g_out);
-    print_message("$ %s -> %d\n%.2000s", cmd, rc, g_out);
-    return rc;
-}
+#define sh(...) run_logged(g_out, sizeof g_out, __VA_ARGS__)
 
 static void write_text(const char *path, const char *text) {
     FILE *f = fopen(path, "w");

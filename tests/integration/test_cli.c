@@ -13,16 +13,7 @@
 static char g_tmp[64];
 static char g_out[16384];
 
-static int sh(const char *fmt, ...) {
-    char cmd[8192];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(cmd, sizeof cmd, fmt, ap);
-    va_end(ap);
-    int rc = run_capture(cmd, g_out, sizeof g_out);
-    print_message("$ %s -> %d\n%s", cmd, rc, g_out);
-    return rc;
-}
+#define sh(...) run_logged(g_out, sizeof g_out, __VA_ARGS__)
 
 static int setup(void **st) {
     (void)st;

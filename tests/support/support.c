@@ -1,6 +1,7 @@
 #include "support.h"
 
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -38,6 +39,18 @@ bool test_open(sb_session *s, const char *scene, const char *path, int w, int h,
     o.height = h;
     memset(s, 0, sizeof *s);
     return sb_session_open(s, &o, scene, path, err);
+}
+
+int run_logged(char *out, size_t len, const char *fmt, ...) {
+    char cmd[8192];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(cmd, sizeof cmd, fmt, ap);
+    va_end(ap);
+    int rc = run_capture(cmd, out, len);
+    printf("$ %s -> %d\n%.2000s", cmd, rc, out);
+    fflush(stdout);
+    return rc;
 }
 
 bool pb_open(sb_session *s, sb_backend backend, int w, int h, sb_err *err) {

@@ -37,3 +37,6 @@ const char *test_data(const char *name);
 const char *test_binary(void);
 /* Runs a shell command, captures stderr+stdout into out; returns the exit code. */
 int run_capture(const char *cmd, char *out, size_t len);
+/* run_capture of a printf-formatted command, logging the command, its exit code and
+ * the start of its output. */
+int run_logged(char *out, size_t len, const char *fmt, ...);
