@@ -158,7 +158,7 @@ static bool batch_build(sb_batch *b, const char *file, char *text, const sb_run_
     for (int i = 0; ok && load && i < b->nscenes; i++) {
         sb_batch_scene *sc = &b->scenes[i];
         sb_err e;
-        if (!sb_scene_load(&sc->scene, sc->file, &e)) {
+        if (!sb_scene_load(&sc->scene, sc->file, NULL, &e)) {
             ok = sb_fail(err, "%s:%d: %s", file, sc->line, e.msg);
             break;
         }

@@ -170,7 +170,7 @@ static int cmd_path(const cli *c) {
     sb_scene scene;
     bool have_scene = false;
     if (c->npos == 2) {
-        if (!sb_scene_load(&scene, c->pos[1], &err)) {
+        if (!sb_scene_load(&scene, c->pos[1], NULL, &err)) {
             fprintf(stderr, "shadowbench: %s\n", err.msg);
             return 1;
         }

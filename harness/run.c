@@ -100,9 +100,14 @@ bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, con
     memset(s, 0, sizeof *s);
     s->opts = *o;
     if (have_ctx) s->ctx = keep;
-    else if (!sb_context_create(&s->ctx, o->backend, err)) return false;
-    if (!sb_scene_load(&s->scene, scene, err)) return false;
+    /* files first: a broken scene or path is refused before any GL is touched */
+    if (!sb_scene_load(&s->scene, scene, NULL, err)) return false;
     if (!sb_path_load(&s->path, path, &s->scene, err)) {
+        sb_scene_free(&s->scene);
+        return false;
+    }
+    if (!have_ctx && !sb_context_create(&s->ctx, o->backend, err)) {
+        sb_path_free(&s->path);
         sb_scene_free(&s->scene);
         return false;
     }

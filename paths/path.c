@@ -7,7 +7,8 @@
 
 #include "scene.h"
 
-bool sb_gltf_camera_path(sb_path *p, const char *path, int cam, sb_err *err); /* gltf_load.cc */
+bool sb_gltf_camera_path(sb_path *p, const char *path, int cam, const sb_scene_opts *opts,
+                         sb_err *err); /* gltf_load.cc */
 
 static bool add_key(sb_path *p, int *cap, sb_path_key k) {
     if (p->key_count == *cap) {
@@ -171,7 +172,7 @@ bool sb_path_load(sb_path *p, const char *spec, const sb_scene *scene, sb_err *e
         if (!sb_parse_int(hash + 8, &cam) || cam < 0 || cam > INT_MAX)
             return sb_fail(err, "%s: expected FILE#camera=INDEX", spec);
         p->fov_deg = 60;
-        if (!sb_gltf_camera_path(p, file, (int)cam, err)) {
+        if (!sb_gltf_camera_path(p, file, (int)cam, scene ? &scene->opts : NULL, err)) {
             sb_path_free(p);
             return false;
         }

@@ -2,6 +2,7 @@
 // scene model, and animated glTF cameras into paths. The only C++ on the
 // scene side; everything it exposes is a C function.
 #include <cerrno>
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -9,12 +10,14 @@
 #include <vector>
 #include <set>
 #include <algorithm>
+#include <memory>
 
 #include <tiny_gltf.h>
 
 extern "C" {
-#include "scene.h"
+#include "gltf_check.h"
 #include "path.h"
+#include "scene.h"
 }
 
 namespace {
@@ -46,77 +49,124 @@ struct Ctx {
     }
 };
 
-// Locates accessor data; checks every index and range against the buffers.
-bool accessor_view(Ctx &c, int acc_idx, const std::string &where, int want_type,
-                   const unsigned char **data, size_t *stride, size_t *count, int *ctype) {
+// Overflow-safe range test: [off, off + len) inside [0, size).
+bool fits(size_t off, size_t len, size_t size) { return off <= size && len <= size - off; }
+
+// A strided run of `count` elements of `elem` bytes at `off` in bufferView `view`;
+// every range is checked again here (sb_gltf_check did it on the raw JSON).
+bool view_range(Ctx &c, int view, size_t off, size_t count, size_t elem, size_t stride, const std::string &where,
+                const unsigned char **data) {
     const tinygltf::Model &m = *c.m;
-    if (acc_idx < 0 || acc_idx >= (int)m.accessors.size())
-        return c.fail(where, "accessor " + std::to_string(acc_idx) + " does not exist");
-    const tinygltf::Accessor &a = m.accessors[acc_idx];
-    std::string ap = "/accessors/" + std::to_string(acc_idx);
-    if (a.sparse.isSparse) return c.fail(ap, "sparse accessors are not supported");
-    if (want_type && a.type != want_type) return c.fail(ap, "unexpected accessor type");
-    if (a.bufferView < 0 || a.bufferView >= (int)m.bufferViews.size())
-        return c.fail(ap + "/bufferView", "missing or out of range");
-    const tinygltf::BufferView &bv = m.bufferViews[a.bufferView];
-    std::string bp = "/bufferViews/" + std::to_string(a.bufferView);
+    if (view < 0 || view >= (int)m.bufferViews.size()) return c.fail(where + "/bufferView", "missing or out of range");
+    const tinygltf::BufferView &bv = m.bufferViews[view];
     if (bv.buffer < 0 || bv.buffer >= (int)m.buffers.size())
-        return c.fail(bp + "/buffer", "missing or out of range");
+        return c.fail("/bufferViews/" + std::to_string(view) + "/buffer", "missing or out of range");
     const tinygltf::Buffer &b = m.buffers[bv.buffer];
-    if (bv.byteOffset + bv.byteLength > b.data.size())
-        return c.fail(bp, "range " + std::to_string(bv.byteOffset) + "+" + std::to_string(bv.byteLength) +
-                              " exceeds buffer " + std::to_string(bv.buffer) + " of " +
-                              std::to_string(b.data.size()) + " bytes");
+    if (!fits(bv.byteOffset, bv.byteLength, b.data.size()))
+        return c.fail("/bufferViews/" + std::to_string(view), "range exceeds buffer " + std::to_string(bv.buffer) +
+                                                                 " of " + std::to_string(b.data.size()) + " bytes");
+    size_t need;
+    if (count == 0 || __builtin_mul_overflow(stride, count - 1, &need) || __builtin_add_overflow(need, elem, &need) ||
+        !fits(off, need, bv.byteLength))
+        return c.fail(where, "count " + std::to_string(count) + " runs past the end of bufferView " + std::to_string(view));
+    *data = b.data.data() + bv.byteOffset + off;
+    return true;
+}
+
+// One component as a double: integers exactly, normalized ones mapped to [0, 1] or [-1, 1].
+double component(const unsigned char *p, int ctype, bool normalized) {
+    switch (ctype) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE: { int8_t v; memcpy(&v, p, 1); return normalized ? std::max(v / 127.0, -1.0) : v; }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return normalized ? p[0] / 255.0 : p[0];
+    case TINYGLTF_COMPONENT_TYPE_SHORT: { int16_t v; memcpy(&v, p, 2); return normalized ? std::max(v / 32767.0, -1.0) : v; }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: { uint16_t v; memcpy(&v, p, 2); return normalized ? v / 65535.0 : v; }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: { uint32_t v; memcpy(&v, p, 4); return v; }
+    default: { float v; memcpy(&v, p, 4); return v; }
+    }
+}
+
+// Reads accessor `acc` as count x ncomp doubles (any component type; matrix
+// columns padded to 4 bytes as the spec lays them out; sparse values applied).
+bool read_accessor(Ctx &c, int acc, const std::string &where, int want_type, std::vector<double> &out) {
+    const tinygltf::Model &m = *c.m;
+    if (acc < 0 || acc >= (int)m.accessors.size())
+        return c.fail(where, "accessor " + std::to_string(acc) + " does not exist");
+    const tinygltf::Accessor &a = m.accessors[acc];
+    std::string ap = "/accessors/" + std::to_string(acc);
+    if (want_type && a.type != want_type) return c.fail(ap, "unexpected accessor type");
     int csize = tinygltf::GetComponentSizeInBytes(a.componentType);
     int ncomp = tinygltf::GetNumComponentsInType(a.type);
     if (csize <= 0 || ncomp <= 0) return c.fail(ap, "invalid componentType or type");
-    size_t elem = (size_t)csize * ncomp;
-    size_t st = bv.byteStride ? bv.byteStride : elem;
-    if (a.count > 0 && a.byteOffset + st * (a.count - 1) + elem > bv.byteLength)
-        return c.fail(ap, "count " + std::to_string(a.count) + " runs past the end of bufferView " +
-                              std::to_string(a.bufferView));
-    *data = b.data.data() + bv.byteOffset + a.byteOffset;
-    *stride = st;
-    *count = a.count;
-    *ctype = a.componentType;
+    int rows = a.type == TINYGLTF_TYPE_MAT2 ? 2 : a.type == TINYGLTF_TYPE_MAT3 ? 3 : a.type == TINYGLTF_TYPE_MAT4 ? 4 : ncomp;
+    size_t col = (size_t)rows * csize;
+    if (rows != ncomp) col = (col + 3) / 4 * 4;   // matrix columns start on 4-byte boundaries
+    size_t elem = col * (size_t)(ncomp / rows);
+    size_t total;
+    if (__builtin_mul_overflow(a.count, (size_t)ncomp, &total) || total > ((size_t)1 << 32))
+        return c.fail(ap + "/count", std::to_string(a.count) + " elements are more than shadowbench reads");
+    out.assign(total, 0.0);
+    auto decode = [&](const unsigned char *d, size_t stride, size_t n, size_t first) {
+        for (size_t i = 0; i < n; i++)
+            for (int k = 0; k < ncomp; k++)
+                out[(first + i) * ncomp + k] =
+                    component(d + i * stride + (size_t)(k / rows) * col + (size_t)(k % rows) * csize, a.componentType, a.normalized);
+    };
+    if (a.bufferView >= (int)m.bufferViews.size()) return c.fail(ap + "/bufferView", "out of range");
+    if (a.bufferView >= 0) {
+        const unsigned char *d;
+        size_t bs = m.bufferViews[a.bufferView].byteStride;
+        size_t stride = bs ? bs : elem;
+        if (stride < elem) return c.fail(ap, "byteStride is smaller than the element");
+        if (!view_range(c, a.bufferView, a.byteOffset, a.count, elem, stride, ap, &d)) return false;
+        decode(d, stride, a.count, 0);
+    }
+    if (a.sparse.isSparse) {
+        const auto &sp = a.sparse;
+        std::string sp_path = ap + "/sparse";
+        if (sp.count <= 0 || (size_t)sp.count > a.count || sp.indices.byteOffset < 0 || sp.values.byteOffset < 0)
+            return c.fail(sp_path, "count or byteOffset out of range");
+        int isize = tinygltf::GetComponentSizeInBytes(sp.indices.componentType);
+        int ict = sp.indices.componentType;
+        if (ict != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && ict != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+            ict != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+            return c.fail(sp_path + "/indices/componentType", "expected unsigned byte, short or int");
+        const unsigned char *di, *dv;
+        if (!view_range(c, sp.indices.bufferView, (size_t)sp.indices.byteOffset, (size_t)sp.count, (size_t)isize,
+                        (size_t)isize, sp_path + "/indices", &di) ||
+            !view_range(c, sp.values.bufferView, (size_t)sp.values.byteOffset, (size_t)sp.count, elem, elem,
+                        sp_path + "/values", &dv))
+            return false;
+        size_t prev = 0;
+        for (int k = 0; k < sp.count; k++) {
+            size_t idx = (size_t)component(di + (size_t)k * isize, sp.indices.componentType, false);
+            if (idx >= a.count || (k > 0 && idx <= prev))
+                return c.fail(sp_path + "/indices", "index " + std::to_string(idx) + " at " + std::to_string(k) +
+                                                         " is out of range or not increasing");
+            decode(dv + (size_t)k * elem, elem, 1, idx);
+            prev = idx;
+        }
+    }
     return true;
 }
 
 bool read_vec(Ctx &c, int acc, const std::string &where, int ncomp, std::vector<double> &out) {
-    const unsigned char *d;
-    size_t stride, count;
-    int ctype;
     int type = ncomp == 1 ? TINYGLTF_TYPE_SCALAR : ncomp == 3 ? TINYGLTF_TYPE_VEC3 : TINYGLTF_TYPE_VEC4;
-    if (!accessor_view(c, acc, where, type, &d, &stride, &count, &ctype)) return false;
-    if (ctype != TINYGLTF_COMPONENT_TYPE_FLOAT) return c.fail(where, "expected float components");
-    out.resize(count * ncomp);
-    for (size_t i = 0; i < count; i++) {
-        for (int k = 0; k < ncomp; k++) {
-            float f;
-            memcpy(&f, d + i * stride + 4 * k, 4);
-            if (!std::isfinite(f))
-                return c.fail(where, "element " + std::to_string(i) + " is " + (std::isnan(f) ? "NaN" : "Inf"));
-            out[i * ncomp + k] = f;
-        }
-    }
+    if (!read_accessor(c, acc, where, type, out)) return false;
+    for (size_t i = 0; i < out.size(); i++)
+        if (!std::isfinite(out[i]))
+            return c.fail(where, "element " + std::to_string(i / ncomp) + " is " + (std::isnan(out[i]) ? "NaN" : "Inf"));
     return true;
 }
 
 bool read_indices(Ctx &c, int acc, const std::string &where, std::vector<uint32_t> &out) {
-    const unsigned char *d;
-    size_t stride, count;
-    int ctype;
-    if (!accessor_view(c, acc, where, TINYGLTF_TYPE_SCALAR, &d, &stride, &count, &ctype)) return false;
-    out.resize(count);
-    for (size_t i = 0; i < count; i++) {
-        const unsigned char *p = d + i * stride;
-        switch (ctype) {
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: out[i] = p[0]; break;
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: { uint16_t v; memcpy(&v, p, 2); out[i] = v; break; }
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: { uint32_t v; memcpy(&v, p, 4); out[i] = v; break; }
-        default: return c.fail(where, "indices must be unsigned byte, short or int");
-        }
-    }
+    std::vector<double> v;
+    if (!read_accessor(c, acc, where, TINYGLTF_TYPE_SCALAR, v)) return false;
+    int ct = c.m->accessors[acc].componentType;
+    if (ct != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && ct != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+        ct != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+        return c.fail(where, "indices must be unsigned byte, short or int");
+    out.resize(v.size());
+    for (size_t i = 0; i < v.size(); i++) out[i] = (uint32_t)v[i];
     return true;
 }
 
@@ -137,7 +187,6 @@ sb_m4 node_local(const tinygltf::Node &n) {
 struct Loader {
     Ctx c;
     sb_scene *s;
-    std::vector<int> depth_guard;
     std::vector<sb_m4> world;   // per node, filled during traversal
     std::vector<char> visited;
 
@@ -227,12 +276,10 @@ struct Loader {
         return true;
     }
 
-    bool node(int ni, const sb_m4 &parent, int depth) {
+    // One node: its world transform from its parent's, its primitives, camera and light.
+    bool visit(int ni, const sb_m4 &parent) {
         const tinygltf::Model &m = *c.m;
         std::string where = "/nodes/" + std::to_string(ni);
-        if (ni < 0 || ni >= (int)m.nodes.size()) return c.fail(where, "node does not exist");
-        if (depth > 256 || visited[ni]) return c.fail(where, "node graph has a cycle or a node with two parents");
-        visited[ni] = 1;
         const tinygltf::Node &n = m.nodes[ni];
         if ((!n.matrix.empty() && n.matrix.size() != 16) || (!n.translation.empty() && n.translation.size() != 3) ||
             (!n.rotation.empty() && n.rotation.size() != 4) || (!n.scale.empty() && n.scale.size() != 3))
@@ -268,34 +315,117 @@ struct Loader {
                 s->sun = sb_v3_scale(l.direction, -1);
             }
         }
-        for (int ch : n.children)
-            if (!node(ch, w, depth + 1)) return false;
+        return true;
+    }
+
+    // Depth-first from the roots without recursion (exported files hold chains
+    // of tens of thousands of nodes), in the order a recursive walk would take.
+    bool walk(const std::vector<int> &roots) {
+        const tinygltf::Model &m = *c.m;
+        struct Item { int node; sb_m4 parent; };
+        std::vector<Item> stack;
+        for (size_t i = roots.size(); i-- > 0;) stack.push_back({roots[i], sb_m4_identity()});
+        while (!stack.empty()) {
+            Item it = stack.back();
+            stack.pop_back();
+            std::string where = "/nodes/" + std::to_string(it.node);
+            if (it.node < 0 || it.node >= (int)m.nodes.size()) return c.fail(where, "node does not exist");
+            if (visited[it.node]) return c.fail(where, "node is reached twice (a cycle or a node with two parents)");
+            visited[it.node] = 1;
+            if (!visit(it.node, it.parent)) return false;
+            const std::vector<int> &ch = m.nodes[it.node].children;
+            for (size_t i = ch.size(); i-- > 0;) stack.push_back({ch[i], world[it.node]});
+        }
         return true;
     }
 };
 
-bool load_model(const char *path, tinygltf::Model &model, ImageCounter *images, sb_err *err) {
+// tinygltf reads external buffers and images through these: only regular
+// files inside the scene's folder (unless allowed), never shell expansion.
+struct FsCtx {
+    std::string base_dir;
+    bool allow_external;
+};
+
+bool fs_exists(const std::string &path, void *user) {
+    FsCtx *f = static_cast<FsCtx *>(user);
+    char real[PATH_MAX];
+    sb_err e;
+    return sb_file_confined(f->base_dir.c_str(), path.c_str(), f->allow_external, real, sizeof real, &e);
+}
+
+std::string fs_expand(const std::string &path, void *) { return path; }
+
+bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::string &path, void *user) {
+    FsCtx *f = static_cast<FsCtx *>(user);
+    char real[PATH_MAX];
+    sb_err e;
+    size_t n = 0;
+    char *data = nullptr;
+    if (sb_file_confined(f->base_dir.c_str(), path.c_str(), f->allow_external, real, sizeof real, &e))
+        data = sb_read_file(real, &n, &e);
+    if (!data) {
+        if (err) *err = e.msg;
+        return false;
+    }
+    out->assign(data, data + n);
+    free(data);
+    return true;
+}
+
+bool fs_write(std::string *err, const std::string &, const std::vector<unsigned char> &, void *) {
+    if (err) *err = "shadowbench writes no glTF files";
+    return false;
+}
+
+// Reads the file once, checks the raw document (gltf_check.h), then lets
+// tinygltf parse it from memory. *hash: FNV-1a of the file and its buffers.
+bool load_model(const char *path, const sb_scene_opts *opts, tinygltf::Model &model, ImageCounter *images,
+                uint64_t *hash, sb_err *err) {
+    size_t size = 0;
+    char *bytes = sb_read_file(path, &size, err);
+    if (!bytes) return false;
+    std::unique_ptr<char, decltype(&free)> hold(bytes, &free);
+    if (size > UINT_MAX) return sb_fail(err, "%s: %zu bytes: files over 4 GiB are not supported", path, size);
+    const unsigned char *u = reinterpret_cast<const unsigned char *>(bytes);
+    bool glb = size >= 4 && memcmp(bytes, "glTF", 4) == 0;
+    const char *json = bytes;
+    uint64_t json_len = size, bin_len = 0;
+    const unsigned char *bin = nullptr;
+    if (glb && !sb_glb_split(u, size, path, &json, &json_len, &bin, &bin_len, err)) return false;
+    std::string base_dir(path);
+    size_t slash = base_dir.find_last_of('/');
+    base_dir = slash == std::string::npos ? std::string(".") : slash == 0 ? std::string("/") : base_dir.substr(0, slash);
+    sb_json_doc doc;
+    if (!sb_json_parse(&doc, path, json, json_len, err)) return false;
+    sb_gltf_check_desc cd = {path, base_dir.c_str(), glb, bin ? bin_len : 0, opts && opts->allow_external_uris};
+    bool ok = sb_gltf_check(doc.root, &cd, err);
+    sb_json_free(&doc);
+    if (!ok) return false;
+
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(skip_image, images);
+    FsCtx fs_ctx{base_dir, cd.allow_external_uris};
+    loader.SetFsCallbacks(tinygltf::FsCallbacks{fs_exists, fs_expand, fs_read, fs_write, &fs_ctx});
     std::string e, w;
-    size_t n = strlen(path);
-    bool glb = n > 4 && (strcmp(path + n - 4, ".glb") == 0 || strcmp(path + n - 4, ".GLB") == 0);
-    FILE *f = fopen(path, "rb");
-    if (!f) return sb_fail(err, "%s: cannot open: %s", path, strerror(errno));
-    fclose(f);
-    bool ok = glb ? loader.LoadBinaryFromFile(&model, &e, &w, path) : loader.LoadASCIIFromFile(&model, &e, &w, path);
+    ok = glb ? loader.LoadBinaryFromMemory(&model, &e, &w, u, (unsigned)size, base_dir)
+             : loader.LoadASCIIFromString(&model, &e, &w, bytes, (unsigned)size, base_dir);
     if (!ok) return sb_fail(err, "%s: %s", path, e.empty() ? "not a valid glTF file" : first_line(e).c_str());
+    uint64_t h = sb_fnv1a(SB_FNV_SEED, bytes, size);
+    for (auto &b : model.buffers) h = sb_fnv1a(h, b.data.data(), b.data.size());
+    *hash = h;
     return true;
 }
 
 } // namespace
 
-extern "C" bool sb_gltf_load(sb_scene *s, const char *path, sb_err *err) {
+extern "C" bool sb_gltf_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_err *err) {
     tinygltf::Model model;
     ImageCounter images;
     try {
-        if (!load_model(path, model, &images, err)) return false;
-        Loader L{Ctx{path, &model, err}, s, {}, std::vector<sb_m4>(model.nodes.size()), std::vector<char>(model.nodes.size())};
+        uint64_t hash;
+        if (!load_model(path, opts, model, &images, &hash, err)) return false;
+        Loader L{Ctx{path, &model, err}, s, std::vector<sb_m4>(model.nodes.size()), std::vector<char>(model.nodes.size())};
         s->camera_count = (uint32_t)model.cameras.size();
         s->cameras = (sb_scene_camera *)calloc(s->camera_count ? s->camera_count : 1, sizeof(sb_scene_camera));
         for (size_t i = 0; i < model.cameras.size(); i++) {
@@ -320,18 +450,9 @@ extern "C" bool sb_gltf_load(sb_scene *s, const char *path, sb_err *err) {
             for (size_t i = 0; i < model.nodes.size(); i++)
                 if (!child[i]) roots.push_back((int)i);
         }
-        for (int r : roots)
-            if (!L.node(r, sb_m4_identity(), 0)) return false;
+        if (!L.walk(roots)) return false;
         s->images_skipped = images.skipped;
-        s->content_hash = SB_FNV_SEED;
-        size_t sz = 0;
-        sb_err e2;
-        char *bytes = sb_read_file(path, &sz, &e2);
-        if (bytes) {
-            s->content_hash = sb_fnv1a(s->content_hash, bytes, sz);
-            free(bytes);
-        }
-        for (auto &b : model.buffers) s->content_hash = sb_fnv1a(s->content_hash, b.data.data(), b.data.size());
+        s->content_hash = hash;
         if (s->alpha_mask_draws)
             sb_log("%s: %u alpha-masked primitive(s) are drawn as opaque casters (alpha textures are not applied)",
                    path, s->alpha_mask_draws);
@@ -346,11 +467,12 @@ extern "C" bool sb_gltf_load(sb_scene *s, const char *path, sb_err *err) {
 
 // An animated glTF camera as a path: keys at every animation time of the
 // camera's node (translation/rotation channels), parent chain static.
-extern "C" bool sb_gltf_camera_path(sb_path *p, const char *path, int cam, sb_err *err) {
+extern "C" bool sb_gltf_camera_path(sb_path *p, const char *path, int cam, const sb_scene_opts *opts, sb_err *err) {
     tinygltf::Model model;
     ImageCounter images;
     try {
-        if (!load_model(path, model, &images, err)) return false;
+        uint64_t hash;
+        if (!load_model(path, opts, model, &images, &hash, err)) return false;
         Ctx c{path, &model, err};
         if (cam < 0 || cam >= (int)model.cameras.size())
             return sb_fail(err, "%s#camera=%d: the file has %zu camera(s)", path, cam, model.cameras.size());
@@ -363,8 +485,8 @@ extern "C" bool sb_gltf_camera_path(sb_path *p, const char *path, int cam, sb_er
         }
         if (cn < 0) return sb_fail(err, "%s#camera=%d: no node uses this camera", path, cam);
         sb_m4 pw = sb_m4_identity();
-        int depth = 0;
-        for (int q = parent[cn]; q >= 0 && depth < 256; q = parent[q], depth++)
+        size_t depth = 0; // the graph was checked to be a forest: the walk ends at a root
+        for (int q = parent[cn]; q >= 0 && depth <= model.nodes.size(); q = parent[q], depth++)
             pw = sb_m4_mul(node_local(model.nodes[q]), pw);
         const tinygltf::Node &n = model.nodes[cn];
         struct Chan { std::vector<double> in, out; int ncomp; bool step; };

@@ -8,7 +8,7 @@
 
 #define SB_CHUNK_TRIS 4096u
 
-bool sb_gltf_load(sb_scene *s, const char *path, sb_err *err); /* gltf_load.cc */
+bool sb_gltf_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_err *err); /* gltf_load.cc */
 
 void sb_scene_begin(sb_scene *s) {
     memset(s, 0, sizeof *s);
@@ -302,13 +302,14 @@ bool sb_resolve_bundled(const char *name, const char *ext, char *out, size_t out
     return false;
 }
 
-bool sb_scene_load(sb_scene *s, const char *path, sb_err *err) {
+bool sb_scene_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_err *err) {
     char resolved[PATH_MAX];
     if (sb_resolve_bundled(path, ".glb", resolved, sizeof resolved)) path = resolved;
     double t0 = sb_now_ms();
     sb_scene_begin(s);
     s->file = sb_strdup(path);
-    if (!sb_gltf_load(s, path, err)) {
+    if (opts) s->opts = *opts;
+    if (!sb_gltf_load(s, path, opts, err)) {
         sb_scene_free(s);
         return false;
     }

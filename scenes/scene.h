@@ -64,6 +64,11 @@ typedef struct sb_plane {
     uint32_t tri_count;
 } sb_plane;
 
+/* How a scene file is read; zero means the default. */
+typedef struct sb_scene_opts {
+    bool allow_external_uris;    /* buffer and image URIs may leave the scene's folder */
+} sb_scene_opts;
+
 typedef struct sb_scene {
     char *file;
     sb_v3 origin;                /* world position of the local frame */
@@ -84,6 +89,7 @@ typedef struct sb_scene {
     uint32_t camera_count;
 
     uint64_t content_hash;       /* FNV-1a of the file bytes (for run ids) */
+    sb_scene_opts opts;          /* as loaded (a glTF camera path of the scene is read alike) */
     double load_ms;
     uint32_t images_skipped;     /* textures present but not decoded */
     uint32_t alpha_mask_draws;
@@ -96,9 +102,10 @@ typedef struct sb_scene {
     uint32_t build_cap;
 } sb_scene;
 
-/* Loads .gltf/.glb (through tinygltf) or a bundled name ("plane-box", "desert",
- * ...; looked up in SB_SCENE_DIR and the build's scene folder). */
-bool sb_scene_load(sb_scene *s, const char *path, sb_err *err);
+/* Loads .gltf/.glb (through tinygltf, after gltf_check.h's checks) or a bundled
+ * name ("plane-box", "desert", ...; looked up in SB_DATA_DIR and the build's
+ * scene folder). opts may be NULL. */
+bool sb_scene_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_err *err);
 void sb_scene_free(sb_scene *s);
 uint64_t sb_scene_triangles(const sb_scene *s);
 /* Resolves a bundled scene or path name to a file; returns false if it is not one. */

@@ -21,7 +21,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     sb_set_quiet(true);
     sb_scene s;
     sb_err err = {{0}};
-    if (sb_scene_load(&s, path, &err)) {
+    if (sb_scene_load(&s, path, NULL, &err)) {
         /* a loaded scene is usable: finite bounds, indices in range */
         if (!sb_v3_finite(s.bounds.lo) || !sb_v3_finite(s.bounds.hi)) __builtin_trap();
         for (uint32_t i = 0; i < s.index_count; i++)

@@ -20,7 +20,8 @@ if [[ -d $src/tests/fuzz/regressions/$name ]] && ls "$src/tests/fuzz/regressions
   "$fuzzer" "$src/tests/fuzz/regressions/$name"/* 2>&1 | tail -n 3
 fi
 cd "$work"
-"$fuzzer" -max_total_time="$secs" -max_len=262144 -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
+dict=(); [[ -f $src/tests/fuzz/$name.dict ]] && dict=(-dict="$src/tests/fuzz/$name.dict")
+"$fuzzer" "${dict[@]}" -max_total_time="$secs" -max_len=262144 -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
   corpus > log 2>&1 || {
     tail -n 40 log
     mkdir -p "$start/fuzz-crashes/$name" && cp crash-* leak-* timeout-* oom-* "$start/fuzz-crashes/$name/" 2>/dev/null || true

@@ -1,5 +1,10 @@
 #include "support.h"
 
+#include <setjmp.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -177,4 +182,78 @@ bool eval_frame(sb_session *s, const char *spec, int i, int n, sb_error_metrics 
     sb_timer_free(&t);
     sb_instance_destroy(&in, s);
     return sb_gl_check(spec, err);
+}
+
+static void base64(const unsigned char *in, size_t n, char *out) {
+    static const char tbl[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    size_t o = 0;
+    for (size_t i = 0; i < n; i += 3) {
+        uint32_t v = (uint32_t)in[i] << 16 | (i + 1 < n ? (uint32_t)in[i + 1] << 8 : 0) | (i + 2 < n ? in[i + 2] : 0);
+        out[o++] = tbl[v >> 18 & 63];
+        out[o++] = tbl[v >> 12 & 63];
+        out[o++] = i + 1 < n ? tbl[v >> 6 & 63] : '=';
+        out[o++] = i + 2 < n ? tbl[v & 63] : '=';
+    }
+    out[o] = 0;
+}
+
+bool gltf_tri_write(const char *path, const gltf_tri *t) {
+    unsigned char buf[44] = {0};
+    const float pos[9] = {0, 0, 0, 1, 0, 0, 0, 0, 1};
+    const uint16_t idx[3] = {0, 1, 2};
+    memcpy(buf, pos, sizeof pos);
+    memcpy(buf + 36, idx, sizeof idx);
+    char b64[80], data_uri[128];
+    base64(buf, sizeof buf, b64);
+    snprintf(data_uri, sizeof data_uri, "data:application/octet-stream;base64,%s", b64);
+#define OR(f, d) (t->f ? t->f : (d))
+    FILE *f = fopen(path, "w");
+    if (!f) return false;
+    fprintf(f,
+            "{\"asset\":{\"version\":\"2.0\"},\"scene\":%s,\"scenes\":[{\"nodes\":%s}],"
+            "\"nodes\":[{%s}%s],\"meshes\":[{\"primitives\":[{%s}]}],"
+            "\"buffers\":[{\"byteLength\":%s,\"uri\":\"%s\"}],\"bufferViews\":[{%s},{%s}],"
+            "\"accessors\":[{%s},{%s}]%s}\n",
+            OR(scene, "0"), OR(scene_nodes, "[0]"), OR(node0, "\"mesh\":0"), OR(nodes_more, ""),
+            OR(prim, "\"attributes\":{\"POSITION\":0},\"indices\":1"), OR(buffer_len, "44"), OR(uri, data_uri),
+            OR(view0, "\"buffer\":0,\"byteOffset\":0,\"byteLength\":36"),
+            OR(view1, "\"buffer\":0,\"byteOffset\":36,\"byteLength\":6"),
+            OR(acc0, "\"bufferView\":0,\"byteOffset\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\""),
+            OR(acc1, "\"bufferView\":1,\"byteOffset\":0,\"componentType\":5123,\"count\":3,\"type\":\"SCALAR\""),
+            OR(root_more, ""));
+#undef OR
+    return fclose(f) == 0;
+}
+
+void expect_scene_refused(const char *path, const char *needle) {
+    sb_scene s;
+    sb_err err = {{0}};
+    bool ok = sb_scene_load(&s, path, NULL, &err);
+    print_message("%s\n", ok ? "(loaded)" : err.msg);
+    if (ok) sb_scene_free(&s);
+    assert_false(ok);
+    assert_non_null(strstr(err.msg, path));
+    assert_non_null(strstr(err.msg, needle));
+    assert_null(strchr(err.msg, '\n'));
+}
+
+const char *expect_cli_fail(const char *needle, const char *fmt, ...) {
+    static char out[16384];
+    char cmd[8192];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(cmd, sizeof cmd, fmt, ap);
+    va_end(ap);
+    int rc = run_logged(out, sizeof out, "%s", cmd);
+    assert_int_not_equal(rc, 0);
+    assert_non_null(strstr(out, needle));
+    /* one line */
+    assert_true(strchr(out, '\n') == NULL || strchr(out, '\n') == out + strlen(out) - 1);
+    return out;
+}
+
+void copy_bundled(const char *name, const char *dst) {
+    char cmd[8192];
+    snprintf(cmd, sizeof cmd, "cp %s/%s %s", getenv("SB_DATA_DIR"), name, dst);
+    assert_int_equal(system(cmd), 0);
 }

@@ -40,3 +40,34 @@ int run_capture(const char *cmd, char *out, size_t len);
 /* run_capture of a printf-formatted command, logging the command, its exit code and
  * the start of its output. */
 int run_logged(char *out, size_t len, const char *fmt, ...);
+
+/* A one-triangle glTF document (.gltf, buffer in a data: URI unless `uri` is
+ * given) whose fields can be replaced by exact JSON text, for bad-input tests.
+ * The buffer holds three float VEC3 positions (36 bytes) and three unsigned
+ * short indices (6 bytes, padded to 44). NULL keeps the default, shown after
+ * each field. */
+typedef struct gltf_tri {
+    const char *uri;            /* data: URI of the 44 bytes */
+    const char *buffer_len;     /* "44" */
+    const char *view0;          /* positions' bufferView body: "\"buffer\":0,\"byteOffset\":0,\"byteLength\":36" */
+    const char *view1;          /* indices' bufferView body: "\"buffer\":0,\"byteOffset\":36,\"byteLength\":6" */
+    const char *acc0;           /* positions' accessor body: bufferView 0, byteOffset 0, float VEC3, count 3 */
+    const char *acc1;           /* indices' accessor body: bufferView 1, byteOffset 0, ushort SCALAR, count 3 */
+    const char *prim;           /* primitive body: "\"attributes\":{\"POSITION\":0},\"indices\":1" */
+    const char *node0;          /* node 0 body: "\"mesh\":0" */
+    const char *nodes_more;     /* more nodes after node 0, with a leading comma: "" */
+    const char *scene;          /* "0" */
+    const char *scene_nodes;    /* "[0]" */
+    const char *root_more;      /* more root members, with a leading comma: "" */
+} gltf_tri;
+
+/* Writes the document to path; false if it cannot. */
+bool gltf_tri_write(const char *path, const gltf_tri *t);
+/* Loads path as a scene expecting a refusal whose one-line message holds
+ * needle; prints the message. */
+void expect_scene_refused(const char *path, const char *needle);
+/* Runs the printf-formatted command (logged) expecting a non-zero exit and
+ * one line of output holding needle; returns that output. */
+const char *expect_cli_fail(const char *needle, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* Copies the bundled scene file `name` (from SB_DATA_DIR) to dst. */
+void copy_bundled(const char *name, const char *dst);

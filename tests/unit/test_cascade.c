@@ -81,7 +81,7 @@ static void rig_camera(rig *r, double far_scale) {
 static void rig_open(rig *r, const char *scene, int stable) {
     memset(r, 0, sizeof *r);
     sb_err err;
-    assert_true(sb_scene_load(&r->scene, scene, &err));
+    assert_true(sb_scene_load(&r->scene, scene, NULL, &err));
     r->gpu.scene = &r->scene;
     r->gpu.scratch = malloc((r->scene.draw_count + 1) * sizeof(uint32_t));
     r->csm.count = 4;
@@ -220,7 +220,7 @@ static void test_lispsm_fallback(void **st) {
     (void)st;
     sb_scene s;
     sb_err err;
-    assert_true(sb_scene_load(&s, "towers", &err));
+    assert_true(sb_scene_load(&s, "towers", NULL, &err));
     sb_v3 sun = sb_sun_dir(200, 55);
     const double angles[] = {0, 0.5, 4.9, 5.1, 30, 90, 150, 179.9, 180};
     for (size_t i = 0; i < SB_COUNT(angles); i++) {
@@ -298,7 +298,7 @@ static void test_psm_behind_camera_order(void **st) {
     (void)st;
     sb_scene s;
     sb_err err;
-    assert_true(sb_scene_load(&s, "plane-box", &err));
+    assert_true(sb_scene_load(&s, "plane-box", NULL, &err));
     sb_camera cam = look_camera(sb_v3_make(-2, 0.3, -3.75), sb_v3_make(-2.97, 0.126, -3.579));
     sb_v3 sun = sb_sun_dir(30, 20);
     sb_light_fit inv[6], naive[6];
@@ -362,7 +362,7 @@ static void test_psm_cube_and_limits(void **st) {
     (void)st;
     sb_scene s;
     sb_err err;
-    assert_true(sb_scene_load(&s, "plane-box", &err));
+    assert_true(sb_scene_load(&s, "plane-box", NULL, &err));
     for (int back = 0; back < 2; back++) {
         sb_v3 sun = sb_sun_dir(30, 50);
         sb_v3 target = sb_v3_make(0, 1, 0);

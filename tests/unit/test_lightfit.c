@@ -16,7 +16,7 @@ static double urand(void) { return rand() / (double)RAND_MAX; }
 static void check_scene(const char *name) {
     sb_scene s;
     sb_err err;
-    assert_true(sb_scene_load(&s, name, &err));
+    assert_true(sb_scene_load(&s, name, NULL, &err));
     srand(11);
     sb_v3 ext = sb_v3_sub(s.bounds.hi, s.bounds.lo);
     int checked = 0;

@@ -21,7 +21,7 @@ static void test_plane_box(void **st) {
     (void)st;
     sb_scene s;
     sb_err err;
-    assert_true(sb_scene_load(&s, "plane-box", &err));
+    assert_true(sb_scene_load(&s, "plane-box", NULL, &err));
     assert_int_equal(sb_scene_triangles(&s), 24);
     assert_int_equal(s.draw_count, 2);
     assert_true(s.has_sun);
@@ -35,7 +35,7 @@ static void test_desert_size(void **st) {
     (void)st;
     sb_scene s;
     sb_err err;
-    assert_true(sb_scene_load(&s, "desert", &err));
+    assert_true(sb_scene_load(&s, "desert", NULL, &err));
     print_message("desert: %llu triangles, %u draws\n", (unsigned long long)sb_scene_triangles(&s), s.draw_count);
     assert_true(sb_scene_triangles(&s) >= 200000);
     sb_scene_free(&s);
@@ -49,7 +49,7 @@ static void load_shared(const char *rel, uint64_t expect_tris) {
     }
     sb_scene s;
     sb_err err = {{0}};
-    bool ok = sb_scene_load(&s, p, &err);
+    bool ok = sb_scene_load(&s, p, NULL, &err);
     if (!ok) print_message("%s\n", err.msg);
     assert_true(ok);
     print_message("%s: %llu triangles, %u draws, %u images skipped, %.0f ms\n", rel,
@@ -73,7 +73,7 @@ static void test_bvh_cull_exact(void **st) {
     (void)st;
     sb_scene s;
     sb_err err;
-    assert_true(sb_scene_load(&s, "towers", &err));
+    assert_true(sb_scene_load(&s, "towers", NULL, &err));
     srand(7);
     char *hit = calloc(s.draw_count, 1);
     for (int trial = 0; trial < 200; trial++) {
@@ -102,7 +102,7 @@ static void test_bvh_cull_exact(void **st) {
 static void expect_load_error(const char *file, const char *needle) {
     sb_scene s;
     sb_err err = {{0}};
-    assert_false(sb_scene_load(&s, file, &err));
+    assert_false(sb_scene_load(&s, file, NULL, &err));
     print_message("%s\n", err.msg);
     assert_non_null(strstr(err.msg, needle));
 }

@@ -1,0 +1,59 @@
+/* json.h - a small JSON reader for checking glTF documents before the glTF
+ * library sees them.
+ *
+ * The glTF library coerces numbers (2^64 - 8 wraps, -12 becomes 0, an index
+ * above 2^32 is truncated into a valid one), and reports a syntax error with
+ * no position. This reader keeps every number's text, so integers are read
+ * exactly (sb_json_u64), and says where a syntax error is (line and column).
+ * Values live in one arena freed by sb_json_free; strings are decoded (escapes,
+ * \u surrogates to UTF-8) and NUL-terminated. Nesting deeper than
+ * SB_JSON_MAX_DEPTH is refused rather than recursed into. */
+#pragma once
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "util.h"
+
+#define SB_JSON_MAX_DEPTH 512
+
+typedef enum sb_json_type {
+    SB_JSON_NULL,
+    SB_JSON_BOOL,
+    SB_JSON_NUMBER,
+    SB_JSON_STRING,
+    SB_JSON_ARRAY,
+    SB_JSON_OBJECT,
+} sb_json_type;
+
+typedef struct sb_json sb_json;
+struct sb_json {
+    sb_json_type type;
+    uint32_t count;         /* array/object: children */
+    uint32_t line, col;     /* where the value starts (1-based) */
+    const char *key;        /* member of an object: its name (decoded); else NULL */
+    bool b;                 /* BOOL */
+    const char *text;       /* NUMBER: the literal as written; STRING: decoded text */
+    double num;             /* NUMBER: as a double */
+    sb_json *items;         /* ARRAY/OBJECT: count children, in order */
+};
+
+typedef struct sb_json_doc {
+    sb_json *root;
+    void *arena;            /* private */
+} sb_json_doc;
+
+/* Parses text[0..len). On failure fills err with "NAME: JSON syntax error at
+ * line L, column C: what was expected" and returns false. */
+bool sb_json_parse(sb_json_doc *doc, const char *name, const char *text, size_t len, sb_err *err);
+void sb_json_free(sb_json_doc *doc);
+
+/* Member of an object by name (the first one), or NULL. */
+const sb_json *sb_json_get(const sb_json *obj, const char *key);
+/* The number as an exact unsigned integer: an integer literal that fits in 64
+ * bits, or a literal with a fraction or exponent whose value is a whole number
+ * below 2^53. Returns false for negative, fractional or too large values. */
+bool sb_json_u64(const sb_json *v, uint64_t *out);
+/* Is the number negative (its literal starts with '-' and it is not zero)? */
+bool sb_json_negative(const sb_json *v);
+const char *sb_json_type_name(sb_json_type t);
