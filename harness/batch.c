@@ -105,6 +105,10 @@ static bool batch_build(sb_batch *b, const char *file, char *text, const sb_run_
         } else if (!strcmp(tok[0], "defaults")) {
             for (int i = 1; ok && i < n; i++) {
                 if (!strcmp(tok[i], "--progress") || !strcmp(tok[i], "--quiet")) continue;
+                if (!strcmp(tok[i], "--allow-external-uris")) {
+                    b->opts.allow_external_uris = true;
+                    continue;
+                }
                 sb_err e;
                 int rc = sb_run_opts_set(&b->opts, tok[i], i + 1 < n ? tok[i + 1] : NULL, &e);
                 if (rc < 0) ok = sb_fail(err, "%s:%d: %s", file, lineno, e.msg);
@@ -158,7 +162,8 @@ static bool batch_build(sb_batch *b, const char *file, char *text, const sb_run_
     for (int i = 0; ok && load && i < b->nscenes; i++) {
         sb_batch_scene *sc = &b->scenes[i];
         sb_err e;
-        if (!sb_scene_load(&sc->scene, sc->file, NULL, &e)) {
+        sb_scene_opts so = {.allow_external_uris = b->opts.allow_external_uris};
+        if (!sb_scene_load(&sc->scene, sc->file, &so, &e)) {
             ok = sb_fail(err, "%s:%d: %s", file, sc->line, e.msg);
             break;
         }

@@ -46,7 +46,8 @@ static void usage(FILE *f) {
             "  --threads N            reference ray-casting threads (default: all cores)\n"
             "  --out DIR              results folder (default results); each run command writes DIR/<UTC time>/\n"
             "  --progress             progress line on stderr (default when stderr is a terminal)\n"
-            "  --quiet                no notices on stderr\n");
+            "  --quiet                no notices on stderr\n"
+            "  --allow-external-uris  let glTF buffers and images be read from outside the scene's folder\n");
 }
 
 typedef struct cli {
@@ -88,6 +89,7 @@ static int parse_cli(cli *c, int argc, char **argv) {
         if (!strcmp(a, "--progress")) { c->opts.progress = true; continue; }
         if (!strcmp(a, "--quiet")) { sb_set_quiet(true); c->opts.progress = false; continue; }
         if (!strcmp(a, "--dry-run")) { c->dry_run = true; continue; }
+        if (!strcmp(a, "--allow-external-uris")) { c->opts.allow_external_uris = true; continue; }
         if (!v) return bad("%s needs a value", a);
         i++;
         sb_err err;
@@ -170,7 +172,8 @@ static int cmd_path(const cli *c) {
     sb_scene scene;
     bool have_scene = false;
     if (c->npos == 2) {
-        if (!sb_scene_load(&scene, c->pos[1], NULL, &err)) {
+        sb_scene_opts so = {.allow_external_uris = c->opts.allow_external_uris};
+        if (!sb_scene_load(&scene, c->pos[1], &so, &err)) {
             fprintf(stderr, "shadowbench: %s\n", err.msg);
             return 1;
         }
@@ -308,6 +311,7 @@ static int cmd_batch(const cli *c) {
     sb_run_opts base;
     sb_run_opts_defaults(&base);
     base.progress = c->opts.progress;
+    base.allow_external_uris = c->opts.allow_external_uris;
     sb_batch b;
     if (!sb_batch_load(&b, c->pos[0], &base, c->run_opts, c->nrun_opts, &err)) {
         fprintf(stderr, "shadowbench: %s\n", err.msg);

@@ -101,7 +101,8 @@ bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, con
     s->opts = *o;
     if (have_ctx) s->ctx = keep;
     /* files first: a broken scene or path is refused before any GL is touched */
-    if (!sb_scene_load(&s->scene, scene, NULL, err)) return false;
+    sb_scene_opts so = {.allow_external_uris = o->allow_external_uris};
+    if (!sb_scene_load(&s->scene, scene, &so, err)) return false;
     if (!sb_path_load(&s->path, path, &s->scene, err)) {
         sb_scene_free(&s->scene);
         return false;
@@ -145,13 +146,26 @@ void sb_session_close(sb_session *s) {
     memset(s, 0, sizeof *s);
 }
 
-const char *sb_skip_reason(const sb_session *s, const sb_technique *t) {
-    bool point = sb_point_light(&s->scene, 0, NULL) != NULL;
-    if ((t->needs & SB_NEEDS_SUN) && !s->scene.has_sun && point && !s->opts.sun_override)
-        return "the scene is lit by point lights only (no sun); --sun AZ,EL adds one";
-    if ((t->needs & SB_NEEDS_PLANE) && s->scene.plane_count == 0)
-        return "the scene has no large planar receiver";
-    if ((t->needs & SB_NEEDS_POINT_LIGHT) && !point) return "the scene has no point or spot light";
+const char *sb_skip_reason(sb_session *s, const sb_technique *t) {
+    const sb_scene *sc = &s->scene;
+    int points = 0, spots = 0;
+    for (uint32_t i = 0; i < sc->light_count; i++) {
+        points += sc->lights[i].type == SB_LIGHT_POINT;
+        spots += sc->lights[i].type == SB_LIGHT_SPOT;
+    }
+    if (sc->degenerate[0]) {
+        snprintf(s->skip, sizeof s->skip, "the scene is degenerate: %s", sc->degenerate);
+        return s->skip;
+    }
+    if ((t->needs & SB_NEEDS_SUN) && !sc->has_sun && points + spots && !s->opts.sun_override) {
+        char lamps[96];
+        if (points && spots) snprintf(lamps, sizeof lamps, "%d point and %d spot light(s)", points, spots);
+        else snprintf(lamps, sizeof lamps, "%d %s light(s)", points + spots, points ? "point" : "spot");
+        snprintf(s->skip, sizeof s->skip, "the scene is lit only by %s, no sun; --sun AZ,EL adds one", lamps);
+        return s->skip;
+    }
+    if ((t->needs & SB_NEEDS_PLANE) && sc->plane_count == 0) return "the scene has no large planar receiver";
+    if ((t->needs & SB_NEEDS_POINT_LIGHT) && !(points + spots)) return "the scene has no point or spot light";
     return NULL;
 }
 

@@ -28,6 +28,7 @@ typedef struct sb_run_opts {
     int max_repeat;             /* cap for target_ci (default 10) */
     int threads;                /* reference ray-casting threads (default: all cores) */
     double run_timeout_s;       /* a run taking longer fails with a timeout (0: none) */
+    bool allow_external_uris;   /* glTF buffers and images may be read from outside the scene's folder */
 } sb_run_opts;
 
 void sb_run_opts_defaults(sb_run_opts *o);
@@ -47,6 +48,7 @@ typedef struct sb_session {
     sb_gpu gpu;
     sb_timing_mode timing;      /* resolved */
     char scene_name[256], path_name[256];
+    char skip[256];             /* the last skip reason */
 } sb_session;
 
 /* Opens the context (if not already), loads scene and path, uploads buffers. */
@@ -67,8 +69,8 @@ void sb_render_frame(sb_session *s, sb_instance *in, sb_frame *f, int i, int n, 
 /* Renders an explicit camera (tests, stress cases). */
 void sb_render_camera(sb_session *s, sb_instance *in, sb_frame *f, const sb_camera *cam, int seq,
                       struct sb_timer *timer);
-/* Why a technique cannot apply to this scene, or NULL. */
-const char *sb_skip_reason(const sb_session *s, const sb_technique *t);
+/* Why a technique cannot apply to this scene, or NULL (the text lives in the session). */
+const char *sb_skip_reason(sb_session *s, const sb_technique *t);
 
 /* Summary rows of one invocation, rewritten atomically after every run. */
 typedef struct sb_summary {

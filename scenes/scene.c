@@ -195,6 +195,16 @@ bool sb_scene_finish(sb_scene *s, sb_err *err) {
         s->lights[i].position = sb_v3_sub(s->lights[i].position, s->origin);
     s->bounds.lo = sb_v3_sub(all.lo, s->origin);
     s->bounds.hi = sb_v3_sub(all.hi, s->origin);
+    double area = 0;
+    for (uint32_t t = 0; t < s->index_count / 3 && area == 0; t++) {
+        const double *a = s->build_pos + 3 * (size_t)s->indices[3 * t], *b = s->build_pos + 3 * (size_t)s->indices[3 * t + 1],
+                     *c = s->build_pos + 3 * (size_t)s->indices[3 * t + 2];
+        area = sb_v3_len(sb_v3_cross(sb_v3_make(b[0] - a[0], b[1] - a[1], b[2] - a[2]),
+                                     sb_v3_make(c[0] - a[0], c[1] - a[1], c[2] - a[2])));
+    }
+    if (!(area > 0))
+        snprintf(s->degenerate, sizeof s->degenerate, "all %u triangles have zero area (a zero scale, or every vertex "
+                 "at one point)", s->index_count / 3);
     free(s->build_pos);
     s->build_pos = NULL;
     sb_bvh_build(s);

@@ -96,6 +96,7 @@ typedef struct sb_scene {
     uint32_t nodes_drawn;        /* node instances with a mesh reached from the scene graph */
     sb_plane planes[SB_MAX_PLANES];
     uint32_t plane_count;
+    char degenerate[128];        /* why nothing in it can cast or receive a shadow ("" if it can) */
 
     /* builder scratch, freed by sb_scene_finish */
     double *build_pos;

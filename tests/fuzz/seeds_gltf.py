@@ -51,3 +51,35 @@ for i, field in enumerate(fields):
         v = edges[(3 * i + k) % len(edges)]
         with open(os.path.join(out, "edge-%s-%d.gltf" % (field, k)), "w") as f:
             f.write(doc({field: v}))
+
+# One broken rule each (issue 17): the valid document with one piece of text replaced.
+valid = doc({})
+rules = {
+    "uri-dir": ('"uri":"data:', '"uri":".","x":"data:'),
+    "uri-up": ('"uri":"data:', '"uri":"../../../../etc/passwd","x":"data:'),
+    "uri-dev": ('"uri":"data:', '"uri":"/dev/zero","x":"data:'),
+    "uri-scheme": ('"uri":"data:', '"uri":"http://example.com/a.bin","x":"data:'),
+    "stride-small": ('"byteLength":36}', '"byteLength":36,"byteStride":4}'),
+    "stride-odd": ('"byteLength":36}', '"byteLength":36,"byteStride":14}'),
+    "offset-unaligned": ('"bufferView":0,"byteOffset":0', '"bufferView":0,"byteOffset":2'),
+    "index-stride": ('"byteOffset":36,"byteLength":6}', '"byteOffset":34,"byteLength":10,"byteStride":4}'),
+    "quat-zero": ('"rotation":[0,0,0,1]', '"rotation":[0,0,0,0]'),
+    "quat-long": ('"rotation":[0,0,0,1]', '"rotation":[0,0,0,2]'),
+    "matrix-w": ('"rotation":[0,0,0,1]', '"matrix":[1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,0]'),
+    "scale-zero": ('"rotation":[0,0,0,1]', '"scale":[0,0,0]'),
+    "scene-negative": ('"scene":0', '"scene":-1'),
+    "cycle": ('"children":[1]', '"children":[1]},{"children":[3]},{"children":[2]'),
+    "two-parents": ('"rotation":[0,0,0,1]}', '"rotation":[0,0,0,1],"children":[1]}'),
+    "spot-cone": ('"outerConeAngle":0.5', '"outerConeAngle":2'),
+    "spot-negative": ('"type":"spot"', '"type":"spot","intensity":-1'),
+    "syntax": ('"scenes":[', '"scenes":[[,'),
+}
+for name, (old, new) in rules.items():
+    assert old in valid, name
+    with open(os.path.join(out, "rule-%s.gltf" % name), "w") as f:
+        f.write(valid.replace(old, new, 1))
+# a chain of 300 nodes (deeper than the old recursion limit of 256)
+chain = ",".join('{"translation":[0,0.01,0],"children":[%d]}' % (i + 1) for i in range(300)) + ',{"mesh":0}'
+with open(os.path.join(out, "rule-chain.gltf"), "w") as f:
+    f.write(valid.replace('"nodes":[{"mesh":0,"children":[1],"skin":0},', '"nodes":[' + chain + ',{"skin":0},')
+            .replace('"joints":[0]', '"joints":[301]').replace('"children":[1],"skin":0}', '"skin":0}'))

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "support.h"
+#include "table.h"
 
 static char g_tmp[64];
 static char g_out[16384];
@@ -290,10 +291,43 @@ static void test_repeats_and_target_ci(void **st) {
     assert_int_equal(summary_int(d, "repeats"), 1);
 }
 
+/* Runs that cannot mean anything are skipped with a reason that says why. */
+static void test_skip_reasons(void **st) {
+    (void)st;
+    char flat[300], spot[300], d[4096], path[4200];
+    snprintf(flat, sizeof flat, "%s/flat.gltf", g_tmp);
+    snprintf(spot, sizeof spot, "%s/spot.gltf", g_tmp);
+    assert_true(gltf_tri_write(flat, &(gltf_tri){.node0 = "\"mesh\":0,\"scale\":[0,0,0]"}));
+    assert_true(gltf_tri_write(spot, &(gltf_tri){
+        .nodes_more = ",{\"translation\":[0,2,0],\"extensions\":{\"KHR_lights_punctual\":{\"light\":0}}}",
+        .scene_nodes = "[0,1]",
+        .root_more = ",\"extensions\":{\"KHR_lights_punctual\":{\"lights\":[{\"type\":\"spot\",\"spot\":{}}]}}"}));
+    const char *scenes[] = {flat, spot};
+    const char *expect[][2] = {{"the scene is degenerate: all 1 triangles have zero area", "the scene is degenerate"},
+                               {"the scene is lit only by 1 spot light(s), no sun", NULL}};
+    for (int k = 0; k < 2; k++) {
+        run_dir(d, sizeof d, "%s run %s auto sm none --frames 2 --warmup 0 --size 64x36 --out %s/skip --quiet",
+                test_binary(), scenes[k], g_tmp);
+        snprintf(path, sizeof path, "%s/summary.csv", d);
+        sb_table t;
+        sb_err err;
+        assert_true(sb_table_load(&t, path, &err));
+        assert_int_equal(t.nrows, 2);
+        for (int r = 0; r < 2; r++) {
+            const char *want = expect[k][r];
+            print_message("%s %s: %s %s\n", scenes[k], sb_table_get(&t, r, "technique"), sb_table_get(&t, r, "status"),
+                          sb_table_get(&t, r, "reason"));
+            assert_string_equal(sb_table_get(&t, r, "status"), want ? "skipped" : "ok");
+            if (want) assert_non_null(strstr(sb_table_get(&t, r, "reason"), want));
+        }
+        sb_table_free(&t);
+    }
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_run_writes_csv),   cmocka_unit_test(test_gltf_camera_path),
-        cmocka_unit_test(test_builtin_paths),
+        cmocka_unit_test(test_builtin_paths),    cmocka_unit_test(test_skip_reasons),
         cmocka_unit_test(test_backends_same_draw_calls), cmocka_unit_test(test_query_timing),
         cmocka_unit_test(test_repeats_and_target_ci),
     };

@@ -6,6 +6,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <cmocka.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -178,6 +179,222 @@ static void test_count_wraps(void **st) {
             ": /accessors/0/count: 1e300 is too large");
 }
 
+/* ---- issue 17: URIs, layouts, transforms, graphs, degenerate scenes, lights ---- */
+
+static void test_uri_directory(void **st) {
+    (void)st;
+    refused("dir.gltf", &(gltf_tri){.uri = "."}, ": /buffers/0/uri: \".\" is a directory, not a regular file");
+}
+
+/* The 44 bytes of the triangle in a .bin file at path. */
+static void write_bin(const char *path) {
+    unsigned char buf[44] = {0};
+    const float pos[9] = {0, 0, 0, 1, 0, 0, 0, 0, 1};
+    const uint16_t idx[3] = {0, 1, 2};
+    memcpy(buf, pos, sizeof pos);
+    memcpy(buf + 36, idx, sizeof idx);
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(buf, 1, sizeof buf, f), sizeof buf);
+    fclose(f);
+}
+
+static void test_uri_confined(void **st) {
+    (void)st;
+    char dir[300], out[300], cmd[700];
+    snprintf(dir, sizeof dir, "%s/scene", g_tmp);
+    snprintf(out, sizeof out, "%s/outside", g_tmp);
+    snprintf(cmd, sizeof cmd, "mkdir -p %s %s", dir, out);
+    assert_int_equal(system(cmd), 0);
+    char bin[400], in_bin[400], link[400], file[400];
+    snprintf(bin, sizeof bin, "%s/tri.bin", out);
+    snprintf(in_bin, sizeof in_bin, "%s/tri.bin", dir);
+    write_bin(bin);
+    write_bin(in_bin);
+    /* inside the folder: read */
+    snprintf(file, sizeof file, "%s/in.gltf", dir);
+    assert_true(gltf_tri_write(file, &(gltf_tri){.uri = "tri.bin"}));
+    sb_scene s;
+    sb_err err = {{0}};
+    assert_true(sb_scene_load(&s, file, NULL, &err));
+    sb_scene_free(&s);
+    /* '..', an absolute path, a device, a symbolic link out of the folder: refused */
+    snprintf(file, sizeof file, "%s/up.gltf", dir);
+    assert_true(gltf_tri_write(file, &(gltf_tri){.uri = "../outside/tri.bin"}));
+    expect_scene_refused(file, "/buffers/0/uri: \"../outside/tri.bin\" resolves to");
+    expect_scene_refused(file, "outside the scene's folder");
+    snprintf(file, sizeof file, "%s/passwd.gltf", dir);
+    assert_true(gltf_tri_write(file, &(gltf_tri){.uri = "../../../../../../../etc/passwd"}));
+    expect_scene_refused(file, "outside the scene's folder");
+    snprintf(file, sizeof file, "%s/abs.gltf", dir);
+    assert_true(gltf_tri_write(file, &(gltf_tri){.uri = bin}));
+    expect_scene_refused(file, "outside the scene's folder");
+    snprintf(file, sizeof file, "%s/zero.gltf", dir);
+    assert_true(gltf_tri_write(file, &(gltf_tri){.uri = "/dev/zero"}));
+    expect_scene_refused(file, "/buffers/0/uri: \"/dev/zero\" is a device, not a regular file");
+    snprintf(link, sizeof link, "%s/link.bin", dir);
+    assert_int_equal(symlink(bin, link), 0);
+    snprintf(file, sizeof file, "%s/link.gltf", dir);
+    assert_true(gltf_tri_write(file, &(gltf_tri){.uri = "link.bin"}));
+    expect_scene_refused(file, "outside the scene's folder");
+    /* image URIs alike */
+    snprintf(file, sizeof file, "%s/img.gltf", dir);
+    assert_true(gltf_tri_write(file, &(gltf_tri){.root_more = ",\"images\":[{\"uri\":\"../../../../../etc/passwd\"}]"}));
+    expect_scene_refused(file, "/images/0/uri: \"../../../../../etc/passwd\" resolves to");
+    /* --allow-external-uris reads outside the folder, but never a device */
+    sb_scene_opts allow = {.allow_external_uris = true};
+    snprintf(file, sizeof file, "%s/up.gltf", dir);
+    assert_true(sb_scene_load(&s, file, &allow, &err));
+    assert_int_equal(sb_scene_triangles(&s), 1);
+    sb_scene_free(&s);
+    snprintf(file, sizeof file, "%s/zero.gltf", dir);
+    assert_false(sb_scene_load(&s, file, &allow, &err));
+    assert_non_null(strstr(err.msg, "is a device"));
+}
+
+static void test_layouts(void **st) {
+    (void)st;
+    refused("stride-small.gltf", &(gltf_tri){.view0 = "\"buffer\":0,\"byteLength\":36,\"byteStride\":4"},
+            ": /accessors/0: byteStride 4 of bufferView 0 is smaller than its 12-byte VEC3 elements");
+    refused("stride-odd.gltf", &(gltf_tri){.view0 = "\"buffer\":0,\"byteLength\":36,\"byteStride\":14"},
+            ": /bufferViews/0/byteStride: 14 is not a multiple of 4");
+    refused("pos-offset.gltf",
+            &(gltf_tri){.view0 = "\"buffer\":0,\"byteLength\":40",
+                        .acc0 = "\"bufferView\":0,\"byteOffset\":2,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\""},
+            ": /accessors/0/byteOffset: 2 is not a multiple of the component size 4");
+    refused("view-offset.gltf", &(gltf_tri){.view0 = "\"buffer\":0,\"byteOffset\":2,\"byteLength\":36"},
+            ": /accessors/0: offset in the buffer (bufferView 0 at 2 + byteOffset 0) is not a multiple of the component size 4");
+    refused("idx-offset.gltf",
+            &(gltf_tri){.view1 = "\"buffer\":0,\"byteOffset\":36,\"byteLength\":8",
+                        .acc1 = "\"bufferView\":1,\"byteOffset\":1,\"componentType\":5123,\"count\":3,\"type\":\"SCALAR\""},
+            ": /accessors/1/byteOffset: 1 is not a multiple of the component size 2");
+    refused("idx-stride.gltf", &(gltf_tri){.view1 = "\"buffer\":0,\"byteOffset\":34,\"byteLength\":10,\"byteStride\":4"},
+            ": /meshes/0/primitives/0/indices: accessor 1: bufferView 1 of indices must not have a byteStride");
+}
+
+static void test_transforms(void **st) {
+    (void)st;
+    refused("quat-zero.gltf", &(gltf_tri){.node0 = "\"mesh\":0,\"rotation\":[0,0,0,0]"},
+            ": /nodes/0/rotation: a zero-length quaternion is not a rotation");
+    refused("matrix-w.gltf", &(gltf_tri){.node0 = "\"mesh\":0,\"matrix\":[1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,0]"},
+            ": /nodes/0/matrix: not decomposable to translation, rotation and scale: its last row is (0, 0, 0, 0)");
+    refused("scene-neg.gltf", &(gltf_tri){.scene = "-1"}, ": /scene: -1 is negative");
+    refused("scene-big.gltf", &(gltf_tri){.scene = "1"}, ": /scene: scene 1 does not exist (the file has 1)");
+    /* a quaternion of length 2 is normalised (with a warning): the identity */
+    const char *f = tmp_file("quat-two.gltf");
+    assert_true(gltf_tri_write(f, &(gltf_tri){.node0 = "\"mesh\":0,\"rotation\":[0,0,0,2]"}));
+    sb_scene s;
+    sb_err err;
+    assert_true(sb_scene_load(&s, f, NULL, &err));
+    sb_v3 hi = sb_v3_add(s.bounds.hi, s.origin);
+    assert_true(fabs(hi.x - 1) < 1e-9 && fabs(hi.z - 1) < 1e-9);
+    sb_scene_free(&s);
+}
+
+static void test_node_graphs(void **st) {
+    (void)st;
+    /* a real cycle (nodes 1 and 2, off the scene) and two parents */
+    refused("cycle.gltf", &(gltf_tri){.nodes_more = ",{\"children\":[2]},{\"children\":[1]}"},
+            ": /nodes/1/children: the node graph has a cycle through node 1");
+    refused("self.gltf", &(gltf_tri){.node0 = "\"mesh\":0,\"children\":[0]"},
+            ": /nodes/0/children/0: node 0 is its own child");
+    refused("parents.gltf", &(gltf_tri){.node0 = "\"children\":[2]", .nodes_more = ",{\"children\":[2]},{\"mesh\":0}"},
+            ": /nodes/1/children/0: node 2 has two parents (nodes 0 and 1)");
+    refused("not-root.gltf", &(gltf_tri){.node0 = "\"children\":[1]", .nodes_more = ",{\"mesh\":0}", .scene_nodes = "[0,1]"},
+            ": /scenes/0/nodes/1: node 1 is not a root node (it is a child of node 0)");
+    /* a chain of 20,000 nodes is no cycle: it loads, every translation applied */
+    const int n = 20000;
+    char *more = malloc((size_t)n * 64);
+    size_t len = 0;
+    for (int i = 1; i < n; i++) {
+        char next[32];
+        snprintf(next, sizeof next, "\"children\":[%d]", i + 1);
+        len += (size_t)snprintf(more + len, 64, ",{\"translation\":[0,0.001,0],%s}", i + 1 < n ? next : "\"mesh\":0");
+    }
+    const char *f = tmp_file("chain.gltf");
+    assert_true(gltf_tri_write(f, &(gltf_tri){.node0 = "\"children\":[1],\"translation\":[0,0.001,0]", .nodes_more = more}));
+    free(more);
+    sb_scene s;
+    sb_err err = {{0}};
+    bool ok = sb_scene_load(&s, f, NULL, &err);
+    if (!ok) print_message("%s\n", err.msg);
+    assert_true(ok);
+    assert_int_equal(sb_scene_triangles(&s), 1);
+    print_message("chain of %d nodes: the triangle at y = %.9f\n", n, s.origin.y);
+    assert_true(fabs(s.origin.y - 0.001 * n) < 1e-6);
+    sb_scene_free(&s);
+}
+
+static void test_degenerate(void **st) {
+    (void)st;
+    const char *cases[][2] = {
+        {"scale0.gltf", "\"mesh\":0,\"scale\":[0,0,0]"},
+        {"point.gltf", NULL}, /* every vertex at one point: positions without a bufferView are zeros */
+    };
+    for (int k = 0; k < 2; k++) {
+        const char *f = tmp_file(cases[k][0]);
+        gltf_tri t = {.node0 = cases[k][1]};
+        if (!cases[k][1]) t.acc0 = "\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"";
+        assert_true(gltf_tri_write(f, &t));
+        sb_scene s;
+        sb_err err;
+        assert_true(sb_scene_load(&s, f, NULL, &err));
+        print_message("%s: %s\n", cases[k][0], s.degenerate);
+        assert_non_null(strstr(s.degenerate, "all 1 triangles have zero area"));
+        sb_scene_free(&s);
+    }
+    /* the triangle itself is not degenerate */
+    const char *f = tmp_file("fine.gltf");
+    assert_true(gltf_tri_write(f, &(gltf_tri){0}));
+    sb_scene s;
+    sb_err err;
+    assert_true(sb_scene_load(&s, f, NULL, &err));
+    assert_string_equal(s.degenerate, "");
+    sb_scene_free(&s);
+}
+
+static void test_lights(void **st) {
+    (void)st;
+    static const char node[] = "\"mesh\":0,\"extensions\":{\"KHR_lights_punctual\":{\"light\":0}}";
+    refused("spot-cone.gltf",
+            &(gltf_tri){.node0 = node,
+                        .root_more = ",\"extensions\":{\"KHR_lights_punctual\":{\"lights\":[{\"type\":\"spot\","
+                                     "\"spot\":{\"outerConeAngle\":2}}]}}"},
+            ": /extensions/KHR_lights_punctual/lights/0/spot/outerConeAngle: 2 is out of range (0, 1.5708]");
+    refused("spot-inner.gltf",
+            &(gltf_tri){.node0 = node,
+                        .root_more = ",\"extensions\":{\"KHR_lights_punctual\":{\"lights\":[{\"type\":\"spot\","
+                                     "\"spot\":{\"innerConeAngle\":0.5,\"outerConeAngle\":0.4}}]}}"},
+            ": /extensions/KHR_lights_punctual/lights/0/spot/innerConeAngle: 0.5 is out of range [0, 0.4)");
+    refused("spot-intensity.gltf",
+            &(gltf_tri){.node0 = node,
+                        .root_more = ",\"extensions\":{\"KHR_lights_punctual\":{\"lights\":[{\"type\":\"spot\","
+                                     "\"intensity\":-1,\"spot\":{}}]}}"},
+            ": /extensions/KHR_lights_punctual/lights/0/intensity: -1 is out of range [0, inf)");
+    refused("spot-missing.gltf",
+            &(gltf_tri){.node0 = node,
+                        .root_more = ",\"extensions\":{\"KHR_lights_punctual\":{\"lights\":[{\"type\":\"spot\"}]}}"},
+            ": /extensions/KHR_lights_punctual/lights/0: 'spot' is missing");
+    refused("light-type.gltf",
+            &(gltf_tri){.node0 = node,
+                        .root_more = ",\"extensions\":{\"KHR_lights_punctual\":{\"lights\":[{\"type\":\"area\"}]}}"},
+            ": /extensions/KHR_lights_punctual/lights/0/type: \"area\" is not one of directional|point|spot");
+}
+
+static void test_syntax_in_a_file(void **st) {
+    (void)st;
+    const char *f = tmp_file("syntax.gltf");
+    FILE *fp = fopen(f, "w");
+    fputs("{\n  \"asset\": {\"version\": \"2.0\"},\n  \"nodes\": [ {\"mesh\": 0} }\n}\n", fp);
+    fclose(fp);
+    expect_scene_refused(f, ": JSON syntax error at line 3, column 26: expected ',' or ']'");
+    f = tmp_file("empty.gltf");
+    fp = fopen(f, "w");
+    fputs("{}", fp);
+    fclose(fp);
+    expect_scene_refused(f, ": /: 'asset' is missing");
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_json_exact_integers),  cmocka_unit_test(test_json_strings),
@@ -185,7 +402,11 @@ int main(void) {
         cmocka_unit_test(test_accessor_offset_wraps), cmocka_unit_test(test_view_offset_wraps),
         cmocka_unit_test(test_index_offset_wraps),   cmocka_unit_test(test_view_length_wraps),
         cmocka_unit_test(test_negative_offsets),     cmocka_unit_test(test_indices_beyond_2_32),
-        cmocka_unit_test(test_count_wraps),
+        cmocka_unit_test(test_count_wraps),          cmocka_unit_test(test_uri_directory),
+        cmocka_unit_test(test_uri_confined),         cmocka_unit_test(test_layouts),
+        cmocka_unit_test(test_transforms),           cmocka_unit_test(test_node_graphs),
+        cmocka_unit_test(test_degenerate),           cmocka_unit_test(test_lights),
+        cmocka_unit_test(test_syntax_in_a_file),
     };
     return cmocka_run_group_tests_name("gltf", tests, setup, teardown);
 }
