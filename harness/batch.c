@@ -3,6 +3,11 @@
 
 #include <stdlib.h>
 #include <string.h>
+#include <sys/utsname.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "table.h"
 
 static int find_path(const sb_batch *b, const char *name) {
     for (int i = 0; i < b->npaths; i++)
@@ -183,11 +188,6 @@ static bool batch_build(sb_batch *b, const char *file, char *text, const sb_run_
     /* the matrix */
     for (int i = 0; ok && load && i < b->nscenes; i++) {
         sb_batch_scene *sc = &b->scenes[i];
-        sb_session ids;     /* just what sb_run_id reads */
-        memset(&ids, 0, sizeof ids);
-        ids.opts = b->opts;
-        ids.scene.content_hash = sc->scene.content_hash;
-        ids.path.content_hash = sc->path.content_hash;
         for (int l = 0; l < nlines; l++) {
             if (!line_applies(&lines[l], sc->name)) continue;
             for (int k = 0; k < lines[l].nspecs; k++) {
@@ -200,7 +200,7 @@ static bool batch_build(sb_batch *b, const char *file, char *text, const sb_run_
                     br->index = b->nruns++;
                     br->scene = i;
                     br->spec = rs[r];
-                    sb_run_id(&ids, &rs[r], br->run_id);
+                    sb_run_id(sc->scene.content_hash, sc->path.content_hash, &b->opts, &rs[r], br->run_id);
                     br->cost = run_cost(b, sc, &rs[r]);
                 }
                 free(rs);
@@ -279,4 +279,196 @@ void sb_batch_shard(const sb_batch *b, int shard, int nshards, bool *selected) {
     }
     free(order);
     free(load);
+}
+
+/* ---- running a batch ---- */
+
+static void cpu_model(char *out, size_t len) {
+    snprintf(out, len, "unknown");
+    FILE *f = fopen("/proc/cpuinfo", "r");
+    if (!f) return;
+    char line[512];
+    while (fgets(line, sizeof line, f))
+        if (!strncmp(line, "model name", 10)) {
+            char *colon = strchr(line, ':');
+            if (colon) {
+                snprintf(out, len, "%s", colon + 2);
+                out[strcspn(out, "\n")] = 0;
+            }
+            break;
+        }
+    fclose(f);
+}
+
+static bool write_meta(const sb_batch_cmd *cmd, const char *dir, const sb_context *ctx, const sb_batch *b, int selected,
+                       sb_err *err) {
+    char buf[8192], cpu[256], date[64];
+    cpu_model(cpu, sizeof cpu);
+    struct utsname u;
+    uname(&u);
+    time_t now = time(NULL);
+    struct tm tm;
+    gmtime_r(&now, &tm);
+    strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    int n = snprintf(buf, sizeof buf,
+                     "command: %s\nversion: %s\ncommit: %s\ndate: %s\nbatch: %s\nruns: %d of %d%s%s\n"
+                     "backend: %s (%s)\ngl_vendor: %s\ngl_renderer: %s\ngl_version: %s\ncpu: %s\ncores: %ld\n"
+                     "kernel: %s %s %s\n",
+                     cmd->command_line, cmd->version, cmd->commit, date, b->file, selected, b->nruns,
+                     cmd->shard ? ", shard " : "", cmd->shard ? cmd->shard : "", sb_backend_name(ctx->backend),
+                     ctx->device, ctx->vendor, ctx->renderer, ctx->version, cpu, cores, u.sysname, u.release,
+                     u.machine);
+    char path[4200];
+    snprintf(path, sizeof path, "%s/meta", dir);
+    return sb_write_file_atomic(path, buf, (size_t)(n < (int)sizeof buf ? n : (int)sizeof buf - 1), err);
+}
+
+static void print_dry_run(const sb_batch *b, const bool *selected, int nsel, bool sharded) {
+    printf("index,run_id,scene,path,technique,params,cost\n");
+    for (int i = 0; i < b->nruns; i++) {
+        if (!selected[i]) continue;
+        const sb_batch_run *r = &b->runs[i];
+        char params[1024];
+        sb_params_canonical(&r->spec.params, params, sizeof params);
+        printf("%d,%s,%s,%s,%s,%s,%.3g\n", r->index, r->run_id, b->scenes[r->scene].name,
+               b->scenes[r->scene].path_label, r->spec.tech->name, params, r->cost);
+    }
+    fprintf(stderr, "%d run(s)%s of %d in the matrix of %s\n", nsel, sharded ? " in this shard" : "", b->nruns, b->file);
+}
+
+/* Resume: keeps the runs of the old summary that are complete (a summary row
+ * and, unless skipped, the committed per-frame CSV), rows as they were. */
+static void keep_complete_runs(const sb_batch *b, const char *dir, const bool *selected, bool *done, sb_summary *sum) {
+    sb_table old;
+    sb_err err;
+    if (!sb_table_load(&old, sum->path, &err)) return;
+    for (int r = 0; r < old.nrows; r++) {
+        const char *id = sb_table_get(&old, r, "run_id"), *st = sb_table_get(&old, r, "status");
+        for (int i = 0; i < b->nruns; i++) {
+            if (!selected[i] || done[i] || strcmp(b->runs[i].run_id, id)) continue;
+            char csv[4400];
+            snprintf(csv, sizeof csv, "%s/%s.csv", dir, id);
+            if (strcmp(st, "skipped") && (strcmp(st, "ok") || access(csv, R_OK) != 0)) continue;
+            done[i] = true;
+            sb_summary_add_line(sum, old.lines[r], st);
+        }
+    }
+    sb_table_free(&old);
+}
+
+/* A scene that cannot be opened: each of its runs is recorded as failed. */
+static void fail_runs(const sb_batch *b, int i, const char *renderer, const char *why, sb_summary *sum) {
+    const sb_batch_run *r = &b->runs[i];
+    const sb_batch_scene *bs = &b->scenes[r->scene];
+    char params[1024];
+    sb_params_canonical(&r->spec.params, params, sizeof params);
+    sb_run_info info = {.run_id = r->run_id, .run_index = r->index, .scene = bs->name, .path = bs->path_label,
+                        .technique = r->spec.tech->name, .params = params, .backend = sb_backend_name(b->opts.backend),
+                        .renderer = renderer, .timing = sb_timing_name(b->opts.timing), .status = "failed",
+                        .reason = why, .frames = b->opts.frames, .warmup = b->opts.warmup, .width = b->opts.width,
+                        .height = b->opts.height};
+    sb_summary_add_outcome(sum, &info, r->spec.tech->stages, NULL, NULL, 0);
+}
+
+static bool results_dir(const sb_batch_cmd *cmd, const sb_batch *b, char *dir, size_t len, sb_err *err) {
+    if (cmd->resume) {
+        snprintf(dir, len, "%s", cmd->resume);
+        if (access(dir, W_OK) != 0) return sb_fail(err, "--resume %s: no such results folder", cmd->resume);
+        return true;
+    }
+    char base_dir[4096];
+    snprintf(base_dir, sizeof base_dir, "%s/%s", cmd->out, b->name);
+    return sb_make_stamped_dir(base_dir, dir, len, err);
+}
+
+/* The selected runs of each scene, the scene loaded once (by sb_batch_load). */
+static void run_scenes(sb_batch *b, const bool *selected, const bool *done, int todo, const char *dir, sb_session *s,
+                       sb_summary *sum) {
+    sb_err err;
+    int k = 0;
+    for (int sc = 0; sc < b->nscenes; sc++) {
+        bool any = false;
+        for (int i = 0; i < b->nruns; i++) any |= b->runs[i].scene == sc && selected[i] && !done[i];
+        if (!any) continue;
+        sb_batch_scene *bs = &b->scenes[sc];
+        bool open = sb_session_attach(s, &b->opts, &bs->scene, &bs->path, &err);
+        if (open) {
+            snprintf(s->scene_name, sizeof s->scene_name, "%s", bs->name);
+            snprintf(s->path_name, sizeof s->path_name, "%s", bs->path_label);
+        } else {
+            fprintf(stderr, "shadowbench: %s\n", err.msg);
+        }
+        for (int i = 0; i < b->nruns; i++) {
+            if (b->runs[i].scene != sc || !selected[i] || done[i]) continue;
+            if (open) sb_run_one(s, &b->runs[i].spec, dir, sum, b->runs[i].index, k, todo);
+            else fail_runs(b, i, s->ctx.renderer, err.msg, sum);
+            k++;
+            sb_err e;
+            if (!sb_summary_flush(sum, &e)) fprintf(stderr, "shadowbench: %s\n", e.msg);
+        }
+        if (open) sb_session_close_scene(s);
+    }
+}
+
+int sb_batch_main(const sb_batch_cmd *cmd) {
+    sb_err err;
+    sb_batch b;
+    if (!sb_batch_load(&b, cmd->file, cmd->base, cmd->cli_opts, cmd->ncli, &err)) {
+        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        return 2;
+    }
+    int rc = 0, nsel = 0;
+    bool *selected = malloc((size_t)(b.nruns ? b.nruns : 1)), *done = calloc((size_t)(b.nruns ? b.nruns : 1), 1);
+    memset(selected, 1, (size_t)(b.nruns ? b.nruns : 1));
+    if (cmd->shard) {
+        int si, sn;
+        char extra;
+        if (sscanf(cmd->shard, "%d/%d%c", &si, &sn, &extra) != 2 || sn < 1 || si < 1 || si > sn) {
+            fprintf(stderr, "shadowbench: --shard %s: expected I/N with 1 <= I <= N\n", cmd->shard);
+            rc = 2;
+            goto out;
+        }
+        sb_batch_shard(&b, si, sn, selected);
+    }
+    for (int i = 0; i < b.nruns; i++) nsel += selected[i];
+    if (cmd->dry_run) {
+        print_dry_run(&b, selected, nsel, cmd->shard != NULL);
+        goto out;
+    }
+    char dir[4096], sum_path[4200];
+    if (!results_dir(cmd, &b, dir, sizeof dir, &err)) {
+        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        rc = cmd->resume ? 2 : 1;
+        goto out;
+    }
+    sb_session s;
+    memset(&s, 0, sizeof s);
+    if (!sb_context_create(&s.ctx, b.opts.backend, &err)) {
+        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        rc = 1;
+        goto out;
+    }
+    if (!write_meta(cmd, dir, &s.ctx, &b, nsel, &err) || !sb_report_write_columns(dir, &err))
+        fprintf(stderr, "shadowbench: %s\n", err.msg);
+    snprintf(sum_path, sizeof sum_path, "%s/summary.csv", dir);
+    sb_summary sum;
+    sb_summary_open(&sum, sum_path);
+    if (cmd->resume) keep_complete_runs(&b, dir, selected, done, &sum);
+    int todo = 0;
+    for (int i = 0; i < b.nruns; i++) todo += selected[i] && !done[i];
+    if (cmd->resume) sb_log("resuming %s: %d run(s) complete, %d to do", dir, nsel - todo, todo);
+    if (!sb_summary_flush(&sum, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
+    run_scenes(&b, selected, done, todo, dir, &s, &sum);
+    printf("%s\n", dir);
+    sb_log("%d run(s): %d ok, %d failed, %d skipped; results in %s", sum.count, sum.count - sum.failed - sum.skipped,
+           sum.failed, sum.skipped, dir);
+    rc = sum.failed ? 1 : 0;
+    sb_summary_free(&sum);
+    sb_context_destroy(&s.ctx);
+out:
+    sb_batch_free(&b);
+    free(selected);
+    free(done);
+    return rc;
 }

@@ -58,3 +58,21 @@ void sb_batch_free(sb_batch *b);
 bool sb_batch_check(const char *name, const char *text, sb_err *err);
 /* Deterministic, cost-balanced share I of N (1-based): marks runs out of the share. */
 void sb_batch_shard(const sb_batch *b, int shard, int nshards, bool *selected);
+
+/* `shadowbench batch`: what the command line gave. */
+typedef struct sb_batch_cmd {
+    const char *file;
+    const sb_run_opts *base;            /* defaults with the command line's flags (progress, URIs) */
+    const char *const *cli_opts;        /* run options as given, NAME VALUE pairs: they beat the file's */
+    int ncli;
+    const char *out, *resume, *shard;   /* --out, --resume DIR, --shard I/N (NULL: not given) */
+    bool dry_run;
+    const char *command_line, *version, *commit;   /* for the meta file */
+} sb_batch_cmd;
+
+/* Loads, shards and runs the batch (or prints it with dry_run): every scene
+ * loaded once, its runs in matrix order, a run that fails recorded and the
+ * batch going on; a resumed batch keeps complete runs. Prints the results
+ * folder on stdout. Returns the exit status: 0, 1 (a run failed, or a results
+ * folder could not be made) or 2 (bad input). */
+int sb_batch_main(const sb_batch_cmd *cmd);

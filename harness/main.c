@@ -1,10 +1,8 @@
 /* main.c - the shadowbench command line. */
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 #include <unistd.h>
 
-#include <sys/utsname.h>
 
 #include "batch.h"
 #include "compare.h"
@@ -21,11 +19,19 @@ static void usage(FILE *f) {
             "\n"
             "usage:\n"
             "  shadowbench run SCENE PATH SPEC...     render each technique spec along the path, write CSV\n"
+            "  shadowbench batch FILE [--shard I/N] [--resume DIR] [--dry-run]   run a matrix from a batch file\n"
+            "  shadowbench compare BASE NEW [--metric M,...] [--threshold PCT] [--format text|csv|markdown]\n"
+            "                                         exit 1 when a metric regresses\n"
+            "  shadowbench compare RESULTS --pair KEY=A,B   runs differing only in KEY\n"
+            "  shadowbench merge DIR... --out DIR     merge shard outputs into one results set\n"
+            "  shadowbench stress [CASE [SPEC...]]    numerical-stability battery (--frames N, --size WxH)\n"
             "  shadowbench techniques                 list techniques and their parameters\n"
+            "  shadowbench columns                    the CSV columns (per frame and per run) as CSV\n"
             "  shadowbench info                       backends, GL renderer and features\n"
             "  shadowbench path PATH [SCENE] [--frames N]   print the sampled cameras as CSV\n"
             "\n"
-            "SCENE: a .gltf/.glb file or a bundled scene (plane-box, desert, towers, overhangs)\n"
+            "SCENE: a .gltf/.glb file or a bundled scene (plane-box, desert, towers, overhangs, plane-box-lamp,\n"
+            "       towers-night)\n"
             "PATH:  a .path file, a bundled path (same names), auto, orbit, or FILE.glb#camera=K\n"
             "SPEC:  technique[:param=value[,value...]]...  e.g. sm:res=1024,2048:filter=pcf3 (lists make a grid)\n"
             "\n"
@@ -44,6 +50,7 @@ static void usage(FILE *f) {
             "  --target-ci PCT        repeat the path until the 95%% CI of mean gpu_ms is within PCT%% of it\n"
             "  --max-repeat N         at most N repetitions for --target-ci (default 10)\n"
             "  --threads N            reference ray-casting threads (default: all cores)\n"
+            "  --run-timeout S        a run taking longer is recorded as failed\n"
             "  --out DIR              results folder (default results); each run command writes DIR/<UTC time>/\n"
             "  --progress             progress line on stderr (default when stderr is a terminal)\n"
             "  --quiet                no notices on stderr\n"
@@ -53,9 +60,9 @@ static void usage(FILE *f) {
 typedef struct cli {
     sb_run_opts opts;
     const char *out;
-    const char *pos[256];
+    const char **pos;
     int npos;
-    const char *run_opts[128];  /* the run options as given, NAME VALUE pairs (batch: they beat defaults) */
+    const char **run_opts;      /* the run options as given, NAME VALUE pairs (batch: they beat defaults) */
     int nrun_opts;
     const char *resume, *shard, *metrics, *format, *pair;
     double threshold;
@@ -78,11 +85,12 @@ static int parse_cli(cli *c, int argc, char **argv) {
     c->threshold = 5;
     c->argc = argc;
     c->argv = argv;
+    c->pos = calloc((size_t)argc, sizeof *c->pos);           /* never more than the arguments */
+    c->run_opts = calloc((size_t)argc, sizeof *c->run_opts);
     for (int i = 2; i < argc; i++) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (strncmp(a, "--", 2) != 0) {
-            if (c->npos == 256) return bad("too many arguments%s", "");
             c->pos[c->npos++] = a;
             continue;
         }
@@ -96,10 +104,8 @@ static int parse_cli(cli *c, int argc, char **argv) {
         int rc = sb_run_opts_set(&c->opts, a, v, &err);
         if (rc < 0) return bad("%s", err.msg);
         if (rc > 0) {
-            if (c->nrun_opts + 2 <= 128) {
-                c->run_opts[c->nrun_opts++] = a;
-                c->run_opts[c->nrun_opts++] = v;
-            }
+            c->run_opts[c->nrun_opts++] = a;
+            c->run_opts[c->nrun_opts++] = v;
             continue;
         }
         if (!strcmp(a, "--out")) {
@@ -199,20 +205,6 @@ static int cmd_path(const cli *c) {
     return 0;
 }
 
-static bool make_out_dir(const char *base, char *out, size_t len, sb_err *err) {
-    time_t now = time(NULL);
-    struct tm tm;
-    gmtime_r(&now, &tm);
-    char stamp[32];
-    strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &tm);
-    for (int k = 0; k < 100; k++) {
-        if (k == 0) snprintf(out, len, "%s/%s", base, stamp);
-        else snprintf(out, len, "%s/%s-%d", base, stamp, k + 1);
-        if (access(out, F_OK) != 0) return sb_mkdir_p(out, err);
-    }
-    return sb_fail(err, "%s: cannot find a free results folder name", base);
-}
-
 static int cmd_run(const cli *c) {
     if (c->npos < 3) return bad("usage: shadowbench run SCENE PATH SPEC... (see --help)%s", "");
     sb_err err;
@@ -233,7 +225,7 @@ static int cmd_run(const cli *c) {
         return 1;
     }
     char dir[4096], sum_path[4200];
-    if (!make_out_dir(c->out, dir, sizeof dir, &err)) {
+    if (!sb_make_stamped_dir(c->out, dir, sizeof dir, &err) || !sb_report_write_columns(dir, &err)) {
         fprintf(stderr, "shadowbench: %s\n", err.msg);
         sb_session_close(&s);
         free(runs);
@@ -261,192 +253,29 @@ static int cmd_run(const cli *c) {
 
 /* ---- batch ---- */
 
-static void cpu_model(char *out, size_t len) {
-    snprintf(out, len, "unknown");
-    FILE *f = fopen("/proc/cpuinfo", "r");
-    if (!f) return;
-    char line[512];
-    while (fgets(line, sizeof line, f))
-        if (!strncmp(line, "model name", 10)) {
-            char *colon = strchr(line, ':');
-            if (colon) {
-                snprintf(out, len, "%s", colon + 2);
-                out[strcspn(out, "\n")] = 0;
-            }
-            break;
-        }
-    fclose(f);
-}
-
-static bool write_meta(const cli *c, const char *dir, const sb_context *ctx, const sb_batch *b, int selected,
-                       sb_err *err) {
-    char buf[8192], cmd[2048] = {0}, cpu[256], date[64];
-    for (int i = 0; i < c->argc; i++) {
-        size_t l = strlen(cmd);
-        snprintf(cmd + l, sizeof cmd - l, "%s%s", i ? " " : "", c->argv[i]);
-    }
-    cpu_model(cpu, sizeof cpu);
-    struct utsname u;
-    uname(&u);
-    time_t now = time(NULL);
-    struct tm tm;
-    gmtime_r(&now, &tm);
-    strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", &tm);
-    long cores = sysconf(_SC_NPROCESSORS_ONLN);
-    int n = snprintf(buf, sizeof buf,
-                     "command: %s\nversion: %s\ncommit: %s\ndate: %s\nbatch: %s\nruns: %d of %d%s%s\n"
-                     "backend: %s (%s)\ngl_vendor: %s\ngl_renderer: %s\ngl_version: %s\ncpu: %s\ncores: %ld\n"
-                     "kernel: %s %s %s\n",
-                     cmd, SB_VERSION, SB_GIT_COMMIT, date, b ? b->file : "-", selected, b ? b->nruns : selected,
-                     c->shard ? ", shard " : "", c->shard ? c->shard : "", sb_backend_name(ctx->backend), ctx->device,
-                     ctx->vendor, ctx->renderer, ctx->version, cpu, cores, u.sysname, u.release, u.machine);
-    char path[4200];
-    snprintf(path, sizeof path, "%s/meta", dir);
-    return sb_write_file_atomic(path, buf, (size_t)n, err);
-}
-
 static int cmd_batch(const cli *c) {
     if (c->npos != 1) return bad("usage: shadowbench batch FILE [--shard I/N] [--resume DIR] [--dry-run]%s", "");
-    sb_err err;
+    char cmdline[2048] = {0};
+    for (int i = 0; i < c->argc; i++) {
+        size_t l = strlen(cmdline);
+        snprintf(cmdline + l, sizeof cmdline - l, "%s%s", i ? " " : "", c->argv[i]);
+    }
     sb_run_opts base;
     sb_run_opts_defaults(&base);
     base.progress = c->opts.progress;
     base.allow_external_uris = c->opts.allow_external_uris;
-    sb_batch b;
-    if (!sb_batch_load(&b, c->pos[0], &base, c->run_opts, c->nrun_opts, &err)) {
-        fprintf(stderr, "shadowbench: %s\n", err.msg);
-        return 2;
-    }
-    bool *selected = malloc((size_t)(b.nruns ? b.nruns : 1));
-    memset(selected, 1, (size_t)(b.nruns ? b.nruns : 1));
-    if (c->shard) {
-        int si, sn;
-        char extra;
-        if (sscanf(c->shard, "%d/%d%c", &si, &sn, &extra) != 2 || sn < 1 || si < 1 || si > sn) {
-            sb_batch_free(&b);
-            free(selected);
-            return bad("--shard %s: expected I/N with 1 <= I <= N", c->shard);
-        }
-        sb_batch_shard(&b, si, sn, selected);
-    }
-    int nsel = 0;
-    for (int i = 0; i < b.nruns; i++) nsel += selected[i];
-    if (c->dry_run) {
-        printf("index,run_id,scene,path,technique,params,cost\n");
-        for (int i = 0; i < b.nruns; i++) {
-            if (!selected[i]) continue;
-            const sb_batch_run *r = &b.runs[i];
-            char params[1024];
-            sb_params_canonical(&r->spec.params, params, sizeof params);
-            printf("%d,%s,%s,%s,%s,%s,%.3g\n", r->index, r->run_id, b.scenes[r->scene].name,
-                   b.scenes[r->scene].path_label, r->spec.tech->name, params, r->cost);
-        }
-        fprintf(stderr, "%d run(s)%s of %d in the matrix of %s\n", nsel, c->shard ? " in this shard" : "", b.nruns,
-                b.file);
-        sb_batch_free(&b);
-        free(selected);
-        return 0;
-    }
-    char dir[4096];
-    if (c->resume) {
-        snprintf(dir, sizeof dir, "%s", c->resume);
-        if (access(dir, W_OK) != 0) {
-            sb_batch_free(&b);
-            free(selected);
-            return bad("--resume %s: no such results folder", c->resume);
-        }
-    } else {
-        char base_dir[4096];
-        snprintf(base_dir, sizeof base_dir, "%s/%s", c->out, b.name);
-        if (!make_out_dir(base_dir, dir, sizeof dir, &err)) {
-            fprintf(stderr, "shadowbench: %s\n", err.msg);
-            sb_batch_free(&b);
-            free(selected);
-            return 1;
-        }
-    }
-    sb_session s;
-    memset(&s, 0, sizeof s);
-    if (!sb_context_create(&s.ctx, b.opts.backend, &err)) {
-        fprintf(stderr, "shadowbench: %s\n", err.msg);
-        sb_batch_free(&b);
-        free(selected);
-        return 1;
-    }
-    if (!write_meta(c, dir, &s.ctx, &b, nsel, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
-    char sum_path[4200];
-    snprintf(sum_path, sizeof sum_path, "%s/summary.csv", dir);
-    sb_summary sum;
-    sb_summary_open(&sum, sum_path);
-    bool *done = calloc((size_t)(b.nruns ? b.nruns : 1), 1);
-    if (c->resume) { /* keep the complete runs: a summary row and the committed per-frame CSV */
-        sb_table old;
-        if (sb_table_load(&old, sum_path, &err)) {
-            for (int r = 0; r < old.nrows; r++) {
-                const char *id = sb_table_get(&old, r, "run_id"), *st = sb_table_get(&old, r, "status");
-                for (int i = 0; i < b.nruns; i++) {
-                    if (!selected[i] || done[i] || strcmp(b.runs[i].run_id, id)) continue;
-                    char csv[4400];
-                    snprintf(csv, sizeof csv, "%s/%s.csv", dir, id);
-                    bool complete = !strcmp(st, "skipped") || (!strcmp(st, "ok") && access(csv, R_OK) == 0);
-                    if (!complete) continue;
-                    done[i] = true;
-                    sb_csv_line(&sum.rows, old.lines[r]); /* the row as it was */
-                    sum.count++;
-                    if (!strcmp(st, "skipped")) sum.skipped++;
-                }
-            }
-            sb_table_free(&old);
-        }
-    }
-    int todo = 0, k = 0;
-    for (int i = 0; i < b.nruns; i++) todo += selected[i] && !done[i];
-    if (c->resume) sb_log("resuming %s: %d run(s) complete, %d to do", dir, nsel - todo, todo);
-    if (!sb_summary_flush(&sum, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
-    for (int sc = 0; sc < b.nscenes; sc++) {
-        bool any = false;
-        for (int i = 0; i < b.nruns; i++) any |= b.runs[i].scene == sc && selected[i] && !done[i];
-        if (!any) continue;
-        sb_batch_scene *bs = &b.scenes[sc];
-        bool open = sb_session_open(&s, &b.opts, bs->file, bs->path_file, &err);
-        if (open) {
-            snprintf(s.scene_name, sizeof s.scene_name, "%s", bs->name);
-            snprintf(s.path_name, sizeof s.path_name, "%s", bs->path_label);
-        } else {
-            fprintf(stderr, "shadowbench: %s\n", err.msg);
-        }
-        for (int i = 0; i < b.nruns; i++) {
-            if (b.runs[i].scene != sc || !selected[i] || done[i]) continue;
-            if (open) {
-                sb_run_one(&s, &b.runs[i].spec, dir, &sum, b.runs[i].index, k, todo);
-            } else { /* the scene could not be opened: its runs fail, the batch goes on */
-                char params[1024];
-                sb_params_canonical(&b.runs[i].spec.params, params, sizeof params);
-                sb_run_info info = {.run_id = b.runs[i].run_id, .run_index = b.runs[i].index, .scene = bs->name,
-                                    .path = bs->path_label, .technique = b.runs[i].spec.tech->name, .params = params,
-                                    .backend = sb_backend_name(b.opts.backend), .renderer = s.ctx.renderer,
-                                    .timing = sb_timing_name(b.opts.timing), .status = "failed", .reason = err.msg,
-                                    .frames = b.opts.frames, .warmup = b.opts.warmup, .width = b.opts.width,
-                                    .height = b.opts.height};
-                sb_report_summary_row(&sum.rows, &info, b.runs[i].spec.tech->stages, NULL, NULL, 0);
-                sum.count++;
-                sum.failed++;
-            }
-            k++;
-            if (!sb_summary_flush(&sum, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
-        }
-        if (open) sb_session_close_scene(&s);
-    }
-    printf("%s\n", dir);
-    sb_log("%d run(s): %d ok, %d failed, %d skipped; results in %s", sum.count, sum.count - sum.failed - sum.skipped,
-           sum.failed, sum.skipped, dir);
-    int rc = sum.failed ? 1 : 0;
-    sb_summary_free(&sum);
-    sb_context_destroy(&s.ctx);
-    sb_batch_free(&b);
-    free(selected);
-    free(done);
-    return rc;
+    sb_batch_cmd cmd = {.file = c->pos[0], .base = &base, .cli_opts = c->run_opts, .ncli = c->nrun_opts,
+                        .out = c->out, .resume = c->resume, .shard = c->shard, .dry_run = c->dry_run,
+                        .command_line = cmdline, .version = SB_VERSION, .commit = SB_GIT_COMMIT};
+    return sb_batch_main(&cmd);
+}
+
+static int cmd_columns(void) {
+    sb_csv csv = {0};
+    sb_report_columns(&csv);
+    fputs(csv.buf, stdout);
+    sb_csv_free(&csv);
+    return 0;
 }
 
 /* ---- stress ---- */
@@ -539,6 +368,7 @@ int main(int argc, char **argv) {
     const char *cmd = argv[1];
     if (!strcmp(cmd, "run")) return cmd_run(&c);
     if (!strcmp(cmd, "techniques")) return cmd_techniques();
+    if (!strcmp(cmd, "columns")) return cmd_columns();
     if (!strcmp(cmd, "info")) return cmd_info(&c);
     if (!strcmp(cmd, "path")) return cmd_path(&c);
     if (!strcmp(cmd, "batch")) return cmd_batch(&c);

@@ -95,25 +95,36 @@ static void base_name(const char *path, char *out, size_t len) {
 }
 
 bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, const char *path, sb_err *err) {
+    /* files first: a broken scene or path is refused before any GL is touched */
+    sb_scene sc;
+    sb_path p;
+    sb_scene_opts so = {.allow_external_uris = o->allow_external_uris};
+    if (!sb_scene_load(&sc, scene, &so, err)) return false;
+    if (!sb_path_load(&p, path, &sc, err)) {
+        sb_scene_free(&sc);
+        return false;
+    }
+    if (!sb_session_attach(s, o, &sc, &p, err)) return false;
+    base_name(scene, s->scene_name, sizeof s->scene_name);
+    base_name(path, s->path_name, sizeof s->path_name);
+    return true;
+}
+
+bool sb_session_attach(sb_session *s, const sb_run_opts *o, sb_scene *scene, sb_path *path, sb_err *err) {
     bool have_ctx = s->ctx.renderer[0] != 0;
     sb_context keep = s->ctx;
     memset(s, 0, sizeof *s);
     s->opts = *o;
+    s->scene = *scene;
+    s->path = *path;
+    memset(scene, 0, sizeof *scene);
+    memset(path, 0, sizeof *path);
     if (have_ctx) s->ctx = keep;
-    /* files first: a broken scene or path is refused before any GL is touched */
-    sb_scene_opts so = {.allow_external_uris = o->allow_external_uris};
-    if (!sb_scene_load(&s->scene, scene, &so, err)) return false;
-    if (!sb_path_load(&s->path, path, &s->scene, err)) {
-        sb_scene_free(&s->scene);
-        return false;
-    }
     if (!have_ctx && !sb_context_create(&s->ctx, o->backend, err)) {
         sb_path_free(&s->path);
         sb_scene_free(&s->scene);
         return false;
     }
-    base_name(scene, s->scene_name, sizeof s->scene_name);
-    base_name(path, s->path_name, sizeof s->path_name);
     sb_v3 sun = s->scene.has_sun ? s->scene.sun : sb_sun_dir(135, 40);
     if (o->sun_override) sun = sb_sun_dir(o->sun_az, o->sun_el);
     bool init_ok = sb_gpu_init(&s->gpu, &s->ctx, &s->scene, o->width, o->height, sun, err);
@@ -204,39 +215,25 @@ void sb_render_frame(sb_session *s, sb_instance *in, sb_frame *f, int i, int n, 
     sb_render_camera(s, in, f, &cam, seq, timer);
 }
 
-void sb_run_id(const sb_session *s, const sb_run_spec *spec, char out[17]) {
+void sb_run_id(uint64_t scene_hash, uint64_t path_hash, const sb_run_opts *o, const sb_run_spec *spec, char out[17]) {
     char params[1024];
     sb_params_canonical(&spec->params, params, sizeof params);
     uint64_t h = SB_FNV_SEED;
-    h = sb_fnv1a(h, &s->scene.content_hash, sizeof s->scene.content_hash);
-    h = sb_fnv1a(h, &s->path.content_hash, sizeof s->path.content_hash);
+    h = sb_fnv1a(h, &scene_hash, sizeof scene_hash);
+    h = sb_fnv1a(h, &path_hash, sizeof path_hash);
     h = sb_fnv1a(h, spec->tech->name, strlen(spec->tech->name) + 1);
     h = sb_fnv1a(h, params, strlen(params) + 1);
-    int dims[4] = {s->opts.frames, s->opts.width, s->opts.height, (int)s->opts.backend};
+    int dims[4] = {o->frames, o->width, o->height, (int)o->backend};
     h = sb_fnv1a(h, dims, sizeof dims);
-    if (s->opts.sun_override) {
-        double sun[2] = {s->opts.sun_az, s->opts.sun_el};
+    if (o->sun_override) {
+        double sun[2] = {o->sun_az, o->sun_el};
         h = sb_fnv1a(h, sun, sizeof sun);
     }
     snprintf(out, 17, "%016llx", (unsigned long long)h);
 }
 
-/* ---- summary file ---- */
-
-void sb_summary_open(sb_summary *sum, const char *path) {
-    memset(sum, 0, sizeof *sum);
-    sum->path = sb_strdup(path);
-    sb_report_summary_header(&sum->rows);
-}
-
-bool sb_summary_flush(sb_summary *sum, sb_err *err) {
-    return sb_write_file_atomic(sum->path, sum->rows.buf, sum->rows.len, err);
-}
-
-void sb_summary_free(sb_summary *sum) {
-    free(sum->path);
-    sb_csv_free(&sum->rows);
-    memset(sum, 0, sizeof *sum);
+void sb_session_run_id(const sb_session *s, const sb_run_spec *spec, char out[17]) {
+    sb_run_id(s->scene.content_hash, s->path.content_hash, &s->opts, spec, out);
 }
 
 static void progress_line(const sb_session *s, int index, int total, const char *tech, int frame, int frames,
@@ -312,7 +309,7 @@ static bool evaluate(sb_session *s, sb_instance *in, const char *out_dir, const 
 bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_summary *sum, int run_index,
                 int index, int total) {
     char run_id[17], path[4096], params[1024];
-    sb_run_id(s, spec, run_id);
+    sb_session_run_id(s, spec, run_id);
     sb_params_canonical(&spec->params, params, sizeof params);
     snprintf(path, sizeof path, "%s/%s.csv", out_dir, run_id);
     const sb_run_opts *o = &s->opts;
@@ -329,9 +326,7 @@ bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_
     if (skip) {
         info.status = "skipped";
         info.reason = skip;
-        sb_report_summary_row(&sum->rows, &info, stages, NULL, NULL, 0);
-        sum->count++;
-        sum->skipped++;
+        sb_summary_add_outcome(sum, &info, stages, NULL, NULL, 0);
         return true;
     }
     const int N = o->frames, W = o->warmup;
@@ -345,9 +340,7 @@ bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_
         info.status = "failed";
         info.reason = err.msg;
         info.run_wall_s = (sb_now_ms() - t_run) / 1e3;
-        sb_report_summary_row(&sum->rows, &info, stages, NULL, NULL, 0);
-        sum->count++;
-        sum->failed++;
+        sb_summary_add_outcome(sum, &info, stages, NULL, NULL, 0);
         return false;
     }
     sb_timer timer;
@@ -423,10 +416,8 @@ bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_
         sb_log("run %s (%s): failed: %s", run_id, spec->tech->name, err.msg);
         info.status = "failed";
         info.reason = err.msg;
-        sum->failed++;
     }
-    sb_report_summary_row(&sum->rows, &info, stages, ok ? recs + W : NULL, timer.times + W, measured);
-    sum->count++;
+    sb_summary_add_outcome(sum, &info, stages, ok ? recs + W : NULL, timer.times + W, measured);
     sb_csv_free(&rows);
     free(recs);
     sb_timer_free(&timer);

@@ -8,6 +8,7 @@
 #include "context.h"
 #include "csv.h"
 #include "gpu.h"
+#include "report.h"
 #include "spec.h"
 #include "timing.h"
 
@@ -51,8 +52,11 @@ typedef struct sb_session {
     char skip[256];             /* the last skip reason */
 } sb_session;
 
-/* Opens the context (if not already), loads scene and path, uploads buffers. */
+/* Loads scene and path, opens the context (if not already), uploads buffers. */
 bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, const char *path, sb_err *err);
+/* The same with a scene and path already loaded: the session takes them over
+ * (freed with it, also when this fails). */
+bool sb_session_attach(sb_session *s, const sb_run_opts *o, sb_scene *scene, sb_path *path, sb_err *err);
 void sb_session_close(sb_session *s);
 
 /* A live technique instance. */
@@ -72,22 +76,14 @@ void sb_render_camera(sb_session *s, sb_instance *in, sb_frame *f, const sb_came
 /* Why a technique cannot apply to this scene, or NULL (the text lives in the session). */
 const char *sb_skip_reason(sb_session *s, const sb_technique *t);
 
-/* Summary rows of one invocation, rewritten atomically after every run. */
-typedef struct sb_summary {
-    char *path;
-    sb_csv rows;
-    int count, failed, skipped;
-} sb_summary;
-
-void sb_summary_open(sb_summary *sum, const char *path);
-bool sb_summary_flush(sb_summary *sum, sb_err *err);
-void sb_summary_free(sb_summary *sum);
-
 /* Runs one spec; writes DIR/<run_id>.csv and a summary row. run_index is its
  * place in the matrix; progress shows "run i of n". Returns false if it failed. */
 bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_summary *sum, int run_index, int i,
                 int n);
 /* Frees the scene, path and GPU buffers but keeps the context (next scene of a batch). */
 void sb_session_close_scene(sb_session *s);
-/* run_id: hash of scene and path contents, technique, canonical parameters, frames, size, backend. */
-void sb_run_id(const sb_session *s, const sb_run_spec *spec, char out[17]);
+/* run_id: hash of scene and path contents, technique, canonical parameters,
+ * frames, size, backend (and --sun when given). */
+void sb_run_id(uint64_t scene_hash, uint64_t path_hash, const sb_run_opts *o, const sb_run_spec *spec, char out[17]);
+/* The run id of a spec in this session. */
+void sb_session_run_id(const sb_session *s, const sb_run_spec *spec, char out[17]);

@@ -169,3 +169,17 @@ bool sb_parse_int(const char *s, long *out) {
     *out = v;
     return true;
 }
+
+bool sb_make_stamped_dir(const char *base, char *out, size_t len, sb_err *err) {
+    time_t now = time(NULL);
+    struct tm tm;
+    gmtime_r(&now, &tm);
+    char stamp[32];
+    strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &tm);
+    for (int k = 0; k < 100; k++) {
+        if (k == 0) snprintf(out, len, "%s/%s", base, stamp);
+        else snprintf(out, len, "%s/%s-%d", base, stamp, k + 1);
+        if (access(out, F_OK) != 0) return sb_mkdir_p(out, err);
+    }
+    return sb_fail(err, "%s: cannot find a free results folder name", base);
+}

@@ -24,6 +24,8 @@ char *sb_read_file(const char *path, size_t *size, sb_err *err);
 /* Writes data to path atomically (PATH.tmp, fsync, rename). */
 bool sb_write_file_atomic(const char *path, const void *data, size_t size, sb_err *err);
 bool sb_mkdir_p(const char *path, sb_err *err);
+/* Makes BASE/<UTC time> (or <UTC time>-2, -3, ... when taken) into out. */
+bool sb_make_stamped_dir(const char *base, char *out, size_t len, sb_err *err);
 
 uint64_t sb_fnv1a(uint64_t h, const void *data, size_t n);
 #define SB_FNV_SEED 1469598103934665603ull

@@ -7,10 +7,11 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "csv.h"
-#include "table.h"
+#include <unistd.h>
 
-static const char *const default_metrics[] = {"final_ms", "cascade_ms", "gpu_ms", "shadow_draw_calls", "err_rate"};
+#include "csv.h"
+#include "report.h"
+#include "table.h"
 
 static bool load_summary(sb_table *t, const char *where, sb_err *err) {
     struct stat st;
@@ -60,34 +61,22 @@ static double num(const char *s) {
     return *s && sb_parse_double(s, &v) ? v : NAN;
 }
 
+/* A metric of row r, read the way the column table says (report.h). */
 static metric_value metric(const sb_table *t, int r, const char *m) {
     metric_value v = {NAN, NAN, NAN, false};
-    char col[128];
-    snprintf(col, sizeof col, "%s_median", m);
-    if (sb_table_col(t, col) >= 0) { /* a timing: median, and the mean's confidence interval */
-        v.center = num(sb_table_get(t, r, col));
-        snprintf(col, sizeof col, "%s_mean", m);
-        v.mean = num(sb_table_get(t, r, col));
-        snprintf(col, sizeof col, "%s_ci95", m);
-        v.ci = num(sb_table_get(t, r, col));
-    } else {
-        snprintf(col, sizeof col, "%s_mean", m);
-        if (sb_table_col(t, col) < 0) snprintf(col, sizeof col, "%s", m);
-        if (sb_table_col(t, col) < 0) return v;
-        v.center = v.mean = num(sb_table_get(t, r, col));
-    }
+    sb_metric_cols mc;
+    if (!sb_report_metric(m, &mc)) return v;
+    v.center = num(sb_table_get(t, r, mc.center));
+    v.mean = num(sb_table_get(t, r, mc.mean));
+    if (mc.ci[0]) v.ci = num(sb_table_get(t, r, mc.ci));
     v.ok = !isnan(v.center);
     return v;
 }
 
+/* A metric the table knows and the summary has. */
 static bool known_metric(const sb_table *t, const char *m) {
-    char col[128];
-    const char *suffix[] = {"_median", "_mean", ""};
-    for (size_t i = 0; i < SB_COUNT(suffix); i++) {
-        snprintf(col, sizeof col, "%s%s", m, suffix[i]);
-        if (sb_table_col(t, col) >= 0) return true;
-    }
-    return false;
+    sb_metric_cols mc;
+    return sb_report_metric(m, &mc) && sb_table_col(t, mc.center) >= 0;
 }
 
 static void header(FILE *out, int format, const char *a, const char *b) {
@@ -132,13 +121,14 @@ int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FIL
         sb_table_free(&A);
         return -1;
     }
-    const char *metrics[32];
+    const char *metrics[32], *defaults[32];
     int nm = 0;
     if (o->nmetrics) {
         for (int k = 0; k < o->nmetrics; k++) metrics[nm++] = o->metrics[k];
     } else { /* the defaults this summary has */
-        for (size_t k = 0; k < SB_COUNT(default_metrics); k++)
-            if (known_metric(&A, default_metrics[k])) metrics[nm++] = default_metrics[k];
+        int nd = sb_report_default_metrics(defaults, 32);
+        for (int k = 0; k < nd; k++)
+            if (known_metric(&A, defaults[k])) metrics[nm++] = defaults[k];
     }
     for (int k = 0; k < nm; k++)
         if (!known_metric(&A, metrics[k])) {
@@ -230,8 +220,9 @@ int sb_compare_pairs(const char *dir, const sb_compare_opts *o, FILE *out, sb_er
     snprintf(vb, sizeof vb, "%s", comma + 1);
     sb_table t;
     if (!load_summary(&t, dir, err)) return -1;
-    const char *const *metrics = o->nmetrics ? o->metrics : default_metrics;
-    int nm = o->nmetrics ? o->nmetrics : (int)SB_COUNT(default_metrics);
+    const char *defaults[32];
+    const char *const *metrics = o->nmetrics ? o->metrics : defaults;
+    int nm = o->nmetrics ? o->nmetrics : sb_report_default_metrics(defaults, 32);
     bool by_tech = !strcmp(key, "technique");
     header(out, o->format, va, vb);
     int pairs = 0;
@@ -313,20 +304,12 @@ bool sb_merge(const char *const *dirs, int n, const char *out_dir, sb_err *err) 
             char from[4400], to[4400];
             snprintf(from, sizeof from, "%s/%s.csv", dirs[i], id);
             snprintf(to, sizeof to, "%s/%s.csv", out_dir, id);
-            FILE *f = fopen(from, "r");
-            if (f) {
-                fclose(f);
-                ok = copy_file(from, to, err);
-            }
+            if (access(from, R_OK) == 0) ok = copy_file(from, to, err);
         }
         char from[4400], to[4400];
         snprintf(from, sizeof from, "%s/meta", dirs[i]);
         snprintf(to, sizeof to, "%s/meta.%d", out_dir, i + 1);
-        FILE *f = fopen(from, "r");
-        if (ok && f) {
-            fclose(f);
-            ok = copy_file(from, to, err);
-        }
+        if (ok && access(from, R_OK) == 0) ok = copy_file(from, to, err);
     }
     if (ok) {
         qsort(rows, (size_t)nrows, sizeof *rows, by_index);
@@ -345,7 +328,7 @@ bool sb_merge(const char *const *dirs, int n, const char *out_dir, sb_err *err) 
         }
         char path[4200];
         snprintf(path, sizeof path, "%s/summary.csv", out_dir);
-        ok = sb_write_file_atomic(path, text, (size_t)(p - text), err);
+        ok = sb_write_file_atomic(path, text, (size_t)(p - text), err) && sb_report_write_columns(out_dir, err);
         free(text);
     }
     for (int i = 0; i < n; i++) sb_table_free(&t[i]);

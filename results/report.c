@@ -1,5 +1,6 @@
-/* report.c - per-frame and summary CSV rows. A stage a technique does not
- * have, or a metric not measured for a frame, is an empty field, not 0. */
+/* report.c - the two column tables of the CSV contract (see report.h). A
+ * stage a technique does not have, or a metric not measured for a frame, is
+ * an empty field, not 0. */
 #include "report.h"
 
 #include <stdlib.h>
@@ -7,43 +8,23 @@
 
 #include "stats.h"
 
-/* stages that draw (per-stage draw-call columns) */
-static bool draws_in(int s) { return s != SB_STAGE_MINMAX && s != SB_STAGE_RAYS; }
+const char *const sb_stat_names[SB_STAT_COUNT] = {"mean", "median", "p95", "p99", "std", "ci95"};
 
-static const char *const error_cols[] = {"err_rate", "err_false_shadow", "err_false_lit", "vis_mae",
-                                         "res_err_mean", "res_err_p95", "texel_px_p95"};
+static sb_cell empty(void) { return (sb_cell){SB_CELL_EMPTY, 0, NAN, NULL}; }
+static sb_cell integer(long long v) { return (sb_cell){SB_CELL_INT, v, (double)v, NULL}; }
+static sb_cell number(double v) { return (sb_cell){SB_CELL_NUM, 0, v, NULL}; }
+static sb_cell text(const char *s) { return (sb_cell){SB_CELL_STR, 0, NAN, s}; }
 
-static double error_field(const sb_error_metrics *e, int k) {
-    const double v[] = {e->err_rate, e->false_shadow, e->false_lit, e->vis_mae,
-                        e->res_err_mean, e->res_err_p95, e->texel_px_p95};
-    return v[k];
+static void put(sb_csv *c, sb_cell v) {
+    switch (v.kind) {
+    case SB_CELL_EMPTY: sb_csv_empty(c); break;
+    case SB_CELL_INT: sb_csv_int(c, v.i); break;
+    case SB_CELL_NUM: sb_csv_num(c, v.num); break;
+    case SB_CELL_STR: sb_csv_str(c, v.str); break;
+    }
 }
 
-void sb_report_frame_header(sb_csv *c) {
-    const char *cols[] = {"frame", "repeat", "progress", "draw_calls", "shadow_draw_calls", "triangles",
-                          "shadow_triangles", "cascades_rendered", "cascades_skipped", "warp_fallbacks"};
-    for (size_t i = 0; i < SB_COUNT(cols); i++) sb_csv_str(c, cols[i]);
-    char name[40];
-    for (int s = 0; s < SB_STAGE_COUNT; s++) {
-        snprintf(name, sizeof name, "%s_ms", sb_stage_names[s]);
-        sb_csv_str(c, name);
-    }
-    sb_csv_str(c, "gpu_ms");
-    sb_csv_str(c, "cpu_ms");
-    sb_csv_str(c, "wall_ms");
-    for (int s = 0; s < SB_STAGE_COUNT; s++) {
-        if (!draws_in(s)) continue;
-        snprintf(name, sizeof name, "%s_draw_calls", sb_stage_names[s]);
-        sb_csv_str(c, name);
-    }
-    for (int k = 0; k < SB_MAX_CASCADES; k++) {
-        snprintf(name, sizeof name, "split_%d", k + 1);
-        sb_csv_str(c, name);
-    }
-    sb_csv_str(c, "eval_pixels");
-    for (size_t k = 0; k < SB_COUNT(error_cols); k++) sb_csv_str(c, error_cols[k]);
-    sb_csv_end_row(c);
-}
+static bool has(unsigned stages, int s) { return stages & SB_STAGE_BIT(s); }
 
 static double gpu_ms(const sb_stage_times *t) {
     double sum = 0;
@@ -52,76 +33,312 @@ static double gpu_ms(const sb_stage_times *t) {
     return sum;
 }
 
-void sb_report_frame_row(sb_csv *c, const sb_frame_rec *r, const sb_stage_times *t, unsigned stages) {
-    sb_csv_int(c, r->frame);
-    sb_csv_int(c, r->repeat);
-    sb_csv_num(c, r->progress);
-    sb_csv_int(c, r->counters.draw_calls);
-    sb_csv_int(c, r->counters.shadow_draw_calls);
-    sb_csv_int(c, (long long)r->counters.triangles);
-    sb_csv_int(c, (long long)r->counters.shadow_triangles);
-    if (stages & SB_STAGE_BIT(SB_STAGE_CASCADE)) {
-        sb_csv_int(c, r->counters.cascades_rendered);
-        sb_csv_int(c, r->counters.cascades_skipped);
-        sb_csv_int(c, r->counters.warp_fallbacks);
-    } else {
-        sb_csv_empty(c);
-        sb_csv_empty(c);
-        sb_csv_empty(c);
+/* ---- per-frame columns ---- */
+
+enum { C_DRAWS, C_SHADOW_DRAWS, C_TRIS, C_SHADOW_TRIS, C_RENDERED, C_SKIPPED, C_WARP };
+enum { E_RATE, E_FALSE_SHADOW, E_FALSE_LIT, E_MAE, E_RES_MEAN, E_RES_P95, E_TEXEL_P95 };
+
+static sb_cell f_frame(const sb_frame_row *r, int a) { (void)a; return integer(r->rec->frame); }
+static sb_cell f_repeat(const sb_frame_row *r, int a) { (void)a; return integer(r->rec->repeat); }
+static sb_cell f_progress(const sb_frame_row *r, int a) { (void)a; return number(r->rec->progress); }
+
+static sb_cell f_counter(const sb_frame_row *r, int a) {
+    const sb_counters *k = &r->rec->counters;
+    switch (a) {
+    case C_DRAWS: return integer(k->draw_calls);
+    case C_SHADOW_DRAWS: return integer(k->shadow_draw_calls);
+    case C_TRIS: return integer((long long)k->triangles);
+    case C_SHADOW_TRIS: return integer((long long)k->shadow_triangles);
     }
-    for (int s = 0; s < SB_STAGE_COUNT; s++) {
-        if ((stages & SB_STAGE_BIT(s)) && (t->mask & SB_STAGE_BIT(s))) sb_csv_num(c, t->ms[s]);
-        else sb_csv_empty(c);
-    }
-    sb_csv_num(c, gpu_ms(t));
-    sb_csv_num(c, r->cpu_ms);
-    sb_csv_num(c, r->wall_ms);
-    for (int s = 0; s < SB_STAGE_COUNT; s++) {
-        if (!draws_in(s)) continue;
-        if (stages & SB_STAGE_BIT(s)) sb_csv_int(c, r->counters.stage_draw_calls[s]);
-        else sb_csv_empty(c);
-    }
-    for (int k = 0; k < SB_MAX_CASCADES; k++) {
-        if (k < r->counters.split_count) sb_csv_num(c, r->counters.splits[k]);
-        else sb_csv_empty(c);
-    }
-    if (r->evaluated) sb_csv_int(c, r->err.pixels);
-    else sb_csv_empty(c);
-    for (size_t k = 0; k < SB_COUNT(error_cols); k++) sb_csv_num(c, r->evaluated ? error_field(&r->err, (int)k) : NAN);
+    if (!has(r->stages, SB_STAGE_CASCADE)) return empty(); /* no shadow maps: no cascades */
+    return integer(a == C_RENDERED ? k->cascades_rendered : a == C_SKIPPED ? k->cascades_skipped : k->warp_fallbacks);
+}
+
+static sb_cell f_stage_ms(const sb_frame_row *r, int s) {
+    return has(r->stages, s) && (r->t->mask & SB_STAGE_BIT(s)) ? number(r->t->ms[s]) : empty();
+}
+static sb_cell f_gpu_ms(const sb_frame_row *r, int a) { (void)a; return number(gpu_ms(r->t)); }
+static sb_cell f_cpu_ms(const sb_frame_row *r, int a) { (void)a; return number(r->rec->cpu_ms); }
+static sb_cell f_wall_ms(const sb_frame_row *r, int a) { (void)a; return number(r->rec->wall_ms); }
+static sb_cell f_stage_draws(const sb_frame_row *r, int s) {
+    return has(r->stages, s) ? integer(r->rec->counters.stage_draw_calls[s]) : empty();
+}
+static sb_cell f_split(const sb_frame_row *r, int k) {
+    return k < r->rec->counters.split_count ? number(r->rec->counters.splits[k]) : empty();
+}
+static sb_cell f_eval_pixels(const sb_frame_row *r, int a) {
+    (void)a;
+    return r->rec->evaluated ? integer(r->rec->err.pixels) : empty();
+}
+static sb_cell f_error(const sb_frame_row *r, int k) {
+    if (!r->rec->evaluated) return empty();
+    const sb_error_metrics *e = &r->rec->err;
+    const double v[] = {e->err_rate, e->false_shadow, e->false_lit, e->vis_mae,
+                        e->res_err_mean, e->res_err_p95, e->texel_px_p95};
+    return number(v[k]);
+}
+
+#define STAGE_MS(name, s, doc) {name, f_stage_ms, s, SB_COL_STAGE_TIME, doc}
+#define SPLIT(k) {"split_" #k, f_split, k - 1, 0, "view-space far distance of cascade " #k " this frame"}
+
+const sb_frame_col sb_frame_cols[] = {
+    {"frame", f_frame, 0, 0, "frame of the path (0..frames-1)"},
+    {"repeat", f_repeat, 0, 0, "repetition of the path (0-based)"},
+    {"progress", f_progress, 0, 0, "position along the path in [0, 1]"},
+    {"draw_calls", f_counter, C_DRAWS, 0, "draw calls submitted in the frame"},
+    {"shadow_draw_calls", f_counter, C_SHADOW_DRAWS, 0, "draw calls of the shadow stages (cascade, volumes)"},
+    {"triangles", f_counter, C_TRIS, 0, "triangles submitted (instances counted)"},
+    {"shadow_triangles", f_counter, C_SHADOW_TRIS, 0, "triangles submitted in the shadow stages"},
+    {"cascades_rendered", f_counter, C_RENDERED, 0, "shadow maps rendered (empty: no shadow maps)"},
+    {"cascades_skipped", f_counter, C_SKIPPED, 0, "shadow maps skipped for want of receivers"},
+    {"warp_fallbacks", f_counter, C_WARP, 0, "warped maps that fell back to the uniform fit"},
+    STAGE_MS("zpass_ms", SB_STAGE_ZPASS, "camera depth pre-pass"),
+    STAGE_MS("minmax_ms", SB_STAGE_MINMAX, "depth reduction"),
+    STAGE_MS("cascade_ms", SB_STAGE_CASCADE, "all shadow-map rendering"),
+    STAGE_MS("final_ms", SB_STAGE_FINAL, "camera pass with the shadow lookup"),
+    STAGE_MS("volumes_ms", SB_STAGE_VOLUMES, "stencil shadow volumes (and planar casters)"),
+    STAGE_MS("rays_ms", SB_STAGE_RAYS, "CPU ray casting (raycast)"),
+    {"gpu_ms", f_gpu_ms, 0, 0, "sum of the stage times"},
+    {"cpu_ms", f_cpu_ms, 0, 0, "frame wall time not spent waiting for the GPU"},
+    {"wall_ms", f_wall_ms, 0, 0, "frame wall time"},
+    {"zpass_draw_calls", f_stage_draws, SB_STAGE_ZPASS, 0, "draw calls of the z-pass"},
+    {"cascade_draw_calls", f_stage_draws, SB_STAGE_CASCADE, 0, "draw calls of the cascade stage"},
+    {"final_draw_calls", f_stage_draws, SB_STAGE_FINAL, 0, "draw calls of the final pass"},
+    {"volumes_draw_calls", f_stage_draws, SB_STAGE_VOLUMES, 0, "draw calls of the volumes stage"},
+    SPLIT(1), SPLIT(2), SPLIT(3), SPLIT(4), SPLIT(5), SPLIT(6), SPLIT(7), SPLIT(8),
+    {"eval_pixels", f_eval_pixels, 0, 0, "pixels evaluated against the reference (lit-facing, not sky)"},
+    {"err_rate", f_error, E_RATE, 0, "share of evaluated pixels whose shadow state differs from the reference"},
+    {"err_false_shadow", f_error, E_FALSE_SHADOW, 0, "share shadowed by the technique, lit in the reference"},
+    {"err_false_lit", f_error, E_FALSE_LIT, 0, "share lit by the technique, shadowed in the reference"},
+    {"vis_mae", f_error, E_MAE, 0, "mean absolute visibility difference"},
+    {"res_err_mean", f_error, E_RES_MEAN, 0, "mean of max(-log2(shadow texels per pixel), 0)"},
+    {"res_err_p95", f_error, E_RES_P95, 0, "95th percentile of the resolution error"},
+    {"texel_px_p95", f_error, E_TEXEL_P95, 0, "95th percentile of shadow texels per pixel"},
+};
+const int sb_frame_col_count = (int)SB_COUNT(sb_frame_cols);
+
+/* ---- per-run columns ---- */
+
+enum {
+    S_RUN_ID, S_SCENE, S_PATH, S_TECHNIQUE, S_PARAMS, S_BACKEND, S_RENDERER, S_TIMING, S_STATUS, S_REASON
+};
+enum { I_RUN_INDEX, I_FRAMES, I_WARMUP, I_WIDTH, I_HEIGHT, I_STALLS, I_SCENE_TRIS };
+
+static sb_cell r_text(const sb_run_row *r, int a) {
+    const sb_run_info *in = r->info;
+    const char *v[] = {in->run_id, in->scene, in->path, in->technique, in->params, in->backend, in->renderer,
+                       in->timing, in->status, in->reason};
+    return text(v[a]);
+}
+static sb_cell r_int(const sb_run_row *r, int a) {
+    const sb_run_info *in = r->info;
+    const long long v[] = {in->run_index, in->frames, in->warmup, in->width, in->height, (long long)in->stalls,
+                           (long long)in->scene_triangles};
+    return integer(v[a]);
+}
+static sb_cell r_repeats(const sb_run_row *r, int a) { (void)a; return integer(r->n ? r->info->repeats : 0); }
+static sb_cell r_target_ci(const sb_run_row *r, int a) {
+    (void)a;
+    return number(r->info->target_ci > 0 ? r->info->target_ci : NAN);
+}
+static sb_cell r_gpu_ci(const sb_run_row *r, int a) {
+    (void)a;
+    return number(r->n ? sb_report_gpu_ci_pct(r->times, r->n, r->info->frames) : NAN);
+}
+static sb_cell r_load_ms(const sb_run_row *r, int a) { (void)a; return number(r->info->load_ms); }
+static sb_cell r_wall_s(const sb_run_row *r, int a) { (void)a; return number(r->info->run_wall_s); }
+static sb_cell r_harness_share(const sb_run_row *r, int a) {
+    (void)a;
+    const sb_run_info *in = r->info;
+    return number(r->n && in->run_wall_s > 0 ? 1.0 - in->frames_wall_ms / (in->run_wall_s * 1e3) : NAN);
+}
+static sb_cell r_error_frames(const sb_run_row *r, int a) {
+    (void)a;
+    int ne = 0;
+    for (int i = 0; i < r->n; i++) ne += r->recs[i].evaluated;
+    return integer(ne);
+}
+static sb_cell r_rays_per_s(const sb_run_row *r, int a) {
+    (void)a;
+    return number(r->info->ray_ms > 0 ? r->info->rays / (r->info->ray_ms / 1e3) : NAN);
+}
+
+#define SERIES(name, stats, flags) {name, NULL, 0, stats, flags, NULL}
+
+const sb_run_col sb_run_cols[] = {
+    {"run_id", r_text, S_RUN_ID, 0, 0, "hash of scene and path contents, technique, parameters, frames, size, backend"},
+    {"run_index", r_int, I_RUN_INDEX, 0, 0, "position in the expanded matrix"},
+    {"scene", r_text, S_SCENE, 0, 0, "scene name"},
+    {"path", r_text, S_PATH, 0, 0, "path name"},
+    {"technique", r_text, S_TECHNIQUE, 0, 0, "technique"},
+    {"params", r_text, S_PARAMS, 0, 0, "every parameter, in table order"},
+    {"backend", r_text, S_BACKEND, 0, 0, "egl or osmesa"},
+    {"renderer", r_text, S_RENDERER, 0, 0, "GL_RENDERER"},
+    {"timing", r_text, S_TIMING, 0, 0, "queries or sync: the timing mode used"},
+    {"frames", r_int, I_FRAMES, 0, 0, "frames sampled along the path"},
+    {"warmup", r_int, I_WARMUP, 0, 0, "warm-up frames, excluded"},
+    {"width", r_int, I_WIDTH, 0, 0, "render width"},
+    {"height", r_int, I_HEIGHT, 0, 0, "render height"},
+    {"status", r_text, S_STATUS, 0, 0, "ok, failed or skipped"},
+    {"reason", r_text, S_REASON, 0, 0, "why a run failed or was skipped"},
+    {"repeats", r_repeats, 0, 0, 0, "repetitions of the path measured"},
+    {"target_ci_pct", r_target_ci, 0, 0, 0, "--target-ci"},
+    {"gpu_ci_pct", r_gpu_ci, 0, 0, 0, "95% CI half-width of mean gpu_ms, percent of the mean"},
+    {"stalls", r_int, I_STALLS, 0, 0, "query reads that would have blocked"},
+    {"scene_triangles", r_int, I_SCENE_TRIS, 0, 0, "triangles in the scene"},
+    {"load_ms", r_load_ms, 0, 0, 0, "scene load time"},
+    {"run_wall_s", r_wall_s, 0, 0, 0, "wall time of the run"},
+    {"harness_share", r_harness_share, 0, 0, 0, "share of the run's wall time outside rendered frames"},
+    SERIES("draw_calls", SB_STAT_MEAN, 0),
+    SERIES("shadow_draw_calls", SB_STAT_MEAN, SB_COL_DEFAULT_METRIC),
+    SERIES("shadow_triangles", SB_STAT_MEAN, 0),
+    SERIES("cascades_rendered", SB_STAT_MEAN, 0),
+    SERIES("cascades_skipped", SB_STAT_MEAN, 0),
+    SERIES("warp_fallbacks", SB_STAT_MEAN, 0),
+    SERIES("zpass_ms", SB_STATS_TIMING, 0),
+    SERIES("minmax_ms", SB_STATS_TIMING, 0),
+    SERIES("cascade_ms", SB_STATS_TIMING, SB_COL_DEFAULT_METRIC),
+    SERIES("final_ms", SB_STATS_TIMING, SB_COL_DEFAULT_METRIC),
+    SERIES("volumes_ms", SB_STATS_TIMING, 0),
+    SERIES("rays_ms", SB_STATS_TIMING, 0),
+    SERIES("gpu_ms", SB_STATS_TIMING, SB_COL_DEFAULT_METRIC),
+    SERIES("cpu_ms", SB_STATS_TIMING, 0),
+    SERIES("wall_ms", SB_STATS_TIMING, 0),
+    {"error_frames", r_error_frames, 0, 0, 0, "frames evaluated against the reference"},
+    SERIES("err_rate", SB_STAT_MEAN | SB_STAT_P95, SB_COL_DEFAULT_METRIC),
+    SERIES("err_false_shadow", SB_STAT_MEAN | SB_STAT_P95, 0),
+    SERIES("err_false_lit", SB_STAT_MEAN | SB_STAT_P95, 0),
+    SERIES("vis_mae", SB_STAT_MEAN | SB_STAT_P95, 0),
+    SERIES("res_err_mean", SB_STAT_MEAN | SB_STAT_P95, 0),
+    SERIES("res_err_p95", SB_STAT_MEAN | SB_STAT_P95, 0),
+    SERIES("texel_px_p95", SB_STAT_MEAN | SB_STAT_P95, 0),
+    {"ref_rays_per_s", r_rays_per_s, 0, 0, 0, "reference rays per second on this machine"},
+};
+const int sb_run_col_count = (int)SB_COUNT(sb_run_cols);
+
+/* ---- writing ---- */
+
+static const sb_frame_col *frame_col(const char *name) {
+    for (int k = 0; k < sb_frame_col_count; k++)
+        if (!strcmp(sb_frame_cols[k].name, name)) return &sb_frame_cols[k];
+    return NULL;
+}
+
+static void stat_name(char *out, size_t len, const char *series, int bit) {
+    snprintf(out, len, "%s_%s", series, sb_stat_names[bit]);
+}
+
+void sb_report_frame_header(sb_csv *c) {
+    for (int k = 0; k < sb_frame_col_count; k++) sb_csv_str(c, sb_frame_cols[k].name);
     sb_csv_end_row(c);
 }
 
-#define N_SUMMARY_STAGES (SB_STAGE_COUNT + 3) /* stages, gpu, cpu, wall */
-static const char *summary_stage_name(int k) {
-    static const char *extra[] = {"gpu", "cpu", "wall"};
-    return k < SB_STAGE_COUNT ? sb_stage_names[k] : extra[k - SB_STAGE_COUNT];
+void sb_report_frame_row(sb_csv *c, const sb_frame_rec *r, const sb_stage_times *t, unsigned stages) {
+    const sb_frame_row row = {r, t, stages};
+    for (int k = 0; k < sb_frame_col_count; k++) put(c, sb_frame_cols[k].get(&row, sb_frame_cols[k].arg));
+    sb_csv_end_row(c);
 }
-
-static const char *const counter_cols[] = {"draw_calls_mean", "shadow_draw_calls_mean", "shadow_triangles_mean",
-                                           "cascades_rendered_mean", "cascades_skipped_mean", "warp_fallbacks_mean"};
 
 void sb_report_summary_header(sb_csv *c) {
-    const char *cols[] = {"run_id", "run_index", "scene", "path", "technique", "params", "backend", "renderer", "timing",
-                          "frames", "warmup", "width", "height", "status", "reason", "repeats", "target_ci_pct",
-                          "gpu_ci_pct", "stalls", "scene_triangles", "load_ms", "run_wall_s", "harness_share"};
-    for (size_t i = 0; i < SB_COUNT(cols); i++) sb_csv_str(c, cols[i]);
-    for (size_t i = 0; i < SB_COUNT(counter_cols); i++) sb_csv_str(c, counter_cols[i]);
-    const char *st[] = {"mean", "median", "p95", "p99", "std", "ci95"};
-    char name[64];
-    for (int k = 0; k < N_SUMMARY_STAGES; k++)
-        for (size_t j = 0; j < SB_COUNT(st); j++) {
-            snprintf(name, sizeof name, "%s_ms_%s", summary_stage_name(k), st[j]);
-            sb_csv_str(c, name);
+    char name[128];
+    for (int k = 0; k < sb_run_col_count; k++) {
+        const sb_run_col *col = &sb_run_cols[k];
+        if (col->get) {
+            sb_csv_str(c, col->name);
+            continue;
         }
-    sb_csv_str(c, "error_frames");
-    for (size_t k = 0; k < SB_COUNT(error_cols); k++) {
-        snprintf(name, sizeof name, "%s_mean", error_cols[k]);
-        sb_csv_str(c, name);
-        snprintf(name, sizeof name, "%s_p95", error_cols[k]);
-        sb_csv_str(c, name);
+        for (int b = 0; b < SB_STAT_COUNT; b++)
+            if (col->stats & (1u << b)) {
+                stat_name(name, sizeof name, col->name, b);
+                sb_csv_str(c, name);
+            }
     }
-    sb_csv_str(c, "ref_rays_per_s");
     sb_csv_end_row(c);
+}
+
+void sb_report_summary_row(sb_csv *c, const sb_run_info *info, unsigned stages, const sb_frame_rec *recs,
+                           const sb_stage_times *times, int n) {
+    if (!recs) n = 0;
+    const sb_run_row row = {info, recs, times, n, stages};
+    double *v = malloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
+    for (int k = 0; k < sb_run_col_count; k++) {
+        const sb_run_col *col = &sb_run_cols[k];
+        if (col->get) {
+            put(c, col->get(&row, col->arg));
+            continue;
+        }
+        const sb_frame_col *fc = frame_col(col->name);
+        for (int i = 0; i < n; i++) {
+            const sb_frame_row fr = {&recs[i], &times[i], stages};
+            sb_cell cell = fc->get(&fr, fc->arg);
+            v[i] = cell.kind == SB_CELL_INT || cell.kind == SB_CELL_NUM ? cell.num : NAN;
+        }
+        sb_stats st = sb_stats_compute(v, n);
+        const double s[SB_STAT_COUNT] = {st.mean, st.median, st.p95, st.p99, st.std, st.ci95};
+        for (int b = 0; b < SB_STAT_COUNT; b++)
+            if (col->stats & (1u << b)) sb_csv_num(c, s[b]);
+    }
+    sb_csv_end_row(c);
+    free(v);
+}
+
+void sb_report_columns(sb_csv *c) {
+    const char *hdr[] = {"scope", "name", "statistics", "flags", "doc"};
+    for (size_t i = 0; i < SB_COUNT(hdr); i++) sb_csv_str(c, hdr[i]);
+    sb_csv_end_row(c);
+    for (int k = 0; k < sb_frame_col_count; k++) {
+        const sb_frame_col *f = &sb_frame_cols[k];
+        sb_csv_str(c, "frame");
+        sb_csv_str(c, f->name);
+        sb_csv_str(c, "");
+        sb_csv_str(c, f->flags & SB_COL_STAGE_TIME ? "stage_time" : "");
+        sb_csv_str(c, f->doc);
+        sb_csv_end_row(c);
+    }
+    for (int k = 0; k < sb_run_col_count; k++) {
+        const sb_run_col *r = &sb_run_cols[k];
+        char stats[96] = "";
+        for (int b = 0; b < SB_STAT_COUNT; b++)
+            if (r->stats & (1u << b)) {
+                size_t l = strlen(stats);
+                snprintf(stats + l, sizeof stats - l, "%s%s", l ? "|" : "", sb_stat_names[b]);
+            }
+        const sb_frame_col *fc = r->get ? NULL : frame_col(r->name);
+        sb_csv_str(c, "run");
+        sb_csv_str(c, r->name);
+        sb_csv_str(c, stats);
+        sb_csv_str(c, r->flags & SB_COL_DEFAULT_METRIC ? "default_metric" : "");
+        sb_csv_str(c, fc ? fc->doc : r->doc);
+        sb_csv_end_row(c);
+    }
+}
+
+bool sb_report_metric(const char *name, sb_metric_cols *out) {
+    memset(out, 0, sizeof *out);
+    for (int k = 0; k < sb_run_col_count; k++) {
+        const sb_run_col *r = &sb_run_cols[k];
+        if (strcmp(r->name, name)) continue;
+        if (r->get) {
+            snprintf(out->center, sizeof out->center, "%s", name);
+            snprintf(out->mean, sizeof out->mean, "%s", name);
+        } else if ((r->stats & SB_STAT_MEDIAN) && (r->stats & SB_STAT_CI95)) {
+            snprintf(out->center, sizeof out->center, "%s_median", name);
+            snprintf(out->mean, sizeof out->mean, "%s_mean", name);
+            snprintf(out->ci, sizeof out->ci, "%s_ci95", name);
+        } else {
+            snprintf(out->center, sizeof out->center, "%s_mean", name);
+            snprintf(out->mean, sizeof out->mean, "%s_mean", name);
+        }
+        return true;
+    }
+    return false;
+}
+
+int sb_report_default_metrics(const char **out, int max) {
+    int n = 0;
+    for (int k = 0; k < sb_run_col_count && n < max; k++)
+        if (sb_run_cols[k].flags & SB_COL_DEFAULT_METRIC) out[n++] = sb_run_cols[k].name;
+    return n;
 }
 
 double sb_report_gpu_ci_pct(const sb_stage_times *times, int n, int per_repeat) {
@@ -141,72 +358,47 @@ double sb_report_gpu_ci_pct(const sb_stage_times *times, int n, int per_repeat) 
     return st.mean > 0 ? 100.0 * st.ci95 / st.mean : NAN;
 }
 
-void sb_report_summary_row(sb_csv *c, const sb_run_info *in, unsigned stages, const sb_frame_rec *recs,
-                           const sb_stage_times *times, int n) {
-    if (!recs) n = 0;
-    sb_csv_str(c, in->run_id);
-    sb_csv_int(c, in->run_index);
-    sb_csv_str(c, in->scene);
-    sb_csv_str(c, in->path);
-    sb_csv_str(c, in->technique);
-    sb_csv_str(c, in->params);
-    sb_csv_str(c, in->backend);
-    sb_csv_str(c, in->renderer);
-    sb_csv_str(c, in->timing);
-    sb_csv_int(c, in->frames);
-    sb_csv_int(c, in->warmup);
-    sb_csv_int(c, in->width);
-    sb_csv_int(c, in->height);
-    sb_csv_str(c, in->status);
-    sb_csv_str(c, in->reason);
-    sb_csv_int(c, n ? in->repeats : 0);
-    sb_csv_num(c, in->target_ci > 0 ? in->target_ci : NAN);
-    sb_csv_num(c, n ? sb_report_gpu_ci_pct(times, n, in->frames) : NAN);
-    sb_csv_int(c, (long long)in->stalls);
-    sb_csv_int(c, (long long)in->scene_triangles);
-    sb_csv_num(c, in->load_ms);
-    sb_csv_num(c, in->run_wall_s);
-    sb_csv_num(c, n && in->run_wall_s > 0 ? 1.0 - in->frames_wall_ms / (in->run_wall_s * 1e3) : NAN);
-    double *v = malloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
-    bool has_cascades = stages & SB_STAGE_BIT(SB_STAGE_CASCADE);
-    for (int field = 0; field < (int)SB_COUNT(counter_cols); field++) {
-        for (int i = 0; i < n; i++) {
-            const sb_counters *k = &recs[i].counters;
-            v[i] = field == 0 ? k->draw_calls : field == 1 ? k->shadow_draw_calls : field == 2 ? (double)k->shadow_triangles
-                 : field == 3 ? k->cascades_rendered : field == 4 ? k->cascades_skipped : k->warp_fallbacks;
-        }
-        if (field >= 3 && !has_cascades) sb_csv_empty(c);
-        else sb_csv_num(c, n ? sb_stats_compute(v, n).mean : NAN);
-    }
-    for (int k = 0; k < N_SUMMARY_STAGES; k++) {
-        for (int i = 0; i < n; i++) {
-            const sb_stage_times *st = &times[i];
-            if (k < SB_STAGE_COUNT)
-                v[i] = (stages & SB_STAGE_BIT(k)) && (st->mask & SB_STAGE_BIT(k)) ? st->ms[k] : NAN;
-            else if (k == SB_STAGE_COUNT) v[i] = gpu_ms(st);
-            else if (k == SB_STAGE_COUNT + 1) v[i] = recs[i].cpu_ms;
-            else v[i] = recs[i].wall_ms;
-        }
-        sb_stats st = sb_stats_compute(v, n);
-        sb_csv_num(c, st.mean);
-        sb_csv_num(c, st.median);
-        sb_csv_num(c, st.p95);
-        sb_csv_num(c, st.p99);
-        sb_csv_num(c, st.std);
-        sb_csv_num(c, st.ci95);
-    }
-    int ne = 0;
-    for (int i = 0; i < n; i++) ne += recs[i].evaluated;
-    sb_csv_int(c, ne);
-    for (size_t k = 0; k < SB_COUNT(error_cols); k++) {
-        int m = 0;
-        for (int i = 0; i < n; i++)
-            if (recs[i].evaluated) v[m++] = error_field(&recs[i].err, (int)k);
-        sb_stats st = sb_stats_compute(v, m);
-        sb_csv_num(c, st.mean);
-        sb_csv_num(c, st.p95);
-    }
-    sb_csv_num(c, in->ray_ms > 0 ? in->rays / (in->ray_ms / 1e3) : NAN);
-    sb_csv_end_row(c);
-    free(v);
+/* ---- the summary file ---- */
+
+void sb_summary_open(sb_summary *sum, const char *path) {
+    memset(sum, 0, sizeof *sum);
+    sum->path = sb_strdup(path);
+    sb_report_summary_header(&sum->rows);
+}
+
+static void count_status(sb_summary *sum, const char *status) {
+    sum->count++;
+    sum->failed += !strcmp(status, "failed");
+    sum->skipped += !strcmp(status, "skipped");
+}
+
+void sb_summary_add_outcome(sb_summary *sum, const sb_run_info *info, unsigned stages, const sb_frame_rec *recs,
+                            const sb_stage_times *times, int n) {
+    sb_report_summary_row(&sum->rows, info, stages, recs, times, n);
+    count_status(sum, info->status);
+}
+
+void sb_summary_add_line(sb_summary *sum, const char *line, const char *status) {
+    sb_csv_line(&sum->rows, line);
+    count_status(sum, status);
+}
+
+bool sb_summary_flush(sb_summary *sum, sb_err *err) {
+    return sb_write_file_atomic(sum->path, sum->rows.buf, sum->rows.len, err);
+}
+
+void sb_summary_free(sb_summary *sum) {
+    free(sum->path);
+    sb_csv_free(&sum->rows);
+    memset(sum, 0, sizeof *sum);
+}
+
+bool sb_report_write_columns(const char *dir, sb_err *err) {
+    sb_csv c = {0};
+    sb_report_columns(&c);
+    char path[4200];
+    snprintf(path, sizeof path, "%s/columns.csv", dir);
+    bool ok = sb_write_file_atomic(path, c.buf, c.len, err);
+    sb_csv_free(&c);
+    return ok;
 }

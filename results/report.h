@@ -1,4 +1,12 @@
-/* report.h - the CSV contract: per-frame rows and the per-run summary row. */
+/* report.h - the CSV contract: one table of per-frame columns and one of
+ * per-run (summary) columns, each row a name and a getter. Headers, rows,
+ * `compare`'s metric lookup and `shadowbench columns` (columns.csv beside
+ * every results set) are all produced from these two tables: adding a column
+ * is adding one row to report.c.
+ *
+ * A per-run column is either a scalar (run_id, load_ms, ...) or a series: a
+ * per-frame column summarised by a set of statistics, named
+ * <frame column>_<statistic> (gpu_ms_median, err_rate_p95, ...). */
 #pragma once
 #include "csv.h"
 #include "error.h"
@@ -14,9 +22,6 @@ typedef struct sb_frame_rec {
     sb_error_metrics err;
 } sb_frame_rec;
 
-void sb_report_frame_header(sb_csv *c);
-void sb_report_frame_row(sb_csv *c, const sb_frame_rec *r, const sb_stage_times *t, unsigned stages);
-
 typedef struct sb_run_info {
     const char *run_id, *scene, *path, *technique, *params, *backend, *renderer, *timing, *status, *reason;
     int run_index;              /* position in the expanded matrix */
@@ -28,13 +33,111 @@ typedef struct sb_run_info {
     double ray_ms;
 } sb_run_info;
 
+/* A cell of a row: empty, an integer, a number (%.6g) or text. */
+typedef enum sb_cell_kind { SB_CELL_EMPTY, SB_CELL_INT, SB_CELL_NUM, SB_CELL_STR } sb_cell_kind;
+typedef struct sb_cell {
+    sb_cell_kind kind;
+    long long i;
+    double num;
+    const char *str;
+} sb_cell;
+
+/* What a per-frame column reads. */
+typedef struct sb_frame_row {
+    const sb_frame_rec *rec;
+    const sb_stage_times *t;
+    unsigned stages;            /* the technique's SB_STAGE_BIT()s */
+} sb_frame_row;
+
+/* What a per-run column reads: the run and its n measured frames (none when
+ * it failed or was skipped). */
+typedef struct sb_run_row {
+    const sb_run_info *info;
+    const sb_frame_rec *recs;
+    const sb_stage_times *times;
+    int n;
+    unsigned stages;
+} sb_run_row;
+
+/* Statistics a series is summarised by (sb_stats). */
+enum {
+    SB_STAT_MEAN = 1u << 0, SB_STAT_MEDIAN = 1u << 1, SB_STAT_P95 = 1u << 2, SB_STAT_P99 = 1u << 3,
+    SB_STAT_STD = 1u << 4, SB_STAT_CI95 = 1u << 5,
+    SB_STATS_TIMING = 0x3f,
+};
+#define SB_STAT_COUNT 6
+extern const char *const sb_stat_names[SB_STAT_COUNT];   /* "mean", "median", ... in bit order */
+
+enum {
+    SB_COL_STAGE_TIME = 1u << 0,    /* a per-frame stage time (<stage>_ms): plots stack these */
+    SB_COL_DEFAULT_METRIC = 1u << 1 /* compared by default (`compare` with no --metric) */
+};
+
+typedef struct sb_frame_col {
+    const char *name;
+    sb_cell (*get)(const sb_frame_row *r, int arg);
+    int arg;
+    unsigned flags;
+    const char *doc;
+} sb_frame_col;
+
+typedef struct sb_run_col {
+    const char *name;           /* a scalar column, or the frame column a series summarises */
+    sb_cell (*get)(const sb_run_row *r, int arg);   /* NULL: a series */
+    int arg;
+    unsigned stats;             /* a series: SB_STAT_* bits */
+    unsigned flags;
+    const char *doc;
+} sb_run_col;
+
+extern const sb_frame_col sb_frame_cols[];
+extern const int sb_frame_col_count;
+extern const sb_run_col sb_run_cols[];
+extern const int sb_run_col_count;
+
+void sb_report_frame_header(sb_csv *c);
+void sb_report_frame_row(sb_csv *c, const sb_frame_rec *r, const sb_stage_times *t, unsigned stages);
 void sb_report_summary_header(sb_csv *c);
 /* recs/times: the n measured frames (NULL for a run that failed or was skipped). */
 void sb_report_summary_row(sb_csv *c, const sb_run_info *info, unsigned stages, const sb_frame_rec *recs,
                            const sb_stage_times *times, int n);
+/* The column table as CSV (scope, name, kind, statistics, flags, doc): `shadowbench columns`, columns.csv. */
+void sb_report_columns(sb_csv *c);
+
+/* How a summary metric is read (compare): a series with a median and a
+ * confidence interval is a timing (centre: median; separation: mean ± ci95),
+ * another series its mean, else the scalar column itself. Returns false for a
+ * name the table does not have. */
+typedef struct sb_metric_cols {
+    char center[96], mean[96], ci[96];   /* column names; ci empty when the metric has none */
+} sb_metric_cols;
+bool sb_report_metric(const char *name, sb_metric_cols *out);
+/* The metrics `compare` uses by default, in table order; returns how many (<= max). */
+int sb_report_default_metrics(const char **out, int max);
+
 /* Relative half-width (percent) of the 95% confidence interval of the mean
  * gpu_ms. With two or more complete repetitions of the path (per_repeat frames
  * each) the samples are the repetitions' means: that measures how well the
  * path's time is known, not how much frames differ along the path. With one,
  * the samples are the frames. */
 double sb_report_gpu_ci_pct(const sb_stage_times *times, int n, int per_repeat);
+
+/* The summary rows of one invocation (summary.csv), rewritten atomically
+ * after every run. */
+typedef struct sb_summary {
+    char *path;
+    sb_csv rows;
+    int count, failed, skipped;
+} sb_summary;
+
+void sb_summary_open(sb_summary *sum, const char *path);
+/* Records one run: its row, counted by info->status ("ok", "failed",
+ * "skipped"); recs/times as sb_report_summary_row. */
+void sb_summary_add_outcome(sb_summary *sum, const sb_run_info *info, unsigned stages, const sb_frame_rec *recs,
+                            const sb_stage_times *times, int n);
+/* A row kept as it was from an earlier summary (resume), counted by its status. */
+void sb_summary_add_line(sb_summary *sum, const char *line, const char *status);
+bool sb_summary_flush(sb_summary *sum, sb_err *err);
+void sb_summary_free(sb_summary *sum);
+/* Writes DIR/columns.csv (sb_report_columns): a results set describes its own columns. */
+bool sb_report_write_columns(const char *dir, sb_err *err);

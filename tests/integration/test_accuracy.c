@@ -182,7 +182,7 @@ static void test_evaluation_does_not_touch_timed_frames(void **st) {
             print_message("%s error-every %d: %lu readbacks in timed frames\n", specs[sp], e ? 2 : 0, g_timed_reads);
             assert_int_equal(g_timed_reads, 0);
             char run_id[17], path[256];
-            sb_run_id(&g_towers, &runs[0], run_id);
+            sb_session_run_id(&g_towers, &runs[0], run_id);
             snprintf(path, sizeof path, "%s/%s.csv", out, run_id);
             csv[e] = sb_read_file(path, NULL, &err);
             assert_non_null(csv[e]);
