@@ -49,34 +49,95 @@ static bool line_applies(const run_line *rl, const char *scene) {
 /* A rough cost model: frames x (geometry per pass x passes + shadow-map fill). */
 static double run_cost(const sb_batch *b, const sb_batch_scene *sc, const sb_run_spec *spec) {
     double tris = (double)sb_scene_triangles(&sc->scene);
-    double cascades = sb_param_num(&spec->params, "cascades");
-    double res = sb_param_num(&spec->params, "res");
-    if (isnan(cascades)) cascades = isnan(res) ? 0 : 1;
-    if (isnan(res)) res = 0;
+    double cascades, res;
+    bool maps = sb_params_find(&spec->params, "res", &res);
+    if (!sb_params_find(&spec->params, "cascades", &cascades)) cascades = maps ? 1 : 0;
+    if (!maps) res = 0;
     double pixels = (double)b->opts.width * b->opts.height;
     double per_frame = tris * (1 + cascades) + cascades * res * res * 0.25 + pixels;
     if (!strcmp(spec->tech->name, "raycast")) per_frame += pixels * 20;
     return per_frame * (b->opts.frames + b->opts.warmup) * (b->opts.error_every > 0 ? 1.2 : 1.0);
 }
 
-static bool batch_build(sb_batch *b, const char *file, char *text, const sb_run_opts *base,
-                        const char *const *cli_opts, int ncli, bool load, sb_err *err) {
-    memset(b, 0, sizeof *b);
-    b->file = sb_strdup(file);
-    const char *slash = strrchr(file, '/');
-    b->name = sb_strdup(slash ? slash + 1 : file);
-    char *dot = strrchr(b->name, '.');
-    if (dot && dot != b->name) *dot = 0;
-    b->opts = *base;
-    run_line *lines = NULL;
-    int nlines = 0;
+/* The parse's state: the batch, its run lines, where we are. */
+typedef struct parse {
+    sb_batch *b;
+    const char *file;
+    int line;
+    run_line *lines;
+    int nlines;
+    sb_err *err;
+} parse;
+
+static bool scene_line(parse *ps, char **tok, int n) {
+    sb_batch *b = ps->b;
+    if (n < 3 || n > 4) return sb_fail(ps->err, "%s:%d: expected 'scene NAME FILE [PATH-NAME]'", ps->file, ps->line);
+    if (find_scene(b, tok[1]) >= 0) return sb_fail(ps->err, "%s:%d: scene '%s' is defined twice", ps->file, ps->line, tok[1]);
+    b->scenes = sb_xrealloc(b->scenes, (size_t)(b->nscenes + 1) * sizeof *b->scenes);
+    sb_batch_scene *sc = &b->scenes[b->nscenes++];
+    memset(sc, 0, sizeof *sc);
+    sc->name = sb_strdup(tok[1]);
+    sc->file = sb_strdup(tok[2]);
+    sc->path_name = n == 4 ? sb_strdup(tok[3]) : NULL;
+    sc->line = ps->line;
+    return true;
+}
+
+static bool path_line(parse *ps, char **tok, int n) {
+    sb_batch *b = ps->b;
+    if (n != 3) return sb_fail(ps->err, "%s:%d: expected 'path NAME FILE'", ps->file, ps->line);
+    if (find_path(b, tok[1]) >= 0) return sb_fail(ps->err, "%s:%d: path '%s' is defined twice", ps->file, ps->line, tok[1]);
+    b->paths = sb_xrealloc(b->paths, (size_t)(b->npaths + 1) * sizeof *b->paths);
+    b->paths[b->npaths++] = (sb_batch_path){sb_strdup(tok[1]), sb_strdup(tok[2]), ps->line};
+    return true;
+}
+
+static bool defaults_line(parse *ps, char **tok, int n) {
+    for (int i = 1; i < n; i++) {
+        if (!strcmp(tok[i], "--progress") || !strcmp(tok[i], "--quiet")) continue;
+        if (!strcmp(tok[i], "--allow-external-uris")) {
+            ps->b->opts.allow_external_uris = true;
+            continue;
+        }
+        sb_err e;
+        int rc = sb_run_opts_set(&ps->b->opts, tok[i], i + 1 < n ? tok[i + 1] : NULL, &e);
+        if (rc < 0) return sb_fail(ps->err, "%s:%d: %s", ps->file, ps->line, e.msg);
+        if (rc == 0) return sb_fail(ps->err, "%s:%d: '%s' is not a run option", ps->file, ps->line, tok[i]);
+        i++;
+    }
+    return true;
+}
+
+/* [@SCENE,...] SPEC...: every spec validated now, nothing renders before the whole file is known good. */
+static bool run_line_of(parse *ps, char **tok, int n) {
+    run_line rl = {0};
+    rl.line = ps->line;
+    int first = 0;
     bool ok = true;
-    int lineno = 0;
-    char *save = NULL;
-    /* strtok_r over lines keeps empty lines out, so count them by hand */
+    if (tok[0][0] == '@') {
+        rl.only = sb_strdup(tok[0] + 1);
+        first = 1;
+        if (n == 1) ok = sb_fail(ps->err, "%s:%d: '@%s' with no technique spec", ps->file, ps->line, rl.only);
+    }
+    for (int i = first; ok && i < n && rl.nspecs < 32; i++) {
+        sb_run_spec *tmp = NULL;
+        int nt = 0;
+        char where[1100];
+        snprintf(where, sizeof where, "%s:%d", ps->file, ps->line);
+        ok = sb_spec_expand(tok[i], where, &tmp, &nt, ps->err);
+        free(tmp);
+        if (ok) rl.specs[rl.nspecs++] = sb_strdup(tok[i]);
+    }
+    ps->lines = sb_xrealloc(ps->lines, (size_t)(ps->nlines + 1) * sizeof *ps->lines);
+    ps->lines[ps->nlines++] = rl;
+    return ok;
+}
+
+/* Every line of the text, in order (empty lines counted for the line numbers). */
+static bool parse_lines(parse *ps, char *text) {
     char *p = text;
-    while (ok && p && *p) {
-        lineno++;
+    while (p && *p) {
+        ps->line++;
         char *eol = strchr(p, '\n');
         if (eol) *eol = 0;
         char *line = p;
@@ -84,117 +145,73 @@ static bool batch_build(sb_batch *b, const char *file, char *text, const sb_run_
         char *tok[64];
         int n = tokens(line, tok, 64);
         if (!n) continue;
-        if (!strcmp(tok[0], "scene")) {
-            if (n < 3 || n > 4) {
-                ok = sb_fail(err, "%s:%d: expected 'scene NAME FILE [PATH-NAME]'", file, lineno);
-            } else if (find_scene(b, tok[1]) >= 0) {
-                ok = sb_fail(err, "%s:%d: scene '%s' is defined twice", file, lineno, tok[1]);
-            } else {
-                b->scenes = realloc(b->scenes, (size_t)(b->nscenes + 1) * sizeof *b->scenes);
-                sb_batch_scene *sc = &b->scenes[b->nscenes++];
-                memset(sc, 0, sizeof *sc);
-                sc->name = sb_strdup(tok[1]);
-                sc->file = sb_strdup(tok[2]);
-                sc->path_name = n == 4 ? sb_strdup(tok[3]) : NULL;
-                sc->line = lineno;
-            }
-        } else if (!strcmp(tok[0], "path")) {
-            if (n != 3) {
-                ok = sb_fail(err, "%s:%d: expected 'path NAME FILE'", file, lineno);
-            } else if (find_path(b, tok[1]) >= 0) {
-                ok = sb_fail(err, "%s:%d: path '%s' is defined twice", file, lineno, tok[1]);
-            } else {
-                b->paths = realloc(b->paths, (size_t)(b->npaths + 1) * sizeof *b->paths);
-                b->paths[b->npaths++] = (sb_batch_path){sb_strdup(tok[1]), sb_strdup(tok[2]), lineno};
-            }
-        } else if (!strcmp(tok[0], "defaults")) {
-            for (int i = 1; ok && i < n; i++) {
-                if (!strcmp(tok[i], "--progress") || !strcmp(tok[i], "--quiet")) continue;
-                if (!strcmp(tok[i], "--allow-external-uris")) {
-                    b->opts.allow_external_uris = true;
-                    continue;
-                }
-                sb_err e;
-                int rc = sb_run_opts_set(&b->opts, tok[i], i + 1 < n ? tok[i + 1] : NULL, &e);
-                if (rc < 0) ok = sb_fail(err, "%s:%d: %s", file, lineno, e.msg);
-                else if (rc == 0) ok = sb_fail(err, "%s:%d: '%s' is not a run option", file, lineno, tok[i]);
-                else i++;
-            }
-        } else {
-            run_line rl = {0};
-            rl.line = lineno;
-            int first = 0;
-            if (tok[0][0] == '@') {
-                rl.only = sb_strdup(tok[0] + 1);
-                first = 1;
-                if (n == 1) ok = sb_fail(err, "%s:%d: '@%s' with no technique spec", file, lineno, rl.only);
-            }
-            for (int i = first; ok && i < n && rl.nspecs < 32; i++) {
-                /* validate now: nothing renders before the whole file is known good */
-                sb_run_spec *tmp = NULL;
-                int nt = 0;
-                char where[1100];
-                snprintf(where, sizeof where, "%s:%d", file, lineno);
-                ok = sb_spec_expand(tok[i], where, &tmp, &nt, err);
-                free(tmp);
-                if (ok) rl.specs[rl.nspecs++] = sb_strdup(tok[i]);
-            }
-            lines = realloc(lines, (size_t)(nlines + 1) * sizeof *lines);
-            lines[nlines++] = rl;
-        }
+        bool ok = !strcmp(tok[0], "scene")      ? scene_line(ps, tok, n)
+                  : !strcmp(tok[0], "path")     ? path_line(ps, tok, n)
+                  : !strcmp(tok[0], "defaults") ? defaults_line(ps, tok, n)
+                                                : run_line_of(ps, tok, n);
+        if (!ok) return false;
     }
-    (void)save;
-    /* command-line options win over the file's defaults */
-    for (int i = 0; ok && i < ncli; i += 2) {
+    return true;
+}
+
+/* Names the file refers to exist; the command line's options beat the file's. */
+static bool check_references(parse *ps, const char *const *cli_opts, int ncli, bool load) {
+    sb_batch *b = ps->b;
+    for (int i = 0; i < ncli; i += 2) {
         sb_err e;
-        if (sb_run_opts_set(&b->opts, cli_opts[i], cli_opts[i + 1], &e) < 0) ok = sb_fail(err, "%s", e.msg);
+        if (sb_run_opts_set(&b->opts, cli_opts[i], cli_opts[i + 1], &e) < 0) return sb_fail(ps->err, "%s", e.msg);
     }
-    if (ok && !b->nscenes) ok = sb_fail(err, "%s: no 'scene' lines", file);
-    if (ok && !nlines) ok = sb_fail(err, "%s: no run lines (technique specs)", file);
-    for (int l = 0; ok && l < nlines; l++)
-        if (lines[l].only) {
+    if (!b->nscenes) return sb_fail(ps->err, "%s: no 'scene' lines", ps->file);
+    if (!ps->nlines) return sb_fail(ps->err, "%s: no run lines (technique specs)", ps->file);
+    for (int l = 0; l < ps->nlines; l++)
+        if (ps->lines[l].only) {
             char buf[512];
-            snprintf(buf, sizeof buf, "%s", lines[l].only);
-            for (char *t = strtok(buf, ","); ok && t; t = strtok(NULL, ","))
-                if (find_scene(b, t) < 0) ok = sb_fail(err, "%s:%d: no scene named '%s'", file, lines[l].line, t);
+            snprintf(buf, sizeof buf, "%s", ps->lines[l].only);
+            for (char *t = strtok(buf, ","); t; t = strtok(NULL, ","))
+                if (find_scene(b, t) < 0)
+                    return sb_fail(ps->err, "%s:%d: no scene named '%s'", ps->file, ps->lines[l].line, t);
         }
-    for (int i = 0; ok && !load && i < b->nscenes; i++) {
+    for (int i = 0; !load && i < b->nscenes; i++) {
         const char *pname = b->scenes[i].path_name;
         if (pname && find_path(b, pname) < 0)
-            ok = sb_fail(err, "%s:%d: no path named '%s'", file, b->scenes[i].line, pname);
+            return sb_fail(ps->err, "%s:%d: no path named '%s'", ps->file, b->scenes[i].line, pname);
     }
-    /* scenes and paths (no GL): contents decide run ids, sizes decide costs */
-    for (int i = 0; ok && load && i < b->nscenes; i++) {
+    return true;
+}
+
+/* Scenes and paths (no GL): contents decide run ids, sizes decide costs. Each
+ * scene is loaded here once; the session takes it over when its runs come. */
+static bool load_scenes(parse *ps) {
+    sb_batch *b = ps->b;
+    for (int i = 0; i < b->nscenes; i++) {
         sb_batch_scene *sc = &b->scenes[i];
         sb_err e;
         sb_scene_opts so = {.allow_external_uris = b->opts.allow_external_uris};
-        if (!sb_scene_load(&sc->scene, sc->file, &so, &e)) {
-            ok = sb_fail(err, "%s:%d: %s", file, sc->line, e.msg);
-            break;
-        }
+        if (!sb_scene_load(&sc->scene, sc->file, &so, &e)) return sb_fail(ps->err, "%s:%d: %s", ps->file, sc->line, e.msg);
         const char *pname = sc->path_name ? sc->path_name : sc->name;
         int pi = find_path(b, pname);
-        if (sc->path_name && pi < 0) {
-            ok = sb_fail(err, "%s:%d: no path named '%s'", file, sc->line, sc->path_name);
-            break;
-        }
+        if (sc->path_name && pi < 0)
+            return sb_fail(ps->err, "%s:%d: no path named '%s'", ps->file, sc->line, sc->path_name);
         snprintf(sc->path_file, sizeof sc->path_file, "%s", pi >= 0 ? b->paths[pi].file : "auto");
         snprintf(sc->path_label, sizeof sc->path_label, "%s", pi >= 0 ? b->paths[pi].name : "auto");
-        if (!sb_path_load(&sc->path, sc->path_file, &sc->scene, &e)) {
-            ok = sb_fail(err, "%s:%d: %s", file, pi >= 0 ? b->paths[pi].line : sc->line, e.msg);
-            break;
-        }
+        if (!sb_path_load(&sc->path, sc->path_file, &sc->scene, &e))
+            return sb_fail(ps->err, "%s:%d: %s", ps->file, pi >= 0 ? b->paths[pi].line : sc->line, e.msg);
     }
-    /* the matrix */
-    for (int i = 0; ok && load && i < b->nscenes; i++) {
+    return true;
+}
+
+/* The matrix: scenes (in file order) x run lines x each line's grid. */
+static void expand_matrix(parse *ps) {
+    sb_batch *b = ps->b;
+    for (int i = 0; i < b->nscenes; i++) {
         sb_batch_scene *sc = &b->scenes[i];
-        for (int l = 0; l < nlines; l++) {
-            if (!line_applies(&lines[l], sc->name)) continue;
-            for (int k = 0; k < lines[l].nspecs; k++) {
+        for (int l = 0; l < ps->nlines; l++) {
+            if (!line_applies(&ps->lines[l], sc->name)) continue;
+            for (int k = 0; k < ps->lines[l].nspecs; k++) {
                 sb_run_spec *rs = NULL;
                 int nr = 0;
-                sb_spec_expand(lines[l].specs[k], NULL, &rs, &nr, err);
-                b->runs = realloc(b->runs, (size_t)(b->nruns + nr) * sizeof *b->runs);
+                sb_spec_expand(ps->lines[l].specs[k], NULL, &rs, &nr, ps->err);
+                b->runs = sb_xrealloc(b->runs, (size_t)(b->nruns + nr) * sizeof *b->runs);
                 for (int r = 0; r < nr; r++) {
                     sb_batch_run *br = &b->runs[b->nruns];
                     br->index = b->nruns++;
@@ -207,11 +224,25 @@ static bool batch_build(sb_batch *b, const char *file, char *text, const sb_run_
             }
         }
     }
-    for (int l = 0; l < nlines; l++) {
-        free(lines[l].only);
-        for (int k = 0; k < lines[l].nspecs; k++) free(lines[l].specs[k]);
+}
+
+static bool batch_build(sb_batch *b, const char *file, char *text, const sb_run_opts *base,
+                        const char *const *cli_opts, int ncli, bool load, sb_err *err) {
+    memset(b, 0, sizeof *b);
+    b->file = sb_strdup(file);
+    const char *slash = strrchr(file, '/');
+    b->name = sb_strdup(slash ? slash + 1 : file);
+    char *dot = strrchr(b->name, '.');
+    if (dot && dot != b->name) *dot = 0;
+    b->opts = *base;
+    parse ps = {.b = b, .file = file, .err = err};
+    bool ok = parse_lines(&ps, text) && check_references(&ps, cli_opts, ncli, load) && (!load || load_scenes(&ps));
+    if (ok && load) expand_matrix(&ps);
+    for (int l = 0; l < ps.nlines; l++) {
+        free(ps.lines[l].only);
+        for (int k = 0; k < ps.lines[l].nspecs; k++) free(ps.lines[l].specs[k]);
     }
-    free(lines);
+    free(ps.lines);
     if (!ok) sb_batch_free(b);
     return ok;
 }
@@ -256,26 +287,29 @@ void sb_batch_free(sb_batch *b) {
     memset(b, 0, sizeof *b);
 }
 
-static const sb_batch_run *g_runs;
+typedef struct {
+    double cost;
+    int index;
+} cost_key;
+
 static int by_cost(const void *a, const void *b) {
-    const sb_batch_run *x = &g_runs[*(const int *)a], *y = &g_runs[*(const int *)b];
+    const cost_key *x = a, *y = b;
     if (x->cost != y->cost) return x->cost > y->cost ? -1 : 1;
     return x->index - y->index;
 }
 
 void sb_batch_shard(const sb_batch *b, int shard, int nshards, bool *selected) {
     /* longest processing time first: the costliest run goes to the least loaded shard */
-    int *order = malloc(sizeof(int) * (size_t)(b->nruns ? b->nruns : 1));
-    double *load = calloc((size_t)nshards, sizeof(double));
-    for (int i = 0; i < b->nruns; i++) order[i] = i;
-    g_runs = b->runs;
-    qsort(order, (size_t)b->nruns, sizeof(int), by_cost);
+    cost_key *order = sb_xmalloc(sizeof *order * (size_t)(b->nruns ? b->nruns : 1));
+    double *load = sb_xcalloc((size_t)nshards, sizeof(double));
+    for (int i = 0; i < b->nruns; i++) order[i] = (cost_key){b->runs[i].cost, b->runs[i].index};
+    qsort(order, (size_t)b->nruns, sizeof *order, by_cost);
     for (int k = 0; k < b->nruns; k++) {
         int best = 0;
         for (int s = 1; s < nshards; s++)
             if (load[s] < load[best]) best = s;
-        load[best] += b->runs[order[k]].cost;
-        selected[order[k]] = best == shard - 1;
+        load[best] += order[k].cost;
+        selected[order[k].index] = best == shard - 1;
     }
     free(order);
     free(load);
@@ -419,7 +453,7 @@ int sb_batch_main(const sb_batch_cmd *cmd) {
         return 2;
     }
     int rc = 0, nsel = 0;
-    bool *selected = malloc((size_t)(b.nruns ? b.nruns : 1)), *done = calloc((size_t)(b.nruns ? b.nruns : 1), 1);
+    bool *selected = sb_xmalloc((size_t)(b.nruns ? b.nruns : 1)), *done = sb_xcalloc((size_t)(b.nruns ? b.nruns : 1), 1);
     memset(selected, 1, (size_t)(b.nruns ? b.nruns : 1));
     if (cmd->shard) {
         int si, sn;

@@ -5,6 +5,8 @@
 #include <stdbool.h>
 #include <stdlib.h>
 
+#include "util.h"
+
 bool sb_osmesa_open(void **ctx_out, void **buffer_out);
 void *sb_osmesa_proc(const char *name);
 void sb_osmesa_close(void *ctx, void *buffer);
@@ -18,7 +20,7 @@ bool sb_osmesa_open(void **ctx_out, void **buffer_out) {
     }
     if (!ctx) return false;
     /* the default framebuffer is a token 16x16; rendering goes to FBOs */
-    void *buffer = calloc(16 * 16, 4);
+    void *buffer = sb_xcalloc(16 * 16, 4);
     if (!OSMesaMakeCurrent(ctx, buffer, GL_UNSIGNED_BYTE, 16, 16)) {
         OSMesaDestroyContext(ctx);
         free(buffer);

@@ -4,16 +4,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "reference.h"
 #include "shaders.h"
 #include "timing.h"
-
-unsigned long sb_gpu_readbacks;
-
-void sb_gpu_read_pixels(int x, int y, int w, int h, GLenum format, GLenum type, void *out) {
-    sb_gpu_readbacks++;
-    glReadPixels(x, y, w, h, format, type, out);
-}
 
 bool sb_gl_check(const char *where, sb_err *err) {
     GLenum e = glGetError();
@@ -29,6 +21,10 @@ static GLuint compile(GLenum type, const char *label, const char *defines, const
                       sb_err *err) {
     const char *src[16];
     int k = 0;
+    if (n > 13) {
+        sb_fail(err, "%s: %d shader parts, at most 13", label, n);
+        return 0;
+    }
     src[k++] = "#version 430 core\n";
     src[k++] = defines ? defines : "";
     src[k++] = sb_shader_common_glsl;
@@ -80,11 +76,14 @@ GLuint sb_gpu_program(const char *label, const char *defines, const char *const 
     return sb_gpu_link(label, defines, st, 2, err);
 }
 
-bool sb_final_prog_create(sb_final_prog *fp, const char *label, const char *vis_glsl, const char *defines,
-                          sb_err *err) {
+bool sb_final_prog_create_parts(sb_final_prog *fp, const char *label, const char *const *vis_parts, int nvis,
+                                const char *defines, sb_err *err) {
     const char *vs[] = {sb_shader_scene_vert};
-    const char *fs[] = {vis_glsl, sb_shader_final_frag};
-    fp->prog = sb_gpu_program(label, defines, vs, 1, fs, 2, err);
+    const char *fs[8];
+    int n = 0;
+    for (int i = 0; i < nvis && n < 7; i++) fs[n++] = vis_parts[i];
+    fs[n++] = sb_shader_final_frag;
+    fp->prog = sb_gpu_program(label, defines, vs, 1, fs, n, err);
     if (!fp->prog) return false;
     fp->u_view = glGetUniformLocation(fp->prog, "u_view");
     fp->u_proj = glGetUniformLocation(fp->prog, "u_proj");
@@ -92,6 +91,11 @@ bool sb_final_prog_create(sb_final_prog *fp, const char *label, const char *vis_
     fp->u_color = glGetUniformLocation(fp->prog, "u_color");
     fp->u_eval = glGetUniformLocation(fp->prog, "sb_eval");
     return true;
+}
+
+bool sb_final_prog_create(sb_final_prog *fp, const char *label, const char *vis_glsl, const char *defines,
+                          sb_err *err) {
+    return sb_final_prog_create_parts(fp, label, &vis_glsl, 1, defines, err);
 }
 
 void sb_final_prog_free(sb_final_prog *fp) {
@@ -116,7 +120,6 @@ bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int
     g->width = w;
     g->height = h;
     g->sun = sb_v3_norm(sun);
-    g->test_bias_sign = 1;
     glGenVertexArrays(1, &g->vao);
     glBindVertexArray(g->vao);
     glGenBuffers(1, &g->vbo);
@@ -158,7 +161,6 @@ bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int
     }
     g->zpass_u_view = glGetUniformLocation(g->zpass_prog, "u_view");
     g->zpass_u_proj = glGetUniformLocation(g->zpass_prog, "u_proj");
-    g->scratch = malloc((s->draw_count + 1) * sizeof(uint32_t));
     if (!sb_gl_check("creating GPU resources", err)) {
         sb_gpu_free(g);
         return false;
@@ -168,33 +170,13 @@ bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int
 
 void sb_gpu_free(sb_gpu *g) {
     if (g->zpass_prog) glDeleteProgram(g->zpass_prog);
-    free(g->scratch);
     if (g->fbo) glDeleteFramebuffers(1, &g->fbo);
     GLuint tex[] = {g->color_tex, g->vis_tex, g->depth_tex, g->pos_tex, g->aux_tex};
     glDeleteTextures(5, tex);
-    if (g->ref) {
-        sb_reference_free(g->ref);
-        free(g->ref);
-    }
     if (g->vbo) glDeleteBuffers(1, &g->vbo);
     if (g->ibo) glDeleteBuffers(1, &g->ibo);
     if (g->vao) glDeleteVertexArrays(1, &g->vao);
     memset(g, 0, sizeof *g);
-}
-
-void sb_frustum_planes(sb_m4 m, double p[6][4]) {
-    const double *a = m.m;
-    for (int i = 0; i < 3; i++) {
-        for (int k = 0; k < 4; k++) {
-            p[2 * i][k] = a[k * 4 + 3] + a[k * 4 + i];
-            p[2 * i + 1][k] = a[k * 4 + 3] - a[k * 4 + i];
-        }
-    }
-    for (int i = 0; i < 6; i++) {
-        double l = sqrt(p[i][0] * p[i][0] + p[i][1] * p[i][1] + p[i][2] * p[i][2]);
-        if (l > 0)
-            for (int k = 0; k < 4; k++) p[i][k] /= l;
-    }
 }
 
 GLuint sb_shadow_texture(GLenum target, GLenum format, int res, int layers, bool linear) {
@@ -213,7 +195,7 @@ GLuint sb_shadow_texture(GLenum target, GLenum format, int res, int layers, bool
     return tex;
 }
 
-void sb_frame_setup(sb_frame *f, sb_gpu *g, const sb_camera *cam) {
+void sb_frame_setup(sb_frame *f, const sb_gpu *g, const sb_camera *cam) {
     memset(&f->counters, 0, sizeof f->counters);
     f->gpu = g;
     f->cam = *cam;
@@ -222,10 +204,24 @@ void sb_frame_setup(sb_frame *f, sb_gpu *g, const sb_camera *cam) {
     f->proj = sb_m4_perspective(cam->fov_deg * SB_PI / 180, cam->aspect, cam->znear, cam->zfar);
     f->view_proj = sb_m4_mul(f->proj, f->view);
     sb_frustum_planes(f->view_proj, f->frustum);
-    g->shade_light[0] = g->sun.x;
-    g->shade_light[1] = g->sun.y;
-    g->shade_light[2] = g->sun.z;
-    g->shade_light[3] = 0;
+    f->shade_light[0] = g->sun.x;
+    f->shade_light[1] = g->sun.y;
+    f->shade_light[2] = g->sun.z;
+    f->shade_light[3] = 0;
+}
+
+bool sb_lamp_supported(const sb_gpu *g, int light, const char *technique, sb_err *why) {
+    int k = 0;
+    if (!sb_scene_point_light(g->scene, light, &k))
+        return sb_fail(why, "%s:light=%d: the scene has %d point or spot light(s)", technique, light, k);
+    return true;
+}
+
+void sb_frame_shade_point(sb_frame *f, sb_v3 pos) {
+    f->shade_light[0] = pos.x;
+    f->shade_light[1] = pos.y;
+    f->shade_light[2] = pos.z;
+    f->shade_light[3] = 1;
 }
 
 void sb_stage_begin(sb_frame *f, sb_stage s) {
@@ -262,7 +258,7 @@ void sb_set_camera_uniforms(const sb_frame *f, GLint u_view, GLint u_proj) {
 }
 
 /* The camera's render target with depth testing and back-face culling. */
-static void bind_camera_target(sb_gpu *g, GLenum depth_func, bool depth_write) {
+static void bind_camera_target(const sb_gpu *g, GLenum depth_func, bool depth_write) {
     glBindFramebuffer(GL_FRAMEBUFFER, g->fbo);
     glViewport(0, 0, g->width, g->height);
     glEnable(GL_DEPTH_TEST);
@@ -273,7 +269,7 @@ static void bind_camera_target(sb_gpu *g, GLenum depth_func, bool depth_write) {
 }
 
 void sb_zpass(sb_frame *f) {
-    sb_gpu *g = f->gpu;
+    const sb_gpu *g = f->gpu;
     bind_camera_target(g, GL_LESS, true);
     glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
     glStencilMask(0xff);
@@ -282,25 +278,24 @@ void sb_zpass(sb_frame *f) {
     glUseProgram(g->zpass_prog);
     sb_set_camera_uniforms(f, g->zpass_u_view, g->zpass_u_proj);
     glBindVertexArray(g->vao);
-    uint32_t n = sb_bvh_collect(g->scene, (const double(*)[4])f->frustum, 6, g->scratch);
-    for (uint32_t i = 0; i < n; i++) sb_submit(f, g->scratch[i], 1);
+    uint32_t n = sb_bvh_collect(g->scene, (const double(*)[4])f->frustum, 6, f->scratch);
+    for (uint32_t i = 0; i < n; i++) sb_submit(f, f->scratch[i], 1);
     glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
     glDisable(GL_CULL_FACE);
 }
 
-static void final_targets(sb_gpu *g, bool reuse_depth) {
-    bind_camera_target(g, reuse_depth ? GL_LEQUAL : GL_LESS, !reuse_depth);
+static void final_targets(const sb_frame *f, bool reuse_depth) {
+    bind_camera_target(f->gpu, reuse_depth ? GL_LEQUAL : GL_LESS, !reuse_depth);
     const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3};
-    glDrawBuffers(g->eval ? 4 : 2, bufs);
+    glDrawBuffers(f->eval ? 4 : 2, bufs);
 }
 
 void sb_final_pass(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
-    sb_gpu *g = f->gpu;
-    final_targets(g, reuse_depth);
+    final_targets(f, reuse_depth);
     const float sky[4] = {0.55f, 0.7f, 0.9f, 1.0f}, one[4] = {1, 1, 1, 1}, none[4] = {0, 0, 0, -1};
     glClearBufferfv(GL_COLOR, 0, sky);
     glClearBufferfv(GL_COLOR, 1, one);
-    if (g->eval) {
+    if (f->eval) {
         glClearBufferfv(GL_COLOR, 2, none);
         glClearBufferfv(GL_COLOR, 3, none);
     }
@@ -309,35 +304,35 @@ void sb_final_pass(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
 }
 
 void sb_final_draw(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
-    sb_gpu *g = f->gpu;
-    final_targets(g, reuse_depth);
+    const sb_gpu *g = f->gpu;
+    final_targets(f, reuse_depth);
     glUseProgram(fp->prog);
     sb_set_camera_uniforms(f, fp->u_view, fp->u_proj);
-    glUniform4f(fp->u_light, (float)g->shade_light[0], (float)g->shade_light[1], (float)g->shade_light[2],
-                (float)g->shade_light[3]);
-    glUniform1i(fp->u_eval, g->eval);
+    glUniform4f(fp->u_light, (float)f->shade_light[0], (float)f->shade_light[1], (float)f->shade_light[2],
+                (float)f->shade_light[3]);
+    glUniform1i(fp->u_eval, f->eval);
     glBindVertexArray(g->vao);
-    uint32_t n = sb_bvh_collect(g->scene, (const double(*)[4])f->frustum, 6, g->scratch);
+    uint32_t n = sb_bvh_collect(g->scene, (const double(*)[4])f->frustum, 6, f->scratch);
     for (uint32_t i = 0; i < n; i++) {
-        const sb_draw *dr = &g->scene->draws[g->scratch[i]];
+        const sb_draw *dr = &g->scene->draws[f->scratch[i]];
         if (fp->u_color >= 0) glUniform4fv(fp->u_color, 1, dr->color);
-        sb_submit(f, g->scratch[i], 1);
+        sb_submit(f, f->scratch[i], 1);
     }
     glDisable(GL_CULL_FACE);
     glDepthMask(GL_TRUE);
 }
 
-void sb_gpu_readback(sb_gpu *g, float *depth, unsigned char *vis, unsigned char *rgba) {
+void sb_gpu_readback(const sb_gpu *g, float *depth, unsigned char *vis, unsigned char *rgba) {
     glBindFramebuffer(GL_READ_FRAMEBUFFER, g->fbo);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
-    if (depth) sb_gpu_read_pixels(0, 0, g->width, g->height, GL_DEPTH_COMPONENT, GL_FLOAT, depth);
+    if (depth) glReadPixels(0, 0, g->width, g->height, GL_DEPTH_COMPONENT, GL_FLOAT, depth);
     if (vis) {
         glReadBuffer(GL_COLOR_ATTACHMENT1);
-        sb_gpu_read_pixels(0, 0, g->width, g->height, GL_RED, GL_UNSIGNED_BYTE, vis);
+        glReadPixels(0, 0, g->width, g->height, GL_RED, GL_UNSIGNED_BYTE, vis);
     }
     if (rgba) {
         glReadBuffer(GL_COLOR_ATTACHMENT0);
-        sb_gpu_read_pixels(0, 0, g->width, g->height, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
+        glReadPixels(0, 0, g->width, g->height, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
     }
     glReadBuffer(GL_COLOR_ATTACHMENT0);
     glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
@@ -350,52 +345,19 @@ sb_v3 sb_frame_unproject(const sb_frame *f, double x, double y, double d) {
     return sb_v3_add(sb_m4_point(inv, ndc), f->gpu->scene->origin);
 }
 
-void sb_gpu_readback_eval(sb_gpu *g, float *pos, float *aux) {
+void sb_gpu_readback_eval(const sb_gpu *g, float *pos, float *aux) {
     glBindFramebuffer(GL_READ_FRAMEBUFFER, g->fbo);
     glPixelStorei(GL_PACK_ALIGNMENT, 4);
     if (pos) {
         glReadBuffer(GL_COLOR_ATTACHMENT2);
-        sb_gpu_read_pixels(0, 0, g->width, g->height, GL_RGBA, GL_FLOAT, pos);
+        glReadPixels(0, 0, g->width, g->height, GL_RGBA, GL_FLOAT, pos);
     }
     if (aux) {
         glReadBuffer(GL_COLOR_ATTACHMENT3);
-        sb_gpu_read_pixels(0, 0, g->width, g->height, GL_RGBA, GL_FLOAT, aux);
+        glReadPixels(0, 0, g->width, g->height, GL_RGBA, GL_FLOAT, aux);
     }
     glReadBuffer(GL_COLOR_ATTACHMENT0);
     glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
-}
-
-sb_reference *sb_gpu_reference(sb_gpu *g, sb_err *err) {
-    if (g->ref) return g->ref;
-    sb_reference *r = calloc(1, sizeof *r);
-    if (!sb_reference_build(r, g->scene, err)) {
-        free(r);
-        return NULL;
-    }
-    g->ref = r;
-    return r;
-}
-
-const sb_light *sb_point_light(const sb_scene *s, int index, int *count) {
-    const sb_light *found = NULL;
-    int k = 0;
-    for (uint32_t i = 0; i < s->light_count; i++)
-        if (s->lights[i].type != SB_LIGHT_DIRECTIONAL && k++ == index) found = &s->lights[i];
-    if (count) *count = k;
-    return found;
-}
-
-void sb_range_planes(sb_v3 c, double r, double p[6][4]) {
-    const double box[6][4] = {{1, 0, 0, -(c.x - r)}, {-1, 0, 0, c.x + r}, {0, 1, 0, -(c.y - r)},
-                              {0, -1, 0, c.y + r},   {0, 0, 1, -(c.z - r)}, {0, 0, -1, c.z + r}};
-    memcpy(p, box, sizeof box);
-}
-
-void sb_shade_point_light(sb_gpu *g, sb_v3 pos) {
-    g->shade_light[0] = pos.x;
-    g->shade_light[1] = pos.y;
-    g->shade_light[2] = pos.z;
-    g->shade_light[3] = 1;
 }
 
 void sb_final_pass_stencil(sb_frame *f, const sb_final_prog *fp, GLint u_lit, GLuint mask) {
@@ -410,4 +372,16 @@ void sb_final_pass_stencil(sb_frame *f, const sb_final_prog *fp, GLint u_lit, GL
     glUniform1f(u_lit, 0.0f);
     sb_final_draw(f, fp, true);     /* the same draws again, without clearing */
     glDisable(GL_STENCIL_TEST);
+}
+
+int sb_layered_resolve(const sb_context *ctx, int layered) {
+    if (layered == SB_LAYERED_ON) return ctx->has_vs_layer ? SB_LAYERED_VS : SB_LAYERED_GS;
+    return layered;
+}
+
+bool sb_layered_supported(const sb_context *ctx, int layered, const char *technique, sb_err *why) {
+    if (layered == SB_LAYERED_VS && !ctx->has_vs_layer)
+        return sb_fail(why, "%s:layered=vs needs GL_ARB_shader_viewport_layer_array, which %s lacks", technique,
+                       ctx->renderer);
+    return true;
 }

@@ -1,6 +1,7 @@
 /* gpu.h - GL entry points (glad 2, generated at build time) and the GPU side
  * of a run: scene buffers, the camera render target, shader programs, draw
- * submission with counting, and the per-frame context techniques receive. */
+ * submission with counting, what a technique's create receives (sb_run_ctx)
+ * and the per-frame state its frame function works on (sb_frame). */
 #pragma once
 #include "glad_gl.h"
 
@@ -10,18 +11,7 @@
 #include "technique.h"
 
 struct sb_timer;
-
-#define SB_MAX_CASCADES 8
-
-typedef struct sb_counters {
-    uint32_t draw_calls, shadow_draw_calls;         /* shadow: cascade and volumes stages */
-    uint32_t stage_draw_calls[SB_STAGE_COUNT];
-    uint64_t triangles, shadow_triangles;           /* triangles x instances submitted */
-    int cascades_rendered, cascades_skipped;
-    int warp_fallbacks;                             /* warped maps (psm, lispsm, tsm) that used the uniform fit */
-    int split_count;                                /* cascades whose far split is known this frame */
-    double splits[SB_MAX_CASCADES];                 /* view-space far distance of each cascade */
-} sb_counters;
+struct sb_reference;
 
 /* Shared program of the camera pass: scene.vert + final.frag + the technique's
  * visibility function. */
@@ -30,29 +20,33 @@ typedef struct sb_final_prog {
     GLint u_view, u_proj, u_light, u_color, u_eval;
 } sb_final_prog;
 
+/* The GPU side of a session: what every run and frame reads, never writes. */
 typedef struct sb_gpu {
     const sb_scene *scene;
     const sb_context *ctx;
     int width, height;
     sb_v3 sun;                          /* unit vector toward the sun */
     bool has_sun;                       /* the scene has one, or --sun gave one (else `sun` is a default) */
-    double shade_light[4];              /* the light the final pass shades and is evaluated against:
-                                           xyz toward the sun (w 0) or a point light's position (w 1);
-                                           the sun unless a technique sets it in its frame */
     GLuint vao, vbo, ibo;
     GLuint fbo, color_tex, vis_tex, depth_tex;
     GLuint pos_tex, aux_tex;            /* evaluation targets (position, normal + cascade) */
-    bool eval;                          /* evaluation pass: the final pass writes all four targets */
-    struct sb_reference *ref;           /* exact reference, built on first use (sb_gpu_reference) */
     GLuint zpass_prog;                  /* camera depth-only program (same vertex shader as the final pass) */
     GLint zpass_u_view, zpass_u_proj;
-    uint32_t *scratch;                  /* draw_count entries, for culling results */
-    int test_bias_sign;                 /* test hook: -1 flips shadow bias (deliberately broken) */
-    int run_frames;                     /* frames the current run will render (warm-up included) */
 } sb_gpu;
 
+/* What a technique's create gets: the session (read-only), the run's size,
+ * and what was prepared for it. */
+typedef struct sb_run_ctx {
+    const sb_gpu *gpu;
+    const sb_technique *tech;
+    int frames;                         /* frames the run will render, warm-up and repeats included */
+    void *scene_data;                   /* what the technique's load step made for this scene (or NULL) */
+    const struct sb_reference *reference;   /* the Embree reference, for SB_NEEDS_REFERENCE (else NULL) */
+} sb_run_ctx;
+
+/* One frame: the camera and everything that varies from frame to frame. */
 typedef struct sb_frame {
-    sb_gpu *gpu;
+    const sb_gpu *gpu;
     struct sb_timer *timer;
     int index;                          /* frame of the path */
     int seq;                            /* position in the run (warm-up frames first) */
@@ -60,13 +54,14 @@ typedef struct sb_frame {
     sb_camera cam;                      /* world space */
     sb_m4 view, proj, view_proj;        /* from origin-relative world */
     double frustum[6][4];               /* camera planes, origin-relative */
+    bool eval;                          /* evaluation pass: the final pass writes all four targets */
+    double shade_light[4];              /* the light the final pass shades and is evaluated against:
+                                           xyz toward the sun (w 0) or a point light's position (w 1);
+                                           the sun unless the technique shades a lamp (sb_frame_shade_point) */
+    uint32_t *scratch;                  /* draw_count entries, for culling results */
     sb_stage stage;                     /* the stage being recorded (for draw counts) */
     sb_counters counters;
 } sb_frame;
-
-/* Readbacks go through these so a test can assert none happen in timed frames. */
-extern unsigned long sb_gpu_readbacks;
-void sb_gpu_read_pixels(int x, int y, int w, int h, GLenum format, GLenum type, void *out);
 
 bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *scene, int width, int height, sb_v3 sun,
                  sb_err *err);
@@ -90,9 +85,13 @@ GLuint sb_gpu_program(const char *label, const char *defines, const char *const 
 /* The final-pass program with the technique's visibility GLSL. */
 bool sb_final_prog_create(sb_final_prog *fp, const char *label, const char *vis_glsl, const char *defines,
                           sb_err *err);
+/* The same with the visibility GLSL in parts (the cascade block, then the lookup). */
+bool sb_final_prog_create_parts(sb_final_prog *fp, const char *label, const char *const *vis_parts, int nvis,
+                                const char *defines, sb_err *err);
 void sb_final_prog_free(sb_final_prog *fp);
 
-void sb_frame_setup(sb_frame *f, sb_gpu *g, const sb_camera *cam);
+/* Sets the frame's camera, matrices and planes, counters to zero and the shaded light to the sun. */
+void sb_frame_setup(sb_frame *f, const sb_gpu *g, const sb_camera *cam);
 void sb_stage_begin(sb_frame *f, sb_stage s);
 void sb_stage_end(sb_frame *f, sb_stage s);
 /* Draws every camera-visible draw into the render target with fp (already
@@ -106,33 +105,32 @@ void sb_zpass(sb_frame *f);
 /* Issues one draw (instanced when instances > 1) with whatever program is
  * bound, and counts it in the current stage. */
 void sb_submit(sb_frame *f, uint32_t draw, int instances);
-/* Point lights: the index-th point or spot light of the scene (NULL if there is
- * none; *count says how many there are); the planes of the cube of half-size
- * r around c (casters within a lamp's range); and making the final pass shade
- * a point light. */
-const sb_light *sb_point_light(const sb_scene *s, int index, int *count);
-void sb_range_planes(sb_v3 c, double r, double planes[6][4]);
-void sb_shade_point_light(sb_gpu *g, sb_v3 pos);
+/* A point-light technique's light=K: false with the reason when the scene has no K-th point or spot light. */
+bool sb_lamp_supported(const sb_gpu *g, int light, const char *technique, sb_err *why);
+/* Makes the final pass shade (and the evaluation test) a point light at pos. */
+void sb_frame_shade_point(sb_frame *f, sb_v3 pos);
 /* The final pass split by the stencil (shadow volumes, planar shadows): where
  * (stencil & mask) == 0 it is drawn lit (u_lit 1), elsewhere in shadow (0).
  * Depth from the z-pass is reused; the stencil is left enabled off afterwards. */
 void sb_final_pass_stencil(sb_frame *f, const sb_final_prog *fp, GLint u_lit, GLuint mask);
+/* Layered shadow rendering (cascades, cube faces): per layer, routed by a
+ * geometry shader, by gl_Layer from the vertex shader, or the best available. */
+enum { SB_LAYERED_OFF, SB_LAYERED_GS, SB_LAYERED_VS, SB_LAYERED_ON };
+int sb_layered_resolve(const sb_context *ctx, int layered);
+/* layered=vs needs GL_ARB_shader_viewport_layer_array: false with the reason when the context lacks it. */
+bool sb_layered_supported(const sb_context *ctx, int layered, const char *technique, sb_err *why);
 /* Uploads the frame's camera view and projection (float) to the bound program. */
 void sb_set_camera_uniforms(const sb_frame *f, GLint u_view, GLint u_proj);
 /* Counts a draw issued by the technique itself (its own geometry). */
 void sb_count_draw(sb_frame *f, uint64_t triangles, int instances);
-/* Planes (inside: n·p + d >= 0) of a clip-space box of the matrix m (Gribb-Hartmann). */
-void sb_frustum_planes(sb_m4 m, double planes[6][4]);
 /* GL error check: returns false and fills err if one is pending. */
 bool sb_gl_check(const char *where, sb_err *err);
 
 /* Reads the last frame's targets (any pointer may be NULL): depth (float,
- * window [0,1]), visibility (1 byte, 255 lit) and colour (RGBA8). Counted as
- * readbacks; never called inside timed frames. Rows bottom-up as in GL. */
-void sb_gpu_readback(sb_gpu *g, float *depth, unsigned char *vis, unsigned char *rgba);
+ * window [0,1]), visibility (1 byte, 255 lit) and colour (RGBA8). Never
+ * called inside timed frames. Rows bottom-up as in GL. */
+void sb_gpu_readback(const sb_gpu *g, float *depth, unsigned char *vis, unsigned char *rgba);
 /* Reads the evaluation targets (4 floats a pixel each; either may be NULL). */
-void sb_gpu_readback_eval(sb_gpu *g, float *pos, float *aux);
-/* The scene's Embree reference, built once per session on first use (NULL on failure). */
-struct sb_reference *sb_gpu_reference(sb_gpu *g, sb_err *err);
+void sb_gpu_readback_eval(const sb_gpu *g, float *pos, float *aux);
 /* World-space (absolute, double) point of pixel (x, y) at window depth d. */
 sb_v3 sb_frame_unproject(const sb_frame *f, double x, double y, double d);

@@ -24,7 +24,8 @@ static void usage(FILE *f) {
             "                                         exit 1 when a metric regresses\n"
             "  shadowbench compare RESULTS --pair KEY=A,B   runs differing only in KEY\n"
             "  shadowbench merge DIR... --out DIR     merge shard outputs into one results set\n"
-            "  shadowbench stress [CASE [SPEC...]]    numerical-stability battery (--frames N, --size WxH)\n"
+            "  shadowbench stress [CASE|all [SPEC...]]  numerical-stability battery (--frames N, --size WxH);\n"
+            "                                         SPECs replace the battery's techniques\n"
             "  shadowbench techniques                 list techniques and their parameters\n"
             "  shadowbench columns                    the CSV columns (per frame and per run) as CSV\n"
             "  shadowbench info                       backends, GL renderer and features\n"
@@ -85,8 +86,8 @@ static int parse_cli(cli *c, int argc, char **argv) {
     c->threshold = 5;
     c->argc = argc;
     c->argv = argv;
-    c->pos = calloc((size_t)argc, sizeof *c->pos);           /* never more than the arguments */
-    c->run_opts = calloc((size_t)argc, sizeof *c->run_opts);
+    c->pos = sb_xcalloc((size_t)argc, sizeof *c->pos);           /* never more than the arguments */
+    c->run_opts = sb_xcalloc((size_t)argc, sizeof *c->run_opts);
     for (int i = 2; i < argc; i++) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -281,7 +282,6 @@ static int cmd_columns(void) {
 /* ---- stress ---- */
 
 static int cmd_stress(const cli *c) {
-    if (c->npos > 1) return bad("usage: shadowbench stress [CASE-SUBSTRING] [--frames N] [--size WxH]%s", "");
     sb_run_opts o = c->opts;
     bool frames_given = false, size_given = false;
     for (int i = 0; i < c->nrun_opts; i += 2) {
@@ -295,7 +295,8 @@ static int cmd_stress(const cli *c) {
     }
     o.warmup = 0;
     sb_err err;
-    int failures = sb_stress_run(&o, c->npos ? c->pos[0] : NULL, stdout, &err);
+    const char *only = c->npos && strcmp(c->pos[0], "all") ? c->pos[0] : NULL;   /* "all": every case */
+    int failures = sb_stress_run(&o, only, c->npos > 1 ? c->pos + 1 : NULL, c->npos > 1 ? c->npos - 1 : 0, stdout, &err);
     if (failures < 0) {
         fprintf(stderr, "shadowbench: %s\n", err.msg);
         return 2;
@@ -352,6 +353,19 @@ static int cmd_merge(const cli *c) {
     return 0;
 }
 
+static int dispatch(const cli *c, const char *cmd) {
+    if (!strcmp(cmd, "run")) return cmd_run(c);
+    if (!strcmp(cmd, "techniques")) return cmd_techniques();
+    if (!strcmp(cmd, "columns")) return cmd_columns();
+    if (!strcmp(cmd, "info")) return cmd_info(c);
+    if (!strcmp(cmd, "path")) return cmd_path(c);
+    if (!strcmp(cmd, "batch")) return cmd_batch(c);
+    if (!strcmp(cmd, "compare")) return cmd_compare(c);
+    if (!strcmp(cmd, "merge")) return cmd_merge(c);
+    if (!strcmp(cmd, "stress")) return cmd_stress(c);
+    return bad("unknown command '%s' (see shadowbench --help)", cmd);
+}
+
 int main(int argc, char **argv) {
     if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {
         usage(argc < 2 ? stderr : stdout);
@@ -364,16 +378,8 @@ int main(int argc, char **argv) {
     cli c;
     memset(&c, 0, sizeof c);
     int rc = parse_cli(&c, argc, argv);
-    if (rc) return rc;
-    const char *cmd = argv[1];
-    if (!strcmp(cmd, "run")) return cmd_run(&c);
-    if (!strcmp(cmd, "techniques")) return cmd_techniques();
-    if (!strcmp(cmd, "columns")) return cmd_columns();
-    if (!strcmp(cmd, "info")) return cmd_info(&c);
-    if (!strcmp(cmd, "path")) return cmd_path(&c);
-    if (!strcmp(cmd, "batch")) return cmd_batch(&c);
-    if (!strcmp(cmd, "compare")) return cmd_compare(&c);
-    if (!strcmp(cmd, "merge")) return cmd_merge(&c);
-    if (!strcmp(cmd, "stress")) return cmd_stress(&c);
-    return bad("unknown command '%s' (see shadowbench --help)", cmd);
+    if (!rc) rc = dispatch(&c, argv[1]);
+    free(c.pos);
+    free(c.run_opts);
+    return rc;
 }

@@ -5,11 +5,11 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "eval.h"
 #include "image.h"
+#include "reference.h"
 #include "report.h"
 #include "stats.h"
-
-bool sb_timed_frames_active;
 
 void sb_run_opts_defaults(sb_run_opts *o) {
     memset(o, 0, sizeof *o);
@@ -24,7 +24,7 @@ void sb_run_opts_defaults(sb_run_opts *o) {
     o->repeat = 1;
     o->max_repeat = 10;
     long cpus = sysconf(_SC_NPROCESSORS_ONLN);
-    o->threads = cpus > 0 ? (int)cpus : 1;
+    o->threads = cpus > 1024 ? 1024 : cpus > 0 ? (int)cpus : 1;
 }
 
 int sb_run_opts_set(sb_run_opts *o, const char *a, const char *v, sb_err *err) {
@@ -75,9 +75,9 @@ int sb_run_opts_set(sb_run_opts *o, const char *a, const char *v, sb_err *err) {
         if (!sb_parse_int(v, &n) || n < 1 || n > 1000) return sb_fail(err, "--max-repeat %s: expected 1..1000", v), -1;
         o->max_repeat = (int)n;
     } else if (!strcmp(a, "--threads")) {
-        if (!sb_parse_int(v, &n) || n < 1 || n > 16) return sb_fail(err, "--threads %s: expected 1..16", v), -1;
+        if (!sb_parse_int(v, &n) || n < 1 || n > 1024) return sb_fail(err, "--threads %s: expected 1..1024", v), -1;
         o->threads = (int)n;
-} else if (!strcmp(a, "--run-timeout")) {
+    } else if (!strcmp(a, "--run-timeout")) {
         if (!sb_parse_double(v, &o->run_timeout_s) || o->run_timeout_s < 0)
             return sb_fail(err, "--run-timeout %s: expected seconds >= 0", v), -1;
     } else {
@@ -93,6 +93,8 @@ static void base_name(const char *path, char *out, size_t len) {
     char *dot = strrchr(out, '.');
     if (dot && dot != out && !strchr(dot, '#')) *dot = 0;
 }
+
+/* ---- sessions ---- */
 
 bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, const char *path, sb_err *err) {
     /* files first: a broken scene or path is refused before any GL is touched */
@@ -121,19 +123,19 @@ bool sb_session_attach(sb_session *s, const sb_run_opts *o, sb_scene *scene, sb_
     memset(path, 0, sizeof *path);
     if (have_ctx) s->ctx = keep;
     if (!have_ctx && !sb_context_create(&s->ctx, o->backend, err)) {
-        sb_path_free(&s->path);
-        sb_scene_free(&s->scene);
+        sb_session_close_scene(s);
         return false;
     }
     sb_v3 sun = s->scene.has_sun ? s->scene.sun : sb_sun_dir(135, 40);
     if (o->sun_override) sun = sb_sun_dir(o->sun_az, o->sun_el);
-    bool init_ok = sb_gpu_init(&s->gpu, &s->ctx, &s->scene, o->width, o->height, sun, err);
-    s->gpu.has_sun = s->scene.has_sun || o->sun_override;
-    if (!init_ok) {
-        sb_path_free(&s->path);
-        sb_scene_free(&s->scene);
+    if (!sb_gpu_init(&s->gpu, &s->ctx, &s->scene, o->width, o->height, sun, err)) {
+        sb_session_close_scene(s);
         return false;
     }
+    s->gpu.has_sun = s->scene.has_sun || o->sun_override;
+    s->scratch = sb_xcalloc(s->scene.draw_count + 1, sizeof(uint32_t));
+    s->tech_data = sb_xcalloc((size_t)sb_technique_count(), sizeof *s->tech_data);
+    s->tech_loaded = sb_xcalloc((size_t)sb_technique_count(), sizeof *s->tech_loaded);
     s->timing = o->timing;
     if (s->timing == SB_TIMING_AUTO) s->timing = s->ctx.software ? SB_TIMING_SYNC : SB_TIMING_QUERIES;
     if (s->timing == SB_TIMING_QUERIES && !s->ctx.has_timer_query) {
@@ -144,20 +146,57 @@ bool sb_session_attach(sb_session *s, const sb_run_opts *o, sb_scene *scene, sb_
 }
 
 void sb_session_close_scene(sb_session *s) {
+    for (int i = 0; s->tech_loaded && i < sb_technique_count(); i++)
+        if (s->tech_loaded[i] && sb_technique_at(i)->unload) sb_technique_at(i)->unload(s->tech_data[i]);
+    free(s->tech_data);
+    free(s->tech_loaded);
+    s->tech_data = NULL;
+    s->tech_loaded = NULL;
+    if (s->ref) {
+        sb_reference_free(s->ref);
+        free(s->ref);
+        s->ref = NULL;
+    }
+    free(s->scratch);
+    s->scratch = NULL;
     sb_gpu_free(&s->gpu);
     sb_path_free(&s->path);
     sb_scene_free(&s->scene);
 }
 
 void sb_session_close(sb_session *s) {
-    sb_gpu_free(&s->gpu);
-    sb_path_free(&s->path);
-    sb_scene_free(&s->scene);
+    sb_session_close_scene(s);
     sb_context_destroy(&s->ctx);
     memset(s, 0, sizeof *s);
 }
 
-const char *sb_skip_reason(sb_session *s, const sb_technique *t) {
+const sb_reference *sb_session_reference(sb_session *s, sb_err *err) {
+    if (s->ref) return s->ref;
+    sb_reference *r = sb_xcalloc(1, sizeof *r);
+    if (!sb_reference_build(r, &s->scene, err)) {
+        free(r);
+        return NULL;
+    }
+    s->ref = r;
+    return r;
+}
+
+/* What the technique's load step made for this scene (made on first use). */
+static bool scene_data(sb_session *s, const sb_technique *t, void **out, sb_err *err) {
+    int i = sb_technique_index(t);
+    *out = NULL;
+    if (!t->load || i < 0) return true;
+    if (!s->tech_loaded[i]) {
+        s->tech_loaded[i] = true;   /* unload frees whatever a failed load left */
+        if (!t->load(&s->gpu, &s->tech_data[i], err)) return false;
+    }
+    *out = s->tech_data[i];
+    return true;
+}
+
+/* ---- why a run cannot apply ---- */
+
+static const char *scene_skip_reason(sb_session *s, const sb_technique *t) {
     const sb_scene *sc = &s->scene;
     int points = 0, spots = 0;
     for (uint32_t i = 0; i < sc->light_count; i++) {
@@ -180,31 +219,63 @@ const char *sb_skip_reason(sb_session *s, const sb_technique *t) {
     return NULL;
 }
 
-bool sb_instance_create(sb_instance *in, sb_session *s, const sb_run_spec *spec, sb_err *err) {
-    memset(in, 0, sizeof *in);
-    in->tech = spec->tech;
-    in->params = spec->params;
-    in->state = calloc(1, spec->tech->state_size ? spec->tech->state_size : 1);
-    if (!spec->tech->create(in->state, &s->gpu, &in->params, err)) {
-        spec->tech->destroy(in->state, &s->gpu);
-        free(in->state);
-        in->state = NULL;
-        while (glGetError() != GL_NO_ERROR) {}
-        return false;
+const char *sb_skip_reason(sb_session *s, const sb_technique *t, const sb_params *p) {
+    const char *why = scene_skip_reason(s, t);
+    if (why || !t->supported) return why;
+    sb_params defaults;
+    if (!p) {
+        sb_params_defaults(&defaults, t);
+        p = &defaults;
     }
-    return true;
+    void *desc = sb_xcalloc(1, t->desc_size ? t->desc_size : 1);
+    sb_params_bind(p, t, desc);
+    sb_run_ctx rc = {.gpu = &s->gpu, .tech = t};
+    sb_err e;
+    bool ok = t->supported(&rc, desc, &e);
+    free(desc);
+    if (ok) return NULL;
+    snprintf(s->skip, sizeof s->skip, "%s", e.msg);
+    return s->skip;
 }
 
-void sb_instance_destroy(sb_instance *in, sb_session *s) {
-    if (in->state) in->tech->destroy(in->state, &s->gpu);
+/* ---- instances and frames ---- */
+
+bool sb_instance_create(sb_instance *in, sb_session *s, const sb_run_spec *spec, int frames, sb_err *err) {
+    const sb_technique *t = spec->tech;
+    memset(in, 0, sizeof *in);
+    in->tech = t;
+    in->params = spec->params;
+    in->desc = sb_xcalloc(1, t->desc_size ? t->desc_size : 1);
+    sb_params_bind(&in->params, t, in->desc);
+    in->rc = (sb_run_ctx){.gpu = &s->gpu, .tech = t, .frames = frames};
+    bool ok = !t->supported || t->supported(&in->rc, in->desc, err);
+    if (ok) ok = scene_data(s, t, &in->rc.scene_data, err);
+    if (ok && (t->needs & SB_NEEDS_REFERENCE)) ok = (in->rc.reference = sb_session_reference(s, err)) != NULL;
+    if (ok) {
+        in->state = sb_xcalloc(1, t->state_size ? t->state_size : 1);
+        ok = t->create(in->state, &in->rc, in->desc, err);
+    }
+    if (!ok) {
+        sb_instance_destroy(in);
+        while (glGetError() != GL_NO_ERROR) {}
+    }
+    return ok;
+}
+
+void sb_instance_destroy(sb_instance *in) {
+    if (in->state) in->tech->destroy(in->state);
     free(in->state);
-    in->state = NULL;
+    free(in->desc);
+    in->state = in->desc = NULL;
 }
 
-void sb_render_camera(sb_session *s, sb_instance *in, sb_frame *f, const sb_camera *cam, int seq, sb_timer *timer) {
+void sb_render_camera(sb_session *s, sb_instance *in, sb_frame *f, const sb_camera *cam, int seq, sb_timer *timer,
+                      bool eval) {
     f->timer = timer;
     f->seq = seq;
     sb_frame_setup(f, &s->gpu, cam);
+    f->scratch = s->scratch;
+    f->eval = eval;
     in->tech->frame(in->state, f);
 }
 
@@ -212,8 +283,10 @@ void sb_render_frame(sb_session *s, sb_instance *in, sb_frame *f, int i, int n, 
     sb_camera cam = sb_path_camera(&s->path, i, n, (double)s->opts.width / s->opts.height, &s->scene);
     f->index = i;
     f->progress = sb_path_progress(i, n);
-    sb_render_camera(s, in, f, &cam, seq, timer);
+    sb_render_camera(s, in, f, &cam, seq, timer, false);
 }
+
+/* ---- run ids ---- */
 
 void sb_run_id(uint64_t scene_hash, uint64_t path_hash, const sb_run_opts *o, const sb_run_spec *spec, char out[17]) {
     char params[1024];
@@ -253,58 +326,141 @@ static bool eval_frame_wanted(const sb_run_opts *o, int pf) {
 }
 
 /* Re-renders the selected path frames with the evaluation targets bound and
- * reads them back: nothing here runs inside a timed frame. */
-static bool evaluate(sb_session *s, sb_instance *in, const char *out_dir, const char *run_id, sb_frame_rec *recs,
-                     sb_run_info *info, sb_err *err) {
-    const int w = s->gpu.width, h = s->gpu.height, n = s->opts.frames, np = w * h;
-    sb_reference *ref = sb_gpu_reference(&s->gpu, err);
-    if (!ref) return false;
+ * reads them back: nothing here runs inside a timed frame. seq: after the
+ * timed frames. */
+static bool evaluate(sb_session *s, sb_instance *in, int seq, const char *out_dir, const char *run_id,
+                     sb_frame_rec *recs, sb_run_info *info, sb_err *err) {
+    const int n = s->opts.frames;
     char dir[4200];
     snprintf(dir, sizeof dir, "%s/images", out_dir);
     if (s->opts.images > 0 && !sb_mkdir_p(dir, err)) return false;
-    unsigned char *rgba = malloc((size_t)np * 4), *vis = malloc((size_t)np), *refvis = malloc((size_t)np);
-    float *pos = malloc(sizeof(float) * 4 * (size_t)np), *aux = malloc(sizeof(float) * 4 * (size_t)np);
-    sb_timer timer;
-    sb_timer_init(&timer, SB_TIMING_SYNC, 1, 3);
+    sb_eval_buf b;
+    sb_eval_buf_init(&b, &s->gpu, s->opts.images > 0);
     bool ok = true;
-    int seq = s->gpu.run_frames;   /* after the timed frames */
     for (int pf = 0; ok && pf < n; pf++) {
         if (!eval_frame_wanted(&s->opts, pf)) continue;
-        /* a temporal technique's frame depends on the frames before it: replay two */
-        for (int k = in->tech->temporal ? 2 : 0; k >= 0; k--) {
-            if (pf - k < 0) continue;
-            sb_frame f;
-            memset(&f, 0, sizeof f);
-            s->gpu.eval = k == 0;
-            sb_timer_frame_begin(&timer, 0);
-            sb_render_frame(s, in, &f, pf - k, n, seq++, &timer);
-        }
-        s->gpu.eval = false;
-        sb_gpu_readback(&s->gpu, NULL, vis, rgba);
-        sb_gpu_readback_eval(&s->gpu, pos, aux);
+        sb_frame f;
         sb_frame_rec *r = &recs[pf];
-        sb_camera cam = sb_path_camera(&s->path, pf, n, (double)w / h, &s->scene);
-        sb_evaluate_frame(ref, s->gpu.shade_light, sb_v3_sub(cam.pos, s->scene.origin), w, h, pos, aux, vis, refvis, &r->err,
-                          s->opts.threads);
-        if (s->opts.error_every > 0 && pf % s->opts.error_every == 0) {
+        ok = sb_eval_frame(s, in, pf, n, in->tech->temporal ? 2 : 0, &seq, &b, &f, &r->err, err);
+        if (ok && s->opts.error_every > 0 && pf % s->opts.error_every == 0) {
             r->evaluated = true;
             info->rays += r->err.rays;
             info->ray_ms += r->err.ray_ms;
         }
-        if (s->opts.images > 0 && pf % s->opts.images == 0)
-            ok = sb_images_write_frame(dir, run_id, pf, w, h, rgba, vis, refvis, pos, aux, err);
+        if (ok && s->opts.images > 0 && pf % s->opts.images == 0)
+            ok = sb_images_write_frame(dir, run_id, pf, b.w, b.h, b.rgba, b.vis, b.ref, b.pos, b.aux, err);
     }
-    if (ok) ok = sb_gl_check("evaluation pass", err);
-    sb_timer_free(&timer);
-    free(rgba);
-    free(vis);
-    free(refvis);
-    free(pos);
-    free(aux);
+    sb_eval_buf_free(&b);
     return ok;
 }
 
 /* ---- one run ---- */
+
+/* A run being measured: its frames' records and timings, its CSV file. */
+typedef struct run_state {
+    sb_session *s;
+    sb_instance in;
+    const sb_run_spec *spec;
+    sb_run_info *info;
+    sb_timer timer;
+    sb_frame_rec *recs;
+    sb_csv rows;
+    sb_csv_file cf;
+    int capacity, done, written, repeats;
+    bool stream;                /* rows go out as their timings arrive */
+    double t_run;
+    sb_err err;
+} run_state;
+
+static void record_frame(run_state *r, int i, int pf, const sb_frame *f, double wall_ms) {
+    const int W = r->s->opts.warmup, N = r->s->opts.frames;
+    sb_frame_rec *rec = &r->recs[i];
+    rec->frame = pf;
+    rec->repeat = i < W ? -1 : (i - W) / N;
+    rec->progress = f->progress;
+    rec->counters = f->counters;
+    rec->wall_ms = wall_ms;
+    rec->cpu_ms = wall_ms - r->timer.wait_ms;
+    r->info->frames_wall_ms += wall_ms; /* warm-up frames render too */
+    r->done = i + 1;
+    while (r->stream && r->written < r->done && r->timer.times[r->written].ready) {
+        sb_report_frame_row(&r->rows, &r->recs[r->written], &r->timer.times[r->written], r->spec->tech->stages);
+        r->written++;
+    }
+}
+
+/* The warm-up frames, then the path (repeated as asked); false on failure (r->err). */
+static bool timed_frames(run_state *r, int index, int total) {
+    sb_session *s = r->s;
+    const sb_run_opts *o = &s->opts;
+    const int N = o->frames, W = o->warmup;
+    bool ok = true;
+    s->timed = true;
+    for (int i = 0; ok && i < r->capacity; i++) {
+        /* warm-up frames replay the path's first frames and are discarded */
+        int pf = i < W ? i % N : (i - W) % N;
+        double w0 = sb_now_ms();
+        sb_timer_frame_begin(&r->timer, i);
+        sb_frame f;
+        memset(&f, 0, sizeof f);
+        sb_render_frame(s, &r->in, &f, pf, N, i, &r->timer);
+        if (r->timer.mode == SB_TIMING_QUERIES) glFlush();
+        record_frame(r, i, pf, &f, sb_now_ms() - w0);
+        if (r->rows.len > 65536) ok = sb_csv_file_write(&r->cf, &r->rows, &r->err);
+        if (ok && o->run_timeout_s > 0 && sb_now_ms() - r->t_run > o->run_timeout_s * 1e3)
+            ok = sb_fail(&r->err, "timeout: the run took longer than %g s (frame %d of %d)", o->run_timeout_s, i + 1,
+                         r->capacity);
+        if (i >= W) progress_line(s, index, total, r->spec->tech->name, (i - W) % N + 1, N, r->t_run);
+        if (i >= W && (i - W) % N == N - 1) { /* a repetition of the path is complete */
+            r->repeats++;
+            if (o->target_ci > 0) {
+                sb_timer_drain(&r->timer); /* between repetitions, never inside a frame */
+                double ci = sb_report_gpu_ci_pct(r->timer.times + W, r->done - W, N);
+                if (ci <= o->target_ci) break;
+            }
+        }
+    }
+    sb_timer_drain(&r->timer);
+    s->timed = false;
+    return ok;
+}
+
+/* A technique with shadow stages that drew no caster in any measured frame
+ * measured nothing a user asked about: said in the run's warnings. */
+static void check_shadows_drawn(run_state *r) {
+    const unsigned shadow = SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_VOLUMES);
+    if (!(r->spec->tech->stages & shadow)) return;
+    for (int i = r->s->opts.warmup; i < r->done; i++)
+        if (r->recs[i].counters.shadow_triangles) return;
+    sb_run_warn(r->info, "no shadow-casting triangle was drawn in any frame (nothing in view casts toward the light)");
+}
+
+/* After the timed frames: collected counters, the evaluation pass, the rest of the rows. */
+static bool finish_run(run_state *r, const char *out_dir) {
+    const sb_run_opts *o = &r->s->opts;
+    const int W = o->warmup;
+    bool ok = true;
+    if (r->spec->tech->collect)
+        for (int i = W; i < r->done; i++) r->spec->tech->collect(r->in.state, i, &r->recs[i].counters);
+    if (o->error_every > 0 || o->images > 0)
+        ok = evaluate(r->s, &r->in, r->capacity, out_dir, r->info->run_id, r->recs + W, r->info, &r->err);
+    if (ok) {
+        for (; r->written < r->done; r->written++)
+            sb_report_frame_row(&r->rows, &r->recs[r->written], &r->timer.times[r->written], r->spec->tech->stages);
+        ok = sb_csv_file_write(&r->cf, &r->rows, &r->err);
+    }
+    if (ok) ok = sb_gl_check(r->spec->tech->name, &r->err);
+    if (ok) check_shadows_drawn(r);
+    return ok;
+}
+
+static void record_outcome(sb_summary *sum, sb_run_info *info, unsigned stages, const char *why, double t_run) {
+    info->status = "failed";
+    info->reason = why;
+    info->run_wall_s = (sb_now_ms() - t_run) / 1e3;
+    sb_log("run %s (%s): failed: %s", info->run_id, info->technique, why);
+    sb_summary_add_outcome(sum, info, stages, NULL, NULL, 0);
+}
 
 bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_summary *sum, int run_index,
                 int index, int total) {
@@ -313,6 +469,7 @@ bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_
     sb_params_canonical(&spec->params, params, sizeof params);
     snprintf(path, sizeof path, "%s/%s.csv", out_dir, run_id);
     const sb_run_opts *o = &s->opts;
+    const unsigned stages = spec->tech->stages;
     sb_run_info info = {
         .run_id = run_id, .run_index = run_index, .scene = s->scene_name, .path = s->path_name, .technique = spec->tech->name,
         .params = params, .backend = sb_backend_name(o->backend), .renderer = s->ctx.renderer,
@@ -320,106 +477,45 @@ bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_
         .warmup = o->warmup, .width = o->width, .height = o->height, .target_ci = o->target_ci,
         .scene_triangles = sb_scene_triangles(&s->scene), .load_ms = s->scene.load_ms,
     };
-    const unsigned stages = spec->tech->stages;
-    double t_run = sb_now_ms();
-    const char *skip = sb_skip_reason(s, spec->tech);
+    run_state r = {.s = s, .spec = spec, .info = &info, .t_run = sb_now_ms(), .written = o->warmup};
+    const char *skip = sb_skip_reason(s, spec->tech, &spec->params);
     if (skip) {
         info.status = "skipped";
         info.reason = skip;
         sb_summary_add_outcome(sum, &info, stages, NULL, NULL, 0);
         return true;
     }
-    const int N = o->frames, W = o->warmup;
-    const int max_repeat = o->target_ci > 0 ? o->max_repeat : o->repeat;
-    const int capacity = W + N * max_repeat;
-    sb_err err = {{0}};
-    sb_instance in;
-    s->gpu.run_frames = capacity;
-    if (!sb_instance_create(&in, s, spec, &err)) {
-        sb_log("run %s (%s): failed: %s", run_id, spec->tech->name, err.msg);
-        info.status = "failed";
-        info.reason = err.msg;
-        info.run_wall_s = (sb_now_ms() - t_run) / 1e3;
-        sb_summary_add_outcome(sum, &info, stages, NULL, NULL, 0);
+    r.capacity = o->warmup + o->frames * (o->target_ci > 0 ? o->max_repeat : o->repeat);
+    if (!sb_instance_create(&r.in, s, spec, r.capacity, &r.err)) {
+        record_outcome(sum, &info, stages, r.err.msg, r.t_run);
         return false;
     }
-    sb_timer timer;
-    sb_timer_init(&timer, s->timing, o->ring, capacity);
-    sb_frame_rec *recs = calloc((size_t)capacity, sizeof *recs);
-    sb_csv rows = {0};
-    sb_csv_file cf;
-    bool ok = sb_csv_file_open(&cf, path, &err);
-    if (ok) {
-        sb_report_frame_header(&rows);
-        ok = sb_csv_file_write(&cf, &rows, &err);
-    }
+    sb_timer_init(&r.timer, s->timing, o->ring, r.capacity);
+    r.recs = sb_xcalloc((size_t)r.capacity, sizeof *r.recs);
     /* rows stream out as their timings arrive, unless something is only known
        after the timed frames (GPU-side counters, error evaluation) */
-    const bool stream = !spec->tech->collect && o->error_every == 0;
-    int written = W, done = 0, repeats = 0;
-    sb_timed_frames_active = true;
-    for (int i = 0; ok && i < capacity; i++) {
-        /* warm-up frames replay the path's first frames and are discarded */
-        int pf = i < W ? i % N : (i - W) % N;
-        double w0 = sb_now_ms();
-        sb_timer_frame_begin(&timer, i);
-        sb_frame f;
-        memset(&f, 0, sizeof f);
-        sb_render_frame(s, &in, &f, pf, N, i, &timer);
-        if (timer.mode == SB_TIMING_QUERIES) glFlush();
-        double w1 = sb_now_ms();
-        sb_frame_rec *r = &recs[i];
-        r->frame = pf;
-        r->repeat = i < W ? -1 : (i - W) / N;
-        r->progress = f.progress;
-        r->counters = f.counters;
-        r->wall_ms = w1 - w0;
-        r->cpu_ms = r->wall_ms - timer.wait_ms;
-        info.frames_wall_ms += r->wall_ms; /* warm-up frames render too */
-        done = i + 1;
-        while (stream && written < done && timer.times[written].ready) {
-            sb_report_frame_row(&rows, &recs[written], &timer.times[written], stages);
-            written++;
-        }
-        if (rows.len > 65536) ok = sb_csv_file_write(&cf, &rows, &err);
-        if (ok && o->run_timeout_s > 0 && sb_now_ms() - t_run > o->run_timeout_s * 1e3)
-            ok = sb_fail(&err, "timeout: the run took longer than %g s (frame %d of %d)", o->run_timeout_s, i + 1,
-                         capacity);
-        if (i >= W) progress_line(s, index, total, spec->tech->name, (i - W) % N + 1, N, t_run);
-        if (i >= W && (i - W) % N == N - 1) { /* a repetition of the path is complete */
-            repeats++;
-            if (o->target_ci > 0) {
-                sb_timer_drain(&timer); /* between repetitions, never inside a frame */
-                double ci = sb_report_gpu_ci_pct(timer.times + W, done - W, N);
-                if (ci <= o->target_ci) break;
-            }
-        }
-    }
-    sb_timer_drain(&timer);
-    sb_timed_frames_active = false;
-    const int measured = done - W;
-    if (ok && spec->tech->collect)
-        for (int i = W; i < done; i++) spec->tech->collect(in.state, i, &recs[i].counters);
-    if (ok && (o->error_every > 0 || o->images > 0)) ok = evaluate(s, &in, out_dir, run_id, recs + W, &info, &err);
+    r.stream = !spec->tech->collect && o->error_every == 0;
+    bool ok = sb_csv_file_open(&r.cf, path, &r.err);
     if (ok) {
-        for (; written < done; written++) sb_report_frame_row(&rows, &recs[written], &timer.times[written], stages);
-        ok = sb_csv_file_write(&cf, &rows, &err);
+        sb_report_frame_header(&r.rows);
+        ok = sb_csv_file_write(&r.cf, &r.rows, &r.err);
     }
-    if (ok) ok = sb_gl_check(spec->tech->name, &err);
-    if (ok) ok = sb_csv_file_commit(&cf, &err);
-    else sb_csv_file_abort(&cf);
-    sb_instance_destroy(&in, s);
-    info.run_wall_s = (sb_now_ms() - t_run) / 1e3;
-    info.repeats = repeats;
-    info.stalls = timer.stalls;
+    ok = ok && timed_frames(&r, index, total) && finish_run(&r, out_dir);
+    if (ok) ok = sb_csv_file_commit(&r.cf, &r.err);
+    else sb_csv_file_abort(&r.cf);
+    sb_instance_destroy(&r.in);
+    info.run_wall_s = (sb_now_ms() - r.t_run) / 1e3;
+    info.repeats = r.repeats;
+    info.stalls = r.timer.stalls;
     if (!ok) {
-        sb_log("run %s (%s): failed: %s", run_id, spec->tech->name, err.msg);
+        sb_log("run %s (%s): failed: %s", run_id, spec->tech->name, r.err.msg);
         info.status = "failed";
-        info.reason = err.msg;
+        info.reason = r.err.msg;
     }
-    sb_summary_add_outcome(sum, &info, stages, ok ? recs + W : NULL, timer.times + W, measured);
-    sb_csv_free(&rows);
-    free(recs);
-    sb_timer_free(&timer);
+    sb_summary_add_outcome(sum, &info, stages, ok ? r.recs + o->warmup : NULL, r.timer.times + o->warmup,
+                           r.done - o->warmup);
+    sb_csv_free(&r.rows);
+    free(r.recs);
+    sb_timer_free(&r.timer);
     return ok;
 }

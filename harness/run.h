@@ -27,7 +27,7 @@ typedef struct sb_run_opts {
     int repeat;                 /* repetitions of the path (default 1) */
     double target_ci;           /* percent: repeat until the gpu_ms CI half-width is within it (0: off) */
     int max_repeat;             /* cap for target_ci (default 10) */
-    int threads;                /* reference ray-casting threads (default: all cores) */
+    int threads;                /* reference ray-casting threads (default: all cores, at most 1024) */
     double run_timeout_s;       /* a run taking longer fails with a timeout (0: none) */
     bool allow_external_uris;   /* glTF buffers and images may be read from outside the scene's folder */
 } sb_run_opts;
@@ -37,10 +37,6 @@ void sb_run_opts_defaults(sb_run_opts *o);
  * option, -1 bad value (err says which and what was expected). */
 int sb_run_opts_set(sb_run_opts *o, const char *name, const char *value, sb_err *err);
 
-/* True while the timed frames of a run are being rendered (instrumentation:
- * tests assert that nothing is read back then). */
-extern bool sb_timed_frames_active;
-
 typedef struct sb_session {
     sb_run_opts opts;
     sb_context ctx;
@@ -49,7 +45,12 @@ typedef struct sb_session {
     sb_gpu gpu;
     sb_timing_mode timing;      /* resolved */
     char scene_name[256], path_name[256];
-    char skip[256];             /* the last skip reason */
+    char skip[SB_ERR_LEN + 64]; /* the last skip reason */
+    uint32_t *scratch;          /* draw_count entries: a frame's culling results */
+    struct sb_reference *ref;   /* the scene's Embree reference, built on first use */
+    void **tech_data;           /* per technique (registry index): what its load step made for the scene */
+    bool *tech_loaded;
+    bool timed;                 /* true while a run's timed frames render (tests assert nothing is read back then) */
 } sb_session;
 
 /* Loads scene and path, opens the context (if not already), uploads buffers. */
@@ -57,31 +58,38 @@ bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, con
 /* The same with a scene and path already loaded: the session takes them over
  * (freed with it, also when this fails). */
 bool sb_session_attach(sb_session *s, const sb_run_opts *o, sb_scene *scene, sb_path *path, sb_err *err);
+/* Frees the scene, path and what was made for them but keeps the context (next scene of a batch). */
+void sb_session_close_scene(sb_session *s);
 void sb_session_close(sb_session *s);
+/* The scene's Embree reference (built on the first call); NULL with err on failure. */
+const struct sb_reference *sb_session_reference(sb_session *s, sb_err *err);
 
-/* A live technique instance. */
+/* A live technique instance: its parameters as values and as the bound struct. */
 typedef struct sb_instance {
     const sb_technique *tech;
     sb_params params;
+    void *desc;                 /* the parameter struct (sb_params_bind) */
     void *state;
+    sb_run_ctx rc;
 } sb_instance;
 
-bool sb_instance_create(sb_instance *in, sb_session *s, const sb_run_spec *spec, sb_err *err);
-void sb_instance_destroy(sb_instance *in, sb_session *s);
+/* Creates the technique for `frames` frames (warm-up and repeats included);
+ * false with the reason when it is not supported here or fails. */
+bool sb_instance_create(sb_instance *in, sb_session *s, const sb_run_spec *spec, int frames, sb_err *err);
+void sb_instance_destroy(sb_instance *in);
 /* Renders frame i of n of the path as the run's seq-th frame, timed by timer. */
 void sb_render_frame(sb_session *s, sb_instance *in, sb_frame *f, int i, int n, int seq, struct sb_timer *timer);
-/* Renders an explicit camera (tests, stress cases). */
+/* Renders an explicit camera (tests, stress cases); eval binds the evaluation targets. */
 void sb_render_camera(sb_session *s, sb_instance *in, sb_frame *f, const sb_camera *cam, int seq,
-                      struct sb_timer *timer);
-/* Why a technique cannot apply to this scene, or NULL (the text lives in the session). */
-const char *sb_skip_reason(sb_session *s, const sb_technique *t);
+                      struct sb_timer *timer, bool eval);
+/* Why a technique (with parameters p; NULL: its defaults) cannot run on this
+ * scene and context, or NULL. The text lives in the session. */
+const char *sb_skip_reason(sb_session *s, const sb_technique *t, const sb_params *p);
 
 /* Runs one spec; writes DIR/<run_id>.csv and a summary row. run_index is its
  * place in the matrix; progress shows "run i of n". Returns false if it failed. */
 bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_summary *sum, int run_index, int i,
                 int n);
-/* Frees the scene, path and GPU buffers but keeps the context (next scene of a batch). */
-void sb_session_close_scene(sb_session *s);
 /* run_id: hash of scene and path contents, technique, canonical parameters,
  * frames, size, backend (and --sun when given). */
 void sb_run_id(uint64_t scene_hash, uint64_t path_hash, const sb_run_opts *o, const sb_run_spec *spec, char out[17]);

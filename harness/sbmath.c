@@ -264,3 +264,25 @@ void sb_basis(sb_v3 d, sb_v3 *right, sb_v3 *up) {
     *right = sb_v3_norm(sb_v3_cross(helper, d));
     *up = sb_v3_cross(d, *right);
 }
+
+void sb_frustum_planes(sb_m4 m, double p[6][4]) {
+    const double *a = m.m;
+    for (int i = 0; i < 3; i++) {
+        for (int k = 0; k < 4; k++) {
+            p[2 * i][k] = a[k * 4 + 3] + a[k * 4 + i];
+            p[2 * i + 1][k] = a[k * 4 + 3] - a[k * 4 + i];
+        }
+    }
+    for (int i = 0; i < 6; i++) {
+        double l = sqrt(p[i][0] * p[i][0] + p[i][1] * p[i][1] + p[i][2] * p[i][2]);
+        if (l > 0)
+            for (int k = 0; k < 4; k++) p[i][k] /= l;
+    }
+}
+
+void sb_cube_planes(sb_v3 c, double r, double p[6][4]) {
+    const double box[6][4] = {{1, 0, 0, -(c.x - r)}, {-1, 0, 0, c.x + r}, {0, 1, 0, -(c.y - r)},
+                              {0, -1, 0, c.y + r},   {0, 0, 1, -(c.z - r)}, {0, 0, -1, c.z + r}};
+    for (int i = 0; i < 6; i++)
+        for (int k = 0; k < 4; k++) p[i][k] = box[i][k];
+}

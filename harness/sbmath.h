@@ -61,6 +61,11 @@ sb_quat sb_quat_from_m4(sb_m4 m);                       /* rotation part, assume
 /* Orientation whose -Z axis looks along dir (glTF camera convention), +Y near up_hint. */
 sb_quat sb_quat_look(sb_v3 dir, sb_v3 up_hint);
 
+/* Planes (inside: n·p + d >= 0) of the clip-space box of the matrix m (Gribb-Hartmann), normalised. */
+void sb_frustum_planes(sb_m4 m, double planes[6][4]);
+/* Planes of the axis-aligned cube of half-size r around c. */
+void sb_cube_planes(sb_v3 c, double r, double planes[6][4]);
+
 /* Unit vector toward a sun at azimuth/elevation in degrees (Y up, azimuth 0 = +Z, 90 = +X). */
 sb_v3 sb_sun_dir(double azimuth_deg, double elevation_deg);
 /* A stable orthonormal basis around dir: picks the helper axis least parallel to dir. */

@@ -29,6 +29,20 @@ static void list_techniques(char *out, size_t len) {
     }
 }
 
+/* A combination the technique cannot run (stable with a warp, ...): refused
+ * with the combination named, before anything renders. */
+static bool check_combination(const sb_technique *t, const sb_params *p, const char *pre, sb_err *err) {
+    void *desc = sb_xcalloc(1, t->desc_size ? t->desc_size : 1);
+    sb_params_bind(p, t, desc);
+    sb_err e;
+    bool ok = t->check(desc, &e);
+    free(desc);
+    if (ok) return true;
+    char canon[1024];
+    sb_params_canonical(p, canon, sizeof canon);
+    return sb_fail(err, "%s%s:%s: %s", pre, t->name, canon, e.msg);
+}
+
 bool sb_spec_expand(const char *spec, const char *where, sb_run_spec **runs, int *count, sb_err *err) {
     char pre[256];
     snprintf(pre, sizeof pre, "%s%s", where ? where : "", where ? ": " : "");
@@ -76,7 +90,7 @@ bool sb_spec_expand(const char *spec, const char *where, sb_run_spec **runs, int
     }
     int total = 1;
     for (int a = 0; a < naxes; a++) total *= axes[a].nvalues;
-    *runs = realloc(*runs, (size_t)(*count + total) * sizeof **runs);
+    *runs = sb_xrealloc(*runs, (size_t)(*count + total) * sizeof **runs);
     for (int r = 0; r < total; r++) {
         sb_run_spec *rs = &(*runs)[*count + r];
         rs->tech = t;
@@ -88,6 +102,7 @@ bool sb_spec_expand(const char *spec, const char *where, sb_run_spec **runs, int
             rem /= axes[a].nvalues;
             sb_param_set(&rs->params, axes[a].param, &t->params[axes[a].param], axes[a].values[k], t->name, err);
         }
+        if (t->check && !check_combination(t, &rs->params, pre, err)) return false;
     }
     *count += total;
     return true;

@@ -17,8 +17,8 @@
 
 #include "cascade.h"
 #include "error.h"
+#include "eval.h"
 #include "glb.h"
-#include "reference.h"
 
 enum { GEO_BOXES, GEO_TRIANGLE, GEO_DEGENERATE };
 enum { CAM_ORBIT, CAM_ONE_KEY, CAM_REPEATED, CAM_FLIPS, CAM_INSIDE, CAM_SKY, CAM_ALONG_SUN, CAM_AGAINST_SUN };
@@ -186,6 +186,48 @@ static void fail(row_result *r, const char *fmt, const char *a) {
     snprintf(r->note, sizeof r->note, fmt, a);
 }
 
+/* The light matrices of the cascade block: finite, invertible, and the worst condition number. */
+static void check_block(const sb_cascade_block *blk, int count, row_result *r) {
+    for (int k = 0; k < count; k++) {
+        if (blk->s.flags[k][0] < 0.5f) continue;
+        sb_m4 m;
+        for (int e = 0; e < 16; e++) {
+            m.m[e] = blk->light_vp[k][e];
+            if (!isfinite(blk->shadow_mat[k][e])) fail(r, "shadow matrix %s is not finite", "");
+        }
+        double cond = condition(m);
+        if (!(cond < INFINITY) || !sb_m4_finite(m)) fail(r, "light matrix %s is singular or not finite", "");
+        else if (cond > r->worst_cond) r->worst_cond = cond;
+    }
+}
+
+/* Coverage: every evaluated sample that a cascade shades lies inside that
+ * cascade's map, and visible samples within the split range have a cascade. */
+static void check_coverage(const sb_cascade_block *blk, const sb_frame *f, const sb_eval_buf *b, sb_v3 origin,
+                           row_result *r) {
+    for (int p = 0; p < b->w * b->h; p++) {
+        if (b->ref[p] == 128) continue; /* sky or facing away */
+        const float *a = b->aux + 4 * (size_t)p, *q = b->pos + 4 * (size_t)p;
+        int k = (int)lroundf(a[3]);
+        r->samples++;
+        if (k < 0) {
+            /* shaded by no map: a miss unless it is beyond the last split */
+            sb_v3 pw = sb_v3_make(q[0], q[1], q[2]);
+            double z = sb_v3_dot(sb_v3_sub(pw, sb_v3_sub(f->cam.pos, origin)), f->cam.forward);
+            int last = f->counters.split_count - 1;
+            if (last >= 0 && z <= f->counters.splits[last] * 0.999) r->coverage_misses++;
+            continue;
+        }
+        const float *sm = blk->shadow_mat[k];
+        double hw = sm[3] * q[0] + sm[7] * q[1] + sm[11] * q[2] + sm[15];
+        double x = (sm[0] * q[0] + sm[4] * q[1] + sm[8] * q[2] + sm[12]) / hw;
+        double y = (sm[1] * q[0] + sm[5] * q[1] + sm[9] * q[2] + sm[13]) / hw;
+        double z = (sm[2] * q[0] + sm[6] * q[1] + sm[10] * q[2] + sm[14]) / hw;
+        const double tol = 1e-3;
+        if (x < -tol || x > 1 + tol || y < -tol || y > 1 + tol || z < -tol || z > 1 + tol) r->coverage_misses++;
+    }
+}
+
 static void run_row(sb_session *s, const char *spec, int frames, row_result *r) {
     memset(r, 0, sizeof *r);
     r->pass = true;
@@ -196,97 +238,52 @@ static void run_row(sb_session *s, const char *spec, int frames, row_result *r) 
         fail(r, "%s", err.msg);
         return;
     }
-    s->gpu.run_frames = frames;
     sb_instance in;
-    if (!sb_instance_create(&in, s, &runs[0], &err)) {
+    if (!sb_instance_create(&in, s, &runs[0], frames, &err)) {
         fail(r, "create: %s", err.msg);
         free(runs);
         return;
     }
-    sb_reference *ref = sb_gpu_reference(&s->gpu, &err);
-    const int w = s->gpu.width, h = s->gpu.height, np = w * h;
-    unsigned char *vis = malloc((size_t)np), *refv = malloc((size_t)np);
-    float *pos = malloc(sizeof(float) * 4 * (size_t)np), *aux = malloc(sizeof(float) * 4 * (size_t)np);
+    sb_eval_buf b;
+    sb_eval_buf_init(&b, &s->gpu, false);
     bool cascades = runs[0].tech->stages & SB_STAGE_BIT(SB_STAGE_CASCADE);
-    sb_timer t;
-    sb_timer_init(&t, SB_TIMING_SYNC, 1, frames);
     double err_sum = 0;
-    for (int i = 0; i < frames && ref; i++) {
+    int seq = 0;
+    for (int i = 0; i < frames && r->pass; i++) {
         sb_frame f;
-        memset(&f, 0, sizeof f);
-        sb_timer_frame_begin(&t, i);
-        s->gpu.eval = true;
-        sb_render_frame(s, &in, &f, i, frames, i, &t);
-        s->gpu.eval = false;
-        if (in.tech->collect) in.tech->collect(in.state, i, &f.counters);
-        if (!sb_gl_check(spec, &err)) fail(r, "%s", err.msg);
+        sb_error_metrics em;
+        if (!sb_eval_frame(s, &in, i, frames, 0, &seq, &b, &f, &em, &err)) fail(r, "%s", err.msg);
         for (int k = 0; k < f.counters.split_count; k++)
             if (!isfinite(f.counters.splits[k])) fail(r, "split %s is not finite", "");
         if (!sb_m4_finite(f.view_proj)) fail(r, "camera matrix %s is not finite", "");
-        sb_gpu_readback(&s->gpu, NULL, vis, NULL);
-        sb_gpu_readback_eval(&s->gpu, pos, aux);
-        sb_cascade_block blk;
+        if (!isfinite(em.err_rate) || !isfinite(em.vis_mae)) fail(r, "error metric %s is not finite", "");
+        err_sum += em.err_rate;
         if (cascades) {
+            sb_cascade_block blk;
             sb_csm *c = (sb_csm *)in.state;
             glBindBuffer(GL_SHADER_STORAGE_BUFFER, c->block);
             glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof blk, &blk);
-            for (int k = 0; k < c->count; k++) {
-                if (blk.flags[k][0] < 0.5f) continue;
-                sb_m4 m;
-                for (int e = 0; e < 16; e++) {
-                    m.m[e] = blk.light_vp[k][e];
-                    if (!isfinite(blk.shadow_mat[k][e])) fail(r, "shadow matrix %s is not finite", "");
-                }
-                double cond = condition(m);
-                if (!(cond < INFINITY) || !sb_m4_finite(m)) fail(r, "light matrix %s is singular or not finite", "");
-                else if (cond > r->worst_cond) r->worst_cond = cond;
-            }
-        }
-        sb_error_metrics em;
-        sb_evaluate_frame(ref, s->gpu.shade_light, sb_v3_sub(f.cam.pos, s->scene.origin), w, h, pos, aux, vis, refv, &em, 2);
-        if (!isfinite(em.err_rate) || !isfinite(em.vis_mae)) fail(r, "error metric %s is not finite", "");
-        err_sum += em.err_rate;
-        if (cascades) { /* coverage: the cascade a sample used contains it */
-            for (int p = 0; p < np; p++) {
-                if (refv[p] == 128) continue; /* sky or facing away */
-                const float *a = aux + 4 * (size_t)p, *q = pos + 4 * (size_t)p;
-                int k = (int)lroundf(a[3]);
-                r->samples++;
-                if (k < 0) {
-                    /* shaded by no map: a miss unless it is beyond the last split */
-                    sb_v3 pw = sb_v3_make(q[0], q[1], q[2]);
-                    double z = sb_v3_dot(sb_v3_sub(pw, sb_v3_sub(f.cam.pos, s->scene.origin)), f.cam.forward);
-                    int last = f.counters.split_count - 1;
-                    if (last >= 0 && z <= f.counters.splits[last] * 0.999) r->coverage_misses++;
-                    continue;
-                }
-                const float *sm = blk.shadow_mat[k];
-                double hw = sm[3] * q[0] + sm[7] * q[1] + sm[11] * q[2] + sm[15];
-                double x = (sm[0] * q[0] + sm[4] * q[1] + sm[8] * q[2] + sm[12]) / hw;
-                double y = (sm[1] * q[0] + sm[5] * q[1] + sm[9] * q[2] + sm[13]) / hw;
-                double z = (sm[2] * q[0] + sm[6] * q[1] + sm[10] * q[2] + sm[14]) / hw;
-                const double tol = 1e-3;
-                if (x < -tol || x > 1 + tol || y < -tol || y > 1 + tol || z < -tol || z > 1 + tol) r->coverage_misses++;
-            }
+            check_block(&blk, c->count, r);
+            check_coverage(&blk, &f, &b, s->scene.origin, r);
         }
     }
-    if (!ref) fail(r, "reference: %s", err.msg);
     r->err_rate = frames ? err_sum / frames : NAN;
     if (r->samples && r->coverage_misses * 1000 > r->samples) {
         char m[64];
         snprintf(m, sizeof m, "%ld of %ld", r->coverage_misses, r->samples);
         fail(r, "coverage: %s samples outside their cascade", m);
     }
-    sb_timer_free(&t);
-    free(vis);
-    free(refv);
-    free(pos);
-    free(aux);
-    sb_instance_destroy(&in, s);
+    sb_eval_buf_free(&b);
+    sb_instance_destroy(&in);
     free(runs);
 }
 
-int sb_stress_run(const sb_run_opts *opts, const char *only, FILE *out, sb_err *err) {
+int sb_stress_run(const sb_run_opts *opts, const char *only, const char *const *specs, int nspecs, FILE *out,
+                  sb_err *err) {
+    if (nspecs == 0) {
+        specs = techniques;
+        nspecs = (int)SB_COUNT(techniques);
+    }
     /* SB_STRESS_KEEP=1 keeps each case's .glb and .path, to rerun a failing case with `run --images` */
     bool keep = getenv("SB_STRESS_KEEP") != NULL;
     char dir[] = "/tmp/shadowbench-stress-XXXXXX";
@@ -296,8 +293,8 @@ int sb_stress_run(const sb_run_opts *opts, const char *only, FILE *out, sb_err *
     if (!sb_context_create(&s.ctx, opts->backend, err)) return -1;
     fprintf(out, "%-26s %-28s %-5s %9s %11s  %s\n", "case", "technique", "pass", "err_rate", "worst_cond", "note");
     int failures = 0;
-    double base_err[SB_COUNT(techniques)];
-    for (size_t t = 0; t < SB_COUNT(techniques); t++) base_err[t] = NAN;
+    double *base_err = sb_xmalloc(sizeof(double) * (size_t)nspecs);
+    for (int t = 0; t < nspecs; t++) base_err[t] = NAN;
     for (size_t ci = 0; ci < SB_COUNT(cases); ci++) {
         const stress_case *c = &cases[ci];
         if (only && !strstr(c->name, only) && strcmp(c->name, "base")) continue;
@@ -319,13 +316,10 @@ int sb_stress_run(const sb_run_opts *opts, const char *only, FILE *out, sb_err *
             failures++;
             continue;
         }
-        /* test hook: SB_TEST_BIAS_SIGN=-1 breaks every shadow map's bias, to show the battery fails */
-        const char *flip = getenv("SB_TEST_BIAS_SIGN");
-        if (flip && !strcmp(flip, "-1")) s.gpu.test_bias_sign = -1;
-        for (size_t t = 0; t < SB_COUNT(techniques); t++) {
+        for (int t = 0; t < nspecs; t++) {
             row_result r;
-            run_row(&s, techniques[t], o.frames, &r);
-            bool raycast = !strcmp(techniques[t], "raycast"), none = !strcmp(techniques[t], "none");
+            run_row(&s, specs[t], o.frames, &r);
+            bool raycast = !strncmp(specs[t], "raycast", 7), none = !strncmp(specs[t], "none", 4);
             double bound = c->relative ? 2 * base_err[t] + 0.001 : raycast ? c->bound / 5 + 0.001 : c->bound;
             if (!none && r.pass && !(r.err_rate <= bound)) {
                 char m[96];
@@ -336,7 +330,7 @@ int sb_stress_run(const sb_run_opts *opts, const char *only, FILE *out, sb_err *
             failures += !r.pass;
             char cond[32] = "-";
             if (r.worst_cond > 0) snprintf(cond, sizeof cond, "%.3g", r.worst_cond);
-            fprintf(out, "%-26s %-28s %-5s %9.5f %11s  %s\n", c->name, techniques[t], r.pass ? "ok" : "FAIL", r.err_rate,
+            fprintf(out, "%-26s %-28s %-5s %9.5f %11s  %s\n", c->name, specs[t], r.pass ? "ok" : "FAIL", r.err_rate,
                     cond, r.note);
             fflush(out);
         }
@@ -349,6 +343,7 @@ int sb_stress_run(const sb_run_opts *opts, const char *only, FILE *out, sb_err *
     if (keep) fprintf(out, "scenes and paths kept in %s (SB_STRESS_KEEP)\n", dir);
     else rmdir(dir);
     sb_context_destroy(&s.ctx);
+    free(base_err);
     fprintf(out, "%d failure(s)\n", failures);
     return failures;
 }

@@ -20,7 +20,7 @@ const char *sb_timing_name(sb_timing_mode m) {
 
 void sb_ring_init(sb_ring *r, int size) {
     r->size = size < 1 ? 1 : size;
-    r->slot_frame = malloc((size_t)r->size * sizeof(int));
+    r->slot_frame = sb_xmalloc((size_t)r->size * sizeof(int));
     for (int i = 0; i < r->size; i++) r->slot_frame[i] = -1;
 }
 
@@ -47,13 +47,13 @@ void sb_timer_init(sb_timer *t, sb_timing_mode mode, int ring, int frames) {
     t->mode = mode;
     t->frames = frames;
     t->current = -1;
-    t->times = calloc((size_t)frames, sizeof *t->times);
+    t->times = sb_xcalloc((size_t)frames, sizeof *t->times);
     sb_ring_init(&t->ring, ring);
     if (mode == SB_TIMING_QUERIES) {
         size_t n = (size_t)t->ring.size * SB_STAGE_COUNT * 2;
-        t->queries = calloc(n, sizeof(unsigned));
+        t->queries = sb_xcalloc(n, sizeof(unsigned));
         glGenQueries((GLsizei)n, t->queries);
-        t->slot_mask = calloc((size_t)t->ring.size, sizeof(unsigned));
+        t->slot_mask = sb_xcalloc((size_t)t->ring.size, sizeof(unsigned));
     }
 }
 

@@ -183,3 +183,20 @@ bool sb_make_stamped_dir(const char *base, char *out, size_t len, sb_err *err) {
     }
     return sb_fail(err, "%s: cannot find a free results folder name", base);
 }
+
+static void *checked(void *p, size_t n) {
+    if (!p && n) {
+        fprintf(stderr, "shadowbench: out of memory (%zu bytes)\n", n);
+        exit(1);
+    }
+    return p;
+}
+
+void *sb_xmalloc(size_t n) { return checked(malloc(n ? n : 1), n); }
+
+void *sb_xcalloc(size_t count, size_t size) {
+    if (size && count > SIZE_MAX / size) return checked(NULL, SIZE_MAX);
+    return checked(calloc(count ? count : 1, size ? size : 1), count * size);
+}
+
+void *sb_xrealloc(void *p, size_t n) { return checked(realloc(p, n ? n : 1), n); }

@@ -33,6 +33,11 @@ uint64_t sb_fnv1a(uint64_t h, const void *data, size_t n);
 double sb_now_ms(void);          /* CLOCK_MONOTONIC in milliseconds */
 double sb_cpu_ms(void);          /* process CPU time in milliseconds */
 
+/* Allocation that cannot return NULL: out of memory prints one line
+ * ("shadowbench: out of memory (N bytes)") and exits with status 1. */
+void *sb_xmalloc(size_t n);
+void *sb_xcalloc(size_t count, size_t size);
+void *sb_xrealloc(void *p, size_t n);
 char *sb_strdup(const char *s);
 /* strtod/strtol wrappers that accept only a whole, finite number. */
 bool sb_parse_double(const char *s, double *out);

@@ -13,7 +13,7 @@ bool sb_gltf_camera_path(sb_path *p, const char *path, int cam, const sb_scene_o
 static bool add_key(sb_path *p, int *cap, sb_path_key k) {
     if (p->key_count == *cap) {
         *cap = *cap ? *cap * 2 : 16;
-        p->keys = realloc(p->keys, (size_t)*cap * sizeof *p->keys);
+        p->keys = sb_xrealloc(p->keys, (size_t)*cap * sizeof *p->keys);
     }
     p->keys[p->key_count++] = k;
     return true;
@@ -137,7 +137,7 @@ static void builtin_path(sb_path *p, const char *kind, const sb_scene *s) {
     sb_v3 e = sb_v3_sub(hi, lo);
     double r = 0.5 * fmax(e.x, e.z);
     int n = strcmp(kind, "orbit") == 0 ? 9 : 6;
-    p->keys = calloc((size_t)n, sizeof *p->keys);
+    p->keys = sb_xcalloc((size_t)n, sizeof *p->keys);
     p->key_count = n;
     for (int i = 0; i < n; i++) {
         double u = (double)i / (n - 1);

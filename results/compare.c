@@ -279,7 +279,7 @@ static int by_index(const void *a, const void *b) {
 
 bool sb_merge(const char *const *dirs, int n, const char *out_dir, sb_err *err) {
     if (!sb_mkdir_p(out_dir, err)) return false;
-    sb_table *t = calloc((size_t)n, sizeof *t);
+    sb_table *t = sb_xcalloc((size_t)n, sizeof *t);
     merged_row *rows = NULL;
     int nrows = 0;
     bool ok = true;
@@ -299,7 +299,7 @@ bool sb_merge(const char *const *dirs, int n, const char *out_dir, sb_err *err) 
             for (int k = 0; k < nrows; k++)
                 if (!strncmp(rows[k].line, id, strlen(id)) && rows[k].line[strlen(id)] == ',')
                     ok = sb_fail(err, "%s: run %s is also in another folder", dirs[i], id);
-            rows = realloc(rows, (size_t)(nrows + 1) * sizeof *rows);
+            rows = sb_xrealloc(rows, (size_t)(nrows + 1) * sizeof *rows);
             rows[nrows++] = (merged_row){num(sb_table_get(&t[i], r, "run_index")), t[i].lines[r]};
             char from[4400], to[4400];
             snprintf(from, sizeof from, "%s/%s.csv", dirs[i], id);
@@ -316,7 +316,7 @@ bool sb_merge(const char *const *dirs, int n, const char *out_dir, sb_err *err) 
         size_t len = strlen(hdr_line);
         size_t total = len + 2;
         for (int k = 0; k < nrows; k++) total += strlen(rows[k].line) + 1;
-        char *text = malloc(total + 1), *p = text;
+        char *text = sb_xmalloc(total + 1), *p = text;
         memcpy(p, hdr_line, len);
         p += len;
         *p++ = '\n';

@@ -11,7 +11,7 @@ static void put(sb_csv *c, const char *s, size_t n) {
     if (c->len + n + 1 > c->cap) {
         size_t cap = c->cap ? c->cap : 4096;
         while (cap < c->len + n + 1) cap *= 2;
-        c->buf = realloc(c->buf, cap);
+        c->buf = sb_xrealloc(c->buf, cap);
         c->cap = cap;
     }
     memcpy(c->buf + c->len, s, n);
@@ -81,7 +81,7 @@ bool sb_csv_file_open(sb_csv_file *cf, const char *path, sb_err *err) {
     memset(cf, 0, sizeof *cf);
     cf->path = sb_strdup(path);
     size_t n = strlen(path) + 5;
-    cf->tmp = malloc(n);
+    cf->tmp = sb_xmalloc(n);
     snprintf(cf->tmp, n, "%s.tmp", path);
     cf->f = fopen(cf->tmp, "w");
     if (!cf->f) {

@@ -16,8 +16,8 @@ void sb_evaluate_frame(const sb_reference *r, const double light[4], sb_v3 eye, 
                        int threads) {
     memset(out, 0, sizeof *out);
     int n = w * h;
-    sb_ref_point *pts = malloc(sizeof *pts * (size_t)(n > 0 ? n : 1));
-    int *pix = malloc(sizeof(int) * (size_t)(n > 0 ? n : 1));
+    sb_ref_point *pts = sb_xmalloc(sizeof *pts * (size_t)(n > 0 ? n : 1));
+    int *pix = sb_xmalloc(sizeof(int) * (size_t)(n > 0 ? n : 1));
     int m = 0;
     for (int i = 0; i < n; i++) {
         const float *a = aux + 4 * (size_t)i, *p = pos + 4 * (size_t)i;
@@ -34,12 +34,12 @@ void sb_evaluate_frame(const sb_reference *r, const double light[4], sb_v3 eye, 
         q->eps = sb_ref_position_eps(r, q->p, (float)sb_v3_len(sb_v3_sub(sb_v3_make(p[0], p[1], p[2]), eye)));
         pix[m++] = i;
     }
-    unsigned char *ref = malloc((size_t)(m > 0 ? m : 1));
+    unsigned char *ref = sb_xmalloc((size_t)(m > 0 ? m : 1));
     double t0 = sb_now_ms();
     out->rays = sb_reference_visibility_light(r, light, pts, m, ref, threads);
     out->ray_ms = sb_now_ms() - t0;
-    double *res_err = malloc(sizeof(double) * (size_t)(m > 0 ? m : 1));
-    double *texel = malloc(sizeof(double) * (size_t)(m > 0 ? m : 1));
+    double *res_err = sb_xmalloc(sizeof(double) * (size_t)(m > 0 ? m : 1));
+    double *texel = sb_xmalloc(sizeof(double) * (size_t)(m > 0 ? m : 1));
     int nres = 0;
     long wrong = 0, fshadow = 0, flit = 0;
     double mae = 0;

@@ -16,8 +16,8 @@ bool sb_images_write_frame(const char *dir, const char *run_id, int frame, int w
     bool ok = sb_image_write_u8(SB_IMG("color.png"), w, h, 4, rgba, err) &&
               sb_image_write_u8(SB_IMG("vis.png"), w, h, 1, vis, err) &&
               sb_image_write_u8(SB_IMG("ref.png"), w, h, 1, ref, err);
-    unsigned char *rgb = malloc((size_t)n * 3);
-    float *texel = malloc(sizeof(float) * (size_t)n);
+    unsigned char *rgb = sb_xmalloc((size_t)n * 3);
+    float *texel = sb_xmalloc(sizeof(float) * (size_t)n);
     if (ok) {
         for (int i = 0; i < n; i++) {
             unsigned char *o = rgb + 3 * (size_t)i;

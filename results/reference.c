@@ -106,9 +106,9 @@ uint64_t sb_reference_visibility(const sb_reference *r, sb_v3 sun, const sb_ref_
 uint64_t sb_reference_visibility_light(const sb_reference *r, const double light[4], const sb_ref_point *pts, int n,
                                        unsigned char *vis, int threads) {
     if (threads < 1) threads = 1;
-    if (threads > 16) threads = 16;
-    pthread_t th[16];
-    job jobs[16];
+    if (threads > n) threads = n > 0 ? n : 1;   /* no idle threads on a small frame */
+    pthread_t *th = sb_xmalloc(sizeof *th * (size_t)threads);
+    job *jobs = sb_xmalloc(sizeof *jobs * (size_t)threads);
     int per = (n + threads - 1) / threads;
     for (int t = 0; t < threads; t++) {
         jobs[t] = (job){r, {(float)light[0], (float)light[1], (float)light[2]}, light[3] > 0.5, pts, vis, t * per, 0};
@@ -118,5 +118,7 @@ uint64_t sb_reference_visibility_light(const sb_reference *r, const double light
     }
     work(&jobs[0]);
     for (int t = 1; t < threads; t++) pthread_join(th[t], NULL);
+    free(th);
+    free(jobs);
     return (uint64_t)n;
 }

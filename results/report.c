@@ -3,6 +3,7 @@
  * an empty field, not 0. */
 #include "report.h"
 
+#include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -136,6 +137,7 @@ static sb_cell r_int(const sb_run_row *r, int a) {
                            (long long)in->scene_triangles};
     return integer(v[a]);
 }
+static sb_cell r_warnings(const sb_run_row *r, int a) { (void)a; return text(r->info->warnings); }
 static sb_cell r_repeats(const sb_run_row *r, int a) { (void)a; return integer(r->n ? r->info->repeats : 0); }
 static sb_cell r_target_ci(const sb_run_row *r, int a) {
     (void)a;
@@ -181,6 +183,7 @@ const sb_run_col sb_run_cols[] = {
     {"height", r_int, I_HEIGHT, 0, 0, "render height"},
     {"status", r_text, S_STATUS, 0, 0, "ok, failed or skipped"},
     {"reason", r_text, S_REASON, 0, 0, "why a run failed or was skipped"},
+    {"warnings", r_warnings, 0, 0, 0, "what the tool cannot stand behind in this run, \"; \"-separated"},
     {"repeats", r_repeats, 0, 0, 0, "repetitions of the path measured"},
     {"target_ci_pct", r_target_ci, 0, 0, 0, "--target-ci"},
     {"gpu_ci_pct", r_gpu_ci, 0, 0, 0, "95% CI half-width of mean gpu_ms, percent of the mean"},
@@ -260,7 +263,7 @@ void sb_report_summary_row(sb_csv *c, const sb_run_info *info, unsigned stages, 
                            const sb_stage_times *times, int n) {
     if (!recs) n = 0;
     const sb_run_row row = {info, recs, times, n, stages};
-    double *v = malloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
+    double *v = sb_xmalloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
     for (int k = 0; k < sb_run_col_count; k++) {
         const sb_run_col *col = &sb_run_cols[k];
         if (col->get) {
@@ -342,7 +345,7 @@ int sb_report_default_metrics(const char **out, int max) {
 }
 
 double sb_report_gpu_ci_pct(const sb_stage_times *times, int n, int per_repeat) {
-    double *v = malloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
+    double *v = sb_xmalloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
     int m = 0;
     if (per_repeat > 0 && n >= 2 * per_repeat) {
         for (int r = 0; r + per_repeat <= n; r += per_repeat) {
@@ -356,6 +359,18 @@ double sb_report_gpu_ci_pct(const sb_stage_times *times, int n, int per_repeat) 
     sb_stats st = sb_stats_compute(v, m);
     free(v);
     return st.mean > 0 ? 100.0 * st.ci95 / st.mean : NAN;
+}
+
+void sb_run_warn(sb_run_info *info, const char *fmt, ...) {
+    size_t n = strlen(info->warnings);
+    if (n && n + 2 < sizeof info->warnings) {
+        memcpy(info->warnings + n, "; ", 3);
+        n += 2;
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(info->warnings + n, sizeof info->warnings - n, fmt, ap);
+    va_end(ap);
 }
 
 /* ---- the summary file ---- */

@@ -31,7 +31,11 @@ typedef struct sb_run_info {
     double load_ms, run_wall_s, frames_wall_ms;   /* frames: every rendered frame, warm-up included */
     uint64_t rays;
     double ray_ms;
+    char warnings[512];         /* what the tool cannot stand behind in an ok run ("; "-separated, "" if nothing) */
 } sb_run_info;
+
+/* Adds a note to the run's warnings. */
+void sb_run_warn(sb_run_info *info, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
 /* A cell of a row: empty, an integer, a number (%.6g) or text. */
 typedef enum sb_cell_kind { SB_CELL_EMPTY, SB_CELL_INT, SB_CELL_NUM, SB_CELL_STR } sb_cell_kind;

@@ -4,6 +4,8 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "util.h"
+
 static int cmp(const void *a, const void *b) {
     double x = *(const double *)a, y = *(const double *)b;
     return x < y ? -1 : x > y ? 1 : 0;
@@ -32,7 +34,7 @@ double sb_t975(int dof) {
 
 sb_stats sb_stats_compute(const double *v, int n) {
     sb_stats s = {0, NAN, NAN, NAN, NAN, NAN, NAN};
-    double *c = malloc((size_t)(n > 0 ? n : 1) * sizeof(double));
+    double *c = sb_xmalloc((size_t)(n > 0 ? n : 1) * sizeof(double));
     int m = 0;
     for (int i = 0; i < n; i++)
         if (!isnan(v[i])) c[m++] = v[i];

@@ -12,7 +12,7 @@ typedef struct {
 static void push(strvec *s, char *x) {
     if (s->n == s->cap) {
         s->cap = s->cap ? s->cap * 2 : 16;
-        s->v = realloc(s->v, (size_t)s->cap * sizeof *s->v);
+        s->v = sb_xrealloc(s->v, (size_t)s->cap * sizeof *s->v);
     }
     s->v[s->n++] = x;
 }
@@ -23,7 +23,7 @@ static bool record(const char **p, strvec *fields, char **line, bool *bad) {
     if (!*s) return false;
     const char *start = s;
     size_t cap = 64, len = 0;
-    char *buf = malloc(cap);
+    char *buf = sb_xmalloc(cap);
     for (;;) {
         len = 0;
         bool quoted = *s == '"';
@@ -46,7 +46,7 @@ static bool record(const char **p, strvec *fields, char **line, bool *bad) {
             } else if (!quoted && (c == ',' || c == '\n' || c == '\r')) {
                 break;
             }
-            if (len + 2 > cap) buf = realloc(buf, cap *= 2);
+            if (len + 2 > cap) buf = sb_xrealloc(buf, cap *= 2);
             buf[len++] = c;
             s++;
         }
@@ -61,7 +61,7 @@ static bool record(const char **p, strvec *fields, char **line, bool *bad) {
     const char *end = s;
     if (*s == '\r') s++;
     if (*s == '\n') s++;
-    *line = malloc((size_t)(end - start) + 1);
+    *line = sb_xmalloc((size_t)(end - start) + 1);
     memcpy(*line, start, (size_t)(end - start));
     (*line)[end - start] = 0;
     *p = s;
@@ -98,8 +98,8 @@ bool sb_table_parse(sb_table *t, const char *name, const char *text, sb_err *err
         }
         if (t->nrows == cap) {
             cap = cap ? cap * 2 : 16;
-            t->rows = realloc(t->rows, (size_t)cap * sizeof *t->rows);
-            t->lines = realloc(t->lines, (size_t)cap * sizeof *t->lines);
+            t->rows = sb_xrealloc(t->rows, (size_t)cap * sizeof *t->rows);
+            t->lines = sb_xrealloc(t->lines, (size_t)cap * sizeof *t->lines);
         }
         t->rows[t->nrows] = f.v;
         t->lines[t->nrows++] = line;

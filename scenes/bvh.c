@@ -18,19 +18,32 @@ static double centre(const sb_aabb *b, int axis) {
     return 0.5 * (lo[axis] + hi[axis]);
 }
 
-static const sb_draw *g_sort_draws;
-static int g_sort_axis;
+/* A draw's sort key: its box centre on the split axis, then its place before
+ * the sort (so equal centres keep their order: the sort is stable). */
+typedef struct {
+    double key;
+    uint32_t pos, draw;
+} draw_key;
+
 static int cmp_draw(const void *a, const void *b) {
-    double ca = centre(&g_sort_draws[*(const uint32_t *)a].box, g_sort_axis);
-    double cb = centre(&g_sort_draws[*(const uint32_t *)b].box, g_sort_axis);
-    return ca < cb ? -1 : ca > cb ? 1 : 0;
+    const draw_key *x = a, *y = b;
+    if (x->key != y->key) return x->key < y->key ? -1 : 1;
+    return x->pos < y->pos ? -1 : x->pos > y->pos;
+}
+
+static void sort_items(const sb_scene *s, uint32_t *items, uint32_t count, int axis) {
+    draw_key *k = sb_xmalloc(sizeof *k * count);
+    for (uint32_t i = 0; i < count; i++) k[i] = (draw_key){centre(&s->draws[items[i]].box, axis), i, items[i]};
+    qsort(k, count, sizeof *k, cmp_draw);
+    for (uint32_t i = 0; i < count; i++) items[i] = k[i].draw;
+    free(k);
 }
 
 static int32_t build(builder *bd, uint32_t first, uint32_t count) {
     sb_bvh *b = bd->b;
     if (b->node_count == bd->cap) {
         bd->cap = bd->cap ? bd->cap * 2 : 64;
-        b->nodes = realloc(b->nodes, bd->cap * sizeof *b->nodes);
+        b->nodes = sb_xrealloc(b->nodes, bd->cap * sizeof *b->nodes);
     }
     int32_t idx = (int32_t)b->node_count++;
     sb_aabb box = bd->s->draws[b->items[first]].box;
@@ -50,9 +63,7 @@ static int32_t build(builder *bd, uint32_t first, uint32_t count) {
     if (count <= SB_BVH_LEAF) return idx;
     sb_v3 ext = sb_v3_sub(chi, clo);
     int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : ext.y >= ext.z ? 1 : 2;
-    g_sort_draws = bd->s->draws;
-    g_sort_axis = axis;
-    qsort(b->items + first, count, sizeof(uint32_t), cmp_draw);
+    sort_items(bd->s, b->items + first, count, axis);
     uint32_t half = count / 2;
     int32_t l = build(bd, first, half);
     int32_t r = build(bd, first + half, count - half);
@@ -64,7 +75,7 @@ static int32_t build(builder *bd, uint32_t first, uint32_t count) {
 void sb_bvh_build(sb_scene *s) {
     sb_bvh_free(&s->bvh);
     if (s->draw_count == 0) return;
-    s->bvh.items = malloc(s->draw_count * sizeof(uint32_t));
+    s->bvh.items = sb_xmalloc(s->draw_count * sizeof(uint32_t));
     for (uint32_t i = 0; i < s->draw_count; i++) s->bvh.items[i] = i;
     builder bd = {s, &s->bvh, 0};
     build(&bd, 0, s->draw_count);

@@ -7,11 +7,21 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* glb.c is also built into the scene generator (no util.c): its own checked allocation. */
+static void *grow(void *p, size_t n) {
+    void *q = realloc(p, n);
+    if (!q) {
+        fprintf(stderr, "glb: out of memory (%zu bytes)\n", n);
+        exit(1);
+    }
+    return q;
+}
+
 
 sb_glb_mesh *sb_glb_new_mesh(sb_glb_scene *s, int material) {
     if (s->n == s->cap) {
         s->cap = s->cap ? s->cap * 2 : 64;
-        s->meshes = realloc(s->meshes, (size_t)s->cap * sizeof(sb_glb_mesh));
+        s->meshes = grow(s->meshes, (size_t)s->cap * sizeof(sb_glb_mesh));
     }
     sb_glb_mesh *m = &s->meshes[s->n++];
     memset(m, 0, sizeof *m);
@@ -22,8 +32,8 @@ sb_glb_mesh *sb_glb_new_mesh(sb_glb_scene *s, int material) {
 uint32_t sb_glb_vert(sb_glb_mesh *m, double x, double y, double z, double nx, double ny, double nz) {
     if (m->nv == m->capv) {
         m->capv = m->capv ? m->capv * 2 : 256;
-        m->pos = realloc(m->pos, (size_t)m->capv * 12);
-        m->nrm = realloc(m->nrm, (size_t)m->capv * 12);
+        m->pos = grow(m->pos, (size_t)m->capv * 12);
+        m->nrm = grow(m->nrm, (size_t)m->capv * 12);
     }
     float *p = m->pos + 3 * (size_t)m->nv, *n = m->nrm + 3 * (size_t)m->nv;
     p[0] = (float)x; p[1] = (float)y; p[2] = (float)z;
@@ -34,7 +44,7 @@ uint32_t sb_glb_vert(sb_glb_mesh *m, double x, double y, double z, double nx, do
 void sb_glb_tri(sb_glb_mesh *m, uint32_t a, uint32_t b, uint32_t c) {
     if (m->ni + 3 > m->capi) {
         m->capi = m->capi ? m->capi * 2 : 768;
-        m->idx = realloc(m->idx, (size_t)m->capi * 4);
+        m->idx = grow(m->idx, (size_t)m->capi * 4);
     }
     m->idx[m->ni++] = a;
     m->idx[m->ni++] = b;
@@ -81,7 +91,7 @@ static void put(str *b, const char *fmt, ...) {
             return;
         }
         b->cap = (b->cap + (size_t)n + 1) * 2;
-        b->s = realloc(b->s, b->cap);
+        b->s = grow(b->s, b->cap);
     }
 }
 
@@ -97,7 +107,7 @@ int sb_glb_write(sb_glb_scene *s, const char *path) {
     str js = {0};
     size_t bin_len = 0;
     for (int i = 0; i < s->n; i++) bin_len += (size_t)s->meshes[i].nv * 24 + (size_t)s->meshes[i].ni * 4;
-    unsigned char *bin = malloc(bin_len ? bin_len : 1);
+    unsigned char *bin = grow(NULL, bin_len ? bin_len : 1);
     size_t off = 0;
     str acc = {0}, views = {0}, meshes = {0}, nodes = {0}, roots = {0};
     for (int i = 0; i < s->n; i++) {

@@ -304,7 +304,7 @@ static bool check_asset(ck *c, const sb_json *root) {
 }
 
 static bool check_buffers(ck *c) {
-    c->buf_len = calloc(c->n[K_BUFFER] + 1, sizeof(uint64_t));
+    c->buf_len = sb_xcalloc(c->n[K_BUFFER] + 1, sizeof(uint64_t));
     for (uint64_t i = 0; i < c->n[K_BUFFER]; i++) {
         const sb_json *b = &c->arr[K_BUFFER]->items[i];
         jpath p = at_i("/buffers", i);
@@ -322,7 +322,7 @@ static bool check_buffers(ck *c) {
 }
 
 static bool check_views(ck *c) {
-    c->views = calloc(c->n[K_VIEW] + 1, sizeof(view_info));
+    c->views = sb_xcalloc(c->n[K_VIEW] + 1, sizeof(view_info));
     for (uint64_t i = 0; i < c->n[K_VIEW]; i++) {
         const sb_json *v = &c->arr[K_VIEW]->items[i];
         view_info *vi = &c->views[i];
@@ -412,7 +412,7 @@ static bool check_sparse(ck *c, const sb_json *sparse, const char *path, const a
 }
 
 static bool check_accessors(ck *c) {
-    c->accs = calloc(c->n[K_ACCESSOR] + 1, sizeof(acc_info));
+    c->accs = sb_xcalloc(c->n[K_ACCESSOR] + 1, sizeof(acc_info));
     for (uint64_t i = 0; i < c->n[K_ACCESSOR]; i++) {
         const sb_json *a = &c->arr[K_ACCESSOR]->items[i];
         acc_info *ai = &c->accs[i];
@@ -546,7 +546,7 @@ static bool check_transform(ck *c, const sb_json *n, const char *path) {
 }
 
 static bool check_nodes(ck *c) {
-    c->parent = malloc(sizeof(int64_t) * (c->n[K_NODE] + 1));
+    c->parent = sb_xmalloc(sizeof(int64_t) * (c->n[K_NODE] + 1));
     for (uint64_t i = 0; i < c->n[K_NODE]; i++) c->parent[i] = -1;
     for (uint64_t i = 0; i < c->n[K_NODE]; i++) {
         const sb_json *n = &c->arr[K_NODE]->items[i], *children, *ext, *lp;
@@ -575,7 +575,7 @@ static bool check_nodes(ck *c) {
             return false;
     }
     /* a real cycle: a walk up the (single) parents that comes back to itself */
-    uint8_t *state = calloc(c->n[K_NODE] + 1, 1);
+    uint8_t *state = sb_xcalloc(c->n[K_NODE] + 1, 1);
     bool ok = true;
     for (uint64_t i = 0; ok && i < c->n[K_NODE]; i++) {
         if (state[i]) continue;

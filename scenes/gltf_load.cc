@@ -308,7 +308,7 @@ struct Loader {
             for (int k = 0; k < 3; k++) l.color[k] = k < (int)L.color.size() ? (float)L.color[k] : 1.0f;
             l.intensity = L.intensity;
             l.range = L.range;
-            s->lights = (sb_light *)realloc(s->lights, (s->light_count + 1) * sizeof(sb_light));
+            s->lights = (sb_light *)sb_xrealloc(s->lights, (s->light_count + 1) * sizeof(sb_light));
             s->lights[s->light_count++] = l;
             if (l.type == SB_LIGHT_DIRECTIONAL && !s->has_sun) {
                 s->has_sun = true;
@@ -427,7 +427,7 @@ extern "C" bool sb_gltf_load(sb_scene *s, const char *path, const sb_scene_opts 
         if (!load_model(path, opts, model, &images, &hash, err)) return false;
         Loader L{Ctx{path, &model, err}, s, std::vector<sb_m4>(model.nodes.size()), std::vector<char>(model.nodes.size())};
         s->camera_count = (uint32_t)model.cameras.size();
-        s->cameras = (sb_scene_camera *)calloc(s->camera_count ? s->camera_count : 1, sizeof(sb_scene_camera));
+        s->cameras = (sb_scene_camera *)sb_xcalloc(s->camera_count ? s->camera_count : 1, sizeof(sb_scene_camera));
         for (size_t i = 0; i < model.cameras.size(); i++) {
             const tinygltf::Camera &cam = model.cameras[i];
             s->cameras[i].node = -1;
@@ -549,7 +549,7 @@ extern "C" bool sb_gltf_camera_path(sb_path *p, const char *path, int cam, const
             p->zfar = camera.perspective.zfar;
         }
         p->key_count = (int)times.size();
-        p->keys = (sb_path_key *)calloc(p->key_count, sizeof(sb_path_key));
+        p->keys = (sb_path_key *)sb_xcalloc(p->key_count, sizeof(sb_path_key));
         double t0 = *times.begin();
         int ki = 0;
         for (double t : times) {

@@ -19,7 +19,7 @@ static void *grow(void *p, uint32_t *cap, uint32_t need, size_t elem) {
     uint32_t c = *cap ? *cap : 1024;
     while (c < need) c *= 2;
     *cap = c;
-    return realloc(p, (size_t)c * elem);
+    return sb_xrealloc(p, (size_t)c * elem);
 }
 
 void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p) {
@@ -82,18 +82,17 @@ void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p) {
 
 /* ---- chunking: split a draw's triangles at the centroid median until small ---- */
 
-static const double *g_pos;
-static const uint32_t *g_idx;
-static int g_axis;
-
-static double tri_centre(uint32_t tri, int axis) {
-    const uint32_t *t = g_idx + 3 * (size_t)tri;
-    return g_pos[3 * (size_t)t[0] + axis] + g_pos[3 * (size_t)t[1] + axis] + g_pos[3 * (size_t)t[2] + axis];
-}
+/* A triangle's sort key: three times its centroid on the split axis, then its
+ * number (equal centroids keep their order: the sort is stable). */
+typedef struct {
+    double key;
+    uint32_t tri;
+} tri_key;
 
 static int cmp_tri(const void *a, const void *b) {
-    double ca = tri_centre(*(const uint32_t *)a, g_axis), cb = tri_centre(*(const uint32_t *)b, g_axis);
-    return ca < cb ? -1 : ca > cb ? 1 : 0;
+    const tri_key *x = a, *y = b;
+    if (x->key != y->key) return x->key < y->key ? -1 : 1;
+    return x->tri < y->tri ? -1 : x->tri > y->tri;
 }
 
 static sb_aabb tri_range_box(const sb_scene *s, uint32_t first_index, uint32_t count) {
@@ -114,7 +113,7 @@ typedef struct {
 
 /* Orders triangles [tri_first, tri_first+n) of the index array spatially (median
  * splits on the longest axis) and records each final run as a leaf. */
-static void split_order(sb_scene *s, uint32_t *order, uint32_t tri_first, uint32_t n, leaf_list *out) {
+static void split_order(sb_scene *s, tri_key *order, uint32_t tri_first, uint32_t n, leaf_list *out) {
     if (n <= SB_CHUNK_TRIS) {
         uint32_t c1 = out->cap, c2 = out->cap;
         out->first = grow(out->first, &c1, out->n + 1, sizeof(uint32_t));
@@ -126,13 +125,17 @@ static void split_order(sb_scene *s, uint32_t *order, uint32_t tri_first, uint32
     }
     sb_aabb b = tri_range_box(s, tri_first * 3, n * 3);
     sb_v3 e = sb_v3_sub(b.hi, b.lo);
-    g_axis = e.x >= e.y && e.x >= e.z ? 0 : e.y >= e.z ? 1 : 2;
-    g_pos = s->build_pos;
-    g_idx = s->indices;
-    for (uint32_t i = 0; i < n; i++) order[i] = tri_first + i;
-    qsort(order, n, sizeof(uint32_t), cmp_tri);
-    uint32_t *tmp = malloc((size_t)n * 3 * sizeof(uint32_t));
-    for (uint32_t i = 0; i < n; i++) memcpy(tmp + 3 * (size_t)i, s->indices + 3 * (size_t)order[i], 12);
+    int axis = e.x >= e.y && e.x >= e.z ? 0 : e.y >= e.z ? 1 : 2;
+    tri_key *k = order;
+    for (uint32_t i = 0; i < n; i++) {
+        const uint32_t *t = s->indices + 3 * (size_t)(tri_first + i);
+        const double *p = s->build_pos;
+        k[i] = (tri_key){p[3 * (size_t)t[0] + axis] + p[3 * (size_t)t[1] + axis] + p[3 * (size_t)t[2] + axis],
+                         tri_first + i};
+    }
+    qsort(k, n, sizeof *k, cmp_tri);
+    uint32_t *tmp = sb_xmalloc((size_t)n * 3 * sizeof(uint32_t));
+    for (uint32_t i = 0; i < n; i++) memcpy(tmp + 3 * (size_t)i, s->indices + 3 * (size_t)k[i].tri, 12);
     memcpy(s->indices + 3 * (size_t)tri_first, tmp, (size_t)n * 12);
     free(tmp);
     uint32_t half = n / 2;
@@ -146,7 +149,7 @@ static void chunk_draws(sb_scene *s) {
         sb_draw d = s->draws[di];
         uint32_t tris = d.index_count / 3;
         if (tris <= SB_CHUNK_TRIS) continue;
-        uint32_t *order = malloc(tris * sizeof(uint32_t));
+        tri_key *order = sb_xmalloc(tris * sizeof *order);
         leaf_list leaves = {0};
         split_order(s, order, d.first_index / 3, tris, &leaves);
         free(order);
@@ -230,7 +233,7 @@ void sb_scene_find_planes(sb_scene *s) {
     sb_v3 ext = sb_v3_sub(s->bounds.hi, s->bounds.lo);
     double face = fmax(ext.x * ext.y, fmax(ext.y * ext.z, ext.x * ext.z)), diag = sb_v3_len(ext);
     if (ntri == 0 || face <= 0) return;
-    plane_tri *pt = malloc(sizeof *pt * ntri);
+    plane_tri *pt = sb_xmalloc(sizeof *pt * ntri);
     uint32_t m = 0;
     for (uint32_t t = 0; t < ntri; t++) {
         const float *a = s->vertices + 6 * (size_t)s->indices[3 * t], *b = s->vertices + 6 * (size_t)s->indices[3 * t + 1],
@@ -270,7 +273,7 @@ void sb_scene_find_planes(sb_scene *s) {
                 p->d = -(n.x * a[0] + n.y * a[1] + n.z * a[2]);
                 p->area = area;
                 p->tri_count = j - i;
-                p->tris = malloc(sizeof(uint32_t) * p->tri_count);
+                p->tris = sb_xmalloc(sizeof(uint32_t) * p->tri_count);
                 for (uint32_t k = i; k < j; k++) p->tris[k - i] = pt[k].tri;
             }
         }
@@ -280,6 +283,15 @@ void sb_scene_find_planes(sb_scene *s) {
 }
 
 uint64_t sb_scene_triangles(const sb_scene *s) { return s->index_count / 3; }
+
+const sb_light *sb_scene_point_light(const sb_scene *s, int index, int *count) {
+    const sb_light *found = NULL;
+    int k = 0;
+    for (uint32_t i = 0; i < s->light_count; i++)
+        if (s->lights[i].type != SB_LIGHT_DIRECTIONAL && k++ == index) found = &s->lights[i];
+    if (count) *count = k;
+    return found;
+}
 
 static bool exe_dir(char *out, size_t len) {
     char buf[PATH_MAX];

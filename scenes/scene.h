@@ -109,6 +109,9 @@ typedef struct sb_scene {
 bool sb_scene_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_err *err);
 void sb_scene_free(sb_scene *s);
 uint64_t sb_scene_triangles(const sb_scene *s);
+/* The index-th point or spot light of the scene in file order (NULL if there
+ * is none); *count (may be NULL) gets how many there are. */
+const sb_light *sb_scene_point_light(const sb_scene *s, int index, int *count);
 /* Resolves a bundled scene or path name to a file; returns false if it is not one. */
 bool sb_resolve_bundled(const char *name, const char *ext, char *out, size_t outlen);
 

@@ -15,9 +15,20 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-STAGES = ["zpass", "minmax", "cascade", "volumes", "rays", "final"]
 COLORS = {"zpass": "#8da0cb", "minmax": "#e78ac3", "cascade": "#fc8d62", "volumes": "#a6d854",
           "rays": "#ffd92f", "final": "#66c2a5"}
+
+
+def stage_names(root):
+    """The stages, from the results set's own column table (columns.csv: the
+    per-frame columns flagged stage_time), in table order."""
+    path = os.path.join(root, "columns.csv")
+    if os.path.exists(path):
+        names = [r["name"][:-3] for r in csv.DictReader(open(path))
+                 if r["scope"] == "frame" and r["flags"] == "stage_time"]
+        if names:
+            return names
+    return list(COLORS)  # results written before columns.csv existed
 
 
 def num(s):
@@ -35,6 +46,9 @@ def label(r):
 
 
 def main(root):
+    STAGES = stage_names(root)
+    for i, st in enumerate(STAGES):
+        COLORS.setdefault(st, plt.cm.tab10(i % 10))
     runs = [r for r in csv.DictReader(open(os.path.join(root, "summary.csv"))) if r["status"] == "ok"]
     out = os.path.join(root, "plots")
     os.makedirs(out, exist_ok=True)

@@ -2,68 +2,91 @@
  * per-slice light fits (lightfit.c), stabilisation, receiver checks, exact
  * caster culling per cascade over the BVH, layered or per-cascade submission
  * into one 2D-array shadow map, and the final-pass lookup (vis_csm.glsl).
- * sm is one cascade over the whole view; pssm and sdsm differ only in where
- * their splits come from. */
+ *
+ * Everything is configured by one descriptor, sb_csm_desc, filled once from a
+ * technique's parameter table (its rows bind to the fields below). A
+ * technique whose frame is "splits, then fit, cull, render and shade" is a row:
+ * SB_CSM_TECHNIQUE with its split callback (sm, pssm, lispsm, tsm). psm and
+ * sdsm compute their fits elsewhere and use the pieces. */
 #pragma once
 #include "lightfit.h"
 
-/* Parameters every shadow-map technique has. */
+enum { SB_WARP_NONE, SB_WARP_LISPSM, SB_WARP_TSM };
+enum { SB_FORMAT_DEPTH, SB_FORMAT_VSM, SB_FORMAT_ESM, SB_FORMAT_MSM };
+enum { SB_FILTER_NONE, SB_FILTER_HW, SB_FILTER_PCF3, SB_FILTER_PCF5, SB_FILTER_POISSON16, SB_FILTER_PCSS };
+
+/* Every shadow-map setting; a technique's parameter struct starts with one. */
+typedef struct sb_csm_desc {
+    int res, depth, filter, stable, format, blur;
+    double bias, slope, normal, sun_size, bleed, exponent;
+    int cascades;               /* maps (cascades, or PSM's 6 cube faces); 0 means 1 */
+    int select;                 /* 0 interval (by view depth), 1 map (the first map holding the point) */
+    double blend;
+    int layered;                /* SB_LAYERED_*; ON resolved to the best available at create */
+    int warp;                   /* SB_WARP_* */
+    double min_angle;           /* LiSPSM: below this view/light angle, no warp (degrees) */
+    double focus;               /* TSM: share of the footprint mapped to 80% of the map */
+} sb_csm_desc;
+
+/* The defaults of the fields a technique's table may not have. */
+#define SB_CSM_DESC_DEFAULTS .cascades = 1, .min_angle = 5, .focus = 0.3
+
+/* Parameters every sun shadow-map technique has. They bind to sb_csm_desc's
+ * fields, so a technique's parameter struct must start with its
+ * `sb_csm_desc csm` (offset 0). */
 #define SB_SHADOWMAP_PARAMS                                                                                    \
-    {"res", SB_PARAM_INT, "2048", 64, 16384, NULL, "shadow map resolution (texels per side, per cascade)"},     \
-    {"depth", SB_PARAM_ENUM, "32f", 0, 0, "16|24|32f", "shadow map depth format"},                             \
-    {"bias", SB_PARAM_FLOAT, "1", 0, 100, NULL, "constant depth bias, in shadow texels of world size"},        \
-    {"slope", SB_PARAM_FLOAT, "2", 0, 100, NULL, "slope-scaled bias (glPolygonOffset factor)"},                \
-    {"normal", SB_PARAM_FLOAT, "1", 0, 100, NULL, "normal offset, in shadow texels"},                          \
-    {"filter", SB_PARAM_ENUM, "hw", 0, 0, "none|hw|pcf3|pcf5|poisson16|pcss", "shadow filter"},                \
-    {"sun_size", SB_PARAM_FLOAT, "0.53", 0, 10, NULL, "pcss: angular diameter of the sun, degrees"},          \
-    {"stable", SB_PARAM_ENUM, "off", 0, 0, "off|on", "sphere fit and texel snapping: no shimmer when moving"},  \
-    {"format", SB_PARAM_ENUM, "depth", 0, 0, "depth|vsm|esm|msm", "what the map stores: depth, or filterable moments"}, \
-    {"blur", SB_PARAM_INT, "2", 0, 16, NULL, "vsm/esm/msm: Gaussian blur radius of the moments, texels"},      \
-    {"bleed", SB_PARAM_FLOAT, "0.2", 0, 0.95, NULL, "vsm/msm: light-bleeding reduction"},                      \
-    {"exponent", SB_PARAM_FLOAT, "80", 1, 85, NULL, "esm: exponent c of exp(c z)"}
+    SB_PARAM_I(sb_csm_desc, res, 2048, 64, 16384, "shadow map resolution (texels per side, per cascade)"),     \
+    SB_PARAM_E(sb_csm_desc, depth, 32f, "16|24|32f", "shadow map depth format"),                               \
+    SB_PARAM_F(sb_csm_desc, bias, 1, 0, 100, "constant depth bias, in shadow texels of world size"),          \
+    SB_PARAM_F(sb_csm_desc, slope, 2, 0, 100, "slope-scaled bias (glPolygonOffset factor)"),                  \
+    SB_PARAM_F(sb_csm_desc, normal, 1, 0, 100, "normal offset, in shadow texels"),                             \
+    SB_PARAM_E(sb_csm_desc, filter, hw, "none|hw|pcf3|pcf5|poisson16|pcss", "shadow filter"),                   \
+    SB_PARAM_F(sb_csm_desc, sun_size, 0.53, 0, 10, "pcss: angular diameter of the sun, degrees"),             \
+    SB_PARAM_E(sb_csm_desc, stable, off, "off|on", "sphere fit and texel snapping: no shimmer when moving"),    \
+    SB_PARAM_E(sb_csm_desc, format, depth, "depth|vsm|esm|msm", "what the map stores: depth, or filterable moments"), \
+    SB_PARAM_I(sb_csm_desc, blur, 2, 0, 16, "vsm/esm/msm: Gaussian blur radius of the moments, texels"),        \
+    SB_PARAM_F(sb_csm_desc, bleed, 0.2, 0, 0.95, "vsm/msm: light-bleeding reduction"),                          \
+    SB_PARAM_F(sb_csm_desc, exponent, 80, 1, 85, "esm: exponent c of exp(c z)")
 
-/* Parameters of the cascaded techniques. */
+/* Parameters of the cascaded techniques (pssm, sdsm). */
 #define SB_CASCADE_PARAMS                                                                                      \
-    {"cascades", SB_PARAM_INT, "4", 1, 8, NULL, "number of cascades"},                                         \
-    {"select", SB_PARAM_ENUM, "interval", 0, 0, "interval|map", "cascade selection: by view depth or by map"}, \
-    {"blend", SB_PARAM_FLOAT, "0", 0, 0.5, NULL, "blend band between cascades (fraction of a cascade)"},       \
-    {"layered", SB_PARAM_ENUM, "off", 0, 0, "off|gs|vs|on",                                                    \
-     "per-cascade draws, or one draw per caster routed by a geometry shader / vertex-shader gl_Layer"},        \
-    {"warp", SB_PARAM_ENUM, "none", 0, 0, "none|lispsm|tsm", "perspective warp of each cascade (LiSPSM, TSM)"}
-
-enum { SB_LAYERED_OFF, SB_LAYERED_GS, SB_LAYERED_VS };
-enum { SB_SPLIT_UNIFORM, SB_SPLIT_LOG, SB_SPLIT_PRACTICAL };
+    SB_PARAM_I(sb_csm_desc, cascades, 4, 1, 8, "number of cascades"),                                           \
+    SB_PARAM_E(sb_csm_desc, select, interval, "interval|map", "cascade selection: by view depth or by map"),    \
+    SB_PARAM_F(sb_csm_desc, blend, 0, 0, 0.5, "blend band between cascades (fraction of a cascade)"),          \
+    SB_PARAM_E(sb_csm_desc, layered, off, "off|gs|vs|on",                                                       \
+               "per-cascade draws, or one draw per caster routed by a geometry shader / vertex-shader gl_Layer"), \
+    SB_PARAM_E(sb_csm_desc, warp, none, "none|lispsm|tsm", "perspective warp of each cascade (LiSPSM, TSM)")
 
 /* Split distances out[0..m] over [n, f]: practical = lambda*log + (1-lambda)*uniform. */
 void sb_split_distances(double lambda, int m, double n, double f, double *out);
 
-/* The cascade block as the GPU sees it (std430, csm_block.glsl). */
+/* The cascade block as the GPU sees it (std430, csm_block.glsl; a test
+ * compares these offsets with the shader's). `splits` is the part SDSM's GPU
+ * fits write and the CSV reads back. */
+typedef struct sb_cascade_splits {
+    float cascade[SB_MAX_CASCADES][4];  /* near split, far split, texel world size, depth range */
+    float flags[SB_MAX_CASCADES][4];    /* x: rendered, y: warped */
+} sb_cascade_splits;
 typedef struct sb_cascade_block {
     float light_vp[SB_MAX_CASCADES][16];
     float shadow_mat[SB_MAX_CASCADES][16];
-    float cascade[SB_MAX_CASCADES][4];   /* near split, far split, texel world size, depth range */
-    float flags[SB_MAX_CASCADES][4];     /* x: rendered */
-    float info[4];                       /* x: count */
+    sb_cascade_splits s;
+    float info[4];                      /* x: count */
 } sb_cascade_block;
 
 /* Techniques built on the machinery keep their sb_csm as the first member of
- * their state, so tests can read the shadow maps of any of them. */
+ * their state, so tests can read (and break) the shadow maps of any of them. */
 typedef struct sb_csm {
-    sb_gpu *gpu;
-    int res, count, filter, select, layered, stable, warp;
-    int format, blur;                     /* 0 depth, 1 vsm, 2 esm, 3 msm; blur radius in texels */
-    double bleed, exponent;
+    sb_csm_desc d;                        /* as created: layered resolved, cascades >= 1 */
+    const sb_gpu *gpu;
+    int count;                            /* maps: d.cascades */
+    bool no_clamp;                        /* clip casters at the near plane (PSM's naive ordering) */
     GLuint moments, moments_tmp;          /* RGBA32F arrays (filtered formats) */
     GLuint blur_prog;
     GLint b_dir, b_radius, b_layer;
     GLint u_moments, u_bleed, u_exponent, d_exponent[3];
-    bool no_clamp;                        /* clip casters at the near plane (PSM's naive ordering) */
-    double min_angle;                     /* LiSPSM falls back to uniform below this view/light angle */
-    double focus;                         /* TSM: share of the footprint mapped to 80% of the map */
-    double bias, slope, normal, blend, sun_size;
     GLuint raw_sampler;                   /* the map without comparison, for PCSS's blocker search */
     GLint u_depth_raw, u_sun_tan;
-    GLenum depth_format;
     GLuint tex, fbo_all, fbo_layer[SB_MAX_CASCADES];
     GLuint block;                         /* SSBO, binding 0 */
     GLuint prog_cascade, prog_gs, prog_vs;
@@ -78,16 +101,11 @@ typedef struct sb_csm {
     sb_cascade_block cpu;
 } sb_csm;
 
-/* Reads the shadow-map (and, if present, cascade) parameters; cascades
- * defaults to 1 when the technique has no `cascades` parameter. */
-bool sb_csm_create(sb_csm *c, sb_gpu *g, const sb_params *p, const char *name, sb_err *err);
-/* What a technique decides instead of its parameters (zero: from the parameters). */
-typedef struct sb_csm_desc {
-    int maps;               /* layers of the array map (PSM's cube: 6) */
-    bool select_map;        /* select by map: the first map that holds the point */
-} sb_csm_desc;
-bool sb_csm_create_desc(sb_csm *c, sb_gpu *g, const sb_params *p, const char *name, const sb_csm_desc *desc,
-                        sb_err *err);
+/* Parameter combinations that cannot work (no GL): stable with a warp. */
+bool sb_csm_check(const sb_csm_desc *d, const char *name, sb_err *err);
+/* What the context must offer: the resolution, and gl_Layer from the vertex shader for layered=vs. */
+bool sb_csm_supported(const sb_context *ctx, const sb_csm_desc *d, const char *name, sb_err *why);
+bool sb_csm_create(sb_csm *c, const sb_gpu *g, const sb_csm_desc *d, const char *name, sb_err *err);
 void sb_csm_destroy(sb_csm *c);
 /* CPU fits: cascade k covers view depth [splits[k], splits[k+1]]; a slice
  * with no receiver in view is skipped. Uploads the cascade block and records
@@ -105,8 +123,40 @@ uint32_t sb_csm_cull(sb_csm *c, sb_frame *f, const sb_light_fit *bound);
 void sb_csm_render(sb_csm *c, sb_frame *f);
 /* The final pass with the cascade lookup. */
 void sb_csm_final(sb_csm *c, sb_frame *f, bool reuse_depth);
-/* A whole frame from CPU splits: fit, then the cascade stage (cull, render)
- * and the final stage. sm and pssm are this with their own splits. */
-void sb_csm_frame(sb_csm *c, sb_frame *f, const double *splits);
 /* The cascade stage (cull, render) and the final stage, for fits already uploaded. */
 void sb_csm_draw(sb_csm *c, sb_frame *f);
+
+/* ---- cascade techniques as rows ---- */
+
+/* A row's split scheme: view depths out[0..count] for the frame. */
+typedef struct sb_csm_kind {
+    void (*splits)(const void *desc, const sb_frame *f, int count, double *out);
+} sb_csm_kind;
+
+/* The splits of one map over the whole view: [near, far]. */
+void sb_csm_view_splits(const void *desc, const sb_frame *f, int count, double *out);
+bool sb_csm_technique_check(const void *desc, sb_err *err);
+bool sb_csm_technique_supported(const struct sb_run_ctx *rc, const void *desc, sb_err *why);
+bool sb_csm_technique_create(void *state, const struct sb_run_ctx *rc, const void *desc, sb_err *err);
+void sb_csm_technique_frame(void *state, sb_frame *f);
+void sb_csm_technique_destroy(void *state);
+
+/* The state of a row: the machinery, its split scheme and parameter struct. */
+typedef struct sb_csm_state {
+    sb_csm csm;
+    const sb_csm_kind *kind;
+    const void *desc;           /* the instance's parameter struct (alive until destroy) */
+} sb_csm_state;
+
+/* A cascade technique: name, summary, parameter table, parameter struct
+ * type, its defaults, and the split scheme. */
+#define SB_CSM_TECHNIQUE(NAME, SUMMARY, PARAMS, DESC_T, DEFAULTS, SPLITS)                                      \
+    {                                                                                                          \
+        .name = NAME, .summary = SUMMARY, .params = PARAMS, .param_count = (int)SB_COUNT(PARAMS),              \
+        .desc_size = sizeof(DESC_T), .desc_defaults = DEFAULTS,                                                \
+        .stages = SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_FINAL), .needs = SB_NEEDS_SUN,       \
+        .state_size = sizeof(sb_csm_state), .check = sb_csm_technique_check,                                   \
+        .supported = sb_csm_technique_supported, .create = sb_csm_technique_create,                            \
+        .frame = sb_csm_technique_frame, .destroy = sb_csm_technique_destroy,                                  \
+        .impl = &(const sb_csm_kind){SPLITS},                                                                  \
+    }

@@ -9,19 +9,24 @@
 #include "gpu.h"
 #include "shaders.h"
 
+typedef struct cube_desc {
+    int res, light, filter, layered;
+    double bias, slope, normal;
+} cube_desc;
+
 static const sb_param_def cube_params[] = {
-    {"res", SB_PARAM_INT, "1024", 64, 8192, NULL, "cube face resolution"},
-    {"light", SB_PARAM_INT, "0", 0, 15, NULL, "which point or spot light of the scene (in file order)"},
-    {"bias", SB_PARAM_FLOAT, "1.5", 0, 100, NULL, "constant bias, in texels at the point's distance"},
-    {"slope", SB_PARAM_FLOAT, "2", 0, 100, NULL, "slope-scaled bias (glPolygonOffset factor)"},
-    {"normal", SB_PARAM_FLOAT, "1", 0, 100, NULL, "normal offset, in texels"},
-    {"filter", SB_PARAM_ENUM, "hw", 0, 0, "none|hw|pcf", "shadow filter"},
-    {"layered", SB_PARAM_ENUM, "off", 0, 0, "off|gs|vs|on", "six passes, or one layered pass"},
+    SB_PARAM_I(cube_desc, res, 1024, 64, 8192, "cube face resolution"),
+    SB_PARAM_I(cube_desc, light, 0, 0, 15, "which point or spot light of the scene (in file order)"),
+    SB_PARAM_F(cube_desc, bias, 1.5, 0, 100, "constant bias, in texels at the point's distance"),
+    SB_PARAM_F(cube_desc, slope, 2, 0, 100, "slope-scaled bias (glPolygonOffset factor)"),
+    SB_PARAM_F(cube_desc, normal, 1, 0, 100, "normal offset, in texels"),
+    SB_PARAM_E(cube_desc, filter, hw, "none|hw|pcf", "shadow filter"),
+    SB_PARAM_E(cube_desc, layered, off, "off|gs|vs|on", "six passes, or one layered pass"),
 };
 
 typedef struct {
-    int res, filter, layered;
-    double bias, slope, normal;
+    const cube_desc *d;         /* the instance's parameters */
+    int layered;                /* resolved (on: the best available) */
     sb_v3 lamp;                 /* origin-relative */
     double near, far;
     GLuint tex, fbo_all, fbo_face[6];
@@ -36,26 +41,14 @@ typedef struct {
 static const double face_dir[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
 static const double face_up[6][3] = {{0, -1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}, {0, -1, 0}, {0, -1, 0}};
 
-static bool cube_create(void *state, sb_gpu *g, const sb_params *p, sb_err *err) {
-    cube_state *s = state;
-    s->res = (int)sb_param_num(p, "res");
-    s->bias = sb_param_num(p, "bias");
-    s->slope = sb_param_num(p, "slope");
-    s->normal = sb_param_num(p, "normal");
-    s->filter = sb_param_choice(p, "filter");
-    int layered = sb_param_choice(p, "layered");
-    if (layered == 3) layered = g->ctx->has_vs_layer ? 2 : 1;
-    if (layered == 2 && !g->ctx->has_vs_layer)
-        return sb_fail(err, "cube:layered=vs needs GL_ARB_shader_viewport_layer_array, which %s lacks", g->ctx->renderer);
-    s->layered = layered;
-    int want = (int)sb_param_num(p, "light"), k = 0;
-    const sb_light *lamp = sb_point_light(g->scene, want, &k);
-    if (!lamp) return sb_fail(err, "cube:light=%d: the scene has %d point or spot light(s)", want, k);
-    s->lamp = lamp->position;
-    sb_v3 ext = sb_v3_sub(g->scene->bounds.hi, g->scene->bounds.lo);
-    double diag = sb_v3_len(ext);
-    s->far = lamp->range > 0 ? lamp->range : 2 * diag;
-    s->near = fmax(s->far * 1e-4, 1e-6);
+static bool cube_supported(const sb_run_ctx *rc, const void *desc, sb_err *why) {
+    const cube_desc *d = desc;
+    if (!sb_lamp_supported(rc->gpu, d->light, "cube", why)) return false;
+    return sb_layered_supported(rc->gpu->ctx, d->layered, "cube", why);
+}
+
+/* The six faces' matrices and culling planes around the lamp. */
+static void face_frusta(cube_state *s) {
     sb_m4 proj = sb_m4_perspective(SB_PI / 2, 1, s->near, s->far);
     for (int f = 0; f < 6; f++) {
         sb_v3 dir = sb_v3_make(face_dir[f][0], face_dir[f][1], face_dir[f][2]);
@@ -63,14 +56,29 @@ static bool cube_create(void *state, sb_gpu *g, const sb_params *p, sb_err *err)
         s->face_vp[f] = sb_m4_mul(proj, sb_m4_look_at(s->lamp, sb_v3_add(s->lamp, dir), up));
         sb_frustum_planes(s->face_vp[f], s->planes[f]);
     }
-    s->tex = sb_shadow_texture(GL_TEXTURE_CUBE_MAP, GL_DEPTH_COMPONENT32F, s->res, 6, s->filter != 0);
+}
+
+static bool cube_create(void *state, const sb_run_ctx *rc, const void *desc, sb_err *err) {
+    cube_state *s = state;
+    const cube_desc *d = desc;
+    const sb_gpu *g = rc->gpu;
+    s->d = d;
+    s->layered = sb_layered_resolve(g->ctx, d->layered);
+    const sb_light *lamp = sb_scene_point_light(g->scene, d->light, NULL);
+    s->lamp = lamp->position;
+    sb_v3 ext = sb_v3_sub(g->scene->bounds.hi, g->scene->bounds.lo);
+    double diag = sb_v3_len(ext);
+    s->far = lamp->range > 0 ? lamp->range : 2 * diag;
+    s->near = fmax(s->far * 1e-4, 1e-6);
+    face_frusta(s);
+    s->tex = sb_shadow_texture(GL_TEXTURE_CUBE_MAP, GL_DEPTH_COMPONENT32F, s->d->res, 6, s->d->filter != 0);
     glGenFramebuffers(1, &s->fbo_all);
     glBindFramebuffer(GL_FRAMEBUFFER, s->fbo_all);
     glFramebufferTexture(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, s->tex, 0);
     glDrawBuffer(GL_NONE);
     glReadBuffer(GL_NONE);
     if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-        return sb_fail(err, "cube:res=%d: layered cube framebuffer is incomplete", s->res);
+        return sb_fail(err, "cube:res=%d: layered cube framebuffer is incomplete", s->d->res);
     glGenFramebuffers(6, s->fbo_face);
     for (int f = 0; f < 6; f++) {
         glBindFramebuffer(GL_FRAMEBUFFER, s->fbo_face[f]);
@@ -101,7 +109,7 @@ static bool cube_create(void *state, sb_gpu *g, const sb_params *p, sb_err *err)
         s->u_face_vp_vs = glGetUniformLocation(s->prog_vs, "u_face_vp");
     }
     char defines[64];
-    snprintf(defines, sizeof defines, "#define SB_FILTER %d\n", s->filter);
+    snprintf(defines, sizeof defines, "#define SB_FILTER %d\n", s->d->filter);
     if (!sb_final_prog_create(&s->fp, "cube", sb_shader_vis_cube_glsl, defines, err)) return false;
     const char *names[] = {"u_cube", "u_lamp", "u_near", "u_far", "u_res", "u_bias", "u_normal"};
     GLint *locs[] = {&s->u_cube, &s->u_lamp, &s->u_near, &s->u_far, &s->u_res, &s->u_bias, &s->u_normal};
@@ -111,19 +119,19 @@ static bool cube_create(void *state, sb_gpu *g, const sb_params *p, sb_err *err)
 
 static void cube_frame(void *state, sb_frame *f) {
     cube_state *s = state;
-    sb_gpu *g = f->gpu;
+    const sb_gpu *g = f->gpu;
     const sb_scene *sc = g->scene;
     sb_stage_begin(f, SB_STAGE_CASCADE);
     glBindFramebuffer(GL_FRAMEBUFFER, s->fbo_all);
-    glViewport(0, 0, s->res, s->res);
+    glViewport(0, 0, s->d->res, s->d->res);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
     glDepthMask(GL_TRUE);
     glClear(GL_DEPTH_BUFFER_BIT);
     glDisable(GL_CULL_FACE);
-    if (s->slope > 0) {
+    if (s->d->slope != 0) {
         glEnable(GL_POLYGON_OFFSET_FILL);
-        glPolygonOffset((float)(s->slope * g->test_bias_sign), 0.0f);
+        glPolygonOffset((float)s->d->slope, 0.0f);
     }
     glBindVertexArray(g->vao);
     float m[6][16];
@@ -132,22 +140,22 @@ static void cube_frame(void *state, sb_frame *f) {
     if (s->layered == 0) {
         glUseProgram(s->prog_face);
         for (int k = 0; k < 6; k++) {
-            uint32_t n = sb_bvh_collect(sc, (const double(*)[4])s->planes[k], 6, g->scratch);
+            uint32_t n = sb_bvh_collect(sc, (const double(*)[4])s->planes[k], 6, f->scratch);
             if (!n) continue;
             faces++;
             glBindFramebuffer(GL_FRAMEBUFFER, s->fbo_face[k]);
             glUniformMatrix4fv(s->u_vp, 1, GL_FALSE, m[k]);
-            for (uint32_t i = 0; i < n; i++) sb_submit(f, g->scratch[i], 1);
+            for (uint32_t i = 0; i < n; i++) sb_submit(f, f->scratch[i], 1);
         }
     } else {
         /* casters within the lamp's range: the box around it */
         double box[6][4];
-        sb_range_planes(s->lamp, s->far, box);
-        uint32_t n = sb_bvh_collect(sc, (const double(*)[4])box, 6, g->scratch);
+        sb_cube_planes(s->lamp, s->far, box);
+        uint32_t n = sb_bvh_collect(sc, (const double(*)[4])box, 6, f->scratch);
         bool gs = s->layered == 1;
         glUseProgram(gs ? s->prog_gs : s->prog_vs);
         glUniformMatrix4fv(gs ? s->u_face_vp_gs : s->u_face_vp_vs, 6, GL_FALSE, &m[0][0]);
-        for (uint32_t i = 0; i < n; i++) sb_submit(f, g->scratch[i], gs ? 1 : 6);
+        for (uint32_t i = 0; i < n; i++) sb_submit(f, f->scratch[i], gs ? 1 : 6);
         faces = n ? 6 : 0;
     }
     glDisable(GL_POLYGON_OFFSET_FILL);
@@ -156,7 +164,7 @@ static void cube_frame(void *state, sb_frame *f) {
     sb_stage_end(f, SB_STAGE_CASCADE);
 
     sb_stage_begin(f, SB_STAGE_FINAL);
-    sb_shade_point_light(g, s->lamp);
+    sb_frame_shade_point(f, s->lamp);
     glUseProgram(s->fp.prog);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_CUBE_MAP, s->tex);
@@ -164,15 +172,14 @@ static void cube_frame(void *state, sb_frame *f) {
     glUniform3f(s->u_lamp, (float)s->lamp.x, (float)s->lamp.y, (float)s->lamp.z);
     glUniform1f(s->u_near, (float)s->near);
     glUniform1f(s->u_far, (float)s->far);
-    glUniform1f(s->u_res, (float)s->res);
-    glUniform1f(s->u_bias, (float)(g->test_bias_sign * s->bias));
-    glUniform1f(s->u_normal, (float)(g->test_bias_sign * s->normal));
+    glUniform1f(s->u_res, (float)s->d->res);
+    glUniform1f(s->u_bias, (float)s->d->bias);
+    glUniform1f(s->u_normal, (float)s->d->normal);
     sb_final_pass(f, &s->fp, false);
     sb_stage_end(f, SB_STAGE_FINAL);
 }
 
-static void cube_destroy(void *state, sb_gpu *g) {
-    (void)g;
+static void cube_destroy(void *state) {
     cube_state *s = state;
     sb_final_prog_free(&s->fp);
     GLuint progs[] = {s->prog_face, s->prog_gs, s->prog_vs};
@@ -188,9 +195,11 @@ const sb_technique sb_technique_cube = {
     .summary = "point-light shadows with a depth cube map (six faces, per face or layered)",
     .params = cube_params,
     .param_count = (int)SB_COUNT(cube_params),
+    .desc_size = sizeof(cube_desc),
     .stages = SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_FINAL),
     .needs = SB_NEEDS_POINT_LIGHT,
     .state_size = sizeof(cube_state),
+    .supported = cube_supported,
     .create = cube_create,
     .frame = cube_frame,
     .destroy = cube_destroy,

@@ -10,18 +10,23 @@
 #include "gpu.h"
 #include "shaders.h"
 
+typedef struct dpsm_desc {
+    int res, light, filter;
+    double bias, slope, normal;
+} dpsm_desc;
+
 static const sb_param_def dpsm_params[] = {
-    {"res", SB_PARAM_INT, "1024", 64, 8192, NULL, "resolution of each paraboloid map"},
-    {"light", SB_PARAM_INT, "0", 0, 15, NULL, "which point or spot light of the scene (in file order)"},
-    {"bias", SB_PARAM_FLOAT, "1.5", 0, 100, NULL, "constant bias, in texels at the point's distance"},
-    {"slope", SB_PARAM_FLOAT, "2", 0, 100, NULL, "slope-scaled bias (glPolygonOffset factor)"},
-    {"normal", SB_PARAM_FLOAT, "1", 0, 100, NULL, "normal offset, in texels"},
-    {"filter", SB_PARAM_ENUM, "hw", 0, 0, "none|hw", "shadow filter"},
+    SB_PARAM_I(dpsm_desc, res, 1024, 64, 8192, "resolution of each paraboloid map"),
+    SB_PARAM_I(dpsm_desc, light, 0, 0, 15, "which point or spot light of the scene (in file order)"),
+    SB_PARAM_F(dpsm_desc, bias, 1.5, 0, 100, "constant bias, in texels at the point's distance"),
+    SB_PARAM_F(dpsm_desc, slope, 2, 0, 100, "slope-scaled bias (glPolygonOffset factor)"),
+    SB_PARAM_F(dpsm_desc, normal, 1, 0, 100, "normal offset, in texels"),
+    SB_PARAM_E(dpsm_desc, filter, hw, "none|hw", "shadow filter"),
 };
 
 typedef struct {
-    int res, filter;
-    double bias, slope, normal, near, far;
+    const dpsm_desc *d;         /* the instance's parameters */
+    double near, far;
     sb_v3 lamp;
     float frame[9];
     GLuint tex, fbo[2], prog;
@@ -30,16 +35,16 @@ typedef struct {
     GLint u_maps, u_lamp, u_frame, u_near, u_far, u_res, u_bias, u_normal;
 } dpsm_state;
 
-static bool dpsm_create(void *state, sb_gpu *g, const sb_params *p, sb_err *err) {
+static bool dpsm_supported(const sb_run_ctx *rc, const void *desc, sb_err *why) {
+    return sb_lamp_supported(rc->gpu, ((const dpsm_desc *)desc)->light, "dpsm", why);
+}
+
+static bool dpsm_create(void *state, const sb_run_ctx *rc, const void *desc, sb_err *err) {
     dpsm_state *s = state;
-    s->res = (int)sb_param_num(p, "res");
-    s->bias = sb_param_num(p, "bias");
-    s->slope = sb_param_num(p, "slope");
-    s->normal = sb_param_num(p, "normal");
-    s->filter = sb_param_choice(p, "filter");
-    int want = (int)sb_param_num(p, "light"), k = 0;
-    const sb_light *lamp = sb_point_light(g->scene, want, &k);
-    if (!lamp) return sb_fail(err, "dpsm:light=%d: the scene has %d point or spot light(s)", want, k);
+    const dpsm_desc *d = desc;
+    const sb_gpu *g = rc->gpu;
+    s->d = d;
+    const sb_light *lamp = sb_scene_point_light(g->scene, d->light, NULL);
     s->lamp = lamp->position;
     double diag = sb_v3_len(sb_v3_sub(g->scene->bounds.hi, g->scene->bounds.lo));
     s->far = lamp->range > 0 ? lamp->range : 2 * diag;
@@ -47,7 +52,7 @@ static bool dpsm_create(void *state, sb_gpu *g, const sb_params *p, sb_err *err)
     /* lamp frame: x = +X, y = +Z, z = -Y (the front hemisphere looks down); rows of a world -> frame matrix */
     const float fr[9] = {1, 0, 0, 0, 0, -1, 0, 1, 0}; /* column-major mat3: columns are the images of x, y, z */
     memcpy(s->frame, fr, sizeof fr);
-    s->tex = sb_shadow_texture(GL_TEXTURE_2D_ARRAY, GL_DEPTH_COMPONENT32F, s->res, 2, s->filter != 0);
+    s->tex = sb_shadow_texture(GL_TEXTURE_2D_ARRAY, GL_DEPTH_COMPONENT32F, s->d->res, 2, s->d->filter != 0);
     glGenFramebuffers(2, s->fbo);
     for (int i = 0; i < 2; i++) {
         glBindFramebuffer(GL_FRAMEBUFFER, s->fbo[i]);
@@ -55,7 +60,7 @@ static bool dpsm_create(void *state, sb_gpu *g, const sb_params *p, sb_err *err)
         glDrawBuffer(GL_NONE);
         glReadBuffer(GL_NONE);
         if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-            return sb_fail(err, "dpsm:res=%d: framebuffer is incomplete", s->res);
+            return sb_fail(err, "dpsm:res=%d: framebuffer is incomplete", s->d->res);
     }
     const char *vs[] = {sb_shader_dpsm_vert}, *fs[] = {sb_shader_depth_frag};
     if (!(s->prog = sb_gpu_program("dpsm", NULL, vs, 1, fs, 1, err))) return false;
@@ -73,33 +78,33 @@ static bool dpsm_create(void *state, sb_gpu *g, const sb_params *p, sb_err *err)
 
 static void dpsm_frame(void *state, sb_frame *f) {
     dpsm_state *s = state;
-    sb_gpu *g = f->gpu;
+    const sb_gpu *g = f->gpu;
     const sb_scene *sc = g->scene;
     sb_stage_begin(f, SB_STAGE_CASCADE);
     double box[6][4];
-    sb_range_planes(s->lamp, s->far, box);
-    uint32_t n = sb_bvh_collect(sc, (const double(*)[4])box, 6, g->scratch);
+    sb_cube_planes(s->lamp, s->far, box);
+    uint32_t n = sb_bvh_collect(sc, (const double(*)[4])box, 6, f->scratch);
     glUseProgram(s->prog);
     glUniform3f(s->d_lamp, (float)s->lamp.x, (float)s->lamp.y, (float)s->lamp.z);
     glUniformMatrix3fv(s->d_frame, 1, GL_FALSE, s->frame);
     glUniform1f(s->d_near, (float)s->near);
     glUniform1f(s->d_far, (float)s->far);
-    glViewport(0, 0, s->res, s->res);
+    glViewport(0, 0, s->d->res, s->d->res);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
     glDepthMask(GL_TRUE);
     glDisable(GL_CULL_FACE);
     glEnable(GL_CLIP_DISTANCE0);
-    if (s->slope > 0) {
+    if (s->d->slope != 0) {
         glEnable(GL_POLYGON_OFFSET_FILL);
-        glPolygonOffset((float)(s->slope * g->test_bias_sign), 0.0f);
+        glPolygonOffset((float)s->d->slope, 0.0f);
     }
     glBindVertexArray(g->vao);
     for (int side = 0; side < 2; side++) {
         glBindFramebuffer(GL_FRAMEBUFFER, s->fbo[side]);
         glClear(GL_DEPTH_BUFFER_BIT);
         glUniform1f(s->d_side, side ? -1.0f : 1.0f);
-        for (uint32_t i = 0; i < n; i++) sb_submit(f, g->scratch[i], 1);
+        for (uint32_t i = 0; i < n; i++) sb_submit(f, f->scratch[i], 1);
     }
     glDisable(GL_CLIP_DISTANCE0);
     glDisable(GL_POLYGON_OFFSET_FILL);
@@ -108,7 +113,7 @@ static void dpsm_frame(void *state, sb_frame *f) {
     sb_stage_end(f, SB_STAGE_CASCADE);
 
     sb_stage_begin(f, SB_STAGE_FINAL);
-    sb_shade_point_light(g, s->lamp);
+    sb_frame_shade_point(f, s->lamp);
     glUseProgram(s->fp.prog);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D_ARRAY, s->tex);
@@ -117,15 +122,14 @@ static void dpsm_frame(void *state, sb_frame *f) {
     glUniformMatrix3fv(s->u_frame, 1, GL_FALSE, s->frame);
     glUniform1f(s->u_near, (float)s->near);
     glUniform1f(s->u_far, (float)s->far);
-    glUniform1f(s->u_res, (float)s->res);
-    glUniform1f(s->u_bias, (float)(g->test_bias_sign * s->bias));
-    glUniform1f(s->u_normal, (float)(g->test_bias_sign * s->normal));
+    glUniform1f(s->u_res, (float)s->d->res);
+    glUniform1f(s->u_bias, (float)s->d->bias);
+    glUniform1f(s->u_normal, (float)s->d->normal);
     sb_final_pass(f, &s->fp, false);
     sb_stage_end(f, SB_STAGE_FINAL);
 }
 
-static void dpsm_destroy(void *state, sb_gpu *g) {
-    (void)g;
+static void dpsm_destroy(void *state) {
     dpsm_state *s = state;
     sb_final_prog_free(&s->fp);
     if (s->prog) glDeleteProgram(s->prog);
@@ -138,9 +142,11 @@ const sb_technique sb_technique_dpsm = {
     .summary = "point-light shadows with dual-paraboloid maps (Brabec et al. 2002)",
     .params = dpsm_params,
     .param_count = (int)SB_COUNT(dpsm_params),
+    .desc_size = sizeof(dpsm_desc),
     .stages = SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_FINAL),
     .needs = SB_NEEDS_POINT_LIGHT,
     .state_size = sizeof(dpsm_state),
+    .supported = dpsm_supported,
     .create = dpsm_create,
     .frame = dpsm_frame,
     .destroy = dpsm_destroy,

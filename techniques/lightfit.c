@@ -151,7 +151,7 @@ typedef struct {
 static void points_push(point_list *l, sb_v3 p) {
     if (l->n == l->cap) {
         int cap = l->cap ? 2 * l->cap : 256;
-        sb_v3 *np = realloc(l->p, sizeof *np * (size_t)cap);
+        sb_v3 *np = sb_xrealloc(l->p, sizeof *np * (size_t)cap);
         if (!np) return;   /* out of memory: the fit uses the points it has */
         l->p = np;
         l->cap = cap;
@@ -338,10 +338,71 @@ static bool homography(const double src[4][2], const double dst[4][2], double H[
     return true;
 }
 
+/* The footprint of what can be seen, in the uniform map's [-1,1]^2: the slice
+ * clipped to the scene's box (the frustum's corners reach far beyond a scene
+ * whose far plane is loose, and the trapezoid would spend the map there), or
+ * the slice's corners q when the clip is empty. *nb gets the point count. */
+static double (*tsm_footprint(const sb_scene *s, const sb_light_fit *out, const sb_v3 *pts, double q[8][2],
+                              int *nb))[2] {
+    double planes[6][4];
+    slice_planes(pts, planes);
+    point_list body = {0};
+    box_clip_vertices(&s->bounds, (const double(*)[4])planes, pts, &body);
+    *nb = body.n ? body.n : 8;
+    double (*fp)[2] = sb_xmalloc(sizeof *fp * (size_t)*nb);
+    for (int i = 0; i < *nb; i++) {
+        if (body.n) {
+            sb_v3 c = sb_m4_point(out->view_proj, body.p[i]);
+            fp[i][0] = c.x;
+            fp[i][1] = c.y;
+        } else {
+            fp[i][0] = q[i][0];
+            fp[i][1] = q[i][1];
+        }
+    }
+    free(body.p);
+    return fp;
+}
+
+/* Embeds the homography H of the map's x, y (depth passes through: it stays
+ * monotonic along each light ray), refits depth to [-1, 1] over the extended
+ * light box, and makes it the fit's matrices. */
+static void tsm_warp(sb_light_fit *out, const double H[9], const sb_v3 *pts) {
+    sb_m4 T = {{0}};
+    T.m[0] = H[0]; T.m[4] = H[1]; T.m[12] = H[2];
+    T.m[1] = H[3]; T.m[5] = H[4]; T.m[13] = H[5];
+    T.m[3] = H[6]; T.m[7] = H[7]; T.m[15] = H[8];
+    T.m[10] = 1;
+    sb_m4 warp = sb_m4_mul(T, out->view_proj);
+    double zlo = 1e300, zhi = -1e300;
+    for (int i = 0; i < 8; i++) {
+        for (int e = 0; e < 2; e++) {
+            /* the uniform light box's corners over this footprint point: near and far depth */
+            sb_v3 c = sb_m4_point(out->view_proj, pts[i]);
+            sb_m4 inv;
+            if (!sb_m4_invert(out->view_proj, &inv)) return;
+            sb_v3 w = sb_m4_point(inv, sb_v3_make(c.x, c.y, e ? 1 : -1));
+            sb_v3 z = sb_m4_point(warp, w);
+            zlo = fmin(zlo, z.z);
+            zhi = fmax(zhi, z.z);
+        }
+    }
+    if (!(zhi > zlo)) return;
+    sb_m4 fitz = sb_m4_identity();
+    fitz.m[10] = 2 / (zhi - zlo);
+    fitz.m[14] = -(zhi + zlo) / (zhi - zlo);
+    sb_m4 vp = sb_m4_mul(fitz, warp);
+    if (!sb_m4_finite(vp)) return;
+    out->view_proj = vp;
+    sb_frustum_planes(vp, out->planes);
+    out->shadow_mat = shadow_from_clip(vp);
+    out->warped = true;
+}
+
 void sb_light_fit_tsm(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int res, double focus, sb_light_fit *out) {
     sb_light_fit_points(s, sun, pts, 8, res, out);
     if (out->empty) return;
-    /* the footprint in the uniform map's [-1,1]^2 */
+    /* the frustum's corners in the uniform map's [-1,1]^2, and the centre line from the near to the far end */
     double q[8][2];
     for (int i = 0; i < 8; i++) {
         sb_v3 c = sb_m4_point(out->view_proj, pts[i]);
@@ -359,30 +420,8 @@ void sb_light_fit_tsm(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int res, d
     ax[0] /= len;
     ax[1] /= len;
     double px[2] = {-ax[1], ax[0]};
-    /* the footprint of what can be seen: the slice clipped to the scene's box (the frustum's
-       corners reach far beyond a scene whose far plane is loose, and the trapezoid would spend
-       the map there) */
-    double planes[6][4];
-    slice_planes(pts, planes);
-    point_list body = {0};
-    box_clip_vertices(&s->bounds, (const double(*)[4])planes, pts, &body);
-    int nb = body.n ? body.n : 8;
-    double (*fp)[2] = malloc(sizeof *fp * (size_t)nb);
-    if (!fp) {
-        free(body.p);
-        return;
-    }
-    for (int i = 0; i < nb; i++) {
-        if (body.n) {
-            sb_v3 c = sb_m4_point(out->view_proj, body.p[i]);
-            fp[i][0] = c.x;
-            fp[i][1] = c.y;
-        } else {
-            fp[i][0] = q[i][0];
-            fp[i][1] = q[i][1];
-        }
-    }
-    free(body.p);
+    int nb;
+    double (*fp)[2] = tsm_footprint(s, out, pts, q, &nb);
     /* footprint in the centre-line frame: t along the line from the near centre, u across */
     double tmin = 1e300, tmax = -1e300;
     for (int i = 0; i < nb; i++) {
@@ -416,38 +455,7 @@ void sb_light_fit_tsm(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int res, d
         src[i][1] = nc[1] + ax[1] * tc[i][0] + px[1] * tc[i][1];
     }
     double H[9];
-    if (!homography(src, dst, H)) return;
-    /* embed: (x, y, w) by H, z passes through (depth stays monotonic along each light ray) */
-    sb_m4 T = {{0}};
-    T.m[0] = H[0]; T.m[4] = H[1]; T.m[12] = H[2];
-    T.m[1] = H[3]; T.m[5] = H[4]; T.m[13] = H[5];
-    T.m[3] = H[6]; T.m[7] = H[7]; T.m[15] = H[8];
-    T.m[10] = 1;
-    sb_m4 warp = sb_m4_mul(T, out->view_proj);
-    /* the depth of the extended light box after the warp: refit z to [-1, 1] */
-    double zlo = 1e300, zhi = -1e300;
-    for (int i = 0; i < 8; i++) {
-        for (int e = 0; e < 2; e++) {
-            /* the uniform light box's corners over this footprint point: near and far depth */
-            sb_v3 c = sb_m4_point(out->view_proj, pts[i]);
-            sb_m4 inv;
-            if (!sb_m4_invert(out->view_proj, &inv)) return;
-            sb_v3 w = sb_m4_point(inv, sb_v3_make(c.x, c.y, e ? 1 : -1));
-            sb_v3 z = sb_m4_point(warp, w);
-            zlo = fmin(zlo, z.z);
-            zhi = fmax(zhi, z.z);
-        }
-    }
-    if (!(zhi > zlo)) return;
-    sb_m4 fitz = sb_m4_identity();
-    fitz.m[10] = 2 / (zhi - zlo);
-    fitz.m[14] = -(zhi + zlo) / (zhi - zlo);
-    sb_m4 vp = sb_m4_mul(fitz, warp);
-    if (!sb_m4_finite(vp)) return;
-    out->view_proj = vp;
-    sb_frustum_planes(vp, out->planes);
-    out->shadow_mat = shadow_from_clip(vp);
-    out->warped = true;
+    if (homography(src, dst, H)) tsm_warp(out, H, pts);
 }
 
 /* ---- PSM ---------------------------------------------------------------- */
@@ -569,32 +577,24 @@ static void psm_finish(sb_light_fit *out, sb_m4 light_view, sb_m4 light_proj, bo
     out->empty = !sb_m4_finite(out->shadow_mat);
 }
 
-int sb_light_fit_psm(const sb_scene *s, sb_v3 sun, const sb_camera *cam, const sb_psm_desc *d, sb_light_fit out[6],
-                     sb_psm_info *info) {
-    int nfit = d->cube ? 6 : 1;
-    memset(out, 0, sizeof *out * (size_t)nfit);
-    memset(info, 0, sizeof *info);
-    for (int k = 0; k < nfit; k++) out[k].empty = true;
-    sun = sb_v3_norm(sun);
+/* The PSM's receivers: the visible draw boxes clipped to the view frustum, cut
+ * at the nearest visible receiver when it lies beyond the near plane. Returns
+ * false when the camera sees nothing. */
+static bool psm_receivers(const sb_scene *s, const sb_camera *cam, point_list *pts) {
     sb_v3 eye = sb_v3_sub(cam->pos, s->origin), fwd = cam->forward;
     double fovy = cam->fov_deg * SB_PI / 180;
-    /* receivers: the visible draw boxes clipped to the view frustum */
     sb_m4 cam_vp = sb_m4_mul(sb_m4_perspective(fovy, cam->aspect, cam->znear, cam->zfar),
                              sb_m4_view(eye, cam->right, cam->up, fwd));
     double planes[6][4];
     sb_frustum_planes(cam_vp, planes);
     sb_v3 corners[8];
     sb_frustum_corners(cam, s->origin, cam->znear, cam->zfar, corners);
-    point_list pts = {0};
-    draw_depth *near = malloc(sizeof *near * (s->draw_count + 1));
-    receiver_scan rs = {s, (const double(*)[4])planes, corners, &pts, eye, fwd, near, 0};
+    draw_depth *near = sb_xmalloc(sizeof *near * (s->draw_count + 1));
+    receiver_scan rs = {s, (const double(*)[4])planes, corners, pts, eye, fwd, near, 0};
     sb_bvh_cull(s, (const double(*)[4])planes, 6, scan_receiver, &rs);
     double znear = near ? nearest_receiver(s, (const double(*)[4])planes, eye, fwd, near, rs.near_count) : cam->znear;
     free(near);
-    if (pts.n == 0 || znear >= 1e300) { /* nothing the camera can see */
-        free(pts.p);
-        return nfit;
-    }
+    if (pts->n == 0 || znear >= 1e300) return false; /* nothing the camera can see */
     if (znear > cam->znear) { /* the receivers' boxes again, cut at the nearest visible receiver */
         double zcut = fmax(cam->znear, znear * (1 - 1e-3));
         planes[4][0] = fwd.x;
@@ -602,25 +602,31 @@ int sb_light_fit_psm(const sb_scene *s, sb_v3 sun, const sb_camera *cam, const s
         planes[4][2] = fwd.z;
         planes[4][3] = -sb_v3_dot(fwd, eye) - zcut;
         sb_frustum_corners(cam, s->origin, zcut, cam->zfar, corners);
-        pts.n = 0;
+        pts->n = 0;
         rs.near = NULL;
         sb_bvh_cull(s, (const double(*)[4])planes, 6, scan_receiver, &rs);
-        if (pts.n == 0) {
-            free(pts.p);
-            return nfit;
-        }
     }
-    /* the PPS camera: near and far pushed to the receivers */
+    return pts->n > 0;
+}
+
+/* The PPS camera: near and far pushed to the receivers (and moved back for
+ * behind=shift until every caster is in front). Returns its projection x view;
+ * *n1, *f1 the pushed planes before any shift, *texel the world texel size. */
+static sb_m4 psm_camera(const sb_scene *s, const sb_camera *cam, const sb_psm_desc *d, const point_list *pts,
+                        sb_psm_info *info, double *n1, double *f1, double *texel) {
+    sb_v3 eye = sb_v3_sub(cam->pos, s->origin), fwd = cam->forward;
     double zmin = 1e300, zmax = -1e300;
     sb_v3 wlo = {1e300, 1e300, 1e300}, whi = {-1e300, -1e300, -1e300};
-    for (int i = 0; i < pts.n; i++) {
-        double z = sb_v3_dot(sb_v3_sub(pts.p[i], eye), fwd);
+    for (int i = 0; i < pts->n; i++) {
+        double z = sb_v3_dot(sb_v3_sub(pts->p[i], eye), fwd);
         zmin = fmin(zmin, z);
         zmax = fmax(zmax, z);
-        wlo = sb_v3_min(wlo, pts.p[i]);
-        whi = sb_v3_max(whi, pts.p[i]);
+        wlo = sb_v3_min(wlo, pts->p[i]);
+        whi = sb_v3_max(whi, pts->p[i]);
     }
-    double n1 = fmax(cam->znear, zmin * (1 - 1e-3)), f1 = fmax(zmax * (1 + 1e-3), n1 * 1.001);
+    *texel = fmax(whi.x - wlo.x, fmax(whi.y - wlo.y, whi.z - wlo.z)) / d->res;
+    *n1 = fmax(cam->znear, zmin * (1 - 1e-3));
+    *f1 = fmax(zmax * (1 + 1e-3), *n1 * 1.001);
     double shift = 0;
     if (d->behind == SB_PSM_SHIFT) { /* every caster in front of the moved camera */
         double cmin = 1e300;
@@ -629,13 +635,123 @@ int sb_light_fit_psm(const sb_scene *s, sb_v3 sun, const sb_camera *cam, const s
                                  k & 4 ? s->bounds.hi.z : s->bounds.lo.z);
             cmin = fmin(cmin, sb_v3_dot(sb_v3_sub(q, eye), fwd));
         }
-        shift = fmax(0, 1e-3 * f1 - cmin);
+        shift = fmax(0, 1e-3 * *f1 - cmin);
     }
     info->shift = shift;
-    info->znear = n1 + shift;
-    info->zfar = f1 + shift;
-    sb_m4 C = sb_m4_mul(sb_m4_perspective(fovy, cam->aspect, n1 + shift, f1 + shift),
-                        sb_m4_view(sb_v3_sub(eye, sb_v3_scale(fwd, shift)), cam->right, cam->up, fwd));
+    info->znear = *n1 + shift;
+    info->zfar = *f1 + shift;
+    return sb_m4_mul(sb_m4_perspective(cam->fov_deg * SB_PI / 180, cam->aspect, *n1 + shift, *f1 + shift),
+                     sb_m4_view(sb_v3_sub(eye, sb_v3_scale(fwd, shift)), cam->right, cam->up, fwd));
+}
+
+/* The sun perpendicular to the view: still a directional light in PPS (dir),
+ * an orthographic map there (w_clip = the camera's w). */
+static void psm_ortho(const point_list *pts, sb_v3 dir, sb_m4 C, int res, double texel, sb_light_fit *out) {
+    sb_m4 lv = sb_light_view(dir);
+    sb_v3 lo = {1e300, 1e300, 1e300}, hi = {-1e300, -1e300, -1e300};
+    for (int i = 0; i < pts->n; i++) {
+        sb_v3 q = sb_m4_point(lv, pts->p[i]);
+        lo = sb_v3_min(lo, q);
+        hi = sb_v3_max(hi, q);
+    }
+    double ztop = hi.z; /* toward the light: the unit cube's extent, casters beyond clamp to 0 */
+    for (int k = 0; k < 8; k++)
+        ztop = fmax(ztop, sb_m4_point(lv, sb_v3_make(k & 1 ? 1 : -1, k & 2 ? 1 : -1, k & 4 ? 1 : -1)).z);
+    double gx = 2 * (hi.x - lo.x) / res + 1e-12, gy = 2 * (hi.y - lo.y) / res + 1e-12;
+    double pad = 1e-4 * (ztop - lo.z) + 1e-12;
+    sb_m4 o = sb_m4_ortho(lo.x - gx, hi.x + gx, lo.y - gy, hi.y + gy, -ztop - pad, -lo.z + pad);
+    psm_finish(out, sb_m4_mul(lv, C), o, false, texel);
+}
+
+/* One frustum from the PPS light l around the receivers' centre; false when
+ * none narrower than max_half_fov_deg holds them (the caller falls back). */
+static bool psm_single(const point_list *pts, sb_v3 l, sb_v3 centre, sb_m4 C, const sb_psm_desc *d, int depth,
+                       bool naive, double texel, sb_light_fit *out) {
+    sb_v3 axis = sb_v3_norm(sb_v3_sub(centre, l)), r, u;
+    sb_basis(axis, &r, &u);
+    double u0 = 1e300, u1 = -1e300, v0 = 1e300, v1 = -1e300, z0 = 1e300, z1 = -1e300;
+    for (int i = 0; i < pts->n; i++) {
+        sb_v3 q = sb_v3_sub(pts->p[i], l);
+        double z = sb_v3_dot(q, axis);
+        if (z <= 1e-9 * sb_v3_len(q)) return false;
+        u0 = fmin(u0, sb_v3_dot(q, r) / z);
+        u1 = fmax(u1, sb_v3_dot(q, r) / z);
+        v0 = fmin(v0, sb_v3_dot(q, u) / z);
+        v1 = fmax(v1, sb_v3_dot(q, u) / z);
+        z0 = fmin(z0, z);
+        z1 = fmax(z1, z);
+    }
+    double lim = tan((d->max_half_fov_deg > 0 ? d->max_half_fov_deg : 80) * SB_PI / 180);
+    if (fmax(fmax(-u0, u1), fmax(-v0, v1)) > lim) return false;
+    double gu = 2 * (u1 - u0) / d->res, gv = 2 * (v1 - v0) / d->res;
+    double nn = depth == DEPTH_ORDINARY ? 0.5 * z0 : z0 * (1 - 1e-4);
+    sb_m4 lp = pps_light_proj(u0 - gu, u1 + gu, v0 - gv, v1 + gv, depth, nn, z1 * (1 + 1e-4));
+    psm_finish(out, sb_m4_mul(pps_light_view(l, r, u, axis), C), lp, naive, texel);
+    return true;
+}
+
+/* Cube face k around l, unless a plane of its pyramid has every receiver
+ * outside; when every receiver is in front of the face's plane, its window
+ * and depth are fitted to them. */
+static void psm_face(const point_list *pts, int k, sb_v3 l, double dist, double far, sb_m4 C, int res, int depth,
+                     bool naive, double texel, sb_light_fit *out) {
+    double g1 = 1 + 4.0 / res;   /* a 90-degree face plus a guard band */
+    sb_v3 axis = {0, 0, 0}, r, u;
+    v3_set(&axis, k / 2, k & 1 ? -1 : 1);
+    sb_basis(axis, &r, &u);
+    bool sep[5] = {true, true, true, true, true}, front = true;
+    double u0 = 1e300, u1 = -1e300, v0 = 1e300, v1 = -1e300, z0 = 1e300, z1 = -1e300;
+    for (int i = 0; i < pts->n; i++) {
+        sb_v3 q = sb_v3_sub(pts->p[i], l);
+        double z = sb_v3_dot(q, axis), x = sb_v3_dot(q, r), y = sb_v3_dot(q, u);
+        if (z > 0) sep[0] = false;
+        if (x <= g1 * z) sep[1] = false;
+        if (x >= -g1 * z) sep[2] = false;
+        if (y <= g1 * z) sep[3] = false;
+        if (y >= -g1 * z) sep[4] = false;
+        if (z <= 1e-9 * sb_v3_len(q)) {
+            front = false;
+            continue;
+        }
+        u0 = fmin(u0, x / z);
+        u1 = fmax(u1, x / z);
+        v0 = fmin(v0, y / z);
+        v1 = fmax(v1, y / z);
+        z0 = fmin(z0, z);
+        z1 = fmax(z1, z);
+    }
+    if (sep[0] || sep[1] || sep[2] || sep[3] || sep[4]) return;
+    double zlo = dist / sqrt(1 + 2 * g1 * g1), zhi = far; /* z' bounds of any receiver inside the face */
+    double w[4] = {-g1, g1, -g1, g1};
+    if (front) {
+        double gu = 2 * (u1 - u0) / res, gv = 2 * (v1 - v0) / res;
+        w[0] = fmax(w[0], u0 - gu);
+        w[1] = fmin(w[1], u1 + gu);
+        w[2] = fmax(w[2], v0 - gv);
+        w[3] = fmin(w[3], v1 + gv);
+        zlo = z0;
+        zhi = z1;
+    }
+    if (!(zlo > 0) || !(w[1] > w[0]) || !(w[3] > w[2])) return;
+    double nn = depth == DEPTH_ORDINARY ? 0.5 * zlo : zlo * (1 - 1e-4);
+    sb_m4 lp = pps_light_proj(w[0], w[1], w[2], w[3], depth, nn, zhi * (1 + 1e-4));
+    psm_finish(out, sb_m4_mul(pps_light_view(l, r, u, axis), C), lp, naive, texel);
+}
+
+int sb_light_fit_psm(const sb_scene *s, sb_v3 sun, const sb_camera *cam, const sb_psm_desc *d, sb_light_fit out[6],
+                     sb_psm_info *info) {
+    int nfit = d->cube ? 6 : 1;
+    memset(out, 0, sizeof *out * (size_t)nfit);
+    memset(info, 0, sizeof *info);
+    for (int k = 0; k < nfit; k++) out[k].empty = true;
+    sun = sb_v3_norm(sun);
+    point_list pts = {0};
+    if (!psm_receivers(s, cam, &pts)) {
+        free(pts.p);
+        return nfit;
+    }
+    double n1, f1, texel;
+    sb_m4 C = psm_camera(s, cam, d, &pts, info, &n1, &f1, &texel);
     const double sun4[4] = {sun.x, sun.y, sun.z, 0};
     double L[4];
     m4_v4(C, sun4, L);
@@ -647,119 +763,29 @@ int sb_light_fit_psm(const sb_scene *s, sb_v3 sun, const sb_camera *cam, const s
         phi = sb_v3_max(phi, pts.p[i]);
         centre = sb_v3_add(centre, sb_v3_scale(pts.p[i], 1.0 / pts.n));
     }
-    double texel = fmax(whi.x - wlo.x, fmax(whi.y - wlo.y, whi.z - wlo.z)) / d->res;
     double lxyz = sqrt(L[0] * L[0] + L[1] * L[1] + L[2] * L[2]);
     bool naive = d->behind == SB_PSM_NAIVE && info->inverted;
     int depth = info->inverted ? (naive ? DEPTH_NAIVE : DEPTH_INVERSE) : DEPTH_ORDINARY;
-
     if (fabs(L[3]) * 1e7 <= lxyz) {
-        /* the sun perpendicular to the view: still a directional light in PPS, an
-           orthographic map there (w_clip = the camera's w) */
         info->ortho = true;
-        sb_v3 dir = sb_v3_make(L[0] / lxyz, L[1] / lxyz, L[2] / lxyz);
-        sb_m4 lv = sb_light_view(dir);
-        sb_v3 lo = {1e300, 1e300, 1e300}, hi = {-1e300, -1e300, -1e300};
-        for (int i = 0; i < pts.n; i++) {
-            sb_v3 q = sb_m4_point(lv, pts.p[i]);
-            lo = sb_v3_min(lo, q);
-            hi = sb_v3_max(hi, q);
-        }
-        double ztop = hi.z; /* toward the light: the unit cube's extent, casters beyond clamp to 0 */
-        for (int k = 0; k < 8; k++)
-            ztop = fmax(ztop, sb_m4_point(lv, sb_v3_make(k & 1 ? 1 : -1, k & 2 ? 1 : -1, k & 4 ? 1 : -1)).z);
-        double gx = 2 * (hi.x - lo.x) / d->res + 1e-12, gy = 2 * (hi.y - lo.y) / d->res + 1e-12;
-        double pad = 1e-4 * (ztop - lo.z) + 1e-12;
-        sb_m4 o = sb_m4_ortho(lo.x - gx, hi.x + gx, lo.y - gy, hi.y + gy, -ztop - pad, -lo.z + pad);
-        psm_finish(&out[0], sb_m4_mul(lv, C), o, false, texel);
-        free(pts.p);
-        return nfit;
-    }
-    sb_v3 l = sb_v3_make(L[0] / L[3], L[1] / L[3], L[2] / L[3]);
-    info->light = l;
-
-    if (!d->cube) {
-        sb_v3 axis = sb_v3_norm(sb_v3_sub(centre, l)), r, u;
-        sb_basis(axis, &r, &u);
-        double u0 = 1e300, u1 = -1e300, v0 = 1e300, v1 = -1e300, z0 = 1e300, z1 = -1e300;
-        bool wide = false;
-        for (int i = 0; i < pts.n && !wide; i++) {
-            sb_v3 q = sb_v3_sub(pts.p[i], l);
-            double z = sb_v3_dot(q, axis);
-            if (z <= 1e-9 * sb_v3_len(q)) wide = true;
-            u0 = fmin(u0, sb_v3_dot(q, r) / z);
-            u1 = fmax(u1, sb_v3_dot(q, r) / z);
-            v0 = fmin(v0, sb_v3_dot(q, u) / z);
-            v1 = fmax(v1, sb_v3_dot(q, u) / z);
-            z0 = fmin(z0, z);
-            z1 = fmax(z1, z);
-        }
-        double lim = tan((d->max_half_fov_deg > 0 ? d->max_half_fov_deg : 80) * SB_PI / 180);
-        if (wide || fmax(fmax(-u0, u1), fmax(-v0, v1)) > lim) {
-            /* no single frustum from l holds the receivers: the uniform map */
-            info->fallback = true;
-            sb_v3 sc[8];
-            sb_frustum_corners(cam, s->origin, n1, f1, sc);
-            sb_light_fit_points(s, sun, sc, 8, d->res, &out[0]);
-            free(pts.p);
-            return nfit;
-        }
-        double gu = 2 * (u1 - u0) / d->res, gv = 2 * (v1 - v0) / d->res;
-        double nn = depth == DEPTH_ORDINARY ? 0.5 * z0 : z0 * (1 - 1e-4);
-        sb_m4 lp = pps_light_proj(u0 - gu, u1 + gu, v0 - gv, v1 + gv, depth, nn, z1 * (1 + 1e-4));
-        psm_finish(&out[0], sb_m4_mul(pps_light_view(l, r, u, axis), C), lp, naive, texel);
-        free(pts.p);
-        return nfit;
-    }
-
-    /* cube: a 90-degree face (plus a guard band) per PPS axis, where receivers are;
-       when every receiver is in front of a face's plane, the face's window and
-       depth are fitted to them (a face that holds them all is the single map) */
-    double g1 = 1 + 4.0 / d->res;
-    sb_v3 near_pt = sb_v3_max(plo, sb_v3_min(l, phi));   /* closest point of the receivers' box to l */
-    double dist = sb_v3_len(sb_v3_sub(near_pt, l)), far = 0;
-    for (int i = 0; i < pts.n; i++) far = fmax(far, sb_v3_len(sb_v3_sub(pts.p[i], l)));
-    for (int k = 0; k < 6; k++) {
-        sb_v3 axis = {0, 0, 0}, r, u;
-        v3_set(&axis, k / 2, k & 1 ? -1 : 1);
-        sb_basis(axis, &r, &u);
-        /* a face is needed unless one of its pyramid's planes has every receiver outside */
-        bool sep[5] = {true, true, true, true, true}, front = true;
-        double u0 = 1e300, u1 = -1e300, v0 = 1e300, v1 = -1e300, z0 = 1e300, z1 = -1e300;
-        for (int i = 0; i < pts.n; i++) {
-            sb_v3 q = sb_v3_sub(pts.p[i], l);
-            double z = sb_v3_dot(q, axis), x = sb_v3_dot(q, r), y = sb_v3_dot(q, u);
-            if (z > 0) sep[0] = false;
-            if (x <= g1 * z) sep[1] = false;
-            if (x >= -g1 * z) sep[2] = false;
-            if (y <= g1 * z) sep[3] = false;
-            if (y >= -g1 * z) sep[4] = false;
-            if (z <= 1e-9 * sb_v3_len(q)) {
-                front = false;
-                continue;
+        psm_ortho(&pts, sb_v3_make(L[0] / lxyz, L[1] / lxyz, L[2] / lxyz), C, d->res, texel, &out[0]);
+    } else {
+        sb_v3 l = sb_v3_make(L[0] / L[3], L[1] / L[3], L[2] / L[3]);
+        info->light = l;
+        if (!d->cube) {
+            if (!psm_single(&pts, l, centre, C, d, depth, naive, texel, &out[0])) {
+                /* no single frustum from l holds the receivers: the uniform map */
+                info->fallback = true;
+                sb_v3 sc[8];
+                sb_frustum_corners(cam, s->origin, n1, f1, sc);
+                sb_light_fit_points(s, sun, sc, 8, d->res, &out[0]);
             }
-            u0 = fmin(u0, x / z);
-            u1 = fmax(u1, x / z);
-            v0 = fmin(v0, y / z);
-            v1 = fmax(v1, y / z);
-            z0 = fmin(z0, z);
-            z1 = fmax(z1, z);
+        } else {
+            sb_v3 near_pt = sb_v3_max(plo, sb_v3_min(l, phi)); /* closest point of the receivers' box to l */
+            double dist = sb_v3_len(sb_v3_sub(near_pt, l)), far = 0;
+            for (int i = 0; i < pts.n; i++) far = fmax(far, sb_v3_len(sb_v3_sub(pts.p[i], l)));
+            for (int k = 0; k < 6; k++) psm_face(&pts, k, l, dist, far, C, d->res, depth, naive, texel, &out[k]);
         }
-        if (sep[0] || sep[1] || sep[2] || sep[3] || sep[4]) continue;
-        double zlo = dist / sqrt(1 + 2 * g1 * g1), zhi = far; /* z' bounds of any receiver inside the face */
-        double w[4] = {-g1, g1, -g1, g1};
-        if (front) {
-            double gu = 2 * (u1 - u0) / d->res, gv = 2 * (v1 - v0) / d->res;
-            w[0] = fmax(w[0], u0 - gu);
-            w[1] = fmin(w[1], u1 + gu);
-            w[2] = fmax(w[2], v0 - gv);
-            w[3] = fmin(w[3], v1 + gv);
-            zlo = z0;
-            zhi = z1;
-        }
-        if (!(zlo > 0) || !(w[1] > w[0]) || !(w[3] > w[2])) continue;
-        double nn = depth == DEPTH_ORDINARY ? 0.5 * zlo : zlo * (1 - 1e-4);
-        sb_m4 lp = pps_light_proj(w[0], w[1], w[2], w[3], depth, nn, zhi * (1 + 1e-4));
-        psm_finish(&out[k], sb_m4_mul(pps_light_view(l, r, u, axis), C), lp, naive, texel);
     }
     free(pts.p);
     return nfit;

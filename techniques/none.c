@@ -6,9 +6,9 @@ typedef struct {
     sb_final_prog fp;
 } none_state;
 
-static bool none_create(void *state, sb_gpu *gpu, const sb_params *p, sb_err *err) {
-    (void)gpu;
-    (void)p;
+static bool none_create(void *state, const sb_run_ctx *rc, const void *desc, sb_err *err) {
+    (void)rc;
+    (void)desc;
     none_state *s = state;
     return sb_final_prog_create(&s->fp, "none", sb_shader_vis_none_glsl, NULL, err);
 }
@@ -21,8 +21,7 @@ static void none_frame(void *state, sb_frame *f) {
     sb_stage_end(f, SB_STAGE_FINAL);
 }
 
-static void none_destroy(void *state, sb_gpu *gpu) {
-    (void)gpu;
+static void none_destroy(void *state) {
     none_state *s = state;
     sb_final_prog_free(&s->fp);
 }

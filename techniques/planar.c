@@ -16,6 +16,7 @@
 #include "gpu.h"
 #include "shaders.h"
 
+/* No parameters: everything is the scene's, made once (load). */
 typedef struct {
     GLuint prog_mark, prog_flat;
     GLint m_view, m_proj;
@@ -26,11 +27,26 @@ typedef struct {
     float flatten[SB_MAX_PLANES][16];
     bool usable[SB_MAX_PLANES];         /* facing the light */
     float eps;
+} planar_geo;
+
+typedef struct {
+    const planar_geo *geo;
 } planar_state;
 
-static bool planar_create(void *state, sb_gpu *g, const sb_params *p, sb_err *err) {
-    (void)p;
-    planar_state *s = state;
+static void planar_unload(void *data) {
+    planar_geo *s = data;
+    if (!s) return;
+    sb_final_prog_free(&s->fp);
+    if (s->prog_mark) glDeleteProgram(s->prog_mark);
+    if (s->prog_flat) glDeleteProgram(s->prog_flat);
+    for (int k = 0; k < SB_MAX_PLANES; k++)
+        if (s->plane_ibo[k]) glDeleteBuffers(1, &s->plane_ibo[k]);
+    free(s);
+}
+
+static bool planar_load(const sb_gpu *g, void **data, sb_err *err) {
+    planar_geo *s = sb_xcalloc(1, sizeof *s);
+    *data = s;
     const sb_scene *sc = g->scene;
     sb_v3 L = g->sun;
     sb_v3 ext = sb_v3_sub(sc->bounds.hi, sc->bounds.lo);
@@ -47,7 +63,7 @@ static bool planar_create(void *state, sb_gpu *g, const sb_params *p, sb_err *er
             for (int r = 0; r < 3; r++) m.m[c * 4 + r] -= Ld[r] * pl->n[c] / nl;
         for (int r = 0; r < 3; r++) m.m[12 + r] = -Ld[r] * pl->d / nl;
         sb_m4_to_float(m, s->flatten[k]);
-        uint32_t *idx = malloc(sizeof(uint32_t) * 3 * pl->tri_count);
+        uint32_t *idx = sb_xmalloc(sizeof(uint32_t) * 3 * pl->tri_count);
         for (uint32_t t = 0; t < pl->tri_count; t++) memcpy(idx + 3 * t, sc->indices + 3 * (size_t)pl->tris[t], 12);
         glGenBuffers(1, &s->plane_ibo[k]);
         glBindBuffer(GL_COPY_WRITE_BUFFER, s->plane_ibo[k]); /* not through a VAO's element binding */
@@ -72,9 +88,16 @@ static bool planar_create(void *state, sb_gpu *g, const sb_params *p, sb_err *er
     return sb_gl_check("planar", err);
 }
 
+static bool planar_create(void *state, const sb_run_ctx *rc, const void *desc, sb_err *err) {
+    (void)desc;
+    (void)err;
+    ((planar_state *)state)->geo = rc->scene_data;
+    return true;
+}
+
 static void planar_frame(void *state, sb_frame *f) {
-    planar_state *s = state;
-    sb_gpu *g = f->gpu;
+    const planar_geo *s = ((planar_state *)state)->geo;
+    const sb_gpu *g = f->gpu;
     const sb_scene *sc = g->scene;
 
     sb_stage_begin(f, SB_STAGE_ZPASS);
@@ -127,15 +150,7 @@ static void planar_frame(void *state, sb_frame *f) {
     sb_stage_end(f, SB_STAGE_FINAL);
 }
 
-static void planar_destroy(void *state, sb_gpu *g) {
-    (void)g;
-    planar_state *s = state;
-    sb_final_prog_free(&s->fp);
-    if (s->prog_mark) glDeleteProgram(s->prog_mark);
-    if (s->prog_flat) glDeleteProgram(s->prog_flat);
-    for (int k = 0; k < SB_MAX_PLANES; k++)
-        if (s->plane_ibo[k]) glDeleteBuffers(1, &s->plane_ibo[k]);
-}
+static void planar_destroy(void *state) { (void)state; }
 
 const sb_technique sb_technique_planar = {
     .name = "planar",
@@ -143,6 +158,8 @@ const sb_technique sb_technique_planar = {
     .stages = SB_STAGE_BIT(SB_STAGE_ZPASS) | SB_STAGE_BIT(SB_STAGE_VOLUMES) | SB_STAGE_BIT(SB_STAGE_FINAL),
     .needs = SB_NEEDS_SUN | SB_NEEDS_PLANE,
     .state_size = sizeof(planar_state),
+    .load = planar_load,
+    .unload = planar_unload,
     .create = planar_create,
     .frame = planar_frame,
     .destroy = planar_destroy,

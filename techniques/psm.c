@@ -16,34 +16,56 @@
  * cube face (selected by map, `layered=` as for cascades). */
 #include "cascade.h"
 
+typedef struct psm_desc {
+    sb_csm_desc csm;
+    int behind, cube;
+    double max_fov;
+} psm_desc;
+
 static const sb_param_def psm_params[] = {
     SB_SHADOWMAP_PARAMS,
-    {"behind", SB_PARAM_ENUM, "inverse", 0, 0, "inverse|shift|naive",
-     "casters behind the camera: inverse projection, virtual camera shift, or none (clipped)"},
-    {"cube", SB_PARAM_ENUM, "off", 0, 0, "off|on", "one map, or a cube of maps around the light in PPS"},
-    {"layered", SB_PARAM_ENUM, "off", 0, 0, "off|gs|vs|on", "cube=on: per-face draws, or layered as for cascades"},
-    {"max_fov", SB_PARAM_FLOAT, "80", 30, 89, NULL,
-     "one map: widest half-angle of the light frustum before the uniform map is used (degrees)"},
+    SB_PARAM_E(psm_desc, behind, inverse, "inverse|shift|naive",
+               "casters behind the camera: inverse projection, virtual camera shift, or none (clipped)"),
+    SB_PARAM_E(psm_desc, cube, off, "off|on", "one map, or a cube of maps around the light in PPS"),
+    SB_PARAM_E(sb_csm_desc, layered, off, "off|gs|vs|on", "cube=on: per-face draws, or layered as for cascades"),
+    SB_PARAM_F(psm_desc, max_fov, 80, 30, 89,
+               "one map: widest half-angle of the light frustum before the uniform map is used (degrees)"),
 };
+static const psm_desc psm_defaults = {.csm = {SB_CSM_DESC_DEFAULTS}};
 
 typedef struct {
     sb_csm csm;
-    sb_psm_desc desc;
+    sb_psm_desc fit;
 } psm_state;
 
-static bool psm_create(void *state, sb_gpu *gpu, const sb_params *p, sb_err *err) {
+static bool psm_check(const void *desc, sb_err *err) {
+    const psm_desc *d = desc;
+    if (d->csm.filter == SB_FILTER_PCSS)
+        return sb_fail(err, "filter=pcss needs depth linear in distance; a PSM's is not (use pcf3, pcf5, poisson16)");
+    if (d->csm.stable) return sb_fail(err, "stable=on cannot be combined with the warp");
+    if (!d->cube && d->csm.layered != SB_LAYERED_OFF) return sb_fail(err, "layered= needs cube=on (one map otherwise)");
+    return true;
+}
+
+/* The map count and selection follow from cube=: one map, or six faces selected by map. */
+static sb_csm_desc maps_of(const psm_desc *d) {
+    sb_csm_desc m = d->csm;
+    m.cascades = d->cube ? 6 : 1;
+    m.select = d->cube ? 1 : 0;
+    return m;
+}
+
+static bool psm_supported(const sb_run_ctx *rc, const void *desc, sb_err *why) {
+    sb_csm_desc m = maps_of(desc);
+    return sb_csm_supported(rc->gpu->ctx, &m, "psm", why);
+}
+
+static bool psm_create(void *state, const sb_run_ctx *rc, const void *desc, sb_err *err) {
     psm_state *s = state;
-    bool cube = sb_param_choice(p, "cube") == 1;
-    if (sb_param_choice(p, "filter") == 5)
-        return sb_fail(err, "psm: filter=pcss needs depth linear in distance; a PSM's is not (use pcf3, pcf5, poisson16)");
-    if (sb_param_choice(p, "stable") == 1) return sb_fail(err, "psm: stable=on cannot be combined with the warp");
-    if (!cube && sb_param_choice(p, "layered") != 0) return sb_fail(err, "psm: layered= needs cube=on (one map otherwise)");
-    sb_csm_desc d = {.maps = cube ? 6 : 1, .select_map = cube};
-    if (!sb_csm_create_desc(&s->csm, gpu, p, "psm", &d, err)) return false;
-    s->desc = (sb_psm_desc){.behind = sb_param_choice(p, "behind"),
-                            .cube = cube,
-                            .res = s->csm.res,
-                            .max_half_fov_deg = sb_param_num(p, "max_fov")};
+    const psm_desc *d = desc;
+    sb_csm_desc m = maps_of(d);
+    if (!sb_csm_create(&s->csm, rc->gpu, &m, "psm", err)) return false;
+    s->fit = (sb_psm_desc){.behind = d->behind, .cube = d->cube, .res = d->csm.res, .max_half_fov_deg = d->max_fov};
     return true;
 }
 
@@ -52,7 +74,7 @@ static void psm_frame(void *state, sb_frame *f) {
     sb_csm *c = &s->csm;
     sb_psm_info info;
     sb_light_fit fits[6];
-    int n = sb_light_fit_psm(f->gpu->scene, f->gpu->sun, &f->cam, &s->desc, fits, &info);
+    int n = sb_light_fit_psm(f->gpu->scene, f->gpu->sun, &f->cam, &s->fit, fits, &info);
     double zn[6], zf[6];
     for (int k = 0; k < n; k++) {
         c->fit[k] = fits[k];
@@ -61,7 +83,7 @@ static void psm_frame(void *state, sb_frame *f) {
         zf[k] = f->cam.zfar;
     }
     /* the naive ordering clips what the inverse projection would clamp */
-    c->no_clamp = s->desc.behind == SB_PSM_NAIVE && info.inverted;
+    c->no_clamp = s->fit.behind == SB_PSM_NAIVE && info.inverted;
     f->counters.warp_fallbacks = info.fallback;
     f->counters.split_count = 1;
     f->counters.splits[0] = info.zfar;
@@ -69,21 +91,19 @@ static void psm_frame(void *state, sb_frame *f) {
     sb_csm_draw(c, f);
 }
 
-static void psm_destroy(void *state, sb_gpu *gpu) {
-    (void)gpu;
-    psm_state *s = state;
-    sb_csm_destroy(&s->csm);
-}
-
 const sb_technique sb_technique_psm = {
     .name = "psm",
     .summary = "perspective shadow map in post-projective space, Novosibirsk fixes (Stamminger & Drettakis 2002)",
     .params = psm_params,
     .param_count = (int)SB_COUNT(psm_params),
+    .desc_size = sizeof(psm_desc),
+    .desc_defaults = &psm_defaults,
     .stages = SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_FINAL),
     .needs = SB_NEEDS_SUN,
     .state_size = sizeof(psm_state),
+    .check = psm_check,
+    .supported = psm_supported,
     .create = psm_create,
     .frame = psm_frame,
-    .destroy = psm_destroy,
+    .destroy = sb_csm_technique_destroy,   /* the state starts with its sb_csm */
 };

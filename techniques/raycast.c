@@ -15,13 +15,18 @@
 #include "reference.h"
 #include "shaders.h"
 
+typedef struct raycast_desc {
+    int threads, light;
+} raycast_desc;
+
 static const sb_param_def raycast_params[] = {
-    {"threads", SB_PARAM_INT, "0", 0, 16, NULL, "ray-casting threads (0: all cores)"},
-    {"light", SB_PARAM_INT, "-1", -1, 64, NULL,
-     "-1: the sun (a scene lit only by point lights: its first point light); K: the K-th point or spot light"},
+    SB_PARAM_I(raycast_desc, threads, 0, 0, 1024, "ray-casting threads (0: all cores)"),
+    SB_PARAM_I(raycast_desc, light, -1, -1, 64,
+               "-1: the sun (a scene lit only by point lights: its first point light); K: the K-th point or spot light"),
 };
 
 typedef struct {
+    const sb_reference *ref;
     sb_final_prog fp;
     GLint u_rays;
     GLuint tex;
@@ -34,28 +39,38 @@ typedef struct {
     unsigned char *hits, *vis;
 } raycast_state;
 
-static bool raycast_create(void *state, sb_gpu *g, const sb_params *p, sb_err *err) {
+/* The point light the rays go to (light=K, or the first lamp of a scene without a sun), or -1: the sun. */
+static int lamp_of(const sb_gpu *g, const raycast_desc *d) {
+    if (d->light >= 0) return d->light;
+    return !g->has_sun && sb_scene_point_light(g->scene, 0, NULL) ? 0 : -1;
+}
+
+static bool raycast_supported(const sb_run_ctx *rc, const void *desc, sb_err *why) {
+    int want = lamp_of(rc->gpu, desc);
+    return want < 0 || sb_lamp_supported(rc->gpu, want, "raycast", why);
+}
+
+static bool raycast_create(void *state, const sb_run_ctx *rc, const void *desc, sb_err *err) {
     raycast_state *s = state;
-    s->threads = (int)sb_param_num(p, "threads");
+    const sb_gpu *g = rc->gpu;
+    const raycast_desc *d = desc;
+    s->ref = rc->reference;
+    s->threads = d->threads;
     if (s->threads == 0) {
         long n = sysconf(_SC_NPROCESSORS_ONLN);
         s->threads = n > 0 ? (int)n : 1;
     }
-    int want = (int)sb_param_num(p, "light"), k = 0;
-    if (want < 0 && !g->has_sun && sb_point_light(g->scene, 0, NULL)) want = 0;
+    int want = lamp_of(g, d);
     if (want >= 0) {
-        const sb_light *lamp = sb_point_light(g->scene, want, &k);
-        if (!lamp) return sb_fail(err, "raycast:light=%d: the scene has %d point or spot light(s)", want, k);
         s->point = true;
-        s->lamp = lamp->position;
+        s->lamp = sb_scene_point_light(g->scene, want, NULL)->position;
     }
-    if (!sb_gpu_reference(g, err)) return false;
-    int n = g->width * g->height;
-    s->depth = malloc(sizeof(float) * (size_t)n);
-    s->pts = malloc(sizeof(sb_ref_point) * (size_t)n);
-    s->pix = malloc(sizeof(int) * (size_t)n);
-    s->hits = malloc((size_t)n);
-    s->vis = malloc((size_t)n);
+    size_t n = (size_t)g->width * g->height;
+    s->depth = sb_xmalloc(sizeof(float) * n);
+    s->pts = sb_xmalloc(sizeof(sb_ref_point) * n);
+    s->pix = sb_xmalloc(sizeof(int) * n);
+    s->hits = sb_xmalloc(n);
+    s->vis = sb_xmalloc(n);
     glGenTextures(1, &s->tex);
     glBindTexture(GL_TEXTURE_2D, s->tex);
     glTexStorage2D(GL_TEXTURE_2D, 1, GL_R8, g->width, g->height);
@@ -68,9 +83,9 @@ static bool raycast_create(void *state, sb_gpu *g, const sb_params *p, sb_err *e
 
 static void raycast_frame(void *state, sb_frame *f) {
     raycast_state *s = state;
-    sb_gpu *g = f->gpu;
+    const sb_gpu *g = f->gpu;
     const int w = g->width, h = g->height;
-    if (s->point) sb_shade_point_light(g, s->lamp);
+    if (s->point) sb_frame_shade_point(f, s->lamp);
 
     sb_stage_begin(f, SB_STAGE_ZPASS);
     sb_zpass(f);
@@ -79,7 +94,7 @@ static void raycast_frame(void *state, sb_frame *f) {
     sb_stage_begin(f, SB_STAGE_RAYS);
     glBindFramebuffer(GL_READ_FRAMEBUFFER, g->fbo);
     glPixelStorei(GL_PACK_ALIGNMENT, 4);
-    sb_gpu_read_pixels(0, 0, w, h, GL_DEPTH_COMPONENT, GL_FLOAT, s->depth);
+    glReadPixels(0, 0, w, h, GL_DEPTH_COMPONENT, GL_FLOAT, s->depth);
     sb_m4 inv;
     sb_m4_invert(f->view_proj, &inv);
     sb_v3 eye = sb_v3_sub(f->cam.pos, g->scene->origin);
@@ -110,10 +125,10 @@ static void raycast_frame(void *state, sb_frame *f) {
                z^2 (f-n)/(n f) per unit of depth: a few ulps of d */
             double z = sb_v3_dot(sb_v3_sub(p, eye), f->cam.forward), zn = f->cam.znear, zf = f->cam.zfar;
             double depth_err = z * z * (zf - zn) / (zn * zf) * ldexp(1.0, -22);
-            q->eps = fmaxf(sb_ref_position_eps(g->ref, q->p, (float)z), (float)depth_err);
+            q->eps = fmaxf(sb_ref_position_eps(s->ref, q->p, (float)z), (float)depth_err);
             s->pix[m++] = y * w + x;
         }
-    sb_reference_visibility_light(g->ref, g->shade_light, s->pts, m, s->hits, s->threads);
+    sb_reference_visibility_light(s->ref, f->shade_light, s->pts, m, s->hits, s->threads);
     for (int k = 0; k < m; k++) s->vis[s->pix[k]] = s->hits[k] ? 255 : 0;
     glBindTexture(GL_TEXTURE_2D, s->tex);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
@@ -129,8 +144,7 @@ static void raycast_frame(void *state, sb_frame *f) {
     sb_stage_end(f, SB_STAGE_FINAL);
 }
 
-static void raycast_destroy(void *state, sb_gpu *g) {
-    (void)g;
+static void raycast_destroy(void *state) {
     raycast_state *s = state;
     sb_final_prog_free(&s->fp);
     if (s->tex) glDeleteTextures(1, &s->tex);
@@ -146,9 +160,11 @@ const sb_technique sb_technique_raycast = {
     .summary = "exact ray-cast shadows on the CPU (Embree), shaded on the GPU: the reference row",
     .params = raycast_params,
     .param_count = (int)SB_COUNT(raycast_params),
+    .desc_size = sizeof(raycast_desc),
     .stages = SB_STAGE_BIT(SB_STAGE_ZPASS) | SB_STAGE_BIT(SB_STAGE_RAYS) | SB_STAGE_BIT(SB_STAGE_FINAL),
-    .needs = 0,
+    .needs = SB_NEEDS_REFERENCE,
     .state_size = sizeof(raycast_state),
+    .supported = raycast_supported,
     .create = raycast_create,
     .frame = raycast_frame,
     .destroy = raycast_destroy,

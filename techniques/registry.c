@@ -1,27 +1,20 @@
-/* registry.c - the list of techniques and their parameter values. */
+/* registry.c - the list of techniques (from techniques/meson.build, through
+ * the generated technique_list.h) and their parameter values. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "technique.h"
 
-extern const sb_technique sb_technique_none;
-extern const sb_technique sb_technique_sm;
-extern const sb_technique sb_technique_pssm;
-extern const sb_technique sb_technique_sdsm;
-extern const sb_technique sb_technique_raycast;
-extern const sb_technique sb_technique_volumes;
-extern const sb_technique sb_technique_planar;
-extern const sb_technique sb_technique_lispsm;
-extern const sb_technique sb_technique_cube;
-extern const sb_technique sb_technique_dpsm;
-extern const sb_technique sb_technique_tsm;
-extern const sb_technique sb_technique_psm;
+#define SB_TECHNIQUE(name) extern const sb_technique sb_technique_##name;
+#include "technique_list.h"
+#undef SB_TECHNIQUE
 
-static const sb_technique *const all[] = {&sb_technique_none,    &sb_technique_sm,      &sb_technique_pssm,
-                                          &sb_technique_sdsm,    &sb_technique_raycast, &sb_technique_volumes,
-                                          &sb_technique_planar, &sb_technique_lispsm,  &sb_technique_cube,
-                                          &sb_technique_dpsm,   &sb_technique_tsm,     &sb_technique_psm};
+static const sb_technique *const all[] = {
+#define SB_TECHNIQUE(name) &sb_technique_##name,
+#include "technique_list.h"
+#undef SB_TECHNIQUE
+};
 
 const char *const sb_stage_names[SB_STAGE_COUNT] = {"zpass", "minmax", "cascade", "final", "volumes", "rays"};
 
@@ -34,20 +27,10 @@ const sb_technique *sb_technique_find(const char *name) {
 int sb_technique_count(void) { return (int)SB_COUNT(all); }
 const sb_technique *sb_technique_at(int i) { return all[i]; }
 
-static int find_param(const sb_params *p, const char *name) {
-    for (int i = 0; i < p->count; i++)
-        if (strcmp(p->v[i].def->name, name) == 0) return i;
+int sb_technique_index(const sb_technique *t) {
+    for (size_t i = 0; i < SB_COUNT(all); i++)
+        if (all[i] == t) return (int)i;
     return -1;
-}
-
-double sb_param_num(const sb_params *p, const char *name) {
-    int i = find_param(p, name);
-    return i < 0 ? NAN : p->v[i].num;
-}
-
-int sb_param_choice(const sb_params *p, const char *name) {
-    int i = find_param(p, name);
-    return i < 0 ? -1 : (int)p->v[i].num;
 }
 
 void sb_params_canonical(const sb_params *p, char *out, size_t len) {
@@ -92,5 +75,29 @@ void sb_params_defaults(sb_params *p, const sb_technique *t) {
     for (int i = 0; i < t->param_count; i++) {
         sb_err e;
         sb_param_set(p, i, &t->params[i], t->params[i].def, t->name, &e);
+    }
+}
+
+bool sb_params_find(const sb_params *p, const char *name, double *out) {
+    for (int i = 0; i < p->count; i++)
+        if (!strcmp(p->v[i].def->name, name)) {
+            *out = p->v[i].num;
+            return true;
+        }
+    return false;
+}
+
+void sb_params_bind(const sb_params *p, const sb_technique *t, void *desc) {
+    if (t->desc_defaults) memcpy(desc, t->desc_defaults, t->desc_size);
+    else memset(desc, 0, t->desc_size);
+    for (int i = 0; i < p->count; i++) {
+        const sb_param_def *d = p->v[i].def;
+        char *field = (char *)desc + d->offset;
+        if (d->kind == SB_PARAM_FLOAT && d->size == sizeof(double)) {
+            memcpy(field, &p->v[i].num, sizeof(double));
+        } else if (d->size == sizeof(int)) {
+            int v = (int)p->v[i].num;
+            memcpy(field, &v, sizeof v);
+        }
     }
 }

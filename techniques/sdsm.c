@@ -20,15 +20,24 @@
 #include "cascade.h"
 #include "shaders.h"
 
+typedef struct sdsm_desc {
+    sb_csm_desc csm;
+    int partition, tight, splits, latency;
+    double guard;
+} sdsm_desc;
+
+enum { SPLITS_GPU, SPLITS_CPU };
+
 static const sb_param_def sdsm_params[] = {
     SB_SHADOWMAP_PARAMS,
     SB_CASCADE_PARAMS,
-    {"partition", SB_PARAM_ENUM, "log", 0, 0, "log|histogram", "partitions of [z_min, z_max]"},
-    {"tight", SB_PARAM_ENUM, "off", 0, 0, "off|on", "per-partition light-space x/y bounds from the samples (splits=gpu)"},
-    {"splits", SB_PARAM_ENUM, "gpu", 0, 0, "gpu|cpu", "where partitions and light matrices are computed"},
-    {"latency", SB_PARAM_INT, "1", 0, 2, NULL, "splits=cpu: frames between the reduction and its readback"},
-    {"guard", SB_PARAM_FLOAT, "2", 0, 64, NULL, "guard band around tight bounds, in texels"},
+    SB_PARAM_E(sdsm_desc, partition, log, "log|histogram", "partitions of [z_min, z_max]"),
+    SB_PARAM_E(sdsm_desc, tight, off, "off|on", "per-partition light-space x/y bounds from the samples (splits=gpu)"),
+    SB_PARAM_E(sdsm_desc, splits, gpu, "gpu|cpu", "where partitions and light matrices are computed"),
+    SB_PARAM_I(sdsm_desc, latency, 1, 0, 2, "splits=cpu: frames between the reduction and its readback"),
+    SB_PARAM_F(sdsm_desc, guard, 2, 0, 64, "guard band around tight bounds, in texels"),
 };
+static const sdsm_desc sdsm_defaults = {.csm = {SB_CSM_DESC_DEFAULTS}};
 
 #define HIST 64
 
@@ -42,7 +51,8 @@ typedef struct depth_stats {
 
 typedef struct {
     sb_csm csm;
-    int partition, tight, gpu, latency;
+    int partition, tight, latency;
+    bool gpu;
     double guard;
     GLuint stats;               /* SSBO binding 1 */
     GLuint ring;                /* splits=cpu: latency+1 copies of the statistics */
@@ -96,18 +106,28 @@ static GLuint compute(const char *label, const char *src, const char *defines, s
     return sb_gpu_link(label, defines, st, 1, err);
 }
 
-static bool sdsm_create(void *state, sb_gpu *gpu, const sb_params *p, sb_err *err) {
+static bool sdsm_check(const void *desc, sb_err *err) {
+    const sdsm_desc *d = desc;
+    if (d->splits == SPLITS_GPU && d->csm.warp != SB_WARP_NONE)
+        return sb_fail(err, "warp= needs splits=cpu (the GPU fits are not warped)");
+    if (d->tight && d->splits != SPLITS_GPU)
+        return sb_fail(err, "tight=on needs splits=gpu (the sample bounds depend on this frame's partitions)");
+    return sb_csm_check(&d->csm, "", err);
+}
+
+static bool sdsm_supported(const sb_run_ctx *rc, const void *desc, sb_err *why) {
+    return sb_csm_supported(rc->gpu->ctx, desc, "sdsm", why);
+}
+
+static bool sdsm_create(void *state, const sb_run_ctx *rc, const void *desc, sb_err *err) {
     sdsm_state *s = state;
-    s->partition = sb_param_choice(p, "partition");
-    s->tight = sb_param_choice(p, "tight");
-    s->gpu = sb_param_choice(p, "splits") == 0;
-    s->latency = (int)sb_param_num(p, "latency");
-    s->guard = sb_param_num(p, "guard");
-    if (s->gpu && sb_param_choice(p, "warp") != 0)
-        return sb_fail(err, "sdsm:warp=lispsm needs splits=cpu (the GPU fits are not warped)");
-    if (s->tight && !s->gpu)
-        return sb_fail(err, "sdsm:tight=on needs splits=gpu (the sample bounds depend on this frame's partitions)");
-    if (!sb_csm_create(&s->csm, gpu, p, "sdsm", err)) return false;
+    const sdsm_desc *d = desc;
+    s->partition = d->partition;
+    s->tight = d->tight;
+    s->gpu = d->splits == SPLITS_GPU;
+    s->latency = d->latency;
+    s->guard = d->guard;
+    if (!sb_csm_create(&s->csm, rc->gpu, &d->csm, "sdsm", err)) return false;
     const char *rw = "#define SB_CASCADE_ACCESS\n";
     if (!(s->reduce = compute("sdsm reduce", sb_shader_sdsm_reduce_comp, NULL, err))) return false;
     s->r_depth = glGetUniformLocation(s->reduce, "u_depth");
@@ -132,10 +152,11 @@ static bool sdsm_create(void *state, sb_gpu *gpu, const sb_params *p, sb_err *er
         GLint *locs[] = {&s->m_light, &s->m_eye, &s->m_right, &s->m_up, &s->m_fwd, &s->m_tan, &s->m_lo,
                          &s->m_hi, &s->m_tight, &s->m_res, &s->m_guard, &s->m_near, &s->m_far};
         for (size_t i = 0; i < SB_COUNT(names); i++) *locs[i] = glGetUniformLocation(s->matrices, names[i]);
-        s->history_frames = gpu->run_frames > 0 ? gpu->run_frames : 1;
+        s->history_frames = rc->frames > 0 ? rc->frames : 1;
         glGenBuffers(1, &s->history);
         glBindBuffer(GL_COPY_WRITE_BUFFER, s->history);
-        glBufferData(GL_COPY_WRITE_BUFFER, (GLsizeiptr)s->history_frames * 256, NULL, GL_STREAM_READ);
+        glBufferData(GL_COPY_WRITE_BUFFER, (GLsizeiptr)(s->history_frames * sizeof(sb_cascade_splits)), NULL,
+                     GL_STREAM_READ);
     } else {
         glGenBuffers(1, &s->ring);
         glBindBuffer(GL_COPY_WRITE_BUFFER, s->ring);
@@ -179,7 +200,7 @@ static void tight_bounds(sdsm_state *s, sb_frame *f, sb_m4 light_view) {
 
 /* splits=gpu: partitions, per-partition counts/bounds and light matrices, all on the GPU. */
 static void gpu_splits(sdsm_state *s, sb_frame *f) {
-    sb_gpu *g = f->gpu;
+    const sb_gpu *g = f->gpu;
     sb_csm *c = &s->csm;
     float nearf = (float)f->cam.znear, farf = (float)f->cam.zfar;
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
@@ -216,7 +237,7 @@ static void gpu_splits(sdsm_state *s, sb_frame *f) {
     glUniform3f(s->m_lo, (float)lo.x, (float)lo.y, (float)lo.z);
     glUniform3f(s->m_hi, (float)hi.x, (float)hi.y, (float)hi.z);
     glUniform1i(s->m_tight, s->tight);
-    glUniform1f(s->m_res, (float)c->res);
+    glUniform1f(s->m_res, (float)c->d.res);
     glUniform1f(s->m_guard, (float)(s->tight ? s->guard : 1.0));
     glDispatchCompute(1, 1, 1);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_UNIFORM_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
@@ -224,8 +245,8 @@ static void gpu_splits(sdsm_state *s, sb_frame *f) {
     if (f->seq < s->history_frames) {
         glBindBuffer(GL_COPY_READ_BUFFER, c->block);
         glBindBuffer(GL_COPY_WRITE_BUFFER, s->history);
-        glCopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER, offsetof(sb_cascade_block, cascade),
-                            (GLintptr)f->seq * 256, 256);
+        glCopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER, offsetof(sb_cascade_block, s),
+                            (GLintptr)(f->seq * sizeof(sb_cascade_splits)), sizeof(sb_cascade_splits));
     }
 }
 
@@ -237,7 +258,6 @@ static void cpu_splits(sdsm_state *s, sb_frame *f) {
     bool have = f->seq >= s->latency;
     if (have) {
         glBindBuffer(GL_COPY_READ_BUFFER, s->ring);
-        sb_gpu_readbacks++;
         glGetBufferSubData(GL_COPY_READ_BUFFER, (GLintptr)((f->seq - s->latency) % (s->latency + 1)) * (GLintptr)sizeof st,
                            sizeof st, &st);
     }
@@ -254,7 +274,7 @@ static void cpu_splits(sdsm_state *s, sb_frame *f) {
 
 static void sdsm_frame(void *state, sb_frame *f) {
     sdsm_state *s = state;
-    sb_gpu *g = f->gpu;
+    const sb_gpu *g = f->gpu;
     sb_csm *c = &s->csm;
 
     sb_stage_begin(f, SB_STAGE_ZPASS);
@@ -290,7 +310,7 @@ static void sdsm_frame(void *state, sb_frame *f) {
         sb_v3 corners[8];
         sb_light_fit bound;
         sb_frustum_corners(&f->cam, g->scene->origin, f->cam.znear, f->cam.zfar, corners);
-        sb_light_fit_points(g->scene, g->sun, corners, 8, c->res, &bound);
+        sb_light_fit_points(g->scene, g->sun, corners, 8, c->d.res, &bound);
         for (int k = 0; k < c->count; k++) c->active[k] = !bound.empty; /* a view without scene: nothing casts */
         sb_csm_cull(c, f, bound.empty ? NULL : &bound);
     } else {
@@ -312,22 +332,20 @@ static void sdsm_frame(void *state, sb_frame *f) {
 static void sdsm_collect(void *state, int seq, sb_counters *out) {
     sdsm_state *s = state;
     if (!s->gpu || seq >= s->history_frames) return;
-    float block[64];
+    sb_cascade_splits block;
     glBindBuffer(GL_COPY_READ_BUFFER, s->history);
-    sb_gpu_readbacks++;
-    glGetBufferSubData(GL_COPY_READ_BUFFER, (GLintptr)seq * 256, 256, block);
+    glGetBufferSubData(GL_COPY_READ_BUFFER, (GLintptr)(seq * sizeof block), sizeof block, &block);
     int rendered = 0;
     out->split_count = s->csm.count;
     for (int k = 0; k < s->csm.count; k++) {
-        out->splits[k] = block[4 * k + 1];          /* cascade[k].y: far split */
-        rendered += block[32 + 4 * k] > 0.5f;       /* flags[k].x */
+        out->splits[k] = block.cascade[k][1];       /* far split */
+        rendered += block.flags[k][0] > 0.5f;       /* rendered */
     }
     out->cascades_rendered = rendered;
     out->cascades_skipped = s->csm.count - rendered;
 }
 
-static void sdsm_destroy(void *state, sb_gpu *gpu) {
-    (void)gpu;
+static void sdsm_destroy(void *state) {
     sdsm_state *s = state;
     GLuint progs[] = {s->reduce, s->splits_prog, s->bounds, s->matrices};
     for (size_t i = 0; i < SB_COUNT(progs); i++)
@@ -343,11 +361,15 @@ const sb_technique sb_technique_sdsm = {
     .summary = "sample distribution shadow maps (Lauritzen, Salvi & Lefohn 2011)",
     .params = sdsm_params,
     .param_count = (int)SB_COUNT(sdsm_params),
+    .desc_size = sizeof(sdsm_desc),
+    .desc_defaults = &sdsm_defaults,
     .stages = SB_STAGE_BIT(SB_STAGE_ZPASS) | SB_STAGE_BIT(SB_STAGE_MINMAX) | SB_STAGE_BIT(SB_STAGE_CASCADE) |
               SB_STAGE_BIT(SB_STAGE_FINAL),
     .needs = SB_NEEDS_SUN,
     .temporal = true,
     .state_size = sizeof(sdsm_state),
+    .check = sdsm_check,
+    .supported = sdsm_supported,
     .create = sdsm_create,
     .frame = sdsm_frame,
     .collect = sdsm_collect,

@@ -1,15 +1,25 @@
 /* technique.h - the one interface every shadow technique implements.
  *
- * A technique is a descriptor (sokol-style): a name, a parameter table with
- * types, defaults and valid ranges, the stages it has, what it needs from a
- * scene, and three functions. Whatever it does, its final pass writes one
- * screen-space visibility target (1 lit ... 0 shadowed) beside colour; the
- * error metrics and images read that. To add one: write techniques/NAME.c
- * with a `const sb_technique sb_technique_NAME`, list it in registry.c and
- * meson.build, and put its GLSL visibility function in techniques/shaders/. */
+ * A technique is a descriptor (sokol-style): a name, a parameter table whose
+ * rows carry types, defaults, valid ranges and where each value goes in the
+ * technique's parameter struct, the stages it has, what it needs from a
+ * scene, and a few functions:
+ *   check      (optional, no GL) parameter combinations that cannot work:
+ *              refused with the spec, before anything renders;
+ *   supported  (optional) whether this context and scene can run it; the
+ *              reason becomes the run's `skipped` reason;
+ *   load       (optional) work per scene that depends on no parameter, done
+ *              once per scene and shared by its runs (unload frees it);
+ *   create, frame, destroy; collect (optional) for counters known only after
+ *              the timed frames.
+ * Whatever it does, its final pass writes one screen-space visibility target
+ * (1 lit ... 0 shadowed) beside colour; the error metrics and images read
+ * that. To add one: write techniques/NAME.c exporting `const sb_technique
+ * sb_technique_NAME` and add NAME to the list in techniques/meson.build. */
 #pragma once
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #include "util.h"
 
@@ -26,10 +36,31 @@ typedef enum sb_stage {
 #define SB_STAGE_BIT(s) (1u << (s))
 extern const char *const sb_stage_names[SB_STAGE_COUNT];
 
-enum { SB_NEEDS_SUN = 1u << 0, SB_NEEDS_POINT_LIGHT = 1u << 1, SB_NEEDS_CLOSED = 1u << 2, SB_NEEDS_PLANE = 1u << 3 };
+#define SB_MAX_CASCADES 8
+
+/* What a frame submitted, counted as it happens (technique-side counters). */
+typedef struct sb_counters {
+    uint32_t draw_calls, shadow_draw_calls;         /* shadow: cascade and volumes stages */
+    uint32_t stage_draw_calls[SB_STAGE_COUNT];
+    uint64_t triangles, shadow_triangles;           /* triangles x instances submitted */
+    int cascades_rendered, cascades_skipped;
+    int warp_fallbacks;                             /* warped maps (psm, lispsm, tsm) that used the uniform fit */
+    int split_count;                                /* cascades whose far split is known this frame */
+    double splits[SB_MAX_CASCADES];                 /* view-space far distance of each cascade */
+} sb_counters;
+
+enum {
+    SB_NEEDS_SUN = 1u << 0,         /* a directional light (skipped on a scene lit only by lamps) */
+    SB_NEEDS_POINT_LIGHT = 1u << 1, /* a point or spot light */
+    SB_NEEDS_CLOSED = 1u << 2,      /* closed casters (reported, not enforced) */
+    SB_NEEDS_PLANE = 1u << 3,       /* a large planar receiver */
+    SB_NEEDS_REFERENCE = 1u << 4,   /* the Embree reference (sb_run_ctx.reference) */
+};
 
 typedef enum sb_param_kind { SB_PARAM_INT, SB_PARAM_FLOAT, SB_PARAM_ENUM } sb_param_kind;
 
+/* One parameter: INT and ENUM values (the choice's index) go to an int field
+ * at `offset` of the technique's parameter struct, FLOAT to a double. */
 typedef struct sb_param_def {
     const char *name;
     sb_param_kind kind;
@@ -37,7 +68,18 @@ typedef struct sb_param_def {
     double min, max;        /* numeric range (inclusive) */
     const char *choices;    /* enums: "none|hw|pcf3" */
     const char *help;
+    size_t offset;          /* in the parameter struct */
+    size_t size;            /* of that field: sizeof(int) or sizeof(double) */
 } sb_param_def;
+
+/* Rows of a parameter table; T is the parameter struct, f its field (and the
+ * parameter's name). */
+#define SB_PARAM_I(T, f, def, lo, hi, help) \
+    {#f, SB_PARAM_INT, #def, lo, hi, NULL, help, offsetof(T, f), sizeof(((T *)0)->f)}
+#define SB_PARAM_F(T, f, def, lo, hi, help) \
+    {#f, SB_PARAM_FLOAT, #def, lo, hi, NULL, help, offsetof(T, f), sizeof(((T *)0)->f)}
+#define SB_PARAM_E(T, f, def, choices, help) \
+    {#f, SB_PARAM_ENUM, #def, 0, 0, choices, help, offsetof(T, f), sizeof(((T *)0)->f)}
 
 #define SB_MAX_PARAMS 24
 
@@ -51,36 +93,46 @@ typedef struct sb_params {
     } v[SB_MAX_PARAMS];
 } sb_params;
 
-double sb_param_num(const sb_params *p, const char *name);
-int sb_param_choice(const sb_params *p, const char *name);
 /* "res=2048:filter=pcf3:..." in table order */
 void sb_params_canonical(const sb_params *p, char *out, size_t len);
 
 struct sb_gpu;
 struct sb_frame;
-struct sb_counters;
+struct sb_run_ctx;
 
 typedef struct sb_technique {
     const char *name;
     const char *summary;
     const sb_param_def *params;
     int param_count;
-    unsigned stages;        /* SB_STAGE_BIT()s it reports */
-    unsigned needs;         /* SB_NEEDS_* */
-    bool temporal;          /* a frame depends on earlier frames (re-rendered before an evaluated one) */
+    size_t desc_size;               /* the parameter struct */
+    const void *desc_defaults;      /* copied into it before the parameters (NULL: zeros) */
+    unsigned stages;                /* SB_STAGE_BIT()s it reports */
+    unsigned needs;                 /* SB_NEEDS_* */
+    bool temporal;                  /* a frame depends on earlier frames (replayed before an evaluated one) */
     size_t state_size;
-    bool (*create)(void *state, struct sb_gpu *gpu, const sb_params *p, sb_err *err);
+    bool (*check)(const void *desc, sb_err *err);
+    bool (*supported)(const struct sb_run_ctx *rc, const void *desc, sb_err *why);
+    bool (*load)(const struct sb_gpu *gpu, void **data, sb_err *err);
+    void (*unload)(void *data);
+    bool (*create)(void *state, const struct sb_run_ctx *rc, const void *desc, sb_err *err);
     void (*frame)(void *state, struct sb_frame *f);
-    /* optional: fills counters known only after the run (read back from the
-     * GPU once, outside the timed frames); seq is the frame's run sequence index */
-    void (*collect)(void *state, int seq, struct sb_counters *out);
-    void (*destroy)(void *state, struct sb_gpu *gpu);
+    /* fills counters known only after the run (read back from the GPU once,
+       outside the timed frames); seq is the frame's run sequence index */
+    void (*collect)(void *state, int seq, sb_counters *out);
+    void (*destroy)(void *state);
+    const void *impl;               /* data of a shared implementation (a cascade technique's split scheme) */
 } sb_technique;
 
 const sb_technique *sb_technique_find(const char *name);
 int sb_technique_count(void);
 const sb_technique *sb_technique_at(int i);
+int sb_technique_index(const sb_technique *t);
 /* Checks one value against a parameter's definition; fills err on failure. */
 bool sb_param_set(sb_params *p, int index, const sb_param_def *def, const char *value, const char *tech,
                   sb_err *err);
 void sb_params_defaults(sb_params *p, const sb_technique *t);
+/* The value of a parameter by name (the cost model, tests); false if the technique has none. */
+bool sb_params_find(const sb_params *p, const char *name, double *out);
+/* The technique's parameter struct: its defaults, then every value at its offset. */
+void sb_params_bind(const sb_params *p, const sb_technique *t, void *desc);

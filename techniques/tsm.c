@@ -3,47 +3,19 @@
  * view's centre line, whose shape puts the focus point (`focus` of the way
  * from the near to the far end) on the map's 80% line, and the trapezoid is
  * mapped to the square by a projective transform (sb_light_fit_tsm). `pssm`
- * and `sdsm:splits=cpu` warp each cascade with `warp=tsm`. */
+ * and `sdsm:splits=cpu` warp each cascade with `warp=tsm`. A row of the
+ * cascade machinery with the warp fixed. */
 #include "cascade.h"
+
+typedef struct tsm_desc {
+    sb_csm_desc csm;
+} tsm_desc;
 
 static const sb_param_def tsm_params[] = {
     SB_SHADOWMAP_PARAMS,
-    {"focus", SB_PARAM_FLOAT, "0.3", 0.01, 0.9, NULL, "share of the footprint mapped to 80% of the map"},
+    SB_PARAM_F(sb_csm_desc, focus, 0.3, 0.01, 0.9, "share of the footprint mapped to 80% of the map"),
 };
+static const tsm_desc tsm_defaults = {.csm = {SB_CSM_DESC_DEFAULTS, .warp = SB_WARP_TSM}};
 
-typedef struct {
-    sb_csm csm;
-} tsm_state;
-
-static bool tsm_create(void *state, sb_gpu *gpu, const sb_params *p, sb_err *err) {
-    tsm_state *s = state;
-    if (!sb_csm_create(&s->csm, gpu, p, "tsm", err)) return false;
-    if (s->csm.stable) return sb_fail(err, "tsm: stable=on cannot be combined with the warp");
-    s->csm.warp = 2;
-    return true;
-}
-
-static void tsm_frame(void *state, sb_frame *f) {
-    tsm_state *s = state;
-    double splits[2] = {f->cam.znear, f->cam.zfar};
-    sb_csm_frame(&s->csm, f, splits);
-}
-
-static void tsm_destroy(void *state, sb_gpu *gpu) {
-    (void)gpu;
-    tsm_state *s = state;
-    sb_csm_destroy(&s->csm);
-}
-
-const sb_technique sb_technique_tsm = {
-    .name = "tsm",
-    .summary = "trapezoidal shadow map over the view (Martin & Tan 2004)",
-    .params = tsm_params,
-    .param_count = (int)SB_COUNT(tsm_params),
-    .stages = SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_FINAL),
-    .needs = SB_NEEDS_SUN,
-    .state_size = sizeof(tsm_state),
-    .create = tsm_create,
-    .frame = tsm_frame,
-    .destroy = tsm_destroy,
-};
+const sb_technique sb_technique_tsm = SB_CSM_TECHNIQUE("tsm", "trapezoidal shadow map over the view (Martin & Tan 2004)",
+                                                       tsm_params, tsm_desc, &tsm_defaults, sb_csm_view_splits);

@@ -17,15 +17,12 @@ static char g_tmp[64];
 
 static int setup(void **st) {
     (void)st;
-    snprintf(g_tmp, sizeof g_tmp, "/tmp/sbbadXXXXXX");
-    return mkdtemp(g_tmp) ? 0 : -1;
+    return tmp_folder(g_tmp, sizeof g_tmp, "sbbad");
 }
 
 static int teardown(void **st) {
     (void)st;
-    char cmd[128];
-    snprintf(cmd, sizeof cmd, "rm -rf %s", g_tmp);
-    return system(cmd) == 0 ? 0 : -1;
+    return tmp_remove(g_tmp);
 }
 
 static void test_truncated_glb(void **st) {

@@ -112,6 +112,16 @@ static void test_dry_run_and_full_batch(void **st) {
     (void)st;
     assert_int_equal(sh("%s batch %s/nightly.bench --dry-run", test_binary(), g_tmp), 0);
     assert_non_null(strstr(g_out, "12 run(s) of 12 in the matrix"));
+    /* command-line options beat the file's however many come first (none dropped after 64 pairs) */
+    assert_int_equal(sh("%s batch %s/nightly.bench --dry-run --frames 3", test_binary(), g_tmp), 0);
+    static char want[sizeof g_out];
+    memcpy(want, g_out, sizeof want);
+    char cmd[8192];
+    int n = snprintf(cmd, sizeof cmd, "%s batch %s/nightly.bench --dry-run", test_binary(), g_tmp);
+    for (int i = 0; i < 70; i++) n += snprintf(cmd + n, sizeof cmd - (size_t)n, " --warmup 1");
+    snprintf(cmd + n, sizeof cmd - (size_t)n, " --frames 3");
+    assert_int_equal(sh("%s", cmd), 0);
+    assert_string_equal(g_out, want);
     assert_int_equal(sh("%s batch %s/nightly.bench --out %s/full --quiet", test_binary(), g_tmp, g_tmp), 0);
     char dir[4096];
     last_line(dir, sizeof dir);

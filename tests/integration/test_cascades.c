@@ -40,7 +40,7 @@ static bool make(sb_instance *in, const char *spec) {
     sb_run_spec *runs = NULL;
     int n = 0;
     sb_err err;
-    bool ok = sb_spec_expand(spec, NULL, &runs, &n, &err) && sb_instance_create(in, &g_s, &runs[0], &err);
+    bool ok = sb_spec_expand(spec, NULL, &runs, &n, &err) && sb_instance_create(in, &g_s, &runs[0], 16, &err);
     if (!ok) print_error("%s: %s\n", spec, err.msg);
     free(runs);
     return ok;
@@ -81,7 +81,7 @@ static void test_layered_matches_per_cascade(void **st) {
                 assert_true(differ <= npx / 1000);
                 assert_true(c.shadow_draw_calls < off_draws);
             }
-            sb_instance_destroy(&in, &g_s);
+            sb_instance_destroy(&in);
         }
     }
     free(ref);
@@ -123,7 +123,6 @@ static void hook_readbacks(bool on) {
 
 static unsigned long frame_loop_reads(const char *spec) {
     sb_instance in;
-    g_s.gpu.run_frames = 12;
     assert_true(make(&in, spec));
     sb_timer t;
     sb_timer_init(&t, SB_TIMING_SYNC, 1, 12);
@@ -147,7 +146,7 @@ static unsigned long frame_loop_reads(const char *spec) {
         assert_int_equal(c.cascades_rendered + c.cascades_skipped, 4);
     }
     sb_timer_free(&t);
-    sb_instance_destroy(&in, &g_s);
+    sb_instance_destroy(&in);
     return reads;
 }
 
@@ -175,7 +174,6 @@ static void test_all_sky_frame(void **st) {
     unsigned char *vis = malloc(320 * 180);
     for (int k = 0; k < 3; k++) {
         sb_instance in;
-        g_s.gpu.run_frames = 1;
         assert_true(make(&in, specs[k]));
         sb_camera cam = camera_at(sb_v3_make(0, 400, 0), sb_v3_make(0.01, 1, 0), 400);   /* straight up, above the roofs */
         sb_timer t;
@@ -183,7 +181,7 @@ static void test_all_sky_frame(void **st) {
         sb_timer_frame_begin(&t, 0);
         sb_frame f;
         memset(&f, 0, sizeof f);
-        sb_render_camera(&g_s, &in, &f, &cam, 0, &t);
+        sb_render_camera(&g_s, &in, &f, &cam, 0, &t, false);
         if (in.tech->collect) in.tech->collect(in.state, 0, &f.counters);
         sb_gpu_readback(&g_s.gpu, NULL, vis, NULL);
         print_message("%s: all-sky frame renders %d cascades, skips %d\n", specs[k], f.counters.cascades_rendered,
@@ -194,7 +192,7 @@ static void test_all_sky_frame(void **st) {
         sb_err err;
         assert_true(sb_gl_check(specs[k], &err));
         sb_timer_free(&t);
-        sb_instance_destroy(&in, &g_s);
+        sb_instance_destroy(&in);
     }
     free(vis);
 }
@@ -202,7 +200,7 @@ static void test_all_sky_frame(void **st) {
 /* Reads layer 0 of a shadow-map technique's map. */
 static float *read_map(sb_instance *in) {
     sb_csm *c = (sb_csm *)in->state;
-    float *m = malloc(sizeof(float) * c->res * c->res * c->count);
+    float *m = malloc(sizeof(float) * c->d.res * c->d.res * c->count);
     glBindTexture(GL_TEXTURE_2D_ARRAY, c->tex);
     glGetTexImage(GL_TEXTURE_2D_ARRAY, 0, GL_DEPTH_COMPONENT, GL_FLOAT, m);
     return m;
@@ -221,7 +219,7 @@ static long shimmer(const char *spec, double texels) {
     sb_frame f;
     memset(&f, 0, sizeof f);
     sb_timer_frame_begin(&t, 0);
-    sb_render_camera(&g_s, &in, &f, &a, 0, &t);
+    sb_render_camera(&g_s, &in, &f, &a, 0, &t, false);
     sb_light_fit fa = c->fit[0];
     float *ma = read_map(&in);
     /* move along the light's x axis by a fraction of a texel */
@@ -230,10 +228,10 @@ static long shimmer(const char *spec, double texels) {
     sb_camera b = a;
     b.pos = sb_v3_add(a.pos, sb_v3_scale(lx, texels * fa.texel_world));
     sb_timer_frame_begin(&t, 1);
-    sb_render_camera(&g_s, &in, &f, &b, 1, &t);
+    sb_render_camera(&g_s, &in, &f, &b, 1, &t, false);
     sb_light_fit fb = c->fit[0];
     float *mb = read_map(&in);
-    int res = c->res;
+    int res = c->d.res;
     double shift = (fb.l - fa.l) / fa.texel_world;
     int dx = (int)lround(shift);
     long differ = 0;
@@ -251,7 +249,7 @@ static long shimmer(const char *spec, double texels) {
     free(ma);
     free(mb);
     sb_timer_free(&t);
-    sb_instance_destroy(&in, &g_s);
+    sb_instance_destroy(&in);
     return differ;
 }
 
@@ -265,12 +263,50 @@ static void test_stable_no_shimmer(void **st) {
     }
 }
 
+/* The C struct of the cascade block and the shader's block agree, member by
+ * member (the offsets the driver reports for every active variable) and in size. */
+static void test_cascade_block_layout(void **st) {
+    (void)st;
+    sb_instance in;
+    assert_true(make(&in, "pssm:filter=pcss"));
+    GLuint prog = ((sb_csm *)in.state)->fp.prog;
+    const struct {
+        const char *name;
+        size_t offset;
+    } vars[] = {{"sb_light_vp[0]", offsetof(sb_cascade_block, light_vp)},
+                {"sb_shadow_mat[0]", offsetof(sb_cascade_block, shadow_mat)},
+                {"sb_cascade[0]", offsetof(sb_cascade_block, s.cascade)},
+                {"sb_flags[0]", offsetof(sb_cascade_block, s.flags)},
+                {"sb_info", offsetof(sb_cascade_block, info)}};
+    int active = 0;
+    for (size_t i = 0; i < sizeof vars / sizeof vars[0]; i++) {
+        GLuint idx = glGetProgramResourceIndex(prog, GL_BUFFER_VARIABLE, vars[i].name);
+        if (idx == GL_INVALID_INDEX) continue; /* optimised out of this program */
+        const GLenum prop = GL_OFFSET;
+        GLint off = -1;
+        glGetProgramResourceiv(prog, GL_BUFFER_VARIABLE, idx, 1, &prop, 1, NULL, &off);
+        print_message("%s: shader offset %d, C offset %zu\n", vars[i].name, off, vars[i].offset);
+        assert_int_equal(off, (int)vars[i].offset);
+        active++;
+    }
+    assert_true(active >= 3);
+    GLuint block = glGetProgramResourceIndex(prog, GL_SHADER_STORAGE_BLOCK, "SbCascades");
+    assert_int_not_equal(block, GL_INVALID_INDEX);
+    const GLenum prop = GL_BUFFER_DATA_SIZE;
+    GLint size = 0;
+    glGetProgramResourceiv(prog, GL_SHADER_STORAGE_BLOCK, block, 1, &prop, 1, NULL, &size);
+    print_message("SbCascades: %d bytes in the shader, %zu in C\n", size, sizeof(sb_cascade_block));
+    assert_int_equal(size, (int)sizeof(sb_cascade_block));
+    sb_instance_destroy(&in);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_layered_matches_per_cascade),
         cmocka_unit_test(test_sdsm_gpu_splits_read_nothing_back),
         cmocka_unit_test(test_all_sky_frame),
         cmocka_unit_test(test_stable_no_shimmer),
+        cmocka_unit_test(test_cascade_block_layout),
     };
     return cmocka_run_group_tests_name("cascades", tests, setup, teardown);
 }

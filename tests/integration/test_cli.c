@@ -18,15 +18,12 @@ static char g_out[16384];
 
 static int setup(void **st) {
     (void)st;
-    snprintf(g_tmp, sizeof g_tmp, "/tmp/sbcliXXXXXX");
-    return mkdtemp(g_tmp) ? 0 : -1;
+    return tmp_folder(g_tmp, sizeof g_tmp, "sbcli");
 }
 
 static int teardown(void **st) {
     (void)st;
-    char cmd[128];
-    snprintf(cmd, sizeof cmd, "rm -rf %s", g_tmp);
-    return system(cmd) == 0 ? 0 : -1;
+    return tmp_remove(g_tmp);
 }
 
 /* Splits a CSV line without quotes into fields (test data has none in these columns). */
@@ -322,12 +319,45 @@ static void test_skip_reasons(void **st) {
         }
         sb_table_free(&t);
     }
+    /* a run that draws no caster in any frame (the camera sees only sky) says so */
+    char sky[300];
+    snprintf(sky, sizeof sky, "%s/sky.path", g_tmp);
+    FILE *f = fopen(sky, "w");
+    fputs("fov 60\nlook 0  0 30 0  0.001 60 0\nlook 1  3 30 0  3.001 60 1\n", f);
+    fclose(f);
+    run_dir(d, sizeof d, "%s run plane-box %s sm none --frames 2 --warmup 0 --size 64x36 --out %s/sky --quiet",
+            test_binary(), sky, g_tmp);
+    snprintf(path, sizeof path, "%s/summary.csv", d);
+    sb_table t;
+    sb_err err;
+    assert_true(sb_table_load(&t, path, &err));
+    print_message("sky: sm warnings '%s', none warnings '%s'\n", sb_table_get(&t, 0, "warnings"), sb_table_get(&t, 1, "warnings"));
+    assert_string_equal(sb_table_get(&t, 0, "status"), "ok");
+    assert_non_null(strstr(sb_table_get(&t, 0, "warnings"), "no shadow-casting triangle was drawn in any frame"));
+    assert_string_equal(sb_table_get(&t, 1, "warnings"), "");
+    sb_table_free(&t);
+}
+
+/* The usage text names every command; the reference takes more than 16 threads. */
+static void test_usage_and_threads(void **st) {
+    (void)st;
+    assert_int_equal(sh("%s --help", test_binary()), 0);
+    const char *cmds[] = {"run SCENE", "batch FILE", "compare BASE NEW", "--pair", "merge DIR", "stress", "techniques",
+                          "columns", "info", "path PATH"};
+    for (size_t i = 0; i < sizeof cmds / sizeof cmds[0]; i++) assert_non_null(strstr(g_out, cmds[i]));
+    char d[4096];
+    run_dir(d, sizeof d, "%s run plane-box plane-box raycast:threads=64 sm --threads 64 --frames 2 --warmup 0 "
+            "--size 64x36 --error-every 1 --out %s/thr --quiet", test_binary(), g_tmp);
+    char v[4][32];
+    assert_int_equal(read_column(d, "err_rate", v, 4), 2);
+    assert_string_not_equal(v[0], "");
 }
 
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_run_writes_csv),   cmocka_unit_test(test_gltf_camera_path),
         cmocka_unit_test(test_builtin_paths),    cmocka_unit_test(test_skip_reasons),
+        cmocka_unit_test(test_usage_and_threads),
         cmocka_unit_test(test_backends_same_draw_calls), cmocka_unit_test(test_query_timing),
         cmocka_unit_test(test_repeats_and_target_ci),
     };

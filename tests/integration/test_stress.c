@@ -34,14 +34,23 @@ static void test_battery_passes(void **st) {
 
 static void test_battery_can_fail(void **st) {
     (void)st;
-    /* one case, with the technique bias flipped through the test hook: it must fail */
+    /* the battery run on a shadow map without bias (acne) and one whose bias
+       detaches every shadow must fail them, and pass the default beside them */
     char cmd[1024];
-    snprintf(cmd, sizeof cmd, "SB_TEST_BIAS_SIGN=-1 %s stress sun-vertical --frames 1 --size 160x90", test_binary());
+    snprintf(cmd, sizeof cmd, "%s stress base sm:bias=0:slope=0:normal=0 sm:bias=100:normal=100 sm --frames 1 --size 160x90",
+             test_binary());
     int rc = run_capture(cmd, g_out, sizeof g_out);
     print_message("%s\n", g_out);
     assert_int_equal(rc, 1);
-    assert_non_null(strstr(g_out, "FAIL"));
+    char row[128];
+    snprintf(row, sizeof row, "%-26s %-28s FAIL", "base", "sm:bias=0:slope=0:normal=0");
+    assert_non_null(strstr(g_out, row));
+    snprintf(row, sizeof row, "%-26s %-28s FAIL", "base", "sm:bias=100:normal=100");
+    assert_non_null(strstr(g_out, row));
+    snprintf(row, sizeof row, "%-26s %-28s ok", "base", "sm");
+    assert_non_null(strstr(g_out, row));
     assert_non_null(strstr(g_out, "above the bound"));
+    assert_non_null(strstr(g_out, "2 failure(s)"));
 }
 
 int main(void) {

@@ -74,10 +74,10 @@ static void test_planar(void **st) {
     sb_session_close(&s);
     /* the terrain of desert has no large plane: the technique is skipped with the reason */
     assert_true(test_open(&s, "desert", "desert", 64, 36, &err));
-    const char *why = sb_skip_reason(&s, sb_technique_find("planar"));
+    const char *why = sb_skip_reason(&s, sb_technique_find("planar"), NULL);
     assert_non_null(why);
     assert_string_equal(why, "the scene has no large planar receiver");
-    assert_null(sb_skip_reason(&s, sb_technique_find("volumes")));
+    assert_null(sb_skip_reason(&s, sb_technique_find("volumes"), NULL));
     sb_session_close(&s);
 }
 
@@ -110,7 +110,7 @@ static void test_point_light_cube(void **st) {
         int n = 0;
         assert_true(sb_spec_expand(specs[k], NULL, &runs, &n, &err));
         sb_instance in;
-        assert_true(sb_instance_create(&in, &s, &runs[0], &err));
+        assert_true(sb_instance_create(&in, &s, &runs[0], 1, &err));
         sb_timer t;
         sb_timer_init(&t, SB_TIMING_SYNC, 1, 1);
         sb_timer_frame_begin(&t, 0);
@@ -137,26 +137,26 @@ static void test_point_light_cube(void **st) {
         assert_true(exact > w * h / 50);
         assert_true(mismatch * 100 < tolerance_pct[k] * w * h);
         sb_timer_free(&t);
-        sb_instance_destroy(&in, &s);
+        sb_instance_destroy(&in);
         free(runs);
     }
     free(depth);
     free(vis);
     /* the sun techniques still shade the sun here; without a point light, cube is skipped */
-    assert_null(sb_skip_reason(&s, sb_technique_find("sm")));
+    assert_null(sb_skip_reason(&s, sb_technique_find("sm"), NULL));
     sb_session_close(&s);
     memset(&s, 0, sizeof s);
     assert_true(sb_session_open(&s, &o, "plane-box", "plane-box", &err));
-    assert_string_equal(sb_skip_reason(&s, sb_technique_find("cube")), "the scene has no point or spot light");
+    assert_string_equal(sb_skip_reason(&s, sb_technique_find("cube"), NULL), "the scene has no point or spot light");
     sb_session_close(&s);
     /* a night scene (lamps, no sun): sun techniques are skipped with the reason */
     memset(&s, 0, sizeof s);
     o.width = 64;
     o.height = 36;
     assert_true(sb_session_open(&s, &o, "towers-night", "towers-night", &err));
-    assert_non_null(strstr(sb_skip_reason(&s, sb_technique_find("pssm")), "lit only by 6 point light(s), no sun"));
-    assert_null(sb_skip_reason(&s, sb_technique_find("cube")));
-    assert_null(sb_skip_reason(&s, sb_technique_find("raycast")));   /* toward the first lamp */
+    assert_non_null(strstr(sb_skip_reason(&s, sb_technique_find("pssm"), NULL), "lit only by 6 point light(s), no sun"));
+    assert_null(sb_skip_reason(&s, sb_technique_find("cube"), NULL));
+    assert_null(sb_skip_reason(&s, sb_technique_find("raycast"), NULL));   /* toward the first lamp */
     sb_session_close(&s);
 }
 

@@ -1,5 +1,7 @@
 #include "support.h"
 
+#include "eval.h"
+
 #include <setjmp.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -11,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 const char *test_data(const char *name) {
     static char buf[4][4096];
@@ -109,7 +112,7 @@ bool pb_render(sb_session *s, const char *spec, pb_result *out, unsigned char *v
     int n = 0;
     if (!sb_spec_expand(spec, NULL, &runs, &n, err)) return false;
     sb_instance in;
-    if (!sb_instance_create(&in, s, &runs[0], err)) {
+    if (!sb_instance_create(&in, s, &runs[0], 1, err)) {
         free(runs);
         return false;
     }
@@ -143,9 +146,22 @@ bool pb_render(sb_session *s, const char *spec, pb_result *out, unsigned char *v
     free(depth);
     free(vis);
     sb_timer_free(&timer);
-    sb_instance_destroy(&in, s);
+    sb_instance_destroy(&in);
     free(runs);
     return sb_gl_check("pb_render", err);
+}
+
+bool eval_instance(sb_session *s, sb_instance *in, int i, int n, sb_error_metrics *m, float *pos_out,
+                   unsigned char *ref_out, sb_err *err) {
+    sb_eval_buf b;
+    sb_eval_buf_init(&b, &s->gpu, false);
+    sb_frame f;
+    int seq = 0;
+    bool ok = sb_eval_frame(s, in, i, n, 0, &seq, &b, &f, m, err);
+    if (pos_out) memcpy(pos_out, b.pos, sizeof(float) * 4 * (size_t)b.w * b.h);
+    if (ref_out) memcpy(ref_out, b.ref, (size_t)b.w * b.h);
+    sb_eval_buf_free(&b);
+    return ok;
 }
 
 bool eval_frame(sb_session *s, const char *spec, int i, int n, sb_error_metrics *m, float *pos_out, unsigned char *ref_out,
@@ -154,34 +170,12 @@ bool eval_frame(sb_session *s, const char *spec, int i, int n, sb_error_metrics 
     int nr = 0;
     if (!sb_spec_expand(spec, NULL, &runs, &nr, err)) return false;
     sb_instance in;
-    bool ok = sb_instance_create(&in, s, &runs[0], err);
+    bool ok = sb_instance_create(&in, s, &runs[0], 1, err);
     free(runs);
     if (!ok) return false;
-    sb_reference *ref = sb_gpu_reference(&s->gpu, err);
-    if (!ref) return false;
-    int w = s->gpu.width, h = s->gpu.height;
-    sb_timer t;
-    sb_timer_init(&t, SB_TIMING_SYNC, 1, 1);
-    sb_timer_frame_begin(&t, 0);
-    sb_frame f;
-    memset(&f, 0, sizeof f);
-    s->gpu.eval = true;
-    sb_render_frame(s, &in, &f, i, n, 0, &t);
-    s->gpu.eval = false;
-    unsigned char *vis = malloc((size_t)w * h), *refv = malloc((size_t)w * h);
-    float *pos = malloc(sizeof(float) * 4 * w * h), *aux = malloc(sizeof(float) * 4 * w * h);
-    sb_gpu_readback(&s->gpu, NULL, vis, NULL);
-    sb_gpu_readback_eval(&s->gpu, pos, aux);
-    sb_evaluate_frame(ref, s->gpu.shade_light, sb_v3_sub(f.cam.pos, s->scene.origin), w, h, pos, aux, vis, refv, m, 2);
-    if (pos_out) memcpy(pos_out, pos, sizeof(float) * 4 * w * h);
-    if (ref_out) memcpy(ref_out, refv, (size_t)w * h);
-    free(vis);
-    free(refv);
-    free(pos);
-    free(aux);
-    sb_timer_free(&t);
-    sb_instance_destroy(&in, s);
-    return sb_gl_check(spec, err);
+    ok = eval_instance(s, &in, i, n, m, pos_out, ref_out, err);
+    sb_instance_destroy(&in);
+    return ok;
 }
 
 static void base64(const unsigned char *in, size_t n, char *out) {
@@ -256,4 +250,15 @@ void copy_bundled(const char *name, const char *dst) {
     char cmd[8192];
     snprintf(cmd, sizeof cmd, "cp %s/%s %s", getenv("SB_DATA_DIR"), name, dst);
     assert_int_equal(system(cmd), 0);
+}
+
+int tmp_folder(char *dir, size_t len, const char *prefix) {
+    snprintf(dir, len, "/tmp/%sXXXXXX", prefix);
+    return mkdtemp(dir) ? 0 : -1;
+}
+
+int tmp_remove(const char *dir) {
+    char cmd[4200];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    return system(cmd) == 0 ? 0 : -1;
 }

@@ -27,6 +27,9 @@ bool pb_render(sb_session *s, const char *spec, pb_result *out, unsigned char *v
  * error against the reference; pos (w*h*4 floats) and ref (w*h) optional. */
 bool eval_frame(sb_session *s, const char *spec, int i, int n, sb_error_metrics *m, float *pos, unsigned char *ref,
                 sb_err *err);
+/* The same for an instance the caller made (and may have changed). */
+bool eval_instance(sb_session *s, sb_instance *in, int i, int n, sb_error_metrics *m, float *pos_out,
+                   unsigned char *ref_out, sb_err *err);
 /* Does a ray from p toward the sun hit the box [-1,1]x[0,2]x[-1,1]? */
 bool pb_box_shadows(sb_v3 p, sb_v3 sun);
 /* Does the segment p + t d, t in (0, tmax), cross that box? */
@@ -71,3 +74,7 @@ void expect_scene_refused(const char *path, const char *needle);
 const char *expect_cli_fail(const char *needle, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 /* Copies the bundled scene file `name` (from SB_DATA_DIR) to dst. */
 void copy_bundled(const char *name, const char *dst);
+/* A fresh folder /tmp/<prefix>XXXXXX into dir (len >= 64); 0 on success (a cmocka group setup's result). */
+int tmp_folder(char *dir, size_t len, const char *prefix);
+/* Removes the folder and everything in it; 0 on success. */
+int tmp_remove(const char *dir);

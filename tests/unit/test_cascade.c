@@ -65,6 +65,7 @@ typedef struct {
     sb_gpu gpu;
     sb_frame frame;
     sb_csm csm;
+    uint32_t *scratch;
 } rig;
 
 static void rig_camera(rig *r, double far_scale) {
@@ -76,6 +77,7 @@ static void rig_camera(rig *r, double far_scale) {
     sb_camera cam = sb_camera_look(pos, dir, 60, 16.0 / 9, 0.1, sb_v3_len(ext) * far_scale);
     r->gpu.sun = sb_sun_dir(urand() * 360, 3 + urand() * 87);
     sb_frame_setup(&r->frame, &r->gpu, &cam);
+    r->frame.scratch = r->scratch;
 }
 
 static void rig_open(rig *r, const char *scene, int stable) {
@@ -83,15 +85,15 @@ static void rig_open(rig *r, const char *scene, int stable) {
     sb_err err;
     assert_true(sb_scene_load(&r->scene, scene, NULL, &err));
     r->gpu.scene = &r->scene;
-    r->gpu.scratch = malloc((r->scene.draw_count + 1) * sizeof(uint32_t));
-    r->csm.count = 4;
-    r->csm.res = 1024;
-    r->csm.stable = stable;
+    r->scratch = malloc((r->scene.draw_count + 1) * sizeof(uint32_t));
+    r->csm.count = r->csm.d.cascades = 4;
+    r->csm.d.res = 1024;
+    r->csm.d.stable = stable;
     r->csm.mask = calloc(r->scene.draw_count, 1);
 }
 
 static void rig_close(rig *r) {
-    free(r->gpu.scratch);
+    free(r->scratch);
     free(r->csm.mask);
     sb_scene_free(&r->scene);
 }
@@ -103,9 +105,9 @@ static bool in_box(sb_v3 p, const sb_aabb *b) {
 static void coverage(const char *scene, int stable, int warp) {
     rig r;
     rig_open(&r, scene, stable);
-    r.csm.warp = warp;
-    r.csm.min_angle = 5;
-    r.csm.focus = 0.3;
+    r.csm.d.warp = warp;
+    r.csm.d.min_angle = 5;
+    r.csm.d.focus = 0.3;
     int warped = 0;
     srand(5);
     long samples = 0;

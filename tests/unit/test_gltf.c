@@ -18,15 +18,12 @@ static char g_tmp[64];
 
 static int setup(void **st) {
     (void)st;
-    snprintf(g_tmp, sizeof g_tmp, "/tmp/sbgltfXXXXXX");
-    return mkdtemp(g_tmp) ? 0 : -1;
+    return tmp_folder(g_tmp, sizeof g_tmp, "sbgltf");
 }
 
 static int teardown(void **st) {
     (void)st;
-    char cmd[128];
-    snprintf(cmd, sizeof cmd, "rm -rf %s", g_tmp);
-    return system(cmd) == 0 ? 0 : -1;
+    return tmp_remove(g_tmp);
 }
 
 static const char *tmp_file(const char *name) {

@@ -21,8 +21,9 @@ static void test_grid(void **st) {
     assert_string_equal(c, "res=512:depth=32f:bias=1:slope=2:normal=1:filter=none:sun_size=0.53:stable=off:format=depth:blur=2:bleed=0.2:exponent=80");
     sb_params_canonical(&runs[5].params, c, sizeof c);
     assert_string_equal(c, "res=2048:depth=32f:bias=1:slope=2:normal=1:filter=pcf3:sun_size=0.53:stable=off:format=depth:blur=2:bleed=0.2:exponent=80");
-    assert_int_equal(sb_param_choice(&runs[5].params, "filter"), 2);
-    assert_true(sb_param_num(&runs[1].params, "res") == 512);
+    double filter, res;
+    assert_true(sb_params_find(&runs[5].params, "filter", &filter) && filter == 2);
+    assert_true(sb_params_find(&runs[1].params, "res", &res) && res == 512);
     assert_true(sb_spec_expand("none", NULL, &runs, &n, &err));
     assert_int_equal(n, 7);
     assert_ptr_equal(runs[6].tech, sb_technique_find("none"));

@@ -1,0 +1,27 @@
+/* eval.h - one evaluated frame: the untimed pass that measures how wrong a
+ * technique's shadows are. The run loop, the stress battery and the tests all
+ * evaluate through sb_eval_frame, so they measure the same thing. */
+#pragma once
+#include "error.h"
+#include "run.h"
+
+/* The read-back targets of an evaluated frame (w * h pixels, rows bottom-up). */
+typedef struct sb_eval_buf {
+    int w, h;
+    unsigned char *vis;         /* the technique's visibility (255 lit) */
+    unsigned char *rgba;        /* colour, when asked for (images) */
+    unsigned char *ref;         /* the reference: 255 lit, 0 shadowed, 128 not evaluated */
+    float *pos, *aux;           /* origin-relative position + texels per pixel; normal + cascade */
+} sb_eval_buf;
+
+void sb_eval_buf_init(sb_eval_buf *b, const sb_gpu *g, bool rgba);
+void sb_eval_buf_free(sb_eval_buf *b);
+
+/* Renders path frame pf of n with the evaluation targets bound, after
+ * replaying the `replay` frames before it (a temporal technique's frame
+ * depends on them), reads the targets back and measures the error against
+ * the scene's reference. *seq is the run sequence number of the first frame
+ * rendered and is advanced past the last. f gets the evaluated frame (its
+ * camera, shaded light and counters, collected ones included). */
+bool sb_eval_frame(sb_session *s, sb_instance *in, int pf, int n, int replay, int *seq, sb_eval_buf *b, sb_frame *f,
+                   sb_error_metrics *m, sb_err *err);
