@@ -1,4 +1,5 @@
 /* CSV writer: quoting, empty fields for NaN, and atomic files. */
+#include <ctype.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -10,6 +11,7 @@
 #include <unistd.h>
 
 #include "csv.h"
+#include "report.h"
 
 static void test_quoting(void **st) {
     (void)st;
@@ -66,7 +68,43 @@ static void test_atomic_file(void **st) {
     assert_int_equal(system(cmd), 0);
 }
 
+/* Every column of the table is documented in the README's CSV section. */
+static void test_columns_documented(void **st) {
+    (void)st;
+    char path[4096];
+    const char *root = getenv("SB_SOURCE_ROOT");
+    snprintf(path, sizeof path, "%s/README.md", root ? root : ".");
+    sb_err err;
+    char *text = sb_read_file(path, NULL, &err);
+    assert_non_null(text);
+    char *sec = strstr(text, "\n## CSV");
+    assert_non_null(sec);
+    char *end = strstr(sec + 1, "\n## ");
+    if (end) *end = 0;
+    int missing = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        int n = pass ? sb_run_col_count : sb_frame_col_count;
+        for (int k = 0; k < n; k++) {
+            const char *name = pass ? sb_run_cols[k].name : sb_frame_cols[k].name;
+            if (!strncmp(name, "split_", 6) && strstr(sec, "split_1 … split_8")) continue;
+            bool found = false;
+            size_t len = strlen(name);
+            for (const char *p = strstr(sec, name); p && !found; p = strstr(p + 1, name)) {
+                char before = p == sec ? ' ' : p[-1], after = p[len];
+                found = !(isalnum((unsigned char)before) || before == '_') && !(isalnum((unsigned char)after) || after == '_');
+            }
+            if (!found) {
+                print_message("README's CSV section does not name the %s column %s\n", pass ? "per-run" : "per-frame", name);
+                missing++;
+            }
+        }
+    }
+    free(text);
+    assert_int_equal(missing, 0);
+}
+
 int main(void) {
-    const struct CMUnitTest tests[] = {cmocka_unit_test(test_quoting), cmocka_unit_test(test_atomic_file)};
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_columns_documented),cmocka_unit_test(test_quoting), cmocka_unit_test(test_atomic_file)};
     return cmocka_run_group_tests_name("csv", tests, NULL, NULL);
 }
