@@ -404,7 +404,7 @@ static bool timed_frames(run_state *r, int index, int total) {
         sb_frame f;
         memset(&f, 0, sizeof f);
         sb_render_frame(s, &r->in, &f, pf, N, i, &r->timer);
-        if (r->timer.mode == SB_TIMING_QUERIES) glFlush();
+        sb_timer_frame_end(&r->timer);
         record_frame(r, i, pf, &f, sb_now_ms() - w0);
         if (r->rows.len > 65536) ok = sb_csv_file_write(&r->cf, &r->rows, &r->err);
         if (ok && o->run_timeout_s > 0 && sb_now_ms() - r->t_run > o->run_timeout_s * 1e3)
@@ -506,7 +506,6 @@ bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_
     sb_instance_destroy(&r.in);
     info.run_wall_s = (sb_now_ms() - r.t_run) / 1e3;
     info.repeats = r.repeats;
-    info.stalls = r.timer.stalls;
     if (!ok) {
         sb_log("run %s (%s): failed: %s", run_id, spec->tech->name, r.err.msg);
         info.status = "failed";

@@ -1,9 +1,13 @@
 /* timing.h - per-stage GPU timing.
  *
- * queries: glQueryCounter(GL_TIMESTAMP) at stage boundaries, query objects in a
- *   ring of `ring` frames. At the start of frame f the slot of frame f-ring is
- *   read; if its results are not available yet the read would block: that is
- *   counted as a stall (and then read anyway). The CPU never waits otherwise.
+ * queries: glQueryCounter(GL_TIMESTAMP) at each frame's start and end and at
+ *   stage boundaries, query objects in a ring of `ring` frames, and a fence
+ *   (glFenceSync) at the end of every frame. Before frame f the CPU waits for
+ *   frame f-ring's fence: that throttles a CPU running ahead of the GPU (the
+ *   time is the frame's cpu_wait_ms), and the queries of f-ring are then
+ *   complete, so reading them never blocks. The frame's gpu_idle_ms is the
+ *   part of its GPU span (start to end timestamp) no stage covers: bubbles
+ *   where the GPU waited for the CPU.
  * sync: glFinish + CLOCK_MONOTONIC at stage boundaries. The only honest mode on
  *   software rasterizers, whose timestamps do not cover rasterization.
  * auto: sync on llvmpipe/softpipe/swrast, queries elsewhere. */
@@ -36,25 +40,34 @@ typedef struct sb_stage_times {
     double ms[SB_STAGE_COUNT];
     unsigned mask;      /* stages measured */
     bool ready;
+    double cpu_wait_ms; /* CPU time blocked on the GPU before and in this frame */
+    double gpu_idle_ms; /* queries: GPU span of the frame not covered by a stage (NaN in sync mode) */
 } sb_stage_times;
 
 typedef struct sb_timer {
     sb_timing_mode mode;        /* resolved: QUERIES or SYNC */
     sb_ring ring;
-    unsigned *queries;          /* ring.size * SB_STAGE_COUNT * 2 */
+    unsigned *queries;          /* ring.size * SB_TIMER_QUERIES */
     unsigned *slot_mask;
+    void **fences;              /* per slot: the GLsync after its frame */
     sb_stage_times *times;      /* per frame, `frames` long */
     int frames;
     int current;
     double t0[SB_STAGE_COUNT];
     double wait_ms;             /* time this frame spent blocked on the GPU */
-    uint64_t stalls;            /* query reads that would have blocked */
 } sb_timer;
+
+/* Queries a frame's slot holds: a begin and end a stage, then the frame's own begin and end. */
+#define SB_TIMER_QUERIES (SB_STAGE_COUNT * 2 + 2)
 
 void sb_timer_init(sb_timer *t, sb_timing_mode resolved, int ring, int frames);
 void sb_timer_free(sb_timer *t);
+/* Starts frame `frame`: in queries mode, waits for the fence of the frame the
+ * ring slot held and collects its results; in sync mode, glFinish. */
 void sb_timer_frame_begin(sb_timer *t, int frame);
+/* Ends the current frame: its end timestamp and fence (queries mode). */
+void sb_timer_frame_end(sb_timer *t);
 void sb_timer_stage_begin(sb_timer *t, sb_stage s);
 void sb_timer_stage_end(sb_timer *t, sb_stage s);
-/* Collects every outstanding frame (end of run; blocking, not counted as stalls). */
+/* Collects every outstanding frame (end of a pass of the path: waits for each). */
 void sb_timer_drain(sb_timer *t);

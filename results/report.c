@@ -60,6 +60,8 @@ static sb_cell f_stage_ms(const sb_frame_row *r, int s) {
 }
 static sb_cell f_gpu_ms(const sb_frame_row *r, int a) { (void)a; return number(gpu_ms(r->t)); }
 static sb_cell f_cpu_ms(const sb_frame_row *r, int a) { (void)a; return number(r->rec->cpu_ms); }
+static sb_cell f_cpu_wait_ms(const sb_frame_row *r, int a) { (void)a; return number(r->t->cpu_wait_ms); }
+static sb_cell f_gpu_idle_ms(const sb_frame_row *r, int a) { (void)a; return number(r->t->gpu_idle_ms); }
 static sb_cell f_wall_ms(const sb_frame_row *r, int a) { (void)a; return number(r->rec->wall_ms); }
 static sb_cell f_stage_draws(const sb_frame_row *r, int s) {
     return has(r->stages, s) ? integer(r->rec->counters.stage_draw_calls[s]) : empty();
@@ -102,6 +104,8 @@ const sb_frame_col sb_frame_cols[] = {
     {"gpu_ms", f_gpu_ms, 0, 0, "sum of the stage times"},
     {"cpu_ms", f_cpu_ms, 0, 0, "frame wall time not spent waiting for the GPU"},
     {"wall_ms", f_wall_ms, 0, 0, "frame wall time"},
+    {"cpu_wait_ms", f_cpu_wait_ms, 0, 0, "CPU time blocked on the GPU (the fence of the frame a ring back, or glFinish)"},
+    {"gpu_idle_ms", f_gpu_idle_ms, 0, 0, "queries: the frame's GPU span not covered by a stage (the GPU waiting for the CPU)"},
     {"zpass_draw_calls", f_stage_draws, SB_STAGE_ZPASS, 0, "draw calls of the z-pass"},
     {"cascade_draw_calls", f_stage_draws, SB_STAGE_CASCADE, 0, "draw calls of the cascade stage"},
     {"final_draw_calls", f_stage_draws, SB_STAGE_FINAL, 0, "draw calls of the final pass"},
@@ -123,7 +127,7 @@ const int sb_frame_col_count = (int)SB_COUNT(sb_frame_cols);
 enum {
     S_RUN_ID, S_SCENE, S_PATH, S_TECHNIQUE, S_PARAMS, S_BACKEND, S_RENDERER, S_TIMING, S_STATUS, S_REASON
 };
-enum { I_RUN_INDEX, I_FRAMES, I_WARMUP, I_WIDTH, I_HEIGHT, I_STALLS, I_SCENE_TRIS };
+enum { I_RUN_INDEX, I_FRAMES, I_WARMUP, I_WIDTH, I_HEIGHT, I_SCENE_TRIS };
 
 static sb_cell r_text(const sb_run_row *r, int a) {
     const sb_run_info *in = r->info;
@@ -133,7 +137,7 @@ static sb_cell r_text(const sb_run_row *r, int a) {
 }
 static sb_cell r_int(const sb_run_row *r, int a) {
     const sb_run_info *in = r->info;
-    const long long v[] = {in->run_index, in->frames, in->warmup, in->width, in->height, (long long)in->stalls,
+    const long long v[] = {in->run_index, in->frames, in->warmup, in->width, in->height,
                            (long long)in->scene_triangles};
     return integer(v[a]);
 }
@@ -187,7 +191,6 @@ const sb_run_col sb_run_cols[] = {
     {"repeats", r_repeats, 0, 0, 0, "repetitions of the path measured"},
     {"target_ci_pct", r_target_ci, 0, 0, 0, "--target-ci"},
     {"gpu_ci_pct", r_gpu_ci, 0, 0, 0, "95% CI half-width of mean gpu_ms, percent of the mean"},
-    {"stalls", r_int, I_STALLS, 0, 0, "query reads that would have blocked"},
     {"scene_triangles", r_int, I_SCENE_TRIS, 0, 0, "triangles in the scene"},
     {"load_ms", r_load_ms, 0, 0, 0, "scene load time"},
     {"run_wall_s", r_wall_s, 0, 0, 0, "wall time of the run"},
@@ -207,6 +210,8 @@ const sb_run_col sb_run_cols[] = {
     SERIES("gpu_ms", SB_STATS_TIMING, SB_COL_DEFAULT_METRIC),
     SERIES("cpu_ms", SB_STATS_TIMING, 0),
     SERIES("wall_ms", SB_STATS_TIMING, 0),
+    SERIES("cpu_wait_ms", SB_STAT_MEAN, 0),
+    SERIES("gpu_idle_ms", SB_STAT_MEAN, 0),
     {"error_frames", r_error_frames, 0, 0, 0, "frames evaluated against the reference"},
     SERIES("err_rate", SB_STAT_MEAN | SB_STAT_P95, SB_COL_DEFAULT_METRIC),
     SERIES("err_false_shadow", SB_STAT_MEAN | SB_STAT_P95, 0),

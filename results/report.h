@@ -27,7 +27,7 @@ typedef struct sb_run_info {
     int run_index;              /* position in the expanded matrix */
     int frames, warmup, width, height, repeats;
     double target_ci;           /* percent, 0: none */
-    uint64_t stalls, scene_triangles;
+    uint64_t scene_triangles;
     double load_ms, run_wall_s, frames_wall_ms;   /* frames: every rendered frame, warm-up included */
     uint64_t rays;
     double ray_ms;

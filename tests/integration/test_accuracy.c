@@ -245,6 +245,59 @@ static void test_evaluation_does_not_touch_timed_frames(void **st) {
     sb_session_close(&g_towers);
 }
 
+
+/* queries mode: every GL_QUERY_RESULT read finds its result available (the
+ * frame's fence was waited for first), for a ring of 1 and of 3 frames. */
+static unsigned long g_query_reads, g_unavailable;
+static PFNGLGETQUERYOBJECTUI64VPROC o_getq64;
+static void GLAD_API_PTR c_getq64(GLuint id, GLenum pname, GLuint64 *out) {
+    if (pname == GL_QUERY_RESULT) {
+        GLuint avail = 0;
+        glad_glGetQueryObjectuiv(id, GL_QUERY_RESULT_AVAILABLE, &avail);
+        g_query_reads++;
+        g_unavailable += !avail;
+    }
+    o_getq64(id, pname, out);
+}
+
+static void test_query_reads_never_block(void **st) {
+    (void)st;
+    char dir[] = "/tmp/sbqryXXXXXX";
+    assert_non_null(mkdtemp(dir));
+    sb_timing_mode keep = g_towers.timing;
+    g_towers.timing = SB_TIMING_QUERIES;
+    g_towers.opts.frames = 10;
+    g_towers.opts.warmup = 2;
+    g_towers.opts.error_every = 0;
+    o_getq64 = glad_glGetQueryObjectui64v;
+    glad_glGetQueryObjectui64v = c_getq64;
+    const char *specs[] = {"sm:res=512", "sdsm:res=512"};
+    for (int ring = 1; ring <= 3; ring += 2)
+        for (int k = 0; k < 2; k++) {
+            g_towers.opts.ring = ring;
+            sb_run_spec *runs = NULL;
+            int n = 0;
+            sb_err err;
+            assert_true(sb_spec_expand(specs[k], NULL, &runs, &n, &err));
+            char sum_path[128];
+            snprintf(sum_path, sizeof sum_path, "%s/summary.csv", dir);
+            sb_summary sum;
+            sb_summary_open(&sum, sum_path);
+            g_query_reads = g_unavailable = 0;
+            assert_true(sb_run_one(&g_towers, &runs[0], dir, &sum, 0, 0, 1));
+            print_message("%s ring %d: %lu query results read, %lu unavailable\n", specs[k], ring, g_query_reads,
+                          g_unavailable);
+            assert_true(g_query_reads >= 12 * 2);   /* the hook sees the reads */
+            assert_int_equal(g_unavailable, 0);
+            sb_summary_free(&sum);
+            free(runs);
+        }
+    glad_glGetQueryObjectui64v = o_getq64;
+    g_towers.timing = keep;
+    g_towers.opts.ring = 3;
+    tmp_remove(dir);
+}
+
 /* overhangs' path ends on a far view: its far plane reaches well beyond the
  * scene. A warp fitted to the view frustum rather than to the part of it
  * inside the scene spends its resolution on empty space; fitted to what can be
@@ -273,6 +326,7 @@ int main(void) {
         cmocka_unit_test(test_reference_matches_analytic),
         cmocka_unit_test(test_error_falls_with_resolution),
         cmocka_unit_test(test_broken_bias_is_detected),
+        cmocka_unit_test(test_query_reads_never_block),
         cmocka_unit_test(test_evaluation_does_not_touch_timed_frames),
         cmocka_unit_test(test_warps_fit_the_visible_scene),   /* its own session: after g_towers closes */
     };
