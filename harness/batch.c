@@ -238,6 +238,7 @@ static bool batch_build(sb_batch *b, const char *file, char *text, const sb_run_
     parse ps = {.b = b, .file = file, .err = err};
     bool ok = parse_lines(&ps, text) && check_references(&ps, cli_opts, ncli, load) && (!load || load_scenes(&ps));
     if (ok && load) expand_matrix(&ps);
+    if (ok) sb_run_opts_finish(&b->opts);
     for (int l = 0; l < ps.nlines; l++) {
         free(ps.lines[l].only);
         for (int k = 0; k < ps.lines[l].nspecs; k++) free(ps.lines[l].specs[k]);
@@ -334,8 +335,8 @@ static void cpu_model(char *out, size_t len) {
     fclose(f);
 }
 
-static bool write_meta(const sb_batch_cmd *cmd, const char *dir, const sb_context *ctx, const sb_batch *b, int selected,
-                       sb_err *err) {
+static bool write_meta(const sb_batch_cmd *cmd, const char *dir, const sb_context *ctx, const sb_clocks *s_clocks,
+                       const sb_batch *b, int selected, sb_err *err) {
     char buf[8192], cpu[256], date[64];
     cpu_model(cpu, sizeof cpu);
     struct utsname u;
@@ -345,14 +346,18 @@ static bool write_meta(const sb_batch_cmd *cmd, const char *dir, const sb_contex
     gmtime_r(&now, &tm);
     strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", &tm);
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    char clocks[1024];
+    sb_clocks_describe(s_clocks, clocks, sizeof clocks);
+    char seed[32] = "";
+    if (b->opts.order == SB_ORDER_SHUFFLE) snprintf(seed, sizeof seed, "%llu", (unsigned long long)b->opts.seed);
     int n = snprintf(buf, sizeof buf,
                      "command: %s\nversion: %s\ncommit: %s\ndate: %s\nbatch: %s\nruns: %d of %d%s%s\n"
                      "backend: %s (%s)\ngl_vendor: %s\ngl_renderer: %s\ngl_version: %s\ncpu: %s\ncores: %ld\n"
-                     "kernel: %s %s %s\n",
+                     "kernel: %s %s %s\norder: %s\nseed: %s\n%s",
                      cmd->command_line, cmd->version, cmd->commit, date, b->file, selected, b->nruns,
                      cmd->shard ? ", shard " : "", cmd->shard ? cmd->shard : "", sb_backend_name(ctx->backend),
                      ctx->device, ctx->vendor, ctx->renderer, ctx->version, cpu, cores, u.sysname, u.release,
-                     u.machine);
+                     u.machine, sb_order_name(b->opts.order), seed, clocks);
     char path[4200];
     snprintf(path, sizeof path, "%s/meta", dir);
     return sb_write_file_atomic(path, buf, (size_t)(n < (int)sizeof buf ? n : (int)sizeof buf - 1), err);
@@ -421,6 +426,8 @@ static void run_scenes(sb_batch *b, const bool *selected, const bool *done, int 
                        sb_summary *sum) {
     sb_err err;
     int k = 0;
+    const sb_run_spec **specs = sb_xmalloc(sizeof *specs * (size_t)(b->nruns ? b->nruns : 1));
+    int *index = sb_xmalloc(sizeof *index * (size_t)(b->nruns ? b->nruns : 1));
     for (int sc = 0; sc < b->nscenes; sc++) {
         bool any = false;
         for (int i = 0; i < b->nruns; i++) any |= b->runs[i].scene == sc && selected[i] && !done[i];
@@ -433,16 +440,23 @@ static void run_scenes(sb_batch *b, const bool *selected, const bool *done, int 
         } else {
             fprintf(stderr, "shadowbench: %s\n", err.msg);
         }
+        int n = 0;
         for (int i = 0; i < b->nruns; i++) {
             if (b->runs[i].scene != sc || !selected[i] || done[i]) continue;
-            if (open) sb_run_one(s, &b->runs[i].spec, dir, sum, b->runs[i].index, k, todo);
-            else fail_runs(b, i, s->ctx.renderer, err.msg, sum);
-            k++;
+            specs[n] = &b->runs[i].spec, index[n++] = b->runs[i].index;
+            if (!open) fail_runs(b, i, s->ctx.renderer, err.msg, sum);
+        }
+        if (open) {
+            sb_run_group(s, specs, index, n, dir, sum, k, todo);
+            sb_session_close_scene(s);
+        } else {
             sb_err e;
             if (!sb_summary_flush(sum, &e)) fprintf(stderr, "shadowbench: %s\n", e.msg);
         }
-        if (open) sb_session_close_scene(s);
+        k += n;
     }
+    free(specs);
+    free(index);
 }
 
 int sb_batch_main(const sb_batch_cmd *cmd) {
@@ -478,12 +492,14 @@ int sb_batch_main(const sb_batch_cmd *cmd) {
     }
     sb_session s;
     memset(&s, 0, sizeof s);
-    if (!sb_context_create(&s.ctx, b.opts.backend, &err)) {
+    if (!sb_context_create(&s.ctx, b.opts.backend, &err) || !sb_session_clocks(&s, &b.opts, &err)) {
         fprintf(stderr, "shadowbench: %s\n", err.msg);
+        sb_clocks_close(s.clocks);
+        sb_context_destroy(&s.ctx);
         rc = 1;
         goto out;
     }
-    if (!write_meta(cmd, dir, &s.ctx, &b, nsel, &err) || !sb_report_write_columns(dir, &err))
+    if (!write_meta(cmd, dir, &s.ctx, s.clocks, &b, nsel, &err) || !sb_report_write_columns(dir, &err))
         fprintf(stderr, "shadowbench: %s\n", err.msg);
     snprintf(sum_path, sizeof sum_path, "%s/summary.csv", dir);
     sb_summary sum;
@@ -495,10 +511,11 @@ int sb_batch_main(const sb_batch_cmd *cmd) {
     if (!sb_summary_flush(&sum, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
     run_scenes(&b, selected, done, todo, dir, &s, &sum);
     printf("%s\n", dir);
-    sb_log("%d run(s): %d ok, %d failed, %d skipped; results in %s", sum.count, sum.count - sum.failed - sum.skipped,
-           sum.failed, sum.skipped, dir);
+    sb_log("%d run(s): %d ok (%d unstable), %d failed, %d skipped; results in %s", sum.count,
+           sum.count - sum.failed - sum.skipped, sum.unstable, sum.failed, sum.skipped, dir);
     rc = sum.failed ? 1 : 0;
     sb_summary_free(&sum);
+    sb_clocks_close(s.clocks);
     sb_context_destroy(&s.ctx);
 out:
     sb_batch_free(&b);

@@ -9,7 +9,7 @@
 #include "gpu.h"
 
 /* context_osmesa.c: kept apart because osmesa.h pulls in GL/gl.h, which glad replaces */
-bool sb_osmesa_open(void **ctx, void **buffer);
+bool sb_osmesa_open(void **ctx, void **buffer, char *why, size_t len);
 void *sb_osmesa_proc(const char *name);
 void sb_osmesa_close(void *ctx, void *buffer);
 
@@ -144,8 +144,8 @@ static bool egl_create(sb_context *c, sb_err *err) {
 }
 
 static bool osmesa_create(sb_context *c, sb_err *err) {
-    if (!sb_osmesa_open(&c->osmesa_context, &c->osmesa_buffer))
-        return sb_fail(err, "osmesa: cannot create a GL 4.3 core context");
+    char why[SB_ERR_LEN];
+    if (!sb_osmesa_open(&c->osmesa_context, &c->osmesa_buffer, why, sizeof why)) return sb_fail(err, "%s", why);
     snprintf(c->device, sizeof c->device, "osmesa");
     return finish_gl(c, (GLADloadfunc)sb_osmesa_proc, err);
 }

@@ -172,7 +172,8 @@ void sb_gpu_free(sb_gpu *g) {
     if (g->zpass_prog) glDeleteProgram(g->zpass_prog);
     if (g->fbo) glDeleteFramebuffers(1, &g->fbo);
     GLuint tex[] = {g->color_tex, g->vis_tex, g->depth_tex, g->pos_tex, g->aux_tex};
-    glDeleteTextures(5, tex);
+    for (size_t i = 0; i < SB_COUNT(tex); i++) /* nothing to delete (nor a GL) when the session never opened */
+        if (tex[i]) glDeleteTextures(1, &tex[i]);
     if (g->vbo) glDeleteBuffers(1, &g->vbo);
     if (g->ibo) glDeleteBuffers(1, &g->ibo);
     if (g->vao) glDeleteVertexArrays(1, &g->vao);

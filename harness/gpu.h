@@ -51,6 +51,7 @@ typedef struct sb_frame {
     int index;                          /* frame of the path */
     int seq;                            /* position in the run (warm-up frames first) */
     double progress;
+    double start_ms;                    /* sb_now_ms() when the frame began (timed frames) */
     sb_camera cam;                      /* world space */
     sb_m4 view, proj, view_proj;        /* from origin-relative world */
     double frustum[6][4];               /* camera planes, origin-relative */

@@ -21,7 +21,8 @@ static void usage(FILE *f) {
             "  shadowbench run SCENE PATH SPEC...     render each technique spec along the path, write CSV\n"
             "  shadowbench batch FILE [--shard I/N] [--resume DIR] [--dry-run]   run a matrix from a batch file\n"
             "  shadowbench compare BASE NEW [--metric M,...] [--threshold PCT] [--format text|csv|markdown]\n"
-            "                                         exit 1 when a metric regresses\n"
+            "                                         exit 1 when a metric regresses, 3 when none does but a\n"
+            "                                         compared timing is UNSTABLE (a run marked stable=no)\n"
             "  shadowbench compare RESULTS --pair KEY=A,B   runs differing only in KEY\n"
             "  shadowbench merge DIR... --out DIR     merge shard outputs into one results set\n"
             "  shadowbench stress [CASE|all [SPEC...]]  numerical-stability battery (--frames N, --size WxH);\n"
@@ -41,7 +42,8 @@ static void usage(FILE *f) {
             "  --timing auto|queries|sync   stage timing (default auto: sync on software rasterizers)\n"
             "  --ring N               timer-query ring depth in frames (default 3)\n"
             "  --frames N             frames sampled along the path (default 60)\n"
-            "  --warmup N             warm-up frames, excluded (default 3)\n"
+            "  --warmup auto|N        warm-up frames, excluded (default auto: until the GPU's times and clocks settle)\n"
+            "  --clocks auto|lock|free   lock the GPU clock for the invocation (NVML; auto: when permitted)\n"
             "  --size WxH             render size (default 1280x720)\n"
             "  --sun AZ,EL            sun azimuth and elevation in degrees (overrides the scene's)\n"
             "  --error-every K        shadow error against the exact ray-cast reference on every K-th frame\n"
@@ -50,6 +52,9 @@ static void usage(FILE *f) {
             "  --repeat K             run the path K times (default 1)\n"
             "  --target-ci PCT        repeat the path until the 95%% CI of mean gpu_ms is within PCT%% of it\n"
             "  --max-repeat N         at most N repetitions for --target-ci (default 10)\n"
+            "  --order matrix|interleave|shuffle   order of a scene's runs and repetitions (default matrix;\n"
+            "                         interleave: A1 B1 A2 B2 ..., so slow drift hits every run alike)\n"
+            "  --seed N               shuffle's seed (default: chosen, in the summary's seed column)\n"
             "  --threads N            reference ray-casting threads (default: all cores)\n"
             "  --run-timeout S        a run taking longer is recorded as failed\n"
             "  --out DIR              results folder (default results); each run command writes DIR/<UTC time>/\n"
@@ -219,10 +224,12 @@ static int cmd_run(const cli *c) {
         }
     sb_session s;
     memset(&s, 0, sizeof s);
-    if (!sb_session_open(&s, &c->opts, c->pos[0], c->pos[1], &err)) {
+    sb_run_opts o = c->opts;
+    sb_run_opts_finish(&o);
+    if (!sb_session_open(&s, &o, c->pos[0], c->pos[1], &err)) {
         fprintf(stderr, "shadowbench: %s\n", err.msg);
         free(runs);
-        sb_context_destroy(&s.ctx);
+        sb_session_close(&s);
         return 1;
     }
     char dir[4096], sum_path[4200];
@@ -238,13 +245,15 @@ static int cmd_run(const cli *c) {
     snprintf(sum_path, sizeof sum_path, "%s/summary.csv", dir);
     sb_summary sum;
     sb_summary_open(&sum, sum_path);
-    for (int i = 0; i < nruns; i++) {
-        sb_run_one(&s, &runs[i], dir, &sum, i, i, nruns);
-        if (!sb_summary_flush(&sum, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
-    }
+    const sb_run_spec **specs = sb_xmalloc(sizeof *specs * (size_t)nruns);
+    int *index = sb_xmalloc(sizeof *index * (size_t)nruns);
+    for (int i = 0; i < nruns; i++) specs[i] = &runs[i], index[i] = i;
+    sb_run_group(&s, specs, index, nruns, dir, &sum, 0, nruns);
+    free(specs);
+    free(index);
     printf("%s\n", dir);
-    sb_log("%d run(s): %d ok, %d failed, %d skipped; results in %s", sum.count, sum.count - sum.failed - sum.skipped,
-           sum.failed, sum.skipped, dir);
+    sb_log("%d run(s): %d ok (%d unstable), %d failed, %d skipped; results in %s", sum.count,
+           sum.count - sum.failed - sum.skipped, sum.unstable, sum.failed, sum.skipped, dir);
     int rc = sum.failed ? 1 : 0;
     sb_summary_free(&sum);
     sb_session_close(&s);
@@ -333,12 +342,13 @@ static int cmd_compare(const cli *c) {
         return 0;
     }
     if (c->npos != 2) return bad("usage: shadowbench compare BASE NEW [--metric M,...] [--threshold PCT]%s", "");
-    int n = sb_compare(c->pos[0], c->pos[1], &o, stdout, &err);
+    int unstable = 0;
+    int n = sb_compare(c->pos[0], c->pos[1], &o, stdout, &unstable, &err);
     if (n < 0) {
         fprintf(stderr, "shadowbench: %s\n", err.msg);
         return 2;
     }
-    return n > 0 ? 1 : 0;
+    return n > 0 ? 1 : unstable > 0 ? 3 : 0; /* 3: nothing regressed, but some timings cannot be trusted */
 }
 
 static int cmd_merge(const cli *c) {

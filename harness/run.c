@@ -3,12 +3,14 @@
 
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "eval.h"
 #include "image.h"
 #include "reference.h"
 #include "report.h"
+#include "stability.h"
 #include "stats.h"
 
 void sb_run_opts_defaults(sb_run_opts *o) {
@@ -17,7 +19,7 @@ void sb_run_opts_defaults(sb_run_opts *o) {
     o->timing = SB_TIMING_AUTO;
     o->ring = 3;
     o->frames = 60;
-    o->warmup = 3;
+    o->warmup = -1;
     o->width = 1280;
     o->height = 720;
     o->error_every = 10;
@@ -41,8 +43,23 @@ int sb_run_opts_set(sb_run_opts *o, const char *a, const char *v, sb_err *err) {
         if (!sb_parse_int(v, &n) || n < 1 || n > 1000000) return sb_fail(err, "--frames %s: expected 1..1000000", v), -1;
         o->frames = (int)n;
     } else if (!strcmp(a, "--warmup")) {
-        if (!sb_parse_int(v, &n) || n < 0 || n > 10000) return sb_fail(err, "--warmup %s: expected 0..10000", v), -1;
-        o->warmup = (int)n;
+        if (!strcmp(v, "auto")) o->warmup = -1;
+        else if (!sb_parse_int(v, &n) || n < 0 || n > 10000)
+            return sb_fail(err, "--warmup %s: expected auto or 0..10000", v), -1;
+        else o->warmup = (int)n;
+    } else if (!strcmp(a, "--clocks")) {
+        if (!sb_clocks_parse(v, &o->clocks)) return sb_fail(err, "--clocks %s: expected auto, lock or free", v), -1;
+    } else if (!strcmp(a, "--order")) {
+        if (!strcmp(v, "matrix")) o->order = SB_ORDER_MATRIX;
+        else if (!strcmp(v, "interleave")) o->order = SB_ORDER_INTERLEAVE;
+        else if (!strcmp(v, "shuffle")) o->order = SB_ORDER_SHUFFLE;
+        else return sb_fail(err, "--order %s: expected matrix, interleave or shuffle", v), -1;
+    } else if (!strcmp(a, "--seed")) {
+        unsigned long long u;
+        char extra;
+        if (sscanf(v, "%llu%c", &u, &extra) != 1 || u == 0 || v[0] == '-')
+            return sb_fail(err, "--seed %s: expected an integer >= 1", v), -1;
+        o->seed = u;
     } else if (!strcmp(a, "--size")) {
         int w, h;
         char extra;
@@ -61,6 +78,8 @@ int sb_run_opts_set(sb_run_opts *o, const char *a, const char *v, sb_err *err) {
         o->sun_override = true;
     } else if (!strcmp(a, "--images")) {
         if (!sb_parse_int(v, &n) || n < 0 || n > 1000000) return sb_fail(err, "--images %s: expected a frame interval >= 0", v), -1;
+        if (n > 0 && !sb_images_available())
+            return sb_fail(err, "--images %s: this shadowbench was built without OpenImageIO (meson -Dimages=disabled)", v), -1;
         o->images = (int)n;
     } else if (!strcmp(a, "--error-every")) {
         if (!sb_parse_int(v, &n) || n < 0 || n > 1000000) return sb_fail(err, "--error-every %s: expected a frame interval >= 0", v), -1;
@@ -84,6 +103,18 @@ int sb_run_opts_set(sb_run_opts *o, const char *a, const char *v, sb_err *err) {
         return 0;
     }
     return 1;
+}
+
+void sb_run_opts_finish(sb_run_opts *o) {
+    if (o->order != SB_ORDER_SHUFFLE || o->seed) return;
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    uint64_t x = (uint64_t)ts.tv_sec * 1000000007u ^ (uint64_t)ts.tv_nsec ^ (uint64_t)getpid() << 32;
+    o->seed = (x % 1000000000u) + 1; /* short enough to type back with --seed */
+}
+
+const char *sb_order_name(sb_order o) {
+    return o == SB_ORDER_INTERLEAVE ? "interleave" : o == SB_ORDER_SHUFFLE ? "shuffle" : "matrix";
 }
 
 static void base_name(const char *path, char *out, size_t len) {
@@ -112,17 +143,30 @@ bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, con
     return true;
 }
 
+bool sb_session_clocks(sb_session *s, const sb_run_opts *o, sb_err *err) {
+    if (s->clocks) return true;
+    s->clocks = sb_clocks_open(&s->ctx, "/sys");
+    return sb_clocks_apply(s->clocks, o->clocks, s->clocks_mode, sizeof s->clocks_mode, err);
+}
+
 bool sb_session_attach(sb_session *s, const sb_run_opts *o, sb_scene *scene, sb_path *path, sb_err *err) {
     bool have_ctx = s->ctx.renderer[0] != 0;
     sb_context keep = s->ctx;
+    sb_clocks *clocks = s->clocks;
+    char mode[sizeof s->clocks_mode];
+    memcpy(mode, s->clocks_mode, sizeof mode);
     memset(s, 0, sizeof *s);
     s->opts = *o;
     s->scene = *scene;
     s->path = *path;
     memset(scene, 0, sizeof *scene);
     memset(path, 0, sizeof *path);
-    if (have_ctx) s->ctx = keep;
-    if (!have_ctx && !sb_context_create(&s->ctx, o->backend, err)) {
+    if (have_ctx) {
+        s->ctx = keep;
+        s->clocks = clocks;
+        memcpy(s->clocks_mode, mode, sizeof mode);
+    }
+    if ((!have_ctx && !sb_context_create(&s->ctx, o->backend, err)) || !sb_session_clocks(s, o, err)) {
         sb_session_close_scene(s);
         return false;
     }
@@ -142,6 +186,10 @@ bool sb_session_attach(sb_session *s, const sb_run_opts *o, sb_scene *scene, sb_
         sb_log("note: %s has no timer queries; using sync timing", s->ctx.renderer);
         s->timing = SB_TIMING_SYNC;
     }
+    if (!sb_calib_init(&s->calib, &s->ctx, s->timing == SB_TIMING_QUERIES, err)) {
+        sb_session_close_scene(s);
+        return false;
+    }
     return true;
 }
 
@@ -159,6 +207,7 @@ void sb_session_close_scene(sb_session *s) {
     }
     free(s->scratch);
     s->scratch = NULL;
+    sb_calib_free(&s->calib);
     sb_gpu_free(&s->gpu);
     sb_path_free(&s->path);
     sb_scene_free(&s->scene);
@@ -166,6 +215,7 @@ void sb_session_close_scene(sb_session *s) {
 
 void sb_session_close(sb_session *s) {
     sb_session_close_scene(s);
+    sb_clocks_close(s->clocks);
     sb_context_destroy(&s->ctx);
     memset(s, 0, sizeof *s);
 }
@@ -354,167 +404,363 @@ static bool evaluate(sb_session *s, sb_instance *in, int seq, const char *out_di
     return ok;
 }
 
-/* ---- one run ---- */
+/* ---- one run: passes of the path ---- */
 
-/* A run being measured: its frames' records and timings, its CSV file. */
-typedef struct run_state {
+struct sb_run {
     sb_session *s;
-    sb_instance in;
     const sb_run_spec *spec;
-    sb_run_info *info;
-    sb_timer timer;
+    sb_summary *sum;
+    char run_id[17], params[1024], csv_path[4096], out_dir[4096];
+    sb_run_info info;
+    sb_instance in;
+    bool have_instance, keep_instance;   /* matrix order: one instance for every repetition */
+    int seq;                    /* the instance's next frame sequence number (warm-up frames first) */
+    sb_timer timer;             /* the measured frames: repetition r's frame j at r*N + j */
     sb_frame_rec *recs;
+    int capacity, done, written, repeats;
+    int warmup_frames;          /* warm-up frames rendered, every pass */
+    double calib_before, calib_after;
     sb_csv rows;
     sb_csv_file cf;
-    int capacity, done, written, repeats;
-    bool stream;                /* rows go out as their timings arrive */
+    bool failed, finished;
     double t_run;
     sb_err err;
-} run_state;
+};
 
-static void record_frame(run_state *r, int i, int pf, const sb_frame *f, double wall_ms) {
-    const int W = r->s->opts.warmup, N = r->s->opts.frames;
+static bool fail_run(sb_run *r, const char *fmt, const char *what) {
+    if (!r->failed) sb_fail(&r->err, fmt, what);
+    r->failed = true;
+    return false;
+}
+
+static bool ensure_instance(sb_run *r) {
+    if (r->have_instance) return true;
+    const sb_run_opts *o = &r->s->opts;
+    int frames = (o->warmup < 0 ? SB_WARMUP_AUTO_CAP : o->warmup) + o->frames * (r->keep_instance ? r->capacity / o->frames : 1);
+    if (!sb_instance_create(&r->in, r->s, r->spec, frames, &r->err)) return fail_run(r, "%s", r->err.msg);
+    r->have_instance = true;
+    r->seq = 0;
+    return true;
+}
+
+static void drop_instance(sb_run *r) {
+    if (!r->have_instance) return;
+    sb_instance_destroy(&r->in);
+    r->have_instance = false;
+}
+
+/* One warm-up frame: rendered and finished (its time is GPU-bound); returns that time. */
+static double warm_frame(sb_run *r, sb_timer *wt, int k) {
+    sb_session *s = r->s;
+    double w0 = sb_now_ms();
+    sb_timer_frame_begin(wt, k);
+    sb_frame f;
+    memset(&f, 0, sizeof f);
+    int pf = s->opts.warmup < 0 ? 0 : k % s->opts.frames;   /* auto: the same frame, so times compare */
+    sb_render_frame(s, &r->in, &f, pf, s->opts.frames, r->seq++, wt);
+    sb_timer_frame_end(wt);
+    glFinish();
+    double ms = sb_now_ms() - w0;
+    r->info.frames_wall_ms += ms; /* warm-up frames render too */
+    return ms;
+}
+
+/* Warm-up: --warmup N frames replaying the path's first frames, or (auto, N < 0)
+ * the path's first frame until the GPU has been busy long enough and the last
+ * frames' times (and clocks, where readable) agree; capped. */
+static void warm_up(sb_run *r) {
+    sb_session *s = r->s;
+    const bool hw = !s->ctx.software;
+    const int fixed = s->opts.warmup;
+    const int window = hw ? 5 : 4, cap = hw ? SB_WARMUP_AUTO_CAP : 30;
+    const double min_busy = hw ? 300 : 0, tol = hw ? 0.03 : 0.10, cap_ms = 5000;
+    sb_timer wt;
+    sb_timer_init(&wt, s->timing, s->opts.ring, fixed >= 0 ? (fixed ? fixed : 1) : cap);
+    double t[SB_WARMUP_AUTO_CAP], mhz[SB_WARMUP_AUTO_CAP], busy = 0, t0 = sb_now_ms();
+    int k = 0;
+    for (; fixed >= 0 ? k < fixed : k < cap; k++) {
+        t[k] = warm_frame(r, &wt, k);
+        mhz[k] = sb_clocks_mhz(s->clocks);
+        busy += t[k];
+        if (fixed >= 0 || k + 1 < window || busy < min_busy) continue;
+        double lo = 1e300, hi = 0, clo = 1e300, chi = 0;
+        for (int i = k + 1 - window; i <= k; i++) {
+            lo = fmin(lo, t[i]), hi = fmax(hi, t[i]);
+            clo = fmin(clo, mhz[i]), chi = fmax(chi, mhz[i]);
+        }
+        bool times_agree = hi - lo <= tol * lo;
+        bool clocks_agree = isnan(mhz[k]) || chi - clo <= 0.02 * clo;
+        if ((times_agree && clocks_agree) || sb_now_ms() - t0 > cap_ms) {
+            k++;
+            break;
+        }
+    }
+    sb_timer_drain(&wt);
+    sb_timer_free(&wt);
+    r->warmup_frames += k;
+}
+
+static void record_frame(sb_run *r, int i, int pf, const sb_frame *f, double wall_ms) {
     sb_frame_rec *rec = &r->recs[i];
     rec->frame = pf;
-    rec->repeat = i < W ? -1 : (i - W) / N;
+    rec->repeat = i / r->s->opts.frames;
+    rec->seq = f->seq;
     rec->progress = f->progress;
     rec->counters = f->counters;
     rec->wall_ms = wall_ms;
     rec->cpu_ms = wall_ms - r->timer.wait_ms;
-    r->info->frames_wall_ms += wall_ms; /* warm-up frames render too */
+    sb_clock_sample cs;
+    sb_clocks_sample(r->s->clocks, &cs);
+    rec->gpu_clock_mhz = cs.gfx_mhz;
+    rec->throttle = cs.throttle;
+    rec->start_s = (f->start_ms - sb_process_start_ms()) / 1e3;
+    r->info.frames_wall_ms += wall_ms;
     r->done = i + 1;
-    while (r->stream && r->written < r->done && r->timer.times[r->written].ready) {
-        sb_report_frame_row(&r->rows, &r->recs[r->written], &r->timer.times[r->written], r->spec->tech->stages);
-        r->written++;
-    }
 }
 
-/* The warm-up frames, then the path (repeated as asked); false on failure (r->err). */
-static bool timed_frames(run_state *r, int index, int total) {
+/* The measured frames of repetition `rep`; false on failure (r->err). */
+static bool measured_frames(sb_run *r, int rep, int index, int total) {
     sb_session *s = r->s;
     const sb_run_opts *o = &s->opts;
-    const int N = o->frames, W = o->warmup;
-    bool ok = true;
+    const int N = o->frames;
     s->timed = true;
-    for (int i = 0; ok && i < r->capacity; i++) {
-        /* warm-up frames replay the path's first frames and are discarded */
-        int pf = i < W ? i % N : (i - W) % N;
+    for (int j = 0; j < N; j++) {
+        int i = rep * N + j;
         double w0 = sb_now_ms();
         sb_timer_frame_begin(&r->timer, i);
         sb_frame f;
         memset(&f, 0, sizeof f);
-        sb_render_frame(s, &r->in, &f, pf, N, i, &r->timer);
+        f.start_ms = w0;
+        sb_render_frame(s, &r->in, &f, j, N, r->seq++, &r->timer);
         sb_timer_frame_end(&r->timer);
-        record_frame(r, i, pf, &f, sb_now_ms() - w0);
-        if (r->rows.len > 65536) ok = sb_csv_file_write(&r->cf, &r->rows, &r->err);
-        if (ok && o->run_timeout_s > 0 && sb_now_ms() - r->t_run > o->run_timeout_s * 1e3)
-            ok = sb_fail(&r->err, "timeout: the run took longer than %g s (frame %d of %d)", o->run_timeout_s, i + 1,
-                         r->capacity);
-        if (i >= W) progress_line(s, index, total, r->spec->tech->name, (i - W) % N + 1, N, r->t_run);
-        if (i >= W && (i - W) % N == N - 1) { /* a repetition of the path is complete */
-            r->repeats++;
-            if (o->target_ci > 0) {
-                sb_timer_drain(&r->timer); /* between repetitions, never inside a frame */
-                double ci = sb_report_gpu_ci_pct(r->timer.times + W, r->done - W, N);
-                if (ci <= o->target_ci) break;
-            }
+        record_frame(r, i, j, &f, sb_now_ms() - w0);
+        progress_line(s, index, total, r->spec->tech->name, j + 1, N, r->t_run);
+        if (o->run_timeout_s > 0 && sb_now_ms() - r->t_run > o->run_timeout_s * 1e3) {
+            char what[128];
+            snprintf(what, sizeof what, "the run took longer than %g s (frame %d of %d)", o->run_timeout_s, i + 1,
+                     r->capacity);
+            s->timed = false;
+            return fail_run(r, "timeout: %s", what);
         }
     }
-    sb_timer_drain(&r->timer);
+    sb_timer_drain(&r->timer); /* between repetitions, never inside a frame */
     s->timed = false;
-    return ok;
+    if (r->spec->tech->collect)
+        for (int j = 0; j < N; j++) r->spec->tech->collect(r->in.state, r->recs[rep * N + j].seq, &r->recs[rep * N + j].counters);
+    return true;
+}
+
+bool sb_run_pass(sb_run *r, int index, int total) {
+    if (r->failed || r->finished) return false;
+    const sb_run_opts *o = &r->s->opts;
+    bool first = r->repeats == 0;
+    if (!ensure_instance(r)) return false;
+    if (first || !r->keep_instance) warm_up(r);
+    if (first) r->calib_before = sb_calib_measure(&r->s->calib);
+    bool ok = measured_frames(r, r->repeats, index, total);
+    if (ok) r->repeats++;
+    r->calib_after = sb_calib_measure(&r->s->calib);
+    if (!r->keep_instance) drop_instance(r);
+    if (!ok) return false;
+    if (o->error_every == 0) { /* nothing fills these rows later: they can go out now */
+        for (; r->written < r->done; r->written++)
+            sb_report_frame_row(&r->rows, &r->recs[r->written], &r->timer.times[r->written], r->spec->tech->stages);
+        if (!sb_csv_file_write(&r->cf, &r->rows, &r->err)) return fail_run(r, "%s", r->err.msg);
+    }
+    return true;
+}
+
+bool sb_run_wants_more(const sb_run *r) {
+    const sb_run_opts *o = &r->s->opts;
+    if (r->failed || r->finished || r->repeats * o->frames >= r->capacity) return false;
+    if (o->target_ci <= 0) return r->repeats < o->repeat;
+    return r->repeats == 0 || sb_report_gpu_ci_pct(r->timer.times, r->done, o->frames) > o->target_ci;
 }
 
 /* A technique with shadow stages that drew no caster in any measured frame
  * measured nothing a user asked about: said in the run's warnings. */
-static void check_shadows_drawn(run_state *r) {
+static void check_shadows_drawn(sb_run *r) {
     const unsigned shadow = SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_VOLUMES);
     if (!(r->spec->tech->stages & shadow)) return;
-    for (int i = r->s->opts.warmup; i < r->done; i++)
+    for (int i = 0; i < r->done; i++)
         if (r->recs[i].counters.shadow_triangles) return;
-    sb_run_warn(r->info, "no shadow-casting triangle was drawn in any frame (nothing in view casts toward the light)");
+    sb_run_warn(&r->info, "no shadow-casting triangle was drawn in any frame (nothing in view casts toward the light)");
 }
 
-/* After the timed frames: collected counters, the evaluation pass, the rest of the rows. */
-static bool finish_run(run_state *r, const char *out_dir) {
-    const sb_run_opts *o = &r->s->opts;
-    const int W = o->warmup;
-    bool ok = true;
-    if (r->spec->tech->collect)
-        for (int i = W; i < r->done; i++) r->spec->tech->collect(r->in.state, i, &r->recs[i].counters);
-    if (o->error_every > 0 || o->images > 0)
-        ok = evaluate(r->s, &r->in, r->capacity, out_dir, r->info->run_id, r->recs + W, r->info, &r->err);
-    if (ok) {
-        for (; r->written < r->done; r->written++)
-            sb_report_frame_row(&r->rows, &r->recs[r->written], &r->timer.times[r->written], r->spec->tech->stages);
-        ok = sb_csv_file_write(&r->cf, &r->rows, &r->err);
+/* The stability verdict from the probe, the batch's probes and the frames' drift. */
+static void judge_stability(sb_run *r) {
+    double *ms = sb_xmalloc(sizeof(double) * (size_t)(r->done ? r->done : 1));
+    for (int i = 0; i < r->done; i++) {
+        const sb_stage_times *t = &r->timer.times[i];
+        ms[i] = 0;
+        for (int k = 0; k < SB_STAGE_COUNT; k++)
+            if (t->mask & SB_STAGE_BIT(k)) ms[i] += t->ms[k];
     }
-    if (ok) ok = sb_gl_check(r->spec->tech->name, &r->err);
-    if (ok) check_shadows_drawn(r);
-    return ok;
+    /* a software rasterizer shares the CPU with everything else on the machine: wider tolerances */
+    const bool sw = r->s->ctx.software;
+    sb_stability_in in = {.calib_before = r->calib_before, .calib_after = r->calib_after,
+                          .batch_calib = r->sum->calib, .nbatch = r->sum->ncalib, .frame_ms = ms, .n = r->done,
+                          .per_repeat = r->s->opts.frames, .probe_tol = sw ? 0.25 : 0.10,
+                          .batch_tol = sw ? 0.35 : 0.15, .drift_tol = sw ? 0.20 : 0.05};
+    r->info.stable = sb_stability(&in, r->info.unstable_reason, sizeof r->info.unstable_reason) ? "yes" : "no";
+    free(ms);
+    r->info.calib_ms_before = r->calib_before;
+    r->info.calib_ms_after = r->calib_after;
+    sb_summary_add_calib(r->sum, r->calib_before);
 }
 
-static void record_outcome(sb_summary *sum, sb_run_info *info, unsigned stages, const char *why, double t_run) {
-    info->status = "failed";
-    info->reason = why;
-    info->run_wall_s = (sb_now_ms() - t_run) / 1e3;
-    sb_log("run %s (%s): failed: %s", info->run_id, info->technique, why);
-    sb_summary_add_outcome(sum, info, stages, NULL, NULL, 0);
+/* After the passes: the evaluation pass, the rest of the rows, the file committed. */
+static bool finish_run(sb_run *r) {
+    const sb_run_opts *o = &r->s->opts;
+    if (r->failed) return false;
+    if (o->error_every > 0 || o->images > 0) {
+        if (!ensure_instance(r)) return false;
+        if (!evaluate(r->s, &r->in, r->seq, r->out_dir, r->run_id, r->recs, &r->info, &r->err))
+            return fail_run(r, "%s", r->err.msg);
+    }
+    for (; r->written < r->done; r->written++)
+        sb_report_frame_row(&r->rows, &r->recs[r->written], &r->timer.times[r->written], r->spec->tech->stages);
+    if (!sb_csv_file_write(&r->cf, &r->rows, &r->err) || !sb_gl_check(r->spec->tech->name, &r->err) ||
+        !sb_csv_file_commit(&r->cf, &r->err))
+        return fail_run(r, "%s", r->err.msg);
+    check_shadows_drawn(r);
+    judge_stability(r);
+    return true;
+}
+
+sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_summary *sum, int run_index,
+                     bool keep_instance) {
+    sb_run *r = sb_xcalloc(1, sizeof *r);
+    const sb_run_opts *o = &s->opts;
+    r->s = s;
+    r->spec = spec;
+    r->sum = sum;
+    r->keep_instance = keep_instance;
+    r->t_run = sb_now_ms();
+    sb_session_run_id(s, spec, r->run_id);
+    sb_params_canonical(&spec->params, r->params, sizeof r->params);
+    snprintf(r->csv_path, sizeof r->csv_path, "%s/%s.csv", out_dir, r->run_id);
+    snprintf(r->out_dir, sizeof r->out_dir, "%s", out_dir);
+    r->info = (sb_run_info){
+        .run_id = r->run_id, .run_index = run_index, .scene = s->scene_name, .path = s->path_name,
+        .technique = spec->tech->name, .params = r->params, .backend = sb_backend_name(o->backend),
+        .renderer = s->ctx.renderer, .timing = sb_timing_name(s->timing), .clocks = s->clocks_mode, .status = "ok",
+        .order = sb_order_name(o->order), .seed = o->order == SB_ORDER_SHUFFLE ? o->seed : 0,
+        .reason = "", .frames = o->frames, .warmup = o->warmup, .width = o->width, .height = o->height,
+        .target_ci = o->target_ci, .scene_triangles = sb_scene_triangles(&s->scene), .load_ms = s->scene.load_ms,
+        .calib_ms_before = NAN, .calib_ms_after = NAN, .stable = "", .unstable_reason = "",
+    };
+    const char *skip = sb_skip_reason(s, spec->tech, &spec->params);
+    if (skip) {
+        r->finished = true;
+        r->info.status = "skipped";
+        r->info.reason = skip;
+        return r;
+    }
+    r->capacity = o->frames * (o->target_ci > 0 ? o->max_repeat : o->repeat);
+    sb_timer_init(&r->timer, s->timing, o->ring, r->capacity);
+    r->recs = sb_xcalloc((size_t)r->capacity, sizeof *r->recs);
+    if (sb_csv_file_open(&r->cf, r->csv_path, &r->err)) {
+        sb_report_frame_header(&r->rows);
+        if (!sb_csv_file_write(&r->cf, &r->rows, &r->err)) fail_run(r, "%s", r->err.msg);
+    } else {
+        fail_run(r, "%s", r->err.msg);
+    }
+    if (!r->failed && keep_instance) ensure_instance(r);
+    return r;
+}
+
+bool sb_run_end(sb_run *r) {
+    bool ok = r->info.status[0] == 's' || finish_run(r); /* skipped runs have nothing to finish */
+    drop_instance(r);
+    if (r->cf.f && r->failed) sb_csv_file_abort(&r->cf);
+    r->info.run_wall_s = (sb_now_ms() - r->t_run) / 1e3;
+    r->info.repeats = r->repeats;
+    r->info.warmup = r->s->opts.warmup < 0 ? (r->repeats ? r->warmup_frames / r->repeats : 0) : r->s->opts.warmup;
+    if (!ok) {
+        sb_log("run %s (%s): failed: %s", r->run_id, r->spec->tech->name, r->err.msg);
+        r->info.status = "failed";
+        r->info.reason = r->err.msg;
+    }
+    bool measured = ok && r->info.status[0] == 'o';
+    sb_summary_add_outcome(r->sum, &r->info, r->spec->tech->stages, measured ? r->recs : NULL, r->timer.times,
+                           r->done);
+    sb_csv_free(&r->rows);
+    free(r->recs);
+    if (r->timer.times) sb_timer_free(&r->timer);
+    free(r);
+    return ok;
 }
 
 bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_summary *sum, int run_index,
                 int index, int total) {
-    char run_id[17], path[4096], params[1024];
-    sb_session_run_id(s, spec, run_id);
-    sb_params_canonical(&spec->params, params, sizeof params);
-    snprintf(path, sizeof path, "%s/%s.csv", out_dir, run_id);
-    const sb_run_opts *o = &s->opts;
-    const unsigned stages = spec->tech->stages;
-    sb_run_info info = {
-        .run_id = run_id, .run_index = run_index, .scene = s->scene_name, .path = s->path_name, .technique = spec->tech->name,
-        .params = params, .backend = sb_backend_name(o->backend), .renderer = s->ctx.renderer,
-        .timing = sb_timing_name(s->timing), .status = "ok", .reason = "", .frames = o->frames,
-        .warmup = o->warmup, .width = o->width, .height = o->height, .target_ci = o->target_ci,
-        .scene_triangles = sb_scene_triangles(&s->scene), .load_ms = s->scene.load_ms,
-    };
-    run_state r = {.s = s, .spec = spec, .info = &info, .t_run = sb_now_ms(), .written = o->warmup};
-    const char *skip = sb_skip_reason(s, spec->tech, &spec->params);
-    if (skip) {
-        info.status = "skipped";
-        info.reason = skip;
-        sb_summary_add_outcome(sum, &info, stages, NULL, NULL, 0);
-        return true;
+    sb_run *r = sb_run_begin(s, spec, out_dir, sum, run_index, true);
+    while (sb_run_wants_more(r) && sb_run_pass(r, index, total)) {}
+    return sb_run_end(r);
+}
+
+/* splitmix64: shuffle's generator (the same seed, the same order everywhere) */
+static uint64_t next_random(uint64_t *x) {
+    uint64_t z = (*x += 0x9e3779b97f4a7c15u);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
+    return z ^ (z >> 31);
+}
+
+static void shuffle(int *v, int n, uint64_t *rng) {
+    for (int i = n - 1; i > 0; i--) {
+        int j = (int)(next_random(rng) % (uint64_t)(i + 1));
+        int t = v[i];
+        v[i] = v[j], v[j] = t;
     }
-    r.capacity = o->warmup + o->frames * (o->target_ci > 0 ? o->max_repeat : o->repeat);
-    if (!sb_instance_create(&r.in, s, spec, r.capacity, &r.err)) {
-        record_outcome(sum, &info, stages, r.err.msg, r.t_run);
-        return false;
-    }
-    sb_timer_init(&r.timer, s->timing, o->ring, r.capacity);
-    r.recs = sb_xcalloc((size_t)r.capacity, sizeof *r.recs);
-    /* rows stream out as their timings arrive, unless something is only known
-       after the timed frames (GPU-side counters, error evaluation) */
-    r.stream = !spec->tech->collect && o->error_every == 0;
-    bool ok = sb_csv_file_open(&r.cf, path, &r.err);
-    if (ok) {
-        sb_report_frame_header(&r.rows);
-        ok = sb_csv_file_write(&r.cf, &r.rows, &r.err);
-    }
-    ok = ok && timed_frames(&r, index, total) && finish_run(&r, out_dir);
-    if (ok) ok = sb_csv_file_commit(&r.cf, &r.err);
-    else sb_csv_file_abort(&r.cf);
-    sb_instance_destroy(&r.in);
-    info.run_wall_s = (sb_now_ms() - r.t_run) / 1e3;
-    info.repeats = r.repeats;
-    if (!ok) {
-        sb_log("run %s (%s): failed: %s", run_id, spec->tech->name, r.err.msg);
-        info.status = "failed";
-        info.reason = r.err.msg;
-    }
-    sb_summary_add_outcome(sum, &info, stages, ok ? r.recs + o->warmup : NULL, r.timer.times + o->warmup,
-                           r.done - o->warmup);
-    sb_csv_free(&r.rows);
-    free(r.recs);
-    sb_timer_free(&r.timer);
+}
+
+static bool end_run(sb_run *r, sb_summary *sum) {
+    bool ok = sb_run_end(r);
+    sb_err e;
+    if (!sb_summary_flush(sum, &e)) fprintf(stderr, "shadowbench: %s\n", e.msg);
     return ok;
+}
+
+/* Rounds: every run that wants another repetition renders one, in the
+ * round's order (interleave: matrix order; shuffle: a fresh permutation). */
+static void run_rounds(sb_session *s, sb_run **runs, int n, int first, int total, uint64_t *rng) {
+    int *perm = sb_xmalloc(sizeof(int) * (size_t)n);
+    for (;;) {
+        bool more = false;
+        for (int k = 0; k < n; k++) more |= sb_run_wants_more(runs[k]);
+        if (!more) break;
+        for (int k = 0; k < n; k++) perm[k] = k;
+        if (s->opts.order == SB_ORDER_SHUFFLE) shuffle(perm, n, rng);
+        for (int k = 0; k < n; k++)
+            if (sb_run_wants_more(runs[perm[k]])) sb_run_pass(runs[perm[k]], first + perm[k], total);
+    }
+    free(perm);
+}
+
+int sb_run_group(sb_session *s, const sb_run_spec *const *specs, const int *run_index, int n, const char *out_dir,
+                 sb_summary *sum, int first, int total) {
+    const sb_run_opts *o = &s->opts;
+    if (n <= 0) return 0;
+    int failed = 0, *at = sb_xmalloc(sizeof(int) * (size_t)n);
+    sb_run **runs = sb_xmalloc(sizeof *runs * (size_t)n);
+    uint64_t rng = o->seed;
+    for (int k = 0; k < n; k++) at[k] = k;
+    /* one pass each: interleaving has nothing to interleave, shuffle permutes the runs */
+    bool one_pass = o->repeat == 1 && o->target_ci <= 0;
+    if (o->order == SB_ORDER_SHUFFLE && one_pass) shuffle(at, n, &rng);
+    if (o->order == SB_ORDER_MATRIX || one_pass) {
+        for (int k = 0; k < n; k++) {
+            failed += !sb_run_one(s, specs[at[k]], out_dir, sum, run_index[at[k]], first + k, total);
+            sb_err e;
+            if (!sb_summary_flush(sum, &e)) fprintf(stderr, "shadowbench: %s\n", e.msg);
+        }
+    } else {
+        for (int k = 0; k < n; k++) runs[k] = sb_run_begin(s, specs[k], out_dir, sum, run_index[k], false);
+        run_rounds(s, runs, n, first, total, &rng);
+        for (int k = 0; k < n; k++) failed += !end_run(runs[k], sum);
+    }
+    free(runs);
+    free(at);
+    return failed;
 }

@@ -5,6 +5,8 @@
  * path's N frames, timing every stage, and writes one per-frame CSV and one
  * summary row. A run that fails is recorded and the next one goes on. */
 #pragma once
+#include "calib.h"
+#include "clocks.h"
 #include "context.h"
 #include "csv.h"
 #include "gpu.h"
@@ -12,12 +14,20 @@
 #include "spec.h"
 #include "timing.h"
 
+/* The order of a scene's runs and their repetitions (--order). */
+typedef enum sb_order {
+    SB_ORDER_MATRIX,            /* each run's repetitions together, runs in matrix order */
+    SB_ORDER_INTERLEAVE,        /* rounds: A1 B1 C1, A2 B2 C2, ... */
+    SB_ORDER_SHUFFLE,           /* rounds, each in a random order (seeded) */
+} sb_order;
+const char *sb_order_name(sb_order o);
+
 typedef struct sb_run_opts {
     sb_backend backend;         /* default egl */
     sb_timing_mode timing;      /* default auto */
     int ring;                   /* query ring frames, default 3 */
     int frames;                 /* default 60 */
-    int warmup;                 /* default 3 */
+    int warmup;                 /* warm-up frames; -1 (the default): auto, until the GPU is warm */
     int width, height;          /* default 1280x720 */
     bool sun_override;
     double sun_az, sun_el;      /* degrees */
@@ -30,12 +40,17 @@ typedef struct sb_run_opts {
     int threads;                /* reference ray-casting threads (default: all cores, at most 1024) */
     double run_timeout_s;       /* a run taking longer fails with a timeout (0: none) */
     bool allow_external_uris;   /* glTF buffers and images may be read from outside the scene's folder */
+    sb_clocks_mode clocks;      /* --clocks auto|lock|free (default auto) */
+    sb_order order;             /* --order matrix|interleave|shuffle (default matrix) */
+    uint64_t seed;              /* --seed: shuffle's seed; 0: chosen by sb_run_opts_finish */
 } sb_run_opts;
 
 void sb_run_opts_defaults(sb_run_opts *o);
 /* Sets one option (--frames, --size, ...) from text: 1 set, 0 not a run
  * option, -1 bad value (err says which and what was expected). */
 int sb_run_opts_set(sb_run_opts *o, const char *name, const char *value, sb_err *err);
+/* After every option is set: picks shuffle's seed when none was given. */
+void sb_run_opts_finish(sb_run_opts *o);
 
 typedef struct sb_session {
     sb_run_opts opts;
@@ -51,8 +66,17 @@ typedef struct sb_session {
     void **tech_data;           /* per technique (registry index): what its load step made for the scene */
     bool *tech_loaded;
     bool timed;                 /* true while a run's timed frames render (tests assert nothing is read back then) */
+    sb_calib calib;             /* the calibration probe */
+    sb_clocks *clocks;          /* the GPU's clock state (kept with the context) */
+    char clocks_mode[64];       /* what the summary's clocks column says */
 } sb_session;
 
+/* The most warm-up frames --warmup auto renders. */
+#define SB_WARMUP_AUTO_CAP 1000
+
+/* Opens the clock reader for the session's context and applies --clocks
+ * (after the context exists; kept with it across scenes). */
+bool sb_session_clocks(sb_session *s, const sb_run_opts *o, sb_err *err);
 /* Loads scene and path, opens the context (if not already), uploads buffers. */
 bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, const char *path, sb_err *err);
 /* The same with a scene and path already loaded: the session takes them over
@@ -86,10 +110,27 @@ void sb_render_camera(sb_session *s, sb_instance *in, sb_frame *f, const sb_came
  * scene and context, or NULL. The text lives in the session. */
 const char *sb_skip_reason(sb_session *s, const sb_technique *t, const sb_params *p);
 
+/* A run in passes of the path, for runs whose repetitions interleave:
+ * begin (the run skipped when it cannot apply), then passes while it wants
+ * more (each pass warms up, renders the path once and measures it), then end
+ * (the evaluation pass, the CSV committed, the summary row). keep_instance:
+ * one technique instance for every repetition (warmed up once); otherwise one
+ * a pass, each warmed up. */
+typedef struct sb_run sb_run;
+sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_summary *sum, int run_index,
+                     bool keep_instance);
+bool sb_run_wants_more(const sb_run *r);
+bool sb_run_pass(sb_run *r, int index, int total);
+bool sb_run_end(sb_run *r);
 /* Runs one spec; writes DIR/<run_id>.csv and a summary row. run_index is its
  * place in the matrix; progress shows "run i of n". Returns false if it failed. */
 bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_summary *sum, int run_index, int i,
                 int n);
+/* The runs of one scene (specs[k], run_index[k]) in the order of --order,
+ * the summary flushed after each run ends; progress counts from `first` of
+ * `total`. Returns the number of runs that failed. */
+int sb_run_group(sb_session *s, const sb_run_spec *const *specs, const int *run_index, int n, const char *out_dir,
+                 sb_summary *sum, int first, int total);
 /* run_id: hash of scene and path contents, technique, canonical parameters,
  * frames, size, backend (and --sun when given). */
 void sb_run_id(uint64_t scene_hash, uint64_t path_hash, const sb_run_opts *o, const sb_run_spec *spec, char out[17]);

@@ -200,3 +200,7 @@ void *sb_xcalloc(size_t count, size_t size) {
 }
 
 void *sb_xrealloc(void *p, size_t n) { return checked(realloc(p, n ? n : 1), n); }
+
+static double g_start_ms;
+__attribute__((constructor)) static void note_start(void) { g_start_ms = sb_now_ms(); }
+double sb_process_start_ms(void) { return g_start_ms; }

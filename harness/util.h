@@ -31,6 +31,7 @@ uint64_t sb_fnv1a(uint64_t h, const void *data, size_t n);
 #define SB_FNV_SEED 1469598103934665603ull
 
 double sb_now_ms(void);          /* CLOCK_MONOTONIC in milliseconds */
+double sb_process_start_ms(void);   /* sb_now_ms() when the process started */
 double sb_cpu_ms(void);          /* process CPU time in milliseconds */
 
 /* Allocation that cannot return NULL: out of memory prints one line

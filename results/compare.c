@@ -114,7 +114,9 @@ static void row(FILE *out, int format, const sb_table *t, int r, const char *par
     }
 }
 
-int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FILE *out, sb_err *err) {
+static bool unstable_row(const sb_table *t, int r) { return !strcmp(sb_table_get(t, r, "stable"), "no"); }
+
+int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FILE *out, int *unstable, sb_err *err) {
     sb_table A, B;
     if (!load_summary(&A, base, err)) return -1;
     if (!load_summary(&B, next, err)) {
@@ -139,7 +141,7 @@ int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FIL
             return -1;
         }
     double thr = o->threshold_pct / 100.0;
-    int regressions = 0, matched = 0;
+    int regressions = 0, matched = 0, shaky = 0;
     header(out, o->format, "base", "new");
     for (int rb = 0; rb < B.nrows; rb++) {
         if (strcmp(sb_table_get(&B, rb, "status"), "ok")) continue;
@@ -161,6 +163,11 @@ int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FIL
             bool worse = b.center > a.center * (1 + thr) + 1e-12;
             /* timings also need the confidence intervals of the means apart */
             bool separated = isnan(a.ci) || isnan(b.ci) || b.mean - b.ci > a.mean + a.ci;
+            if (!isnan(a.ci) && (unstable_row(&A, ra) || unstable_row(&B, rb))) { /* a timing of an unstable run */
+                shaky++;
+                row(out, o->format, &B, rb, params, metrics[k], a.center, b.center, "UNSTABLE");
+                continue;
+            }
             bool regressed = worse && separated;
             regressions += regressed;
             row(out, o->format, &B, rb, params, metrics[k], a.center, b.center,
@@ -168,7 +175,9 @@ int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FIL
         }
     }
     if (o->format == SB_FORMAT_TEXT)
-        fprintf(out, "%d run(s) matched, %d regression(s) beyond %.3g%%\n", matched, regressions, o->threshold_pct);
+        fprintf(out, "%d run(s) matched, %d regression(s) beyond %.3g%%, %d timing(s) UNSTABLE\n", matched, regressions,
+                o->threshold_pct, shaky);
+    if (unstable) *unstable = shaky;
     sb_table_free(&A);
     sb_table_free(&B);
     if (matched == 0) {
@@ -247,9 +256,12 @@ int sb_compare_pairs(const char *dir, const sb_compare_opts *o, FILE *out, sb_er
             pairs++;
             char params[2048];
             sorted_params(pa, params, sizeof params);
+            bool shaky = unstable_row(&t, ra) || unstable_row(&t, rb);
             for (int k = 0; k < nm; k++) {
                 metric_value a = metric(&t, ra, metrics[k]), b = metric(&t, rb, metrics[k]);
-                if (a.ok && b.ok) row(out, o->format, &t, ra, params, metrics[k], a.center, b.center, "");
+                if (a.ok && b.ok)
+                    row(out, o->format, &t, ra, params, metrics[k], a.center, b.center,
+                        shaky && !isnan(a.ci) ? "UNSTABLE" : "");
             }
         }
     }

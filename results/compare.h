@@ -18,9 +18,11 @@ typedef struct sb_compare_opts {
 /* Compares NEW against BASE (results folders or summary.csv files): runs are
  * joined by scene, path, technique and parameters (in any order). A metric
  * regresses when it is worse by more than the threshold and, for timings, the
- * two 95% confidence intervals of the mean do not overlap. Returns the number
+ * two 95% confidence intervals of the mean do not overlap. A timing of a pair
+ * in which either run is marked stable=no is UNSTABLE instead: neither a
+ * regression nor ok (*unstable counts them; may be NULL). Returns the number
  * of regressions, or -1 with err set. */
-int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FILE *out, sb_err *err);
+int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FILE *out, int *unstable, sb_err *err);
 /* Pairs runs within one results set that differ only in the given parameter
  * (or technique, matching the parameters both techniques have). Returns the
  * number of pairs, or -1. */

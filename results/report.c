@@ -7,9 +7,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "clocks.h"
 #include "stats.h"
 
-const char *const sb_stat_names[SB_STAT_COUNT] = {"mean", "median", "p95", "p99", "std", "ci95"};
+const char *const sb_stat_names[SB_STAT_COUNT] = {"mean", "median", "p95", "p99", "std", "ci95", "min", "max"};
 
 static sb_cell empty(void) { return (sb_cell){SB_CELL_EMPTY, 0, NAN, NULL}; }
 static sb_cell integer(long long v) { return (sb_cell){SB_CELL_INT, v, (double)v, NULL}; }
@@ -60,6 +61,8 @@ static sb_cell f_stage_ms(const sb_frame_row *r, int s) {
 }
 static sb_cell f_gpu_ms(const sb_frame_row *r, int a) { (void)a; return number(gpu_ms(r->t)); }
 static sb_cell f_cpu_ms(const sb_frame_row *r, int a) { (void)a; return number(r->rec->cpu_ms); }
+static sb_cell f_start_s(const sb_frame_row *r, int a) { (void)a; return number(r->rec->start_s); }
+static sb_cell f_gpu_clock(const sb_frame_row *r, int a) { (void)a; return number(r->rec->gpu_clock_mhz); }
 static sb_cell f_cpu_wait_ms(const sb_frame_row *r, int a) { (void)a; return number(r->t->cpu_wait_ms); }
 static sb_cell f_gpu_idle_ms(const sb_frame_row *r, int a) { (void)a; return number(r->t->gpu_idle_ms); }
 static sb_cell f_wall_ms(const sb_frame_row *r, int a) { (void)a; return number(r->rec->wall_ms); }
@@ -88,6 +91,7 @@ const sb_frame_col sb_frame_cols[] = {
     {"frame", f_frame, 0, 0, "frame of the path (0..frames-1)"},
     {"repeat", f_repeat, 0, 0, "repetition of the path (0-based)"},
     {"progress", f_progress, 0, 0, "position along the path in [0, 1]"},
+    {"start_s", f_start_s, 0, 0, "when the frame began, seconds since the process started (the order of runs and repeats)"},
     {"draw_calls", f_counter, C_DRAWS, 0, "draw calls submitted in the frame"},
     {"shadow_draw_calls", f_counter, C_SHADOW_DRAWS, 0, "draw calls of the shadow stages (cascade, volumes)"},
     {"triangles", f_counter, C_TRIS, 0, "triangles submitted (instances counted)"},
@@ -105,6 +109,7 @@ const sb_frame_col sb_frame_cols[] = {
     {"cpu_ms", f_cpu_ms, 0, 0, "frame wall time not spent waiting for the GPU"},
     {"wall_ms", f_wall_ms, 0, 0, "frame wall time"},
     {"cpu_wait_ms", f_cpu_wait_ms, 0, 0, "CPU time blocked on the GPU (the fence of the frame a ring back, or glFinish)"},
+    {"gpu_clock_mhz", f_gpu_clock, 0, 0, "the GPU's graphics clock at the frame's end (empty: not readable)"},
     {"gpu_idle_ms", f_gpu_idle_ms, 0, 0, "queries: the frame's GPU span not covered by a stage (the GPU waiting for the CPU)"},
     {"zpass_draw_calls", f_stage_draws, SB_STAGE_ZPASS, 0, "draw calls of the z-pass"},
     {"cascade_draw_calls", f_stage_draws, SB_STAGE_CASCADE, 0, "draw calls of the cascade stage"},
@@ -125,14 +130,15 @@ const int sb_frame_col_count = (int)SB_COUNT(sb_frame_cols);
 /* ---- per-run columns ---- */
 
 enum {
-    S_RUN_ID, S_SCENE, S_PATH, S_TECHNIQUE, S_PARAMS, S_BACKEND, S_RENDERER, S_TIMING, S_STATUS, S_REASON
+    S_RUN_ID, S_SCENE, S_PATH, S_TECHNIQUE, S_PARAMS, S_BACKEND, S_RENDERER, S_TIMING, S_STATUS, S_REASON, S_CLOCKS,
+    S_STABLE, S_ORDER
 };
 enum { I_RUN_INDEX, I_FRAMES, I_WARMUP, I_WIDTH, I_HEIGHT, I_SCENE_TRIS };
 
 static sb_cell r_text(const sb_run_row *r, int a) {
     const sb_run_info *in = r->info;
     const char *v[] = {in->run_id, in->scene, in->path, in->technique, in->params, in->backend, in->renderer,
-                       in->timing, in->status, in->reason};
+                       in->timing, in->status, in->reason, in->clocks, in->stable, in->order};
     return text(v[a]);
 }
 static sb_cell r_int(const sb_run_row *r, int a) {
@@ -140,6 +146,22 @@ static sb_cell r_int(const sb_run_row *r, int a) {
     const long long v[] = {in->run_index, in->frames, in->warmup, in->width, in->height,
                            (long long)in->scene_triangles};
     return integer(v[a]);
+}
+static sb_cell r_seed(const sb_run_row *r, int a) {
+    (void)a;
+    return r->info->seed ? integer((long long)r->info->seed) : empty();
+}
+static sb_cell r_unstable(const sb_run_row *r, int a) { (void)a; return text(r->info->unstable_reason); }
+static sb_cell r_calib(const sb_run_row *r, int a) {
+    return number(r->n ? (a ? r->info->calib_ms_after : r->info->calib_ms_before) : NAN);
+}
+static sb_cell r_throttle(const sb_run_row *r, int a) {
+    (void)a;
+    static char names[256];
+    uint64_t bits = 0;
+    for (int i = 0; i < r->n; i++) bits |= r->recs[i].throttle;
+    sb_throttle_names(bits, names, sizeof names);
+    return text(names);
 }
 static sb_cell r_warnings(const sb_run_row *r, int a) { (void)a; return text(r->info->warnings); }
 static sb_cell r_repeats(const sb_run_row *r, int a) { (void)a; return integer(r->n ? r->info->repeats : 0); }
@@ -181,12 +203,19 @@ const sb_run_col sb_run_cols[] = {
     {"backend", r_text, S_BACKEND, 0, 0, "egl or osmesa"},
     {"renderer", r_text, S_RENDERER, 0, 0, "GL_RENDERER"},
     {"timing", r_text, S_TIMING, 0, 0, "queries or sync: the timing mode used"},
+    {"clocks", r_text, S_CLOCKS, 0, 0, "the GPU clock during the run: free, or locked at N MHz (--clocks)"},
+    {"order", r_text, S_ORDER, 0, 0, "matrix, interleave or shuffle: the order of runs and repetitions (--order)"},
+    {"seed", r_seed, 0, 0, 0, "shuffle's seed (--seed reproduces the order); empty for the other orders"},
     {"frames", r_int, I_FRAMES, 0, 0, "frames sampled along the path"},
     {"warmup", r_int, I_WARMUP, 0, 0, "warm-up frames, excluded"},
     {"width", r_int, I_WIDTH, 0, 0, "render width"},
     {"height", r_int, I_HEIGHT, 0, 0, "render height"},
     {"status", r_text, S_STATUS, 0, 0, "ok, failed or skipped"},
     {"reason", r_text, S_REASON, 0, 0, "why a run failed or was skipped"},
+    {"stable", r_text, S_STABLE, 0, 0, "yes, or no when the timings cannot be trusted (unstable_reason says why)"},
+    {"unstable_reason", r_unstable, 0, 0, 0, "why stable is no: the calibration probe moved, or the frames drifted"},
+    {"calib_ms_before", r_calib, 0, 0, 0, "the calibration probe just before the timed frames"},
+    {"calib_ms_after", r_calib, 1, 0, 0, "the calibration probe just after them"},
     {"warnings", r_warnings, 0, 0, 0, "what the tool cannot stand behind in this run, \"; \"-separated"},
     {"repeats", r_repeats, 0, 0, 0, "repetitions of the path measured"},
     {"target_ci_pct", r_target_ci, 0, 0, 0, "--target-ci"},
@@ -212,6 +241,8 @@ const sb_run_col sb_run_cols[] = {
     SERIES("wall_ms", SB_STATS_TIMING, 0),
     SERIES("cpu_wait_ms", SB_STAT_MEAN, 0),
     SERIES("gpu_idle_ms", SB_STAT_MEAN, 0),
+    SERIES("gpu_clock_mhz", SB_STAT_MIN | SB_STAT_MEDIAN | SB_STAT_MAX, 0),
+    {"throttle_reasons", r_throttle, 0, 0, 0, "clock event (throttle) reasons seen in the measured frames (NVML)"},
     {"error_frames", r_error_frames, 0, 0, 0, "frames evaluated against the reference"},
     SERIES("err_rate", SB_STAT_MEAN | SB_STAT_P95, SB_COL_DEFAULT_METRIC),
     SERIES("err_false_shadow", SB_STAT_MEAN | SB_STAT_P95, 0),
@@ -282,7 +313,7 @@ void sb_report_summary_row(sb_csv *c, const sb_run_info *info, unsigned stages, 
             v[i] = cell.kind == SB_CELL_INT || cell.kind == SB_CELL_NUM ? cell.num : NAN;
         }
         sb_stats st = sb_stats_compute(v, n);
-        const double s[SB_STAT_COUNT] = {st.mean, st.median, st.p95, st.p99, st.std, st.ci95};
+        const double s[SB_STAT_COUNT] = {st.mean, st.median, st.p95, st.p99, st.std, st.ci95, st.min, st.max};
         for (int b = 0; b < SB_STAT_COUNT; b++)
             if (col->stats & (1u << b)) sb_csv_num(c, s[b]);
     }
@@ -386,6 +417,12 @@ void sb_summary_open(sb_summary *sum, const char *path) {
     sb_report_summary_header(&sum->rows);
 }
 
+void sb_summary_add_calib(sb_summary *sum, double calib_ms) {
+    if (!(calib_ms > 0)) return;
+    sum->calib = sb_xrealloc(sum->calib, sizeof(double) * (size_t)(sum->ncalib + 1));
+    sum->calib[sum->ncalib++] = calib_ms;
+}
+
 static void count_status(sb_summary *sum, const char *status) {
     sum->count++;
     sum->failed += !strcmp(status, "failed");
@@ -396,6 +433,7 @@ void sb_summary_add_outcome(sb_summary *sum, const sb_run_info *info, unsigned s
                             const sb_stage_times *times, int n) {
     sb_report_summary_row(&sum->rows, info, stages, recs, times, n);
     count_status(sum, info->status);
+    sum->unstable += info->stable && !strcmp(info->stable, "no");
 }
 
 void sb_summary_add_line(sb_summary *sum, const char *line, const char *status) {
@@ -409,6 +447,7 @@ bool sb_summary_flush(sb_summary *sum, sb_err *err) {
 
 void sb_summary_free(sb_summary *sum) {
     free(sum->path);
+    free(sum->calib);
     sb_csv_free(&sum->rows);
     memset(sum, 0, sizeof *sum);
 }

@@ -15,7 +15,11 @@
 
 typedef struct sb_frame_rec {
     int frame, repeat;          /* path frame, repetition of the path */
+    int seq;                    /* the frame's sequence number in its technique instance */
     double progress;
+    double start_s;             /* when the frame began, seconds since the process started */
+    double gpu_clock_mhz;       /* the graphics clock at the frame's end (NaN: not readable) */
+    uint64_t throttle;          /* clock event (throttle) reason bits then */
     sb_counters counters;
     double cpu_ms, wall_ms;
     bool evaluated;
@@ -24,6 +28,12 @@ typedef struct sb_frame_rec {
 
 typedef struct sb_run_info {
     const char *run_id, *scene, *path, *technique, *params, *backend, *renderer, *timing, *status, *reason;
+    const char *clocks;         /* "free", "locked at N MHz" */
+    const char *order;          /* --order */
+    uint64_t seed;              /* shuffle's seed (0: none) */
+    const char *stable;         /* "yes", "no", "" (not measured) */
+    char unstable_reason[512];
+    double calib_ms_before, calib_ms_after;
     int run_index;              /* position in the expanded matrix */
     int frames, warmup, width, height, repeats;
     double target_ci;           /* percent, 0: none */
@@ -66,10 +76,10 @@ typedef struct sb_run_row {
 /* Statistics a series is summarised by (sb_stats). */
 enum {
     SB_STAT_MEAN = 1u << 0, SB_STAT_MEDIAN = 1u << 1, SB_STAT_P95 = 1u << 2, SB_STAT_P99 = 1u << 3,
-    SB_STAT_STD = 1u << 4, SB_STAT_CI95 = 1u << 5,
+    SB_STAT_STD = 1u << 4, SB_STAT_CI95 = 1u << 5, SB_STAT_MIN = 1u << 6, SB_STAT_MAX = 1u << 7,
     SB_STATS_TIMING = 0x3f,
 };
-#define SB_STAT_COUNT 6
+#define SB_STAT_COUNT 8
 extern const char *const sb_stat_names[SB_STAT_COUNT];   /* "mean", "median", ... in bit order */
 
 enum {
@@ -131,7 +141,9 @@ double sb_report_gpu_ci_pct(const sb_stage_times *times, int n, int per_repeat);
 typedef struct sb_summary {
     char *path;
     sb_csv rows;
-    int count, failed, skipped;
+    int count, failed, skipped, unstable;
+    double *calib;              /* the runs' calib_ms_before so far (the batch median) */
+    int ncalib;
 } sb_summary;
 
 void sb_summary_open(sb_summary *sum, const char *path);
@@ -139,6 +151,8 @@ void sb_summary_open(sb_summary *sum, const char *path);
  * "skipped"); recs/times as sb_report_summary_row. */
 void sb_summary_add_outcome(sb_summary *sum, const sb_run_info *info, unsigned stages, const sb_frame_rec *recs,
                             const sb_stage_times *times, int n);
+/* Notes a run's probe for the batch median (NaN ignored). */
+void sb_summary_add_calib(sb_summary *sum, double calib_ms);
 /* A row kept as it was from an earlier summary (resume), counted by its status. */
 void sb_summary_add_line(sb_summary *sum, const char *line, const char *status);
 bool sb_summary_flush(sb_summary *sum, sb_err *err);

@@ -33,7 +33,7 @@ double sb_t975(int dof) {
 }
 
 sb_stats sb_stats_compute(const double *v, int n) {
-    sb_stats s = {0, NAN, NAN, NAN, NAN, NAN, NAN};
+    sb_stats s = {0, NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN};
     double *c = sb_xmalloc((size_t)(n > 0 ? n : 1) * sizeof(double));
     int m = 0;
     for (int i = 0; i < n; i++)
@@ -47,6 +47,8 @@ sb_stats sb_stats_compute(const double *v, int n) {
     double sum = 0;
     for (int i = 0; i < m; i++) sum += c[i];
     s.mean = sum / m;
+    s.min = c[0];
+    s.max = c[m - 1];
     s.median = sb_percentile(c, m, 0.5);
     s.p95 = sb_percentile(c, m, 0.95);
     s.p99 = sb_percentile(c, m, 0.99);

@@ -5,7 +5,7 @@
 
 typedef struct sb_stats {
     int n;
-    double mean, median, p95, p99, std, ci95;
+    double mean, median, p95, p99, std, ci95, min, max;
 } sb_stats;
 
 /* NaN samples are ignored; with no samples every field is NaN. */

@@ -1,4 +1,5 @@
 /* The command line end to end: output files, CSV contract, bad input. */
+#include <signal.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -6,7 +7,12 @@
 #include <cmocka.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
+
+#include <glob.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
 
 #include "support.h"
 #include "table.h"
@@ -353,13 +359,166 @@ static void test_usage_and_threads(void **st) {
     assert_string_not_equal(v[0], "");
 }
 
+/* Clocks: lock without NVML is one clear line and exit 1; auto says it runs free. */
+static void test_clocks_modes(void **st) {
+    (void)st;
+    const char *out = expect_cli_fail("--clocks lock: cannot lock the GPU clock: ",
+                                      "%s run plane-box plane-box sm --clocks lock --frames 1 --size 64x36 --out %s/lock",
+                                      test_binary(), g_tmp);
+    assert_non_null(strstr(out, "NVML"));
+    char d[4096];
+    run_dir(d, sizeof d, "%s run plane-box plane-box sm --clocks auto --frames 1 --size 64x36 --out %s/auto --quiet",
+            test_binary(), g_tmp);
+    assert_int_equal(sh("%s run plane-box plane-box sm --clocks auto --frames 1 --size 64x36 --out %s/auto", test_binary(),
+                        g_tmp), 0);
+    assert_non_null(strstr(g_out, "note: GPU clock not locked ("));
+    char path[4200];
+    snprintf(path, sizeof path, "%s/summary.csv", d);
+    sb_table t;
+    sb_err err;
+    assert_true(sb_table_load(&t, path, &err));
+    assert_string_equal(sb_table_get(&t, 0, "clocks"), "free");
+    assert_string_equal(sb_table_get(&t, 0, "gpu_clock_mhz_median"), ""); /* llvmpipe has none */
+    sb_table_free(&t);
+}
+
+/* Busy loops on every core until killed, started when a per-frame CSV being
+ * written under `pattern` (a glob) passes `bytes`: when the run has written
+ * the rows of its first repetition of the path. */
+static pid_t hog_when_rows(const char *pattern, long bytes) {
+    pid_t pid = fork();
+    if (pid == 0) {
+        setpgid(0, 0); /* a group of its own: killed together */
+        const struct timespec tick = {0, 2000000};
+        for (bool go = false; !go; nanosleep(&tick, NULL)) {
+            glob_t g;
+            if (glob(pattern, 0, NULL, &g) == 0) {
+                struct stat sb;
+                for (size_t i = 0; i < g.gl_pathc && !go; i++) go = stat(g.gl_pathv[i], &sb) == 0 && sb.st_size > bytes;
+                globfree(&g);
+            }
+        }
+        long n = sysconf(_SC_NPROCESSORS_ONLN);
+        for (long i = 1; i < n; i++)
+            if (fork() == 0) break;
+        volatile unsigned long x = 0;
+        for (;;) x++;
+    }
+    return pid;
+}
+
+static void summary_row(const char *dir, sb_table *t) {
+    char path[4200];
+    snprintf(path, sizeof path, "%s/summary.csv", dir);
+    sb_err err;
+    assert_true(sb_table_load(t, path, &err));
+}
+
+/* The stability verdict on llvmpipe: a run left alone is stable, with its
+ * calibration probe measured before and after; the same run with every core
+ * loaded from about its middle on is not. */
+static void test_stability_verdict_on_llvmpipe(void **st) {
+    (void)st;
+    const char *cmd = "%s run towers towers sm:res=1024 --frames 16 --repeat 2 --size 320x180 --error-every 0 --quiet "
+                      "--out %s/%s";
+    char d[4096];
+    double t0 = sb_now_ms();
+    run_dir(d, sizeof d, cmd, test_binary(), g_tmp, "alone");
+    double wall = (sb_now_ms() - t0) / 1e3;
+    sb_table t;
+    summary_row(d, &t);
+    print_message("alone (%.1f s): stable %s %s, probe %s ms before, %s ms after\n", wall, sb_table_get(&t, 0, "stable"),
+                  sb_table_get(&t, 0, "unstable_reason"), sb_table_get(&t, 0, "calib_ms_before"),
+                  sb_table_get(&t, 0, "calib_ms_after"));
+    assert_string_equal(sb_table_get(&t, 0, "stable"), "yes");
+    assert_true(atof(sb_table_get(&t, 0, "calib_ms_before")) > 0 && atof(sb_table_get(&t, 0, "calib_ms_after")) > 0);
+    assert_true(atoi(sb_table_get(&t, 0, "warmup")) > 0);
+    sb_table_free(&t);
+    char pattern[300];
+    snprintf(pattern, sizeof pattern, "%s/loaded/*/*.csv.tmp", g_tmp);
+    pid_t hog = hog_when_rows(pattern, 2000);
+    run_dir(d, sizeof d, cmd, test_binary(), g_tmp, "loaded");
+    kill(-hog, SIGKILL);
+    waitpid(hog, NULL, 0);
+    summary_row(d, &t);
+    print_message("loaded halfway: stable %s: %s\n", sb_table_get(&t, 0, "stable"), sb_table_get(&t, 0, "unstable_reason"));
+    assert_string_equal(sb_table_get(&t, 0, "stable"), "no");
+    assert_string_not_equal(sb_table_get(&t, 0, "unstable_reason"), "");
+    sb_table_free(&t);
+}
+
+/* The passes of a run folder's runs in the order they started: each pass as
+ * run_index * 100 + repetition, from the per-frame repeat and start_s columns. */
+static int pass_order(const char *dir, int *order, int max) {
+    sb_table sum;
+    summary_row(dir, &sum);
+    double start[64];
+    int n = 0;
+    for (int r = 0; r < sum.nrows; r++) {
+        char path[4200];
+        snprintf(path, sizeof path, "%s/%s.csv", dir, sb_table_get(&sum, r, "run_id"));
+        sb_table t;
+        sb_err err;
+        assert_true(sb_table_load(&t, path, &err));
+        for (int i = 0; i < t.nrows && n < max; i++) {
+            if (atoi(sb_table_get(&t, i, "frame")) != 0) continue; /* a pass starts with frame 0 */
+            order[n] = atoi(sb_table_get(&sum, r, "run_index")) * 100 + atoi(sb_table_get(&t, i, "repeat"));
+            start[n++] = atof(sb_table_get(&t, i, "start_s"));
+        }
+        sb_table_free(&t);
+    }
+    sb_table_free(&sum);
+    for (int i = 1; i < n; i++) /* insertion sort by start time */
+        for (int j = i; j > 0 && start[j] < start[j - 1]; j--) {
+            double ts = start[j];
+            start[j] = start[j - 1], start[j - 1] = ts;
+            int to = order[j];
+            order[j] = order[j - 1], order[j - 1] = to;
+        }
+    return n;
+}
+
+/* --order: matrix renders each run's repetitions together, interleave in
+ * rounds A1 B1 A2 B2 ..., shuffle in rounds of a seeded order. */
+static void test_run_order(void **st) {
+    (void)st;
+    const char *cmd = "%s run plane-box plane-box sm:res=256 pssm:res=256 --frames 3 --warmup 0 --size 64x36 "
+                      "--repeat 3 --error-every 0 --quiet --out %s/order %s";
+    char d[4096];
+    int got[16], n;
+    const int matrix[] = {0, 1, 2, 100, 101, 102}, interleave[] = {0, 100, 1, 101, 2, 102};
+    run_dir(d, sizeof d, cmd, test_binary(), g_tmp, "");
+    assert_int_equal(n = pass_order(d, got, 16), 6);
+    for (int i = 0; i < n; i++) assert_int_equal(got[i], matrix[i]);
+    run_dir(d, sizeof d, cmd, test_binary(), g_tmp, "--order interleave");
+    assert_int_equal(n = pass_order(d, got, 16), 6);
+    for (int i = 0; i < n; i++) assert_int_equal(got[i], interleave[i]);
+    sb_table t;
+    summary_row(d, &t);
+    assert_string_equal(sb_table_get(&t, 0, "order"), "interleave");
+    assert_string_equal(sb_table_get(&t, 0, "seed"), "");
+    sb_table_free(&t);
+    /* shuffle: every run once a round; the seed in every row */
+    run_dir(d, sizeof d, cmd, test_binary(), g_tmp, "--order shuffle --seed 7");
+    assert_int_equal(n = pass_order(d, got, 16), 6);
+    for (int i = 0; i < n; i++) assert_int_equal(got[i] % 100, i / 2);
+    summary_row(d, &t);
+    assert_string_equal(sb_table_get(&t, 1, "order"), "shuffle");
+    assert_string_equal(sb_table_get(&t, 1, "seed"), "7");
+    sb_table_free(&t);
+    expect_cli_fail("--order sideways: expected matrix, interleave or shuffle", "%s run plane-box plane-box sm --order sideways",
+                    test_binary());
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_run_writes_csv),   cmocka_unit_test(test_gltf_camera_path),
         cmocka_unit_test(test_builtin_paths),    cmocka_unit_test(test_skip_reasons),
         cmocka_unit_test(test_usage_and_threads),
+        cmocka_unit_test(test_clocks_modes),
+        cmocka_unit_test(test_stability_verdict_on_llvmpipe),
         cmocka_unit_test(test_backends_same_draw_calls), cmocka_unit_test(test_query_timing),
-        cmocka_unit_test(test_repeats_and_target_ci),
+        cmocka_unit_test(test_repeats_and_target_ci), cmocka_unit_test(test_run_order),
     };
     return cmocka_run_group_tests_name("cli", tests, setup, teardown);
 }

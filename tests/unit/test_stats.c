@@ -6,6 +6,10 @@
 #include <cmocka.h>
 #include <math.h>
 
+#include <stdlib.h>
+#include <string.h>
+
+#include "stability.h"
 #include "stats.h"
 
 static void test_known_values(void **st) {
@@ -18,6 +22,7 @@ static void test_known_values(void **st) {
     assert_true(fabs(s.std - sqrt(2.5)) < 1e-12);
     assert_true(fabs(s.p95 - 4.8) < 1e-12);           /* 1 + 0.95*4 -> between 4 and 5 */
     assert_true(fabs(s.ci95 - 2.776 * sqrt(2.5) / sqrt(5)) < 1e-9);
+    assert_true(s.min == 1 && s.max == 5);
     sb_stats e = sb_stats_compute(v, 0);
     assert_true(isnan(e.mean) && isnan(e.ci95));
 }
@@ -31,7 +36,63 @@ static void test_t_quantiles(void **st) {
     assert_true(sb_t975(1000) > 1.959 && sb_t975(1000) < 1.963);
 }
 
+/* A path of 20 frames whose times differ along it (8..27 ms) with 2% noise, repeated `reps` times;
+ * from repetition `step_from` on, every frame takes `step` times as long. */
+static double *path_times(int reps, int step_from, double step) {
+    double *v = malloc(sizeof(double) * 20 * (size_t)reps);
+    srand(11);
+    for (int r = 0; r < reps; r++)
+        for (int j = 0; j < 20; j++)
+            v[r * 20 + j] = (8 + j) * (1 + 0.02 * (rand() / (double)RAND_MAX - 0.5)) * (r >= step_from ? step : 1);
+    return v;
+}
+
+static void test_stability_verdict(void **st) {
+    (void)st;
+    char why[512];
+    /* a flat run: stable */
+    double *flat = path_times(3, 99, 1);
+    sb_stability_in in = {.calib_before = 2.0, .calib_after = 2.05, .frame_ms = flat, .n = 60, .per_repeat = 20};
+    assert_true(sb_stability(&in, why, sizeof why));
+    assert_string_equal(why, "");
+    /* a 2x step after the first repetition: the frames drifted */
+    double *step = path_times(3, 1, 2.0);
+    in.frame_ms = step;
+    assert_false(sb_stability(&in, why, sizeof why));
+    print_message("2x step: %s\n", why);
+    assert_non_null(strstr(why, "frame times drifted +100% from the first repetition of the path to the last"));
+    /* a step within the noise's reach is not flagged: 3% */
+    double *small = path_times(3, 1, 1.03);
+    in.frame_ms = small;
+    assert_true(sb_stability(&in, why, sizeof why));
+    /* one repetition has no pairs: a path whose frames differ is not drift */
+    in.frame_ms = step;
+    in.n = 20;
+    assert_true(sb_stability(&in, why, sizeof why));
+    /* the probe moved during the run */
+    in.frame_ms = flat;
+    in.n = 60;
+    in.calib_after = 2.6;
+    assert_false(sb_stability(&in, why, sizeof why));
+    print_message("probe: %s\n", why);
+    assert_non_null(strstr(why, "the calibration probe changed +30% during the run (2 ms before, 2.6 ms after)"));
+    /* the probe far from the batch's: another device state than the other runs had */
+    const double batch[] = {1.0, 1.02, 0.98, 1.01};
+    in.calib_after = 2.05;
+    in.batch_calib = batch;
+    in.nbatch = 4;
+    assert_false(sb_stability(&in, why, sizeof why));
+    print_message("batch: %s\n", why);
+    assert_non_null(strstr(why, "off the batch median"));
+    in.nbatch = 2; /* too few runs for a median to mean anything */
+    assert_true(sb_stability(&in, why, sizeof why));
+    free(flat);
+    free(step);
+    free(small);
+}
+
 int main(void) {
-    const struct CMUnitTest tests[] = {cmocka_unit_test(test_known_values), cmocka_unit_test(test_t_quantiles)};
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_known_values), cmocka_unit_test(test_t_quantiles),
+                                       cmocka_unit_test(test_stability_verdict)};
     return cmocka_run_group_tests_name("stats", tests, NULL, NULL);
 }

@@ -1,0 +1,70 @@
+/* stability.c - the stability verdict of a run (see stability.h). */
+#include "stability.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "stats.h"
+#include "util.h"
+
+static void add(char *why, size_t len, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static void add(char *why, size_t len, const char *fmt, ...) {
+    size_t n = strlen(why);
+    if (n && n + 2 < len) {
+        memcpy(why + n, "; ", 3);
+        n += 2;
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(why + n, len - n, fmt, ap);
+    va_end(ap);
+}
+
+/* Paired drift between the first and the last repetition; returns the relative change (NaN: no test). */
+static double drift(const sb_stability_in *in, double tol, bool *beyond) {
+    int m = in->per_repeat, reps = m > 0 ? in->n / m : 0;
+    *beyond = false;
+    if (reps < 2 || m < 2) return NAN;
+    const double *first = in->frame_ms, *last = in->frame_ms + (size_t)(reps - 1) * m;
+    double *d = sb_xmalloc(sizeof(double) * (size_t)m);
+    double base = 0;
+    for (int i = 0; i < m; i++) {
+        d[i] = last[i] - first[i];
+        base += first[i] / m;
+    }
+    sb_stats st = sb_stats_compute(d, m);
+    free(d);
+    if (!(base > 0) || isnan(st.mean)) return NAN;
+    double rel = st.mean / base;
+    *beyond = fabs(rel) > tol && fabs(st.mean) > st.ci95;
+    return rel;
+}
+
+bool sb_stability(const sb_stability_in *in, char *why, size_t len) {
+    double ptol = in->probe_tol > 0 ? in->probe_tol : SB_PROBE_TOL;
+    double btol = in->batch_tol > 0 ? in->batch_tol : SB_BATCH_TOL;
+    double dtol = in->drift_tol > 0 ? in->drift_tol : SB_DRIFT_TOL;
+    why[0] = 0;
+    double a = in->calib_before, b = in->calib_after;
+    if (a > 0 && b > 0 && fabs(b / a - 1) > ptol)
+        add(why, len, "the calibration probe changed %+.0f%% during the run (%.3g ms before, %.3g ms after)",
+            100 * (b / a - 1), a, b);
+    if (a > 0 && in->nbatch >= 3) {
+        double *v = sb_xmalloc(sizeof(double) * (size_t)in->nbatch);
+        memcpy(v, in->batch_calib, sizeof(double) * (size_t)in->nbatch);
+        sb_stats st = sb_stats_compute(v, in->nbatch);
+        free(v);
+        if (st.median > 0 && fabs(a / st.median - 1) > btol)
+            add(why, len, "the calibration probe was %+.0f%% off the batch median (%.3g ms against %.3g ms)",
+                100 * (a / st.median - 1), a, st.median);
+    }
+    bool beyond;
+    double rel = drift(in, dtol, &beyond);
+    if (beyond)
+        add(why, len, "frame times drifted %+.0f%% from the first repetition of the path to the last (beyond their 95%% CI)",
+            100 * rel);
+    return why[0] == 0;
+}
