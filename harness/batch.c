@@ -186,7 +186,7 @@ static bool load_scenes(parse *ps) {
     for (int i = 0; i < b->nscenes; i++) {
         sb_batch_scene *sc = &b->scenes[i];
         sb_err e;
-        sb_scene_opts so = {.allow_external_uris = b->opts.allow_external_uris};
+        sb_scene_opts so = sb_run_scene_opts(&b->opts);
         if (!sb_scene_load(&sc->scene, sc->file, &so, &e)) return sb_fail(ps->err, "%s:%d: %s", ps->file, sc->line, e.msg);
         const char *pname = sc->path_name ? sc->path_name : sc->name;
         int pi = find_path(b, pname);

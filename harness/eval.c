@@ -44,7 +44,10 @@ bool sb_eval_frame(sb_session *s, sb_instance *in, int pf, int n, int replay, in
     if (in->tech->collect) in->tech->collect(in->state, f->seq, &f->counters);
     sb_gpu_readback(&s->gpu, NULL, b->vis, b->rgba);
     sb_gpu_readback_eval(&s->gpu, b->pos, b->aux);
-    sb_evaluate_frame(ref, f->shade_light, sb_v3_sub(f->cam.pos, s->scene.origin), b->w, b->h, b->pos, b->aux, b->vis,
-                      b->ref, m, s->opts.threads);
+    sb_m4 inv;
+    bool have_inv = sb_m4_invert(f->view_proj, &inv);
+    sb_eval_view view = {b->w, b->h, b->pos, b->aux, sb_v3_sub(f->cam.pos, s->scene.origin), have_inv ? &inv : NULL,
+                         f->shade_light};
+    sb_evaluate_frame(ref, &view, b->vis, b->ref, m, s->opts.threads);
     return sb_gl_check("evaluation pass", err);
 }

@@ -17,18 +17,27 @@ bool sb_gl_check(const char *where, sb_err *err) {
     return sb_fail(err, "%s: %s (0x%x)", where, name, e);
 }
 
-static GLuint compile(GLenum type, const char *label, const char *defines, const char *const *parts, int n,
+/* What every program of this session's scene compiles with (sb_gpu_init): the
+ * alpha test when the scene has alpha-tested draws. One GL context a process. */
+static bool g_scene_alpha;
+
+static GLuint compile(GLenum type, const char *label, const char *defines, bool to_gs, const char *const *parts, int n,
                       sb_err *err) {
-    const char *src[16];
+    const char *src[20];
     int k = 0;
-    if (n > 13) {
-        sb_fail(err, "%s: %d shader parts, at most 13", label, n);
+    if (n > 14) {
+        sb_fail(err, "%s: %d shader parts, at most 14", label, n);
         return 0;
     }
     src[k++] = "#version 430 core\n";
     src[k++] = defines ? defines : "";
+    src[k++] = type == GL_VERTEX_SHADER ? (to_gs ? "#define SB_VERTEX\n#define SB_TO_GS\n" : "#define SB_VERTEX\n")
+             : type == GL_GEOMETRY_SHADER ? "#define SB_GEOMETRY\n"
+             : type == GL_FRAGMENT_SHADER ? "#define SB_FRAGMENT\n" : "#define SB_COMPUTE\n";
+    src[k++] = g_scene_alpha ? "#define SB_ALPHA\n" : "";
     src[k++] = sb_shader_common_glsl;
-    for (int i = 0; i < n && k < 16; i++) src[k++] = parts[i];
+    src[k++] = sb_shader_alpha_glsl;
+    for (int i = 0; i < n && k < 20; i++) src[k++] = parts[i];
     GLuint s = glCreateShader(type);
     glShaderSource(s, k, src, NULL);
     glCompileShader(s);
@@ -47,9 +56,11 @@ static GLuint compile(GLenum type, const char *label, const char *defines, const
 }
 
 GLuint sb_gpu_link(const char *label, const char *defines, const sb_shader_src *stages, int nstages, sb_err *err) {
+    bool gs = false;
+    for (int i = 0; i < nstages; i++) gs |= stages[i].type == GL_GEOMETRY_SHADER;
     GLuint p = glCreateProgram();
     for (int i = 0; i < nstages; i++) {
-        GLuint s = compile(stages[i].type, label, defines, stages[i].parts, stages[i].count, err);
+        GLuint s = compile(stages[i].type, label, defines, gs, stages[i].parts, stages[i].count, err);
         if (!s) {
             glDeleteProgram(p);
             return 0;
@@ -113,6 +124,96 @@ static GLuint make_tex(GLenum internal, int w, int h) {
     return t;
 }
 
+/* ---- the alpha test's data ---- */
+
+/* Materials as alpha.glsl's SbMaterial (48 bytes) and the texels as an R8UI buffer texture. */
+static bool upload_alpha(sb_gpu *g, const sb_scene *s, sb_err *err) {
+    g_scene_alpha = s->alpha_tested_draws > 0;
+    if (!g_scene_alpha) return true;
+    GLint max_texels = 0;
+    glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
+    if (s->texel_count > (uint32_t)max_texels)
+        return sb_fail(err, "%s: the alpha textures hold %u texels, more than this GL's buffer textures (%d)", s->file,
+                       s->texel_count, max_texels);
+    typedef struct {
+        uint32_t i[4];
+        float f[8];
+    } packed;
+    packed *m = sb_xcalloc(s->material_count, sizeof *m);
+    for (uint32_t k = 0; k < s->material_count; k++) {
+        const sb_material *sm = &s->materials[k];
+        const sb_texture *t = sm->texture >= 0 ? &s->textures[sm->texture] : NULL;
+        m[k] = (packed){{t ? t->offset : 0, t ? t->w : 0, t ? t->h : 0, t ? (t->wrap_s | t->wrap_t << 16) : 0},
+                        {sm->test ? sm->cutoff : 0, sm->alpha, sm->uv[0], sm->uv[1], sm->uv[2], sm->uv[3], sm->uv[4],
+                         sm->uv[5]}};
+    }
+    glGenBuffers(1, &g->mat_ssbo);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, g->mat_ssbo);
+    glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(s->material_count * sizeof *m), m, GL_STATIC_DRAW);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, g->mat_ssbo);
+    free(m);
+    glGenBuffers(1, &g->texel_buf);
+    glBindBuffer(GL_TEXTURE_BUFFER, g->texel_buf);
+    glBufferData(GL_TEXTURE_BUFFER, s->texel_count ? s->texel_count : 1, s->texels, GL_STATIC_DRAW);
+    glGenTextures(1, &g->texel_tex);
+    glActiveTexture(GL_TEXTURE15);
+    glBindTexture(GL_TEXTURE_BUFFER, g->texel_tex);
+    glTexBuffer(GL_TEXTURE_BUFFER, GL_R8UI, g->texel_buf);
+    glActiveTexture(GL_TEXTURE0);
+    return true;
+}
+
+/* ---- single-sided draws in shadow passes ---- */
+
+/* The GPU index buffer with each single-sided draw's range split: the
+ * triangles whose front faces `light` first (count[d] of them), then the rest. */
+typedef struct sb_facing {
+    bool valid;
+    double light[4];
+    uint32_t *count;            /* per draw */
+    uint32_t *indices;          /* the scene's index buffer as uploaded */
+} sb_facing;
+
+static bool faces_light(const sb_scene *s, const uint32_t *t, const double light[4]) {
+    const float *a = sb_vertex(s, t[0]), *b = sb_vertex(s, t[1]), *c = sb_vertex(s, t[2]);
+    double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    double L[3] = {light[0], light[1], light[2]};
+    if (light[3] > 0.5)
+        for (int k = 0; k < 3; k++) L[k] -= a[k];
+    return n[0] * L[0] + n[1] * L[1] + n[2] * L[2] > 0;
+}
+
+static void arrange_for(const sb_gpu *g, const double light[4]) {
+    sb_facing *fc = g->facing;
+    const sb_scene *s = g->scene;
+    uint32_t *rest = sb_xmalloc(sizeof(uint32_t) * 3 * SB_CHUNK_TRIS);
+    for (uint32_t d = 0; d < s->draw_count; d++) {
+        const sb_draw *dr = &s->draws[d];
+        fc->count[d] = dr->index_count / 3;
+        if (dr->double_sided) continue;
+        const uint32_t *src = s->indices + dr->first_index;
+        uint32_t *dst = fc->indices + dr->first_index, n = dr->index_count / 3, front = 0, back = 0;
+        for (uint32_t t = 0; t < n; t++)
+            memcpy(faces_light(s, src + 3 * t, light) ? dst + 3 * front++ : rest + 3 * back++, src + 3 * t, 12);
+        memcpy(dst + 3 * front, rest, 12 * (size_t)back);
+        fc->count[d] = front;
+    }
+    free(rest);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g->ibo);
+    glBufferSubData(GL_ELEMENT_ARRAY_BUFFER, 0, (GLsizeiptr)s->index_count * sizeof(uint32_t), fc->indices);
+    memcpy(fc->light, light, sizeof fc->light);
+    fc->valid = true;
+}
+
+/* Triangles of draw d that a shadow pass lit by `light` draws. */
+static uint32_t shadow_triangles(const sb_gpu *g, uint32_t d, const double light[4]) {
+    const sb_draw *dr = &g->scene->draws[d];
+    if (dr->double_sided || !g->facing) return dr->index_count / 3;
+    if (!g->facing->valid || memcmp(g->facing->light, light, sizeof g->facing->light)) arrange_for(g, light);
+    return g->facing->count[d];
+}
+
 bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int h, sb_v3 sun, sb_err *err) {
     memset(g, 0, sizeof *g);
     g->scene = s;
@@ -124,15 +225,25 @@ bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int
     glBindVertexArray(g->vao);
     glGenBuffers(1, &g->vbo);
     glBindBuffer(GL_ARRAY_BUFFER, g->vbo);
-    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)s->vertex_count * 6 * sizeof(float), s->vertices, GL_STATIC_DRAW);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)s->vertex_count * SB_VERTEX_BYTES, s->vertices, GL_STATIC_DRAW);
     glGenBuffers(1, &g->ibo);
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g->ibo);
     glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)s->index_count * sizeof(uint32_t), s->indices,
                  GL_STATIC_DRAW);
+    if (s->single_sided_draws) {
+        g->facing = sb_xcalloc(1, sizeof *g->facing);
+        g->facing->count = sb_xcalloc(s->draw_count, sizeof(uint32_t));
+        g->facing->indices = sb_xmalloc(sizeof(uint32_t) * (s->index_count ? s->index_count : 1));
+        memcpy(g->facing->indices, s->indices, sizeof(uint32_t) * s->index_count);
+    }
     glEnableVertexAttribArray(0);
-    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 24, (void *)0);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, SB_VERTEX_BYTES, (void *)0);
     glEnableVertexAttribArray(1);
-    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 24, (void *)12);
+    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, SB_VERTEX_BYTES, (void *)12);
+    glEnableVertexAttribArray(2);   /* texture coordinates and material: the alpha test (alpha.glsl) */
+    glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, SB_VERTEX_BYTES, (void *)24);
+    glEnableVertexAttribArray(3);
+    glVertexAttribIPointer(3, 1, GL_UNSIGNED_INT, SB_VERTEX_BYTES, (void *)32);
 
     g->color_tex = make_tex(GL_RGBA8, w, h);
     g->vis_tex = make_tex(GL_R8, w, h);
@@ -151,6 +262,10 @@ bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int
     if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
         sb_gpu_free(g);
         return sb_fail(err, "render target %dx%d is incomplete (out of memory or unsupported size?)", w, h);
+    }
+    if (!upload_alpha(g, s, err)) {
+        sb_gpu_free(g);
+        return false;
     }
     const char *vs[] = {sb_shader_scene_vert};
     const char *fs[] = {sb_shader_depth_frag};
@@ -177,6 +292,14 @@ void sb_gpu_free(sb_gpu *g) {
     if (g->vbo) glDeleteBuffers(1, &g->vbo);
     if (g->ibo) glDeleteBuffers(1, &g->ibo);
     if (g->vao) glDeleteVertexArrays(1, &g->vao);
+    if (g->mat_ssbo) glDeleteBuffers(1, &g->mat_ssbo);
+    if (g->texel_buf) glDeleteBuffers(1, &g->texel_buf);
+    if (g->texel_tex) glDeleteTextures(1, &g->texel_tex);
+    if (g->facing) {
+        free(g->facing->count);
+        free(g->facing->indices);
+        free(g->facing);
+    }
     memset(g, 0, sizeof *g);
 }
 
@@ -234,9 +357,24 @@ void sb_stage_end(sb_frame *f, sb_stage s) { sb_timer_stage_end(f->timer, s); }
 void sb_submit(sb_frame *f, uint32_t d, int instances) {
     const sb_draw *dr = &f->gpu->scene->draws[d];
     const void *offset = (const void *)((size_t)dr->first_index * sizeof(uint32_t));
-    if (instances > 1) glDrawElementsInstanced(GL_TRIANGLES, (GLsizei)dr->index_count, GL_UNSIGNED_INT, offset, instances);
-    else glDrawElements(GL_TRIANGLES, (GLsizei)dr->index_count, GL_UNSIGNED_INT, offset);
-    sb_count_draw(f, dr->index_count / 3, instances);
+    bool shadow = f->stage == SB_STAGE_CASCADE || f->stage == SB_STAGE_VOLUMES;
+    uint32_t tris = shadow ? shadow_triangles(f->gpu, d, f->shade_light) : dr->index_count / 3;
+    if (tris == 0) return;
+    if (instances > 1) glDrawElementsInstanced(GL_TRIANGLES, (GLsizei)(3 * tris), GL_UNSIGNED_INT, offset, instances);
+    else glDrawElements(GL_TRIANGLES, (GLsizei)(3 * tris), GL_UNSIGNED_INT, offset);
+    sb_count_draw(f, tris, instances);
+}
+
+/* A camera pass's draw: back faces culled unless the material is double-sided
+ * (*culling: the GL state, changed only when the next draw needs the other). */
+static void camera_submit(sb_frame *f, uint32_t d, bool *culling) {
+    bool want = !f->gpu->scene->draws[d].double_sided;
+    if (want != *culling) {
+        if (want) glEnable(GL_CULL_FACE);
+        else glDisable(GL_CULL_FACE);
+        *culling = want;
+    }
+    sb_submit(f, d, 1);
 }
 
 void sb_count_draw(sb_frame *f, uint64_t triangles, int instances) {
@@ -280,19 +418,23 @@ void sb_zpass(sb_frame *f) {
     sb_set_camera_uniforms(f, g->zpass_u_view, g->zpass_u_proj);
     glBindVertexArray(g->vao);
     uint32_t n = sb_bvh_collect(g->scene, (const double(*)[4])f->frustum, 6, f->scratch);
-    for (uint32_t i = 0; i < n; i++) sb_submit(f, f->scratch[i], 1);
+    bool culling = true;
+    for (uint32_t i = 0; i < n; i++) camera_submit(f, f->scratch[i], &culling);
     glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
     glDisable(GL_CULL_FACE);
 }
 
-static void final_targets(const sb_frame *f, bool reuse_depth) {
-    bind_camera_target(f->gpu, reuse_depth ? GL_LEQUAL : GL_LESS, !reuse_depth);
+static void final_targets(const sb_frame *f, GLenum depth_func, bool depth_write) {
+    bind_camera_target(f->gpu, depth_func, depth_write);
     const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3};
     glDrawBuffers(f->eval ? 4 : 2, bufs);
 }
 
-void sb_final_pass(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
-    final_targets(f, reuse_depth);
+static void draw_scene(sb_frame *f, const sb_final_prog *fp, GLenum depth_func, bool depth_write);
+
+/* Clears the targets (and depth, unless it is reused) and draws the scene. */
+static void camera_pass(sb_frame *f, const sb_final_prog *fp, GLenum depth_func, bool depth_write, bool clear_depth) {
+    final_targets(f, depth_func, depth_write);
     const float sky[4] = {0.55f, 0.7f, 0.9f, 1.0f}, one[4] = {1, 1, 1, 1}, none[4] = {0, 0, 0, -1};
     glClearBufferfv(GL_COLOR, 0, sky);
     glClearBufferfv(GL_COLOR, 1, one);
@@ -300,13 +442,23 @@ void sb_final_pass(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
         glClearBufferfv(GL_COLOR, 2, none);
         glClearBufferfv(GL_COLOR, 3, none);
     }
-    if (!reuse_depth) glClear(GL_DEPTH_BUFFER_BIT);
-    sb_final_draw(f, fp, reuse_depth);
+    if (clear_depth) glClear(GL_DEPTH_BUFFER_BIT);
+    draw_scene(f, fp, depth_func, depth_write);
 }
 
+void sb_final_pass(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
+    camera_pass(f, fp, reuse_depth ? GL_LEQUAL : GL_LESS, !reuse_depth, !reuse_depth);
+}
+
+void sb_gbuffer_pass(sb_frame *f, const sb_final_prog *fp) { camera_pass(f, fp, GL_LEQUAL, true, true); }
+
 void sb_final_draw(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
+    draw_scene(f, fp, reuse_depth ? GL_LEQUAL : GL_LESS, !reuse_depth);
+}
+
+static void draw_scene(sb_frame *f, const sb_final_prog *fp, GLenum depth_func, bool depth_write) {
     const sb_gpu *g = f->gpu;
-    final_targets(f, reuse_depth);
+    final_targets(f, depth_func, depth_write);
     glUseProgram(fp->prog);
     sb_set_camera_uniforms(f, fp->u_view, fp->u_proj);
     glUniform4f(fp->u_light, (float)f->shade_light[0], (float)f->shade_light[1], (float)f->shade_light[2],
@@ -314,10 +466,11 @@ void sb_final_draw(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
     glUniform1i(fp->u_eval, f->eval);
     glBindVertexArray(g->vao);
     uint32_t n = sb_bvh_collect(g->scene, (const double(*)[4])f->frustum, 6, f->scratch);
+    bool culling = true;
     for (uint32_t i = 0; i < n; i++) {
         const sb_draw *dr = &g->scene->draws[f->scratch[i]];
         if (fp->u_color >= 0) glUniform4fv(fp->u_color, 1, dr->color);
-        sb_submit(f, f->scratch[i], 1);
+        camera_submit(f, f->scratch[i], &culling);
     }
     glDisable(GL_CULL_FACE);
     glDepthMask(GL_TRUE);

@@ -32,6 +32,8 @@ typedef struct sb_gpu {
     GLuint pos_tex, aux_tex;            /* evaluation targets (position, normal + cascade) */
     GLuint zpass_prog;                  /* camera depth-only program (same vertex shader as the final pass) */
     GLint zpass_u_view, zpass_u_proj;
+    GLuint mat_ssbo, texel_buf, texel_tex;  /* the alpha test's materials (binding 7) and texels (unit 15) */
+    struct sb_facing *facing;           /* single-sided draws' triangles ordered by the light they face (harness-owned) */
 } sb_gpu;
 
 /* What a technique's create gets: the session (read-only), the run's size,
@@ -99,12 +101,19 @@ void sb_stage_end(sb_frame *f, sb_stage s);
  * in use, technique uniforms set). Clears colour, visibility and, unless
  * reuse_depth (a z-pass filled it; tested with LEQUAL), depth. Counts draws. */
 void sb_final_pass(sb_frame *f, const sb_final_prog *fp, bool reuse_depth);
+/* The final pass that fills depth the way a later sb_final_pass with
+ * reuse_depth tests it (LEQUAL, writing: of equal depths the last drawn wins),
+ * so both put the same triangle in every pixel (raycast's position pass). */
+void sb_gbuffer_pass(sb_frame *f, const sb_final_prog *fp);
 /* The same draws without clearing anything (a second pass over the frame). */
 void sb_final_draw(sb_frame *f, const sb_final_prog *fp, bool reuse_depth);
 /* Depth-only camera pass into the render target's depth (the z-pass). */
 void sb_zpass(sb_frame *f);
 /* Issues one draw (instanced when instances > 1) with whatever program is
- * bound, and counts it in the current stage. */
+ * bound, and counts it in the current stage. In a shadow stage (cascade,
+ * volumes) a single-sided draw issues only its triangles whose front faces
+ * the frame's light (they come first in its range: the index buffer is
+ * ordered for the light on first use), as the reference's rays see them. */
 void sb_submit(sb_frame *f, uint32_t draw, int instances);
 /* A point-light technique's light=K: false with the reason when the scene has no K-th point or spot light. */
 bool sb_lamp_supported(const sb_gpu *g, int light, const char *technique, sb_err *why);

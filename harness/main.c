@@ -29,7 +29,7 @@ static void usage(FILE *f) {
             "                                         SPECs replace the battery's techniques\n"
             "  shadowbench techniques                 list techniques and their parameters\n"
             "  shadowbench columns                    the CSV columns (per frame and per run) as CSV\n"
-            "  shadowbench info                       backends, GL renderer and features\n"
+            "  shadowbench info [SCENE]               backends, GL renderer and features; or what a scene holds\n"
             "  shadowbench path PATH [SCENE] [--frames N]   print the sampled cameras as CSV\n"
             "\n"
             "SCENE: a .gltf/.glb file or a bundled scene (plane-box, desert, towers, overhangs, plane-box-lamp,\n"
@@ -60,7 +60,9 @@ static void usage(FILE *f) {
             "  --out DIR              results folder (default results); each run command writes DIR/<UTC time>/\n"
             "  --progress             progress line on stderr (default when stderr is a terminal)\n"
             "  --quiet                no notices on stderr\n"
-            "  --allow-external-uris  let glTF buffers and images be read from outside the scene's folder\n");
+            "  --allow-external-uris  let glTF buffers and images be read from outside the scene's folder\n"
+            "  --blend-casters mask|opaque|none   glTF BLEND materials: alpha-tested at 0.5 (default), opaque, or left out\n"
+            "  --pose T               nodes and skins at time T (seconds) of the file's first animation\n");
 }
 
 typedef struct cli {
@@ -158,6 +160,19 @@ static int cmd_techniques(void) {
 }
 
 static int cmd_info(const cli *c) {
+    if (c->npos > 1) return bad("usage: shadowbench info [SCENE]%s", "");
+    if (c->npos == 1) { /* what a scene file holds and how it is drawn; no GL needed */
+        sb_err err;
+        sb_scene scene;
+        sb_scene_opts so = sb_run_scene_opts(&c->opts);
+        if (!sb_scene_load(&scene, c->pos[0], &so, &err)) {
+            fprintf(stderr, "shadowbench: %s\n", err.msg);
+            return 1;
+        }
+        sb_scene_info(&scene, stdout);
+        sb_scene_free(&scene);
+        return 0;
+    }
     char avail[1024];
     sb_backends_available(avail, sizeof avail);
     printf("shadowbench %s\nbackends available: %s\n", SB_VERSION, avail[0] ? avail : "none");
@@ -184,7 +199,7 @@ static int cmd_path(const cli *c) {
     sb_scene scene;
     bool have_scene = false;
     if (c->npos == 2) {
-        sb_scene_opts so = {.allow_external_uris = c->opts.allow_external_uris};
+        sb_scene_opts so = sb_run_scene_opts(&c->opts);
         if (!sb_scene_load(&scene, c->pos[1], &so, &err)) {
             fprintf(stderr, "shadowbench: %s\n", err.msg);
             return 1;

@@ -60,6 +60,13 @@ int sb_run_opts_set(sb_run_opts *o, const char *a, const char *v, sb_err *err) {
         if (sscanf(v, "%llu%c", &u, &extra) != 1 || u == 0 || v[0] == '-')
             return sb_fail(err, "--seed %s: expected an integer >= 1", v), -1;
         o->seed = u;
+    } else if (!strcmp(a, "--blend-casters")) {
+        if (!sb_blend_policy_parse(v, &o->blend))
+            return sb_fail(err, "--blend-casters %s: expected mask, opaque or none", v), -1;
+    } else if (!strcmp(a, "--pose")) {
+        if (!sb_parse_double(v, &o->pose_time) || !isfinite(o->pose_time))
+            return sb_fail(err, "--pose %s: expected a time in seconds", v), -1;
+        o->pose = true;
     } else if (!strcmp(a, "--size")) {
         int w, h;
         char extra;
@@ -105,6 +112,11 @@ int sb_run_opts_set(sb_run_opts *o, const char *a, const char *v, sb_err *err) {
     return 1;
 }
 
+sb_scene_opts sb_run_scene_opts(const sb_run_opts *o) {
+    return (sb_scene_opts){.allow_external_uris = o->allow_external_uris, .blend = o->blend, .pose = o->pose,
+                           .pose_time = o->pose_time};
+}
+
 void sb_run_opts_finish(sb_run_opts *o) {
     if (o->order != SB_ORDER_SHUFFLE || o->seed) return;
     struct timespec ts;
@@ -131,7 +143,7 @@ bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, con
     /* files first: a broken scene or path is refused before any GL is touched */
     sb_scene sc;
     sb_path p;
-    sb_scene_opts so = {.allow_external_uris = o->allow_external_uris};
+    sb_scene_opts so = sb_run_scene_opts(o);
     if (!sb_scene_load(&sc, scene, &so, err)) return false;
     if (!sb_path_load(&p, path, &sc, err)) {
         sb_scene_free(&sc);
@@ -587,6 +599,24 @@ static void check_shadows_drawn(sb_run *r) {
     sb_run_warn(&r->info, "no shadow-casting triangle was drawn in any frame (nothing in view casts toward the light)");
 }
 
+/* When the evaluation cannot stand behind its figures: rays and rasterizer
+ * disagree on the geometry, or the reference itself is not exact enough. */
+static void check_geometry(sb_run *r) {
+    long mism = 0, ns = 0, flip = 0, nf = 0;
+    for (int i = 0; i < r->done; i++) {
+        if (!r->recs[i].evaluated) continue;
+        mism += r->recs[i].err.geom_mismatches, ns += r->recs[i].err.geom_samples;
+        flip += r->recs[i].err.floor_disagree, nf += r->recs[i].err.floor_samples;
+    }
+    if (ns && (double)mism / ns > SB_GEOM_MISMATCH_WARN)
+        sb_run_warn(&r->info, "rays and rasterizer disagree on the first surface at %.3g%% of sampled pixels "
+                    "(geom_mismatch): the error figures are not against the geometry that was drawn",
+                    100.0 * mism / ns);
+    if (nf && (double)flip / nf > SB_ERR_FLOOR_WARN)
+        sb_run_warn(&r->info, "the reference flips at %.3g%% of sampled pixels when cast from the exact surface "
+                    "(err_floor): error differences below that are noise", 100.0 * flip / nf);
+}
+
 /* The stability verdict from the probe, the batch's probes and the frames' drift. */
 static void judge_stability(sb_run *r) {
     double *ms = sb_xmalloc(sizeof(double) * (size_t)(r->done ? r->done : 1));
@@ -624,6 +654,7 @@ static bool finish_run(sb_run *r) {
         !sb_csv_file_commit(&r->cf, &r->err))
         return fail_run(r, "%s", r->err.msg);
     check_shadows_drawn(r);
+    check_geometry(r);
     judge_stability(r);
     return true;
 }

@@ -40,6 +40,9 @@ typedef struct sb_run_opts {
     int threads;                /* reference ray-casting threads (default: all cores, at most 1024) */
     double run_timeout_s;       /* a run taking longer fails with a timeout (0: none) */
     bool allow_external_uris;   /* glTF buffers and images may be read from outside the scene's folder */
+    sb_blend_policy blend;      /* --blend-casters mask|opaque|none (default mask) */
+    bool pose;                  /* --pose T: the scene at time T of its first animation */
+    double pose_time;
     sb_clocks_mode clocks;      /* --clocks auto|lock|free (default auto) */
     sb_order order;             /* --order matrix|interleave|shuffle (default matrix) */
     uint64_t seed;              /* --seed: shuffle's seed; 0: chosen by sb_run_opts_finish */
@@ -49,6 +52,8 @@ void sb_run_opts_defaults(sb_run_opts *o);
 /* Sets one option (--frames, --size, ...) from text: 1 set, 0 not a run
  * option, -1 bad value (err says which and what was expected). */
 int sb_run_opts_set(sb_run_opts *o, const char *name, const char *value, sb_err *err);
+/* How the options read a scene file. */
+sb_scene_opts sb_run_scene_opts(const sb_run_opts *o);
 /* After every option is set: picks shuffle's seed when none was given. */
 void sb_run_opts_finish(sb_run_opts *o);
 
@@ -70,6 +75,11 @@ typedef struct sb_session {
     sb_clocks *clocks;          /* the GPU's clock state (kept with the context) */
     char clocks_mode[64];       /* what the summary's clocks column says */
 } sb_session;
+
+/* Above these shares a run's warnings say its error figures cannot be trusted
+ * (see check_geometry in run.c and the README's "Error" section). */
+#define SB_GEOM_MISMATCH_WARN 1e-4
+#define SB_ERR_FLOOR_WARN 1e-3
 
 /* The most warm-up frames --warmup auto renders. */
 #define SB_WARMUP_AUTO_CAP 1000

@@ -126,6 +126,58 @@ bool sb_path_parse(sb_path *p, const char *name, const char *text, sb_err *err) 
     return true;
 }
 
+/* ---- built-in paths stay outside the model ---- */
+
+static void camera_axes(sb_camera *c);
+
+#define SB_PATH_CLEARANCE 0.01  /* no surface nearer the camera than this share of the scene's diagonal */
+#define SB_PATH_VIEW 0.05       /* the view's centre ray travels at least this share before its first hit */
+
+/* Whether a camera at pos (world) looking along fwd stands outside the model:
+ * no surface within the clearance in 14 directions (axes and diagonals), none
+ * of those rays starting inside a closed surface, and the centre ray free for
+ * a share of the scene. */
+static bool view_clear(const sb_scene *s, sb_v3 pos, sb_v3 fwd, double diag) {
+    sb_v3 o = sb_v3_sub(pos, s->origin);
+    for (int k = 0; k < 14; k++) {
+        sb_v3 d = k < 6 ? sb_v3_make(k == 0 ? 1 : k == 1 ? -1 : 0, k == 2 ? 1 : k == 3 ? -1 : 0, k == 4 ? 1 : k == 5 ? -1 : 0)
+                        : sb_v3_norm(sb_v3_make((k - 6) & 1 ? 1 : -1, (k - 6) & 2 ? 1 : -1, (k - 6) & 4 ? 1 : -1));
+        bool inside = false;
+        double t = sb_scene_raycast(s, o, d, INFINITY, &inside);
+        if (inside || t < SB_PATH_CLEARANCE * diag) return false;
+    }
+    return !(sb_scene_raycast(s, o, sb_v3_norm(fwd), SB_PATH_VIEW * diag, NULL) < SB_PATH_VIEW * diag);
+}
+
+/* Raises the keys around every sampled view that is not clear (looking at
+ * the same targets) until all are, or a cap. Returns the views still not clear. */
+static int keep_outside(sb_path *p, const sb_scene *s, const sb_v3 *targets) {
+    sb_v3 e = sb_v3_sub(s->bounds.hi, s->bounds.lo);
+    double diag = sb_v3_len(e), step = 0.02 * diag;
+    int bad = 0;
+    for (int round = 0; round < 80; round++) {
+        bad = 0;
+        for (int i = 0; i + 1 < p->key_count; i++)
+            for (int j = 0; j <= 8; j++) {
+                sb_camera c;
+                memset(&c, 0, sizeof c);
+                double t = p->keys[i].t + (p->keys[i + 1].t - p->keys[i].t) * j / 8;
+                sb_path_eval(p, t, &c.pos, &c.rot, &c.fov_deg);
+                camera_axes(&c);
+                if (view_clear(s, c.pos, c.forward, diag)) continue;
+                bad++;
+                for (int k = i; k <= i + 1; k++) {
+                    if (j == 0 && k == i + 1) continue; /* a key's own view moves only that key */
+                    if (j == 8 && k == i) continue;
+                    p->keys[k].pos.y += step;
+                    p->keys[k].rot = sb_quat_look(sb_v3_sub(targets[k], p->keys[k].pos), sb_v3_make(0, 1, 0));
+                }
+            }
+        if (!bad) break;
+    }
+    return bad;
+}
+
 /* Built-in paths from the scene bounds (world space). */
 static void builtin_path(sb_path *p, const char *kind, const sb_scene *s) {
     memset(p, 0, sizeof *p);
@@ -137,6 +189,7 @@ static void builtin_path(sb_path *p, const char *kind, const sb_scene *s) {
     sb_v3 e = sb_v3_sub(hi, lo);
     double r = 0.5 * fmax(e.x, e.z);
     int n = strcmp(kind, "orbit") == 0 ? 9 : 6;
+    sb_v3 targets[9];
     p->keys = sb_xcalloc((size_t)n, sizeof *p->keys);
     p->key_count = n;
     for (int i = 0; i < n; i++) {
@@ -154,7 +207,10 @@ static void builtin_path(sb_path *p, const char *kind, const sb_scene *s) {
         p->keys[i].t = 10.0 * u;
         p->keys[i].pos = pos;
         p->keys[i].rot = sb_quat_look(sb_v3_sub(target, pos), sb_v3_make(0, 1, 0));
+        targets[i] = target;
     }
+    if (keep_outside(p, s, targets))
+        sb_log("%s: the %s path could not be kept clear of the model everywhere", s->file, kind);
 }
 
 bool sb_path_load(sb_path *p, const char *spec, const sb_scene *scene, sb_err *err) {

@@ -1,4 +1,5 @@
-/* error.c - per-frame shadow error against the Embree reference. */
+/* error.c - per-frame shadow error against the Embree reference, and the
+ * check that rays and rasterizer see one geometry. */
 #include "error.h"
 
 #include <stdlib.h>
@@ -11,33 +12,28 @@ static int cmp_double(const void *a, const void *b) {
     return x < y ? -1 : x > y ? 1 : 0;
 }
 
-void sb_evaluate_frame(const sb_reference *r, const double light[4], sb_v3 eye, int w, int h, const float *pos,
-                       const float *aux, const unsigned char *vis, unsigned char *ref_out, sb_error_metrics *out,
-                       int threads) {
-    memset(out, 0, sizeof *out);
-    int n = w * h;
-    sb_ref_point *pts = sb_xmalloc(sizeof *pts * (size_t)(n > 0 ? n : 1));
-    int *pix = sb_xmalloc(sizeof(int) * (size_t)(n > 0 ? n : 1));
-    int m = 0;
+int sb_ref_points(const sb_reference *r, const sb_eval_view *v, sb_ref_point *pts, int *pix) {
+    int n = v->w * v->h, m = 0;
     for (int i = 0; i < n; i++) {
-        const float *a = aux + 4 * (size_t)i, *p = pos + 4 * (size_t)i;
-        if (ref_out) ref_out[i] = 128;
+        const float *a = v->aux + 4 * (size_t)i, *p = v->pos + 4 * (size_t)i;
         double nl = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-        if (nl < 0.5) continue;                                   /* sky */
-        double L[3] = {light[0], light[1], light[2]};
-        if (light[3] > 0.5)
+        if (nl < 0.5) continue; /* sky */
+        double L[3] = {v->light[0], v->light[1], v->light[2]};
+        if (v->light[3] > 0.5)
             for (int k = 0; k < 3; k++) L[k] -= p[k];
-        if (a[0] * L[0] + a[1] * L[1] + a[2] * L[2] <= 0) continue;   /* facing away from the light */
+        if (a[0] * L[0] + a[1] * L[1] + a[2] * L[2] <= 0) continue; /* facing away from the light */
         sb_ref_point *q = &pts[m];
         memcpy(q->p, p, sizeof q->p);
         memcpy(q->n, a, sizeof q->n);
-        q->eps = sb_ref_position_eps(r, q->p, (float)sb_v3_len(sb_v3_sub(sb_v3_make(p[0], p[1], p[2]), eye)));
+        q->eps = sb_ref_position_eps(r, q->p, (float)sb_v3_len(sb_v3_sub(sb_v3_make(p[0], p[1], p[2]), v->eye)));
         pix[m++] = i;
     }
-    unsigned char *ref = sb_xmalloc((size_t)(m > 0 ? m : 1));
-    double t0 = sb_now_ms();
-    out->rays = sb_reference_visibility_light(r, light, pts, m, ref, threads);
-    out->ray_ms = sb_now_ms() - t0;
+    return m;
+}
+
+/* The metrics from the technique's visibility and the reference's. */
+static void compare(const sb_eval_view *v, const unsigned char *vis, const unsigned char *ref, const int *pix, int m,
+                    unsigned char *ref_out, sb_error_metrics *out) {
     double *res_err = sb_xmalloc(sizeof(double) * (size_t)(m > 0 ? m : 1));
     double *texel = sb_xmalloc(sizeof(double) * (size_t)(m > 0 ? m : 1));
     int nres = 0;
@@ -45,14 +41,14 @@ void sb_evaluate_frame(const sb_reference *r, const double light[4], sb_v3 eye, 
     double mae = 0;
     for (int k = 0; k < m; k++) {
         int i = pix[k];
-        double v = vis[i] / 255.0;
+        double vv = vis[i] / 255.0;
         bool tech_shadow = vis[i] < 128, ref_shadow = ref[k] == 0;
         if (ref_out) ref_out[i] = ref_shadow ? 0 : 255;
         wrong += tech_shadow != ref_shadow;
         fshadow += tech_shadow && !ref_shadow;
         flit += !tech_shadow && ref_shadow;
-        mae += fabs(v - (ref_shadow ? 0.0 : 1.0));
-        float d = pos[4 * (size_t)i + 3];
+        mae += fabs(vv - (ref_shadow ? 0.0 : 1.0));
+        float d = v->pos[4 * (size_t)i + 3];
         if (d > 0) {
             texel[nres] = d;
             res_err[nres++] = fmax(-log2(d), 0.0);
@@ -77,6 +73,179 @@ void sb_evaluate_frame(const sb_reference *r, const double light[4], sb_v3 eye, 
     }
     free(res_err);
     free(texel);
+}
+
+/* The ray through a point of the pixel grid (x, y in pixels, the pixel's
+ * centre at +0.5): its points on the near and the far plane. */
+static void pixel_ray(const sb_eval_view *v, double x, double y, float near_out[3], float far_out[3]) {
+    double nx = 2 * x / v->w - 1, ny = 2 * y / v->h - 1;
+    sb_v3 a = sb_m4_point(*v->inv_view_proj, sb_v3_make(nx, ny, -1)), b = sb_m4_point(*v->inv_view_proj, sb_v3_make(nx, ny, 1));
+    near_out[0] = (float)a.x, near_out[1] = (float)a.y, near_out[2] = (float)a.z;
+    far_out[0] = (float)b.x, far_out[1] = (float)b.y, far_out[2] = (float)b.z;
+}
+
+static float dist3(const float *a, const float *b) {
+    float d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+    return sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+}
+
+/* The rasterizer's own precision, within which a camera ray and the raster
+ * still see one surface: vertices are snapped to 1/256 pixel (8 sub-pixel
+ * bits, llvmpipe's and the GL minimum's 4 bits are coarser only in theory),
+ * so a ray up to that far from the pixel centre is the same sample; and two
+ * surfaces closer than a few units in the last place of the float depth
+ * buffer (values near 1: 2^-24) are the same to the depth test. */
+#define SB_SUBPIXEL (1.0 / 256)
+#define SB_DEPTH_ULPS (4.0 / 16777216.0)
+
+typedef struct geo_sample {
+    int pixel;
+    bool sky;
+    float from[3], to[3]; /* the ray: near-plane point to the rasterized position (sky: to the far plane) */
+} geo_sample;
+
+typedef struct geo_ctx {
+    const sb_reference *r;
+    const sb_eval_view *v;
+    sb_m4 view_proj; /* origin-relative world -> clip */
+} geo_ctx;
+
+static double window_depth(const geo_ctx *g, const float p[3]) {
+    return 0.5 * sb_m4_point(g->view_proj, sb_v3_make(p[0], p[1], p[2])).z + 0.5;
+}
+
+/* Whether ray from->through (whose length is len) with first hit h sees the
+ * sample's rasterized surface: sky stays sky; a surface hit lies on the plane
+ * of the rasterized position (the distance measured across the plane, within
+ * the position's error bound: along a grazing ray that error grows without
+ * bound), or in front of it by no more than the depth buffer resolves. */
+static bool sees_raster(const geo_ctx *g, const geo_sample *s, const float from[3], const float through[3], float len,
+                        const sb_ref_hit *h) {
+    if (s->sky) return !(h->t < len);
+    if (!(h->t < INFINITY)) return false;
+    float q[3], off = 0;
+    for (int c = 0; c < 3; c++) q[c] = from[c] + (through[c] - from[c]) * (h->t / len);
+    for (int c = 0; c < 3; c++) off += (s->to[c] - q[c]) * h->n[c];
+    float d = dist3(s->to, s->from);
+    if (fabsf(off) <= 4 * sb_ref_position_eps(g->r, s->to, d)) return true;
+    return h->t < d && window_depth(g, s->to) - window_depth(g, q) <= SB_DEPTH_ULPS;
+}
+
+/* Samples whose centre ray does not see the raster, again through 8 points a
+ * sub-pixel snap away: a sample is a mismatch when none of them does. */
+static long retry_subpixel(const geo_ctx *g, const geo_sample *smp, const int *bad, int nbad, int threads) {
+    static const int ox[8] = {-1, 0, 1, -1, 1, -1, 0, 1}, oy[8] = {-1, -1, -1, 0, 0, 1, 1, 1};
+    int n = 8 * nbad;
+    float (*from)[3] = sb_xmalloc(sizeof *from * (size_t)(n ? n : 1)), (*to)[3] = sb_xmalloc(sizeof *to * (size_t)(n ? n : 1));
+    sb_ref_hit *hits = sb_xmalloc(sizeof *hits * (size_t)(n ? n : 1));
+    for (int b = 0; b < nbad; b++) {
+        int px = smp[bad[b]].pixel;
+        for (int j = 0; j < 8; j++)
+            pixel_ray(g->v, px % g->v->w + 0.5 + ox[j] * SB_SUBPIXEL, px / g->v->w + 0.5 + oy[j] * SB_SUBPIXEL,
+                      from[8 * b + j], to[8 * b + j]);
+    }
+    sb_reference_rays(g->r, from, to, n, hits, threads);
+    long mism = 0;
+    for (int b = 0; b < nbad; b++) {
+        bool seen = false;
+        for (int j = 0; j < 8 && !seen; j++) {
+            int k = 8 * b + j;
+            seen = sees_raster(g, &smp[bad[b]], from[k], to[k], dist3(to[k], from[k]), &hits[k]);
+        }
+        mism += !seen;
+    }
+    free(hits);
+    free(to);
+    free(from);
+    return mism;
+}
+
+/* The geometry check and the floor on every 2nd pixel of every 2nd row. ref[k]
+ * is the reference at pix[k]; kof[i] the k of pixel i (-1: not evaluated). */
+static void geometry_check(const sb_reference *r, const sb_eval_view *v, const unsigned char *ref, const int *kof,
+                           sb_error_metrics *out, int threads) {
+    geo_ctx g = {r, v, sb_m4_identity()};
+    sb_m4_invert(*v->inv_view_proj, &g.view_proj);
+    int ns = 0, cap = ((v->w + 1) / 2) * ((v->h + 1) / 2);
+    cap = cap ? cap : 1;
+    geo_sample *smp = sb_xmalloc(sizeof *smp * (size_t)cap);
+    float (*from)[3] = sb_xmalloc(sizeof *from * (size_t)cap), (*to)[3] = sb_xmalloc(sizeof *to * (size_t)cap);
+    for (int y = 0; y < v->h; y += 2)
+        for (int x = 0; x < v->w; x += 2) {
+            int i = y * v->w + x;
+            geo_sample *s = &smp[ns];
+            s->pixel = i;
+            pixel_ray(v, x + 0.5, y + 0.5, s->from, to[ns]);
+            const float *a = v->aux + 4 * (size_t)i;
+            s->sky = a[0] * a[0] + a[1] * a[1] + a[2] * a[2] < 0.25f;
+            if (!s->sky) memcpy(s->to, v->pos + 4 * (size_t)i, sizeof s->to);
+            else memcpy(s->to, to[ns], sizeof s->to);
+            memcpy(from[ns], s->from, sizeof from[ns]);
+            memcpy(to[ns], s->to, sizeof to[ns]);
+            ns++;
+        }
+    sb_ref_hit *hits = sb_xmalloc(sizeof *hits * (size_t)cap);
+    sb_reference_rays(r, from, to, ns, hits, threads);
+    sb_ref_point *pts = sb_xmalloc(sizeof *pts * (size_t)cap);
+    int *which = sb_xmalloc(sizeof(int) * (size_t)cap), *bad = sb_xmalloc(sizeof(int) * (size_t)cap), np = 0, nbad = 0;
+    for (int k = 0; k < ns; k++) {
+        float d = dist3(smp[k].to, smp[k].from);
+        if (!sees_raster(&g, &smp[k], smp[k].from, smp[k].to, d, &hits[k])) {
+            bad[nbad++] = k;
+            continue;
+        }
+        int kr = kof[smp[k].pixel];
+        if (smp[k].sky || kr < 0) continue;
+        /* the reference again from the exact hit point and normal */
+        sb_ref_point *q = &pts[np];
+        for (int c = 0; c < 3; c++) q->p[c] = smp[k].from[c] + (smp[k].to[c] - smp[k].from[c]) * (hits[k].t / d);
+        memcpy(q->n, hits[k].n, sizeof q->n);
+        q->eps = sb_ref_position_eps(r, q->p, dist3(q->p, (float[3]){(float)v->eye.x, (float)v->eye.y, (float)v->eye.z}));
+        which[np++] = kr;
+    }
+    long mism = retry_subpixel(&g, smp, bad, nbad, threads);
+    unsigned char *exact = sb_xmalloc((size_t)(np ? np : 1));
+    sb_reference_visibility_light(r, v->light, pts, np, exact, threads);
+    long disagree = 0;
+    for (int k = 0; k < np; k++) disagree += (exact[k] != 0) != (ref[which[k]] != 0);
+    out->geom_samples = ns;
+    out->geom_mismatches = mism;
+    out->floor_samples = np;
+    out->floor_disagree = disagree;
+    out->geom_mismatch = ns ? (double)mism / ns : NAN;
+    out->err_floor = np ? (double)disagree / np : NAN;
+    out->rays += (uint64_t)(ns + 8 * nbad + np);
+    free(exact);
+    free(bad);
+    free(which);
+    free(pts);
+    free(from);
+    free(to);
+    free(hits);
+    free(smp);
+}
+
+void sb_evaluate_frame(const sb_reference *r, const sb_eval_view *v, const unsigned char *vis, unsigned char *ref_out,
+                       sb_error_metrics *out, int threads) {
+    memset(out, 0, sizeof *out);
+    int n = v->w * v->h;
+    sb_ref_point *pts = sb_xmalloc(sizeof *pts * (size_t)(n > 0 ? n : 1));
+    int *pix = sb_xmalloc(sizeof(int) * (size_t)(n > 0 ? n : 1));
+    if (ref_out) memset(ref_out, 128, (size_t)n);
+    int m = sb_ref_points(r, v, pts, pix);
+    unsigned char *ref = sb_xmalloc((size_t)(m > 0 ? m : 1));
+    double t0 = sb_now_ms();
+    out->rays = sb_reference_visibility_light(r, v->light, pts, m, ref, threads);
+    compare(v, vis, ref, pix, m, ref_out, out);
+    out->geom_mismatch = out->err_floor = NAN;
+    if (v->inv_view_proj) {
+        int *kof = sb_xmalloc(sizeof(int) * (size_t)(n > 0 ? n : 1));
+        for (int i = 0; i < n; i++) kof[i] = -1;
+        for (int k = 0; k < m; k++) kof[pix[k]] = k;
+        geometry_check(r, v, ref, kof, out, threads);
+        free(kof);
+    }
+    out->ray_ms = sb_now_ms() - t0;
     free(ref);
     free(pts);
     free(pix);

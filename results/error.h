@@ -14,14 +14,33 @@ typedef struct sb_error_metrics {
     long pixels;                       /* evaluated */
     double err_rate, false_shadow, false_lit, vis_mae;
     double res_err_mean, res_err_p95, texel_px_p95;   /* NaN when the technique has no map */
+    /* One geometry: camera rays through every 2nd pixel of every 2nd row. A
+     * sample mismatches when the first surface the ray meets is not where the
+     * rasterizer put the pixel (or the rasterizer shows sky where the ray hits
+     * something). The floor: the reference from the ray's exact hit point and
+     * normal against the one from the rasterized position, on the sampled
+     * evaluated pixels: how exact the error figures can be. */
+    long geom_samples, geom_mismatches, floor_samples, floor_disagree;
+    double geom_mismatch, err_floor;   /* shares; NaN without samples */
     uint64_t rays;
     double ray_ms;
 } sb_error_metrics;
 
-/* pos/aux: the evaluation targets (4 floats a pixel); vis: the technique's
- * visibility target; ref_out (optional, w*h): 255 lit, 0 shadowed, 128 not
- * evaluated. eye: camera position relative to the scene origin. light: as
- * sb_reference_visibility_light (the technique's shaded light). */
-void sb_evaluate_frame(const sb_reference *r, const double light[4], sb_v3 eye, int w, int h, const float *pos,
-                       const float *aux, const unsigned char *vis, unsigned char *ref_out, sb_error_metrics *out,
-                       int threads);
+/* The frame being evaluated: the targets and the camera. */
+typedef struct sb_eval_view {
+    int w, h;
+    const float *pos, *aux;            /* the evaluation targets (4 floats a pixel) */
+    sb_v3 eye;                         /* camera position relative to the scene origin */
+    const sb_m4 *inv_view_proj;        /* origin-relative clip -> world (NULL: no geometry check) */
+    const double *light;               /* as sb_reference_visibility_light: the technique's shaded light */
+} sb_eval_view;
+
+/* The points the reference casts from (pts and pix: w*h capacity; pix[k] is
+ * the pixel of pts[k]): every pixel that is not sky and faces the light, from
+ * its rasterized position and geometric normal. Returns how many. */
+int sb_ref_points(const sb_reference *r, const sb_eval_view *v, sb_ref_point *pts, int *pix);
+
+/* vis: the technique's visibility target; ref_out (optional, w*h): 255 lit,
+ * 0 shadowed, 128 not evaluated. */
+void sb_evaluate_frame(const sb_reference *r, const sb_eval_view *v, const unsigned char *vis, unsigned char *ref_out,
+                       sb_error_metrics *out, int threads);

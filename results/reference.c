@@ -1,4 +1,6 @@
-/* reference.c - Embree occlusion rays toward the sun. */
+/* reference.c - Embree rays: occlusion toward a light (the reference every
+ * technique is measured against, and `raycast`) and first hits of camera rays
+ * (the evaluation's check that rays and rasterizer see one geometry). */
 #include "reference.h"
 
 #include <embree3/rtcore.h>
@@ -6,28 +8,108 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The intersect context handed to the filter: which way a single-sided
+ * triangle must face to count. */
+typedef struct ray_ctx {
+    struct RTCIntersectContext ctx; /* first: Embree passes this pointer to the filter */
+    bool camera;                    /* a camera ray: front faces face the ray's origin; else the ray's end (the light) */
+} ray_ctx;
+
+/* Embree's packet layout (rtcore_ray.h, whose accessors are C++ only):
+ * structure-of-arrays of N lanes. */
+static float ray_dir(const struct RTCFilterFunctionNArguments *a, int axis, unsigned i) {
+    return ((const float *)a->ray)[(4 + axis) * a->N + i];
+}
+static float hit_f(const struct RTCFilterFunctionNArguments *a, int field, unsigned i) {
+    return ((const float *)a->hit)[field * a->N + i]; /* 3: u, 4: v */
+}
+static unsigned hit_prim(const struct RTCFilterFunctionNArguments *a, unsigned i) {
+    return ((const unsigned *)a->hit)[5 * a->N + i];
+}
+
+/* Rejects hits the rasterizer would not draw: the back of an open
+ * single-sided triangle, the uncovered part of an alpha-tested one. */
+static void filter(const struct RTCFilterFunctionNArguments *args) {
+    const sb_reference *r = args->geometryUserPtr;
+    const ray_ctx *rc = (const ray_ctx *)args->context;
+    const sb_scene *s = r->src;
+    for (unsigned i = 0; i < args->N; i++) {
+        if (args->valid[i] != -1) continue;
+        uint32_t prim = hit_prim(args, i);
+        uint8_t flags = r->tri[prim];
+        if (!flags) continue;
+        const uint32_t *ix = s->indices + 3 * (size_t)prim;
+        const float *a = sb_vertex(s, ix[0]), *b = sb_vertex(s, ix[1]), *c = sb_vertex(s, ix[2]);
+        if (flags & SB_REF_SINGLE_SIDED) {
+            float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+            float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+            float d = n[0] * ray_dir(args, 0, i) + n[1] * ray_dir(args, 1, i) + n[2] * ray_dir(args, 2, i);
+            if (rc->camera ? d >= 0 : d <= 0) {
+                args->valid[i] = 0;
+                continue;
+            }
+        }
+        if (flags & SB_REF_ALPHA) {
+            float u = hit_f(args, 3, i), v = hit_f(args, 4, i), w = 1 - u - v;
+            uint32_t mat;
+            memcpy(&mat, a + 8, 4);
+            if (!sb_material_covers(s, mat, w * a[6] + u * b[6] + v * c[6], w * a[7] + u * b[7] + v * c[7]))
+                args->valid[i] = 0;
+        }
+    }
+}
+
+/* Per triangle: what the filter must check (NULL when nothing needs it). */
+static uint8_t *triangle_flags(const sb_scene *s) {
+    uint8_t *f = sb_xcalloc((size_t)s->index_count / 3 + 1, 1);
+    bool any = false;
+    for (uint32_t d = 0; d < s->draw_count; d++) {
+        const sb_draw *dr = &s->draws[d];
+        uint8_t x = (uint8_t)((!dr->double_sided && !dr->closed ? SB_REF_SINGLE_SIDED : 0) |
+                              (dr->material ? SB_REF_ALPHA : 0));
+        if (!x) continue;
+        any = true;
+        memset(f + dr->first_index / 3, x, dr->index_count / 3);
+    }
+    if (!any) {
+        free(f);
+        return NULL;
+    }
+    return f;
+}
+
 bool sb_reference_build(sb_reference *r, const sb_scene *s, sb_err *err) {
     memset(r, 0, sizeof *r);
     double t0 = sb_now_ms();
     RTCDevice dev = rtcNewDevice(NULL);
     if (!dev) return sb_fail(err, "embree: cannot create a device (error %d)", (int)rtcGetDeviceError(NULL));
+    r->src = s;
+    r->tri = triangle_flags(s);
     RTCScene scene = rtcNewScene(dev);
     RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
-    /* positions are the first 3 floats of each 24-byte vertex; the normal after
-       them keeps Embree's 16-byte reads of the last vertex inside the buffer */
-    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, s->vertices, 0, 6 * sizeof(float),
+    /* positions are the first 3 floats of each vertex; what follows them keeps
+       Embree's 16-byte reads of the last vertex inside the buffer */
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, s->vertices, 0, SB_VERTEX_BYTES,
                                s->vertex_count);
     rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, s->indices, 0, 3 * sizeof(uint32_t),
                                s->index_count / 3);
+    if (r->tri) {
+        rtcSetGeometryUserData(g, r);
+        rtcSetGeometryOccludedFilterFunction(g, filter);
+        rtcSetGeometryIntersectFilterFunction(g, filter);
+    }
     rtcCommitGeometry(g);
     rtcAttachGeometry(scene, g);
     rtcReleaseGeometry(g);
+    rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST); /* watertight: no ray slips through a shared edge or corner */
     rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
     rtcCommitScene(scene);
     enum RTCError e = rtcGetDeviceError(dev);
     if (e != RTC_ERROR_NONE) {
         rtcReleaseScene(scene);
         rtcReleaseDevice(dev);
+        free(r->tri);
+        r->tri = NULL;
         return sb_fail(err, "embree: building the scene failed (error %d)", (int)e);
     }
     r->device = dev;
@@ -41,6 +123,7 @@ bool sb_reference_build(sb_reference *r, const sb_scene *s, sb_err *err) {
 void sb_reference_free(sb_reference *r) {
     if (r->scene) rtcReleaseScene(r->scene);
     if (r->device) rtcReleaseDevice(r->device);
+    free(r->tri);
     memset(r, 0, sizeof *r);
 }
 
@@ -51,19 +134,23 @@ float sb_ref_position_eps(const sb_reference *r, const float p[3], float dist) {
     return 1.6e-5f * (mag + dist) + r->eps_scene;
 }
 
-typedef struct {
+/* Work split over threads: items [first, first + count) of a job. */
+typedef struct job {
     const sb_reference *r;
     float sun[3];
     bool point;                 /* sun holds a point light's position */
     const sb_ref_point *pts;
     unsigned char *vis;
+    const float (*from)[3];     /* camera rays: from from[i] toward to[i] */
+    const float (*to)[3];
+    sb_ref_hit *hits;
     int first, count;
 } job;
 
-static void *work(void *arg) {
-    job *j = arg;
-    struct RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
+static void occlusion(job *j) {
+    ray_ctx rc;
+    rtcInitIntersectContext(&rc.ctx);
+    rc.camera = false;
     for (int i = j->first; i < j->first + j->count; i++) {
         const sb_ref_point *q = &j->pts[i];
         float eps = q->eps;
@@ -78,23 +165,72 @@ static void *work(void *arg) {
             for (int k = 0; k < 3; k++) L[k] = d[k] / len;
             far = len - 2 * eps;
         }
-        struct RTCRay ray;
-        ray.org_x = q->p[0] + (q->n[0] + L[0]) * eps;
-        ray.org_y = q->p[1] + (q->n[1] + L[1]) * eps;
-        ray.org_z = q->p[2] + (q->n[2] + L[2]) * eps;
-        ray.dir_x = L[0];
-        ray.dir_y = L[1];
-        ray.dir_z = L[2];
-        ray.tnear = 0;
-        ray.tfar = far > 0 ? far : 0;
-        ray.time = 0;
-        ray.mask = 0xffffffffu;
-        ray.id = 0;
-        ray.flags = 0;
-        rtcOccluded1((RTCScene)j->r->scene, &ctx, &ray);
+        struct RTCRay ray = {.org_x = q->p[0] + (q->n[0] + L[0]) * eps, .org_y = q->p[1] + (q->n[1] + L[1]) * eps,
+                             .org_z = q->p[2] + (q->n[2] + L[2]) * eps, .dir_x = L[0], .dir_y = L[1], .dir_z = L[2],
+                             .tnear = 0, .tfar = far > 0 ? far : 0, .mask = 0xffffffffu};
+        rtcOccluded1((RTCScene)j->r->scene, &rc.ctx, &ray);
         j->vis[i] = ray.tfar == -INFINITY ? 0 : 1;
     }
+}
+
+static void first_hits(job *j) {
+    ray_ctx rc;
+    rtcInitIntersectContext(&rc.ctx);
+    rc.camera = true;
+    for (int i = j->first; i < j->first + j->count; i++) {
+        const float *o = j->from[i];
+        float d[3] = {j->to[i][0] - o[0], j->to[i][1] - o[1], j->to[i][2] - o[2]};
+        float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        sb_ref_hit *h = &j->hits[i];
+        h->t = INFINITY;
+        h->front = false;
+        memset(h->n, 0, sizeof h->n);
+        if (!(len > 0)) continue;
+        struct RTCRayHit rh = {.ray = {.org_x = o[0], .org_y = o[1], .org_z = o[2], .dir_x = d[0] / len,
+                                       .dir_y = d[1] / len, .dir_z = d[2] / len, .tnear = 0, .tfar = INFINITY,
+                                       .mask = 0xffffffffu},
+                               .hit = {.geomID = RTC_INVALID_GEOMETRY_ID}};
+        rtcIntersect1((RTCScene)j->r->scene, &rc.ctx, &rh);
+        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+        h->t = rh.ray.tfar;
+        /* the front face from the triangle's own winding (counter-clockwise, as glTF and GL say) */
+        const sb_scene *sc = j->r->src;
+        const uint32_t *ix = sc->indices + 3 * (size_t)rh.hit.primID;
+        const float *a = sb_vertex(sc, ix[0]), *b = sb_vertex(sc, ix[1]), *c = sb_vertex(sc, ix[2]);
+        float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+        float nl = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        h->front = n[0] * d[0] + n[1] * d[1] + n[2] * d[2] < 0;
+        float s = h->front ? 1.0f : -1.0f; /* the normal returned faces the ray's origin */
+        for (int k = 0; k < 3 && nl > 0; k++) h->n[k] = s * n[k] / nl;
+    }
+}
+
+static void *work(void *arg) {
+    job *j = arg;
+    if (j->from) first_hits(j);
+    else occlusion(j);
     return NULL;
+}
+
+/* Runs `proto` over n items on up to `threads` threads. */
+static void run_jobs(const job *proto, int n, int threads) {
+    if (threads < 1) threads = 1;
+    if (threads > n) threads = n > 0 ? n : 1; /* no idle threads on a small frame */
+    pthread_t *th = sb_xmalloc(sizeof *th * (size_t)threads);
+    job *jobs = sb_xmalloc(sizeof *jobs * (size_t)threads);
+    int per = (n + threads - 1) / threads;
+    for (int t = 0; t < threads; t++) {
+        jobs[t] = *proto;
+        jobs[t].first = t * per;
+        int end = (t + 1) * per < n ? (t + 1) * per : n;
+        jobs[t].count = end > jobs[t].first ? end - jobs[t].first : 0;
+        if (t > 0) pthread_create(&th[t], NULL, work, &jobs[t]);
+    }
+    work(&jobs[0]);
+    for (int t = 1; t < threads; t++) pthread_join(th[t], NULL);
+    free(th);
+    free(jobs);
 }
 
 uint64_t sb_reference_visibility(const sb_reference *r, sb_v3 sun, const sb_ref_point *pts, int n,
@@ -105,20 +241,14 @@ uint64_t sb_reference_visibility(const sb_reference *r, sb_v3 sun, const sb_ref_
 
 uint64_t sb_reference_visibility_light(const sb_reference *r, const double light[4], const sb_ref_point *pts, int n,
                                        unsigned char *vis, int threads) {
-    if (threads < 1) threads = 1;
-    if (threads > n) threads = n > 0 ? n : 1;   /* no idle threads on a small frame */
-    pthread_t *th = sb_xmalloc(sizeof *th * (size_t)threads);
-    job *jobs = sb_xmalloc(sizeof *jobs * (size_t)threads);
-    int per = (n + threads - 1) / threads;
-    for (int t = 0; t < threads; t++) {
-        jobs[t] = (job){r, {(float)light[0], (float)light[1], (float)light[2]}, light[3] > 0.5, pts, vis, t * per, 0};
-        int end = (t + 1) * per < n ? (t + 1) * per : n;
-        jobs[t].count = end > jobs[t].first ? end - jobs[t].first : 0;
-        if (t > 0) pthread_create(&th[t], NULL, work, &jobs[t]);
-    }
-    work(&jobs[0]);
-    for (int t = 1; t < threads; t++) pthread_join(th[t], NULL);
-    free(th);
-    free(jobs);
+    job proto = {.r = r, .sun = {(float)light[0], (float)light[1], (float)light[2]}, .point = light[3] > 0.5,
+                 .pts = pts, .vis = vis};
+    run_jobs(&proto, n, threads);
     return (uint64_t)n;
+}
+
+void sb_reference_rays(const sb_reference *r, const float (*from)[3], const float (*to)[3], int n, sb_ref_hit *out,
+                       int threads) {
+    job proto = {.r = r, .from = from, .to = to, .hits = out};
+    run_jobs(&proto, n, threads);
 }

@@ -38,7 +38,7 @@ static double gpu_ms(const sb_stage_times *t) {
 /* ---- per-frame columns ---- */
 
 enum { C_DRAWS, C_SHADOW_DRAWS, C_TRIS, C_SHADOW_TRIS, C_RENDERED, C_SKIPPED, C_WARP };
-enum { E_RATE, E_FALSE_SHADOW, E_FALSE_LIT, E_MAE, E_RES_MEAN, E_RES_P95, E_TEXEL_P95 };
+enum { E_RATE, E_FALSE_SHADOW, E_FALSE_LIT, E_MAE, E_RES_MEAN, E_RES_P95, E_TEXEL_P95, E_GEOM, E_FLOOR };
 
 static sb_cell f_frame(const sb_frame_row *r, int a) { (void)a; return integer(r->rec->frame); }
 static sb_cell f_repeat(const sb_frame_row *r, int a) { (void)a; return integer(r->rec->repeat); }
@@ -79,8 +79,8 @@ static sb_cell f_eval_pixels(const sb_frame_row *r, int a) {
 static sb_cell f_error(const sb_frame_row *r, int k) {
     if (!r->rec->evaluated) return empty();
     const sb_error_metrics *e = &r->rec->err;
-    const double v[] = {e->err_rate, e->false_shadow, e->false_lit, e->vis_mae,
-                        e->res_err_mean, e->res_err_p95, e->texel_px_p95};
+    const double v[] = {e->err_rate, e->false_shadow, e->false_lit, e->vis_mae, e->res_err_mean,
+                        e->res_err_p95, e->texel_px_p95, e->geom_mismatch, e->err_floor};
     return number(v[k]);
 }
 
@@ -124,6 +124,10 @@ const sb_frame_col sb_frame_cols[] = {
     {"res_err_mean", f_error, E_RES_MEAN, 0, "mean of max(-log2(shadow texels per pixel), 0)"},
     {"res_err_p95", f_error, E_RES_P95, 0, "95th percentile of the resolution error"},
     {"texel_px_p95", f_error, E_TEXEL_P95, 0, "95th percentile of shadow texels per pixel"},
+    {"geom_mismatch", f_error, E_GEOM, 0,
+     "share of sampled pixels where a camera ray's first hit is not the rasterized surface (one geometry?)"},
+    {"err_floor", f_error, E_FLOOR, 0,
+     "share of sampled evaluated pixels whose reference changes when cast from the ray's exact hit point"},
 };
 const int sb_frame_col_count = (int)SB_COUNT(sb_frame_cols);
 
@@ -185,6 +189,17 @@ static sb_cell r_error_frames(const sb_run_row *r, int a) {
     int ne = 0;
     for (int i = 0; i < r->n; i++) ne += r->recs[i].evaluated;
     return integer(ne);
+}
+/* Pooled over the evaluated frames: a = 0 geometry mismatches, 1 the floor. */
+static sb_cell r_pooled(const sb_run_row *r, int a) {
+    long hit = 0, n = 0;
+    for (int i = 0; i < r->n; i++) {
+        const sb_error_metrics *e = &r->recs[i].err;
+        if (!r->recs[i].evaluated) continue;
+        hit += a ? e->floor_disagree : e->geom_mismatches;
+        n += a ? e->floor_samples : e->geom_samples;
+    }
+    return number(n ? (double)hit / n : NAN);
 }
 static sb_cell r_rays_per_s(const sb_run_row *r, int a) {
     (void)a;
@@ -251,6 +266,10 @@ const sb_run_col sb_run_cols[] = {
     SERIES("res_err_mean", SB_STAT_MEAN | SB_STAT_P95, 0),
     SERIES("res_err_p95", SB_STAT_MEAN | SB_STAT_P95, 0),
     SERIES("texel_px_p95", SB_STAT_MEAN | SB_STAT_P95, 0),
+    {"geom_mismatch", r_pooled, 0, 0, 0,
+     "share of sampled pixels (all evaluated frames) where rays and rasterizer disagree on the first surface"},
+    {"err_floor", r_pooled, 1, 0, 0,
+     "share of sampled evaluated pixels whose reference flips when cast from the exact hit: the error figures' floor"},
     {"ref_rays_per_s", r_rays_per_s, 0, 0, 0, "reference rays per second on this machine"},
 };
 const int sb_run_col_count = (int)SB_COUNT(sb_run_cols);

@@ -135,3 +135,67 @@ uint32_t sb_bvh_collect(const sb_scene *s, const double (*planes)[4], int plane_
     sb_bvh_cull(s, planes, plane_count, collect, &c);
     return c.n;
 }
+
+/* ---- CPU ray casting (auto paths: is a camera outside the model?) ---- */
+
+static bool ray_box(const sb_aabb *b, sb_v3 o, sb_v3 inv, double tmax) {
+    const double *lo = &b->lo.x, *hi = &b->hi.x, *oo = &o.x, *iv = &inv.x;
+    double t0 = 0, t1 = tmax;
+    for (int k = 0; k < 3; k++) {
+        double a = (lo[k] - oo[k]) * iv[k], c = (hi[k] - oo[k]) * iv[k];
+        if (a > c) {
+            double t = a;
+            a = c, c = t;
+        }
+        t0 = a > t0 ? a : t0;
+        t1 = c < t1 ? c : t1;
+        if (t0 > t1) return false;
+    }
+    return true;
+}
+
+/* Möller-Trumbore, both sides; t of the hit or INFINITY; *n the (unnormalised) front normal. */
+static double ray_tri(const float *a, const float *b, const float *c, sb_v3 o, sb_v3 d, sb_v3 *n) {
+    sb_v3 A = {a[0], a[1], a[2]}, e1 = sb_v3_sub(sb_v3_make(b[0], b[1], b[2]), A), e2 = sb_v3_sub(sb_v3_make(c[0], c[1], c[2]), A);
+    sb_v3 p = sb_v3_cross(d, e2);
+    double det = sb_v3_dot(e1, p);
+    *n = sb_v3_make(0, 0, 0);
+    if (fabs(det) < 1e-300) return INFINITY;
+    sb_v3 s = sb_v3_sub(o, A), q = sb_v3_cross(s, e1);
+    double u = sb_v3_dot(s, p) / det, v = sb_v3_dot(d, q) / det, t = sb_v3_dot(e2, q) / det;
+    if (u < 0 || v < 0 || u + v > 1 || t <= 0) return INFINITY;
+    *n = sb_v3_cross(e1, e2);
+    return t;
+}
+
+double sb_scene_raycast(const sb_scene *s, sb_v3 o, sb_v3 d, double tmax, bool *backface) {
+    double best = INFINITY;
+    if (!s->bvh.node_count) return best;
+    sb_v3 inv = sb_v3_make(1 / d.x, 1 / d.y, 1 / d.z);
+    int32_t stack[128];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+        const sb_bvh_node *nd = &s->bvh.nodes[stack[--top]];
+        if (!ray_box(&nd->box, o, inv, best < tmax ? best : tmax)) continue;
+        if (nd->left >= 0 && top + 2 <= 128) {
+            stack[top++] = nd->left;
+            stack[top++] = nd->right;
+            continue;
+        }
+        for (uint32_t i = nd->first; i < nd->first + nd->count; i++) {
+            const sb_draw *dr = &s->draws[s->bvh.items[i]];
+            if (!ray_box(&dr->box, o, inv, best < tmax ? best : tmax)) continue;
+            for (uint32_t k = dr->first_index; k + 2 < dr->first_index + dr->index_count; k += 3) {
+                sb_v3 n;
+                double t = ray_tri(sb_vertex(s, s->indices[k]), sb_vertex(s, s->indices[k + 1]),
+                                   sb_vertex(s, s->indices[k + 2]), o, d, &n);
+                if (t < best && t < tmax) {
+                    best = t;
+                    if (backface) *backface = !dr->double_sided && dr->closed && sb_v3_dot(n, d) > 0;
+                }
+            }
+        }
+    }
+    return best;
+}

@@ -34,11 +34,22 @@ uint32_t sb_glb_vert(sb_glb_mesh *m, double x, double y, double z, double nx, do
         m->capv = m->capv ? m->capv * 2 : 256;
         m->pos = grow(m->pos, (size_t)m->capv * 12);
         m->nrm = grow(m->nrm, (size_t)m->capv * 12);
+        if (m->uv) m->uv = grow(m->uv, (size_t)m->capv * 8);
     }
     float *p = m->pos + 3 * (size_t)m->nv, *n = m->nrm + 3 * (size_t)m->nv;
     p[0] = (float)x; p[1] = (float)y; p[2] = (float)z;
     n[0] = (float)nx; n[1] = (float)ny; n[2] = (float)nz;
     return m->nv++;
+}
+
+void sb_glb_uv(sb_glb_mesh *m, double u, double v) {
+    if (!m->uv) m->uv = calloc((size_t)m->capv * 2, sizeof(float));
+    if (!m->uv || m->nv == 0) {
+        fprintf(stderr, "glb: sb_glb_uv before a vertex (or out of memory)\n");
+        exit(1);
+    }
+    m->uv[2 * (size_t)(m->nv - 1)] = (float)u;
+    m->uv[2 * (size_t)(m->nv - 1) + 1] = (float)v;
 }
 
 void sb_glb_tri(sb_glb_mesh *m, uint32_t a, uint32_t b, uint32_t c) {
@@ -72,18 +83,12 @@ void sb_glb_box(sb_glb_mesh *m, double x0, double y0, double z0, double x1, doub
     }
 }
 
-/* ---- GLB writer ---- */
+/* ---- JSON text ---- */
 
-typedef struct {
-    char *s;
-    size_t len, cap;
-} str;
-
-static void put(str *b, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void put(str *b, const char *fmt, ...) {
-    va_list ap;
+static void vput(sb_glb_str *b, const char *fmt, va_list ap0) {
     for (;;) {
-        va_start(ap, fmt);
+        va_list ap;
+        va_copy(ap, ap0);
         int n = vsnprintf(b->s ? b->s + b->len : NULL, b->s ? b->cap - b->len : 0, fmt, ap);
         va_end(ap);
         if (b->s && b->len + (size_t)n < b->cap) {
@@ -92,8 +97,165 @@ static void put(str *b, const char *fmt, ...) {
         }
         b->cap = (b->cap + (size_t)n + 1) * 2;
         b->s = grow(b->s, b->cap);
+        if (b->len == 0) b->s[0] = 0;
     }
 }
+
+static void put(sb_glb_str *b, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void put(sb_glb_str *b, const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    vput(b, fmt, ap);
+    va_end(ap);
+}
+
+/* Appends one JSON item to a list: a comma first unless it is the first. */
+static void item(sb_glb_str *b, const char *fmt, va_list ap) {
+    if (b->len) put(b, ",");
+    vput(b, fmt, ap);
+}
+
+static const char *text(const sb_glb_str *b) { return b->s ? b->s : ""; }
+
+/* ---- the caller's own parts ---- */
+
+static size_t append_bin(sb_glb_scene *s, const void *data, size_t len) {
+    size_t off = s->bin_len;
+    s->bin = grow(s->bin, off + len + 4);
+    memcpy(s->bin + off, data, len);
+    s->bin_len = off + len;
+    while (s->bin_len % 4) s->bin[s->bin_len++] = 0; /* views start 4-aligned */
+    return off;
+}
+
+/* target: 34962 vertex data, 34963 indices, 0 none; stride 0: none given */
+static int view_with(sb_glb_scene *s, const void *data, size_t len, int target, int stride) {
+    size_t off = append_bin(s, data, len);
+    char tgt[64] = "";
+    if (target && stride) snprintf(tgt, sizeof tgt, ",\"byteStride\":%d,\"target\":%d", stride, target);
+    else if (target) snprintf(tgt, sizeof tgt, ",\"target\":%d", target);
+    put(&s->views, "%s{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":%zu%s}", s->nviews ? "," : "", off, len, tgt);
+    return s->nviews++;
+}
+
+static int view_for(sb_glb_scene *s, const void *data, size_t len, int target) {
+    return view_with(s, data, len, target, 0);
+}
+
+int sb_glb_view(sb_glb_scene *s, const void *data, size_t len) { return view_for(s, data, len, 0); }
+
+int sb_glb_view_strided(sb_glb_scene *s, const void *data, size_t len, int stride) {
+    return view_with(s, data, len, 34962, stride);
+}
+
+int sb_glb_accessor(sb_glb_scene *s, const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    item(&s->accessors, fmt, ap);
+    va_end(ap);
+    return s->naccessors++;
+}
+
+int sb_glb_material(sb_glb_scene *s, const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    item(&s->materials, fmt, ap);
+    va_end(ap);
+    return 5 + s->nmaterials++;
+}
+
+int sb_glb_node(sb_glb_scene *s, bool root, const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    item(&s->nodes, fmt, ap);
+    va_end(ap);
+    if (root) put(&s->roots, "%s%d", s->roots.len ? "," : "", s->nnodes);
+    return s->nnodes++;
+}
+
+void sb_glb_top(sb_glb_scene *s, const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    item(&s->top, fmt, ap);
+    va_end(ap);
+}
+
+void sb_glb_extension(sb_glb_scene *s, const char *name, bool required) {
+    put(&s->used, ",\"%s\"", name);
+    if (required) put(&s->required, "%s\"%s\"", s->required.len ? "," : "", name);
+}
+
+/* ---- PNG: stored (uncompressed) deflate blocks, enough for test textures ---- */
+
+static uint32_t crc_update(uint32_t c, const unsigned char *p, size_t n) {
+    for (size_t i = 0; i < n; i++) {
+        c ^= p[i];
+        for (int k = 0; k < 8; k++) c = c & 1 ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+    }
+    return c;
+}
+
+static void be32(unsigned char *p, uint32_t v) {
+    p[0] = (unsigned char)(v >> 24), p[1] = (unsigned char)(v >> 16), p[2] = (unsigned char)(v >> 8), p[3] = (unsigned char)v;
+}
+
+static void chunk(sb_glb_str *out, const char *type, const unsigned char *data, size_t len) {
+    unsigned char hdr[8];
+    be32(hdr, (uint32_t)len);
+    memcpy(hdr + 4, type, 4);
+    size_t need = out->len + 12 + len;
+    if (need > out->cap) out->s = grow(out->s, out->cap = need * 2);
+    memcpy(out->s + out->len, hdr, 8);
+    if (len) memcpy(out->s + out->len + 8, data, len);
+    uint32_t crc = crc_update(0xFFFFFFFFu, hdr + 4, 4);
+    crc = crc_update(crc, data, len) ^ 0xFFFFFFFFu;
+    be32((unsigned char *)out->s + out->len + 8 + len, crc);
+    out->len = need;
+}
+
+int sb_glb_png(sb_glb_scene *s, int w, int h, int channels, const uint8_t *pixels) {
+    static const unsigned char types[5] = {0, 0, 4, 2, 6};
+    size_t row = (size_t)w * channels + 1, raw_len = row * h;
+    unsigned char *raw = grow(NULL, raw_len);
+    for (int y = 0; y < h; y++) {
+        raw[y * row] = 0; /* filter: none */
+        memcpy(raw + y * row + 1, pixels + (size_t)y * w * channels, row - 1);
+    }
+    size_t blocks = raw_len / 65535 + 1, z_len = 2 + raw_len + 5 * blocks + 4;
+    unsigned char *z = grow(NULL, z_len), *q = z;
+    *q++ = 0x78, *q++ = 0x01;
+    uint32_t a = 1, b = 0;
+    for (size_t off = 0; off < raw_len || off == 0;) {
+        size_t n = raw_len - off > 65535 ? 65535 : raw_len - off;
+        *q++ = off + n == raw_len ? 1 : 0;
+        *q++ = (unsigned char)n, *q++ = (unsigned char)(n >> 8), *q++ = (unsigned char)~n, *q++ = (unsigned char)(~n >> 8);
+        memcpy(q, raw + off, n);
+        for (size_t i = 0; i < n; i++) a = (a + raw[off + i]) % 65521, b = (b + a) % 65521;
+        q += n;
+        off += n;
+        if (n == 0) break;
+    }
+    be32(q, b << 16 | a);
+    q += 4;
+    sb_glb_str png = {0};
+    png.s = grow(NULL, png.cap = 64 + (size_t)(q - z));
+    memcpy(png.s, "\x89PNG\r\n\x1a\n", 8);
+    png.len = 8;
+    unsigned char ihdr[13];
+    be32(ihdr, (uint32_t)w), be32(ihdr + 4, (uint32_t)h);
+    ihdr[8] = 8, ihdr[9] = types[channels], ihdr[10] = ihdr[11] = ihdr[12] = 0;
+    chunk(&png, "IHDR", ihdr, 13);
+    chunk(&png, "IDAT", z, (size_t)(q - z));
+    chunk(&png, "IEND", NULL, 0);
+    int view = sb_glb_view(s, png.s, png.len);
+    free(png.s);
+    free(z);
+    free(raw);
+    put(&s->images, "%s{\"bufferView\":%d,\"mimeType\":\"image/png\"}", s->nimages ? "," : "", view);
+    return s->nimages++;
+}
+
+/* ---- the meshes ---- */
 
 static const float materials[][4] = {
     {0.8f, 0.8f, 0.78f, 1}, /* 0 ground */
@@ -103,76 +265,107 @@ static const float materials[][4] = {
     {0.7f, 0.7f, 0.7f, 1}, /* 4 concrete */
 };
 
-int sb_glb_write(sb_glb_scene *s, const char *path) {
-    str js = {0};
-    size_t bin_len = 0;
-    for (int i = 0; i < s->n; i++) bin_len += (size_t)s->meshes[i].nv * 24 + (size_t)s->meshes[i].ni * 4;
-    unsigned char *bin = grow(NULL, bin_len ? bin_len : 1);
-    size_t off = 0;
-    str acc = {0}, views = {0}, meshes = {0}, nodes = {0}, roots = {0};
+static void bounds(const sb_glb_mesh *m, float lo[3], float hi[3]) {
+    for (int k = 0; k < 3; k++) lo[k] = 1e30f, hi[k] = -1e30f;
+    for (uint32_t v = 0; v < m->nv; v++)
+        for (int k = 0; k < 3; k++) {
+            lo[k] = fminf(lo[k], m->pos[3 * v + k]);
+            hi[k] = fmaxf(hi[k], m->pos[3 * v + k]);
+        }
+}
+
+/* A mesh's data as views and accessors; *attrs gets its attribute map. */
+static void mesh_data(sb_glb_scene *s, const sb_glb_mesh *m, sb_glb_str *attrs, sb_glb_str *ext, int *indices) {
+    float lo[3], hi[3];
+    bounds(m, lo, hi);
+    int draco_view = -1, pos_id = 0, nrm_id = 0;
+    if (m->draco) {
+        unsigned char *dr;
+        size_t dlen;
+        if (!sb_glb_draco_encode(m->pos, m->nrm, m->nv, m->idx, m->ni, &dr, &dlen, &pos_id, &nrm_id)) {
+            fprintf(stderr, "glb: Draco encoding failed\n");
+            exit(1);
+        }
+        draco_view = sb_glb_view(s, dr, dlen);
+        free(dr);
+    }
+    int vp = m->draco ? -1 : view_for(s, m->pos, (size_t)m->nv * 12, 34962);
+    int vn = m->draco ? -1 : view_for(s, m->nrm, (size_t)m->nv * 12, 34962);
+    int vi = m->draco ? -1 : view_for(s, m->idx, (size_t)m->ni * 4, 34963);
+    char view[32] = "";
+#define VIEW(v) ((v) >= 0 ? (snprintf(view, sizeof view, "\"bufferView\":%d,", (v)), view) : "")
+    int ap = sb_glb_accessor(s, "{%s\"componentType\":5126,\"count\":%u,\"type\":\"VEC3\",\"min\":[%.9g,%.9g,%.9g],"
+                             "\"max\":[%.9g,%.9g,%.9g]}", VIEW(vp), m->nv, lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+    int an = sb_glb_accessor(s, "{%s\"componentType\":5126,\"count\":%u,\"type\":\"VEC3\"}", VIEW(vn), m->nv);
+    *indices = sb_glb_accessor(s, "{%s\"componentType\":5125,\"count\":%u,\"type\":\"SCALAR\"}", VIEW(vi), m->ni);
+#undef VIEW
+    put(attrs, "\"POSITION\":%d,\"NORMAL\":%d", ap, an);
+    if (m->uv) {
+        int vu = view_for(s, m->uv, (size_t)m->nv * 8, 34962);
+        put(attrs, ",\"TEXCOORD_0\":%d",
+            sb_glb_accessor(s, "{\"bufferView\":%d,\"componentType\":5126,\"count\":%u,\"type\":\"VEC2\"}", vu, m->nv));
+    }
+    if (m->prim_extra[0]) put(attrs, ",%s", m->prim_extra);
+    if (m->draco)
+        put(ext, ",\"extensions\":{\"KHR_draco_mesh_compression\":{\"bufferView\":%d,\"attributes\":{\"POSITION\":%d,"
+            "\"NORMAL\":%d}}}", draco_view, pos_id, nrm_id);
+}
+
+static void write_meshes(sb_glb_scene *s, sb_glb_str *meshes) {
     for (int i = 0; i < s->n; i++) {
         const sb_glb_mesh *m = &s->meshes[i];
-        float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
-        for (uint32_t v = 0; v < m->nv; v++)
-            for (int k = 0; k < 3; k++) {
-                lo[k] = fminf(lo[k], m->pos[3 * v + k]);
-                hi[k] = fmaxf(hi[k], m->pos[3 * v + k]);
-            }
-        memcpy(bin + off, m->pos, (size_t)m->nv * 12);
-        put(&views, "%s{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":%u,\"target\":34962}", i ? "," : "", off,
-            m->nv * 12);
-        off += (size_t)m->nv * 12;
-        memcpy(bin + off, m->nrm, (size_t)m->nv * 12);
-        put(&views, ",{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":%u,\"target\":34962}", off, m->nv * 12);
-        off += (size_t)m->nv * 12;
-        memcpy(bin + off, m->idx, (size_t)m->ni * 4);
-        put(&views, ",{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":%u,\"target\":34963}", off, m->ni * 4);
-        off += (size_t)m->ni * 4;
-        put(&acc,
-            "%s{\"bufferView\":%d,\"componentType\":5126,\"count\":%u,\"type\":\"VEC3\","
-            "\"min\":[%.9g,%.9g,%.9g],\"max\":[%.9g,%.9g,%.9g]}",
-            i ? "," : "", 3 * i, m->nv, lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
-        put(&acc, ",{\"bufferView\":%d,\"componentType\":5126,\"count\":%u,\"type\":\"VEC3\"}", 3 * i + 1, m->nv);
-        put(&acc, ",{\"bufferView\":%d,\"componentType\":5125,\"count\":%u,\"type\":\"SCALAR\"}", 3 * i + 2, m->ni);
-        put(&meshes,
-            "%s{\"primitives\":[{\"attributes\":{\"POSITION\":%d,\"NORMAL\":%d},\"indices\":%d,\"material\":%d}]}",
-            i ? "," : "", 3 * i, 3 * i + 1, 3 * i + 2, m->material);
-        put(&nodes, "%s{\"mesh\":%d,\"translation\":[%.17g,%.17g,%.17g]}", i ? "," : "", i, s->offset.x,
-            s->offset.y, s->offset.z);
-        put(&roots, "%s%d", i ? "," : "", i);
+        if (m->custom[0]) {
+            put(meshes, "%s{\"primitives\":[%s]}", i ? "," : "", m->custom);
+        } else {
+            sb_glb_str attrs = {0}, ext = {0};
+            int indices;
+            mesh_data(s, m, &attrs, &ext, &indices);
+            put(meshes, "%s{\"primitives\":[{\"attributes\":{%s},\"indices\":%d,\"material\":%d%s}]}", i ? "," : "",
+                text(&attrs), indices, m->material, text(&ext));
+            free(attrs.s);
+            free(ext.s);
+        }
+        if (m->no_node) continue;
+        sb_glb_node(s, true, "{\"mesh\":%d,\"translation\":[%.17g,%.17g,%.17g]%s%s}", i, s->offset.x, s->offset.y,
+                    s->offset.z, m->node_extra[0] ? "," : "", m->node_extra);
     }
-    str lights = {0};
-    int nl = 0, nn = s->n;
+}
+
+static void write_lights(sb_glb_scene *s, sb_glb_str *lights) {
+    int nl = 0;
     if (!s->no_sun) {
         sb_quat q = sb_quat_look(sb_v3_scale(s->sun, -1), fabs(s->sun.y) > 0.99 ? sb_v3_make(0, 0, 1) : sb_v3_make(0, 1, 0));
-        put(&nodes, ",{\"name\":\"sun\",\"rotation\":[%.12g,%.12g,%.12g,%.12g],"
-                    "\"extensions\":{\"KHR_lights_punctual\":{\"light\":%d}}}", q.x, q.y, q.z, q.w, nl);
-        put(&lights, "{\"type\":\"directional\",\"name\":\"sun\",\"color\":[1,0.97,0.9],\"intensity\":3}");
-        put(&roots, ",%d", nn++);
+        sb_glb_node(s, true, "{\"name\":\"sun\",\"rotation\":[%.12g,%.12g,%.12g,%.12g],"
+                             "\"extensions\":{\"KHR_lights_punctual\":{\"light\":%d}}}", q.x, q.y, q.z, q.w, nl);
+        put(lights, "{\"type\":\"directional\",\"name\":\"sun\",\"color\":[1,0.97,0.9],\"intensity\":3}");
         nl++;
     }
     for (int i = 0; i < s->nlamps; i++) {
         sb_v3 p = sb_v3_add(s->lamps[i], s->offset);
-        put(&nodes, ",{\"name\":\"lamp%d\",\"translation\":[%.17g,%.17g,%.17g],"
-                    "\"extensions\":{\"KHR_lights_punctual\":{\"light\":%d}}}", i, p.x, p.y, p.z, nl);
-        put(&lights, "%s{\"type\":\"point\",\"name\":\"lamp%d\",\"color\":[1,0.85,0.6],\"intensity\":40}",
-            nl ? "," : "", i);
-        put(&roots, ",%d", nn++);
+        sb_glb_node(s, true, "{\"name\":\"lamp%d\",\"translation\":[%.17g,%.17g,%.17g],"
+                             "\"extensions\":{\"KHR_lights_punctual\":{\"light\":%d}}}", i, p.x, p.y, p.z, nl);
+        put(lights, "%s{\"type\":\"point\",\"name\":\"lamp%d\",\"color\":[1,0.85,0.6],\"intensity\":40}", nl ? "," : "", i);
         nl++;
     }
-    str mats = {0};
-    for (size_t i = 0; i < sizeof materials / sizeof materials[0]; i++)
-        put(&mats, "%s{\"pbrMetallicRoughness\":{\"baseColorFactor\":[%g,%g,%g,%g],\"metallicFactor\":0}}",
-            i ? "," : "", materials[i][0], materials[i][1], materials[i][2], materials[i][3]);
-    put(&js,
-        "{\"asset\":{\"version\":\"2.0\",\"generator\":\"shadowbench scenegen\"},"
-        "\"extensionsUsed\":[\"KHR_lights_punctual\"],"
-        "\"extensions\":{\"KHR_lights_punctual\":{\"lights\":[%s]}},"
-        "\"scene\":0,\"scenes\":[{\"nodes\":[%s]}],\"nodes\":[%s],\"meshes\":[%s],\"materials\":[%s],"
-        "\"accessors\":[%s],\"bufferViews\":[%s],\"buffers\":[{\"byteLength\":%zu}]}",
-        lights.s ? lights.s : "", roots.s, nodes.s, meshes.s, mats.s, acc.s, views.s, bin_len);
-    while (js.len % 4) put(&js, " ");
-    uint32_t json_len = (uint32_t)js.len, bin_pad = (uint32_t)((4 - bin_len % 4) % 4);
+}
+
+void sb_glb_free(sb_glb_scene *s) {
+    for (int i = 0; i < s->n; i++) {
+        free(s->meshes[i].pos);
+        free(s->meshes[i].nrm);
+        free(s->meshes[i].uv);
+        free(s->meshes[i].idx);
+    }
+    free(s->meshes);
+    sb_glb_str *strs[] = {&s->views, &s->accessors, &s->materials, &s->nodes, &s->roots, &s->top, &s->used,
+                          &s->required, &s->images};
+    for (size_t i = 0; i < sizeof strs / sizeof strs[0]; i++) free(strs[i]->s);
+    free(s->bin);
+    memset(s, 0, sizeof *s);
+}
+
+static int write_file(const char *path, const sb_glb_str *js, const unsigned char *bin, size_t bin_len) {
+    uint32_t json_len = (uint32_t)js->len, bin_pad = (uint32_t)((4 - bin_len % 4) % 4);
     uint32_t total = 12 + 8 + json_len + 8 + (uint32_t)bin_len + bin_pad;
     FILE *f = fopen(path, "wb");
     if (!f) {
@@ -183,24 +376,40 @@ int sb_glb_write(sb_glb_scene *s, const char *path) {
     fwrite(hdr, 4, 3, f);
     uint32_t ch[2] = {json_len, 0x4E4F534Au};
     fwrite(ch, 4, 2, f);
-    fwrite(js.s, 1, json_len, f);
+    fwrite(js->s, 1, json_len, f);
     uint32_t bh[2] = {(uint32_t)bin_len + bin_pad, 0x004E4942u};
     fwrite(bh, 4, 2, f);
     fwrite(bin, 1, bin_len, f);
     static const unsigned char zeros[4] = {0};
     fwrite(zeros, 1, bin_pad, f);
-    int rc = fclose(f) == 0 ? 0 : 1;
-    free(bin);
-    free(lights.s);
-    free(js.s); free(acc.s); free(views.s); free(meshes.s); free(nodes.s); free(roots.s); free(mats.s);
-    for (int i = 0; i < s->n; i++) {
-        free(s->meshes[i].pos);
-        free(s->meshes[i].nrm);
-        free(s->meshes[i].idx);
-    }
-    free(s->meshes);
-    s->meshes = NULL;
-    s->n = s->cap = 0;
-    return rc;
+    return fclose(f) == 0 ? 0 : 1;
 }
 
+int sb_glb_write(sb_glb_scene *s, const char *path) {
+    sb_glb_str meshes = {0}, lights = {0}, mats = {0}, js = {0};
+    write_meshes(s, &meshes);
+    write_lights(s, &lights);
+    for (size_t i = 0; i < sizeof materials / sizeof materials[0]; i++)
+        put(&mats, "%s{\"pbrMetallicRoughness\":{\"baseColorFactor\":[%g,%g,%g,%g],\"metallicFactor\":0}}",
+            i ? "," : "", materials[i][0], materials[i][1], materials[i][2], materials[i][3]);
+    if (s->materials.len) put(&mats, ",%s", text(&s->materials));
+    put(&js,
+        "{\"asset\":{\"version\":\"2.0\",\"generator\":\"shadowbench scenegen\"},"
+        "\"extensionsUsed\":[\"KHR_lights_punctual\"%s],%s%s%s"
+        "\"extensions\":{\"KHR_lights_punctual\":{\"lights\":[%s]}},"
+        "\"scene\":0,\"scenes\":[{\"nodes\":[%s]}],\"nodes\":[%s],\"meshes\":[%s],\"materials\":[%s],",
+        text(&s->used), s->required.len ? "\"extensionsRequired\":[" : "", text(&s->required),
+        s->required.len ? "]," : "", text(&lights), text(&s->roots), text(&s->nodes), text(&meshes), text(&mats));
+    if (s->images.len) put(&js, "\"images\":[%s],", text(&s->images));
+    if (s->top.len) put(&js, "%s,", text(&s->top));
+    put(&js, "\"accessors\":[%s],\"bufferViews\":[%s],\"buffers\":[{\"byteLength\":%zu}]}", text(&s->accessors),
+        text(&s->views), s->bin_len);
+    while (js.len % 4) put(&js, " ");
+    int rc = write_file(path, &js, s->bin, s->bin_len);
+    free(js.s);
+    free(meshes.s);
+    free(lights.s);
+    free(mats.s);
+    sb_glb_free(s);
+    return rc;
+}

@@ -456,6 +456,25 @@ static bool check_accessors(ck *c) {
     return true;
 }
 
+/* KHR_draco_mesh_compression on a primitive: its bufferView and attribute ids. */
+static bool check_draco(ck *c, const sb_json *prim, const char *path) {
+    const sb_json *ext, *dr, *attrs;
+    if (!field(c, prim, path, "extensions", SB_JSON_OBJECT, false, &ext)) return false;
+    if (!ext) return true;
+    jpath pe = at(path, "extensions"), pd = at(pe.s, "KHR_draco_mesh_compression");
+    if (!field(c, ext, pe.s, "KHR_draco_mesh_compression", SB_JSON_OBJECT, false, &dr)) return false;
+    if (!dr) return true;
+    int64_t view;
+    uint64_t id;
+    if (!get_index(c, dr, pd.s, "bufferView", true, K_VIEW, &view) ||
+        !field(c, dr, pd.s, "attributes", SB_JSON_OBJECT, true, &attrs))
+        return false;
+    for (uint32_t k = 0; k < attrs->count; k++)
+        if (!uint_value(c, &attrs->items[k], at(at(pd.s, "attributes").s, attrs->items[k].key).s, 0, UINT32_MAX, &id))
+            return false;
+    return true;
+}
+
 static bool check_primitive(ck *c, const sb_json *prim, const char *path) {
     const sb_json *attrs;
     if (!field(c, prim, path, "attributes", SB_JSON_OBJECT, true, &attrs)) return false;
@@ -493,6 +512,7 @@ static bool check_primitive(ck *c, const sb_json *prim, const char *path) {
                         (unsigned long long)ai->view);
     }
     if (!get_index(c, prim, path, "material", false, K_MATERIAL, &mat)) return false;
+    if (!check_draco(c, prim, path)) return false;
     uint64_t mode;
     if (!get_uint(c, prim, path, "mode", false, 4, 0, 6, &mode)) return false;
     const sb_json *targets;
@@ -792,10 +812,40 @@ static bool collect_arrays(ck *c, const sb_json *root) {
     return true;
 }
 
+/* A required extension is one a loader must apply or refuse the file. Those
+ * shadowbench applies, and those that change nothing a shadow depends on
+ * (shading, texture formats: an alpha mask in a format it cannot decode is
+ * reported by the loader), pass; any other is refused. */
+static bool check_required(ck *c, const sb_json *root) {
+    static const char *const applied[] = {"KHR_lights_punctual", "KHR_mesh_quantization", "KHR_texture_transform",
+                                          "EXT_mesh_gpu_instancing", "KHR_texture_basisu", "EXT_texture_webp",
+                                          "EXT_texture_avif", "MSFT_texture_dds", "KHR_xmp_json_ld"};
+    const sb_json *req;
+    if (!field(c, root, "", "extensionsRequired", SB_JSON_ARRAY, false, &req)) return false;
+    for (uint32_t i = 0; req && i < req->count; i++) {
+        jpath p = at_i("/extensionsRequired", i);
+        const sb_json *v = &req->items[i];
+        if (v->type != SB_JSON_STRING) return fail(c, p.s, "expected a string, found %s", sb_json_type_name(v->type));
+        bool ok = !strncmp(v->text, "KHR_materials_", 14);
+        for (size_t k = 0; k < sizeof applied / sizeof applied[0]; k++) ok |= !strcmp(v->text, applied[k]);
+        if (ok) continue;
+        if (!strcmp(v->text, "KHR_draco_mesh_compression")) {
+            if (SB_HAVE_DRACO) continue;
+            return fail(c, p.s, "the file requires KHR_draco_mesh_compression and this shadowbench was built without "
+                        "Draco (libdraco-dev)");
+        }
+        if (!strcmp(v->text, "EXT_meshopt_compression"))
+            return fail(c, p.s, "the file requires EXT_meshopt_compression: meshopt-compressed buffers are not decoded "
+                        "(re-export it without meshopt compression)");
+        return fail(c, p.s, "the file requires the extension %s, which shadowbench does not apply", v->text);
+    }
+    return true;
+}
+
 bool sb_gltf_check(const sb_json *root, const sb_gltf_check_desc *d, sb_err *err) {
     ck c = {.d = d, .err = err};
     if (root->type != SB_JSON_OBJECT) return fail(&c, "/", "the document is %s, not an object", sb_json_type_name(root->type));
-    bool ok = check_asset(&c, root) && collect_arrays(&c, root) && check_buffers(&c) && check_views(&c) &&
+    bool ok = check_asset(&c, root) && check_required(&c, root) && collect_arrays(&c, root) && check_buffers(&c) && check_views(&c) &&
               check_accessors(&c) && check_meshes(&c) && check_nodes(&c) && check_scenes(&c, root) && check_lights(&c) &&
               check_cameras(&c) && check_materials(&c) && check_textures_images(&c) && check_skins(&c) &&
               check_animations(&c);

@@ -1,35 +1,49 @@
 // gltf_load.cc - the tinygltf adapter: glTF 2.0 (.gltf/.glb) into the flat C
 // scene model, and animated glTF cameras into paths. The only C++ on the
-// scene side; everything it exposes is a C function.
+// scene side besides the Draco decoder; everything it exposes is a C function.
+//
+// What it applies (README "glTF features"): node transforms (posed at --pose T
+// from the first animation), skins (vertices skinned on the CPU, the same
+// triangles for the rasterizer and the rays), morph targets at their default
+// weights, EXT_mesh_gpu_instancing (expanded), KHR_mesh_quantization and sparse
+// accessors (any component type), KHR_draco_mesh_compression, materials'
+// doubleSided and alpha (MASK, BLEND under --blend-casters) with the alpha of
+// the base-colour texture (decoded only for such materials) and
+// KHR_texture_transform.
 #include <cerrno>
 #include <climits>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
+#include <map>
+#include <memory>
+#include <set>
 #include <string>
 #include <vector>
-#include <set>
 #include <algorithm>
-#include <memory>
 
 #include <tiny_gltf.h>
 
 extern "C" {
+#include "anim.h"
 #include "gltf_check.h"
+#include "gltf_draco.h"
 #include "path.h"
 #include "scene.h"
 }
 
 namespace {
 
-struct ImageCounter {
-    unsigned skipped = 0;
+// Images are kept encoded while tinygltf reads the file; only the ones an
+// alpha test needs are decoded afterwards (shadows need no other texture).
+struct ImageStore {
+    std::map<int, std::vector<unsigned char>> bytes;
 };
 
-// Shadows do not need textures: keep the bytes undecoded (webp included).
-bool skip_image(tinygltf::Image *, const int, std::string *, std::string *, int, int,
-                const unsigned char *, int, void *user) {
-    static_cast<ImageCounter *>(user)->skipped++;
+bool keep_image(tinygltf::Image *, const int index, std::string *, std::string *, int, int, const unsigned char *data,
+                int size, void *user) {
+    if (data && size > 0) static_cast<ImageStore *>(user)->bytes[index].assign(data, data + size);
     return true;
 }
 
@@ -85,6 +99,36 @@ double component(const unsigned char *p, int ctype, bool normalized) {
     }
 }
 
+// The sparse substitutions of an accessor, applied to out (count x ncomp, elem bytes each).
+bool apply_sparse(Ctx &c, const tinygltf::Accessor &a, const std::string &ap, size_t elem,
+                  const std::function<void(const unsigned char *, size_t)> &decode_one) {
+    const auto &sp = a.sparse;
+    std::string sp_path = ap + "/sparse";
+    if (sp.count <= 0 || (size_t)sp.count > a.count || sp.indices.byteOffset < 0 || sp.values.byteOffset < 0)
+        return c.fail(sp_path, "count or byteOffset out of range");
+    int isize = tinygltf::GetComponentSizeInBytes(sp.indices.componentType);
+    int ict = sp.indices.componentType;
+    if (ict != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && ict != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+        ict != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+        return c.fail(sp_path + "/indices/componentType", "expected unsigned byte, short or int");
+    const unsigned char *di, *dv;
+    if (!view_range(c, sp.indices.bufferView, (size_t)sp.indices.byteOffset, (size_t)sp.count, (size_t)isize,
+                    (size_t)isize, sp_path + "/indices", &di) ||
+        !view_range(c, sp.values.bufferView, (size_t)sp.values.byteOffset, (size_t)sp.count, elem, elem,
+                    sp_path + "/values", &dv))
+        return false;
+    size_t prev = 0;
+    for (int k = 0; k < sp.count; k++) {
+        size_t idx = (size_t)component(di + (size_t)k * isize, sp.indices.componentType, false);
+        if (idx >= a.count || (k > 0 && idx <= prev))
+            return c.fail(sp_path + "/indices", "index " + std::to_string(idx) + " at " + std::to_string(k) +
+                                                     " is out of range or not increasing");
+        decode_one(dv + (size_t)k * elem, idx);
+        prev = idx;
+    }
+    return true;
+}
+
 // Reads accessor `acc` as count x ncomp doubles (any component type; matrix
 // columns padded to 4 bytes as the spec lays them out; sparse values applied).
 bool read_accessor(Ctx &c, int acc, const std::string &where, int want_type, std::vector<double> &out) {
@@ -120,42 +164,22 @@ bool read_accessor(Ctx &c, int acc, const std::string &where, int want_type, std
         if (!view_range(c, a.bufferView, a.byteOffset, a.count, elem, stride, ap, &d)) return false;
         decode(d, stride, a.count, 0);
     }
-    if (a.sparse.isSparse) {
-        const auto &sp = a.sparse;
-        std::string sp_path = ap + "/sparse";
-        if (sp.count <= 0 || (size_t)sp.count > a.count || sp.indices.byteOffset < 0 || sp.values.byteOffset < 0)
-            return c.fail(sp_path, "count or byteOffset out of range");
-        int isize = tinygltf::GetComponentSizeInBytes(sp.indices.componentType);
-        int ict = sp.indices.componentType;
-        if (ict != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && ict != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
-            ict != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
-            return c.fail(sp_path + "/indices/componentType", "expected unsigned byte, short or int");
-        const unsigned char *di, *dv;
-        if (!view_range(c, sp.indices.bufferView, (size_t)sp.indices.byteOffset, (size_t)sp.count, (size_t)isize,
-                        (size_t)isize, sp_path + "/indices", &di) ||
-            !view_range(c, sp.values.bufferView, (size_t)sp.values.byteOffset, (size_t)sp.count, elem, elem,
-                        sp_path + "/values", &dv))
-            return false;
-        size_t prev = 0;
-        for (int k = 0; k < sp.count; k++) {
-            size_t idx = (size_t)component(di + (size_t)k * isize, sp.indices.componentType, false);
-            if (idx >= a.count || (k > 0 && idx <= prev))
-                return c.fail(sp_path + "/indices", "index " + std::to_string(idx) + " at " + std::to_string(k) +
-                                                         " is out of range or not increasing");
-            decode(dv + (size_t)k * elem, elem, 1, idx);
-            prev = idx;
-        }
-    }
+    if (a.sparse.isSparse)
+        return apply_sparse(c, a, ap, elem, [&](const unsigned char *d, size_t idx) { decode(d, elem, 1, idx); });
+    return true;
+}
+
+bool finite_all(Ctx &c, const std::string &where, const std::vector<double> &v, int ncomp) {
+    for (size_t i = 0; i < v.size(); i++)
+        if (!std::isfinite(v[i]))
+            return c.fail(where, "element " + std::to_string(i / ncomp) + " is " + (std::isnan(v[i]) ? "NaN" : "Inf"));
     return true;
 }
 
 bool read_vec(Ctx &c, int acc, const std::string &where, int ncomp, std::vector<double> &out) {
-    int type = ncomp == 1 ? TINYGLTF_TYPE_SCALAR : ncomp == 3 ? TINYGLTF_TYPE_VEC3 : TINYGLTF_TYPE_VEC4;
-    if (!read_accessor(c, acc, where, type, out)) return false;
-    for (size_t i = 0; i < out.size(); i++)
-        if (!std::isfinite(out[i]))
-            return c.fail(where, "element " + std::to_string(i / ncomp) + " is " + (std::isnan(out[i]) ? "NaN" : "Inf"));
-    return true;
+    int type = ncomp == 1 ? TINYGLTF_TYPE_SCALAR : ncomp == 2 ? TINYGLTF_TYPE_VEC2 : ncomp == 3 ? TINYGLTF_TYPE_VEC3
+             : ncomp == 4 ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_MAT4;
+    return read_accessor(c, acc, where, type, out) && finite_all(c, where, out, ncomp);
 }
 
 bool read_indices(Ctx &c, int acc, const std::string &where, std::vector<uint32_t> &out) {
@@ -170,175 +194,562 @@ bool read_indices(Ctx &c, int acc, const std::string &where, std::vector<uint32_
     return true;
 }
 
-sb_m4 node_local(const tinygltf::Node &n) {
-    if (n.matrix.size() == 16) {
-        sb_m4 r;
-        for (int i = 0; i < 16; i++) r.m[i] = n.matrix[i];
-        return r;
-    }
-    sb_m4 t = sb_m4_identity(), r = sb_m4_identity(), s = sb_m4_identity();
-    if (n.translation.size() == 3) t = sb_m4_translate(sb_v3_make(n.translation[0], n.translation[1], n.translation[2]));
-    if (n.rotation.size() == 4)
-        r = sb_quat_to_m4(sb_quat_norm({n.rotation[0], n.rotation[1], n.rotation[2], n.rotation[3]}));
-    if (n.scale.size() == 3) s = sb_m4_scale(sb_v3_make(n.scale[0], n.scale[1], n.scale[2]));
-    return sb_m4_mul(t, sb_m4_mul(r, s));
+sb_trs node_trs(const tinygltf::Node &n) {
+    sb_trs x = {{0, 0, 0}, {0, 0, 0, 1}, {1, 1, 1}};
+    for (size_t k = 0; k < 3 && n.translation.size() == 3; k++) x.t[k] = n.translation[k];
+    for (size_t k = 0; k < 4 && n.rotation.size() == 4; k++) x.r[k] = n.rotation[k];
+    for (size_t k = 0; k < 3 && n.scale.size() == 3; k++) x.s[k] = n.scale[k];
+    return x;
 }
+
+sb_m4 node_local(const tinygltf::Node &n) {
+    if (n.matrix.size() != 16) {
+        sb_trs x = node_trs(n);
+        return sb_trs_matrix(&x);
+    }
+    sb_m4 r;
+    for (int i = 0; i < 16; i++) r.m[i] = n.matrix[i];
+    return r;
+}
+
+double det3(const sb_m4 &w) {
+    return w.m[0] * (w.m[5] * w.m[10] - w.m[9] * w.m[6]) - w.m[4] * (w.m[1] * w.m[10] - w.m[9] * w.m[2]) +
+           w.m[8] * (w.m[1] * w.m[6] - w.m[5] * w.m[2]);
+}
+
+// The inverse transpose of the upper 3x3: what transforms normals.
+sb_m4 normal_matrix(const sb_m4 &w) {
+    sb_m4 nm = sb_m4_identity(), inv;
+    if (sb_m4_invert(w, &inv))
+        for (int r = 0; r < 3; r++)
+            for (int col = 0; col < 3; col++) nm.m[col * 4 + r] = inv.m[r * 4 + col];
+    return nm;
+}
+
+// One animation channel read into a sampler (its arrays kept alive by the owner).
+struct Channel {
+    std::vector<double> in, out;
+    sb_anim_sampler s;
+};
+
+bool read_channel(Ctx &c, const tinygltf::Animation &an, const tinygltf::AnimationChannel &ch, const std::string &where,
+                  int ncomp, Channel &dst) {
+    if (ch.sampler < 0 || ch.sampler >= (int)an.samplers.size()) return c.fail(where, "sampler out of range");
+    const auto &smp = an.samplers[ch.sampler];
+    if (!read_vec(c, smp.input, where + "/input", 1, dst.in)) return false;
+    if (!read_accessor(c, smp.output, where + "/output", 0, dst.out) || !finite_all(c, where + "/output", dst.out, 1))
+        return false;
+    size_t k = dst.in.size();
+    bool cubic = smp.interpolation == "CUBICSPLINE";
+    if (k == 0 || dst.out.size() != (cubic ? 3 : 1) * k * (size_t)ncomp)
+        return c.fail(where, "the sampler's output count does not match its input count");
+    for (size_t i = 1; i < k; i++)
+        if (!(dst.in[i] > dst.in[i - 1])) return c.fail(where + "/input", "times must increase");
+    dst.s = {dst.in.data(), dst.out.data(), k, ncomp, ch.target_path == "rotation",
+             cubic ? SB_INTERP_CUBIC : smp.interpolation == "STEP" ? SB_INTERP_STEP : SB_INTERP_LINEAR};
+    return true;
+}
+
+// A primitive's vertex data, from accessors or a Draco bitstream.
+struct PrimData {
+    std::vector<double> pos, nrm, uv;
+    std::vector<uint32_t> idx;          // as the file lists them (mode 4, 5 or 6)
+    std::vector<double> joints[2], weights[2];
+    bool have_n = false, have_uv = false;
+    int skin_sets = 0;
+};
 
 struct Loader {
     Ctx c;
     sb_scene *s;
-    std::vector<sb_m4> world;   // per node, filled during traversal
-    std::vector<char> visited;
+    const sb_scene_opts *opts;
+    ImageStore *images;
+    std::vector<sb_m4> local, world;
+    std::vector<int> parent;
+    std::vector<std::vector<double>> weights;   // per node: morph weights (posed)
+    std::vector<int> order;                     // nodes of the scene in visit order
+    std::map<int, int32_t> tex_cache;           // glTF texture -> scene texture (-1: not decodable)
 
-    bool prim(int node, int mesh, int pi, const sb_m4 &w) {
+    bool fail(const std::string &where, const std::string &what) { return c.fail(where, what); }
+
+    // Local transforms: the nodes' own, or sampled from the first animation at --pose T.
+    bool pose() {
         const tinygltf::Model &m = *c.m;
-        const tinygltf::Primitive &p = m.meshes[mesh].primitives[pi];
-        std::string where = "/meshes/" + std::to_string(mesh) + "/primitives/" + std::to_string(pi);
-        if (p.mode < 0 || p.mode > 6) return c.fail(where + "/mode", "unsupported primitive mode " + std::to_string(p.mode));
-        if (p.mode < 4) return true; // points and lines neither cast nor receive shadows
-        auto pit = p.attributes.find("POSITION");
-        if (pit == p.attributes.end()) return c.fail(where + "/attributes", "no POSITION");
-        std::vector<double> pos, nrm;
-        if (!read_vec(c, pit->second, where + "/attributes/POSITION", 3, pos)) return false;
-        size_t nv = pos.size() / 3;
-        auto nit = p.attributes.find("NORMAL");
-        bool have_n = nit != p.attributes.end();
-        if (have_n) {
-            if (!read_vec(c, nit->second, where + "/attributes/NORMAL", 3, nrm)) return false;
-            if (nrm.size() != pos.size()) return c.fail(where + "/attributes/NORMAL", "count differs from POSITION");
+        local.resize(m.nodes.size());
+        weights.resize(m.nodes.size());
+        std::vector<sb_trs> trs(m.nodes.size());
+        for (size_t i = 0; i < m.nodes.size(); i++) {
+            trs[i] = node_trs(m.nodes[i]);
+            const tinygltf::Node &n = m.nodes[i];
+            weights[i] = !n.weights.empty() ? n.weights : n.mesh >= 0 && n.mesh < (int)m.meshes.size() ? m.meshes[n.mesh].weights
+                                                                                               : std::vector<double>();
         }
-        std::vector<uint32_t> idx;
-        if (p.indices >= 0) {
-            if (!read_indices(c, p.indices, where + "/indices", idx)) return false;
-        } else {
-            idx.resize(nv);
-            for (size_t i = 0; i < nv; i++) idx[i] = (uint32_t)i;
-        }
-        for (size_t i = 0; i < idx.size(); i++)
-            if (idx[i] >= nv)
-                return c.fail(where + "/indices", "index " + std::to_string(idx[i]) + " at " + std::to_string(i) +
-                                                      " is out of range (" + std::to_string(nv) + " vertices)");
-        std::vector<uint32_t> tris;
-        if (p.mode == 4) {
-            tris.assign(idx.begin(), idx.begin() + (idx.size() / 3) * 3);
-        } else if (p.mode == 5) {
-            for (size_t i = 2; i < idx.size(); i++) {
-                if (i % 2 == 0) tris.insert(tris.end(), {idx[i - 2], idx[i - 1], idx[i]});
-                else tris.insert(tris.end(), {idx[i - 1], idx[i - 2], idx[i]});
-            }
-        } else {
-            for (size_t i = 2; i < idx.size(); i++) tris.insert(tris.end(), {idx[0], idx[i - 1], idx[i]});
-        }
-        if (tris.empty()) return true;
-        double det = w.m[0] * (w.m[5] * w.m[10] - w.m[9] * w.m[6]) - w.m[4] * (w.m[1] * w.m[10] - w.m[9] * w.m[2]) +
-                     w.m[8] * (w.m[1] * w.m[6] - w.m[5] * w.m[2]);
-        if (det < 0)
-            for (size_t i = 0; i < tris.size(); i += 3) std::swap(tris[i + 1], tris[i + 2]);
-        sb_m4 nm = sb_m4_identity();
-        if (have_n) {
-            sb_m4 inv;
-            if (sb_m4_invert(w, &inv)) { // inverse transpose of the upper 3x3
-                for (int r = 0; r < 3; r++)
-                    for (int col = 0; col < 3; col++) nm.m[col * 4 + r] = inv.m[r * 4 + col];
+        std::vector<char> animated(m.nodes.size());
+        if (opts->pose && !m.animations.empty()) {
+            s->features.posed = true;
+            const auto &an = m.animations[0];
+            for (size_t ci = 0; ci < an.channels.size(); ci++) {
+                const auto &ch = an.channels[ci];
+                int ni = ch.target_node;
+                if (ni < 0 || ni >= (int)m.nodes.size()) continue;
+                std::string where = "/animations/0/channels/" + std::to_string(ci);
+                bool w = ch.target_path == "weights";
+                int ncomp = ch.target_path == "rotation" ? 4 : w ? (int)weights[ni].size() : 3;
+                if (ncomp == 0) continue;
+                Channel chan;
+                if (!read_channel(c, an, ch, where, ncomp, chan)) return false;
+                double v[64] = {0};
+                if (ncomp > 64) return fail(where, "more than 64 morph weights");
+                sb_anim_sample(&chan.s, opts->pose_time, v);
+                double *dst = ch.target_path == "translation" ? trs[ni].t : ch.target_path == "rotation" ? trs[ni].r
+                            : ch.target_path == "scale" ? trs[ni].s : nullptr;
+                if (dst) memcpy(dst, v, sizeof(double) * ncomp), animated[ni] = 1;
+                if (w) weights[ni].assign(v, v + ncomp);
             }
         }
-        std::vector<double> wp(nv * 3), wn;
-        for (size_t v = 0; v < nv; v++) {
-            sb_v3 q = sb_m4_point(w, sb_v3_make(pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]));
-            wp[3 * v] = q.x; wp[3 * v + 1] = q.y; wp[3 * v + 2] = q.z;
-        }
-        if (have_n) {
-            wn.resize(nv * 3);
-            for (size_t v = 0; v < nv; v++) {
-                sb_v3 q = sb_m4_dir(nm, sb_v3_make(nrm[3 * v], nrm[3 * v + 1], nrm[3 * v + 2]));
-                wn[3 * v] = q.x; wn[3 * v + 1] = q.y; wn[3 * v + 2] = q.z;
-            }
-        }
-        sb_prim_desc d;
-        memset(&d, 0, sizeof d);
-        d.positions = wp.data();
-        d.normals = have_n ? wn.data() : nullptr;
-        d.vertex_count = (uint32_t)nv;
-        d.indices = tris.data();
-        d.index_count = (uint32_t)tris.size();
-        d.color[0] = d.color[1] = d.color[2] = d.color[3] = 1.0f;
-        d.node = (uint32_t)node;
-        if (p.material >= 0) {
-            if (p.material >= (int)m.materials.size())
-                return c.fail(where + "/material", "material " + std::to_string(p.material) + " does not exist");
-            const tinygltf::Material &mat = m.materials[p.material];
-            const auto &f = mat.pbrMetallicRoughness.baseColorFactor;
-            for (int k = 0; k < 4 && k < (int)f.size(); k++) d.color[k] = (float)f[k];
-            d.alpha_mask = mat.alphaMode == "MASK";
-            d.alpha_cutoff = (float)mat.alphaCutoff;
-        }
-        sb_scene_add_prim(s, &d);
+        for (size_t i = 0; i < m.nodes.size(); i++)
+            local[i] = animated[i] || m.nodes[i].matrix.size() != 16 ? sb_trs_matrix(&trs[i]) : node_local(m.nodes[i]);
         return true;
     }
 
-    // One node: its world transform from its parent's, its primitives, camera and light.
-    bool visit(int ni, const sb_m4 &parent) {
-        const tinygltf::Model &m = *c.m;
-        std::string where = "/nodes/" + std::to_string(ni);
-        const tinygltf::Node &n = m.nodes[ni];
-        if ((!n.matrix.empty() && n.matrix.size() != 16) || (!n.translation.empty() && n.translation.size() != 3) ||
-            (!n.rotation.empty() && n.rotation.size() != 4) || (!n.scale.empty() && n.scale.size() != 3))
-            return c.fail(where, "matrix/translation/rotation/scale has the wrong length");
-        sb_m4 w = sb_m4_mul(parent, node_local(n));
-        if (!sb_m4_finite(w)) return c.fail(where, "transform is not finite");
-        world[ni] = w;
-        if (n.mesh >= 0) {
-            if (n.mesh >= (int)m.meshes.size()) return c.fail(where + "/mesh", "mesh " + std::to_string(n.mesh) + " does not exist");
-            s->nodes_drawn++;
-            for (size_t pi = 0; pi < m.meshes[n.mesh].primitives.size(); pi++)
-                if (!prim(ni, n.mesh, (int)pi, w)) return false;
-        }
-        if (n.camera >= 0 && n.camera < (int)s->camera_count) s->cameras[n.camera].node = ni;
-        auto ext = n.extensions.find("KHR_lights_punctual");
-        if (ext != n.extensions.end() && ext->second.Has("light")) {
-            int li = ext->second.Get("light").GetNumberAsInt();
-            if (li < 0 || li >= (int)m.lights.size())
-                return c.fail(where + "/extensions/KHR_lights_punctual/light", "light " + std::to_string(li) + " does not exist");
-            const tinygltf::Light &L = m.lights[li];
-            sb_light l;
-            memset(&l, 0, sizeof l);
-            l.type = L.type == "directional" ? SB_LIGHT_DIRECTIONAL : L.type == "spot" ? SB_LIGHT_SPOT : SB_LIGHT_POINT;
-            l.position = sb_m4_point(w, sb_v3_make(0, 0, 0));
-            l.direction = sb_v3_norm(sb_m4_dir(w, sb_v3_make(0, 0, -1)));
-            for (int k = 0; k < 3; k++) l.color[k] = k < (int)L.color.size() ? (float)L.color[k] : 1.0f;
-            l.intensity = L.intensity;
-            l.range = L.range;
-            s->lights = (sb_light *)sb_xrealloc(s->lights, (s->light_count + 1) * sizeof(sb_light));
-            s->lights[s->light_count++] = l;
-            if (l.type == SB_LIGHT_DIRECTIONAL && !s->has_sun) {
-                s->has_sun = true;
-                s->sun = sb_v3_scale(l.direction, -1);
-            }
-        }
-        return true;
-    }
-
-    // Depth-first from the roots without recursion (exported files hold chains
-    // of tens of thousands of nodes), in the order a recursive walk would take.
+    // World transforms of every node (joints may lie outside the scene), then
+    // the scene's nodes depth-first without recursion (exported files hold
+    // chains of tens of thousands of nodes), in a recursive walk's order.
     bool walk(const std::vector<int> &roots) {
         const tinygltf::Model &m = *c.m;
-        struct Item { int node; sb_m4 parent; };
-        std::vector<Item> stack;
-        for (size_t i = roots.size(); i-- > 0;) stack.push_back({roots[i], sb_m4_identity()});
-        while (!stack.empty()) {
-            Item it = stack.back();
+        world.assign(m.nodes.size(), sb_m4_identity());
+        parent.assign(m.nodes.size(), -1);
+        for (size_t i = 0; i < m.nodes.size(); i++)
+            for (int ch : m.nodes[i].children)
+                if (ch >= 0 && ch < (int)m.nodes.size()) parent[ch] = (int)i;
+        std::vector<int> stack;
+        for (size_t i = 0; i < m.nodes.size(); i++)
+            if (parent[i] < 0) stack.push_back((int)i);
+        while (!stack.empty()) { // the graph was checked to be a forest
+            int ni = stack.back();
             stack.pop_back();
-            std::string where = "/nodes/" + std::to_string(it.node);
-            if (it.node < 0 || it.node >= (int)m.nodes.size()) return c.fail(where, "node does not exist");
-            if (visited[it.node]) return c.fail(where, "node is reached twice (a cycle or a node with two parents)");
-            visited[it.node] = 1;
-            if (!visit(it.node, it.parent)) return false;
-            const std::vector<int> &ch = m.nodes[it.node].children;
-            for (size_t i = ch.size(); i-- > 0;) stack.push_back({ch[i], world[it.node]});
+            world[ni] = parent[ni] < 0 ? local[ni] : sb_m4_mul(world[parent[ni]], local[ni]);
+            if (!sb_m4_finite(world[ni])) return fail("/nodes/" + std::to_string(ni), "transform is not finite");
+            for (int ch : m.nodes[ni].children) stack.push_back(ch);
+        }
+        std::vector<char> visited(m.nodes.size());
+        for (size_t i = roots.size(); i-- > 0;) stack.push_back(roots[i]);
+        while (!stack.empty()) {
+            int ni = stack.back();
+            stack.pop_back();
+            std::string where = "/nodes/" + std::to_string(ni);
+            if (ni < 0 || ni >= (int)m.nodes.size()) return fail(where, "node does not exist");
+            if (visited[ni]) return fail(where, "node is reached twice (a cycle or a node with two parents)");
+            visited[ni] = 1;
+            order.push_back(ni);
+            const std::vector<int> &ch = m.nodes[ni].children;
+            for (size_t i = ch.size(); i-- > 0;) stack.push_back(ch[i]);
         }
         return true;
     }
+
+    int32_t texture(int ti) {
+        auto it = tex_cache.find(ti);
+        if (it != tex_cache.end()) return it->second;
+        int32_t r = decode_texture(ti);
+        tex_cache[ti] = r;
+        if (r < 0) s->features.undecodable_alpha++;
+        else s->features.textures_decoded++;
+        return r;
+    }
+
+    // The alpha of texture ti as a scene texture; -1 when its image cannot be decoded here.
+    int32_t decode_texture(int ti) {
+        const tinygltf::Model &m = *c.m;
+        if (ti < 0 || ti >= (int)m.textures.size()) return -1;
+        const tinygltf::Texture &t = m.textures[ti];
+        auto bytes = images->bytes.find(t.source);
+        if (t.source < 0 || bytes == images->bytes.end()) return -1;
+        tinygltf::Image img;
+        std::string e, w;
+        if (!tinygltf::LoadImageData(&img, t.source, &e, &w, 0, 0, bytes->second.data(), (int)bytes->second.size(),
+                                     nullptr) ||
+            img.width <= 0 || img.height <= 0 || img.component <= 0)
+            return -1;
+        size_t n = (size_t)img.width * img.height, bpc = img.bits == 16 ? 2 : 1;
+        if (img.image.size() < n * img.component * bpc) return -1;
+        std::vector<uint8_t> alpha(n, 255);
+        if (img.component == 2 || img.component == 4)
+            for (size_t i = 0; i < n; i++) // the last channel; 16-bit: its high byte (little-endian)
+                alpha[i] = img.image[(i * img.component + img.component - 1) * bpc + bpc - 1];
+        uint32_t ws = 10497, wt = 10497;
+        if (t.sampler >= 0 && t.sampler < (int)m.samplers.size()) {
+            ws = (uint32_t)m.samplers[t.sampler].wrapS;
+            wt = (uint32_t)m.samplers[t.sampler].wrapT;
+        }
+        return sb_scene_add_texture(s, (uint32_t)img.width, (uint32_t)img.height, alpha.data(), ws, wt);
+    }
+
+    // The alpha test of material mi (0: none) and the texture coordinate set it
+    // reads; *drop for a BLEND material under --blend-casters none.
+    uint32_t material(int mi, bool *drop, bool *double_sided, int *uv_set) {
+        const tinygltf::Model &m = *c.m;
+        *drop = false, *double_sided = false, *uv_set = 0;
+        if (mi < 0 || mi >= (int)m.materials.size()) return 0;
+        const tinygltf::Material &mat = m.materials[mi];
+        *double_sided = mat.doubleSided;
+        bool blend = mat.alphaMode == "BLEND", mask = mat.alphaMode == "MASK";
+        if (blend) *drop = opts->blend == SB_BLEND_NONE;
+        if (!mask && !(blend && opts->blend == SB_BLEND_MASK)) return 0;
+        sb_material sm = {true, mask ? (float)mat.alphaCutoff : 0.5f, 1.0f, -1, {1, 0, 0, 0, 1, 0}};
+        const auto &f = mat.pbrMetallicRoughness.baseColorFactor;
+        if (f.size() == 4) sm.alpha = (float)f[3];
+        const tinygltf::TextureInfo &bt = mat.pbrMetallicRoughness.baseColorTexture;
+        if (bt.index >= 0) {
+            sm.texture = texture(bt.index);
+            *uv_set = bt.texCoord;
+            auto tt = bt.extensions.find("KHR_texture_transform");
+            if (tt != bt.extensions.end()) texture_transform(tt->second, sm.uv, uv_set);
+        }
+        return sb_scene_add_material(s, &sm);
+    }
+
+    // KHR_texture_transform as the spec's GLSL builds it: translation * rotation * scale.
+    static void texture_transform(const tinygltf::Value &v, float uv[6], int *uv_set) {
+        double o[2] = {0, 0}, sc[2] = {1, 1}, r = 0;
+        auto num = [&](const char *key, int i, double def) {
+            if (!v.Has(key)) return def;
+            const tinygltf::Value &x = v.Get(key);
+            const tinygltf::Value &e = x.IsArray() ? x.Get(i) : x;
+            return e.IsNumber() ? e.GetNumberAsDouble() : def;
+        };
+        o[0] = num("offset", 0, 0), o[1] = num("offset", 1, 0);
+        sc[0] = num("scale", 0, 1), sc[1] = num("scale", 1, 1);
+        r = num("rotation", 0, 0);
+        if (v.Has("texCoord") && v.Get("texCoord").IsInt()) *uv_set = v.Get("texCoord").GetNumberAsInt();
+        double cs = cos(r), sn = sin(r);
+        const double mtx[6] = {cs * sc[0], -sn * sc[1], o[0], sn * sc[0], cs * sc[1], o[1]};
+        for (int k = 0; k < 6; k++) uv[k] = (float)mtx[k];
+    }
+
+    bool attribute(const tinygltf::Primitive &p, const std::string &where, const char *name, int ncomp,
+                   std::vector<double> &out, bool *have) {
+        auto it = p.attributes.find(name);
+        *have = it != p.attributes.end();
+        return !*have || read_vec(c, it->second, where + "/attributes/" + name, ncomp, out);
+    }
+
+    // Vertex data from the accessors.
+    bool read_prim(const tinygltf::Primitive &p, const std::string &where, int uv_set, bool skinned, PrimData &d) {
+        bool have;
+        if (!attribute(p, where, "POSITION", 3, d.pos, &have)) return false;
+        if (!have) return fail(where + "/attributes", "no POSITION");
+        if (!attribute(p, where, "NORMAL", 3, d.nrm, &d.have_n)) return false;
+        std::string uv = "TEXCOORD_" + std::to_string(uv_set);
+        if (!attribute(p, where, uv.c_str(), 2, d.uv, &d.have_uv)) return false;
+        for (int k = 0; skinned && k < 2; k++) {
+            bool hj, hw;
+            std::string j = "JOINTS_" + std::to_string(k), w = "WEIGHTS_" + std::to_string(k);
+            if (!attribute(p, where, j.c_str(), 4, d.joints[k], &hj) || !attribute(p, where, w.c_str(), 4, d.weights[k], &hw))
+                return false;
+            if (hj != hw) return fail(where + "/attributes", j + " and " + w + " come in pairs");
+            d.skin_sets += hj;
+        }
+        if (p.indices >= 0) return read_indices(c, p.indices, where + "/indices", d.idx);
+        d.idx.resize(d.pos.size() / 3);
+        for (size_t i = 0; i < d.idx.size(); i++) d.idx[i] = (uint32_t)i;
+        return true;
+    }
+
+    // Vertex data from a KHR_draco_mesh_compression bitstream.
+    bool read_draco(const tinygltf::Primitive &p, const tinygltf::Value &ext, const std::string &where, int uv_set,
+                    bool skinned, PrimData &d) {
+        std::string pd = where + "/extensions/KHR_draco_mesh_compression";
+        const unsigned char *data;
+        int view = ext.Get("bufferView").GetNumberAsInt();
+        if (view < 0 || view >= (int)c.m->bufferViews.size()) return fail(pd + "/bufferView", "out of range");
+        size_t len = c.m->bufferViews[view].byteLength;
+        if (!view_range(c, view, 0, len, 1, 1, pd, &data)) return false;
+        const tinygltf::Value &attrs = ext.Get("attributes");
+        std::string uv = "TEXCOORD_" + std::to_string(uv_set);
+        std::vector<std::string> names = {"POSITION", "NORMAL", uv};
+        if (skinned) names.insert(names.end(), {"JOINTS_0", "WEIGHTS_0", "JOINTS_1", "WEIGHTS_1"});
+        std::vector<std::string> present;
+        int ids[SB_DRACO_MAX_ATTRS], nc[SB_DRACO_MAX_ATTRS], n = 0;
+        for (const auto &name : names)
+            if (attrs.Has(name) && p.attributes.count(name)) {
+                present.push_back(name);
+                ids[n] = attrs.Get(name).GetNumberAsInt();
+                nc[n++] = name == "POSITION" || name == "NORMAL" ? 3 : name == uv ? 2 : 4;
+            }
+        if (present.empty() || present[0] != "POSITION") return fail(pd + "/attributes", "no POSITION");
+        sb_draco_out out;
+        char why[SB_ERR_LEN];
+        if (!sb_draco_decode(data, len, ids, nc, n, &out, why, sizeof why)) return fail(pd, why);
+        for (int a = 0; a < n; a++) {
+            std::vector<double> v(out.values[a], out.values[a] + (size_t)nc[a] * out.points);
+            const tinygltf::Accessor &acc = c.m->accessors[p.attributes.at(present[a])];
+            if (acc.normalized && acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT) // Draco keeps the raw integers
+                for (double &x : v) x /= acc.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ? 255.0 : 65535.0;
+            const std::string &name = present[a];
+            if (name == "POSITION") d.pos = v;
+            else if (name == "NORMAL") d.nrm = v, d.have_n = true;
+            else if (name == uv) d.uv = v, d.have_uv = true;
+            else (name[0] == 'J' ? d.joints : d.weights)[name.back() - '0'] = v;
+        }
+        d.skin_sets = !d.joints[0].empty() + !d.joints[1].empty();
+        d.idx.assign(out.indices, out.indices + out.index_count);
+        sb_draco_free(&out);
+        s->features.draco++;
+        return finite_all(c, pd, d.pos, 3);
+    }
+
+    // Morph targets at the node's weights.
+    bool morph(const tinygltf::Primitive &p, const std::string &where, const std::vector<double> &w, PrimData &d) {
+        for (size_t t = 0; t < p.targets.size() && t < w.size(); t++) {
+            if (w[t] == 0) continue;
+            for (const char *name : {"POSITION", "NORMAL"}) {
+                auto it = p.targets[t].find(name);
+                if (it == p.targets[t].end()) continue;
+                std::vector<double> delta, &dst = name[0] == 'P' ? d.pos : d.nrm;
+                if (!read_vec(c, it->second, where + "/targets/" + std::to_string(t) + "/" + name, 3, delta)) return false;
+                if (delta.size() != dst.size()) continue; // NORMAL deltas without normals
+                for (size_t i = 0; i < dst.size(); i++) dst[i] += w[t] * delta[i];
+            }
+        }
+        return true;
+    }
+
+    // Skinned positions and normals: each vertex by its joints' world x inverse-bind matrices, weighted.
+    bool skin(int si, const std::string &where, PrimData &d) {
+        const tinygltf::Model &m = *c.m;
+        const tinygltf::Skin &sk = m.skins[si];
+        std::string sp = "/skins/" + std::to_string(si);
+        std::vector<double> ibm;
+        if (sk.inverseBindMatrices >= 0 && !read_vec(c, sk.inverseBindMatrices, sp + "/inverseBindMatrices", 16, ibm))
+            return false;
+        std::vector<sb_m4> jm(sk.joints.size());
+        for (size_t j = 0; j < sk.joints.size(); j++) {
+            int jn = sk.joints[j];
+            if (jn < 0 || jn >= (int)m.nodes.size()) return fail(sp + "/joints/" + std::to_string(j), "node out of range");
+            sb_m4 inv = sb_m4_identity();
+            if (ibm.size() >= 16 * (j + 1))
+                for (int k = 0; k < 16; k++) inv.m[k] = ibm[16 * j + k];
+            jm[j] = sb_m4_mul(world[jn], inv);
+        }
+        size_t nv = d.pos.size() / 3;
+        for (size_t v = 0; v < nv; v++) {
+            sb_m4 sum = {{0}};
+            for (int set = 0; set < d.skin_sets; set++)
+                for (int k = 0; k < 4; k++) {
+                    double wgt = d.weights[set][4 * v + k];
+                    size_t j = (size_t)d.joints[set][4 * v + k];
+                    if (wgt == 0) continue;
+                    if (j >= jm.size()) return fail(where + "/attributes/JOINTS_" + std::to_string(set),
+                                                    "joint " + std::to_string(j) + " of vertex " + std::to_string(v) +
+                                                        " is not in skin " + std::to_string(si));
+                    for (int e = 0; e < 16; e++) sum.m[e] += wgt * jm[j].m[e];
+                }
+            sb_v3 q = sb_m4_point(sum, sb_v3_make(d.pos[3 * v], d.pos[3 * v + 1], d.pos[3 * v + 2]));
+            d.pos[3 * v] = q.x, d.pos[3 * v + 1] = q.y, d.pos[3 * v + 2] = q.z;
+            if (!d.have_n) continue;
+            sb_v3 n = sb_m4_dir(normal_matrix(sum), sb_v3_make(d.nrm[3 * v], d.nrm[3 * v + 1], d.nrm[3 * v + 2]));
+            d.nrm[3 * v] = n.x, d.nrm[3 * v + 1] = n.y, d.nrm[3 * v + 2] = n.z;
+        }
+        return finite_all(c, where + " (skinned)", d.pos, 3);
+    }
+
+    bool prim(int node, int mesh, int pi, const std::vector<sb_m4> &instances);
+    bool triangles(const tinygltf::Primitive &p, const std::string &where, const PrimData &d, std::vector<uint32_t> &tris);
+    void emit(const PrimData &d, const std::vector<uint32_t> &tris, const sb_m4 *w, int node, uint32_t mat,
+              bool double_sided, const float color[4]);
+    bool instances(int ni, std::vector<sb_m4> &out);
+    bool light(int ni);
+    bool emit_nodes();
 };
+
+// The triangle list of a primitive (strips and fans unrolled), every index checked.
+bool Loader::triangles(const tinygltf::Primitive &p, const std::string &where, const PrimData &d,
+                       std::vector<uint32_t> &tris) {
+    size_t nv = d.pos.size() / 3;
+    const std::vector<uint32_t> &idx = d.idx;
+    for (size_t i = 0; i < idx.size(); i++)
+        if (idx[i] >= nv)
+            return fail(where + "/indices", "index " + std::to_string(idx[i]) + " at " + std::to_string(i) +
+                                                " is out of range (" + std::to_string(nv) + " vertices)");
+    auto sized = [&](const std::vector<double> &v, int n, const char *name) {
+        return v.empty() || v.size() == nv * n || fail(where + "/attributes/" + name, "count differs from POSITION");
+    };
+    if (!sized(d.nrm, 3, "NORMAL") || !sized(d.uv, 2, "TEXCOORD") || !sized(d.joints[0], 4, "JOINTS_0") ||
+        !sized(d.weights[0], 4, "WEIGHTS_0") || !sized(d.joints[1], 4, "JOINTS_1") || !sized(d.weights[1], 4, "WEIGHTS_1"))
+        return false;
+    if (p.mode == 4 || p.mode < 0) {
+        tris.assign(idx.begin(), idx.begin() + (idx.size() / 3) * 3);
+    } else if (p.mode == 5) {
+        for (size_t i = 2; i < idx.size(); i++) {
+            if (i % 2 == 0) tris.insert(tris.end(), {idx[i - 2], idx[i - 1], idx[i]});
+            else tris.insert(tris.end(), {idx[i - 1], idx[i - 2], idx[i]});
+        }
+    } else {
+        for (size_t i = 2; i < idx.size(); i++) tris.insert(tris.end(), {idx[0], idx[i - 1], idx[i]});
+    }
+    return true;
+}
+
+// Adds the primitive to the scene in world space: under w (NULL: already there, skinned).
+void Loader::emit(const PrimData &d, const std::vector<uint32_t> &tris_in, const sb_m4 *w, int node, uint32_t mat,
+                  bool double_sided, const float color[4]) {
+    size_t nv = d.pos.size() / 3;
+    std::vector<uint32_t> tris = tris_in;
+    std::vector<double> wp(d.pos), wn(d.nrm);
+    if (w) {
+        if (det3(*w) < 0) // a mirroring transform turns the winding: front faces stay front faces
+            for (size_t i = 0; i < tris.size(); i += 3) std::swap(tris[i + 1], tris[i + 2]);
+        sb_m4 nm = normal_matrix(*w);
+        for (size_t v = 0; v < nv; v++) {
+            sb_v3 q = sb_m4_point(*w, sb_v3_make(d.pos[3 * v], d.pos[3 * v + 1], d.pos[3 * v + 2]));
+            wp[3 * v] = q.x, wp[3 * v + 1] = q.y, wp[3 * v + 2] = q.z;
+            if (!d.have_n) continue;
+            sb_v3 n = sb_m4_dir(nm, sb_v3_make(d.nrm[3 * v], d.nrm[3 * v + 1], d.nrm[3 * v + 2]));
+            wn[3 * v] = n.x, wn[3 * v + 1] = n.y, wn[3 * v + 2] = n.z;
+        }
+    }
+    sb_prim_desc pd;
+    memset(&pd, 0, sizeof pd);
+    pd.positions = wp.data();
+    pd.normals = d.have_n ? wn.data() : nullptr;
+    pd.uv = d.have_uv && mat ? d.uv.data() : nullptr;
+    pd.vertex_count = (uint32_t)nv;
+    pd.indices = tris.data();
+    pd.index_count = (uint32_t)tris.size();
+    memcpy(pd.color, color, sizeof pd.color);
+    pd.double_sided = double_sided;
+    pd.material = mat;
+    pd.node = (uint32_t)node;
+    sb_scene_add_prim(s, &pd);
+}
+
+bool Loader::prim(int node, int mesh, int pi, const std::vector<sb_m4> &inst) {
+    const tinygltf::Model &m = *c.m;
+    const tinygltf::Primitive &p = m.meshes[mesh].primitives[pi];
+    const tinygltf::Node &n = m.nodes[node];
+    std::string where = "/meshes/" + std::to_string(mesh) + "/primitives/" + std::to_string(pi);
+    if (p.mode > 6) return fail(where + "/mode", "unsupported primitive mode " + std::to_string(p.mode));
+    if (p.mode >= 0 && p.mode < 4) return true; // points and lines neither cast nor receive shadows
+    if (p.material >= (int)m.materials.size())
+        return fail(where + "/material", "material " + std::to_string(p.material) + " does not exist");
+    bool drop, ds;
+    int uv_set;
+    uint32_t mat = material(p.material, &drop, &ds, &uv_set);
+    const tinygltf::Material *pm = p.material >= 0 ? &m.materials[p.material] : nullptr;
+    if (pm && pm->alphaMode == "BLEND") s->features.blend++;
+    if (pm && pm->alphaMode == "MASK") s->features.mask++;
+    if (drop) return true;
+    bool skinned = n.skin >= 0 && n.skin < (int)m.skins.size();
+    PrimData d;
+    auto dr = p.extensions.find("KHR_draco_mesh_compression");
+    if (!(dr != p.extensions.end() ? read_draco(p, dr->second, where, uv_set, skinned, d)
+                                   : read_prim(p, where, uv_set, skinned, d)))
+        return false;
+    std::vector<uint32_t> tris;
+    if (!triangles(p, where, d, tris)) return false;
+    if (tris.empty()) return true;
+    if (!p.targets.empty() && !morph(p, where, weights[node], d)) return false;
+    if (mat && p.attributes.count("COLOR_0") && m.accessors[p.attributes.at("COLOR_0")].type == TINYGLTF_TYPE_VEC4)
+        s->features.vertex_alpha_ignored++;
+    skinned = skinned && d.skin_sets > 0;
+    if (skinned && !skin(n.skin, where, d)) return false;
+    float color[4] = {1, 1, 1, 1};
+    if (pm)
+        for (size_t k = 0; k < 4 && k < pm->pbrMetallicRoughness.baseColorFactor.size(); k++)
+            color[k] = (float)pm->pbrMetallicRoughness.baseColorFactor[k];
+    s->features.prims++;
+    s->features.double_sided += ds;
+    s->features.skinned += skinned;
+    if (skinned) { // a skinned mesh ignores its node's transform (and instancing)
+        emit(d, tris, nullptr, node, mat, ds, color);
+        return true;
+    }
+    for (const sb_m4 &w : inst) emit(d, tris, &w, node, mat, ds, color);
+    return true;
+}
+
+// The node's world transform, or one for each EXT_mesh_gpu_instancing instance.
+bool Loader::instances(int ni, std::vector<sb_m4> &out) {
+    const tinygltf::Node &n = c.m->nodes[ni];
+    out.assign(1, world[ni]);
+    auto ext = n.extensions.find("EXT_mesh_gpu_instancing");
+    if (ext == n.extensions.end() || !ext->second.Has("attributes")) return true;
+    const tinygltf::Value &a = ext->second.Get("attributes");
+    std::string where = "/nodes/" + std::to_string(ni) + "/extensions/EXT_mesh_gpu_instancing/attributes/";
+    std::vector<double> v[3];
+    const char *names[3] = {"TRANSLATION", "ROTATION", "SCALE"};
+    size_t count = SIZE_MAX;
+    for (int k = 0; k < 3; k++) {
+        if (!a.Has(names[k]) || !a.Get(names[k]).IsInt()) continue;
+        if (!read_vec(c, a.Get(names[k]).GetNumberAsInt(), where + names[k], k == 1 ? 4 : 3, v[k])) return false;
+        size_t cnt = v[k].size() / (k == 1 ? 4 : 3);
+        if (count != SIZE_MAX && cnt != count) return fail(where + names[k], "count differs from the other attributes");
+        count = cnt;
+    }
+    if (count == SIZE_MAX) return true;
+    out.resize(count);
+    for (size_t i = 0; i < count; i++) {
+        sb_trs x = {{0, 0, 0}, {0, 0, 0, 1}, {1, 1, 1}};
+        for (int k = 0; k < 3 && !v[0].empty(); k++) x.t[k] = v[0][3 * i + k];
+        for (int k = 0; k < 4 && !v[1].empty(); k++) x.r[k] = v[1][4 * i + k];
+        for (int k = 0; k < 3 && !v[2].empty(); k++) x.s[k] = v[2][3 * i + k];
+        out[i] = sb_m4_mul(world[ni], sb_trs_matrix(&x));
+    }
+    s->features.instanced_nodes++;
+    s->features.instances += (uint32_t)count;
+    return true;
+}
+
+bool Loader::light(int ni) {
+    const tinygltf::Model &m = *c.m;
+    const tinygltf::Node &n = m.nodes[ni];
+    auto ext = n.extensions.find("KHR_lights_punctual");
+    if (ext == n.extensions.end() || !ext->second.Has("light")) return true;
+    int li = ext->second.Get("light").GetNumberAsInt();
+    if (li < 0 || li >= (int)m.lights.size())
+        return fail("/nodes/" + std::to_string(ni) + "/extensions/KHR_lights_punctual/light",
+                    "light " + std::to_string(li) + " does not exist");
+    const tinygltf::Light &L = m.lights[li];
+    sb_light l;
+    memset(&l, 0, sizeof l);
+    l.type = L.type == "directional" ? SB_LIGHT_DIRECTIONAL : L.type == "spot" ? SB_LIGHT_SPOT : SB_LIGHT_POINT;
+    l.position = sb_m4_point(world[ni], sb_v3_make(0, 0, 0));
+    l.direction = sb_v3_norm(sb_m4_dir(world[ni], sb_v3_make(0, 0, -1)));
+    for (int k = 0; k < 3; k++) l.color[k] = k < (int)L.color.size() ? (float)L.color[k] : 1.0f;
+    l.intensity = L.intensity;
+    l.range = L.range;
+    s->lights = (sb_light *)sb_xrealloc(s->lights, (s->light_count + 1) * sizeof(sb_light));
+    s->lights[s->light_count++] = l;
+    if (l.type == SB_LIGHT_DIRECTIONAL && !s->has_sun) {
+        s->has_sun = true;
+        s->sun = sb_v3_scale(l.direction, -1);
+    }
+    return true;
+}
+
+// Every node of the scene in visit order: its primitives, camera and light.
+bool Loader::emit_nodes() {
+    const tinygltf::Model &m = *c.m;
+    std::set<int> skins;
+    for (int ni : order) {
+        const tinygltf::Node &n = m.nodes[ni];
+        std::string where = "/nodes/" + std::to_string(ni);
+        if (n.mesh >= 0) {
+            if (n.mesh >= (int)m.meshes.size()) return fail(where + "/mesh", "mesh " + std::to_string(n.mesh) + " does not exist");
+            s->nodes_drawn++;
+            std::vector<sb_m4> inst;
+            if (!instances(ni, inst)) return false;
+            if (n.skin >= 0) skins.insert(n.skin);
+            for (size_t pi = 0; pi < m.meshes[n.mesh].primitives.size(); pi++)
+                if (!prim(ni, n.mesh, (int)pi, inst)) return false;
+        }
+        if (n.camera >= 0 && n.camera < (int)s->camera_count) s->cameras[n.camera].node = ni;
+        if (!light(ni)) return false;
+    }
+    s->features.skins = (uint32_t)skins.size();
+    return true;
+}
 
 // tinygltf reads external buffers and images through these: only regular
 // files inside the scene's folder (unless allowed), never shell expansion.
@@ -378,9 +789,33 @@ bool fs_write(std::string *err, const std::string &, const std::vector<unsigned 
     return false;
 }
 
+// tinygltf refuses an indices accessor without a bufferView, which is how
+// KHR_draco_mesh_compression primitives come (their indices are in the
+// bitstream): their "indices" keys are renamed in place ("_ndices", same
+// length, so a .glb's chunk sizes hold) for tinygltf to pass over them.
+void hide_draco_indices(const sb_json *root, char *json, size_t len) {
+    std::vector<size_t> line_start(1, 0);
+    for (size_t i = 0; i < len; i++)
+        if (json[i] == '\n') line_start.push_back(i + 1);
+    const sb_json *meshes = sb_json_get(root, "meshes");
+    for (uint32_t i = 0; meshes && meshes->type == SB_JSON_ARRAY && i < meshes->count; i++) {
+        const sb_json *prims = sb_json_get(&meshes->items[i], "primitives");
+        for (uint32_t k = 0; prims && prims->type == SB_JSON_ARRAY && k < prims->count; k++) {
+            const sb_json *p = &prims->items[k], *ext = sb_json_get(p, "extensions"), *ind = sb_json_get(p, "indices");
+            if (!ind || !ext || !sb_json_get(ext, "KHR_draco_mesh_compression") || ind->line == 0 ||
+                ind->line > line_start.size())
+                continue;
+            size_t at = line_start[ind->line - 1] + ind->col - 1;
+            std::string text(json, std::min(at, len));
+            size_t key = text.rfind("\"indices\"");
+            if (key != std::string::npos) json[key + 1] = '_';
+        }
+    }
+}
+
 // Reads the file once, checks the raw document (gltf_check.h), then lets
 // tinygltf parse it from memory. *hash: FNV-1a of the file and its buffers.
-bool load_model(const char *path, const sb_scene_opts *opts, tinygltf::Model &model, ImageCounter *images,
+bool load_model(const char *path, const sb_scene_opts *opts, tinygltf::Model &model, ImageStore *images,
                 uint64_t *hash, sb_err *err) {
     size_t size = 0;
     char *bytes = sb_read_file(path, &size, err);
@@ -400,20 +835,65 @@ bool load_model(const char *path, const sb_scene_opts *opts, tinygltf::Model &mo
     if (!sb_json_parse(&doc, path, json, json_len, err)) return false;
     sb_gltf_check_desc cd = {path, base_dir.c_str(), glb, bin ? bin_len : 0, opts && opts->allow_external_uris};
     bool ok = sb_gltf_check(doc.root, &cd, err);
+    uint64_t h = sb_fnv1a(SB_FNV_SEED, bytes, size);
+    if (ok) hide_draco_indices(doc.root, const_cast<char *>(json), json_len);
     sb_json_free(&doc);
     if (!ok) return false;
 
     tinygltf::TinyGLTF loader;
-    loader.SetImageLoader(skip_image, images);
+    loader.SetImageLoader(keep_image, images);
     FsCtx fs_ctx{base_dir, cd.allow_external_uris};
     loader.SetFsCallbacks(tinygltf::FsCallbacks{fs_exists, fs_expand, fs_read, fs_write, &fs_ctx});
     std::string e, w;
     ok = glb ? loader.LoadBinaryFromMemory(&model, &e, &w, u, (unsigned)size, base_dir)
              : loader.LoadASCIIFromString(&model, &e, &w, bytes, (unsigned)size, base_dir);
     if (!ok) return sb_fail(err, "%s: %s", path, e.empty() ? "not a valid glTF file" : first_line(e).c_str());
-    uint64_t h = sb_fnv1a(SB_FNV_SEED, bytes, size);
     for (auto &b : model.buffers) h = sb_fnv1a(h, b.data.data(), b.data.size());
     *hash = h;
+    return true;
+}
+
+// What the file held that is not drawn as its author made it, said once at load.
+void log_features(const char *path, const sb_scene *s, const tinygltf::Model &m) {
+    const sb_scene_features &f = s->features;
+    if (f.undecodable_alpha)
+        sb_log("%s: %u alpha texture(s) cannot be decoded here (a format other than PNG, JPEG, BMP, TGA or GIF): "
+               "those materials are alpha-tested with their base colour factor alone", path, f.undecodable_alpha);
+    if (f.vertex_alpha_ignored)
+        sb_log("%s: %u alpha-tested primitive(s) have vertex colours with alpha, which the alpha test leaves out", path,
+               f.vertex_alpha_ignored);
+    if (s->opts.pose && m.animations.empty())
+        sb_log("%s: --pose %g: the file has no animation; nodes keep their own transforms", path, s->opts.pose_time);
+}
+
+void read_cameras(sb_scene *s, const tinygltf::Model &model) {
+    s->camera_count = (uint32_t)model.cameras.size();
+    s->cameras = (sb_scene_camera *)sb_xcalloc(s->camera_count ? s->camera_count : 1, sizeof(sb_scene_camera));
+    for (size_t i = 0; i < model.cameras.size(); i++) {
+        const tinygltf::Camera &cam = model.cameras[i];
+        s->cameras[i].node = -1;
+        if (cam.type == "perspective") {
+            s->cameras[i].yfov = cam.perspective.yfov;
+            s->cameras[i].znear = cam.perspective.znear;
+            s->cameras[i].zfar = cam.perspective.zfar;
+        }
+    }
+}
+
+// The default scene's root nodes, or every parentless node when there is no scene.
+bool scene_roots(const char *path, const tinygltf::Model &model, std::vector<int> &roots, sb_err *err) {
+    int sc = model.defaultScene >= 0 ? model.defaultScene : 0;
+    if (!model.scenes.empty()) {
+        if (sc >= (int)model.scenes.size()) return sb_fail(err, "%s: /scene: scene %d does not exist", path, sc);
+        roots = model.scenes[sc].nodes;
+        return true;
+    }
+    std::vector<char> child(model.nodes.size());
+    for (auto &n : model.nodes)
+        for (int ch : n.children)
+            if (ch >= 0 && ch < (int)child.size()) child[ch] = 1;
+    for (size_t i = 0; i < model.nodes.size(); i++)
+        if (!child[i]) roots.push_back((int)i);
     return true;
 }
 
@@ -421,44 +901,20 @@ bool load_model(const char *path, const sb_scene_opts *opts, tinygltf::Model &mo
 
 extern "C" bool sb_gltf_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_err *err) {
     tinygltf::Model model;
-    ImageCounter images;
+    ImageStore images;
+    sb_scene_opts defaults;
+    memset(&defaults, 0, sizeof defaults);
+    if (!opts) opts = &defaults;
     try {
         uint64_t hash;
         if (!load_model(path, opts, model, &images, &hash, err)) return false;
-        Loader L{Ctx{path, &model, err}, s, std::vector<sb_m4>(model.nodes.size()), std::vector<char>(model.nodes.size())};
-        s->camera_count = (uint32_t)model.cameras.size();
-        s->cameras = (sb_scene_camera *)sb_xcalloc(s->camera_count ? s->camera_count : 1, sizeof(sb_scene_camera));
-        for (size_t i = 0; i < model.cameras.size(); i++) {
-            const tinygltf::Camera &cam = model.cameras[i];
-            s->cameras[i].node = -1;
-            if (cam.type == "perspective") {
-                s->cameras[i].yfov = cam.perspective.yfov;
-                s->cameras[i].znear = cam.perspective.znear;
-                s->cameras[i].zfar = cam.perspective.zfar;
-            }
-        }
+        Loader L{Ctx{path, &model, err}, s, opts, &images, {}, {}, {}, {}, {}, {}};
+        read_cameras(s, model);
         std::vector<int> roots;
-        int sc = model.defaultScene >= 0 ? model.defaultScene : 0;
-        if (!model.scenes.empty()) {
-            if (sc >= (int)model.scenes.size()) return sb_fail(err, "%s: /scene: scene %d does not exist", path, sc);
-            roots = model.scenes[sc].nodes;
-        } else { // no scenes: every node without a parent is a root
-            std::vector<char> child(model.nodes.size());
-            for (auto &n : model.nodes)
-                for (int ch : n.children)
-                    if (ch >= 0 && ch < (int)child.size()) child[ch] = 1;
-            for (size_t i = 0; i < model.nodes.size(); i++)
-                if (!child[i]) roots.push_back((int)i);
-        }
-        if (!L.walk(roots)) return false;
-        s->images_skipped = images.skipped;
+        if (!scene_roots(path, model, roots, err) || !L.pose() || !L.walk(roots) || !L.emit_nodes()) return false;
+        s->features.textures_skipped = (uint32_t)model.images.size() - s->features.textures_decoded;
         s->content_hash = hash;
-        if (s->alpha_mask_draws)
-            sb_log("%s: %u alpha-masked primitive(s) are drawn as opaque casters (alpha textures are not applied)",
-                   path, s->alpha_mask_draws);
-        if (images.skipped)
-            sb_log("%s: %u texture(s) not decoded (shadows need none)%s", path, images.skipped,
-                   model.extensionsRequired.empty() ? "" : "; required extensions ignored for geometry");
+        log_features(path, s, model);
         return true;
     } catch (const std::exception &ex) {
         return sb_fail(err, "%s: %s", path, ex.what());
@@ -466,10 +922,10 @@ extern "C" bool sb_gltf_load(sb_scene *s, const char *path, const sb_scene_opts 
 }
 
 // An animated glTF camera as a path: keys at every animation time of the
-// camera's node (translation/rotation channels), parent chain static.
+// camera's node (translation/rotation channels of every animation), parent chain static.
 extern "C" bool sb_gltf_camera_path(sb_path *p, const char *path, int cam, const sb_scene_opts *opts, sb_err *err) {
     tinygltf::Model model;
-    ImageCounter images;
+    ImageStore images;
     try {
         uint64_t hash;
         if (!load_model(path, opts, model, &images, &hash, err)) return false;
@@ -488,60 +944,21 @@ extern "C" bool sb_gltf_camera_path(sb_path *p, const char *path, int cam, const
         size_t depth = 0; // the graph was checked to be a forest: the walk ends at a root
         for (int q = parent[cn]; q >= 0 && depth <= model.nodes.size(); q = parent[q], depth++)
             pw = sb_m4_mul(node_local(model.nodes[q]), pw);
-        const tinygltf::Node &n = model.nodes[cn];
-        struct Chan { std::vector<double> in, out; int ncomp; bool step; };
-        Chan tr{{}, {}, 3, false}, rot{{}, {}, 4, false};
-        bool have_t = false, have_r = false;
+        std::vector<Channel> chans;
+        std::vector<int> is_rot;
         for (size_t ai = 0; ai < model.animations.size(); ai++) {
             const auto &an = model.animations[ai];
             for (size_t ci = 0; ci < an.channels.size(); ci++) {
                 const auto &ch = an.channels[ci];
-                if (ch.target_node != cn) continue;
-                bool is_t = ch.target_path == "translation", is_r = ch.target_path == "rotation";
-                if (!is_t && !is_r) continue;
+                if (ch.target_node != cn || (ch.target_path != "translation" && ch.target_path != "rotation")) continue;
+                chans.emplace_back();
                 std::string where = "/animations/" + std::to_string(ai) + "/channels/" + std::to_string(ci);
-                if (ch.sampler < 0 || ch.sampler >= (int)an.samplers.size()) return c.fail(where, "sampler out of range");
-                const auto &smp = an.samplers[ch.sampler];
-                Chan &dst = is_t ? tr : rot;
-                if (!read_vec(c, smp.input, where + "/input", 1, dst.in)) return false;
-                if (!read_vec(c, smp.output, where + "/output", dst.ncomp, dst.out)) return false;
-                size_t k = dst.in.size();
-                if (smp.interpolation == "CUBICSPLINE") { // keep the values, drop the tangents
-                    if (dst.out.size() != 3 * k * dst.ncomp) return c.fail(where, "CUBICSPLINE output count mismatch");
-                    std::vector<double> v(k * dst.ncomp);
-                    for (size_t i = 0; i < k; i++)
-                        for (int j = 0; j < dst.ncomp; j++) v[i * dst.ncomp + j] = dst.out[(3 * i + 1) * dst.ncomp + j];
-                    dst.out = v;
-                }
-                if (dst.out.size() != k * dst.ncomp) return c.fail(where, "input and output counts differ");
-                for (size_t i = 1; i < k; i++)
-                    if (!(dst.in[i] > dst.in[i - 1])) return c.fail(where + "/input", "times must increase");
-                dst.step = smp.interpolation == "STEP";
-                (is_t ? have_t : have_r) = true;
+                if (!read_channel(c, an, ch, where, ch.target_path == "rotation" ? 4 : 3, chans.back())) return false;
             }
         }
         std::set<double> times;
-        for (double t : tr.in) times.insert(t);
-        for (double t : rot.in) times.insert(t);
+        for (const Channel &ch : chans) times.insert(ch.in.begin(), ch.in.end());
         if (times.empty()) times.insert(0.0);
-        auto sample = [](const Chan &ch, double t, double *out) {
-            size_t k = ch.in.size();
-            size_t i = std::upper_bound(ch.in.begin(), ch.in.end(), t) - ch.in.begin();
-            if (i == 0 || i >= k || ch.step) {
-                size_t j = i == 0 ? 0 : i - 1;
-                for (int c2 = 0; c2 < ch.ncomp; c2++) out[c2] = ch.out[j * ch.ncomp + c2];
-                return;
-            }
-            double u = (t - ch.in[i - 1]) / (ch.in[i] - ch.in[i - 1]);
-            if (ch.ncomp == 4) {
-                const double *a = &ch.out[(i - 1) * 4], *b = &ch.out[i * 4];
-                sb_quat q = sb_quat_slerp(sb_quat_norm({a[0], a[1], a[2], a[3]}), sb_quat_norm({b[0], b[1], b[2], b[3]}), u);
-                out[0] = q.x; out[1] = q.y; out[2] = q.z; out[3] = q.w;
-            } else {
-                for (int c2 = 0; c2 < ch.ncomp; c2++)
-                    out[c2] = ch.out[(i - 1) * ch.ncomp + c2] * (1 - u) + ch.out[i * ch.ncomp + c2] * u;
-            }
-        };
         const tinygltf::Camera &camera = model.cameras[cam];
         p->fov_deg = camera.type == "perspective" && camera.perspective.yfov > 0 ? camera.perspective.yfov * 180 / SB_PI : 60;
         if (camera.type == "perspective") {
@@ -553,11 +970,14 @@ extern "C" bool sb_gltf_camera_path(sb_path *p, const char *path, int cam, const
         double t0 = *times.begin();
         int ki = 0;
         for (double t : times) {
-            tinygltf::Node local = n;
-            double v[4];
-            if (have_t) { sample(tr, t, v); local.translation = {v[0], v[1], v[2]}; local.matrix.clear(); }
-            if (have_r) { sample(rot, t, v); local.rotation = {v[0], v[1], v[2], v[3]}; local.matrix.clear(); }
-            sb_m4 w = sb_m4_mul(pw, node_local(local));
+            sb_trs x = node_trs(model.nodes[cn]);
+            bool animated = false;
+            for (Channel &ch : chans) { // later channels win, as in a player applying them in order
+                sb_anim_sample(&ch.s, t, ch.s.rotation ? x.r : x.t);
+                animated = true;
+            }
+            sb_m4 w = sb_m4_mul(pw, animated || model.nodes[cn].matrix.size() != 16 ? sb_trs_matrix(&x)
+                                                                                    : node_local(model.nodes[cn]));
             sb_path_key &k = p->keys[ki++];
             k.t = t - t0;
             k.pos = sb_m4_point(w, sb_v3_make(0, 0, 0));

@@ -6,13 +6,8 @@
 #include <string.h>
 #include <unistd.h>
 
-#define SB_CHUNK_TRIS 4096u
 
 bool sb_gltf_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_err *err); /* gltf_load.cc */
-
-void sb_scene_begin(sb_scene *s) {
-    memset(s, 0, sizeof *s);
-}
 
 static void *grow(void *p, uint32_t *cap, uint32_t need, size_t elem) {
     if (need <= *cap) return p;
@@ -22,45 +17,170 @@ static void *grow(void *p, uint32_t *cap, uint32_t need, size_t elem) {
     return sb_xrealloc(p, (size_t)c * elem);
 }
 
+void sb_scene_begin(sb_scene *s) {
+    memset(s, 0, sizeof *s);
+    s->materials = sb_xcalloc(1, sizeof *s->materials); /* material 0: no alpha test, no texture */
+    s->materials[0].texture = -1;
+    s->material_count = 1;
+}
+
+const char *sb_blend_policy_name(sb_blend_policy p) {
+    return p == SB_BLEND_OPAQUE ? "opaque" : p == SB_BLEND_NONE ? "none" : "mask";
+}
+
+bool sb_blend_policy_parse(const char *v, sb_blend_policy *out) {
+    for (int p = SB_BLEND_MASK; p <= SB_BLEND_NONE; p++)
+        if (!strcmp(v, sb_blend_policy_name((sb_blend_policy)p))) return *out = (sb_blend_policy)p, true;
+    return false;
+}
+
+uint32_t sb_scene_add_material(sb_scene *s, const sb_material *m) {
+    if (!m->test) return 0;
+    for (uint32_t i = 1; i < s->material_count; i++)
+        if (!memcmp(&s->materials[i], m, sizeof *m)) return i;
+    s->materials = sb_xrealloc(s->materials, (s->material_count + 1) * sizeof *s->materials);
+    s->materials[s->material_count] = *m;
+    return s->material_count++;
+}
+
+int32_t sb_scene_add_texture(sb_scene *s, uint32_t w, uint32_t h, const uint8_t *alpha, uint32_t wrap_s,
+                             uint32_t wrap_t) {
+    s->textures = sb_xrealloc(s->textures, (s->texture_count + 1) * sizeof *s->textures);
+    s->textures[s->texture_count] = (sb_texture){w, h, s->texel_count, wrap_s, wrap_t};
+    s->texels = sb_xrealloc(s->texels, (size_t)s->texel_count + (size_t)w * h);
+    memcpy(s->texels + s->texel_count, alpha, (size_t)w * h);
+    s->texel_count += w * h;
+    return (int32_t)s->texture_count++;
+}
+
+/* A wrapped texture coordinate (clamping happens on the texel index); the
+ * shaders' sb_wrap() in alpha.glsl does the same arithmetic. */
+static float wrap_coord(float t, uint32_t mode) {
+    if (mode == 0x812F) return t; /* GL_CLAMP_TO_EDGE */
+    if (mode == 0x8370) {         /* GL_MIRRORED_REPEAT */
+        float f = t - 2.0f * floorf(t * 0.5f);
+        return f > 1.0f ? 2.0f - f : f;
+    }
+    return t - floorf(t); /* GL_REPEAT */
+}
+
+static uint32_t texel_index(float t, uint32_t mode, uint32_t n) {
+    float x = floorf(wrap_coord(t, mode) * (float)n);
+    return x <= 0 ? 0 : x >= (float)n - 1 ? n - 1 : (uint32_t)x;
+}
+
+bool sb_material_covers(const sb_scene *s, uint32_t mi, float u, float v) {
+    if (mi == 0 || mi >= s->material_count) return true;
+    const sb_material *m = &s->materials[mi];
+    if (!m->test) return true;
+    float a = m->alpha;
+    if (m->texture >= 0) {
+        const sb_texture *t = &s->textures[m->texture];
+        float tu = m->uv[0] * u + m->uv[1] * v + m->uv[2], tv = m->uv[3] * u + m->uv[4] * v + m->uv[5];
+        uint32_t x = texel_index(tu, t->wrap_s, t->w), y = texel_index(tv, t->wrap_t, t->h);
+        a *= (float)s->texels[t->offset + (size_t)y * t->w + x] / 255.0f;
+    }
+    return a >= m->cutoff;
+}
+
+/* Area-weighted vertex normals from the faces, for a primitive without normals. */
+static void face_normals(sb_scene *s, const sb_prim_desc *p, uint32_t base) {
+    for (uint32_t i = 0; i + 2 < p->index_count; i += 3) {
+        const double *a = p->positions + 3 * (size_t)p->indices[i];
+        const double *b = p->positions + 3 * (size_t)p->indices[i + 1];
+        const double *c = p->positions + 3 * (size_t)p->indices[i + 2];
+        sb_v3 n = sb_v3_cross(sb_v3_make(b[0] - a[0], b[1] - a[1], b[2] - a[2]),
+                              sb_v3_make(c[0] - a[0], c[1] - a[1], c[2] - a[2]));
+        for (int k = 0; k < 3; k++) {
+            float *out = sb_vertex(s, base + p->indices[i + k]);
+            out[3] += (float)n.x;
+            out[4] += (float)n.y;
+            out[5] += (float)n.z;
+        }
+    }
+    for (uint32_t v = 0; v < p->vertex_count; v++) {
+        float *out = sb_vertex(s, base + v);
+        sb_v3 n = sb_v3_norm(sb_v3_make(out[3], out[4], out[5]));
+        out[3] = (float)n.x;
+        out[4] = (float)n.y;
+        out[5] = (float)n.z;
+    }
+}
+
+static int cmp_u64(const void *a, const void *b) {
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+typedef struct {
+    double p[3];
+    uint32_t v;
+} weld_key;
+
+static int cmp_weld(const void *a, const void *b) {
+    const weld_key *x = a, *y = b;
+    for (int k = 0; k < 3; k++)
+        if (x->p[k] != y->p[k]) return x->p[k] < y->p[k] ? -1 : 1;
+    return x->v < y->v ? -1 : x->v > y->v;
+}
+
+/* Whether the primitive is a closed surface with consistent winding: with
+ * vertices welded by position, every directed edge a->b appears once and so
+ * does b->a. Then each ray from outside crossing it leaves through a face
+ * turned its way, so back faces can be culled without changing any answer. */
+static bool prim_closed(const sb_prim_desc *p) {
+    uint32_t nv = p->vertex_count, nt = p->index_count / 3;
+    if (nt < 4) return false;
+    weld_key *k = sb_xmalloc(sizeof *k * nv);
+    uint32_t *id = sb_xmalloc(sizeof(uint32_t) * nv);
+    for (uint32_t v = 0; v < nv; v++) memcpy(k[v].p, p->positions + 3 * (size_t)v, sizeof k[v].p), k[v].v = v;
+    qsort(k, nv, sizeof *k, cmp_weld);
+    for (uint32_t i = 0, w = 0; i < nv; i++) {
+        if (i > 0 && memcmp(k[i].p, k[i - 1].p, sizeof k[i].p)) w = i;
+        id[k[i].v] = w;
+    }
+    uint64_t *e = sb_xmalloc(sizeof(uint64_t) * 3 * nt);
+    bool closed = true;
+    for (uint32_t t = 0; t < nt && closed; t++)
+        for (int j = 0; j < 3; j++) {
+            uint32_t a = id[p->indices[3 * t + j]], b = id[p->indices[3 * t + (j + 1) % 3]];
+            closed &= a != b;
+            e[3 * t + j] = (uint64_t)a << 32 | b;
+        }
+    if (closed) qsort(e, 3 * (size_t)nt, sizeof *e, cmp_u64);
+    for (size_t i = 0; closed && i < 3 * (size_t)nt; i++) {
+        uint64_t rev = e[i] << 32 | e[i] >> 32;
+        closed = (i + 1 == 3 * (size_t)nt || e[i + 1] != e[i]) && bsearch(&rev, e, 3 * (size_t)nt, sizeof *e, cmp_u64);
+    }
+    free(e);
+    free(id);
+    free(k);
+    return closed;
+}
+
 void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p) {
     uint32_t base = s->vertex_count;
     uint32_t cap = s->build_cap;
     s->build_pos = grow(s->build_pos, &cap, base + p->vertex_count, 3 * sizeof(double));
-    s->vertices = grow(s->vertices, &s->vertex_cap, base + p->vertex_count, 6 * sizeof(float));
+    s->vertices = grow(s->vertices, &s->vertex_cap, base + p->vertex_count, SB_VERTEX_BYTES);
     s->build_cap = cap;
     for (uint32_t v = 0; v < p->vertex_count; v++) {
         memcpy(s->build_pos + 3 * (size_t)(base + v), p->positions + 3 * (size_t)v, 3 * sizeof(double));
-        float *out = s->vertices + 6 * (size_t)(base + v);
-        out[3] = out[4] = out[5] = 0;
+        float *out = sb_vertex(s, base + v);
+        memset(out, 0, SB_VERTEX_BYTES);
         if (p->normals) {
             sb_v3 n = sb_v3_norm(sb_v3_make(p->normals[3 * v], p->normals[3 * v + 1], p->normals[3 * v + 2]));
             out[3] = (float)n.x;
             out[4] = (float)n.y;
             out[5] = (float)n.z;
         }
-    }
-    if (!p->normals) { /* area-weighted vertex normals from the faces */
-        for (uint32_t i = 0; i + 2 < p->index_count; i += 3) {
-            const double *a = p->positions + 3 * (size_t)p->indices[i];
-            const double *b = p->positions + 3 * (size_t)p->indices[i + 1];
-            const double *c = p->positions + 3 * (size_t)p->indices[i + 2];
-            sb_v3 n = sb_v3_cross(sb_v3_make(b[0] - a[0], b[1] - a[1], b[2] - a[2]),
-                                  sb_v3_make(c[0] - a[0], c[1] - a[1], c[2] - a[2]));
-            for (int k = 0; k < 3; k++) {
-                float *out = s->vertices + 6 * (size_t)(base + p->indices[i + k]);
-                out[3] += (float)n.x;
-                out[4] += (float)n.y;
-                out[5] += (float)n.z;
-            }
+        if (p->uv) {
+            out[6] = (float)p->uv[2 * v];
+            out[7] = (float)p->uv[2 * v + 1];
         }
-        for (uint32_t v = 0; v < p->vertex_count; v++) {
-            float *out = s->vertices + 6 * (size_t)(base + v);
-            sb_v3 n = sb_v3_norm(sb_v3_make(out[3], out[4], out[5]));
-            out[3] = (float)n.x;
-            out[4] = (float)n.y;
-            out[5] = (float)n.z;
-        }
+        memcpy(out + 8, &p->material, 4);
     }
+    if (!p->normals) face_normals(s, p, base);
     s->vertex_count += p->vertex_count;
 
     uint32_t first = s->index_count;
@@ -74,10 +194,10 @@ void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p) {
     d->first_index = first;
     d->index_count = p->index_count;
     memcpy(d->color, p->color, sizeof d->color);
-    d->alpha_mask = p->alpha_mask;
-    d->alpha_cutoff = p->alpha_cutoff;
+    d->double_sided = p->double_sided;
+    d->closed = !p->double_sided && prim_closed(p);
+    d->material = p->material;
     d->node = p->node;
-    if (p->alpha_mask) s->alpha_mask_draws++;
 }
 
 /* ---- chunking: split a draw's triangles at the centroid median until small ---- */
@@ -176,6 +296,10 @@ bool sb_scene_finish(sb_scene *s, sb_err *err) {
         return sb_fail(err, "%s: the scene has no triangles reachable from its scene graph", s->file);
     }
     chunk_draws(s);
+    for (uint32_t i = 0; i < s->draw_count; i++) {
+        s->alpha_tested_draws += s->draws[i].material != 0;
+        s->single_sided_draws += !s->draws[i].double_sided;
+    }
     sb_aabb all = {{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
     for (uint32_t i = 0; i < s->draw_count; i++) {
         s->draws[i].box = tri_range_box(s, s->draws[i].first_index, s->draws[i].index_count);
@@ -185,7 +309,7 @@ bool sb_scene_finish(sb_scene *s, sb_err *err) {
     s->origin = sb_v3_scale(sb_v3_add(all.lo, all.hi), 0.5);
     for (uint32_t v = 0; v < s->vertex_count; v++) {
         const double *p = s->build_pos + 3 * (size_t)v;
-        float *o = s->vertices + 6 * (size_t)v;
+        float *o = sb_vertex(s, v);
         o[0] = (float)(p[0] - s->origin.x);
         o[1] = (float)(p[1] - s->origin.y);
         o[2] = (float)(p[2] - s->origin.z);
@@ -236,8 +360,8 @@ void sb_scene_find_planes(sb_scene *s) {
     plane_tri *pt = sb_xmalloc(sizeof *pt * ntri);
     uint32_t m = 0;
     for (uint32_t t = 0; t < ntri; t++) {
-        const float *a = s->vertices + 6 * (size_t)s->indices[3 * t], *b = s->vertices + 6 * (size_t)s->indices[3 * t + 1],
-                    *c = s->vertices + 6 * (size_t)s->indices[3 * t + 2];
+        const float *a = sb_vertex(s, s->indices[3 * t]), *b = sb_vertex(s, s->indices[3 * t + 1]),
+                    *c = sb_vertex(s, s->indices[3 * t + 2]);
         sb_v3 n = sb_v3_cross(sb_v3_make(b[0] - a[0], b[1] - a[1], b[2] - a[2]),
                               sb_v3_make(c[0] - a[0], c[1] - a[1], c[2] - a[2]));
         double area = 0.5 * sb_v3_len(n);
@@ -263,8 +387,8 @@ void sb_scene_find_planes(sb_scene *s) {
                 sb_plane *p = &s->planes[slot];
                 free(p->tris);
                 const uint32_t t0 = pt[i].tri;
-                const float *a = s->vertices + 6 * (size_t)s->indices[3 * t0], *b = s->vertices + 6 * (size_t)s->indices[3 * t0 + 1],
-                            *c = s->vertices + 6 * (size_t)s->indices[3 * t0 + 2];
+                const float *a = sb_vertex(s, s->indices[3 * t0]), *b = sb_vertex(s, s->indices[3 * t0 + 1]),
+                            *c = sb_vertex(s, s->indices[3 * t0 + 2]);
                 sb_v3 n = sb_v3_norm(sb_v3_cross(sb_v3_make(b[0] - a[0], b[1] - a[1], b[2] - a[2]),
                                                  sb_v3_make(c[0] - a[0], c[1] - a[1], c[2] - a[2])));
                 p->n[0] = n.x;
@@ -339,6 +463,10 @@ bool sb_scene_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_
         sb_scene_free(s);
         return false;
     }
+    /* options that change what is drawn change the run ids (the defaults leave them as they were) */
+    if (s->opts.blend != SB_BLEND_MASK && s->features.blend)
+        s->content_hash = sb_fnv1a(s->content_hash, &s->opts.blend, sizeof s->opts.blend);
+    if (s->opts.pose) s->content_hash = sb_fnv1a(s->content_hash, &s->opts.pose_time, sizeof s->opts.pose_time);
     s->load_ms = sb_now_ms() - t0;
     return true;
 }
@@ -351,7 +479,37 @@ void sb_scene_free(sb_scene *s) {
     free(s->lights);
     free(s->cameras);
     free(s->build_pos);
+    free(s->materials);
+    free(s->textures);
+    free(s->texels);
     for (uint32_t i = 0; i < s->plane_count; i++) free(s->planes[i].tris);
     sb_bvh_free(&s->bvh);
     memset(s, 0, sizeof *s);
+}
+
+void sb_scene_info(const sb_scene *s, FILE *out) {
+    const sb_scene_features *f = &s->features;
+    uint32_t closed = 0;
+    for (uint32_t i = 0; i < s->draw_count; i++) closed += s->draws[i].closed;
+    sb_v3 e = sb_v3_sub(s->bounds.hi, s->bounds.lo);
+    fprintf(out, "scene: %s\ntriangles: %llu in %u draws (%u primitives, %u mesh nodes)\n", s->file,
+            (unsigned long long)sb_scene_triangles(s), s->draw_count, f->prims, s->nodes_drawn);
+    fprintf(out, "size: %.6g x %.6g x %.6g\nsun: %s\nlights: %u\ncameras: %u\n", e.x, e.y, e.z,
+            s->has_sun ? "from the file" : "none in the file (default or --sun)", s->light_count, s->camera_count);
+    fprintf(out, "double-sided primitives: %u (back faces drawn and hit)\n", f->double_sided);
+    fprintf(out, "single-sided draws: %u (back faces culled in every pass and not hit by rays; %u closed)\n",
+            s->single_sided_draws, closed);
+    fprintf(out, "alpha MASK primitives: %u (alpha-tested in every pass and by the rays; volumes extrudes them whole)\n",
+            f->mask);
+    fprintf(out, "alpha BLEND primitives: %u (--blend-casters %s: %s)\n", f->blend, sb_blend_policy_name(s->opts.blend),
+            s->opts.blend == SB_BLEND_NONE ? "left out" : s->opts.blend == SB_BLEND_OPAQUE ? "opaque" : "alpha-tested at 0.5");
+    fprintf(out, "alpha textures: %u decoded, %u not decodable (alpha factor alone); %u other images not decoded\n",
+            f->textures_decoded, f->undecodable_alpha, f->textures_skipped);
+    fprintf(out, "skins: %u (%u primitives skinned on the CPU, %s)\n", f->skins, f->skinned,
+            f->posed ? "posed at --pose" : "in the nodes' own pose");
+    fprintf(out, "instancing (EXT_mesh_gpu_instancing): %u nodes, %u instances (expanded)\n", f->instanced_nodes,
+            f->instances);
+    fprintf(out, "Draco-compressed primitives: %u (decoded)\n", f->draco);
+    fprintf(out, "vertex-colour alpha on alpha-tested primitives: %u (ignored)\n", f->vertex_alpha_ignored);
+    fprintf(out, "degenerate: %s\n", s->degenerate[0] ? s->degenerate : "no");
 }

@@ -9,6 +9,7 @@
 #pragma once
 #include <stdbool.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "sbmath.h"
 #include "util.h"
@@ -22,10 +23,56 @@ typedef struct sb_draw {
     uint32_t index_count;   /* multiple of 3 */
     sb_aabb box;            /* relative to origin */
     float color[4];         /* base colour factor */
-    bool alpha_mask;        /* glTF alphaMode MASK */
-    float alpha_cutoff;
+    bool double_sided;      /* glTF doubleSided: back faces drawn and hit; otherwise culled (see README) */
+    bool closed;            /* its primitive is a closed, consistently wound surface: culling its back
+                               faces changes nothing a shadow map or a ray from outside it sees */
+    uint32_t material;      /* into sb_scene.materials: what the alpha test of its surface is (0: none) */
     uint32_t node;          /* source node index, for messages */
 } sb_draw;
+
+/* The alpha test of a surface: a glTF MASK material (or a BLEND one under
+ * --blend-casters mask). A point of a triangle is there when
+ * alpha * texel(uv) >= cutoff; the texel is the nearest one (no filtering), in
+ * every GL pass and in the reference's rays alike. Material 0 has no test. */
+typedef struct sb_material {
+    bool test;              /* the alpha test applies */
+    float cutoff;           /* alphaCutoff (0.5 under --blend-casters mask) */
+    float alpha;            /* baseColorFactor alpha */
+    int32_t texture;        /* into sb_scene.textures, -1: none (alpha alone decides) */
+    float uv[6];            /* KHR_texture_transform: u' = uv[0]u + uv[1]v + uv[2], v' = uv[3]u + uv[4]v + uv[5] */
+} sb_material;
+
+/* The alpha channel of a decoded base-colour texture (8 bits a texel). */
+typedef struct sb_texture {
+    uint32_t w, h;
+    uint32_t offset;        /* first texel in sb_scene.texels */
+    uint32_t wrap_s, wrap_t;    /* GL enums: GL_REPEAT, GL_CLAMP_TO_EDGE, GL_MIRRORED_REPEAT */
+} sb_texture;
+
+/* No draw holds more triangles: bigger primitives are split into spatial chunks. */
+#define SB_CHUNK_TRIS 4096u
+
+/* A vertex: position (3 floats, origin-relative), normal (3), texture
+ * coordinates of the material's alpha texture (2), material (1, as uint32 bits). */
+#define SB_VERTEX_FLOATS 9
+#define SB_VERTEX_BYTES (SB_VERTEX_FLOATS * 4)
+
+/* How the scene's BLEND materials take part in shadows (--blend-casters). */
+typedef enum sb_blend_policy {
+    SB_BLEND_MASK,          /* default: alpha-tested at 0.5, like a MASK material */
+    SB_BLEND_OPAQUE,        /* drawn, cast and hit as opaque */
+    SB_BLEND_NONE,          /* left out: neither seen, nor casting, nor hit */
+} sb_blend_policy;
+const char *sb_blend_policy_name(sb_blend_policy p);
+bool sb_blend_policy_parse(const char *s, sb_blend_policy *out);
+
+/* What a loaded file held and how it was treated (shadowbench info SCENE). */
+typedef struct sb_scene_features {
+    uint32_t prims, double_sided, mask, blend, textures_decoded, textures_skipped;
+    uint32_t skinned, skins, instanced_nodes, instances, draco, quantized, sparse;
+    uint32_t morph_ignored, vertex_alpha_ignored, undecodable_alpha;
+    bool posed;             /* skins and node animation at --pose T */
+} sb_scene_features;
 
 typedef struct sb_bvh_node {
     sb_aabb box;
@@ -67,12 +114,15 @@ typedef struct sb_plane {
 /* How a scene file is read; zero means the default. */
 typedef struct sb_scene_opts {
     bool allow_external_uris;    /* buffer and image URIs may leave the scene's folder */
+    sb_blend_policy blend;       /* --blend-casters */
+    bool pose;                   /* --pose T: nodes and skins at time T of the first animation */
+    double pose_time;            /* otherwise: the nodes' own transforms (skins in their rest pose) */
 } sb_scene_opts;
 
 typedef struct sb_scene {
     char *file;
     sb_v3 origin;                /* world position of the local frame */
-    float *vertices;             /* 6 floats per vertex: position, normal */
+    float *vertices;             /* SB_VERTEX_FLOATS per vertex */
     uint32_t vertex_count, vertex_cap;
     uint32_t *indices;
     uint32_t index_count, index_cap;
@@ -88,11 +138,19 @@ typedef struct sb_scene {
     sb_scene_camera *cameras;
     uint32_t camera_count;
 
-    uint64_t content_hash;       /* FNV-1a of the file bytes (for run ids) */
+    sb_material *materials;      /* [0]: no alpha test */
+    uint32_t material_count;
+    sb_texture *textures;
+    uint32_t texture_count;
+    uint8_t *texels;             /* every texture's alpha, one after the other */
+    uint32_t texel_count;
+    uint32_t alpha_tested_draws; /* draws whose material has the alpha test */
+    uint32_t single_sided_draws;
+    sb_scene_features features;
+
+    uint64_t content_hash;       /* FNV-1a of the file bytes and the options that change geometry (run ids) */
     sb_scene_opts opts;          /* as loaded (a glTF camera path of the scene is read alike) */
     double load_ms;
-    uint32_t images_skipped;     /* textures present but not decoded */
-    uint32_t alpha_mask_draws;
     uint32_t nodes_drawn;        /* node instances with a mesh reached from the scene graph */
     sb_plane planes[SB_MAX_PLANES];
     uint32_t plane_count;
@@ -108,6 +166,8 @@ typedef struct sb_scene {
  * scene folder). opts may be NULL. */
 bool sb_scene_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_err *err);
 void sb_scene_free(sb_scene *s);
+/* What the file held and how it is drawn (shadowbench info SCENE), as lines "key: value". */
+void sb_scene_info(const sb_scene *s, FILE *out);
 uint64_t sb_scene_triangles(const sb_scene *s);
 /* The index-th point or spot light of the scene in file order (NULL if there
  * is none); *count (may be NULL) gets how many there are. */
@@ -120,16 +180,27 @@ bool sb_resolve_bundled(const char *name, const char *ext, char *out, size_t out
 typedef struct sb_prim_desc {
     const double *positions;     /* 3 per vertex, world space */
     const double *normals;       /* 3 per vertex, world space, may be NULL */
+    const double *uv;            /* 2 per vertex (the alpha texture's set), may be NULL */
     uint32_t vertex_count;
     const uint32_t *indices;     /* triangle list */
     uint32_t index_count;
     float color[4];
-    bool alpha_mask;
-    float alpha_cutoff;
+    bool double_sided;
+    uint32_t material;           /* from sb_scene_add_material, 0: none */
     uint32_t node;
 } sb_prim_desc;
 
 void sb_scene_begin(sb_scene *s);
+/* Adds a material (the alpha test) and returns its index; equal ones are shared. */
+uint32_t sb_scene_add_material(sb_scene *s, const sb_material *m);
+/* Adds a texture's alpha (w*h bytes, copied) and returns its index. */
+int32_t sb_scene_add_texture(sb_scene *s, uint32_t w, uint32_t h, const uint8_t *alpha, uint32_t wrap_s,
+                             uint32_t wrap_t);
+/* Whether the surface of material m is there at texture coordinates (u, v):
+ * the alpha test, exactly as the shaders do it (alpha.glsl). */
+bool sb_material_covers(const sb_scene *s, uint32_t m, float u, float v);
+/* The first float of vertex i. */
+static inline float *sb_vertex(const sb_scene *s, uint32_t i) { return s->vertices + (size_t)SB_VERTEX_FLOATS * i; }
 void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p);
 /* Finds the large planar receivers (a plane holding at least 10% of the area of
  * the bounds' largest face); called by sb_scene_finish. */
@@ -146,4 +217,8 @@ uint32_t sb_bvh_cull(const sb_scene *s, const double (*planes)[4], int plane_cou
 uint32_t sb_bvh_collect(const sb_scene *s, const double (*planes)[4], int plane_count, uint32_t *out);
 bool sb_aabb_outside_plane(const sb_aabb *b, const double plane[4]);
 void sb_bvh_build(sb_scene *s);
+/* The nearest triangle (either side) the ray o + t d meets, t in (0, tmax)
+ * (origin-relative; d need not be unit): its t, or INFINITY. *backface (may
+ * be NULL): it is the inside of a closed single-sided surface (o is inside it). */
+double sb_scene_raycast(const sb_scene *s, sb_v3 o, sb_v3 d, double tmax, bool *backface);
 void sb_bvh_free(sb_bvh *b);

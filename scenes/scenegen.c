@@ -5,7 +5,8 @@
  *   plane-box  a 2x2x2 box on a 40x40 slab: analytic shadows for tests
  *   desert     wide flat terrain, ~6000 low boxy buildings (>200k triangles)
  *   towers     a dense block of skyscrapers with setbacks and narrow streets
- *   overhangs  cantilevered buildings and bridges over open ground, far views */
+ *   overhangs  cantilevered buildings and bridges over open ground, far views
+ * and the conformance set (conformance.h). */
 #include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
@@ -13,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "conformance.h"
 #include "glb.h"
 #include "sbmath.h"
 
@@ -242,11 +244,34 @@ static int gen_overhangs(const char *dir) {
     return rc;
 }
 
+/* towers with every mesh Draco-compressed (conformance set; a build with Draco only) */
+static int gen_towers_draco(const char *dir) {
+    if (!SB_HAVE_DRACO) return 0;
+    sb_glb_scene s = {0};
+    s.sun = sb_sun_dir(200, 55);
+    towers_buildings(&s);
+    for (int i = 0; i < s.n; i++) s.meshes[i].draco = true;
+    sb_glb_extension(&s, "KHR_draco_mesh_compression", true);
+    char p[4096], src[4096];
+    snprintf(p, sizeof p, "%s/towers-draco.glb", dir);
+    int rc = sb_glb_write(&s, p);
+    snprintf(src, sizeof src, "%s/towers.path", dir);
+    snprintf(p, sizeof p, "%s/towers-draco.path", dir);
+    FILE *in = fopen(src, "r"), *out = fopen(p, "w");
+    char line[512];
+    while (in && out && fgets(line, sizeof line, in)) fputs(line, out);
+    rc |= !in || !out;
+    if (in) fclose(in);
+    if (out) rc |= fclose(out) != 0;
+    return rc;
+}
+
 int main(int argc, char **argv) {
     if (argc != 2) {
         fprintf(stderr, "usage: scenegen OUTDIR\n");
         return 2;
     }
     return gen_plane_box(argv[1]) | gen_plane_box_lamp(argv[1]) | gen_desert(argv[1]) | gen_towers(argv[1]) |
-           gen_towers_night(argv[1]) | gen_overhangs(argv[1]);
+           gen_towers_night(argv[1]) | gen_overhangs(argv[1]) | gen_towers_draco(argv[1]) |
+           sb_conformance_write(argv[1]);
 }

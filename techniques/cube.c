@@ -100,7 +100,11 @@ static bool cube_create(void *state, const sb_run_ctx *rc, const void *desc, sb_
         static const char vs_src[] =
             "layout(location = 0) in vec3 a_pos;\n"
             "uniform mat4 u_face_vp[6];\n"
-            "void main() { gl_Layer = gl_InstanceID; gl_Position = u_face_vp[gl_InstanceID] * vec4(a_pos, 1.0); }\n";
+            "void main() {\n"
+            "    gl_Layer = gl_InstanceID;\n"
+            "    gl_Position = u_face_vp[gl_InstanceID] * vec4(a_pos, 1.0);\n"
+            "    SB_ALPHA_VS();\n"
+            "}\n";
         const char *vs[] = {vs_src};
         const sb_shader_src st[] = {{GL_VERTEX_SHADER, vs, 1}, {GL_FRAGMENT_SHADER, fs, 1}};
         if (!(s->prog_vs = sb_gpu_link("cube layered (vertex shader)",

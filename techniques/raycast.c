@@ -1,16 +1,20 @@
-/* raycast.c - ray-cast shadows (the Zagreb thesis), exact: a depth pre-pass,
- * then for every pixel the world position is reconstructed in double and an
- * Embree occlusion ray is cast toward the sun (offset from the surface by an
- * epsilon that grows with distance, and limited to the scene; the thesis's
- * version had neither), and the camera pass reads the result. It is the
- * reference every technique is measured against, with a cost of its own:
- * its readback and rays are the `rays` stage. On a scene lit only by point
- * lights it casts toward the first of them (or the one `light` names), so the
+/* raycast.c - ray-cast shadows (the Zagreb thesis), exact: a camera pass
+ * writes every pixel's position and geometric normal (the evaluation
+ * targets), then an Embree occlusion ray is cast from each toward the light
+ * (offset from the surface by an epsilon that grows with distance, and limited
+ * to the scene; the thesis's version had neither), and the camera pass reads
+ * the result. The points are built exactly as the reference builds them
+ * (sb_ref_points), so its error against the reference is zero up to the
+ * rasterizer repeating itself; how exact that reference is, is the run's
+ * err_floor. It has a cost of its own: the position pass is its `zpass`, the
+ * readback and rays its `rays` stage. On a scene lit only by point lights it
+ * casts toward the first of them (or the one `light` names), so the
  * point-light techniques have their reference row too. */
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
+#include "error.h"
 #include "gpu.h"
 #include "reference.h"
 #include "shaders.h"
@@ -33,7 +37,7 @@ typedef struct {
     int threads;
     bool point;             /* toward a point light, not the sun */
     sb_v3 lamp;
-    float *depth;
+    float *pos, *aux;           /* the position pass's targets */
     sb_ref_point *pts;
     int *pix;
     unsigned char *hits, *vis;
@@ -66,7 +70,8 @@ static bool raycast_create(void *state, const sb_run_ctx *rc, const void *desc, 
         s->lamp = sb_scene_point_light(g->scene, want, NULL)->position;
     }
     size_t n = (size_t)g->width * g->height;
-    s->depth = sb_xmalloc(sizeof(float) * n);
+    s->pos = sb_xmalloc(sizeof(float) * 4 * n);
+    s->aux = sb_xmalloc(sizeof(float) * 4 * n);
     s->pts = sb_xmalloc(sizeof(sb_ref_point) * n);
     s->pix = sb_xmalloc(sizeof(int) * n);
     s->hits = sb_xmalloc(n);
@@ -87,47 +92,22 @@ static void raycast_frame(void *state, sb_frame *f) {
     const int w = g->width, h = g->height;
     if (s->point) sb_frame_shade_point(f, s->lamp);
 
+    /* the camera pass with the evaluation targets: positions and normals. Its
+       depth test is the final pass's (LEQUAL: of equal depths the last drawn
+       wins), so both passes put the same triangle in every pixel. */
     sb_stage_begin(f, SB_STAGE_ZPASS);
-    sb_zpass(f);
+    bool eval = f->eval;
+    f->eval = true;
+    glUseProgram(s->fp.prog);
+    sb_gbuffer_pass(f, &s->fp);
+    f->eval = eval;
     sb_stage_end(f, SB_STAGE_ZPASS);
 
     sb_stage_begin(f, SB_STAGE_RAYS);
-    glBindFramebuffer(GL_READ_FRAMEBUFFER, g->fbo);
-    glPixelStorei(GL_PACK_ALIGNMENT, 4);
-    glReadPixels(0, 0, w, h, GL_DEPTH_COMPONENT, GL_FLOAT, s->depth);
-    sb_m4 inv;
-    sb_m4_invert(f->view_proj, &inv);
-    sb_v3 eye = sb_v3_sub(f->cam.pos, g->scene->origin);
-    int m = 0;
+    sb_gpu_readback_eval(g, s->pos, s->aux);
+    sb_eval_view view = {w, h, s->pos, s->aux, sb_v3_sub(f->cam.pos, g->scene->origin), NULL, f->shade_light};
+    int m = sb_ref_points(s->ref, &view, s->pts, s->pix);
     memset(s->vis, 255, (size_t)w * h);
-    for (int y = 0; y < h; y++)
-        for (int x = 0; x < w; x++) {
-            float d = s->depth[y * w + x];
-            if (d >= 1.0f) continue;
-#define SB_AT(px, py, dd) sb_m4_point(inv, sb_v3_make(2 * ((px) + 0.5) / w - 1, 2 * ((py) + 0.5) / h - 1, 2 * (double)(dd) - 1))
-            sb_v3 p = SB_AT(x, y, d);
-            /* normal from the neighbours whose depth is closest (never across an edge) */
-            int xo = x + 1 < w ? 1 : -1, yo = y + 1 < h ? 1 : -1;
-            if (x > 0 && x + 1 < w && fabsf(s->depth[y * w + x - 1] - d) < fabsf(s->depth[y * w + x + 1] - d)) xo = -1;
-            if (y > 0 && y + 1 < h && fabsf(s->depth[(y - 1) * w + x] - d) < fabsf(s->depth[(y + 1) * w + x] - d)) yo = -1;
-            sb_v3 px = SB_AT(x + xo, y, s->depth[y * w + x + xo]), py = SB_AT(x, y + yo, s->depth[(y + yo) * w + x]);
-#undef SB_AT
-            sb_v3 n = sb_v3_norm(sb_v3_cross(sb_v3_sub(px, p), sb_v3_sub(py, p)));
-            if (sb_v3_dot(n, sb_v3_sub(eye, p)) < 0) n = sb_v3_scale(n, -1);
-            sb_ref_point *q = &s->pts[m];
-            q->p[0] = (float)p.x;
-            q->p[1] = (float)p.y;
-            q->p[2] = (float)p.z;
-            q->n[0] = (float)n.x;
-            q->n[1] = (float)n.y;
-            q->n[2] = (float)n.z;
-            /* a depth-buffer position is off along the view ray by up to
-               z^2 (f-n)/(n f) per unit of depth: a few ulps of d */
-            double z = sb_v3_dot(sb_v3_sub(p, eye), f->cam.forward), zn = f->cam.znear, zf = f->cam.zfar;
-            double depth_err = z * z * (zf - zn) / (zn * zf) * ldexp(1.0, -22);
-            q->eps = fmaxf(sb_ref_position_eps(s->ref, q->p, (float)z), (float)depth_err);
-            s->pix[m++] = y * w + x;
-        }
     sb_reference_visibility_light(s->ref, f->shade_light, s->pts, m, s->hits, s->threads);
     for (int k = 0; k < m; k++) s->vis[s->pix[k]] = s->hits[k] ? 255 : 0;
     glBindTexture(GL_TEXTURE_2D, s->tex);
@@ -148,7 +128,8 @@ static void raycast_destroy(void *state) {
     raycast_state *s = state;
     sb_final_prog_free(&s->fp);
     if (s->tex) glDeleteTextures(1, &s->tex);
-    free(s->depth);
+    free(s->pos);
+    free(s->aux);
     free(s->pts);
     free(s->pix);
     free(s->hits);

@@ -79,7 +79,7 @@ static uint32_t *weld(const sb_scene *sc) {
     weld_key *k = sb_xmalloc(sizeof *k * (nv ? nv : 1));
     uint32_t *id = sb_xmalloc(sizeof(uint32_t) * (nv ? nv : 1));
     for (uint32_t i = 0; i < nv; i++) {
-        memcpy(k[i].p, sc->vertices + 6 * (size_t)i, sizeof k[i].p);
+        memcpy(k[i].p, sb_vertex(sc, (uint32_t)i), sizeof k[i].p);
         k[i].v = i;
     }
     qsort(k, nv, sizeof *k, cmp_weld);
@@ -160,7 +160,7 @@ static void build_geometry(volumes_geo *geo, const sb_scene *sc, sb_v3 sun, cons
             const uint32_t *ix = sc->indices + 3 * (size_t)t;
             for (int e = 0; e < 3; e++) {
                 if (!sil[3 * (size_t)t + e]) continue;
-                const float *a = sc->vertices + 6 * (size_t)ix[e], *b = sc->vertices + 6 * (size_t)ix[(e + 1) % 3];
+                const float *a = sb_vertex(sc, ix[e]), *b = sb_vertex(sc, ix[(e + 1) % 3]);
                 /* the side is the lit triangle's neighbour across a -> b: it runs b -> a */
                 push4(vb, b, 1, off);
                 push4(vb, a, 1, off);
@@ -175,7 +175,7 @@ static void build_geometry(volumes_geo *geo, const sb_scene *sc, sb_v3 sun, cons
         for (uint32_t t = t0; t < t1; t++) {
             if (!lit[t]) continue;
             const uint32_t *ix = sc->indices + 3 * (size_t)t;
-            for (int k = 0; k < 3; k++) push4(vb, sc->vertices + 6 * (size_t)ix[k], 1, off);
+            for (int k = 0; k < 3; k++) push4(vb, sb_vertex(sc, ix[k]), 1, off);
         }
         geo->cap_count[d] = (uint32_t)(vb->n / 4) - geo->cap_first[d];
     }
@@ -204,8 +204,8 @@ static bool volumes_load(const sb_gpu *g, void **data, sb_err *err) {
     uint8_t *lit = sb_xcalloc(ntri ? ntri : 1, 1);
     for (uint32_t t = 0; t < ntri; t++) {
         const uint32_t *ix = sc->indices + 3 * (size_t)t;
-        const float *a = sc->vertices + 6 * (size_t)ix[0], *b = sc->vertices + 6 * (size_t)ix[1],
-                    *c = sc->vertices + 6 * (size_t)ix[2];
+        const float *a = sb_vertex(sc, ix[0]), *b = sb_vertex(sc, ix[1]),
+                    *c = sb_vertex(sc, ix[2]);
         sb_v3 n = sb_v3_cross(sb_v3_make(b[0] - a[0], b[1] - a[1], b[2] - a[2]),
                               sb_v3_make(c[0] - a[0], c[1] - a[1], c[2] - a[2]));
         lit[t] = sb_v3_dot(n, g->sun) > 0;
@@ -230,7 +230,8 @@ static bool volumes_load(const sb_gpu *g, void **data, sb_err *err) {
                geo->open_edges);
     const char *vs[] = {sb_shader_volume_vert};
     const char *fs[] = {sb_shader_depth_frag};
-    if (!(geo->prog = sb_gpu_program("volumes", NULL, vs, 1, fs, 1, err))) return false;
+    /* extruded silhouettes have no texture coordinates: no alpha test (README: volumes on alpha-tested scenes) */
+    if (!(geo->prog = sb_gpu_program("volumes", "#define SB_NO_ALPHA\n", vs, 1, fs, 1, err))) return false;
     geo->u_view = glGetUniformLocation(geo->prog, "u_view");
     geo->u_proj = glGetUniformLocation(geo->prog, "u_proj");
     if (!sb_final_prog_create(&geo->fp, "volumes", sb_shader_vis_volumes_glsl, NULL, err)) return false;

@@ -3,6 +3,7 @@
 layout(location = 0) in vec3 a_pos;
 uniform uint u_mask;
 void main() {
+    SB_ALPHA_VS();
     int k = gl_InstanceID, c = 0;
     for (; c < 8; c++) {
         if (((u_mask >> uint(c)) & 1u) != 0u) {

@@ -1,4 +1,7 @@
 // cube_depth.vert - one cube face per draw.
 layout(location = 0) in vec3 a_pos;
 uniform mat4 u_vp;
-void main() { gl_Position = u_vp * vec4(a_pos, 1.0); }
+void main() {
+    gl_Position = u_vp * vec4(a_pos, 1.0);
+    SB_ALPHA_VS();
+}

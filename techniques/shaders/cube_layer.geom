@@ -14,9 +14,9 @@ void main() {
         if (p0.y > p0.w && p1.y > p1.w && p2.y > p2.w) continue;
         if (p0.y < -p0.w && p1.y < -p1.w && p2.y < -p2.w) continue;
         if (p0.w < 0.0 && p1.w < 0.0 && p2.w < 0.0) continue;
-        gl_Layer = f; gl_Position = p0; EmitVertex();
-        gl_Layer = f; gl_Position = p1; EmitVertex();
-        gl_Layer = f; gl_Position = p2; EmitVertex();
+        gl_Layer = f; gl_Position = p0; SB_ALPHA_GS(0); EmitVertex();
+        gl_Layer = f; gl_Position = p1; SB_ALPHA_GS(1); EmitVertex();
+        gl_Layer = f; gl_Position = p2; SB_ALPHA_GS(2); EmitVertex();
         EndPrimitive();
     }
 }

@@ -1,2 +1,2 @@
 // depth.frag - depth only.
-void main() {}
+void main() { SB_ALPHA_TEST(); }

@@ -7,6 +7,7 @@ uniform mat3 u_frame;       // world -> lamp frame, +z along the front hemispher
 uniform float u_side;       // +1 front map, -1 back map
 uniform float u_near, u_far;
 void main() {
+    SB_ALPHA_VS();
     vec3 v = u_frame * (a_pos - u_lamp);
     v.z *= u_side;
     float len = length(v);

@@ -12,6 +12,7 @@ layout(location = 1) out float o_vis;
 layout(location = 2) out vec4 o_pos;   // origin-relative position, shadow texels per pixel
 layout(location = 3) out vec4 o_aux;   // geometric normal (facing the viewer), cascade index
 void main() {
+    SB_ALPHA_TEST();
     sb_out_texel_px = -1.0;
     sb_out_cascade = -1.0;
     vec3 n = normalize(v_nrm);

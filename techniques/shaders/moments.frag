@@ -3,6 +3,7 @@
 uniform float u_exponent;
 layout(location = 0) out vec4 o_moments;
 void main() {
+    SB_ALPHA_TEST();
     float z = gl_FragCoord.z;
 #if SB_FORMAT == 1
     float dx = dFdx(z), dy = dFdy(z);

@@ -2,5 +2,6 @@
 in float v_side;
 uniform float u_eps;
 void main() {
+    SB_ALPHA_TEST();
     if (v_side < u_eps) discard;
 }

@@ -8,6 +8,7 @@ uniform mat4 u_flatten;     // projection onto the plane along the light
 uniform vec4 u_plane;       // n, d (origin-relative)
 out float v_side;
 void main() {
+    SB_ALPHA_VS();
     v_side = dot(u_plane.xyz, a_pos) + u_plane.w;
     gl_Position = u_proj * (u_view * (u_flatten * vec4(a_pos, 1.0)));
 }

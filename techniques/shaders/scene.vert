@@ -14,4 +14,5 @@ void main() {
     v_nrm = a_nrm;
     v_view_z = -vp.z;
     gl_Position = u_proj * vp;
+    SB_ALPHA_VS();
 }

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs one libFuzzer harness for a few seconds over its seed corpus (and, for
-# glTF, the real scenes in ../shared/scenes), then replays the regression
+# glTF, the real scenes in ../shared/scenes and the conformance set), then replays the regression
 # inputs of crashes found before. Prints the executions; non-zero on a crash.
 #   run.sh FUZZER NAME SOURCE_ROOT SECONDS
 set -euo pipefail
@@ -11,8 +11,9 @@ trap 'rm -rf "$work"' EXIT
 mkdir -p "$work/corpus"
 cp "$src/tests/fuzz/corpus/$name"/* "$work/corpus/" 2>/dev/null || true
 extra=()
-if [[ $name == gltf && -d $src/../shared/scenes ]]; then
-  for f in "$src"/../shared/scenes/*/*.glb "$src"/../shared/scenes/*/*.gltf; do
+if [[ $name == gltf ]]; then
+  # the real scenes, and the conformance set (skins, instancing, alpha textures, quantization, sparse)
+  for f in "$src"/../shared/scenes/*/*.glb "$src"/../shared/scenes/*/*.gltf "${SB_DATA_DIR:-.}"/conf-*.glb; do
     [[ -f $f ]] && cp "$f" "$work/corpus/"
   done
 fi

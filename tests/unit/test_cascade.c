@@ -196,9 +196,10 @@ static void culling(const char *scene) {
                 bool culled = !(r.csm.mask[d] & (1u << k));
                 if (!culled) submitted += dr->index_count / 3;
                 for (uint32_t t = dr->first_index; t < dr->first_index + dr->index_count; t += 3) {
-                    const float *v = r.scene.vertices;
                     const uint32_t *ix = r.scene.indices + t;
-                    if (!triangle_casts(&r.csm.fit[k], v + 6 * ix[0], v + 6 * ix[1], v + 6 * ix[2])) continue;
+                    if (!triangle_casts(&r.csm.fit[k], sb_vertex(&r.scene, ix[0]), sb_vertex(&r.scene, ix[1]),
+                                        sb_vertex(&r.scene, ix[2])))
+                        continue;
                     necessary++;
                     if (culled) fail_msg("%s: draw %u culled from cascade %d but triangle %u casts into it", scene, d, k, t / 3);
                 }

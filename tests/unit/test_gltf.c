@@ -378,6 +378,36 @@ static void test_lights(void **st) {
             ": /extensions/KHR_lights_punctual/lights/0/type: \"area\" is not one of directional|point|spot");
 }
 
+/* Required extensions: applied ones load, any other is refused in one line
+ * naming it (a loader must not draw what it does not understand). */
+static void test_required_extensions(void **st) {
+    (void)st;
+    const char *f = tmp_file("req.gltf");
+    const char *ok[] = {"KHR_mesh_quantization", "KHR_texture_transform", "EXT_mesh_gpu_instancing",
+                        "KHR_materials_transmission"};
+    char more[256];
+    for (size_t i = 0; i < sizeof ok / sizeof ok[0]; i++) {
+        snprintf(more, sizeof more, ",\"extensionsUsed\":[\"%s\"],\"extensionsRequired\":[\"%s\"]", ok[i], ok[i]);
+        assert_true(gltf_tri_write(f, &(gltf_tri){.root_more = more}));
+        sb_scene s;
+        sb_err err;
+        assert_true(sb_scene_load(&s, f, NULL, &err));
+        sb_scene_free(&s);
+    }
+    assert_true(gltf_tri_write(f, &(gltf_tri){.root_more = ",\"extensionsRequired\":[\"KHR_gaussian_splatting\"]"}));
+    expect_scene_refused(f, "/extensionsRequired/0: the file requires the extension KHR_gaussian_splatting");
+    assert_true(gltf_tri_write(f, &(gltf_tri){.root_more = ",\"extensionsRequired\":[\"EXT_meshopt_compression\"]"}));
+    expect_scene_refused(f, "requires EXT_meshopt_compression: meshopt-compressed buffers are not decoded");
+    assert_true(gltf_tri_write(f, &(gltf_tri){.root_more = ",\"extensionsRequired\":[\"KHR_draco_mesh_compression\"]"}));
+    if (!SB_HAVE_DRACO) expect_scene_refused(f, "built without Draco");
+    /* a Draco primitive whose bitstream is not one: its extension's place in the message */
+    assert_true(gltf_tri_write(f, &(gltf_tri){.prim = "\"attributes\":{\"POSITION\":0},\"indices\":1,\"extensions\":"
+                                                      "{\"KHR_draco_mesh_compression\":{\"bufferView\":0,\"attributes\":"
+                                                      "{\"POSITION\":0}}}"}));
+    expect_scene_refused(f, SB_HAVE_DRACO ? "/meshes/0/primitives/0/extensions/KHR_draco_mesh_compression: Draco:"
+                                          : "built without Draco");
+}
+
 static void test_syntax_in_a_file(void **st) {
     (void)st;
     const char *f = tmp_file("syntax.gltf");
@@ -403,7 +433,7 @@ int main(void) {
         cmocka_unit_test(test_uri_confined),         cmocka_unit_test(test_layouts),
         cmocka_unit_test(test_transforms),           cmocka_unit_test(test_node_graphs),
         cmocka_unit_test(test_degenerate),           cmocka_unit_test(test_lights),
-        cmocka_unit_test(test_syntax_in_a_file),
+        cmocka_unit_test(test_syntax_in_a_file),     cmocka_unit_test(test_required_extensions),
     };
     return cmocka_run_group_tests_name("gltf", tests, setup, teardown);
 }

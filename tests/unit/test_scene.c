@@ -52,8 +52,8 @@ static void load_shared(const char *rel, uint64_t expect_tris) {
     bool ok = sb_scene_load(&s, p, NULL, &err);
     if (!ok) print_message("%s\n", err.msg);
     assert_true(ok);
-    print_message("%s: %llu triangles, %u draws, %u images skipped, %.0f ms\n", rel,
-                  (unsigned long long)sb_scene_triangles(&s), s.draw_count, s.images_skipped, s.load_ms);
+    print_message("%s: %llu triangles, %u draws, %u textures decoded, %.0f ms\n", rel,
+                  (unsigned long long)sb_scene_triangles(&s), s.draw_count, s.features.textures_decoded, s.load_ms);
     assert_int_equal(sb_scene_triangles(&s), expect_tris);
     for (uint32_t i = 0; i < s.draw_count; i++) assert_true(s.draws[i].index_count / 3 <= 4096);
     sb_scene_free(&s);
