@@ -289,8 +289,58 @@ static int by_index(const void *a, const void *b) {
     return x->index < y->index ? -1 : x->index > y->index ? 1 : 0;
 }
 
+/* A batch shard's place, from its meta ("runs: R of T, shard I/N"); false
+ * for a folder that is not a shard (a whole batch, a `run`). */
+typedef struct {
+    int runs, total, index, count;
+} shard_meta;
+
+static bool read_shard(const char *dir, shard_meta *m) {
+    char path[4200];
+    snprintf(path, sizeof path, "%s/meta", dir);
+    sb_err e;
+    char *text = sb_read_file(path, NULL, &e);
+    if (!text) return false;
+    const char *line = strstr(text, "\nruns: ");
+    bool ok = line && sscanf(line, "\nruns: %d of %d, shard %d/%d", &m->runs, &m->total, &m->index, &m->count) == 4 &&
+              m->count > 0 && m->index >= 1 && m->index <= m->count;
+    free(text);
+    return ok;
+}
+
+/* Shards merge only as a whole: every shard of the batch once, each with all
+ * its runs (a shard killed before its end must be resumed first). */
+static bool check_shards(const char *const *dirs, int n, const sb_table *t, sb_err *err) {
+    shard_meta first = {0};
+    int seen_count = 0;
+    unsigned char *seen = NULL;
+    bool ok = true;
+    for (int i = 0; ok && i < n; i++) {
+        shard_meta m;
+        if (!read_shard(dirs[i], &m)) continue;
+        if (!seen) {
+            first = m;
+            seen = sb_xcalloc((size_t)m.count + 1, 1);
+        } else if (m.count != first.count || m.total != first.total) {
+            ok = sb_fail(err, "%s: shard %d/%d of %d runs does not belong with %s (shards of %d, %d runs)", dirs[i],
+                         m.index, m.count, m.total, dirs[0], first.count, first.total);
+            break;
+        }
+        if (seen[m.index]++) ok = sb_fail(err, "%s: shard %d/%d is given twice", dirs[i], m.index, m.count);
+        else if (t[i].nrows != m.runs)
+            ok = sb_fail(err, "%s: shard %d/%d has %d of its %d runs: it stopped before its end (resume it with "
+                              "`shadowbench batch FILE --shard %d/%d --resume %s`)",
+                         dirs[i], m.index, m.count, t[i].nrows, m.runs, m.index, m.count, dirs[i]);
+        seen_count++;
+    }
+    for (int k = 1; ok && seen && k <= first.count; k++)
+        if (!seen[k]) ok = sb_fail(err, "shard %d/%d is missing: %d of %d shards given, the merge would lose its runs", k,
+                                   first.count, seen_count, first.count);
+    free(seen);
+    return ok;
+}
+
 bool sb_merge(const char *const *dirs, int n, const char *out_dir, sb_err *err) {
-    if (!sb_mkdir_p(out_dir, err)) return false;
     sb_table *t = sb_xcalloc((size_t)n, sizeof *t);
     merged_row *rows = NULL;
     int nrows = 0;
@@ -306,6 +356,10 @@ bool sb_merge(const char *const *dirs, int n, const char *out_dir, sb_err *err) 
         }
         if (!hdr_line) hdr_line = sb_strdup(hdr);
         else if (ok && strcmp(hdr_line, hdr)) ok = sb_fail(err, "%s: summary columns differ from %s's", dirs[i], dirs[0]);
+    }
+    /* nothing is written until the inputs are known to make a whole */
+    ok = ok && check_shards(dirs, n, t, err) && sb_mkdir_p(out_dir, err);
+    for (int i = 0; ok && i < n; i++) {
         for (int r = 0; ok && r < t[i].nrows; r++) {
             const char *id = sb_table_get(&t[i], r, "run_id");
             for (int k = 0; k < nrows; k++)
