@@ -509,8 +509,15 @@ int sb_batch_main(const sb_batch_cmd *cmd) {
     for (int i = 0; i < b.nruns; i++) todo += selected[i] && !done[i];
     if (cmd->resume) sb_log("resuming %s: %d run(s) complete, %d to do", dir, nsel - todo, todo);
     if (!sb_summary_flush(&sum, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
+    double t0 = sb_now_ms();
     run_scenes(&b, selected, done, todo, dir, &s, &sum);
+    double wall_s = (sb_now_ms() - t0) / 1e3;
     printf("%s\n", dir);
+    /* how much of the batch the GPU spent on what is measured: the rest is the harness's */
+    sb_log("gpu busy share: %.1f%% (timed GPU work %.1f s of %.1f s wall); reference: %llu rays cast, %d evaluated "
+           "frame(s) reused",
+           wall_s > 0 ? 100.0 * sum.timed_gpu_ms / 1e3 / wall_s : 0.0, sum.timed_gpu_ms / 1e3, wall_s,
+           (unsigned long long)sum.ref_rays, sum.ref_reused);
     sb_log("%d run(s): %d ok (%d unstable), %d failed, %d skipped; results in %s", sum.count,
            sum.count - sum.failed - sum.skipped, sum.unstable, sum.failed, sum.skipped, dir);
     rc = sum.failed ? 1 : 0;

@@ -48,6 +48,6 @@ bool sb_eval_frame(sb_session *s, sb_instance *in, int pf, int n, int replay, in
     bool have_inv = sb_m4_invert(f->view_proj, &inv);
     sb_eval_view view = {b->w, b->h, b->pos, b->aux, sb_v3_sub(f->cam.pos, s->scene.origin), have_inv ? &inv : NULL,
                          f->shade_light};
-    sb_evaluate_frame(ref, &view, b->vis, b->ref, m, s->opts.threads);
+    sb_evaluate_frame(ref, s->ref_cache, &view, b->vis, b->ref, m, s->opts.threads);
     return sb_gl_check("evaluation pass", err);
 }

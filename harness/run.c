@@ -86,7 +86,7 @@ int sb_run_opts_set(sb_run_opts *o, const char *a, const char *v, sb_err *err) {
     } else if (!strcmp(a, "--images")) {
         if (!sb_parse_int(v, &n) || n < 0 || n > 1000000) return sb_fail(err, "--images %s: expected a frame interval >= 0", v), -1;
         if (n > 0 && !sb_images_available())
-            return sb_fail(err, "--images %s: this shadowbench was built without OpenImageIO (meson -Dimages=disabled)", v), -1;
+            return sb_fail(err, "--images %s: %s", v, sb_images_unavailable_reason()), -1;
         o->images = (int)n;
     } else if (!strcmp(a, "--error-every")) {
         if (!sb_parse_int(v, &n) || n < 0 || n > 1000000) return sb_fail(err, "--error-every %s: expected a frame interval >= 0", v), -1;
@@ -217,6 +217,8 @@ void sb_session_close_scene(sb_session *s) {
         free(s->ref);
         s->ref = NULL;
     }
+    sb_ref_cache_free(s->ref_cache);
+    s->ref_cache = NULL;
     free(s->scratch);
     s->scratch = NULL;
     sb_calib_free(&s->calib);
@@ -240,6 +242,7 @@ const sb_reference *sb_session_reference(sb_session *s, sb_err *err) {
         return NULL;
     }
     s->ref = r;
+    s->ref_cache = sb_ref_cache_new(SB_REF_CACHE_BYTES);
     return r;
 }
 
@@ -408,6 +411,8 @@ static bool evaluate(sb_session *s, sb_instance *in, int seq, const char *out_di
             r->evaluated = true;
             info->rays += r->err.rays;
             info->ray_ms += r->err.ray_ms;
+            if (r->err.reused) info->ref_reused++;
+            else info->cast_ms += r->err.ray_ms;
         }
         if (ok && s->opts.images > 0 && pf % s->opts.images == 0)
             ok = sb_images_write_frame(dir, run_id, pf, b.w, b.h, b.rgba, b.vis, b.ref, b.pos, b.aux, err);

@@ -68,6 +68,7 @@ typedef struct sb_session {
     char skip[SB_ERR_LEN + 64]; /* the last skip reason */
     uint32_t *scratch;          /* draw_count entries: a frame's culling results */
     struct sb_reference *ref;   /* the scene's Embree reference, built on first use */
+    struct sb_ref_cache *ref_cache; /* its answers per rasterized frame, shared by the runs of the scene */
     void **tech_data;           /* per technique (registry index): what its load step made for the scene */
     bool *tech_loaded;
     bool timed;                 /* true while a run's timed frames render (tests assert nothing is read back then) */
@@ -78,6 +79,8 @@ typedef struct sb_session {
 
 /* Above these shares a run's warnings say its error figures cannot be trusted
  * (see check_geometry in run.c and the README's "Error" section). */
+/* The reference answers kept per scene (bytes: one per evaluated pixel; 1280x720 frames about 0.9 MB each). */
+#define SB_REF_CACHE_BYTES ((size_t)512 << 20)
 #define SB_GEOM_MISMATCH_WARN 1e-4
 #define SB_ERR_FLOOR_WARN 1e-3
 

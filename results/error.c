@@ -7,11 +7,6 @@
 
 #include "stats.h"
 
-static int cmp_double(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y ? 1 : 0;
-}
-
 int sb_ref_points(const sb_reference *r, const sb_eval_view *v, sb_ref_point *pts, int *pix) {
     int n = v->w * v->h, m = 0;
     for (int i = 0; i < n; i++) {
@@ -66,10 +61,8 @@ static void compare(const sb_eval_view *v, const unsigned char *vis, const unsig
         double sum = 0;
         for (int k = 0; k < nres; k++) sum += res_err[k];
         out->res_err_mean = sum / nres;
-        qsort(res_err, (size_t)nres, sizeof(double), cmp_double);
-        qsort(texel, (size_t)nres, sizeof(double), cmp_double);
-        out->res_err_p95 = sb_percentile(res_err, nres, 0.95);
-        out->texel_px_p95 = sb_percentile(texel, nres, 0.95);
+        out->res_err_p95 = sb_percentile_select(res_err, nres, 0.95);
+        out->texel_px_p95 = sb_percentile_select(texel, nres, 0.95);
     }
     free(res_err);
     free(texel);
@@ -225,26 +218,146 @@ static void geometry_check(const sb_reference *r, const sb_eval_view *v, const u
     free(smp);
 }
 
-void sb_evaluate_frame(const sb_reference *r, const sb_eval_view *v, const unsigned char *vis, unsigned char *ref_out,
-                       sb_error_metrics *out, int threads) {
+/* ---- the cache ---- */
+
+typedef struct ref_entry {
+    uint64_t key[2];
+    int m;                     /* evaluated pixels */
+    unsigned char *ref;        /* their reference, m bytes */
+    sb_error_metrics geo;      /* the geometry check's figures */
+} ref_entry;
+
+struct sb_ref_cache {
+    ref_entry *e;
+    int n, cap;
+    size_t bytes, max_bytes;
+    long hits, misses;
+};
+
+sb_ref_cache *sb_ref_cache_new(size_t max_bytes) {
+    sb_ref_cache *c = sb_xcalloc(1, sizeof *c);
+    c->max_bytes = max_bytes;
+    return c;
+}
+
+void sb_ref_cache_free(sb_ref_cache *c) {
+    if (!c) return;
+    for (int i = 0; i < c->n; i++) free(c->e[i].ref);
+    free(c->e);
+    free(c);
+}
+
+void sb_ref_cache_stats(const sb_ref_cache *c, long *hits, long *misses) {
+    *hits = c ? c->hits : 0;
+    *misses = c ? c->misses : 0;
+}
+
+static uint64_t mix64(uint64_t h) {
+    h ^= h >> 33;
+    h *= 0xff51afd7ed558ccdULL;
+    h ^= h >> 33;
+    h *= 0xc4ceb9fe1a85ec53ULL;
+    return h ^ (h >> 33);
+}
+
+/* Two independent 64-bit hashes of what determines the reference's answers. */
+static void view_key(const sb_eval_view *v, uint64_t key[2]) {
+    uint64_t h1 = 0x9e3779b97f4a7c15ULL ^ (uint64_t)v->w << 32 ^ (uint64_t)v->h, h2 = mix64(h1 + 1);
+    double cam[16 + 4 + 3] = {0};
+    if (v->inv_view_proj) memcpy(cam, v->inv_view_proj->m, sizeof(double) * 16);
+    memcpy(cam + 16, v->light, sizeof(double) * 4);
+    cam[20] = v->eye.x, cam[21] = v->eye.y, cam[22] = v->eye.z;
+    for (size_t i = 0; i < sizeof cam / sizeof cam[0]; i++) {
+        uint64_t w;
+        memcpy(&w, &cam[i], 8);
+        h1 = (h1 ^ w) * 0x100000001b3ULL;
+        h2 = mix64(h2 ^ w);
+    }
+    size_t n = (size_t)v->w * v->h;
+    for (size_t i = 0; i < n; i++) {
+        uint32_t w[6];
+        memcpy(w, v->pos + 4 * i, 12); /* xyz: the position; w (texels per pixel) is the technique's */
+        memcpy(w + 3, v->aux + 4 * i, 12);
+        uint64_t a = (uint64_t)w[0] | (uint64_t)w[1] << 32, b = (uint64_t)w[2] | (uint64_t)w[3] << 32,
+                 c = (uint64_t)w[4] | (uint64_t)w[5] << 32;
+        h1 = ((h1 ^ a) * 0x9fb21c651e98df25ULL ^ b) * 0xc2b2ae3d27d4eb4fULL ^ c;
+        h1 = h1 << 29 | h1 >> 35;
+        h2 = (h2 + a * 0x165667b19e3779f9ULL) ^ (b + (c << 7 | c >> 57));
+        h2 = (h2 << 31 | h2 >> 33) * 0x27d4eb2f165667c5ULL;
+    }
+    key[0] = mix64(h1);
+    key[1] = mix64(h2 ^ key[0]);
+}
+
+static const ref_entry *cache_find(sb_ref_cache *c, const uint64_t key[2], int m) {
+    for (int i = 0; c && i < c->n; i++)
+        if (c->e[i].key[0] == key[0] && c->e[i].key[1] == key[1] && c->e[i].m == m) return &c->e[i];
+    return NULL;
+}
+
+static void cache_put(sb_ref_cache *c, const uint64_t key[2], int m, const unsigned char *ref,
+                      const sb_error_metrics *geo) {
+    if (!c || (size_t)m > c->max_bytes) return;
+    while (c->n && c->bytes + (size_t)m > c->max_bytes) { /* the oldest go first */
+        c->bytes -= (size_t)c->e[0].m;
+        free(c->e[0].ref);
+        memmove(c->e, c->e + 1, sizeof *c->e * (size_t)--c->n);
+    }
+    if (c->n == c->cap) {
+        c->cap = c->cap ? 2 * c->cap : 16;
+        c->e = sb_xrealloc(c->e, sizeof *c->e * (size_t)c->cap);
+    }
+    ref_entry *e = &c->e[c->n++];
+    e->key[0] = key[0], e->key[1] = key[1];
+    e->m = m;
+    e->ref = sb_xmalloc((size_t)(m ? m : 1));
+    memcpy(e->ref, ref, (size_t)m);
+    e->geo = *geo;
+    c->bytes += (size_t)m;
+}
+
+void sb_evaluate_frame(const sb_reference *r, sb_ref_cache *cache, const sb_eval_view *v, const unsigned char *vis,
+                       unsigned char *ref_out, sb_error_metrics *out, int threads) {
     memset(out, 0, sizeof *out);
     int n = v->w * v->h;
+    double t0 = sb_now_ms();
     sb_ref_point *pts = sb_xmalloc(sizeof *pts * (size_t)(n > 0 ? n : 1));
     int *pix = sb_xmalloc(sizeof(int) * (size_t)(n > 0 ? n : 1));
     if (ref_out) memset(ref_out, 128, (size_t)n);
     int m = sb_ref_points(r, v, pts, pix);
     unsigned char *ref = sb_xmalloc((size_t)(m > 0 ? m : 1));
-    double t0 = sb_now_ms();
-    out->rays = sb_reference_visibility_light(r, v->light, pts, m, ref, threads);
-    compare(v, vis, ref, pix, m, ref_out, out);
-    out->geom_mismatch = out->err_floor = NAN;
-    if (v->inv_view_proj) {
-        int *kof = sb_xmalloc(sizeof(int) * (size_t)(n > 0 ? n : 1));
-        for (int i = 0; i < n; i++) kof[i] = -1;
-        for (int k = 0; k < m; k++) kof[pix[k]] = k;
-        geometry_check(r, v, ref, kof, out, threads);
-        free(kof);
+    uint64_t key[2] = {0, 0};
+    if (cache) view_key(v, key);
+    const ref_entry *hit = cache_find(cache, key, m);
+    sb_error_metrics geo = {0};
+    geo.geom_mismatch = geo.err_floor = NAN;
+    if (hit) {
+        memcpy(ref, hit->ref, (size_t)m);
+        geo = hit->geo;
+        cache->hits++;
+        out->reused = true;
+    } else {
+        geo.rays = sb_reference_visibility_light(r, v->light, pts, m, ref, threads);
+        if (v->inv_view_proj) {
+            int *kof = sb_xmalloc(sizeof(int) * (size_t)(n > 0 ? n : 1));
+            for (int i = 0; i < n; i++) kof[i] = -1;
+            for (int k = 0; k < m; k++) kof[pix[k]] = k;
+            geometry_check(r, v, ref, kof, &geo, threads);
+            free(kof);
+        }
+        if (cache) {
+            cache->misses++;
+            cache_put(cache, key, m, ref, &geo);
+        }
     }
+    compare(v, vis, ref, pix, m, ref_out, out);
+    out->geom_samples = geo.geom_samples;
+    out->geom_mismatches = geo.geom_mismatches;
+    out->floor_samples = geo.floor_samples;
+    out->floor_disagree = geo.floor_disagree;
+    out->geom_mismatch = geo.geom_mismatch;
+    out->err_floor = geo.err_floor;
+    out->rays = hit ? 0 : geo.rays;
     out->ray_ms = sb_now_ms() - t0;
     free(ref);
     free(pts);

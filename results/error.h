@@ -22,9 +22,21 @@ typedef struct sb_error_metrics {
      * evaluated pixels: how exact the error figures can be. */
     long geom_samples, geom_mismatches, floor_samples, floor_disagree;
     double geom_mismatch, err_floor;   /* shares; NaN without samples */
-    uint64_t rays;
-    double ray_ms;
+    uint64_t rays;                     /* reference rays cast for this frame (0: the answers were reused) */
+    double ray_ms;                     /* time in the reference for this frame (casting, or finding the answers) */
+    bool reused;                       /* the reference's answers came from the cache */
 } sb_error_metrics;
+
+/* The reference's answers for a frame, kept by their exact inputs: the
+ * rasterized positions and normals of every pixel, the camera, the size and
+ * the light (not the technique's own values: texels per pixel, cascade). Two
+ * runs that rasterize the same frame bit for bit (every technique of a
+ * scene, path and size does) share one set of rays: what a cached answer
+ * says is what casting would say. Entries past max_bytes go oldest first. */
+typedef struct sb_ref_cache sb_ref_cache;
+sb_ref_cache *sb_ref_cache_new(size_t max_bytes);
+void sb_ref_cache_free(sb_ref_cache *c);
+void sb_ref_cache_stats(const sb_ref_cache *c, long *hits, long *misses);
 
 /* The frame being evaluated: the targets and the camera. */
 typedef struct sb_eval_view {
@@ -42,5 +54,5 @@ int sb_ref_points(const sb_reference *r, const sb_eval_view *v, sb_ref_point *pt
 
 /* vis: the technique's visibility target; ref_out (optional, w*h): 255 lit,
  * 0 shadowed, 128 not evaluated. */
-void sb_evaluate_frame(const sb_reference *r, const sb_eval_view *v, const unsigned char *vis, unsigned char *ref_out,
-                       sb_error_metrics *out, int threads);
+void sb_evaluate_frame(const sb_reference *r, sb_ref_cache *cache, const sb_eval_view *v, const unsigned char *vis,
+                       unsigned char *ref_out, sb_error_metrics *out, int threads);

@@ -1,4 +1,5 @@
-/* image.h - writing images through OpenImageIO (results/image_oiio.cc;
+/* image.h - writing images through OpenImageIO (the module
+ * results/image_oiio.cc, opened by results/image_dl.c on first use;
  * results/image_none.c in a build without it).
  * Rows are given bottom-up (GL order) and written top-down. The format
  * follows the file extension (.png, .exr, ...). */
@@ -7,8 +8,10 @@
 
 #include "util.h"
 
-/* false in a build without OpenImageIO (meson -Dimages=disabled, results/image_none.c) */
+/* false in a build without OpenImageIO (meson -Dimages=disabled, results/image_none.c)
+ * or where the image module cannot be opened; the reason in one line. */
 bool sb_images_available(void);
+const char *sb_images_unavailable_reason(void);
 /* channels 1..4 of unsigned bytes */
 bool sb_image_write_u8(const char *path, int w, int h, int channels, const unsigned char *pixels, sb_err *err);
 /* channels 1..4 of floats (EXR for float data) */

@@ -1,16 +1,31 @@
-// image_oiio.cc - the OpenImageIO adapter: the only C++ on the results side,
-// exposing plain C functions.
+// image_oiio.cc - the OpenImageIO adapter: the only C++ on the results side.
+// Built as a module of its own (libsbimages.so beside the binary), opened by
+// results/image_dl.c only when --images asks for images: OpenImageIO links
+// about 250 libraries, and a process that writes no image should not pay for
+// loading them. Its one entry point is plain C and uses nothing of the binary.
 #include <OpenImageIO/imageio.h>
 
+#include <cstdarg>
 #include <cstdio>
 #include <memory>
 #include <string>
 
-extern "C" {
-#include "image.h"
-}
+#include "image_module.h"
 
 namespace {
+
+struct sb_err {
+    char *msg;
+    size_t len;
+};
+
+bool sb_fail(sb_err *err, const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    std::vsnprintf(err->msg, err->len, fmt, ap);
+    va_end(ap);
+    return false;
+}
 
 bool write_to(const char *path, int w, int h, int channels, OIIO::TypeDesc type, const void *pixels, size_t elem,
               sb_err *err);
@@ -47,13 +62,9 @@ bool write_to(const char *path, int w, int h, int channels, OIIO::TypeDesc type,
 
 } // namespace
 
-extern "C" bool sb_image_write_u8(const char *path, int w, int h, int channels, const unsigned char *pixels,
-                                  sb_err *err) {
-    return write(path, w, h, channels, OIIO::TypeDesc::UINT8, pixels, 1, err);
+extern "C" bool SB_IMAGE_MODULE_ENTRY(const char *path, int w, int h, int channels, int is_float, const void *pixels,
+                                      char *err, size_t err_len) {
+    sb_err e{err, err_len};
+    return is_float ? write(path, w, h, channels, OIIO::TypeDesc::FLOAT, pixels, 4, &e)
+                    : write(path, w, h, channels, OIIO::TypeDesc::UINT8, pixels, 1, &e);
 }
-
-extern "C" bool sb_image_write_f32(const char *path, int w, int h, int channels, const float *pixels, sb_err *err) {
-    return write(path, w, h, channels, OIIO::TypeDesc::FLOAT, pixels, 4, err);
-}
-
-extern "C" bool sb_images_available(void) { return true; }

@@ -203,7 +203,14 @@ static sb_cell r_pooled(const sb_run_row *r, int a) {
 }
 static sb_cell r_rays_per_s(const sb_run_row *r, int a) {
     (void)a;
-    return number(r->info->ray_ms > 0 ? r->info->rays / (r->info->ray_ms / 1e3) : NAN);
+    return number(r->info->cast_ms > 0 && r->info->rays ? r->info->rays / (r->info->cast_ms / 1e3) : NAN);
+}
+/* a = 0 rays cast, 1 time in the reference, 2 frames whose reference was reused; empty without evaluated frames */
+static sb_cell r_ref(const sb_run_row *r, int a) {
+    int ne = 0;
+    for (int i = 0; i < r->n; i++) ne += r->recs[i].evaluated;
+    if (!ne) return empty();
+    return a == 0 ? integer((long long)r->info->rays) : a == 1 ? number(r->info->ray_ms) : integer(r->info->ref_reused);
 }
 
 #define SERIES(name, stats, flags) {name, NULL, 0, stats, flags, NULL}
@@ -270,7 +277,10 @@ const sb_run_col sb_run_cols[] = {
      "share of sampled pixels (all evaluated frames) where rays and rasterizer disagree on the first surface"},
     {"err_floor", r_pooled, 1, 0, 0,
      "share of sampled evaluated pixels whose reference flips when cast from the exact hit: the error figures' floor"},
-    {"ref_rays_per_s", r_rays_per_s, 0, 0, 0, "reference rays per second on this machine"},
+    {"ref_rays", r_ref, 0, 0, 0, "reference rays cast for this run: 0 when every evaluated frame's answers were reused"},
+    {"ref_reused", r_ref, 2, 0, 0, "evaluated frames whose reference came from an earlier run of the same frame"},
+    {"ref_ms", r_ref, 1, 0, 0, "time in the reference for this run (casting, geometry check, or finding the answers)"},
+    {"ref_rays_per_s", r_rays_per_s, 0, 0, 0, "reference rays per second on this machine (frames that cast)"},
 };
 const int sb_run_col_count = (int)SB_COUNT(sb_run_cols);
 
@@ -452,6 +462,9 @@ void sb_summary_add_outcome(sb_summary *sum, const sb_run_info *info, unsigned s
                             const sb_stage_times *times, int n) {
     sb_report_summary_row(&sum->rows, info, stages, recs, times, n);
     count_status(sum, info->status);
+    for (int i = 0; times && i < n; i++) sum->timed_gpu_ms += gpu_ms(&times[i]);
+    sum->ref_rays += info->rays;
+    sum->ref_reused += info->ref_reused;
     sum->unstable += info->stable && !strcmp(info->stable, "no");
 }
 

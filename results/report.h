@@ -39,8 +39,9 @@ typedef struct sb_run_info {
     double target_ci;           /* percent, 0: none */
     uint64_t scene_triangles;
     double load_ms, run_wall_s, frames_wall_ms;   /* frames: every rendered frame, warm-up included */
-    uint64_t rays;
-    double ray_ms;
+    uint64_t rays;              /* reference rays cast for this run (0: every answer reused) */
+    double ray_ms, cast_ms;     /* time in the reference for this run; of it, casting */
+    int ref_reused;             /* evaluated frames whose reference was reused */
     char warnings[512];         /* what the tool cannot stand behind in an ok run ("; "-separated, "" if nothing) */
 } sb_run_info;
 
@@ -142,6 +143,9 @@ typedef struct sb_summary {
     char *path;
     sb_csv rows;
     int count, failed, skipped, unstable;
+    double timed_gpu_ms;        /* the measured frames' GPU time, summed over the runs added */
+    uint64_t ref_rays;          /* reference rays the runs cast */
+    int ref_reused;             /* evaluated frames whose reference was reused */
     double *calib;              /* the runs' calib_ms_before so far (the batch median) */
     int ncalib;
 } sb_summary;

@@ -20,6 +20,41 @@ double sb_percentile(const double *s, int n, double p) {
     return s[i] + (s[i + 1] - s[i]) * f;
 }
 
+/* Rearranges a[lo..hi] so that a[k] holds the value it would hold sorted,
+ * smaller values before it and larger after (Hoare's selection). */
+static void select_kth(double *a, int lo, int hi, int k) {
+    while (lo < hi) {
+        int mid = lo + (hi - lo) / 2;
+        double x = a[mid] < a[lo] ? (a[hi] < a[mid] ? a[mid] : a[hi] < a[lo] ? a[hi] : a[lo])
+                                  : (a[hi] < a[lo] ? a[lo] : a[hi] < a[mid] ? a[hi] : a[mid]); /* median of 3 */
+        int i = lo, j = hi;
+        while (i <= j) {
+            while (a[i] < x) i++;
+            while (x < a[j]) j--;
+            if (i <= j) {
+                double t = a[i];
+                a[i++] = a[j];
+                a[j--] = t;
+            }
+        }
+        if (k <= j) hi = j;
+        else if (k >= i) lo = i;
+        else return;
+    }
+}
+
+double sb_percentile_select(double *a, int n, double p) {
+    if (n <= 0) return NAN;
+    double pos = p * (n - 1);
+    int i = (int)floor(pos);
+    if (i >= n - 1) i = n - 1;
+    select_kth(a, 0, n - 1, i);
+    if (i == n - 1) return a[i];
+    double next = a[i + 1];
+    for (int k = i + 2; k < n; k++) next = a[k] < next ? a[k] : next;
+    return a[i] + (next - a[i]) * (pos - i);
+}
+
 double sb_t975(int dof) {
     static const double table[] = {NAN,    12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262,
                                    2.228,  2.201,  2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093,

@@ -147,7 +147,8 @@ say "merged: $merged"
 python3 - "$whole" "$merged" <<'PY' || fail "the merged results differ from the unsharded run"
 import csv, os, re, sys
 whole, merged = sys.argv[1], sys.argv[2]
-timing = re.compile(r"(_ms|_s$|^start_s$|^warmup$|wall|^cpu|gpu|calib|harness|per_s$|stable|clock|throttle)")
+# timings, and the reference's cost (runs share its rays within one process: a shard shares less)
+timing = re.compile(r"(_ms|_s$|^start_s$|^warmup$|wall|^cpu|gpu|calib|harness|per_s$|stable|clock|throttle|^ref_)")
 def load(d, name):
     with open(os.path.join(d, name)) as f:
         return list(csv.DictReader(f))

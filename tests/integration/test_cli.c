@@ -449,6 +449,37 @@ static void test_stability_verdict_on_llvmpipe(void **st) {
     sb_table_free(&t);
 }
 
+/* The reference is cast once per frame: in a two-spec run the second run
+ * reuses the first's answers (ref_rays 0), and its error figures are those
+ * of the same spec run alone, which casts its own. */
+static void test_reference_shared(void **st) {
+    (void)st;
+    const char *cmd = "%s run towers towers %s --frames 4 --size 320x180 --error-every 1 --warmup 0 --quiet --out %s/%s";
+    char two[4096], one[4096];
+    run_dir(two, sizeof two, cmd, test_binary(), "sm:res=1024 pssm:res=1024", g_tmp, "ref2");
+    run_dir(one, sizeof one, cmd, test_binary(), "pssm:res=1024", g_tmp, "ref1");
+    sb_table a, b;
+    summary_row(two, &a);
+    summary_row(one, &b);
+    assert_int_equal(a.nrows, 2);
+    print_message("two specs: ref_rays %s then %s (reused %s, %s ms); alone: %s (%s ms)\n", sb_table_get(&a, 0, "ref_rays"),
+                  sb_table_get(&a, 1, "ref_rays"), sb_table_get(&a, 1, "ref_reused"), sb_table_get(&a, 1, "ref_ms"),
+                  sb_table_get(&b, 0, "ref_rays"), sb_table_get(&b, 0, "ref_ms"));
+    assert_true(atoll(sb_table_get(&a, 0, "ref_rays")) > 0);
+    assert_string_equal(sb_table_get(&a, 0, "ref_reused"), "0");
+    assert_string_equal(sb_table_get(&a, 1, "ref_rays"), "0");
+    assert_string_equal(sb_table_get(&a, 1, "ref_reused"), "4");
+    assert_string_equal(sb_table_get(&b, 0, "ref_rays"), sb_table_get(&a, 0, "ref_rays"));
+    const char *same[] = {"err_rate_mean", "err_rate_p95", "err_false_shadow_mean", "err_false_lit_mean", "vis_mae_mean",
+                          "geom_mismatch", "err_floor"};
+    for (size_t k = 0; k < sizeof same / sizeof same[0]; k++) {
+        print_message("%s: %s shared, %s alone\n", same[k], sb_table_get(&a, 1, same[k]), sb_table_get(&b, 0, same[k]));
+        assert_string_equal(sb_table_get(&a, 1, same[k]), sb_table_get(&b, 0, same[k]));
+    }
+    sb_table_free(&a);
+    sb_table_free(&b);
+}
+
 /* The passes of a run folder's runs in the order they started: each pass as
  * run_index * 100 + repetition, from the per-frame repeat and start_s columns. */
 static int pass_order(const char *dir, int *order, int max) {
@@ -521,6 +552,7 @@ int main(void) {
         cmocka_unit_test(test_stability_verdict_on_llvmpipe),
         cmocka_unit_test(test_backends_same_draw_calls), cmocka_unit_test(test_query_timing),
         cmocka_unit_test(test_repeats_and_target_ci), cmocka_unit_test(test_run_order),
+        cmocka_unit_test(test_reference_shared),
     };
     return cmocka_run_group_tests_name("cli", tests, setup, teardown);
 }

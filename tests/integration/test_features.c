@@ -71,6 +71,11 @@ static void test_images(void **st) {
                         test_binary(), g_tmp);
         return;
     }
+    /* the module is opened on first use: without it, one line and nothing rendered */
+    expect_cli_fail("--images 2: the image module cannot be opened: /nonexistent/libsbimages.so",
+                    "SB_IMAGE_MODULE=/nonexistent/libsbimages.so %s run plane-box plane-box sm:res=256 --frames 3 "
+                    "--warmup 0 --size 64x36 --error-every 1 --images 2 --quiet --out %s/img",
+                    test_binary(), g_tmp);
     assert_int_equal(sh(cmd, test_binary(), g_tmp), 0);
     char dir[4096], p[4400];
     out_dir(dir, sizeof dir);
@@ -136,14 +141,18 @@ static void test_no_gl(void **st) {
                     test_binary(), g_tmp);
 }
 
-/* libOSMesa (and the LLVM behind it) is opened only when asked for, never
- * linked; OpenImageIO is linked only in a build with images. */
+/* libOSMesa (and the LLVM behind it) and OpenImageIO (about 250 libraries)
+ * are opened only when asked for, never linked: OpenImageIO through the image
+ * module beside the binary, built only with images. */
 static void test_linked_libraries(void **st) {
     (void)st;
     /* grep -c prints the count (and exits 1 when it is 0) */
-    sh("ldd %s | grep -c -E 'libOSMesa|libLLVM'", test_binary());
+    sh("ldd %s | grep -c -E 'libOSMesa|libLLVM|libOpenImageIO'", test_binary());
     assert_int_equal(atoi(g_out), 0);
-    sh("ldd %s | grep -c libOpenImageIO", test_binary());
+    char module[4200];
+    snprintf(module, sizeof module, "%s", test_binary());
+    snprintf(strrchr(module, '/') + 1, sizeof module - (size_t)(strrchr(module, '/') + 1 - module), "libsbimages.so");
+    sh("ldd %s | grep -c libOpenImageIO", module);
     assert_int_equal(atoi(g_out) > 0, SB_HAVE_IMAGES);
     sh("ldd %s | grep -c libEGL", test_binary());
     assert_true(atoi(g_out) > 0); /* the check can see a linked library */

@@ -91,8 +91,35 @@ static void test_stability_verdict(void **st) {
     free(small);
 }
 
+static int cmp_d(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y ? 1 : 0;
+}
+
+/* Selection gives the sorted percentile exactly, with ties, runs and tiny n. */
+static void test_percentile_select(void **st) {
+    (void)st;
+    uint64_t x = 88172645463325252ULL;
+    const double ps[] = {0, 0.5, 0.95, 0.99, 1};
+    for (int n = 1; n < 300; n += (n < 20 ? 1 : 37)) {
+        double a[300], sorted[300];
+        for (int i = 0; i < n; i++) {
+            x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+            a[i] = (n % 3 == 0) ? (double)(x % 5) : (double)(x % 100000) / 7; /* every third n: many ties */
+        }
+        memcpy(sorted, a, sizeof(double) * (size_t)n);
+        qsort(sorted, (size_t)n, sizeof(double), cmp_d);
+        for (size_t k = 0; k < sizeof ps / sizeof ps[0]; k++) {
+            double b[300];
+            memcpy(b, a, sizeof(double) * (size_t)n);
+            assert_true(sb_percentile_select(b, n, ps[k]) == sb_percentile(sorted, n, ps[k]));
+        }
+    }
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_known_values), cmocka_unit_test(test_t_quantiles),
-                                       cmocka_unit_test(test_stability_verdict)};
+                                       cmocka_unit_test(test_stability_verdict),
+                                       cmocka_unit_test(test_percentile_select)};
     return cmocka_run_group_tests_name("stats", tests, NULL, NULL);
 }

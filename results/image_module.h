@@ -1,0 +1,16 @@
+/* image_module.h - the contract between the binary and the image module
+ * (libsbimages.so, results/image_oiio.cc), which results/image_dl.c opens
+ * at run time: one C function, rows bottom-up as image.h says. */
+#pragma once
+#include <stdbool.h>
+#include <stddef.h>
+
+#define SB_IMAGE_MODULE_FILE "libsbimages.so"
+#define SB_IMAGE_MODULE_ENTRY sb_image_module_write
+#define SB_IMAGE_MODULE_SYMBOL "sb_image_module_write"
+
+/* Writes w x h pixels of `channels` unsigned bytes (is_float 0) or floats
+ * (is_float 1) to path, in the format its extension names, under a
+ * temporary name renamed when complete. false with a message in err. */
+typedef bool (*sb_image_module_fn)(const char *path, int w, int h, int channels, int is_float, const void *pixels,
+                                   char *err, size_t err_len);
