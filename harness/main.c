@@ -254,9 +254,11 @@ static int cmd_run(const cli *c) {
         free(runs);
         return 1;
     }
-    sb_log("%s: %u triangles, %u draws, loaded in %.0f ms; renderer %s (%s timing)", s.scene.file,
-           (unsigned)sb_scene_triangles(&s.scene), s.scene.draw_count, s.scene.load_ms, s.ctx.renderer,
-           sb_timing_name(s.timing));
+    char parts[256];
+    sb_scene_load_parts(&s.scene, parts, sizeof parts);
+    sb_log("%s: %u triangles, %u draws, loaded in %.0f ms (%s), GPU upload %.0f ms; renderer %s (%s timing)",
+           s.scene.file, (unsigned)sb_scene_triangles(&s.scene), s.scene.draw_count, s.scene.load_ms, parts,
+           s.gpu_upload_ms, s.ctx.renderer, sb_timing_name(s.timing));
     snprintf(sum_path, sizeof sum_path, "%s/summary.csv", dir);
     sb_summary sum;
     sb_summary_open(&sum, sum_path);

@@ -184,10 +184,13 @@ bool sb_session_attach(sb_session *s, const sb_run_opts *o, sb_scene *scene, sb_
     }
     sb_v3 sun = s->scene.has_sun ? s->scene.sun : sb_sun_dir(135, 40);
     if (o->sun_override) sun = sb_sun_dir(o->sun_az, o->sun_el);
+    double t0 = sb_now_ms();
     if (!sb_gpu_init(&s->gpu, &s->ctx, &s->scene, o->width, o->height, sun, err)) {
         sb_session_close_scene(s);
         return false;
     }
+    glFinish();
+    s->gpu_upload_ms = sb_now_ms() - t0;
     s->gpu.has_sun = s->scene.has_sun || o->sun_override;
     s->scratch = sb_xcalloc(s->scene.draw_count + 1, sizeof(uint32_t));
     s->tech_data = sb_xcalloc((size_t)sb_technique_count(), sizeof *s->tech_data);

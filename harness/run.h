@@ -68,6 +68,7 @@ typedef struct sb_session {
     char skip[SB_ERR_LEN + 64]; /* the last skip reason */
     uint32_t *scratch;          /* draw_count entries: a frame's culling results */
     struct sb_reference *ref;   /* the scene's Embree reference, built on first use */
+    double gpu_upload_ms;       /* the scene's buffers and targets made on the GPU (sb_gpu_init, finished) */
     struct sb_ref_cache *ref_cache; /* its answers per rasterized frame, shared by the runs of the scene */
     void **tech_data;           /* per technique (registry index): what its load step made for the scene */
     bool *tech_loaded;

@@ -907,7 +907,10 @@ extern "C" bool sb_gltf_load(sb_scene *s, const char *path, const sb_scene_opts 
     if (!opts) opts = &defaults;
     try {
         uint64_t hash;
+        double t0 = sb_now_ms();
         if (!load_model(path, opts, model, &images, &hash, err)) return false;
+        double t1 = sb_now_ms();
+        s->load_part_ms[SB_LOAD_PARSE] = t1 - t0;
         Loader L{Ctx{path, &model, err}, s, opts, &images, {}, {}, {}, {}, {}, {}};
         read_cameras(s, model);
         std::vector<int> roots;
@@ -915,6 +918,7 @@ extern "C" bool sb_gltf_load(sb_scene *s, const char *path, const sb_scene_opts 
         s->features.textures_skipped = (uint32_t)model.images.size() - s->features.textures_decoded;
         s->content_hash = hash;
         log_features(path, s, model);
+        s->load_part_ms[SB_LOAD_FLATTEN] = sb_now_ms() - t1;
         return true;
     } catch (const std::exception &ex) {
         return sb_fail(err, "%s: %s", path, ex.what());

@@ -295,6 +295,7 @@ bool sb_scene_finish(sb_scene *s, sb_err *err) {
         s->build_pos = NULL;
         return sb_fail(err, "%s: the scene has no triangles reachable from its scene graph", s->file);
     }
+    double t0 = sb_now_ms();
     chunk_draws(s);
     for (uint32_t i = 0; i < s->draw_count; i++) {
         s->alpha_tested_draws += s->draws[i].material != 0;
@@ -334,9 +335,23 @@ bool sb_scene_finish(sb_scene *s, sb_err *err) {
                  "at one point)", s->index_count / 3);
     free(s->build_pos);
     s->build_pos = NULL;
+    double t1 = sb_now_ms();
     sb_bvh_build(s);
+    double t2 = sb_now_ms();
     sb_scene_find_planes(s);
+    s->load_part_ms[SB_LOAD_DRAWS] = t1 - t0;
+    s->load_part_ms[SB_LOAD_BVH] = t2 - t1;
+    s->load_part_ms[SB_LOAD_PLANES] = sb_now_ms() - t2;
     return true;
+}
+
+const char *const sb_load_part_names[SB_LOAD_PARTS] = {"parse", "flatten", "draws", "bvh", "planes"};
+
+void sb_scene_load_parts(const sb_scene *s, char *out, size_t len) {
+    size_t n = 0;
+    out[0] = 0;
+    for (int i = 0; i < SB_LOAD_PARTS && n < len; i++)
+        n += (size_t)snprintf(out + n, len - n, "%s%s %.0f", i ? ", " : "", sb_load_part_names[i], s->load_part_ms[i]);
 }
 
 typedef struct {

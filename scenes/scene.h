@@ -119,6 +119,12 @@ typedef struct sb_scene_opts {
     double pose_time;            /* otherwise: the nodes' own transforms (skins in their rest pose) */
 } sb_scene_opts;
 
+/* The parts of a scene's load, timed: reading, checking and parsing the file
+ * (tinygltf), flattening the node graph into draws (skins, instances,
+ * materials), the draws' chunks and boxes, the culling BVH, the plane search. */
+enum { SB_LOAD_PARSE, SB_LOAD_FLATTEN, SB_LOAD_DRAWS, SB_LOAD_BVH, SB_LOAD_PLANES, SB_LOAD_PARTS };
+extern const char *const sb_load_part_names[SB_LOAD_PARTS];
+
 typedef struct sb_scene {
     char *file;
     sb_v3 origin;                /* world position of the local frame */
@@ -151,6 +157,7 @@ typedef struct sb_scene {
     uint64_t content_hash;       /* FNV-1a of the file bytes and the options that change geometry (run ids) */
     sb_scene_opts opts;          /* as loaded (a glTF camera path of the scene is read alike) */
     double load_ms;
+    double load_part_ms[SB_LOAD_PARTS]; /* where load_ms went (sb_load_part_names) */
     uint32_t nodes_drawn;        /* node instances with a mesh reached from the scene graph */
     sb_plane planes[SB_MAX_PLANES];
     uint32_t plane_count;
@@ -160,6 +167,9 @@ typedef struct sb_scene {
     double *build_pos;
     uint32_t build_cap;
 } sb_scene;
+
+/* "parse 40, flatten 120, ..." (ms) into out */
+void sb_scene_load_parts(const sb_scene *s, char *out, size_t len);
 
 /* Loads .gltf/.glb (through tinygltf, after gltf_check.h's checks) or a bundled
  * name ("plane-box", "desert", ...; looked up in SB_DATA_DIR and the build's
