@@ -58,9 +58,11 @@ typedef struct sb_frame {
     sb_m4 view, proj, view_proj;        /* from origin-relative world */
     double frustum[6][4];               /* camera planes, origin-relative */
     bool eval;                          /* evaluation pass: the final pass writes all four targets */
-    double shade_light[4];              /* the light the final pass shades and is evaluated against:
-                                           xyz toward the sun (w 0) or a point light's position (w 1);
-                                           the sun unless the technique shades a lamp (sb_frame_shade_point) */
+    double shade_light[4];              /* the light the frame is lit by: shadow stages draw the triangles
+                                           of single-sided draws facing it, the final pass shades it and the
+                                           evaluation tests it; xyz toward the sun (w 0) or a point light's
+                                           position (w 1); the sun unless the technique shades a lamp
+                                           (sb_frame_shade_point, before its shadow stage) */
     uint32_t *scratch;                  /* draw_count entries, for culling results */
     sb_stage stage;                     /* the stage being recorded (for draw counts) */
     sb_counters counters;
@@ -117,7 +119,9 @@ void sb_zpass(sb_frame *f);
 void sb_submit(sb_frame *f, uint32_t draw, int instances);
 /* A point-light technique's light=K: false with the reason when the scene has no K-th point or spot light. */
 bool sb_lamp_supported(const sb_gpu *g, int light, const char *technique, sb_err *why);
-/* Makes the final pass shade (and the evaluation test) a point light at pos. */
+/* Makes the frame lit by a point light at pos: call it before the shadow
+ * stage (its draws keep the triangles facing the lamp), and the final pass
+ * shades and the evaluation tests that lamp. */
 void sb_frame_shade_point(sb_frame *f, sb_v3 pos);
 /* The final pass split by the stencil (shadow volumes, planar shadows): where
  * (stencil & mask) == 0 it is drawn lit (u_lit 1), elsewhere in shadow (0).

@@ -125,6 +125,8 @@ static void cube_frame(void *state, sb_frame *f) {
     cube_state *s = state;
     const sb_gpu *g = f->gpu;
     const sb_scene *sc = g->scene;
+    /* the lamp, before the shadow stage: its draws keep the triangles facing it */
+    sb_frame_shade_point(f, s->lamp);
     sb_stage_begin(f, SB_STAGE_CASCADE);
     glBindFramebuffer(GL_FRAMEBUFFER, s->fbo_all);
     glViewport(0, 0, s->d->res, s->d->res);
@@ -168,7 +170,6 @@ static void cube_frame(void *state, sb_frame *f) {
     sb_stage_end(f, SB_STAGE_CASCADE);
 
     sb_stage_begin(f, SB_STAGE_FINAL);
-    sb_frame_shade_point(f, s->lamp);
     glUseProgram(s->fp.prog);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_CUBE_MAP, s->tex);

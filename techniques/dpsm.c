@@ -80,6 +80,8 @@ static void dpsm_frame(void *state, sb_frame *f) {
     dpsm_state *s = state;
     const sb_gpu *g = f->gpu;
     const sb_scene *sc = g->scene;
+    /* the lamp, before the shadow stage: its draws keep the triangles facing it */
+    sb_frame_shade_point(f, s->lamp);
     sb_stage_begin(f, SB_STAGE_CASCADE);
     double box[6][4];
     sb_cube_planes(s->lamp, s->far, box);
@@ -113,7 +115,6 @@ static void dpsm_frame(void *state, sb_frame *f) {
     sb_stage_end(f, SB_STAGE_CASCADE);
 
     sb_stage_begin(f, SB_STAGE_FINAL);
-    sb_frame_shade_point(f, s->lamp);
     glUseProgram(s->fp.prog);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D_ARRAY, s->tex);
