@@ -212,6 +212,23 @@ static int quantized(const char *dir) {
     return finish(&s, dir, "conf-quantized");
 }
 
+/* A wall that faces a lamp and not the sun: a shadow pass for the lamp must
+ * keep it, one for the sun must not. */
+static int lamp_wall(const char *dir) {
+    sb_glb_scene s = {0};
+    floor_slab(&s);
+    sb_glb_mesh *m = sb_glb_new_mesh(&s, sb_glb_material(&s, "{\"pbrMetallicRoughness\":{\"baseColorFactor\":[0.8,0.7,0.5,1]}}"));
+    const double y[4] = {0.5, 0.5, 3.5, 3.5}, z[4] = {-2, 2, 2, -2};
+    uint32_t v[4];
+    for (int k = 0; k < 4; k++) v[k] = sb_glb_vert(m, 0, y[k], z[k], -1, 0, 0);
+    sb_glb_tri(m, v[0], v[1], v[2]); /* counter-clockwise seen from -x */
+    sb_glb_tri(m, v[0], v[2], v[3]);
+    s.lamps[0] = sb_v3_make(SB_CONF_LAMP_X, SB_CONF_LAMP_Y, 0);
+    s.nlamps = 1;
+    return finish(&s, dir, "conf-lamp-wall");
+}
+
 int sb_conformance_write(const char *dir) {
-    return double_sided(dir) | blend(dir) | alpha_card(dir) | skin(dir) | instanced(dir) | quantized(dir);
+    return double_sided(dir) | blend(dir) | alpha_card(dir) | skin(dir) | instanced(dir) | quantized(dir) |
+           lamp_wall(dir);
 }

@@ -43,6 +43,12 @@
 /* conf-instanced: box (x, z) footprint 1 x 1 centred on x = -8, -4, 0, 4, 8 at z = 0, height 1 + k / 2 */
 #define SB_CONF_INSTANCES 5
 
+/* conf-lamp-wall: a single-sided wall in the plane x = 0 (y 0.5..3.5, z -2..2) facing -x, away
+ * from the sun (which is toward +x), and a lamp on its front side at (-2, 2, 0): the wall
+ * casts the lamp's shadow onto the floor at x > 0 and no shadow of the sun. */
+#define SB_CONF_LAMP_X (-2.0)
+#define SB_CONF_LAMP_Y 2.0
+
 /* conf-quantized: box 1 spans x -6..-2, y 0..2, z -2..2; box 2 (sparse) x 2..6, y 0..2, z -2..2 */
 
 /* Writes the conformance scenes and their paths into dir (0 on success). */
