@@ -281,8 +281,9 @@ static void test_lamp_wall(void **st) {
 /* The Draco copy of towers is the same scene: same triangles, same shadows.
  * Draco stores the triangles in another order, and where two faces of a box
  * meet at an edge at equal depth the shadow map keeps whichever came first:
- * a pixel may differ (measured: 0.0221348 against 0.0221358; one pixel of a
- * frame moves the mean by about 1e-5), nothing more. */
+ * a few pixels may differ (measured: 0.0221348 against 0.0221358 with a
+ * normal offset of 1 texel, 0.00992545 against 0.00989955 with 0.25; one
+ * pixel of a frame moves the mean by about 1e-5), nothing more. */
 static void test_draco_copy(void **st) {
     (void)st;
     if (!SB_HAVE_DRACO) skip(); /* no towers-draco without Draco; test_gltf checks the refusal */
@@ -299,7 +300,7 @@ static void test_draco_copy(void **st) {
     }
     print_message("towers err_rate %g (%g triangles), towers-draco %g (%g)\n", err[0], tris[0], err[1], tris[1]);
     assert_true(tris[0] == tris[1] && tris[0] > 9000);
-    assert_true(fabs(err[0] - err[1]) <= 1e-5);
+    assert_true(fabs(err[0] - err[1]) <= 1e-4);
 }
 
 /* The built-in paths stand outside the model: at every sampled camera no
