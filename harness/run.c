@@ -397,7 +397,7 @@ static bool eval_frame_wanted(const sb_run_opts *o, int pf) {
  * reads them back: nothing here runs inside a timed frame. seq: after the
  * timed frames. */
 static bool evaluate(sb_session *s, sb_instance *in, int seq, const char *out_dir, const char *run_id,
-                     sb_frame_rec *recs, sb_run_info *info, sb_err *err) {
+                     sb_frame_rec *recs, sb_err *err) {
     const int n = s->opts.frames;
     char dir[4200];
     snprintf(dir, sizeof dir, "%s/images", out_dir);
@@ -412,10 +412,6 @@ static bool evaluate(sb_session *s, sb_instance *in, int seq, const char *out_di
         ok = sb_eval_frame(s, in, pf, n, in->tech->temporal ? 2 : 0, &seq, &b, &f, &r->err, err);
         if (ok && s->opts.error_every > 0 && pf % s->opts.error_every == 0) {
             r->evaluated = true;
-            info->rays += r->err.rays;
-            info->ray_ms += r->err.ray_ms;
-            if (r->err.reused) info->ref_reused++;
-            else info->cast_ms += r->err.ray_ms;
         }
         if (ok && s->opts.images > 0 && pf % s->opts.images == 0)
             ok = sb_images_write_frame(dir, run_id, pf, b.w, b.h, b.rgba, b.vis, b.ref, b.pos, b.aux, err);
@@ -653,7 +649,7 @@ static bool finish_run(sb_run *r) {
     if (r->failed) return false;
     if (o->error_every > 0 || o->images > 0) {
         if (!ensure_instance(r)) return false;
-        if (!evaluate(r->s, &r->in, r->seq, r->out_dir, r->run_id, r->recs, &r->info, &r->err))
+        if (!evaluate(r->s, &r->in, r->seq, r->out_dir, r->run_id, r->recs, &r->err))
             return fail_run(r, "%s", r->err.msg);
     }
     for (; r->written < r->done; r->written++)

@@ -36,7 +36,6 @@ typedef struct sb_error_metrics {
 typedef struct sb_ref_cache sb_ref_cache;
 sb_ref_cache *sb_ref_cache_new(size_t max_bytes);
 void sb_ref_cache_free(sb_ref_cache *c);
-void sb_ref_cache_stats(const sb_ref_cache *c, long *hits, long *misses);
 
 /* The frame being evaluated: the targets and the camera. */
 typedef struct sb_eval_view {

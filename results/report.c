@@ -184,11 +184,30 @@ static sb_cell r_harness_share(const sb_run_row *r, int a) {
     const sb_run_info *in = r->info;
     return number(r->n && in->run_wall_s > 0 ? 1.0 - in->frames_wall_ms / (in->run_wall_s * 1e3) : NAN);
 }
+/* The reference's part of a run, from its evaluated frames. */
+typedef struct {
+    int frames, reused;
+    uint64_t rays;
+    double ms, cast_ms; /* all of it; of it, the frames that cast */
+} ref_totals;
+
+static ref_totals ref_sum(const sb_frame_rec *recs, int n) {
+    ref_totals t = {0};
+    for (int i = 0; i < n; i++) {
+        const sb_error_metrics *e = &recs[i].err;
+        if (!recs[i].evaluated) continue;
+        t.frames++;
+        t.reused += e->reused;
+        t.rays += e->rays;
+        t.ms += e->ray_ms;
+        if (!e->reused) t.cast_ms += e->ray_ms;
+    }
+    return t;
+}
+
 static sb_cell r_error_frames(const sb_run_row *r, int a) {
     (void)a;
-    int ne = 0;
-    for (int i = 0; i < r->n; i++) ne += r->recs[i].evaluated;
-    return integer(ne);
+    return integer(ref_sum(r->recs, r->n).frames);
 }
 /* Pooled over the evaluated frames: a = 0 geometry mismatches, 1 the floor. */
 static sb_cell r_pooled(const sb_run_row *r, int a) {
@@ -203,14 +222,14 @@ static sb_cell r_pooled(const sb_run_row *r, int a) {
 }
 static sb_cell r_rays_per_s(const sb_run_row *r, int a) {
     (void)a;
-    return number(r->info->cast_ms > 0 && r->info->rays ? r->info->rays / (r->info->cast_ms / 1e3) : NAN);
+    ref_totals t = ref_sum(r->recs, r->n);
+    return number(t.cast_ms > 0 && t.rays ? t.rays / (t.cast_ms / 1e3) : NAN);
 }
 /* a = 0 rays cast, 1 time in the reference, 2 frames whose reference was reused; empty without evaluated frames */
 static sb_cell r_ref(const sb_run_row *r, int a) {
-    int ne = 0;
-    for (int i = 0; i < r->n; i++) ne += r->recs[i].evaluated;
-    if (!ne) return empty();
-    return a == 0 ? integer((long long)r->info->rays) : a == 1 ? number(r->info->ray_ms) : integer(r->info->ref_reused);
+    ref_totals t = ref_sum(r->recs, r->n);
+    if (!t.frames) return empty();
+    return a == 0 ? integer((long long)t.rays) : a == 1 ? number(t.ms) : integer(t.reused);
 }
 
 #define SERIES(name, stats, flags) {name, NULL, 0, stats, flags, NULL}
@@ -463,8 +482,9 @@ void sb_summary_add_outcome(sb_summary *sum, const sb_run_info *info, unsigned s
     sb_report_summary_row(&sum->rows, info, stages, recs, times, n);
     count_status(sum, info->status);
     for (int i = 0; times && i < n; i++) sum->timed_gpu_ms += gpu_ms(&times[i]);
-    sum->ref_rays += info->rays;
-    sum->ref_reused += info->ref_reused;
+    ref_totals t = ref_sum(recs, recs ? n : 0);
+    sum->ref_rays += t.rays;
+    sum->ref_reused += t.reused;
     sum->unstable += info->stable && !strcmp(info->stable, "no");
 }
 

@@ -39,9 +39,6 @@ typedef struct sb_run_info {
     double target_ci;           /* percent, 0: none */
     uint64_t scene_triangles;
     double load_ms, run_wall_s, frames_wall_ms;   /* frames: every rendered frame, warm-up included */
-    uint64_t rays;              /* reference rays cast for this run (0: every answer reused) */
-    double ray_ms, cast_ms;     /* time in the reference for this run; of it, casting */
-    int ref_reused;             /* evaluated frames whose reference was reused */
     char warnings[512];         /* what the tool cannot stand behind in an ok run ("; "-separated, "" if nothing) */
 } sb_run_info;
 

@@ -297,7 +297,7 @@ static void test_repeats_and_target_ci(void **st) {
 /* Runs that cannot mean anything are skipped with a reason that says why. */
 static void test_skip_reasons(void **st) {
     (void)st;
-    char flat[300], spot[300], d[4096], path[4200];
+    char flat[300], spot[300], d[4096];
     snprintf(flat, sizeof flat, "%s/flat.gltf", g_tmp);
     snprintf(spot, sizeof spot, "%s/spot.gltf", g_tmp);
     assert_true(gltf_tri_write(flat, &(gltf_tri){.node0 = "\"mesh\":0,\"scale\":[0,0,0]"}));
@@ -311,10 +311,8 @@ static void test_skip_reasons(void **st) {
     for (int k = 0; k < 2; k++) {
         run_dir(d, sizeof d, "%s run %s auto sm none --frames 2 --warmup 0 --size 64x36 --out %s/skip --quiet",
                 test_binary(), scenes[k], g_tmp);
-        snprintf(path, sizeof path, "%s/summary.csv", d);
         sb_table t;
-        sb_err err;
-        assert_true(sb_table_load(&t, path, &err));
+        summary_table(d, &t);
         assert_int_equal(t.nrows, 2);
         for (int r = 0; r < 2; r++) {
             const char *want = expect[k][r];
@@ -333,10 +331,8 @@ static void test_skip_reasons(void **st) {
     fclose(f);
     run_dir(d, sizeof d, "%s run plane-box %s sm none --frames 2 --warmup 0 --size 64x36 --out %s/sky --quiet",
             test_binary(), sky, g_tmp);
-    snprintf(path, sizeof path, "%s/summary.csv", d);
     sb_table t;
-    sb_err err;
-    assert_true(sb_table_load(&t, path, &err));
+    summary_table(d, &t);
     print_message("sky: sm warnings '%s', none warnings '%s'\n", sb_table_get(&t, 0, "warnings"), sb_table_get(&t, 1, "warnings"));
     assert_string_equal(sb_table_get(&t, 0, "status"), "ok");
     assert_non_null(strstr(sb_table_get(&t, 0, "warnings"), "no shadow-casting triangle was drawn in any frame"));
@@ -372,11 +368,8 @@ static void test_clocks_modes(void **st) {
     assert_int_equal(sh("%s run plane-box plane-box sm --clocks auto --frames 1 --size 64x36 --out %s/auto", test_binary(),
                         g_tmp), 0);
     assert_non_null(strstr(g_out, "note: GPU clock not locked ("));
-    char path[4200];
-    snprintf(path, sizeof path, "%s/summary.csv", d);
     sb_table t;
-    sb_err err;
-    assert_true(sb_table_load(&t, path, &err));
+    summary_table(d, &t);
     assert_string_equal(sb_table_get(&t, 0, "clocks"), "free");
     assert_string_equal(sb_table_get(&t, 0, "gpu_clock_mhz_median"), ""); /* llvmpipe has none */
     sb_table_free(&t);
@@ -407,13 +400,6 @@ static pid_t hog_when_rows(const char *pattern, long bytes) {
     return pid;
 }
 
-static void summary_row(const char *dir, sb_table *t) {
-    char path[4200];
-    snprintf(path, sizeof path, "%s/summary.csv", dir);
-    sb_err err;
-    assert_true(sb_table_load(t, path, &err));
-}
-
 /* The stability verdict on llvmpipe: a run left alone is stable, with its
  * calibration probe measured before and after; the same run with every core
  * loaded from about its middle on is not. */
@@ -429,7 +415,7 @@ static void test_stability_verdict_on_llvmpipe(void **st) {
         double t0 = sb_now_ms();
         run_dir(d, sizeof d, cmd, test_binary(), g_tmp, "alone");
         double wall = (sb_now_ms() - t0) / 1e3;
-        summary_row(d, &t);
+        summary_table(d, &t);
         print_message("alone, try %d (%.1f s): stable %s %s, probe %s ms before, %s ms after\n", attempt, wall,
                       sb_table_get(&t, 0, "stable"), sb_table_get(&t, 0, "unstable_reason"),
                       sb_table_get(&t, 0, "calib_ms_before"), sb_table_get(&t, 0, "calib_ms_after"));
@@ -448,7 +434,7 @@ static void test_stability_verdict_on_llvmpipe(void **st) {
     run_dir(d, sizeof d, cmd, test_binary(), g_tmp, "loaded");
     kill(-hog, SIGKILL);
     waitpid(hog, NULL, 0);
-    summary_row(d, &t);
+    summary_table(d, &t);
     print_message("loaded halfway: stable %s: %s\n", sb_table_get(&t, 0, "stable"), sb_table_get(&t, 0, "unstable_reason"));
     assert_string_equal(sb_table_get(&t, 0, "stable"), "no");
     assert_string_not_equal(sb_table_get(&t, 0, "unstable_reason"), "");
@@ -465,8 +451,8 @@ static void test_reference_shared(void **st) {
     run_dir(two, sizeof two, cmd, test_binary(), "sm:res=1024 pssm:res=1024", g_tmp, "ref2");
     run_dir(one, sizeof one, cmd, test_binary(), "pssm:res=1024", g_tmp, "ref1");
     sb_table a, b;
-    summary_row(two, &a);
-    summary_row(one, &b);
+    summary_table(two, &a);
+    summary_table(one, &b);
     assert_int_equal(a.nrows, 2);
     print_message("two specs: ref_rays %s then %s (reused %s, %s ms); alone: %s (%s ms)\n", sb_table_get(&a, 0, "ref_rays"),
                   sb_table_get(&a, 1, "ref_rays"), sb_table_get(&a, 1, "ref_reused"), sb_table_get(&a, 1, "ref_ms"),
@@ -490,7 +476,7 @@ static void test_reference_shared(void **st) {
  * run_index * 100 + repetition, from the per-frame repeat and start_s columns. */
 static int pass_order(const char *dir, int *order, int max) {
     sb_table sum;
-    summary_row(dir, &sum);
+    summary_table(dir, &sum);
     double start[64];
     int n = 0;
     for (int r = 0; r < sum.nrows; r++) {
@@ -533,7 +519,7 @@ static void test_run_order(void **st) {
     assert_int_equal(n = pass_order(d, got, 16), 6);
     for (int i = 0; i < n; i++) assert_int_equal(got[i], interleave[i]);
     sb_table t;
-    summary_row(d, &t);
+    summary_table(d, &t);
     assert_string_equal(sb_table_get(&t, 0, "order"), "interleave");
     assert_string_equal(sb_table_get(&t, 0, "seed"), "");
     sb_table_free(&t);
@@ -541,7 +527,7 @@ static void test_run_order(void **st) {
     run_dir(d, sizeof d, cmd, test_binary(), g_tmp, "--order shuffle --seed 7");
     assert_int_equal(n = pass_order(d, got, 16), 6);
     for (int i = 0; i < n; i++) assert_int_equal(got[i] % 100, i / 2);
-    summary_row(d, &t);
+    summary_table(d, &t);
     assert_string_equal(sb_table_get(&t, 1, "order"), "shuffle");
     assert_string_equal(sb_table_get(&t, 1, "seed"), "7");
     sb_table_free(&t);

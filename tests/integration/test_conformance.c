@@ -201,14 +201,12 @@ static void test_instanced_quantized_sparse(void **st) {
 /* ---- the rasterized techniques against the reference ---- */
 
 static void load_summary(sb_table *t) {
-    char dir[4096], path[4200];
+    char dir[4096];
     size_t n = strcspn(g_out, "\n");
     assert_true(n < sizeof dir);
     memcpy(dir, g_out, n);
     dir[n] = 0;
-    snprintf(path, sizeof path, "%s/summary.csv", dir);
-    sb_err err;
-    assert_true(sb_table_load(t, path, &err));
+    summary_table(dir, t);
 }
 
 /* Renders run with leak detection off in the sanitizer build (the loader

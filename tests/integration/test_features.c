@@ -80,9 +80,7 @@ static void test_images(void **st) {
     char dir[4096], p[4400];
     out_dir(dir, sizeof dir);
     sb_table t;
-    sb_err err;
-    snprintf(p, sizeof p, "%s/summary.csv", dir);
-    assert_true(sb_table_load(&t, p, &err));
+    summary_table(dir, &t);
     const char *id = sb_table_get(&t, 0, "run_id");
     const struct {
         const char *kind;
@@ -119,12 +117,10 @@ static void test_osmesa(void **st) {
         return;
     }
     assert_int_equal(sh(cmd, test_binary(), g_tmp), 0);
-    char dir[4096], p[4400];
+    char dir[4096];
     out_dir(dir, sizeof dir);
     sb_table t;
-    sb_err err;
-    snprintf(p, sizeof p, "%s/summary.csv", dir);
-    assert_true(sb_table_load(&t, p, &err));
+    summary_table(dir, &t);
     assert_string_equal(sb_table_get(&t, 0, "status"), "ok");
     assert_string_equal(sb_table_get(&t, 0, "backend"), "osmesa");
     assert_non_null(strstr(sb_table_get(&t, 0, "renderer"), "llvmpipe"));

@@ -1,6 +1,7 @@
 #include "support.h"
 
 #include "eval.h"
+#include "table.h"
 
 #include <setjmp.h>
 #include <stddef.h>
@@ -261,4 +262,11 @@ int tmp_remove(const char *dir) {
     char cmd[4200];
     snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
     return system(cmd) == 0 ? 0 : -1;
+}
+
+void summary_table(const char *dir, sb_table *t) {
+    char path[4200];
+    snprintf(path, sizeof path, "%s/summary.csv", dir);
+    sb_err err;
+    if (!sb_table_load(t, path, &err)) fail_msg("%s", err.msg);
 }

@@ -69,6 +69,10 @@ bool gltf_tri_write(const char *path, const gltf_tri *t);
 /* Loads path as a scene expecting a refusal whose one-line message holds
  * needle; prints the message. */
 void expect_scene_refused(const char *path, const char *needle);
+/* Loads DIR/summary.csv (a results folder's runs) into t, asserting it loads. */
+struct sb_table;
+void summary_table(const char *dir, struct sb_table *t);
+
 /* Runs the printf-formatted command (logged) expecting a non-zero exit and
  * one line of output holding needle; returns that output. */
 const char *expect_cli_fail(const char *needle, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
