@@ -378,22 +378,32 @@ static void print_dry_run(const sb_batch *b, const bool *selected, int nsel, boo
 
 /* Resume: keeps the runs of the old summary that are complete (a summary row
  * and, unless skipped, the committed per-frame CSV), rows as they were. */
-static void keep_complete_runs(const sb_batch *b, const char *dir, const bool *selected, bool *done, sb_summary *sum) {
+int sb_summary_keep_complete(sb_summary *sum, const char *dir, const char *const *ids, int n, bool *done) {
     sb_table old;
     sb_err err;
-    if (!sb_table_load(&old, sum->path, &err)) return;
+    int kept = 0;
+    if (!sb_table_load(&old, sum->path, &err)) return 0;
     for (int r = 0; r < old.nrows; r++) {
         const char *id = sb_table_get(&old, r, "run_id"), *st = sb_table_get(&old, r, "status");
-        for (int i = 0; i < b->nruns; i++) {
-            if (!selected[i] || done[i] || strcmp(b->runs[i].run_id, id)) continue;
+        for (int i = 0; i < n; i++) {
+            if (!ids[i] || done[i] || strcmp(ids[i], id)) continue;
             char csv[4400];
             snprintf(csv, sizeof csv, "%s/%s.csv", dir, id);
             if (strcmp(st, "skipped") && (strcmp(st, "ok") || access(csv, R_OK) != 0)) continue;
             done[i] = true;
+            kept++;
             sb_summary_add_line(sum, old.lines[r], st);
         }
     }
     sb_table_free(&old);
+    return kept;
+}
+
+static void keep_complete_runs(const sb_batch *b, const char *dir, const bool *selected, bool *done, sb_summary *sum) {
+    const char **ids = sb_xcalloc((size_t)(b->nruns ? b->nruns : 1), sizeof *ids);
+    for (int i = 0; i < b->nruns; i++) ids[i] = selected[i] ? b->runs[i].run_id : NULL;
+    sb_summary_keep_complete(sum, dir, ids, b->nruns, done);
+    free(ids);
 }
 
 /* A scene that cannot be opened: each of its runs is recorded as failed. */

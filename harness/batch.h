@@ -59,6 +59,11 @@ bool sb_batch_check(const char *name, const char *text, sb_err *err);
 /* Deterministic, cost-balanced share I of N (1-based): marks runs out of the share. */
 void sb_batch_shard(const sb_batch *b, int shard, int nshards, bool *selected);
 
+/* Resume: the rows of sum's file (DIR/summary.csv) for runs ids[i] (NULL:
+ * not wanted) that are complete (a row and, unless skipped, the committed
+ * per-frame CSV) are kept in sum as they were and marked done. Returns how many. */
+int sb_summary_keep_complete(sb_summary *sum, const char *dir, const char *const *ids, int n, bool *done);
+
 /* `shadowbench batch`: what the command line gave. */
 typedef struct sb_batch_cmd {
     const char *file;
