@@ -1,4 +1,5 @@
 /* main.c - the shadowbench command line. */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -10,6 +11,7 @@
 #include "run.h"
 #include "stress.h"
 #include "table.h"
+#include "tune.h"
 #include "version.h"
 
 
@@ -27,6 +29,10 @@ static void usage(FILE *f) {
             "  shadowbench merge DIR... --out DIR     merge shard outputs into one results set\n"
             "  shadowbench stress [CASE|all [SPEC...]]  numerical-stability battery (--frames N, --size WxH);\n"
             "                                         SPECs replace the battery's techniques\n"
+            "  shadowbench tune SCENE [PATH] [SPEC...] --max-err E | --budget-ms B [--techniques LIST]\n"
+            "                   [--time-limit D] [--seed N] [--resume DIR]\n"
+            "                                         the cheapest settings within an error bound (or the most\n"
+            "                                         accurate within a frame-time budget), by successive halving\n"
             "  shadowbench techniques                 list techniques and their parameters\n"
             "  shadowbench columns                    the CSV columns (per frame and per run) as CSV\n"
             "  shadowbench info [SCENE]               backends, GL renderer and features; or what a scene holds\n"
@@ -72,8 +78,8 @@ typedef struct cli {
     int npos;
     const char **run_opts;      /* the run options as given, NAME VALUE pairs (batch: they beat defaults) */
     int nrun_opts;
-    const char *resume, *shard, *metrics, *format, *pair;
-    double threshold;
+    const char *resume, *shard, *metrics, *format, *pair, *techniques;
+    double threshold, max_err, budget_ms, time_limit_s;
     bool dry_run;
     int argc;
     char **argv;
@@ -128,6 +134,17 @@ static int parse_cli(cli *c, int argc, char **argv) {
             c->format = v;
         } else if (!strcmp(a, "--pair")) {
             c->pair = v;
+        } else if (!strcmp(a, "--techniques")) {
+            c->techniques = v;
+        } else if (!strcmp(a, "--max-err")) {
+            if (!sb_parse_double(v, &c->max_err) || !(c->max_err > 0) || c->max_err > 1)
+                return bad("--max-err %s: expected an err_rate in (0, 1]", v);
+        } else if (!strcmp(a, "--budget-ms")) {
+            if (!sb_parse_double(v, &c->budget_ms) || !(c->budget_ms > 0) || isinf(c->budget_ms))
+                return bad("--budget-ms %s: expected milliseconds > 0", v);
+        } else if (!strcmp(a, "--time-limit")) {
+            if (!sb_parse_duration(v, &c->time_limit_s) || c->time_limit_s <= 0)
+                return bad("--time-limit %s: expected a duration such as 600, 90s, 10m or 1.5h", v);
         } else if (!strcmp(a, "--threshold")) {
             if (!sb_parse_double(v, &c->threshold) || c->threshold < 0)
                 return bad("--threshold %s: expected a percentage >= 0", v);
@@ -278,6 +295,41 @@ static int cmd_run(const cli *c) {
     return rc;
 }
 
+/* ---- tune ---- */
+
+static bool given(const cli *c, const char *name) {
+    for (int i = 0; i < c->nrun_opts; i += 2)
+        if (!strcmp(c->run_opts[i], name)) return true;
+    return false;
+}
+
+static int cmd_tune(const cli *c) {
+    if (c->npos < 1)
+        return bad("usage: shadowbench tune SCENE [PATH] [SPEC...] --max-err E | --budget-ms B%s", "");
+    sb_run_opts o = c->opts;
+    /* tune's own defaults: the full measurement is 33 frames (rungs of 3, 9 and 33 share their cameras), one
+       warm-up frame a run, the error of every frame, and a fixed plan */
+    if (!given(c, "--frames")) o.frames = 33;
+    if (!given(c, "--warmup")) o.warmup = 1;
+    if (!given(c, "--error-every")) o.error_every = 1;
+    if (!given(c, "--seed")) o.seed = 1;
+    o.order = SB_ORDER_SHUFFLE;   /* the summary's seed column records the plan's seed */
+    sb_run_opts_finish(&o);
+    /* the second word is the path unless it names a technique */
+    int first_spec = 1;
+    const char *path = NULL;
+    if (c->npos > 1) {
+        char name[64];
+        snprintf(name, sizeof name, "%.*s", (int)strcspn(c->pos[1], ":"), c->pos[1]);
+        if (!sb_technique_find(name)) path = c->pos[1], first_spec = 2;
+    }
+    sb_tune_cmd cmd = {.scene = c->pos[0], .path = path, .specs = c->pos + first_spec, .nspecs = c->npos - first_spec,
+                       .techniques = c->techniques, .max_err = c->max_err, .budget_ms = c->budget_ms,
+                       .time_limit_s = c->time_limit_s, .opts = &o, .out = c->out, .resume = c->resume};
+    if (cmd.nspecs && cmd.techniques) return bad("tune: give SPECs or --techniques, not both%s", "");
+    return sb_tune_main(&cmd);
+}
+
 /* ---- batch ---- */
 
 static int cmd_batch(const cli *c) {
@@ -390,6 +442,7 @@ static int dispatch(const cli *c, const char *cmd) {
     if (!strcmp(cmd, "compare")) return cmd_compare(c);
     if (!strcmp(cmd, "merge")) return cmd_merge(c);
     if (!strcmp(cmd, "stress")) return cmd_stress(c);
+    if (!strcmp(cmd, "tune")) return cmd_tune(c);
     return bad("unknown command '%s' (see shadowbench --help)", cmd);
 }
 

@@ -1,0 +1,777 @@
+/* tune.c - `shadowbench tune`: successive halving over techniques and their
+ * settings, for the cheapest setting that meets an error bound (or the most
+ * accurate one within a frame-time budget).
+ *
+ * Rungs: every candidate renders a few frames of the path (rung 0), the
+ * promising ones more (rung 1), the finalists all N (rung 2). The frames of a
+ * rung are frames of the next (path frames i/(n-1): n = (N-1)/8+1, (N-1)/4+1,
+ * N), so the reference rays of a camera are cast once. How many go on is set
+ * so that all the rungs together render at most a quarter of the frames the
+ * full grid would (warm-up frames and the session's warm-up run counted). A candidate goes on when it may
+ * meet the bound (its estimate within a margin that narrows with the rung),
+ * cheapest first; the best one that clearly meets it always goes on, so a
+ * noisy estimate cannot leave the final rung without a safe choice. Each rung
+ * is a results set of its own (rung-K/summary.csv and per-frame CSVs); tune
+ * reads its decisions back from those files, which is what makes --resume
+ * take up exactly where a search stopped. The plan (the candidates, their
+ * order in each rung, the frames) follows from the command line and --seed;
+ * only measured times can change what is chosen. */
+#define _XOPEN_SOURCE 700 /* realpath */
+#include "tune.h"
+
+#include <limits.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <stdarg.h>
+
+#include "batch.h"
+#include "table.h"
+
+/* A formatted line into a text buffer. */
+static void __attribute__((format(printf, 2, 3))) line(sb_csv *c, const char *fmt, ...) {
+    char buf[8192];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(buf, sizeof buf, fmt, ap);
+    va_end(ap);
+    sb_csv_line(c, buf);
+}
+
+/* The axes tune searches by default, for every technique that has the
+ * parameter (enum values a technique lacks are left out). */
+static const struct {
+    const char *param, *values;
+} tune_axes[] = {
+    {"res", "512,1024,2048"},
+    {"cascades", "2,3,4"},
+    {"lambda", "0.5,0.75"},
+    {"filter", "none,hw,pcf3"},
+};
+
+#define RUNGS 3
+
+typedef struct cand {
+    sb_run_spec spec;
+    char label[512];            /* technique[:param=value...]: the parameters that differ from the defaults */
+    char run_id[RUNGS][17];
+    int rung;                   /* highest rung measured, -1: none */
+    bool alive;                 /* still in the race */
+    bool skipped, failed;
+    char reason[512];
+    double time_ms, time_ci, err, err_ci;   /* at its highest rung: gpu_ms median and CI, err_rate mean and CI */
+    int frames;                 /* timed frames of that measurement */
+    bool front, chosen;
+} cand;
+
+typedef struct tune {
+    const sb_tune_cmd *cmd;
+    sb_session s;
+    cand *c;
+    int n;
+    int rung_frames[RUNGS], nrungs;
+    int warmup;                 /* warm-up frames per run, for the frame count (auto: as measured) */
+    long frames_rendered;       /* warm-up and timed frames of the runs this search used (resumed ones included) */
+    char dir[4096];
+    double t0;
+    bool out_of_time;
+    int last_rung;              /* highest rung with a measurement */
+    int kept;                   /* runs kept from the resumed folder */
+    int warm_frames;            /* frames of the session's warm-up run */
+    int final_reps;             /* passes of the path each finalist renders, interleaved */
+} tune;
+
+bool sb_parse_duration(const char *text, double *seconds) {
+    char *end;
+    double v = strtod(text, &end);
+    if (end == text || !(v >= 0) || isinf(v)) return false;
+    double unit = 1;
+    if (!strcmp(end, "") || !strcmp(end, "s")) unit = 1;
+    else if (!strcmp(end, "m") || !strcmp(end, "min")) unit = 60;
+    else if (!strcmp(end, "h")) unit = 3600;
+    else return false;
+    *seconds = v * unit;
+    return true;
+}
+
+/* ---- the candidates ---- */
+
+static void short_label(const sb_run_spec *r, char *out, size_t len) {
+    sb_params def;
+    sb_params_defaults(&def, r->tech);
+    snprintf(out, len, "%s", r->tech->name);
+    for (int i = 0; i < r->params.count; i++) {
+        if (!strcmp(r->params.v[i].text, def.v[i].text)) continue;
+        size_t l = strlen(out);
+        snprintf(out + l, len - l, ":%s=%s", r->params.v[i].def->name, r->params.v[i].text);
+    }
+}
+
+/* "pssm:res=512,1024,2048:cascades=2,3,4:..." from tune's axes. */
+static void default_grid(const sb_technique *t, char *out, size_t len) {
+    snprintf(out, len, "%s", t->name);
+    for (size_t a = 0; a < SB_COUNT(tune_axes); a++) {
+        int pi = -1;
+        for (int i = 0; i < t->param_count; i++)
+            if (!strcmp(t->params[i].name, tune_axes[a].param)) pi = i;
+        if (pi < 0) continue;
+        char vals[256], list[256] = "";
+        snprintf(vals, sizeof vals, "%s", tune_axes[a].values);
+        for (char *save = NULL, *v = strtok_r(vals, ",", &save); v; v = strtok_r(NULL, ",", &save)) {
+            sb_params probe;
+            sb_err e;
+            if (!sb_param_set(&probe, 0, &t->params[pi], v, t->name, &e)) continue;
+            size_t l = strlen(list);
+            snprintf(list + l, sizeof list - l, "%s%s", l ? "," : "", v);
+        }
+        if (!list[0]) continue;
+        size_t l = strlen(out);
+        snprintf(out + l, len - l, ":%s=%s", tune_axes[a].param, list);
+    }
+}
+
+static bool in_list(const char *list, const char *name) {
+    size_t n = strlen(name);
+    for (const char *p = list; p && *p;) {
+        const char *comma = strchr(p, ',');
+        size_t l = comma ? (size_t)(comma - p) : strlen(p);
+        if (l == n && !strncmp(p, name, n)) return true;
+        p = comma ? comma + 1 : NULL;
+    }
+    return false;
+}
+
+static bool make_candidates(tune *t, sb_err *err) {
+    const sb_tune_cmd *cmd = t->cmd;
+    sb_run_spec *runs = NULL;
+    int n = 0;
+    if (cmd->nspecs) {
+        for (int i = 0; i < cmd->nspecs; i++)
+            if (!sb_spec_expand(cmd->specs[i], NULL, &runs, &n, err)) {
+                free(runs);
+                return false;
+            }
+    } else {
+        if (cmd->techniques) {   /* every name must be a technique */
+            char list[1024];
+            snprintf(list, sizeof list, "%s", cmd->techniques);
+            for (char *save = NULL, *v = strtok_r(list, ",", &save); v; v = strtok_r(NULL, ",", &save))
+                if (!sb_technique_find(v)) {
+                    sb_spec_expand(v, "--techniques", &runs, &n, err);   /* the message lists the known ones */
+                    free(runs);
+                    return false;
+                }
+        }
+        for (int i = 0; i < sb_technique_count(); i++) {
+            const sb_technique *tq = sb_technique_at(i);
+            bool want = cmd->techniques ? in_list(cmd->techniques, tq->name)
+                                        : strcmp(tq->name, "none") && strcmp(tq->name, "raycast");
+            if (!want) continue;
+            char spec[1024];
+            default_grid(tq, spec, sizeof spec);
+            if (!sb_spec_expand(spec, "tune", &runs, &n, err)) {
+                free(runs);
+                return false;
+            }
+        }
+    }
+    if (n == 0) {
+        free(runs);
+        return sb_fail(err, "tune: no candidate to measure");
+    }
+    t->c = sb_xcalloc((size_t)n, sizeof *t->c);
+    t->n = n;
+    for (int i = 0; i < n; i++) {
+        t->c[i].spec = runs[i];
+        t->c[i].rung = -1;
+        t->c[i].alive = true;
+        short_label(&runs[i], t->c[i].label, sizeof t->c[i].label);
+    }
+    free(runs);
+    return true;
+}
+
+/* ---- the rungs ---- */
+
+static void plan_frames(tune *t) {
+    int N = t->cmd->opts->frames;
+    int f[RUNGS] = {(N - 1) / 8 + 1, (N - 1) / 4 + 1, N};
+    t->nrungs = 0;
+    for (int r = 0; r < RUNGS; r++) {
+        if (f[r] < 2 && N >= 2) f[r] = 2;
+        if (t->nrungs && f[r] <= t->rung_frames[t->nrungs - 1]) continue;
+        t->rung_frames[t->nrungs++] = f[r];
+    }
+    if (!t->nrungs) t->rung_frames[t->nrungs++] = N;
+}
+
+/* Warm-up frames of a run at the rung: none at rung 0, whose figure is the
+ * median of its frames (a slow first frame does not move it). */
+static int rung_warmup(const tune *t, int rung) { return rung == 0 && t->nrungs > 1 ? 0 : t->cmd->opts->warmup; }
+
+/* The constraint (what the bound limits) and the objective (what is minimised). */
+static double constraint_of(const tune *t, const cand *c) { return t->cmd->max_err > 0 ? c->err : c->time_ms; }
+static double objective_of(const tune *t, const cand *c) { return t->cmd->max_err > 0 ? c->time_ms : c->err; }
+static double bound_of(const tune *t) { return t->cmd->max_err > 0 ? t->cmd->max_err : t->cmd->budget_ms; }
+
+static bool measured_at(const cand *c, int rung) { return c->rung == rung && !c->skipped && !c->failed; }
+
+/* Reads the rung's summary back into the candidates. */
+static void read_rung(tune *t, int rung, const char *sum_path) {
+    sb_table tb;
+    sb_err err;
+    if (!sb_table_load(&tb, sum_path, &err)) return;
+    for (int r = 0; r < tb.nrows; r++) {
+        const char *id = sb_table_get(&tb, r, "run_id");
+        for (int i = 0; i < t->n; i++) {
+            cand *c = &t->c[i];
+            if (strcmp(c->run_id[rung], id)) continue;
+            const char *st = sb_table_get(&tb, r, "status");
+            c->rung = rung;
+            c->skipped = !strcmp(st, "skipped");
+            c->failed = !strcmp(st, "failed");
+            snprintf(c->reason, sizeof c->reason, "%s", sb_table_get(&tb, r, "reason"));
+            double v;
+            /* early rungs: the fastest frame, which a slow spell on a shared machine does not lower (all
+               candidates render the same cameras); the last rung: the median, the figure tune reports */
+            const char *time_col = rung < t->nrungs - 1 ? "gpu_ms_min" : "gpu_ms_median";
+            c->time_ms = sb_parse_double(sb_table_get(&tb, r, time_col), &v) ? v : NAN;
+            c->time_ci = sb_parse_double(sb_table_get(&tb, r, "gpu_ms_ci95"), &v) ? v : NAN;
+            c->err = sb_parse_double(sb_table_get(&tb, r, "err_rate_mean"), &v) ? v : NAN;
+            c->err_ci = sb_parse_double(sb_table_get(&tb, r, "err_rate_ci95"), &v) ? v : NAN;
+            long fr = 0, wu = 0, rep = 1;
+            sb_parse_int(sb_table_get(&tb, r, "frames"), &fr);
+            sb_parse_int(sb_table_get(&tb, r, "warmup"), &wu);
+            if (!sb_parse_int(sb_table_get(&tb, r, "repeats"), &rep)) rep = 1;
+            c->frames = (int)fr;
+            if (!c->skipped) t->frames_rendered += rep * (fr + wu);
+            if (measured_at(c, rung) && rung > t->last_rung) t->last_rung = rung;
+            if (c->skipped || c->failed || isnan(c->time_ms) || isnan(c->err)) c->alive = false;
+            if (!c->skipped && !c->failed && (isnan(c->time_ms) || isnan(c->err)))
+                snprintf(c->reason, sizeof c->reason, "no gpu_ms or err_rate was measured (error evaluation off?)");
+        }
+    }
+    sb_table_free(&tb);
+}
+
+/* splitmix64 */
+static uint64_t next_random(uint64_t *x) {
+    uint64_t z = (*x += 0x9e3779b97f4a7c15u);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
+    return z ^ (z >> 31);
+}
+
+/* Measures every live candidate at the rung (what a resumed folder has is
+ * kept), in an order that follows from the seed. False: the time ran out. */
+static bool run_rung(tune *t, int rung) {
+    sb_session *s = &t->s;
+    s->opts.frames = t->rung_frames[rung];
+    s->opts.warmup = rung_warmup(t, rung);
+    char dir[4200], sum_path[4300];
+    snprintf(dir, sizeof dir, "%s/rung-%d", t->dir, rung);
+    snprintf(sum_path, sizeof sum_path, "%s/summary.csv", dir);
+    sb_err err;
+    if (!sb_mkdir_p(dir, &err) || !sb_report_write_columns(dir, &err)) {
+        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        return false;
+    }
+    const char **ids = sb_xcalloc((size_t)t->n, sizeof *ids);
+    bool *done = sb_xcalloc((size_t)t->n, sizeof *done);
+    int *order = sb_xmalloc(sizeof(int) * (size_t)t->n), todo = 0;
+    for (int i = 0; i < t->n; i++) {
+        if (!t->c[i].alive) continue;
+        sb_session_run_id(s, &t->c[i].spec, t->c[i].run_id[rung]);
+        ids[i] = t->c[i].run_id[rung];
+    }
+    sb_summary sum;
+    sb_summary_open(&sum, sum_path);
+    int kept = t->cmd->resume ? sb_summary_keep_complete(&sum, dir, ids, t->n, done) : 0;
+    t->kept += kept;
+    /* the rung's order over all its candidates, then those already done left out: a resumed search
+       renders the rest in the order the whole search would have */
+    int all = 0;
+    for (int i = 0; i < t->n; i++)
+        if (ids[i]) order[all++] = i;
+    uint64_t rng = s->opts.seed ^ (0x5bd1e995u * (uint64_t)(rung + 1));
+    for (int k = all - 1; k > 0; k--) {
+        int j = (int)(next_random(&rng) % (uint64_t)(k + 1));
+        int tmp = order[k];
+        order[k] = order[j], order[j] = tmp;
+    }
+    for (int k = 0; k < all; k++)
+        if (!done[order[k]]) order[todo++] = order[k];
+    sb_log("rung %d: %d candidate(s) on %d frame(s) of the path%s", rung, todo + kept, s->opts.frames,
+           kept ? " (some kept from the resumed folder)" : "");
+    bool in_time = true;
+    const bool passes = rung == t->nrungs - 1 && t->final_reps > 1;
+    if (passes && todo) {   /* the finalists: their passes interleaved, so a slow spell hits each alike */
+        if (t->cmd->time_limit_s > 0 && (sb_now_ms() - t->t0) / 1e3 > t->cmd->time_limit_s) {
+            in_time = false;
+        } else {
+            const sb_run_spec **specs = sb_xmalloc(sizeof *specs * (size_t)todo);
+            for (int k = 0; k < todo; k++) specs[k] = &t->c[order[k]].spec;
+            sb_run_opts keep = s->opts;
+            s->opts.repeat = t->final_reps;
+            s->opts.order = SB_ORDER_INTERLEAVE;
+            sb_run_group(s, specs, order, todo, dir, &sum, 0, todo);
+            s->opts = keep;
+            free(specs);
+        }
+    }
+    for (int k = 0; !passes && k < todo; k++) {
+        if (t->cmd->time_limit_s > 0 && (sb_now_ms() - t->t0) / 1e3 > t->cmd->time_limit_s) {
+            in_time = false;
+            break;
+        }
+        cand *c = &t->c[order[k]];
+        sb_run_one(s, &c->spec, dir, &sum, order[k], k, todo);
+        if (!sb_summary_flush(&sum, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
+    }
+    if (!sb_summary_flush(&sum, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
+    sb_summary_free(&sum);
+    read_rung(t, rung, sum_path);
+    free(ids);
+    free(done);
+    free(order);
+    return in_time;
+}
+
+typedef struct rank {
+    int group;                  /* 1..: the Pareto layer of one that may meet the bound; INT_MAX: does not */
+    double v;                   /* may meet it: the objective; does not: the constraint */
+    int i;
+} rank;
+
+/* The first run of a session is slower than the ones after it beyond its
+ * own warm-up frame (llvmpipe, towers at 320x180: every frame of it 30-60 %
+ * slower), which would price the first candidate of rung 0 out of the race:
+ * one run of a candidate on the rung-0 frames with 8 warm-up frames comes
+ * first, in warm-up/ (its frames counted, its figures not used). */
+static void warm_session(tune *t) {
+    sb_session *s = &t->s;
+    int first = -1;
+    for (int i = 0; i < t->n && first < 0; i++)
+        if (t->c[i].alive && !sb_skip_reason(s, t->c[i].spec.tech, &t->c[i].spec.params)) first = i;
+    if (first < 0) return;
+    char dir[4200], sum_path[4300];
+    snprintf(dir, sizeof dir, "%s/warm-up", t->dir);
+    snprintf(sum_path, sizeof sum_path, "%s/summary.csv", dir);
+    sb_err err;
+    if (!sb_mkdir_p(dir, &err)) {
+        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        return;
+    }
+    sb_run_opts keep = s->opts;
+    s->opts.frames = t->rung_frames[0];
+    s->opts.warmup = 8;
+    s->opts.error_every = 0;
+    sb_summary sum;
+    sb_summary_open(&sum, sum_path);
+    sb_run_one(s, &t->c[first].spec, dir, &sum, first, 0, 1);
+    if (!sb_summary_flush(&sum, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
+    sb_summary_free(&sum);
+    s->opts = keep;
+    t->warm_frames = t->rung_frames[0] + 8;
+    t->frames_rendered += t->warm_frames;
+}
+
+static int cmp_rank(const void *a, const void *b) {
+    const rank *x = a, *y = b;
+    if (x->group != y->group) return x->group < y->group ? -1 : 1;
+    if (x->v != y->v) return x->v < y->v ? -1 : 1;
+    return x->i - y->i;
+}
+
+/* a beats b on both counts by more than an early rung can tell (eps: relative) */
+static bool dominates(const cand *a, const cand *b, double eps) {
+    return a->time_ms * (1 + eps) <= b->time_ms && a->err * (1 + eps) <= b->err;
+}
+
+/* Who goes on from `rung`. Those that may meet the bound (within the margin,
+ * which the few frames of an early rung need) go first, by Pareto layer of
+ * (time, error) among them and then by objective: a candidate that another
+ * beats on both counts waits for those that nothing beats, so a noisy time
+ * alone cannot push a setting that is better on error out of the race (and
+ * beating means by more than a quarter of the margin: three frames do not
+ * tell errors 1 % apart); those whose estimate meets the bound before those
+ * only within the margin. Then
+ * the others, by how close they come. `keep` of them, and always the best
+ * that clearly meets the bound, or if none does the one closest to meeting
+ * it (it takes the last place). */
+static void promote(tune *t, int rung, int keep, double margin) {
+    const double b = bound_of(t);
+    rank *rk = sb_xmalloc(sizeof *rk * (size_t)t->n);
+    bool *within = sb_xcalloc((size_t)t->n, sizeof *within);
+    int m = 0, best_clear = -1;
+    for (int i = 0; i < t->n; i++) {
+        cand *c = &t->c[i];
+        if (!c->alive || !measured_at(c, rung)) {
+            c->alive = false;
+            continue;
+        }
+        bool maybe = constraint_of(t, c) <= b * (1 + margin);
+        rk[m++] = (rank){maybe ? 0 : INT_MAX, maybe ? objective_of(t, c) : constraint_of(t, c), i};
+        within[i] = constraint_of(t, c) <= b;
+        if (constraint_of(t, c) <= b * (1 - margin / 2) &&
+            (best_clear < 0 || objective_of(t, c) < objective_of(t, &t->c[best_clear])))
+            best_clear = i;
+    }
+    if (best_clear < 0)   /* nothing clearly meets it: the safe place goes to the one closest to meeting it */
+        for (int k = 0; k < m; k++)
+            if (best_clear < 0 || constraint_of(t, &t->c[rk[k].i]) < constraint_of(t, &t->c[best_clear]))
+                best_clear = rk[k].i;
+    /* non-dominated sorting of the hopeful: layer L holds those only layers < L beat */
+    for (int layer = 1, left = 1; left; layer++) {
+        left = 0;
+        for (int k = 0; k < m; k++) {
+            if (rk[k].group != 0) continue;
+            bool beaten = false;
+            for (int j = 0; j < m && !beaten; j++)
+                beaten = j != k && (rk[j].group == 0 || rk[j].group == -layer) &&
+                         dominates(&t->c[rk[j].i], &t->c[rk[k].i], margin / 4);
+            if (!beaten) rk[k].group = -layer;   /* provisional: this layer */
+            else left++;
+        }
+        for (int k = 0; k < m; k++)
+            if (rk[k].group == -layer) rk[k].group = layer;
+    }
+    /* those whose estimate meets the bound before those only within the margin */
+    for (int k = 0; k < m; k++)
+        if (rk[k].group != INT_MAX && !within[rk[k].i]) rk[k].group += 1 << 20;
+    free(within);
+    qsort(rk, (size_t)m, sizeof *rk, cmp_rank);
+    for (int k = 0; k < m; k++) t->c[rk[k].i].alive = k < keep;
+    if (best_clear >= 0 && !t->c[best_clear].alive && keep > 0) {
+        t->c[rk[keep - 1].i].alive = false;
+        t->c[best_clear].alive = true;
+    }
+    free(rk);
+}
+
+/* How many go on from rung 0 (k1) and to the last rung (k2), and how many
+ * passes each finalist renders there (interleaved, A B C A B C), so that the
+ * whole search renders at most a quarter of the grid's frames. Measured on
+ * llvmpipe (towers at 320x180, 30 settings, 33 frames): two settings 14 %
+ * apart came out in either order from single 33-frame runs (the noise of one
+ * run on a shared CPU is about 10 %), and the median of 9 frames ranked two
+ * techniques whose time depends differently on the camera no better than 3
+ * frames did; a setting left out of the final costs more than a noisy final.
+ * So the budget goes to the finalists first: two interleaved passes for 6 of
+ * them where that fits, else one pass for as many as fit; rung 1 runs only
+ * with what is left, for at least twice as many as go on. */
+static void plan_keep(tune *t, int runnable, int *k1, int *k2) {
+    const int w = t->warmup, N = t->cmd->opts->frames;
+    const long budget = (long)runnable * (N + w) / 4 - t->warm_frames;
+    const long r0 = (long)runnable * (t->rung_frames[0] + rung_warmup(t, 0));
+    const long left = budget - r0, pass = N + w;
+    long f2 = left / (2 * pass);
+    t->final_reps = f2 >= 6 && runnable > 6 ? 2 : 1;
+    long f = t->final_reps == 2 ? (f2 > 6 ? 6 : f2) : left / pass;
+    if (f > runnable) f = runnable;
+    if (f < 1) f = 1;
+    *k2 = (int)f;
+    *k1 = 0;
+    if (t->nrungs < 3) return;
+    long rest = left - f * pass * t->final_reps, k = rest > 0 ? rest / (t->rung_frames[1] + w) : 0;
+    if (k >= 2 * f && f < runnable) *k1 = (int)(k > runnable ? runnable : k);
+}
+
+/* ---- the answer ---- */
+
+static int choose(tune *t, int rung) {
+    int best = -1;
+    const double b = bound_of(t);
+    for (int i = 0; i < t->n; i++) {
+        const cand *c = &t->c[i];
+        if (!measured_at(c, rung) || isnan(c->err) || isnan(c->time_ms) || constraint_of(t, c) > b) continue;
+        if (best < 0 || objective_of(t, c) < objective_of(t, &t->c[best])) best = i;
+    }
+    return best;
+}
+
+/* The closest to the bound, when nothing meets it. */
+static int closest(const tune *t, int rung) {
+    int best = -1;
+    for (int i = 0; i < t->n; i++) {
+        const cand *c = &t->c[i];
+        if (!measured_at(c, rung) || isnan(c->err) || isnan(c->time_ms)) continue;
+        if (best < 0 || constraint_of(t, c) < constraint_of(t, &t->c[best])) best = i;
+    }
+    return best;
+}
+
+static bool usable(const cand *c) { return c->rung >= 0 && !c->skipped && !c->failed && !isnan(c->err) && !isnan(c->time_ms); }
+
+/* Pareto front of (time, err) over every candidate's best-known figures. */
+static void mark_front(tune *t) {
+    for (int i = 0; i < t->n; i++) {
+        cand *a = &t->c[i];
+        a->front = usable(a);
+        for (int j = 0; a->front && j < t->n; j++) {
+            const cand *o = &t->c[j];
+            if (j == i || !usable(o)) continue;
+            if (o->time_ms <= a->time_ms && o->err <= a->err && (o->time_ms < a->time_ms || o->err < a->err))
+                a->front = false;
+        }
+    }
+}
+
+static int cmp_time(const void *a, const void *b) {
+    const cand *x = *(const cand *const *)a, *y = *(const cand *const *)b;
+    return x->time_ms < y->time_ms ? -1 : x->time_ms > y->time_ms;
+}
+
+static bool write_csv(const tune *t, sb_err *err) {
+    sb_csv csv = {0};
+    static const char *const head[] = {"candidate", "technique", "spec", "rung", "frames", "status", "reason",
+                                       "gpu_ms_median", "gpu_ms_ci95", "err_rate_mean", "err_rate_ci95", "front",
+                                       "recommended", "run_id"};
+    for (size_t k = 0; k < SB_COUNT(head); k++) sb_csv_str(&csv, head[k]);
+    sb_csv_end_row(&csv);
+    for (int i = 0; i < t->n; i++) {
+        const cand *c = &t->c[i];
+        sb_csv_int(&csv, i);
+        sb_csv_str(&csv, c->spec.tech->name);
+        sb_csv_str(&csv, c->label);
+        sb_csv_int(&csv, c->rung);
+        sb_csv_int(&csv, c->rung >= 0 ? c->frames : 0);
+        sb_csv_str(&csv, c->rung < 0 ? "not_run" : c->skipped ? "skipped" : c->failed ? "failed" : "ok");
+        sb_csv_str(&csv, c->reason);
+        sb_csv_num(&csv, c->time_ms);
+        sb_csv_num(&csv, c->time_ci);
+        sb_csv_num(&csv, c->err);
+        sb_csv_num(&csv, c->err_ci);
+        sb_csv_str(&csv, c->front ? "yes" : "no");
+        sb_csv_str(&csv, c->chosen ? "yes" : "no");
+        sb_csv_str(&csv, c->rung >= 0 ? c->run_id[c->rung] : "");
+        sb_csv_end_row(&csv);
+    }
+    char path[4200];
+    snprintf(path, sizeof path, "%s/tune.csv", t->dir);
+    bool ok = sb_write_file_atomic(path, csv.buf, csv.len, err);
+    sb_csv_free(&csv);
+    return ok;
+}
+
+/* time against error: every candidate, the front joined, the choice ringed. */
+static bool write_svg(const tune *t, int chosen, sb_err *err) {
+    const double W = 720, H = 440, L = 70, R = 20, T = 30, B = 50;
+    double xmax = 0, ymax = 0;
+    for (int i = 0; i < t->n; i++)
+        if (usable(&t->c[i])) xmax = fmax(xmax, t->c[i].time_ms), ymax = fmax(ymax, t->c[i].err);
+    if (t->cmd->max_err > 0) ymax = fmax(ymax, t->cmd->max_err);
+    else xmax = fmax(xmax, t->cmd->budget_ms);
+    xmax = xmax > 0 ? xmax * 1.08 : 1, ymax = ymax > 0 ? ymax * 1.08 : 1;
+#define X(v) (L + (v) / xmax * (W - L - R))
+#define Y(v) (H - B - (v) / ymax * (H - T - B))
+    sb_csv o = {0};
+    line(&o, "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%g\" height=\"%g\" font-family=\"sans-serif\" "
+                   "font-size=\"12\">", W, H);
+    line(&o, "<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>");
+    line(&o, "<text x=\"%g\" y=\"18\">%s: gpu_ms median against err_rate mean</text>", L, t->s.scene_name);
+    line(&o, "<line x1=\"%g\" y1=\"%g\" x2=\"%g\" y2=\"%g\" stroke=\"black\"/>", L, H - B, W - R, H - B);
+    line(&o, "<line x1=\"%g\" y1=\"%g\" x2=\"%g\" y2=\"%g\" stroke=\"black\"/>", L, T, L, H - B);
+    for (int k = 0; k <= 4; k++) {
+        double xv = xmax * k / 4, yv = ymax * k / 4;
+        line(&o, "<text x=\"%g\" y=\"%g\" text-anchor=\"middle\">%.3g</text>", X(xv), H - B + 16, xv);
+        line(&o, "<text x=\"%g\" y=\"%g\" text-anchor=\"end\">%.3g</text>", L - 4, Y(yv) + 4, yv);
+    }
+    line(&o, "<text x=\"%g\" y=\"%g\" text-anchor=\"middle\">gpu_ms (median)</text>", (L + W - R) / 2, H - 12);
+    line(&o, "<text x=\"14\" y=\"%g\" transform=\"rotate(-90 14 %g)\" text-anchor=\"middle\">err_rate</text>",
+               (T + H - B) / 2, (T + H - B) / 2);
+    if (t->cmd->max_err > 0)
+        line(&o, "<line x1=\"%g\" y1=\"%g\" x2=\"%g\" y2=\"%g\" stroke=\"red\" stroke-dasharray=\"4 3\"/>", L,
+                   Y(t->cmd->max_err), W - R, Y(t->cmd->max_err));
+    else
+        line(&o, "<line x1=\"%g\" y1=\"%g\" x2=\"%g\" y2=\"%g\" stroke=\"red\" stroke-dasharray=\"4 3\"/>",
+                   X(t->cmd->budget_ms), T, X(t->cmd->budget_ms), H - B);
+    const cand **f = sb_xmalloc(sizeof *f * (size_t)t->n);
+    int nf = 0;
+    for (int i = 0; i < t->n; i++)
+        if (t->c[i].front) f[nf++] = &t->c[i];
+    qsort(f, (size_t)nf, sizeof *f, cmp_time);
+    sb_csv o2 = {0};
+    for (int k = 0; k < nf; k++) line(&o2, "%.1f,%.1f", X(f[k]->time_ms), Y(f[k]->err));
+    for (size_t k = 0; k < o2.len; k++)
+        if (o2.buf[k] == '\n') o2.buf[k] = ' ';
+    line(&o, "<polyline fill=\"none\" stroke=\"#2060c0\" points=\"%s\"/>", o2.len ? o2.buf : "");
+    sb_csv_free(&o2);
+    free(f);
+    for (int i = 0; i < t->n; i++) {
+        const cand *c = &t->c[i];
+        if (!usable(c)) continue;
+        line(&o, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"%d\" fill=\"%s\" fill-opacity=\"0.7\"><title>%s: %.3g ms, "
+                       "err %.3g (%d frames)</title></circle>", X(c->time_ms), Y(c->err), c->front ? 4 : 3,
+                   c->front ? "#2060c0" : "#999999", c->label, c->time_ms, c->err, c->frames);
+    }
+    if (chosen >= 0)
+        line(&o, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"8\" fill=\"none\" stroke=\"red\" stroke-width=\"2\"/>",
+                   X(t->c[chosen].time_ms), Y(t->c[chosen].err));
+    line(&o, "</svg>");
+#undef X
+#undef Y
+    char path[4200];
+    snprintf(path, sizeof path, "%s/front.svg", t->dir);
+    bool ok = sb_write_file_atomic(path, o.buf, o.len, err);
+    sb_csv_free(&o);
+    return ok;
+}
+
+/* A file or a bundled name as a batch file can name it. */
+static void batch_name(const char *what, char *out, size_t len) {
+    char real[4096];
+    if (access(what, R_OK) == 0 && realpath(what, real)) snprintf(out, len, "%s", real);
+    else snprintf(out, len, "%s", what);
+}
+
+static bool write_bench(const tune *t, int chosen, sb_err *err) {
+    const sb_tune_cmd *cmd = t->cmd;
+    const sb_run_opts *o = cmd->opts;
+    char scene[4096], path[4096];
+    batch_name(cmd->scene, scene, sizeof scene);
+    batch_name(cmd->path ? cmd->path : "auto", path, sizeof path);
+    sb_csv b = {0};
+    line(&b, "# shadowbench tune %s %s: %s %g", cmd->scene, cmd->path ? cmd->path : "auto",
+               cmd->max_err > 0 ? "--max-err" : "--budget-ms", bound_of(t));
+    line(&b, "path tuned %s", path);
+    line(&b, "scene %s %s tuned", t->s.scene_name, scene);
+    line(&b, "defaults --frames %d --size %dx%d --error-every %d", o->frames, o->width, o->height,
+               o->error_every > 0 ? o->error_every : 10);
+    if (chosen >= 0) line(&b, "@%s %s", t->s.scene_name, t->c[chosen].label);
+    else line(&b, "# nothing met the bound");
+    char file[4200];
+    snprintf(file, sizeof file, "%s/tune.bench", t->dir);
+    bool ok = sb_write_file_atomic(file, b.buf, b.len, err);
+    sb_csv_free(&b);
+    return ok;
+}
+
+static void print_report(const tune *t, int chosen, bool met) {
+    const sb_tune_cmd *cmd = t->cmd;
+    const cand **v = sb_xmalloc(sizeof *v * (size_t)t->n);
+    int nv = 0, skipped = 0, failed = 0;
+    for (int i = 0; i < t->n; i++) {
+        skipped += t->c[i].skipped, failed += t->c[i].failed;
+        if (t->c[i].front) v[nv++] = &t->c[i];
+    }
+    qsort(v, (size_t)nv, sizeof *v, cmp_time);
+    printf("%s along %s, %dx%d, %s %g\n", t->s.scene_name, t->s.path_name, cmd->opts->width, cmd->opts->height,
+           cmd->max_err > 0 ? "err_rate at most" : "gpu_ms at most", bound_of(t));
+    if (chosen >= 0) {
+        const cand *c = &t->c[chosen];
+        printf("%s: %s\n  gpu_ms median %.3g (95%% CI of the mean +-%.2g), err_rate %.4g (+-%.2g), %d frames\n",
+               met ? "recommended" : "nothing met the bound; closest", c->label, c->time_ms, c->time_ci, c->err,
+               c->err_ci, c->frames);
+    } else {
+        printf("no candidate could be measured\n");
+    }
+    if (t->kept) printf("  (%d run(s) kept from the resumed folder, not measured again)\n", t->kept);
+    if (t->out_of_time) printf("  (the time limit ended the search after rung %d: figures from fewer frames)\n", t->last_rung);
+    printf("\nPareto front (time against error; frames: how many frames the figures are from):\n");
+    printf("  %-52s %10s %9s %10s %9s %6s\n", "setting", "gpu_ms", "+-ci95", "err_rate", "+-ci95", "frames");
+    for (int k = 0; k < nv; k++)
+        printf("%c %-52s %10.3g %9.2g %10.4g %9.2g %6d\n", v[k] == &t->c[chosen < 0 ? 0 : chosen] && chosen >= 0 ? '*' : ' ',
+               v[k]->label, v[k]->time_ms, v[k]->time_ci, v[k]->err, v[k]->err_ci, v[k]->frames);
+    long grid = 0;
+    for (int i = 0; i < t->n; i++)
+        if (!t->c[i].skipped && t->c[i].rung >= 0) grid += cmd->opts->frames + t->warmup;
+    printf("\n%d candidate(s) (%d skipped here, %d failed); frames rendered %ld of the full grid's %ld (%.0f%%)\n",
+           t->n, skipped, failed, t->frames_rendered, grid, grid ? 100.0 * t->frames_rendered / grid : 0);
+    for (int i = 0, shown = 0; i < t->n && shown < 5; i++)
+        if (t->c[i].skipped) printf("  skipped %s: %s\n", t->c[i].label, t->c[i].reason), shown++;
+    if (chosen >= 0 && met) printf("\nbatch line (pin it in a nightly):\n  @%s %s\n", t->s.scene_name, t->c[chosen].label);
+    printf("\nfront.svg, tune.csv and tune.bench in\n%s\n", t->dir);
+    free(v);
+}
+
+int sb_tune_main(const sb_tune_cmd *cmd) {
+    if ((cmd->max_err > 0) == (cmd->budget_ms > 0)) {
+        fprintf(stderr, "shadowbench: tune needs one of --max-err E or --budget-ms B\n");
+        return 2;
+    }
+    tune t;
+    memset(&t, 0, sizeof t);
+    t.cmd = cmd;
+    t.t0 = sb_now_ms();
+    t.last_rung = -1;
+    sb_err err;
+    if (!make_candidates(&t, &err)) {
+        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        return 2;
+    }
+    if (cmd->opts->error_every <= 0) {
+        fprintf(stderr, "shadowbench: tune needs the error: --error-every must be at least 1\n");
+        free(t.c);
+        return 2;
+    }
+    plan_frames(&t);
+    t.warmup = cmd->opts->warmup < 0 ? 1 : cmd->opts->warmup;
+    t.final_reps = 1;
+    if (cmd->resume && access(cmd->resume, W_OK) != 0) {
+        fprintf(stderr, "shadowbench: --resume %s: no such results folder\n", cmd->resume);
+        free(t.c);
+        return 2;
+    }
+    if (!sb_session_open(&t.s, cmd->opts, cmd->scene, cmd->path ? cmd->path : "auto", &err)) {
+        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        sb_session_close(&t.s);
+        free(t.c);
+        return 1;
+    }
+    if (cmd->resume) {
+        snprintf(t.dir, sizeof t.dir, "%s", cmd->resume);
+    } else {
+        char base[4200];
+        snprintf(base, sizeof base, "%s/tune-%s", cmd->out, t.s.scene_name);
+        if (!sb_make_stamped_dir(base, t.dir, sizeof t.dir, &err)) {
+            fprintf(stderr, "shadowbench: %s\n", err.msg);
+            sb_session_close(&t.s);
+            free(t.c);
+            return 1;
+        }
+    }
+    sb_log("tune: %d candidate(s), rungs of %d/%d/%d frames, seed %llu, results in %s", t.n, t.rung_frames[0],
+           t.nrungs > 1 ? t.rung_frames[1] : t.rung_frames[0], t.rung_frames[t.nrungs - 1],
+           (unsigned long long)cmd->opts->seed, t.dir);
+    int final_rung = -1;
+    bool in_time = true;
+    warm_session(&t);
+    int k1 = 0, k2 = 0;
+    for (int r = 0; r < t.nrungs && in_time; r++) {
+        in_time = run_rung(&t, r);
+        if (!in_time) break;
+        final_rung = r;
+        if (r == t.nrungs - 1) break;
+        if (r == 0) {
+            int runnable = 0;
+            for (int i = 0; i < t.n; i++) runnable += measured_at(&t.c[i], 0);
+            plan_keep(&t, runnable, &k1, &k2);
+            sb_log("tune: %d of %d can run here; %d go on to rung 1, %d to the last rung (%d pass(es) each)",
+                   runnable, t.n, k1, k2, t.final_reps);
+            if (k1 > 0) {
+                promote(&t, 0, k1, 0.5);
+            } else {   /* straight to the last rung */
+                promote(&t, 0, k2, 0.5);
+                r = t.nrungs - 2;
+            }
+        } else {
+            promote(&t, r, k2, 0.2);
+        }
+    }
+    t.out_of_time = !in_time;
+    int rung = t.out_of_time ? t.last_rung : final_rung;
+    int chosen = rung >= 0 ? choose(&t, rung) : -1;
+    bool met = chosen >= 0;
+    if (!met && rung >= 0) chosen = closest(&t, rung);
+    if (chosen >= 0) t.c[chosen].chosen = true;
+    mark_front(&t);
+    bool ok = write_csv(&t, &err) && write_svg(&t, chosen, &err) && write_bench(&t, met ? chosen : -1, &err);
+    if (!ok) fprintf(stderr, "shadowbench: %s\n", err.msg);
+    print_report(&t, chosen, met);
+    sb_session_close(&t.s);
+    free(t.c);
+    return ok && met ? 0 : 1;
+}

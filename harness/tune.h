@@ -1,0 +1,36 @@
+/* tune.h - `shadowbench tune`: which technique and settings to ship for a
+ * scene and path.
+ *
+ *   shadowbench tune SCENE [PATH] [SPEC...] --max-err E | --budget-ms B
+ *                    [--techniques LIST] [--time-limit D] [--seed N] [--resume DIR]
+ *
+ * With --max-err: the cheapest setting (median gpu_ms) whose mean err_rate is
+ * at most E; with --budget-ms: the most accurate one whose median gpu_ms is at
+ * most B. The candidates are the SPECs' grids, or every technique of LIST (by
+ * default every technique but `none` and `raycast`) over tune's axes (res,
+ * cascades, lambda, filter: see tune.c). The search is successive halving:
+ * every candidate measured on a few frames of the path, the promising ones on
+ * more, the finalists on all of them, so that the frames rendered stay within
+ * a quarter of the grid's; the reference is cast once per camera and shared
+ * (the frames of a short rung are frames of the long ones). */
+#pragma once
+#include "run.h"
+
+typedef struct sb_tune_cmd {
+    const char *scene, *path;           /* path NULL: auto */
+    const char *const *specs;           /* the grid as specs (NULL: the default axes) */
+    int nspecs;
+    const char *techniques;             /* --techniques a,b,c (NULL: all but none and raycast) */
+    double max_err, budget_ms;          /* exactly one > 0 */
+    double time_limit_s;                /* 0: none */
+    const sb_run_opts *opts;            /* frames: the full measurement; seed: the plan's */
+    const char *out, *resume;           /* results base folder; or a tune folder to resume */
+} sb_tune_cmd;
+
+/* Parses a duration: "90", "90s", "5m", "1.5h" (seconds out). */
+bool sb_parse_duration(const char *text, double *seconds);
+/* Runs the search and prints the recommendation, the Pareto front and a batch
+ * line; writes tune.csv, front.svg, tune.bench and each rung's results under
+ * OUT/tune-SCENE/<UTC time>/. Returns 0 (a recommendation), 1 (nothing met
+ * the bound, or a failure) or 2 (bad input). */
+int sb_tune_main(const sb_tune_cmd *cmd);
