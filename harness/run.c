@@ -734,17 +734,9 @@ bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_
     return sb_run_end(r);
 }
 
-/* splitmix64: shuffle's generator (the same seed, the same order everywhere) */
-static uint64_t next_random(uint64_t *x) {
-    uint64_t z = (*x += 0x9e3779b97f4a7c15u);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
-    return z ^ (z >> 31);
-}
-
 static void shuffle(int *v, int n, uint64_t *rng) {
     for (int i = n - 1; i > 0; i--) {
-        int j = (int)(next_random(rng) % (uint64_t)(i + 1));
+        int j = (int)(sb_splitmix64(rng) % (uint64_t)(i + 1));
         int t = v[i];
         v[i] = v[j], v[j] = t;
     }

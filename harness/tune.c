@@ -256,14 +256,6 @@ static void read_rung(tune *t, int rung, const char *sum_path) {
     sb_table_free(&tb);
 }
 
-/* splitmix64 */
-static uint64_t next_random(uint64_t *x) {
-    uint64_t z = (*x += 0x9e3779b97f4a7c15u);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
-    return z ^ (z >> 31);
-}
-
 /* Measures every live candidate at the rung (what a resumed folder has is
  * kept), in an order that follows from the seed. False: the time ran out. */
 static bool run_rung(tune *t, int rung) {
@@ -297,7 +289,7 @@ static bool run_rung(tune *t, int rung) {
         if (ids[i]) order[all++] = i;
     uint64_t rng = s->opts.seed ^ (0x5bd1e995u * (uint64_t)(rung + 1));
     for (int k = all - 1; k > 0; k--) {
-        int j = (int)(next_random(&rng) % (uint64_t)(k + 1));
+        int j = (int)(sb_splitmix64(&rng) % (uint64_t)(k + 1));
         int tmp = order[k];
         order[k] = order[j], order[j] = tmp;
     }

@@ -162,6 +162,19 @@ static int pick_bounds(double *bounds, int max) {
     return k;
 }
 
+/* tune over the grid's settings with a bound (--max-err or --budget-ms), expecting a recommendation:
+ * the grid's figures for it. */
+static const cfg *tune_grid(const char *option, double bound, const char *sub, tuned *t) {
+    assert_int_equal(sh("%s tune towers auto " SPECS " " COMMON " %s %.9g --seed 7 --out %s/%s", test_binary(), option,
+                        bound, g_tmp, sub), 0);
+    char dir[4096];
+    last_line(dir, sizeof dir);
+    read_tune(dir, t);
+    const cfg *got = grid_find(t->key);
+    assert_non_null(got);
+    return got;
+}
+
 /* Times two settings again in one run, their repetitions interleaved (A B A B A B). */
 static void remeasure(const char *a, const char *b, double *a_ms, double *b_ms) {
     assert_int_equal(sh("%s run towers auto '%s' '%s' " COMMON " --warmup 1 --error-every 0 --repeat 3 --order interleave "
@@ -190,15 +203,8 @@ static void test_max_err_matches_the_grid(void **st) {
     for (int b = 0; b < nb; b++) {
         double next;
         const cfg *best = grid_best(bounds[b], &next);
-        int rc = sh("%s tune towers auto " SPECS " " COMMON " --max-err %.9g --seed 7 --out %s/tune", test_binary(),
-                    bounds[b], g_tmp);
-        assert_int_equal(rc, 0);
-        char dir[4096];
-        last_line(dir, sizeof dir);
         tuned t;
-        read_tune(dir, &t);
-        const cfg *got = grid_find(t.key);
-        assert_non_null(got);
+        const cfg *got = tune_grid("--max-err", bounds[b], "tune", &t);
         long grid_frames = (long)t.runnable * (FRAMES + 1);
         printf("bound %.5g: grid's cheapest %s (%.3g ms, err %.5g; next %.3g ms); tune: %s (grid: %.3g ms, err %.5g); "
                "frames %ld of %ld\n", bounds[b], best->key, best->ms, best->err, next, got->key, got->ms, got->err,
@@ -294,14 +300,9 @@ static void test_budget(void **st) {
     /* a budget every setting meets: the most accurate of the grid */
     double slowest = 0, least_err = INFINITY;
     for (int i = 0; i < g_n; i++) slowest = fmax(slowest, g_grid[i].ms), least_err = fmin(least_err, g_grid[i].err);
-    assert_int_equal(sh("%s tune towers auto " SPECS " " COMMON " --budget-ms %.6g --out %s/budget", test_binary(),
-                        slowest * 3, g_tmp), 0);
-    char dir[4096];
-    last_line(dir, sizeof dir);
     tuned t;
-    read_tune(dir, &t);
-    const cfg *got = grid_find(t.key);
-    assert_non_null(got);
+    const cfg *got = tune_grid("--budget-ms", slowest * 3, "budget", &t);
+    char dir[4096];
     printf("budget %.3g ms: %s, err %.5g (least in the grid %.5g)\n", slowest * 3, got->key, got->err, least_err);
     assert_true(got->err <= least_err * 1.000001);
     /* a budget nothing meets: said, exit 1, and no batch line to pin */
