@@ -665,7 +665,7 @@ static void print_report(const tune *t, int chosen, bool met) {
     printf("\nPareto front (time against error; frames: how many frames the figures are from):\n");
     printf("  %-52s %10s %9s %10s %9s %6s\n", "setting", "gpu_ms", "+-ci95", "err_rate", "+-ci95", "frames");
     for (int k = 0; k < nv; k++)
-        printf("%c %-52s %10.3g %9.2g %10.4g %9.2g %6d\n", v[k] == &t->c[chosen < 0 ? 0 : chosen] && chosen >= 0 ? '*' : ' ',
+        printf("%c %-52s %10.3g %9.2g %10.4g %9.2g %6d\n", v[k]->chosen ? '*' : ' ',
                v[k]->label, v[k]->time_ms, v[k]->time_ci, v[k]->err, v[k]->err_ci, v[k]->frames);
     long grid = 0;
     for (int i = 0; i < t->n; i++)
