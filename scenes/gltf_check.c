@@ -120,7 +120,7 @@ static bool get_uint(ck *c, const sb_json *obj, const char *path, const char *ke
 }
 
 static bool index_value(ck *c, const sb_json *v, const char *path, int kind, int64_t *out) {
-    uint64_t x;
+    uint64_t x = 0;
     if (!uint_value(c, v, path, 0, UINT64_MAX, &x)) return false;
     if (x >= c->n[kind])
         return fail(c, path, "%s %llu does not exist (the file has %llu)", kind_name[kind], (unsigned long long)x,
@@ -483,7 +483,7 @@ static bool check_primitive(ck *c, const sb_json *prim, const char *path) {
     for (uint32_t k = 0; k < attrs->count; k++) {
         const sb_json *v = &attrs->items[k];
         jpath pk = at(pa.s, v->key);
-        int64_t acc;
+        int64_t acc = 0;
         if (!index_value(c, v, pk.s, K_ACCESSOR, &acc)) return false;
         const acc_info *ai = &c->accs[acc];
         if (k > 0 && ai->count != count)

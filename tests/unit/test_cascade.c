@@ -318,7 +318,7 @@ static void test_psm_behind_camera_order(void **st) {
             if (!in_view(&cam, p) || t < 0 || (fabs(x) <= 1 && fabs(z) <= 1)) continue;
             sb_v3 q = sb_v3_add(p, sb_v3_scale(sun, t + 1e-3));   /* inside the caster */
             assert_true(sb_v3_dot(sb_v3_sub(q, cam.pos), cam.forward) < 0);
-            sb_v3 pr = sb_v3_sub(p, s.origin), qr = sb_v3_sub(q, s.origin), cp, cq;
+            sb_v3 pr = sb_v3_sub(p, s.origin), qr = sb_v3_sub(q, s.origin), cp = {0, 0, 0}, cq = {0, 0, 0};
             assert_true(shadow_coord(&inv[0], pr, &cp) > 0 && shadow_coord(&inv[0], qr, &cq) > 0);
             assert_true(cp.x >= 0 && cp.x <= 1 && cp.y >= 0 && cp.y <= 1 && cp.z >= 0 && cp.z <= 1);
             assert_true(fabs(cp.x - cq.x) < 1e-6 && fabs(cp.y - cq.y) < 1e-6);
