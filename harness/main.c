@@ -168,7 +168,8 @@ static int cmd_techniques(void) {
                 printf("  %-8s %-28s default %-6s %s\n", p->name, p->choices, p->def, p->help);
             else {
                 char range[64];
-                snprintf(range, sizeof range, "%s %g..%g", p->kind == SB_PARAM_INT ? "int" : "float", p->min, p->max);
+                snprintf(range, sizeof range, "%s %g..%g%s", p->kind == SB_PARAM_INT ? "int" : "float", p->min, p->max,
+                         p->can_auto ? " or auto" : "");
                 printf("  %-8s %-28s default %-6s %s\n", p->name, range, p->def, p->help);
             }
         }

@@ -6,6 +6,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "autobias.h"
 #include "eval.h"
 #include "image.h"
 #include "reference.h"
@@ -311,6 +312,10 @@ const char *sb_skip_reason(sb_session *s, const sb_technique *t, const sb_params
 bool sb_instance_create(sb_instance *in, sb_session *s, const sb_run_spec *spec, int frames, sb_err *err) {
     const sb_technique *t = spec->tech;
     memset(in, 0, sizeof *in);
+    for (int i = 0; i < spec->params.count; i++)
+        if (spec->params.v[i].automatic)
+            return sb_fail(err, "%s:%s=auto: only run, batch and tune calibrate auto values", t->name,
+                           spec->params.v[i].def->name);
     in->tech = t;
     in->params = spec->params;
     in->desc = sb_xcalloc(1, t->desc_size ? t->desc_size : 1);
@@ -425,6 +430,8 @@ static bool evaluate(sb_session *s, sb_instance *in, int seq, const char *out_di
 struct sb_run {
     sb_session *s;
     const sb_run_spec *spec;
+    sb_run_spec used;           /* spec with its "auto" values chosen (autobias.h) */
+    bool calibrated;
     sb_summary *sum;
     char run_id[17], params[1024], csv_path[4096], out_dir[4096];
     sb_run_info info;
@@ -453,7 +460,12 @@ static bool ensure_instance(sb_run *r) {
     if (r->have_instance) return true;
     const sb_run_opts *o = &r->s->opts;
     int frames = (o->warmup < 0 ? SB_WARMUP_AUTO_CAP : o->warmup) + o->frames * (r->keep_instance ? r->capacity / o->frames : 1);
-    if (!sb_instance_create(&r->in, r->s, r->spec, frames, &r->err)) return fail_run(r, "%s", r->err.msg);
+    if (!r->calibrated) { /* once per run, before its first frame */
+        if (!sb_autobias_choose(r->s, r->spec, &r->used, r->info.auto_params, sizeof r->info.auto_params, NULL, &r->err))
+            return fail_run(r, "auto offsets: %s", r->err.msg);
+        r->calibrated = true;
+    }
+    if (!sb_instance_create(&r->in, r->s, &r->used, frames, &r->err)) return fail_run(r, "%s", r->err.msg);
     r->have_instance = true;
     r->seq = 0;
     return true;

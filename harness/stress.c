@@ -15,6 +15,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "autobias.h"
 #include "cascade.h"
 #include "error.h"
 #include "eval.h"
@@ -283,6 +284,17 @@ int sb_stress_run(const sb_run_opts *opts, const char *only, const char *const *
     if (nspecs == 0) {
         specs = techniques;
         nspecs = (int)SB_COUNT(techniques);
+    }
+    for (int t = 0; t < nspecs; t++) { /* bad specs: one line before anything renders */
+        sb_run_spec *runs = NULL;
+        int n = 0;
+        bool ok = sb_spec_expand(specs[t], NULL, &runs, &n, err);
+        for (int r = 0; ok && r < n; r++)
+            if (sb_autobias_wanted(&runs[r]))
+                ok = sb_fail(err, "%s: stress renders fixed offsets; auto is calibrated by run, batch and tune",
+                             specs[t]);
+        free(runs);
+        if (!ok) return -1;
     }
     /* SB_STRESS_KEEP=1 keeps each case's .glb and .path, to rerun a failing case with `run --images` */
     bool keep = getenv("SB_STRESS_KEEP") != NULL;

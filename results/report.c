@@ -168,6 +168,7 @@ static sb_cell r_throttle(const sb_run_row *r, int a) {
     return text(names);
 }
 static sb_cell r_warnings(const sb_run_row *r, int a) { (void)a; return text(r->info->warnings); }
+static sb_cell r_auto(const sb_run_row *r, int a) { (void)a; return text(r->info->auto_params); }
 static sb_cell r_repeats(const sb_run_row *r, int a) { (void)a; return integer(r->n ? r->info->repeats : 0); }
 static sb_cell r_target_ci(const sb_run_row *r, int a) {
     (void)a;
@@ -241,6 +242,7 @@ const sb_run_col sb_run_cols[] = {
     {"path", r_text, S_PATH, 0, 0, "path name"},
     {"technique", r_text, S_TECHNIQUE, 0, 0, "technique"},
     {"params", r_text, S_PARAMS, 0, 0, "every parameter, in table order"},
+    {"auto_params", r_auto, 0, 0, 0, "the values a run calibrated for its parameters given as auto (bias=auto...)"},
     {"backend", r_text, S_BACKEND, 0, 0, "egl or osmesa"},
     {"renderer", r_text, S_RENDERER, 0, 0, "GL_RENDERER"},
     {"timing", r_text, S_TIMING, 0, 0, "queries or sync: the timing mode used"},

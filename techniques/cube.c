@@ -17,9 +17,9 @@ typedef struct cube_desc {
 static const sb_param_def cube_params[] = {
     SB_PARAM_I(cube_desc, res, 1024, 64, 8192, "cube face resolution"),
     SB_PARAM_I(cube_desc, light, 0, 0, 15, "which point or spot light of the scene (in file order)"),
-    SB_PARAM_F(cube_desc, bias, 1.5, 0, 100, "constant bias, in texels at the point's distance"),
-    SB_PARAM_F(cube_desc, slope, 2, 0, 100, "slope-scaled bias (glPolygonOffset factor)"),
-    SB_PARAM_F(cube_desc, normal, 1, 0, 100, "normal offset, in texels"),
+    SB_PARAM_FA(cube_desc, bias, 1.5, 0, 100, "constant bias, in texels at the point's distance"),
+    SB_PARAM_FA(cube_desc, slope, 2, 0, 100, "slope-scaled bias (glPolygonOffset factor)"),
+    SB_PARAM_FA(cube_desc, normal, 1, 0, 100, "normal offset, in texels"),
     SB_PARAM_E(cube_desc, filter, hw, "none|hw|pcf", "shadow filter"),
     SB_PARAM_E(cube_desc, layered, off, "off|gs|vs|on", "six passes, or one layered pass"),
 };

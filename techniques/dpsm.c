@@ -18,9 +18,9 @@ typedef struct dpsm_desc {
 static const sb_param_def dpsm_params[] = {
     SB_PARAM_I(dpsm_desc, res, 1024, 64, 8192, "resolution of each paraboloid map"),
     SB_PARAM_I(dpsm_desc, light, 0, 0, 15, "which point or spot light of the scene (in file order)"),
-    SB_PARAM_F(dpsm_desc, bias, 1.5, 0, 100, "constant bias, in texels at the point's distance"),
-    SB_PARAM_F(dpsm_desc, slope, 2, 0, 100, "slope-scaled bias (glPolygonOffset factor)"),
-    SB_PARAM_F(dpsm_desc, normal, 1, 0, 100, "normal offset, in texels"),
+    SB_PARAM_FA(dpsm_desc, bias, 1.5, 0, 100, "constant bias, in texels at the point's distance"),
+    SB_PARAM_FA(dpsm_desc, slope, 2, 0, 100, "slope-scaled bias (glPolygonOffset factor)"),
+    SB_PARAM_FA(dpsm_desc, normal, 1, 0, 100, "normal offset, in texels"),
     SB_PARAM_E(dpsm_desc, filter, hw, "none|hw", "shadow filter"),
 };
 

@@ -43,6 +43,13 @@ void sb_params_canonical(const sb_params *p, char *out, size_t len) {
 
 bool sb_param_set(sb_params *p, int i, const sb_param_def *d, const char *value, const char *tech, sb_err *err) {
     p->v[i].def = d;
+    p->v[i].automatic = false;
+    if (d->can_auto && strcmp(value, "auto") == 0) {
+        p->v[i].automatic = true;
+        sb_parse_double(d->def, &p->v[i].num);
+        snprintf(p->v[i].text, sizeof p->v[i].text, "auto");
+        return true;
+    }
     if (d->kind == SB_PARAM_ENUM) {
         const char *c = d->choices;
         for (int k = 0; *c; k++) {
@@ -59,7 +66,8 @@ bool sb_param_set(sb_params *p, int i, const sb_param_def *d, const char *value,
     }
     double v;
     if (!sb_parse_double(value, &v))
-        return sb_fail(err, "%s:%s=%s: expected a number in [%g, %g]", tech, d->name, value, d->min, d->max);
+        return sb_fail(err, "%s:%s=%s: expected a number in [%g, %g]%s", tech, d->name, value, d->min, d->max,
+                       d->can_auto ? " or auto" : "");
     if (d->kind == SB_PARAM_INT && v != floor(v))
         return sb_fail(err, "%s:%s=%s: expected an integer in [%g, %g]", tech, d->name, value, d->min, d->max);
     if (v < d->min || v > d->max)

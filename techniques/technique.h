@@ -70,16 +70,20 @@ typedef struct sb_param_def {
     const char *help;
     size_t offset;          /* in the parameter struct */
     size_t size;            /* of that field: sizeof(int) or sizeof(double) */
+    bool can_auto;          /* FLOAT: "auto" is a value (chosen per run by calibration, autobias.h) */
 } sb_param_def;
 
 /* Rows of a parameter table; T is the parameter struct, f its field (and the
  * parameter's name). */
 #define SB_PARAM_I(T, f, def, lo, hi, help) \
-    {#f, SB_PARAM_INT, #def, lo, hi, NULL, help, offsetof(T, f), sizeof(((T *)0)->f)}
+    {#f, SB_PARAM_INT, #def, lo, hi, NULL, help, offsetof(T, f), sizeof(((T *)0)->f), false}
 #define SB_PARAM_F(T, f, def, lo, hi, help) \
-    {#f, SB_PARAM_FLOAT, #def, lo, hi, NULL, help, offsetof(T, f), sizeof(((T *)0)->f)}
+    {#f, SB_PARAM_FLOAT, #def, lo, hi, NULL, help, offsetof(T, f), sizeof(((T *)0)->f), false}
+/* A FLOAT parameter that also takes "auto": the run calibrates it (bias, slope, normal offset). */
+#define SB_PARAM_FA(T, f, def, lo, hi, help) \
+    {#f, SB_PARAM_FLOAT, #def, lo, hi, NULL, help, offsetof(T, f), sizeof(((T *)0)->f), true}
 #define SB_PARAM_E(T, f, def, choices, help) \
-    {#f, SB_PARAM_ENUM, #def, 0, 0, choices, help, offsetof(T, f), sizeof(((T *)0)->f)}
+    {#f, SB_PARAM_ENUM, #def, 0, 0, choices, help, offsetof(T, f), sizeof(((T *)0)->f), false}
 
 #define SB_MAX_PARAMS 24
 
@@ -88,8 +92,9 @@ typedef struct sb_params {
     int count;
     struct {
         const sb_param_def *def;
-        double num;         /* INT/FLOAT value, or the enum's choice index */
+        double num;         /* INT/FLOAT value, or the enum's choice index (auto: the default) */
         char text[32];      /* canonical text */
+        bool automatic;     /* "auto": calibrated per run before it is bound */
     } v[SB_MAX_PARAMS];
 } sb_params;
 

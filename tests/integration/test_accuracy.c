@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "autobias.h"
 #include "cascade.h"
 #include "reference.h"
 #include "support.h"
@@ -121,6 +122,62 @@ static void test_broken_bias_is_detected(void **st) {
     assert_true(bad.err_rate > 0.05);
     assert_true(bad.err_rate > 10 * good.err_rate);
     assert_true(bad.false_shadow > bad.false_lit);   /* acne: surfaces shadow themselves */
+}
+
+/* Mean error of a spec over frames 0, 3, 6, 9 of 12 (as err_rate_mean). */
+static void pooled(const sb_run_spec *spec, sb_error_metrics *out) {
+    memset(out, 0, sizeof *out);
+    sb_err err;
+    for (int fr = 0; fr < 12; fr += 3) {
+        sb_instance in;
+        sb_error_metrics m;
+        assert_true(sb_instance_create(&in, &g_towers, spec, 1, &err));
+        assert_true(eval_instance(&g_towers, &in, fr, 12, &m, NULL, NULL, &err));
+        sb_instance_destroy(&in);
+        assert_true(m.pixels > 0);
+        out->pixels += m.pixels;
+        out->err_rate += m.err_rate / 4;
+        out->false_shadow += m.false_shadow / 4;
+    }
+}
+
+/* bias=auto: on the run's evaluated frames, the chosen offsets keep acne
+ * near the least any tried offset reaches and have no more error than the
+ * defaults (a candidate); offsets of zero, which it could have chosen, show acne. */
+static void test_auto_offsets(void **st) {
+    (void)st;
+    sb_run_opts keep = g_towers.opts;
+    g_towers.opts.frames = 12;
+    g_towers.opts.error_every = 3;
+    const char *specs[] = {"sm:res=1024:filter=none:bias=auto:slope=auto:normal=auto", "sm:res=1024:filter=none",
+                           "sm:res=1024:filter=none:bias=0:slope=0:normal=0"};
+    sb_run_spec *runs = NULL;
+    int n = 0;
+    sb_err err;
+    for (int k = 0; k < 3; k++) assert_true(sb_spec_expand(specs[k], NULL, &runs, &n, &err));
+    assert_true(sb_autobias_wanted(&runs[0]) && !sb_autobias_wanted(&runs[1]));
+    sb_run_spec chosen;
+    char text[160];
+    int tried = 0;
+    assert_true(sb_autobias_choose(&g_towers, &runs[0], &chosen, text, sizeof text, &tried, &err));
+    assert_false(sb_autobias_wanted(&chosen));
+    sb_error_metrics a, d, z;
+    pooled(&chosen, &a);
+    pooled(&runs[1], &d);
+    pooled(&runs[2], &z);
+    print_message("auto %s (%d candidates): err_rate %.5f false shadow %.5f; defaults %.5f / %.5f; zero %.5f / %.5f\n",
+                  text, tried, a.err_rate, a.false_shadow, d.err_rate, d.false_shadow, z.err_rate, z.false_shadow);
+    assert_true(tried >= 5);   /* the joint ladder at least */
+    assert_true(z.false_shadow > 5 * d.false_shadow);                 /* the scene has acne to avoid */
+    assert_true(a.false_shadow <= SB_AUTO_REL * fmin(d.false_shadow, z.false_shadow) + SB_AUTO_ABS);
+    assert_true(a.err_rate < d.err_rate);   /* towers: the defaults are not the best on these frames */
+    assert_true(a.err_rate < z.err_rate);
+    /* an instance is never made with an uncalibrated auto value */
+    sb_instance in;
+    assert_false(sb_instance_create(&in, &g_towers, &runs[0], 1, &err));
+    assert_non_null(strstr(err.msg, "bias=auto"));
+    free(runs);
+    g_towers.opts = keep;
 }
 
 /* Readbacks counted through the loader while the timed frames run. */
@@ -328,6 +385,7 @@ int main(void) {
         cmocka_unit_test(test_reference_matches_analytic),
         cmocka_unit_test(test_error_falls_with_resolution),
         cmocka_unit_test(test_broken_bias_is_detected),
+        cmocka_unit_test(test_auto_offsets),
         cmocka_unit_test(test_query_reads_never_block),
         cmocka_unit_test(test_evaluation_does_not_touch_timed_frames),
         cmocka_unit_test(test_warps_fit_the_visible_scene),   /* its own session: after g_towers closes */

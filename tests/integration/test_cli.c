@@ -156,7 +156,7 @@ static void test_gltf_camera_path(void **st) {
     for (int i = 0; i < 3; i++) {
         line = strtok(NULL, "\n");
         assert_non_null(line);
-        char *fl[16];
+        char *fl[16] = {0};
         assert_int_equal(fields(line, fl, 16), 13);
         assert_true(fabs(atof(fl[3]) - xs[i]) < 1e-6);
         assert_true(fabs(atof(fl[10]) - 0.8 * 180 / SB_PI) < 1e-3);   /* fov from the glTF camera */
@@ -472,6 +472,37 @@ static void test_reference_shared(void **st) {
     sb_table_free(&b);
 }
 
+/* bias=auto: the run calibrates, says what it chose in auto_params, and renders
+ * with it: its error figures are those of a run with the chosen values given. */
+static void test_auto_offsets(void **st) {
+    (void)st;
+    const char *cmd = "%s run towers towers %s --frames 4 --size 320x180 --error-every 1 --warmup 0 --quiet --out %s/%s";
+    char autod[4096], pinned[4096], spec[512];
+    run_dir(autod, sizeof autod, cmd, test_binary(), "sm:res=1024:bias=auto:slope=auto:normal=auto", g_tmp, "auto");
+    sb_table a, b;
+    summary_table(autod, &a);
+    const char *chosen = sb_table_get(&a, 0, "auto_params");
+    print_message("auto: %s -> %s, err_rate %s\n", sb_table_get(&a, 0, "params"), chosen,
+                  sb_table_get(&a, 0, "err_rate_mean"));
+    assert_non_null(strstr(sb_table_get(&a, 0, "params"), "bias=auto:slope=auto:normal=auto"));
+    assert_true(!strncmp(chosen, "bias=", 5) && strstr(chosen, ":slope=") && strstr(chosen, ":normal="));
+    snprintf(spec, sizeof spec, "sm:res=1024:%s", chosen);
+    run_dir(pinned, sizeof pinned, cmd, test_binary(), spec, g_tmp, "pinned");
+    summary_table(pinned, &b);
+    assert_string_equal(sb_table_get(&b, 0, "auto_params"), "");
+    const char *same[] = {"err_rate_mean", "err_false_shadow_mean", "err_false_lit_mean", "shadow_draw_calls_mean"};
+    for (size_t k = 0; k < sizeof same / sizeof same[0]; k++)
+        assert_string_equal(sb_table_get(&a, 0, same[k]), sb_table_get(&b, 0, same[k]));
+    sb_table_free(&a);
+    sb_table_free(&b);
+    /* only a parameter that says so takes auto; stress does not calibrate */
+    expect_cli_fail("sm:res=auto: expected a number in [64, 16384]", "%s run towers towers sm:res=auto --quiet",
+                    test_binary());
+    expect_cli_fail("expected a number in [0, 100] or auto", "%s run towers towers sm:bias=x --quiet", test_binary());
+    expect_cli_fail("sm:bias=auto: stress renders fixed offsets; auto is calibrated by run, batch and tune",
+                    "%s stress sun-parallel sm:bias=auto --frames 2 --size 64x36 --quiet", test_binary());
+}
+
 /* The passes of a run folder's runs in the order they started: each pass as
  * run_index * 100 + repetition, from the per-frame repeat and start_s columns. */
 static int pass_order(const char *dir, int *order, int max) {
@@ -544,7 +575,7 @@ int main(void) {
         cmocka_unit_test(test_stability_verdict_on_llvmpipe),
         cmocka_unit_test(test_backends_same_draw_calls), cmocka_unit_test(test_query_timing),
         cmocka_unit_test(test_repeats_and_target_ci), cmocka_unit_test(test_run_order),
-        cmocka_unit_test(test_reference_shared),
+        cmocka_unit_test(test_reference_shared), cmocka_unit_test(test_auto_offsets),
     };
     return cmocka_run_group_tests_name("cli", tests, setup, teardown);
 }

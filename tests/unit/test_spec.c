@@ -27,6 +27,15 @@ static void test_grid(void **st) {
     assert_true(sb_spec_expand("none", NULL, &runs, &n, &err));
     assert_int_equal(n, 7);
     assert_ptr_equal(runs[6].tech, sb_technique_find("none"));
+    /* "auto" where the table allows it: a grid value like any other, kept as text, bound as the default */
+    assert_true(sb_spec_expand("pssm:bias=auto,0.5:normal=auto", NULL, &runs, &n, &err));
+    assert_int_equal(n, 9);
+    sb_params_canonical(&runs[7].params, c, sizeof c);
+    assert_non_null(strstr(c, ":bias=auto:slope=2:normal=auto:"));
+    double bias;
+    assert_true(sb_params_find(&runs[7].params, "bias", &bias) && bias == 1);
+    assert_true(runs[7].params.v[2].automatic && !runs[8].params.v[2].automatic && runs[8].params.v[4].automatic);
+    assert_true(sb_spec_expand("cube:bias=auto", NULL, &runs, &n, &err));
     free(runs);
 }
 
@@ -50,7 +59,10 @@ static void test_errors(void **st) {
     expect_error("sm:filter=gauss", "expected one of none|hw|pcf3|pcf5|poisson16|pcss");
     expect_error("sm:res", "not NAME=VALUE");
     expect_error("sm:res=512:res=1024", "given twice");
-    expect_error("sm:bias=nan", "expected a number");
+    expect_error("sm:bias=nan", "expected a number in [0, 100] or auto");
+    expect_error("pssm:lambda=auto", "expected a number in [0, 1]");
+    expect_error("sm:res=auto", "expected a number in [64, 16384]");
+    expect_error("sm:filter=auto", "expected one of");
 }
 
 int main(void) {
