@@ -138,6 +138,32 @@ uint64_t sb_fnv1a(uint64_t h, const void *data, size_t n) {
     return h;
 }
 
+static inline uint64_t rotl64(uint64_t x, int r) { return x << r | x >> (64 - r); }
+
+static inline uint64_t mix64(uint64_t z) {
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
+    return z ^ (z >> 31);
+}
+
+/* Four lanes of 64-bit words (a multiply and a rotate each), folded and
+ * mixed; the tail bytes FNV-style. Several GB/s where sb_fnv1a does one byte
+ * per multiply. */
+uint64_t sb_hash_bytes(uint64_t h, const void *data, size_t n) {
+    const unsigned char *p = data;
+    uint64_t v[4] = {h ^ 0x9e3779b97f4a7c15u, h + 0xc2b2ae3d27d4eb4fu, h ^ 0x165667b19e3779f9u, h - 0x27d4eb2f165667c5u};
+    size_t i = 0;
+    for (; i + 32 <= n; i += 32)
+        for (int k = 0; k < 4; k++) {
+            uint64_t w;
+            memcpy(&w, p + i + 8 * (size_t)k, 8);
+            v[k] = rotl64(v[k] + w * 0xc2b2ae3d27d4eb4fu, 31) * 0x9e3779b97f4a7c15u;
+        }
+    uint64_t r = mix64(v[0]) ^ rotl64(mix64(v[1]), 17) ^ rotl64(mix64(v[2]), 31) ^ rotl64(mix64(v[3]), 47);
+    for (; i < n; i++) r = (r ^ p[i]) * 1099511628211ull;
+    return mix64(r ^ (uint64_t)n);
+}
+
 double sb_now_ms(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);

@@ -28,6 +28,8 @@ bool sb_mkdir_p(const char *path, sb_err *err);
 bool sb_make_stamped_dir(const char *base, char *out, size_t len, sb_err *err);
 
 uint64_t sb_fnv1a(uint64_t h, const void *data, size_t n);
+/* A fast 64-bit hash of large data (scene files): chained like sb_fnv1a (h: the hash so far). Not cryptographic. */
+uint64_t sb_hash_bytes(uint64_t h, const void *data, size_t n);
 /* splitmix64: the next number of the sequence x (shuffles: the same seed, the same order everywhere). */
 uint64_t sb_splitmix64(uint64_t *x);
 #define SB_FNV_SEED 1469598103934665603ull

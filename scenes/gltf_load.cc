@@ -756,6 +756,7 @@ bool Loader::emit_nodes() {
 struct FsCtx {
     std::string base_dir;
     bool allow_external;
+    uint64_t hash;   /* of the file, then of every file read through here (buffers, images), in order */
 };
 
 bool fs_exists(const std::string &path, void *user) {
@@ -779,6 +780,7 @@ bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::strin
         if (err) *err = e.msg;
         return false;
     }
+    f->hash = sb_hash_bytes(f->hash, data, n);
     out->assign(data, data + n);
     free(data);
     return true;
@@ -814,7 +816,7 @@ void hide_draco_indices(const sb_json *root, char *json, size_t len) {
 }
 
 // Reads the file once, checks the raw document (gltf_check.h), then lets
-// tinygltf parse it from memory. *hash: FNV-1a of the file and its buffers.
+// tinygltf parse it from memory. *hash: of the file and the files it refers to.
 bool load_model(const char *path, const sb_scene_opts *opts, tinygltf::Model &model, ImageStore *images,
                 uint64_t *hash, sb_err *err) {
     size_t size = 0;
@@ -835,21 +837,20 @@ bool load_model(const char *path, const sb_scene_opts *opts, tinygltf::Model &mo
     if (!sb_json_parse(&doc, path, json, json_len, err)) return false;
     sb_gltf_check_desc cd = {path, base_dir.c_str(), glb, bin ? bin_len : 0, opts && opts->allow_external_uris};
     bool ok = sb_gltf_check(doc.root, &cd, err);
-    uint64_t h = sb_fnv1a(SB_FNV_SEED, bytes, size);
+    uint64_t h = sb_hash_bytes(SB_FNV_SEED, bytes, size);
     if (ok) hide_draco_indices(doc.root, const_cast<char *>(json), json_len);
     sb_json_free(&doc);
     if (!ok) return false;
 
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(keep_image, images);
-    FsCtx fs_ctx{base_dir, cd.allow_external_uris};
+    FsCtx fs_ctx{base_dir, cd.allow_external_uris, h};
     loader.SetFsCallbacks(tinygltf::FsCallbacks{fs_exists, fs_expand, fs_read, fs_write, &fs_ctx});
     std::string e, w;
     ok = glb ? loader.LoadBinaryFromMemory(&model, &e, &w, u, (unsigned)size, base_dir)
              : loader.LoadASCIIFromString(&model, &e, &w, bytes, (unsigned)size, base_dir);
     if (!ok) return sb_fail(err, "%s: %s", path, e.empty() ? "not a valid glTF file" : first_line(e).c_str());
-    for (auto &b : model.buffers) h = sb_fnv1a(h, b.data.data(), b.data.size());
-    *hash = h;
+    *hash = fs_ctx.hash;
     return true;
 }
 

@@ -107,21 +107,25 @@ static void face_normals(sb_scene *s, const sb_prim_desc *p, uint32_t base) {
     }
 }
 
-static int cmp_u64(const void *a, const void *b) {
-    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
-    return x < y ? -1 : x > y;
+/* Open addressing over a power-of-two table of indices (UINT32_MAX: empty),
+ * for grouping in linear time: welding, edges, planes. */
+typedef struct {
+    uint32_t *slot;
+    uint64_t mask;
+} idx_table;
+
+static void idx_table_init(idx_table *t, size_t n) {
+    size_t cap = 16;
+    while (cap < 2 * n) cap *= 2;
+    t->slot = sb_xmalloc(cap * sizeof(uint32_t));
+    memset(t->slot, 0xff, cap * sizeof(uint32_t));
+    t->mask = cap - 1;
 }
 
-typedef struct {
-    double p[3];
-    uint32_t v;
-} weld_key;
-
-static int cmp_weld(const void *a, const void *b) {
-    const weld_key *x = a, *y = b;
-    for (int k = 0; k < 3; k++)
-        if (x->p[k] != y->p[k]) return x->p[k] < y->p[k] ? -1 : 1;
-    return x->v < y->v ? -1 : x->v > y->v;
+static uint64_t mix_key(uint64_t z) {
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
+    return z ^ (z >> 31);
 }
 
 /* Whether the primitive is a closed surface with consistent winding: with
@@ -131,15 +135,30 @@ static int cmp_weld(const void *a, const void *b) {
 static bool prim_closed(const sb_prim_desc *p) {
     uint32_t nv = p->vertex_count, nt = p->index_count / 3;
     if (nt < 4) return false;
-    weld_key *k = sb_xmalloc(sizeof *k * nv);
+    /* weld: each vertex to the first vertex with its exact position */
     uint32_t *id = sb_xmalloc(sizeof(uint32_t) * nv);
-    for (uint32_t v = 0; v < nv; v++) memcpy(k[v].p, p->positions + 3 * (size_t)v, sizeof k[v].p), k[v].v = v;
-    qsort(k, nv, sizeof *k, cmp_weld);
-    for (uint32_t i = 0, w = 0; i < nv; i++) {
-        if (i > 0 && memcmp(k[i].p, k[i - 1].p, sizeof k[i].p)) w = i;
-        id[k[i].v] = w;
+    idx_table w;
+    idx_table_init(&w, nv);
+    for (uint32_t v = 0; v < nv; v++) {
+        const double *q = p->positions + 3 * (size_t)v;
+        uint64_t b[3];
+        memcpy(b, q, sizeof b);
+        for (uint64_t h = mix_key(b[0] ^ mix_key(b[1] ^ mix_key(b[2]))) & w.mask;; h = (h + 1) & w.mask) {
+            uint32_t o = w.slot[h];
+            if (o == UINT32_MAX) {
+                w.slot[h] = id[v] = v;
+                break;
+            }
+            if (!memcmp(p->positions + 3 * (size_t)o, q, 3 * sizeof(double))) {
+                id[v] = o;
+                break;
+            }
+        }
     }
+    free(w.slot);
+    /* directed edges, each once; then every edge's reverse present */
     uint64_t *e = sb_xmalloc(sizeof(uint64_t) * 3 * nt);
+    size_t ne = 3 * (size_t)nt;
     bool closed = true;
     for (uint32_t t = 0; t < nt && closed; t++)
         for (int j = 0; j < 3; j++) {
@@ -147,14 +166,30 @@ static bool prim_closed(const sb_prim_desc *p) {
             closed &= a != b;
             e[3 * t + j] = (uint64_t)a << 32 | b;
         }
-    if (closed) qsort(e, 3 * (size_t)nt, sizeof *e, cmp_u64);
-    for (size_t i = 0; closed && i < 3 * (size_t)nt; i++) {
+    idx_table et;
+    idx_table_init(&et, closed ? ne : 0);
+    for (size_t i = 0; closed && i < ne; i++)
+        for (uint64_t h = mix_key(e[i]) & et.mask;; h = (h + 1) & et.mask) {
+            uint32_t o = et.slot[h];
+            if (o == UINT32_MAX) {
+                et.slot[h] = (uint32_t)i;
+                break;
+            }
+            if (e[o] == e[i]) {
+                closed = false;   /* the same directed edge twice */
+                break;
+            }
+        }
+    for (size_t i = 0; closed && i < ne; i++) {
         uint64_t rev = e[i] << 32 | e[i] >> 32;
-        closed = (i + 1 == 3 * (size_t)nt || e[i + 1] != e[i]) && bsearch(&rev, e, 3 * (size_t)nt, sizeof *e, cmp_u64);
+        bool found = false;
+        for (uint64_t h = mix_key(rev) & et.mask; et.slot[h] != UINT32_MAX && !found; h = (h + 1) & et.mask)
+            found = e[et.slot[h]] == rev;
+        closed = found;
     }
+    free(et.slot);
     free(e);
     free(id);
-    free(k);
     return closed;
 }
 
@@ -209,21 +244,55 @@ typedef struct {
     uint32_t tri;
 } tri_key;
 
-static int cmp_tri(const void *a, const void *b) {
-    const tri_key *x = a, *y = b;
-    if (x->key != y->key) return x->key < y->key ? -1 : 1;
-    return x->tri < y->tri ? -1 : x->tri > y->tri;
+static inline bool tri_less(const tri_key *x, const tri_key *y) {
+    return x->key < y->key || (x->key == y->key && x->tri < y->tri);
+}
+
+/* Sorts by (key, tri): a total order (tri numbers are unique), so the result
+ * is the one any sort gives; typed and inlined, several times qsort's speed. */
+static void sort_tri_keys(tri_key *k, size_t n) {
+    while (n > 16) {
+        tri_key a = k[0], b = k[n / 2], c = k[n - 1], pivot;   /* median of three */
+        pivot = tri_less(&a, &b) ? (tri_less(&b, &c) ? b : tri_less(&a, &c) ? c : a)
+                                 : (tri_less(&a, &c) ? a : tri_less(&b, &c) ? c : b);
+        size_t i = 0, j = n - 1;
+        for (;;) {
+            while (tri_less(&k[i], &pivot)) i++;
+            while (tri_less(&pivot, &k[j])) j--;
+            if (i >= j) break;
+            tri_key t = k[i];
+            k[i++] = k[j];
+            k[j--] = t;
+        }
+        /* [0, j] <= pivot <= [j+1, n): recurse into the smaller part, loop on the larger */
+        size_t left = j + 1;
+        if (left < n - left) {
+            sort_tri_keys(k, left);
+            k += left;
+            n -= left;
+        } else {
+            sort_tri_keys(k + left, n - left);
+            n = left;
+        }
+    }
+    for (size_t i = 1; i < n; i++) {
+        tri_key t = k[i];
+        size_t j = i;
+        for (; j > 0 && tri_less(&t, &k[j - 1]); j--) k[j] = k[j - 1];
+        k[j] = t;
+    }
 }
 
 static sb_aabb tri_range_box(const sb_scene *s, uint32_t first_index, uint32_t count) {
-    sb_aabb b = {{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
+    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
     for (uint32_t i = first_index; i < first_index + count; i++) {
         const double *p = s->build_pos + 3 * (size_t)s->indices[i];
-        sb_v3 v = {p[0], p[1], p[2]};
-        b.lo = sb_v3_min(b.lo, v);
-        b.hi = sb_v3_max(b.hi, v);
+        for (int k = 0; k < 3; k++) {
+            lo[k] = p[k] < lo[k] ? p[k] : lo[k];
+            hi[k] = p[k] > hi[k] ? p[k] : hi[k];
+        }
     }
-    return b;
+    return (sb_aabb){{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
 }
 
 typedef struct {
@@ -253,7 +322,7 @@ static void split_order(sb_scene *s, tri_key *order, uint32_t tri_first, uint32_
         k[i] = (tri_key){p[3 * (size_t)t[0] + axis] + p[3 * (size_t)t[1] + axis] + p[3 * (size_t)t[2] + axis],
                          tri_first + i};
     }
-    qsort(k, n, sizeof *k, cmp_tri);
+    sort_tri_keys(k, n);
     uint32_t *tmp = sb_xmalloc((size_t)n * 3 * sizeof(uint32_t));
     for (uint32_t i = 0; i < n; i++) memcpy(tmp + 3 * (size_t)i, s->indices + 3 * (size_t)k[i].tri, 12);
     memcpy(s->indices + 3 * (size_t)tri_first, tmp, (size_t)n * 12);
@@ -386,38 +455,86 @@ void sb_scene_find_planes(sb_scene *s) {
         pt[m++] = (plane_tri){{llround(n.x * 1e3), llround(n.y * 1e3), llround(n.z * 1e3), llround(d / diag * 1e4)},
                               t, area};
     }
-    qsort(pt, m, sizeof *pt, cmp_plane_tri);
-    for (uint32_t i = 0; i < m;) {
-        uint32_t j = i;
-        double area = 0;
-        while (j < m && !memcmp(pt[j].key, pt[i].key, sizeof pt[i].key)) area += pt[j++].area;
-        if (area >= 0.1 * face) {
-            /* keep the largest SB_MAX_PLANES */
-            int slot = -1;
-            if (s->plane_count < SB_MAX_PLANES) slot = (int)s->plane_count++;
-            else
-                for (int k = 0; k < SB_MAX_PLANES; k++)
-                    if (s->planes[k].area < area && (slot < 0 || s->planes[k].area < s->planes[slot].area)) slot = k;
-            if (slot >= 0) {
-                sb_plane *p = &s->planes[slot];
-                free(p->tris);
-                const uint32_t t0 = pt[i].tri;
-                const float *a = sb_vertex(s, s->indices[3 * t0]), *b = sb_vertex(s, s->indices[3 * t0 + 1]),
-                            *c = sb_vertex(s, s->indices[3 * t0 + 2]);
-                sb_v3 n = sb_v3_norm(sb_v3_cross(sb_v3_make(b[0] - a[0], b[1] - a[1], b[2] - a[2]),
-                                                 sb_v3_make(c[0] - a[0], c[1] - a[1], c[2] - a[2])));
-                p->n[0] = n.x;
-                p->n[1] = n.y;
-                p->n[2] = n.z;
-                p->d = -(n.x * a[0] + n.y * a[1] + n.z * a[2]);
-                p->area = area;
-                p->tri_count = j - i;
-                p->tris = sb_xmalloc(sizeof(uint32_t) * p->tri_count);
-                for (uint32_t k = i; k < j; k++) p->tris[k - i] = pt[k].tri;
+    /* group by quantised plane in linear time: each group's triangles chained
+     * in triangle order; then the large groups in key order, as a sort would visit them */
+    uint32_t *next = sb_xmalloc(sizeof(uint32_t) * (m ? m : 1)), *head = NULL, *tail = NULL, ng = 0;
+    double *garea = NULL;
+    uint32_t *gcount = NULL;
+    idx_table g;
+    idx_table_init(&g, m);
+    uint32_t gcap = 0;
+    for (uint32_t i = 0; i < m; i++) {
+        next[i] = UINT32_MAX;
+        uint64_t h = mix_key((uint64_t)pt[i].key[0] ^ mix_key((uint64_t)pt[i].key[1] ^
+                             mix_key((uint64_t)pt[i].key[2] ^ mix_key((uint64_t)pt[i].key[3]))));
+        for (h &= g.mask;; h = (h + 1) & g.mask) {
+            uint32_t k = g.slot[h];
+            if (k == UINT32_MAX) {
+                if (ng == gcap) {
+                    gcap = gcap ? 2 * gcap : 1024;
+                    head = sb_xrealloc(head, gcap * sizeof *head);
+                    tail = sb_xrealloc(tail, gcap * sizeof *tail);
+                    garea = sb_xrealloc(garea, gcap * sizeof *garea);
+                    gcount = sb_xrealloc(gcount, gcap * sizeof *gcount);
+                }
+                g.slot[h] = ng;
+                head[ng] = tail[ng] = i;
+                garea[ng] = pt[i].area;
+                gcount[ng++] = 1;
+                break;
+            }
+            if (!memcmp(pt[head[k]].key, pt[i].key, sizeof pt[i].key)) {
+                next[tail[k]] = i;
+                tail[k] = i;
+                garea[k] += pt[i].area;
+                gcount[k]++;
+                break;
             }
         }
-        i = j;
     }
+    free(g.slot);
+    plane_tri *big = NULL;   /* one per large group: its first triangle's key, the group in .tri, its area */
+    uint32_t nbig = 0;
+    for (uint32_t k = 0; k < ng; k++)
+        if (garea[k] >= 0.1 * face) {
+            big = sb_xrealloc(big, (nbig + 1) * sizeof *big);
+            big[nbig] = pt[head[k]];
+            big[nbig++].tri = k;
+        }
+    if (nbig > 1) qsort(big, nbig, sizeof *big, cmp_plane_tri);
+    for (uint32_t b = 0; b < nbig; b++) {
+        uint32_t k = big[b].tri;
+        double area = garea[k];
+        /* keep the largest SB_MAX_PLANES */
+        int slot = -1;
+        if (s->plane_count < SB_MAX_PLANES) slot = (int)s->plane_count++;
+        else
+            for (int q = 0; q < SB_MAX_PLANES; q++)
+                if (s->planes[q].area < area && (slot < 0 || s->planes[q].area < s->planes[slot].area)) slot = q;
+        if (slot < 0) continue;
+        sb_plane *p = &s->planes[slot];
+        free(p->tris);
+        const uint32_t t0 = pt[head[k]].tri;
+        const float *a = sb_vertex(s, s->indices[3 * t0]), *bb = sb_vertex(s, s->indices[3 * t0 + 1]),
+                    *c = sb_vertex(s, s->indices[3 * t0 + 2]);
+        sb_v3 n = sb_v3_norm(sb_v3_cross(sb_v3_make(bb[0] - a[0], bb[1] - a[1], bb[2] - a[2]),
+                                         sb_v3_make(c[0] - a[0], c[1] - a[1], c[2] - a[2])));
+        p->n[0] = n.x;
+        p->n[1] = n.y;
+        p->n[2] = n.z;
+        p->d = -(n.x * a[0] + n.y * a[1] + n.z * a[2]);
+        p->area = area;
+        p->tri_count = gcount[k];
+        p->tris = sb_xmalloc(sizeof(uint32_t) * p->tri_count);
+        uint32_t j = 0;
+        for (uint32_t i = head[k]; i != UINT32_MAX; i = next[i]) p->tris[j++] = pt[i].tri;
+    }
+    free(big);
+    free(next);
+    free(head);
+    free(tail);
+    free(garea);
+    free(gcount);
     free(pt);
 }
 

@@ -154,7 +154,7 @@ typedef struct sb_scene {
     uint32_t single_sided_draws;
     sb_scene_features features;
 
-    uint64_t content_hash;       /* FNV-1a of the file bytes and the options that change geometry (run ids) */
+    uint64_t content_hash;       /* sb_hash_bytes of the file, the files it reads and the options that change geometry (run ids) */
     sb_scene_opts opts;          /* as loaded (a glTF camera path of the scene is read alike) */
     double load_ms;
     double load_part_ms[SB_LOAD_PARTS]; /* where load_ms went (sb_load_part_names) */

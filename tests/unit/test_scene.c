@@ -41,6 +41,66 @@ static void test_desert_size(void **st) {
     sb_scene_free(&s);
 }
 
+/* A unit cube as 24 vertices (4 per face, welded by position) and 12
+ * outward-wound triangles; `drop` leaves out that many triangles from the
+ * end, `flip` turns triangle 0 around. */
+static void add_cube(sb_scene *s, double x0, int drop, bool flip, bool double_sided) {
+    static const int face[6][4][3] = {
+        {{0, 0, 0}, {0, 1, 0}, {1, 1, 0}, {1, 0, 0}}, {{0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}},
+        {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}}, {{0, 1, 0}, {0, 1, 1}, {1, 1, 1}, {1, 1, 0}},
+        {{0, 0, 0}, {0, 0, 1}, {0, 1, 1}, {0, 1, 0}}, {{1, 0, 0}, {1, 1, 0}, {1, 1, 1}, {1, 0, 1}}};
+    double pos[72];
+    uint32_t idx[36];
+    for (int f = 0; f < 6; f++) {
+        for (int v = 0; v < 4; v++)
+            for (int k = 0; k < 3; k++) pos[3 * (4 * f + v) + k] = face[f][v][k] + (k == 0 ? x0 : 0);
+        const uint32_t q[6] = {0, 1, 2, 0, 2, 3};
+        for (int k = 0; k < 6; k++) idx[6 * f + k] = 4 * (uint32_t)f + q[k];
+    }
+    if (flip) {
+        uint32_t t = idx[1];
+        idx[1] = idx[2];
+        idx[2] = t;
+    }
+    sb_prim_desc d = {.positions = pos, .vertex_count = 24, .indices = idx, .index_count = 36 - 3 * (uint32_t)drop,
+                      .color = {1, 1, 1, 1}, .double_sided = double_sided};
+    sb_scene_add_prim(s, &d);
+}
+
+/* Closed meshes (back faces culled in shadow passes) and large planes
+ * (planar shadows), found in linear time: checked against hand-made cases. */
+static void test_closed_and_planes(void **st) {
+    (void)st;
+    sb_scene s;
+    sb_err err;
+    sb_scene_begin(&s);
+    add_cube(&s, 0, 0, false, false);  /* closed */
+    add_cube(&s, 2, 1, false, false);  /* a hole */
+    add_cube(&s, 4, 0, true, false);   /* one triangle wound the other way */
+    add_cube(&s, 6, 0, false, true);   /* double-sided */
+    add_cube(&s, 8, 0, false, false);  /* closed */
+    /* a 100 x 100 ground quad at y = 0 split into 8 triangles, the first 4 before the cubes' */
+    double g[27];
+    uint32_t gi[24];
+    for (int i = 0; i < 9; i++) g[3 * i] = (i % 3) * 50.0 - 50, g[3 * i + 1] = 0, g[3 * i + 2] = (i / 3) * 50.0 - 50;
+    for (int c = 0, k = 0; c < 4; c++) {
+        uint32_t a = (uint32_t)(c % 2 + 3 * (c / 2));
+        const uint32_t t[6] = {a, a + 3, a + 4, a, a + 4, a + 1};
+        for (int j = 0; j < 6; j++) gi[k++] = t[j];
+    }
+    sb_prim_desc d = {.positions = g, .vertex_count = 9, .indices = gi, .index_count = 24, .color = {1, 1, 1, 1}};
+    sb_scene_add_prim(&s, &d);
+    const bool closed[6] = {true, false, false, false, true, false};
+    for (int i = 0; i < 6; i++) assert_int_equal(s.draws[i].closed, closed[i]);
+    assert_true(sb_scene_finish(&s, &err));
+    assert_int_equal(s.plane_count, 1);   /* the cubes' faces are far below 10% of the largest face */
+    const sb_plane *p = &s.planes[0];
+    assert_int_equal(p->tri_count, 8);
+    for (uint32_t k = 0; k < 8; k++) assert_int_equal(p->tris[k], 5 * 12 - 1 + k);   /* in triangle order */
+    assert_true(fabs(fabs(p->n[1]) - 1) < 1e-9 && fabs(p->area - 1e4) < 1e-6);
+    sb_scene_free(&s);
+}
+
 static void load_shared(const char *rel, uint64_t expect_tris) {
     const char *p = shared(rel);
     if (access(p, R_OK) != 0) {
@@ -116,7 +176,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_plane_box), cmocka_unit_test(test_desert_size), cmocka_unit_test(test_truck_town),
         cmocka_unit_test(test_zdm2),      cmocka_unit_test(test_hallway),     cmocka_unit_test(test_bvh_cull_exact),
-        cmocka_unit_test(test_missing_file),
+        cmocka_unit_test(test_missing_file),       cmocka_unit_test(test_closed_and_planes),
     };
     return cmocka_run_group_tests_name("scene", tests, NULL, NULL);
 }
