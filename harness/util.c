@@ -1,3 +1,4 @@
+#define _DEFAULT_SOURCE /* MAP_POPULATE */
 #include "util.h"
 
 #include <errno.h>
@@ -5,6 +6,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
@@ -25,14 +27,41 @@ bool sb_fail(sb_err *e, const char *fmt, ...) {
     return false;
 }
 
+/* Lines logged while a capture is on (sb_log_capture), kept whether or not quiet. */
+static char *g_capture;
+static size_t g_capture_len, g_capture_cap;
+static bool g_capturing;
+
 void sb_log(const char *fmt, ...) {
-    if (g_quiet) return;
+    if (g_quiet && !g_capturing) return;
+    char line[2048];
     va_list ap;
     va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
+    vsnprintf(line, sizeof line, fmt, ap);
     va_end(ap);
-    fputc('\n', stderr);
+    if (g_capturing) {
+        size_t n = strlen(line) + 1;
+        if (g_capture_len + n + 1 > g_capture_cap) {
+            g_capture_cap = (g_capture_len + n + 1) * 2;
+            g_capture = sb_xrealloc(g_capture, g_capture_cap);
+        }
+        memcpy(g_capture + g_capture_len, line, n - 1);
+        g_capture[g_capture_len + n - 1] = '\n';
+        g_capture_len += n;
+        g_capture[g_capture_len] = 0;
+    }
+    if (!g_quiet) fprintf(stderr, "%s\n", line);
 }
+
+void sb_log_capture(bool on) {
+    g_capturing = on;
+    if (on) {
+        g_capture_len = 0;
+        if (g_capture) g_capture[0] = 0;
+    }
+}
+
+const char *sb_log_captured(void) { return g_capture ? g_capture : ""; }
 
 char *sb_read_file(const char *path, size_t *size, sb_err *err) {
     FILE *f = fopen(path, "rb");
@@ -68,6 +97,24 @@ char *sb_read_file(const char *path, size_t *size, sb_err *err) {
     buf[n] = 0;
     if (size) *size = (size_t)n;
     return buf;
+}
+
+void *sb_map_file(const char *path, size_t *size, bool writable) {
+    int fd = open(path, O_RDONLY);
+    if (fd < 0) return NULL;
+    struct stat st;
+    void *p = NULL;
+    if (fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0) {
+        p = mmap(NULL, (size_t)st.st_size, PROT_READ | (writable ? PROT_WRITE : 0), MAP_PRIVATE | MAP_POPULATE, fd, 0);
+        if (p == MAP_FAILED) p = NULL;
+        else *size = (size_t)st.st_size;
+    }
+    close(fd);
+    return p;
+}
+
+void sb_unmap_file(void *p, size_t size) {
+    if (p) munmap(p, size);
 }
 
 bool sb_write_file_atomic(const char *path, const void *data, size_t size, sb_err *err) {

@@ -18,9 +18,17 @@ typedef struct sb_err {
 bool sb_fail(sb_err *e, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 void sb_log(const char *fmt, ...) __attribute__((format(printf, 1, 2)));   /* stderr, newline added */
 void sb_set_quiet(bool quiet);
+/* While on, sb_log also keeps its lines (newline-terminated; quiet or not):
+ * what a load said, for the scene cache to say again. on=true clears them. */
+void sb_log_capture(bool on);
+const char *sb_log_captured(void);
 
 /* Reads a whole file; returns NULL and fills err on failure. *size excludes the added NUL. */
 char *sb_read_file(const char *path, size_t *size, sb_err *err);
+/* Maps a regular, non-empty file whole (pre-faulted: a file in the page cache
+ * costs no page faults later); writable: a private copy-on-write mapping. NULL otherwise. */
+void *sb_map_file(const char *path, size_t *size, bool writable);
+void sb_unmap_file(void *p, size_t size);
 /* Writes data to path atomically (PATH.tmp, fsync, rename). */
 bool sb_write_file_atomic(const char *path, const void *data, size_t size, sb_err *err);
 bool sb_mkdir_p(const char *path, sb_err *err);

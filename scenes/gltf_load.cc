@@ -31,6 +31,7 @@ extern "C" {
 #include "gltf_draco.h"
 #include "path.h"
 #include "scene.h"
+#include "scene_cache.h"
 }
 
 namespace {
@@ -780,7 +781,9 @@ bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::strin
         if (err) *err = e.msg;
         return false;
     }
-    f->hash = sb_hash_bytes(f->hash, data, n);
+    uint64_t h = sb_hash_bytes(SB_FNV_SEED, data, n);
+    f->hash = sb_fnv1a(f->hash, &h, sizeof h);
+    sb_scene_cache_note_file(real, h);
     out->assign(data, data + n);
     free(data);
     return true;

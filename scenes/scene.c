@@ -1,5 +1,6 @@
 /* scene.c - building the flat scene model, re-basing, chunking, bundled names. */
 #include "scene.h"
+#include "scene_cache.h"
 
 #include <limits.h>
 #include <stdlib.h>
@@ -419,6 +420,10 @@ const char *const sb_load_part_names[SB_LOAD_PARTS] = {"parse", "flatten", "draw
 void sb_scene_load_parts(const sb_scene *s, char *out, size_t len) {
     size_t n = 0;
     out[0] = 0;
+    if (s->from_cache) {
+        snprintf(out, len, "from the scene cache");
+        return;
+    }
     for (int i = 0; i < SB_LOAD_PARTS && n < len; i++)
         n += (size_t)snprintf(out + n, len - n, "%s%s %.0f", i ? ", " : "", sb_load_part_names[i], s->load_part_ms[i]);
 }
@@ -580,18 +585,12 @@ bool sb_resolve_bundled(const char *name, const char *ext, char *out, size_t out
     return false;
 }
 
-bool sb_scene_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_err *err) {
-    char resolved[PATH_MAX];
-    if (sb_resolve_bundled(path, ".glb", resolved, sizeof resolved)) path = resolved;
-    double t0 = sb_now_ms();
+/* The file read, its checks, tinygltf and the flattening: a load without the cache. */
+static bool load_file(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_err *err) {
     sb_scene_begin(s);
     s->file = sb_strdup(path);
     if (opts) s->opts = *opts;
-    if (!sb_gltf_load(s, path, opts, err)) {
-        sb_scene_free(s);
-        return false;
-    }
-    if (!sb_scene_finish(s, err)) {
+    if (!sb_gltf_load(s, path, opts, err) || !sb_scene_finish(s, err)) {
         sb_scene_free(s);
         return false;
     }
@@ -599,23 +598,49 @@ bool sb_scene_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_
     if (s->opts.blend != SB_BLEND_MASK && s->features.blend)
         s->content_hash = sb_fnv1a(s->content_hash, &s->opts.blend, sizeof s->opts.blend);
     if (s->opts.pose) s->content_hash = sb_fnv1a(s->content_hash, &s->opts.pose_time, sizeof s->opts.pose_time);
-    s->load_ms = sb_now_ms() - t0;
     return true;
+}
+
+bool sb_scene_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_err *err) {
+    char resolved[PATH_MAX], dir[PATH_MAX];
+    if (sb_resolve_bundled(path, ".glb", resolved, sizeof resolved)) path = resolved;
+    double t0 = sb_now_ms();
+    /* the cache is found by the file's bytes; a file that cannot be read gets its message from the load */
+    size_t size = 0;
+    void *bytes = sb_scene_cache_dir(dir, sizeof dir) ? sb_map_file(path, &size, false) : NULL;
+    bool ok;
+    if (bytes && sb_scene_cache_get(s, path, opts, bytes, size)) {
+        ok = true;
+    } else {
+        if (bytes) sb_scene_cache_begin();
+        ok = load_file(s, path, opts, err);
+        if (bytes) sb_scene_cache_put(s, opts, bytes, size, ok);
+    }
+    sb_unmap_file(bytes, size);
+    if (ok) s->load_ms = sb_now_ms() - t0;
+    return ok;
+}
+
+/* Frees *p unless it points into the mapped cache entry. */
+static void free_owned(const sb_scene *s, void *p) {
+    const char *m = s->cache_map, *q = p;
+    if (!m || q < m || q >= m + s->cache_map_len) free(p);
 }
 
 void sb_scene_free(sb_scene *s) {
     free(s->file);
-    free(s->vertices);
-    free(s->indices);
-    free(s->draws);
-    free(s->lights);
-    free(s->cameras);
+    free_owned(s, s->vertices);
+    free_owned(s, s->indices);
+    free_owned(s, s->draws);
+    free_owned(s, s->lights);
+    free_owned(s, s->cameras);
     free(s->build_pos);
-    free(s->materials);
-    free(s->textures);
-    free(s->texels);
-    for (uint32_t i = 0; i < s->plane_count; i++) free(s->planes[i].tris);
+    free_owned(s, s->materials);
+    free_owned(s, s->textures);
+    free_owned(s, s->texels);
+    for (uint32_t i = 0; i < s->plane_count; i++) free_owned(s, s->planes[i].tris);
     sb_bvh_free(&s->bvh);
+    sb_unmap_file(s->cache_map, s->cache_map_len);
     memset(s, 0, sizeof *s);
 }
 

@@ -158,6 +158,9 @@ typedef struct sb_scene {
     sb_scene_opts opts;          /* as loaded (a glTF camera path of the scene is read alike) */
     double load_ms;
     double load_part_ms[SB_LOAD_PARTS]; /* where load_ms went (sb_load_part_names) */
+    bool from_cache;             /* read from the scene cache (scene_cache.h): load_ms is that read */
+    void *cache_map;             /* the mapped cache entry the arrays point into (sb_scene_free unmaps it) */
+    size_t cache_map_len;
     uint32_t nodes_drawn;        /* node instances with a mesh reached from the scene graph */
     sb_plane planes[SB_MAX_PLANES];
     uint32_t plane_count;
@@ -168,7 +171,7 @@ typedef struct sb_scene {
     uint32_t build_cap;
 } sb_scene;
 
-/* "parse 40, flatten 120, ..." (ms) into out */
+/* "parse 40, flatten 120, ..." (ms) into out, or "from the scene cache" */
 void sb_scene_load_parts(const sb_scene *s, char *out, size_t len);
 
 /* Loads .gltf/.glb (through tinygltf, after gltf_check.h's checks) or a bundled

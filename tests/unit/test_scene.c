@@ -1,4 +1,5 @@
 /* Scene loading (real glTF through tinygltf), chunking, BVH culling. */
+#define _DEFAULT_SOURCE /* setenv, truncate, popen */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -9,6 +10,7 @@
 #include <unistd.h>
 
 #include "scene.h"
+#include "support.h"
 
 static const char *shared(const char *rel) {
     static char buf[4096];
@@ -101,6 +103,139 @@ static void test_closed_and_planes(void **st) {
     sb_scene_free(&s);
 }
 
+/* ---- the scene cache ---- */
+
+static char g_cache[64];
+
+static void load_expect(const char *path, bool from_cache, sb_scene *s) {
+    sb_err err = {{0}};
+    bool ok = sb_scene_load(s, path, NULL, &err);
+    if (!ok) print_message("%s\n", err.msg);
+    assert_true(ok);
+    print_message("%s: %s, %.1f ms\n", path, s->from_cache ? "from the cache" : "read", s->load_ms);
+    assert_int_equal(s->from_cache, from_cache);
+}
+
+static void same_scene(const sb_scene *a, const sb_scene *b) {
+    assert_int_equal(a->vertex_count, b->vertex_count);
+    assert_int_equal(a->index_count, b->index_count);
+    assert_int_equal(a->draw_count, b->draw_count);
+    assert_memory_equal(a->vertices, b->vertices, (size_t)a->vertex_count * SB_VERTEX_BYTES);
+    assert_memory_equal(a->indices, b->indices, (size_t)a->index_count * 4);
+    for (uint32_t i = 0; i < a->draw_count; i++) {
+        const sb_draw *x = &a->draws[i], *y = &b->draws[i];
+        assert_true(x->first_index == y->first_index && x->index_count == y->index_count && x->closed == y->closed &&
+                    x->double_sided == y->double_sided && x->material == y->material && x->node == y->node);
+        assert_memory_equal(&x->box, &y->box, sizeof x->box);
+    }
+    assert_true(a->content_hash == b->content_hash && a->has_sun == b->has_sun && a->light_count == b->light_count);
+    assert_memory_equal(&a->origin, &b->origin, sizeof a->origin);
+    assert_memory_equal(&a->bounds, &b->bounds, sizeof a->bounds);
+    assert_int_equal(a->plane_count, b->plane_count);
+    for (uint32_t i = 0; i < a->plane_count; i++) {
+        assert_int_equal(a->planes[i].tri_count, b->planes[i].tri_count);
+        assert_memory_equal(a->planes[i].tris, b->planes[i].tris, a->planes[i].tri_count * 4);
+    }
+    assert_int_equal(a->bvh.node_count, b->bvh.node_count);
+    assert_int_equal(a->features.prims, b->features.prims);
+}
+
+static void copy_file(const char *from, const char *to) {
+    size_t n = 0;
+    sb_err err;
+    char *d = sb_read_file(from, &n, &err);
+    assert_non_null(d);
+    assert_true(sb_write_file_atomic(to, d, n, &err));
+    free(d);
+}
+
+/* The one entry file in the cache folder. */
+static void entry_file(char *out, size_t len) {
+    char cmd[256];
+    snprintf(cmd, sizeof cmd, "ls %s/*.sbscene", g_cache);
+    FILE *p = popen(cmd, "r");
+    assert_non_null(p);
+    assert_non_null(fgets(out, (int)len, p));
+    out[strcspn(out, "\n")] = 0;
+    assert_null(fgets(cmd, sizeof cmd, p));   /* only one */
+    pclose(p);
+}
+
+/* A scene read before comes from the cache, equal in every array; a changed
+ * file, a changed buffer it refers to, a damaged entry are read afresh; the
+ * load's messages are said again; SB_SCENE_CACHE=off reads every time. */
+static void test_scene_cache(void **st) {
+    (void)st;
+    assert_int_equal(tmp_folder(g_cache, sizeof g_cache, "sbcache"), 0);
+    setenv("SB_SCENE_CACHE", g_cache, 1);
+    char glb[128], bundled[4096], entry[512];
+    snprintf(glb, sizeof glb, "%s/scene.glb", g_cache);
+    assert_true(sb_resolve_bundled("towers", ".glb", bundled, sizeof bundled));
+    copy_file(bundled, glb);
+    sb_scene a, b;
+    load_expect(glb, false, &a);
+    load_expect(glb, true, &b);
+    same_scene(&a, &b);
+    assert_true(b.load_ms < a.load_ms);
+    sb_scene_free(&a);
+    sb_scene_free(&b);
+    /* damaged entries: cut short, one byte changed */
+    entry_file(entry, sizeof entry);
+    assert_int_equal(truncate(entry, 1000), 0);
+    load_expect(glb, false, &a);
+    sb_scene_free(&a);
+    FILE *f = fopen(entry, "r+b");
+    assert_non_null(f);
+    fseek(f, 5000, SEEK_SET);
+    int c = fgetc(f);
+    fseek(f, 5000, SEEK_SET);
+    fputc(c ^ 1, f);
+    fclose(f);
+    load_expect(glb, false, &a);
+    load_expect(glb, true, &b);
+    sb_scene_free(&a);
+    sb_scene_free(&b);
+    /* another file at the same name */
+    assert_true(sb_resolve_bundled("plane-box", ".glb", bundled, sizeof bundled));
+    copy_file(bundled, glb);
+    load_expect(glb, false, &a);
+    assert_int_equal(sb_scene_triangles(&a), 24);
+    sb_scene_free(&a);
+    /* an external buffer changed under the same .gltf; the load's notice said again */
+    char gltf[128], bin[128];
+    snprintf(gltf, sizeof gltf, "%s/tri.gltf", g_cache);
+    snprintf(bin, sizeof bin, "%s/tri.bin", g_cache);
+    gltf_tri t = {.uri = "tri.bin", .node0 = "\"mesh\":0,\"rotation\":[0,0,0,2]"};
+    assert_true(gltf_tri_write(gltf, &t));
+    float pos[11] = {0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0};
+    uint16_t *idx = (uint16_t *)&pos[9];
+    idx[0] = 0, idx[1] = 1, idx[2] = 2;
+    sb_err err;
+    assert_true(sb_write_file_atomic(bin, pos, 44, &err));
+    load_expect(gltf, false, &a);
+    sb_log_capture(true);
+    load_expect(gltf, true, &b);
+    sb_log_capture(false);
+    print_message("said again: %s", sb_log_captured());
+    assert_non_null(strstr(sb_log_captured(), "not unit quaternions and are normalised"));
+    same_scene(&a, &b);
+    sb_scene_free(&b);
+    pos[3] = 2;
+    assert_true(sb_write_file_atomic(bin, pos, 44, &err));
+    load_expect(gltf, false, &b);
+    assert_true(a.content_hash != b.content_hash);
+    assert_memory_not_equal(a.vertices, b.vertices, (size_t)a.vertex_count * SB_VERTEX_BYTES);
+    sb_scene_free(&a);
+    sb_scene_free(&b);
+    setenv("SB_SCENE_CACHE", "off", 1);
+    load_expect(glb, false, &a);
+    sb_scene_free(&a);
+    load_expect(glb, false, &a);
+    sb_scene_free(&a);
+    unsetenv("SB_SCENE_CACHE");
+    assert_int_equal(tmp_remove(g_cache), 0);
+}
+
 static void load_shared(const char *rel, uint64_t expect_tris) {
     const char *p = shared(rel);
     if (access(p, R_OK) != 0) {
@@ -177,6 +312,7 @@ int main(void) {
         cmocka_unit_test(test_plane_box), cmocka_unit_test(test_desert_size), cmocka_unit_test(test_truck_town),
         cmocka_unit_test(test_zdm2),      cmocka_unit_test(test_hallway),     cmocka_unit_test(test_bvh_cull_exact),
         cmocka_unit_test(test_missing_file),       cmocka_unit_test(test_closed_and_planes),
+        cmocka_unit_test(test_scene_cache),
     };
     return cmocka_run_group_tests_name("scene", tests, NULL, NULL);
 }
