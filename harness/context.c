@@ -168,16 +168,16 @@ void sb_context_destroy(sb_context *c) {
     c->egl_display = c->egl_context = c->osmesa_context = c->osmesa_buffer = NULL;
 }
 
-void sb_backends_available(char *buf, size_t len) {
+void sb_backends_available(const sb_context *have, char *buf, size_t len) {
     buf[0] = 0;
     const sb_backend all[] = {SB_BACKEND_EGL, SB_BACKEND_OSMESA};
     for (size_t i = 0; i < SB_COUNT(all); i++) {
         sb_context c;
         sb_err e;
-        if (sb_context_create(&c, all[i], &e)) {
-            size_t n = strlen(buf);
-            snprintf(buf + n, len - n, "%s%s (%s)", n ? ", " : "", sb_backend_name(all[i]), c.renderer);
-            sb_context_destroy(&c);
-        }
+        bool reuse = have && have->backend == all[i];   /* a second context costs as much again */
+        if (!reuse && !sb_context_create(&c, all[i], &e)) continue;
+        size_t n = strlen(buf);
+        snprintf(buf + n, len - n, "%s%s (%s)", n ? ", " : "", sb_backend_name(all[i]), reuse ? have->renderer : c.renderer);
+        if (!reuse) sb_context_destroy(&c);
     }
 }

@@ -24,5 +24,6 @@ const char *sb_backend_name(sb_backend b);
 /* Creates a GL 4.3+ core context and loads GL through glad. */
 bool sb_context_create(sb_context *c, sb_backend b, sb_err *err);
 void sb_context_destroy(sb_context *c);
-/* Lists the backends that can create a context here, into buf (", "-separated). */
-void sb_backends_available(char *buf, size_t len);
+/* Lists the backends that can create a context here, into buf (", "-separated);
+ * `have` (may be NULL): a context already open, whose backend is not tried again. */
+void sb_backends_available(const sb_context *have, char *buf, size_t len);

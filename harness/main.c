@@ -192,11 +192,12 @@ static int cmd_info(const cli *c) {
         return 0;
     }
     char avail[1024];
-    sb_backends_available(avail, sizeof avail);
-    printf("shadowbench %s\nbackends available: %s\n", SB_VERSION, avail[0] ? avail : "none");
     sb_context ctx;
     sb_err err;
-    if (!sb_context_create(&ctx, c->opts.backend, &err)) {
+    bool have = sb_context_create(&ctx, c->opts.backend, &err);
+    sb_backends_available(have ? &ctx : NULL, avail, sizeof avail);
+    printf("shadowbench %s\nbackends available: %s\n", SB_VERSION, avail[0] ? avail : "none");
+    if (!have) {
         fprintf(stderr, "shadowbench: %s\n", err.msg);
         return 1;
     }
