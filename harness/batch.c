@@ -445,6 +445,7 @@ static void run_scenes(sb_batch *b, const bool *selected, const bool *done, int 
         sb_batch_scene *bs = &b->scenes[sc];
         bool open = sb_session_attach(s, &b->opts, &bs->scene, &bs->path, &err);
         if (open) {
+            sb_session_keep_reference(s, dir);
             snprintf(s->scene_name, sizeof s->scene_name, "%s", bs->name);
             snprintf(s->path_name, sizeof s->path_name, "%s", bs->path_label);
         } else {

@@ -273,6 +273,7 @@ static int cmd_run(const cli *c) {
         free(runs);
         return 1;
     }
+    sb_session_keep_reference(&s, dir);
     char parts[256];
     sb_scene_load_parts(&s.scene, parts, sizeof parts);
     sb_log("%s: %u triangles, %u draws, loaded in %.0f ms (%s), GPU upload %.0f ms; renderer %s (%s timing)",

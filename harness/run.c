@@ -209,7 +209,28 @@ bool sb_session_attach(sb_session *s, const sb_run_opts *o, sb_scene *scene, sb_
     return true;
 }
 
+/* The file of the scene's kept answers and the tag they are kept under. */
+static bool ref_store_file(const sb_session *s, char *out, size_t len, uint64_t *tag) {
+    if (!s->ref_store[0]) return false;
+    uint64_t v[3] = {s->scene.content_hash, sb_binary_identity(), 1 /* format */};
+    *tag = sb_fnv1a(SB_FNV_SEED, v, sizeof v);
+    return (size_t)snprintf(out, len, "%s/%016llx.ref", s->ref_store, (unsigned long long)*tag) < len;
+}
+
+void sb_session_keep_reference(sb_session *s, const char *results_dir) {
+    const char *slash = strrchr(results_dir, '/');
+    int n = slash ? (int)(slash - results_dir) : 0;
+    snprintf(s->ref_store, sizeof s->ref_store, "%.*s%sreference", n, results_dir, slash ? "/" : "");
+}
+
 void sb_session_close_scene(sb_session *s) {
+    char file[4200];
+    uint64_t tag;
+    if (sb_ref_cache_dirty(s->ref_cache) && ref_store_file(s, file, sizeof file, &tag)) {
+        sb_err e;
+        if (!sb_mkdir_p(s->ref_store, &e) || !sb_ref_cache_save(s->ref_cache, file, tag, &e))
+            sb_log("the reference's answers are not kept for later runs: %s", e.msg);
+    }
     for (int i = 0; s->tech_loaded && i < sb_technique_count(); i++)
         if (s->tech_loaded[i] && sb_technique_at(i)->unload) sb_technique_at(i)->unload(s->tech_data[i]);
     free(s->tech_data);
@@ -247,6 +268,9 @@ const sb_reference *sb_session_reference(sb_session *s, sb_err *err) {
     }
     s->ref = r;
     s->ref_cache = sb_ref_cache_new(SB_REF_CACHE_BYTES);
+    char file[4200];
+    uint64_t tag;
+    if (ref_store_file(s, file, sizeof file, &tag)) sb_ref_cache_load(s->ref_cache, file, tag);
     return r;
 }
 

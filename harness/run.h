@@ -70,6 +70,7 @@ typedef struct sb_session {
     struct sb_reference *ref;   /* the scene's Embree reference, built on first use */
     double gpu_upload_ms;       /* the scene's buffers and targets made on the GPU (sb_gpu_init, finished) */
     struct sb_ref_cache *ref_cache; /* its answers per rasterized frame, shared by the runs of the scene */
+    char ref_store[4096];       /* folder keeping those answers across processes ("": none; sb_session_keep_reference) */
     void **tech_data;           /* per technique (registry index): what its load step made for the scene */
     bool *tech_loaded;
     bool timed;                 /* true while a run's timed frames render (tests assert nothing is read back then) */
@@ -96,6 +97,12 @@ bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, con
 /* The same with a scene and path already loaded: the session takes them over
  * (freed with it, also when this fails). */
 bool sb_session_attach(sb_session *s, const sb_run_opts *o, sb_scene *scene, sb_path *path, sb_err *err);
+/* Keeps the reference's answers beside a results set: in the folder
+ * `reference` next to results_dir (OUT/reference for run's OUT/<UTC>, the
+ * batch's OUT/NAME/reference), read when a scene's reference is first used
+ * and written when the scene closes, so reruns into the same OUT and
+ * --resume cast no ray already cast. */
+void sb_session_keep_reference(sb_session *s, const char *results_dir);
 /* Frees the scene, path and what was made for them but keeps the context (next scene of a batch). */
 void sb_session_close_scene(sb_session *s);
 void sb_session_close(sb_session *s);

@@ -99,6 +99,13 @@ char *sb_read_file(const char *path, size_t *size, sb_err *err) {
     return buf;
 }
 
+uint64_t sb_binary_identity(void) {
+    struct stat st;
+    if (stat("/proc/self/exe", &st) != 0) return 0;
+    int64_t id[4] = {(int64_t)st.st_size, (int64_t)st.st_mtim.tv_sec, (int64_t)st.st_mtim.tv_nsec, (int64_t)st.st_ino};
+    return sb_fnv1a(SB_FNV_SEED, id, sizeof id);
+}
+
 void *sb_map_file(const char *path, size_t *size, bool writable) {
     int fd = open(path, O_RDONLY);
     if (fd < 0) return NULL;
@@ -118,9 +125,9 @@ void sb_unmap_file(void *p, size_t size) {
 }
 
 bool sb_write_file_atomic(const char *path, const void *data, size_t size, sb_err *err) {
-    size_t len = strlen(path) + 8;
-    char *tmp = malloc(len);
-    snprintf(tmp, len, "%s.tmp", path);
+    size_t len = strlen(path) + 32;
+    char *tmp = sb_xmalloc(len);
+    snprintf(tmp, len, "%s.%ld.tmp", path, (long)getpid());   /* its own: two writers never share one */
     int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC, 0644);
     if (fd < 0) {
         sb_fail(err, "%s: cannot create: %s", tmp, strerror(errno));

@@ -25,11 +25,14 @@ const char *sb_log_captured(void);
 
 /* Reads a whole file; returns NULL and fills err on failure. *size excludes the added NUL. */
 char *sb_read_file(const char *path, size_t *size, sb_err *err);
+/* The running binary's identity (size, time and inode of /proc/self/exe): what
+ * it wrote to a cache is read back only by the same build. 0 when unknown. */
+uint64_t sb_binary_identity(void);
 /* Maps a regular, non-empty file whole (pre-faulted: a file in the page cache
  * costs no page faults later); writable: a private copy-on-write mapping. NULL otherwise. */
 void *sb_map_file(const char *path, size_t *size, bool writable);
 void sb_unmap_file(void *p, size_t size);
-/* Writes data to path atomically (PATH.tmp, fsync, rename). */
+/* Writes data to path atomically (PATH.PID.tmp, fsync, rename). */
 bool sb_write_file_atomic(const char *path, const void *data, size_t size, sb_err *err);
 bool sb_mkdir_p(const char *path, sb_err *err);
 /* Makes BASE/<UTC time> (or <UTC time>-2, -3, ... when taken) into out. */

@@ -231,6 +231,7 @@ struct sb_ref_cache {
     ref_entry *e;
     int n, cap;
     size_t bytes, max_bytes;
+    bool dirty;                /* answers added since it was made or loaded */
 };
 
 sb_ref_cache *sb_ref_cache_new(size_t max_bytes) {
@@ -308,6 +309,68 @@ static void cache_put(sb_ref_cache *c, const uint64_t key[2], int m, const unsig
     memcpy(e->ref, ref, (size_t)m);
     e->geo = *geo;
     c->bytes += (size_t)m;
+    c->dirty = true;
+}
+
+/* ---- kept across processes ---- */
+
+static const char ref_magic[8] = {'S', 'B', 'R', 'E', 'F', '0', '0', '1'};
+
+bool sb_ref_cache_dirty(const sb_ref_cache *c) { return c && c->dirty; }
+
+bool sb_ref_cache_save(sb_ref_cache *c, const char *path, uint64_t tag, sb_err *err) {
+    size_t size = 8 + 3 * sizeof(uint64_t), at = 0;
+    for (int i = 0; i < c->n; i++) size += 2 * sizeof(uint64_t) + sizeof(int) + sizeof(sb_error_metrics) + (size_t)c->e[i].m;
+    unsigned char *b = sb_xmalloc(size);
+#define PUT(p, n) (memcpy(b + at, (p), (n)), at += (n))
+    uint64_t count = (uint64_t)c->n, sum = 0;
+    PUT(ref_magic, 8);
+    PUT(&tag, sizeof tag);
+    PUT(&count, sizeof count);
+    PUT(&sum, sizeof sum);   /* the checksum, written below */
+    for (int i = 0; i < c->n; i++) {
+        PUT(c->e[i].key, 2 * sizeof(uint64_t));
+        PUT(&c->e[i].m, sizeof(int));
+        PUT(&c->e[i].geo, sizeof(sb_error_metrics));
+        PUT(c->e[i].ref, (size_t)c->e[i].m);
+    }
+#undef PUT
+    size_t head = 8 + 3 * sizeof(uint64_t);
+    sum = sb_hash_bytes(SB_FNV_SEED, b + head, size - head);
+    memcpy(b + 8 + 2 * sizeof(uint64_t), &sum, sizeof sum);
+    bool ok = sb_write_file_atomic(path, b, size, err);
+    free(b);
+    if (ok) c->dirty = false;
+    return ok;
+}
+
+int sb_ref_cache_load(sb_ref_cache *c, const char *path, uint64_t tag) {
+    size_t size = 0;
+    unsigned char *b = sb_map_file(path, &size, false);
+    size_t head = 8 + 3 * sizeof(uint64_t), at = head;
+    uint64_t h[3];
+    bool ok = b && size >= head && !memcmp(b, ref_magic, 8);
+    if (ok) memcpy(h, b + 8, sizeof h);
+    ok = ok && h[0] == tag && h[2] == sb_hash_bytes(SB_FNV_SEED, b + head, size - head);
+    int loaded = 0;
+    for (uint64_t i = 0; ok && i < h[1]; i++) {
+        uint64_t key[2];
+        int m;
+        sb_error_metrics geo;
+        ok = size - at >= sizeof key + sizeof m + sizeof geo;
+        if (!ok) break;
+        memcpy(key, b + at, sizeof key);
+        memcpy(&m, b + at + sizeof key, sizeof m);
+        memcpy(&geo, b + at + sizeof key + sizeof m, sizeof geo);
+        at += sizeof key + sizeof m + sizeof geo;
+        ok = m >= 0 && size - at >= (size_t)m;
+        if (!ok) break;
+        if (!cache_find(c, key, m)) cache_put(c, key, m, b + at, &geo), loaded++;
+        at += (size_t)m;
+    }
+    sb_unmap_file(b, size);
+    c->dirty = false;
+    return ok ? loaded : 0;
 }
 
 void sb_evaluate_frame(const sb_reference *r, sb_ref_cache *cache, const sb_eval_view *v, const unsigned char *vis,

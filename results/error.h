@@ -36,6 +36,14 @@ typedef struct sb_error_metrics {
 typedef struct sb_ref_cache sb_ref_cache;
 sb_ref_cache *sb_ref_cache_new(size_t max_bytes);
 void sb_ref_cache_free(sb_ref_cache *c);
+/* Kept across processes (a results folder's reference/): every answer with
+ * its key, under a tag the caller makes of what else decides them (the
+ * scene's contents, the binary); written whole and renamed. load adds the
+ * file's answers when its tag and checksum hold and returns how many (0 for
+ * a missing, stale or damaged file). dirty: answers added since made or loaded. */
+bool sb_ref_cache_save(sb_ref_cache *c, const char *path, uint64_t tag, sb_err *err);
+int sb_ref_cache_load(sb_ref_cache *c, const char *path, uint64_t tag);
+bool sb_ref_cache_dirty(const sb_ref_cache *c);
 
 /* The frame being evaluated: the targets and the camera. */
 typedef struct sb_eval_view {

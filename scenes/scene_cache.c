@@ -69,12 +69,8 @@ static uint64_t entry_key(const sb_scene_opts *opts, const void *bytes, size_t s
     h = sb_fnv1a(h, &v, sizeof v);
     h = sb_fnv1a(h, flags, sizeof flags);
     h = sb_fnv1a(h, &o.pose_time, sizeof o.pose_time);
-    struct stat st;
-    if (stat("/proc/self/exe", &st) == 0) {
-        int64_t id[4] = {(int64_t)st.st_size, (int64_t)st.st_mtim.tv_sec, (int64_t)st.st_mtim.tv_nsec, (int64_t)st.st_ino};
-        h = sb_fnv1a(h, id, sizeof id);
-    }
-    return h;
+    uint64_t id = sb_binary_identity();
+    return sb_fnv1a(h, &id, sizeof id);
 }
 
 static bool entry_path(uint64_t key, char *out, size_t len) {

@@ -468,6 +468,25 @@ static void test_reference_shared(void **st) {
         print_message("%s: %s shared, %s alone\n", same[k], sb_table_get(&a, 1, same[k]), sb_table_get(&b, 0, same[k]));
         assert_string_equal(sb_table_get(&a, 1, same[k]), sb_table_get(&b, 0, same[k]));
     }
+    /* a rerun into the same OUT reads the answers kept in OUT/reference: no ray cast, the same figures */
+    char again[4096];
+    sb_table c;
+    run_dir(again, sizeof again, cmd, test_binary(), "pssm:res=1024", g_tmp, "ref1");
+    summary_table(again, &c);
+    print_message("rerun: ref_rays %s, reused %s\n", sb_table_get(&c, 0, "ref_rays"), sb_table_get(&c, 0, "ref_reused"));
+    assert_string_equal(sb_table_get(&c, 0, "ref_rays"), "0");
+    assert_string_equal(sb_table_get(&c, 0, "ref_reused"), "4");
+    for (size_t k = 0; k < sizeof same / sizeof same[0]; k++)
+        assert_string_equal(sb_table_get(&c, 0, same[k]), sb_table_get(&b, 0, same[k]));
+    sb_table_free(&c);
+    /* a damaged file is not read: the rays are cast again */
+    assert_int_equal(sh("for f in %s/ref1/reference/*.ref; do printf 'xx' | dd of=$f bs=1 seek=100 conv=notrunc 2>/dev/null; done",
+                        g_tmp), 0);
+    run_dir(again, sizeof again, cmd, test_binary(), "pssm:res=1024", g_tmp, "ref1");
+    summary_table(again, &c);
+    assert_string_equal(sb_table_get(&c, 0, "ref_rays"), sb_table_get(&b, 0, "ref_rays"));
+    assert_string_equal(sb_table_get(&c, 0, "err_rate_mean"), sb_table_get(&b, 0, "err_rate_mean"));
+    sb_table_free(&c);
     sb_table_free(&a);
     sb_table_free(&b);
 }
