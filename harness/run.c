@@ -220,7 +220,7 @@ static bool ref_store_file(const sb_session *s, char *out, size_t len, uint64_t 
 void sb_session_keep_reference(sb_session *s, const char *results_dir) {
     const char *slash = strrchr(results_dir, '/');
     int n = slash ? (int)(slash - results_dir) : 0;
-    snprintf(s->ref_store, sizeof s->ref_store, "%.*s%sreference", n, results_dir, slash ? "/" : "");
+    snprintf(s->ref_store, sizeof s->ref_store, "%.*s%s.reference", n, results_dir, slash ? "/" : "");
 }
 
 void sb_session_close_scene(sb_session *s) {

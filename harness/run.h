@@ -97,9 +97,9 @@ bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, con
 /* The same with a scene and path already loaded: the session takes them over
  * (freed with it, also when this fails). */
 bool sb_session_attach(sb_session *s, const sb_run_opts *o, sb_scene *scene, sb_path *path, sb_err *err);
-/* Keeps the reference's answers beside a results set: in the folder
- * `reference` next to results_dir (OUT/reference for run's OUT/<UTC>, the
- * batch's OUT/NAME/reference), read when a scene's reference is first used
+/* Keeps the reference's answers beside a results set: in the hidden folder
+ * `.reference` next to results_dir (OUT/.reference for run's OUT/<UTC>, the
+ * batch's OUT/NAME/.reference: listings of results sets do not see it), read when a scene's reference is first used
  * and written when the scene closes, so reruns into the same OUT and
  * --resume cast no ray already cast. */
 void sb_session_keep_reference(sb_session *s, const char *results_dir);

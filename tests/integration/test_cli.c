@@ -468,7 +468,7 @@ static void test_reference_shared(void **st) {
         print_message("%s: %s shared, %s alone\n", same[k], sb_table_get(&a, 1, same[k]), sb_table_get(&b, 0, same[k]));
         assert_string_equal(sb_table_get(&a, 1, same[k]), sb_table_get(&b, 0, same[k]));
     }
-    /* a rerun into the same OUT reads the answers kept in OUT/reference: no ray cast, the same figures */
+    /* a rerun into the same OUT reads the answers kept in OUT/.reference: no ray cast, the same figures */
     char again[4096];
     sb_table c;
     run_dir(again, sizeof again, cmd, test_binary(), "pssm:res=1024", g_tmp, "ref1");
@@ -480,7 +480,7 @@ static void test_reference_shared(void **st) {
         assert_string_equal(sb_table_get(&c, 0, same[k]), sb_table_get(&b, 0, same[k]));
     sb_table_free(&c);
     /* a damaged file is not read: the rays are cast again */
-    assert_int_equal(sh("for f in %s/ref1/reference/*.ref; do printf 'xx' | dd of=$f bs=1 seek=100 conv=notrunc 2>/dev/null; done",
+    assert_int_equal(sh("for f in %s/ref1/.reference/*.ref; do printf 'xx' | dd of=$f bs=1 seek=100 conv=notrunc 2>/dev/null; done",
                         g_tmp), 0);
     run_dir(again, sizeof again, cmd, test_binary(), "pssm:res=1024", g_tmp, "ref1");
     summary_table(again, &c);
