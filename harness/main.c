@@ -68,7 +68,10 @@ static void usage(FILE *f) {
             "  --quiet                no notices on stderr\n"
             "  --allow-external-uris  let glTF buffers and images be read from outside the scene's folder\n"
             "  --blend-casters mask|opaque|none   glTF BLEND materials: alpha-tested at 0.5 (default), opaque, or left out\n"
-            "  --pose T               nodes and skins at time T (seconds) of the file's first animation\n");
+            "  --pose T               nodes and skins at time T (seconds) of the file's first animation\n"
+            "\nenvironment:\n"
+            "  SB_SCENE_CACHE=DIR|off where scenes read before are kept, flattened (default\n"
+            "                         $XDG_CACHE_HOME or ~/.cache, shadowbench/scenes)\n");
 }
 
 typedef struct cli {
