@@ -725,6 +725,7 @@ int sb_tune_main(const sb_tune_cmd *cmd) {
             return 1;
         }
     }
+    sb_session_keep_reference(&t.s, t.dir);   /* OUT/tune-SCENE/.reference: reruns and --resume cast no ray twice */
     sb_log("tune: %d candidate(s), rungs of %d/%d/%d frames, seed %llu, results in %s", t.n, t.rung_frames[0],
            t.nrungs > 1 ? t.rung_frames[1] : t.rung_frames[0], t.rung_frames[t.nrungs - 1],
            (unsigned long long)cmd->opts->seed, t.dir);
