@@ -176,11 +176,18 @@ bool sb_mkdir_p(const char *path, sb_err *err) {
     return true;
 }
 
-uint64_t sb_splitmix64(uint64_t *x) {
-    uint64_t z = (*x += 0x9e3779b97f4a7c15u);
+uint64_t sb_mix64(uint64_t z) {
     z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
     z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
     return z ^ (z >> 31);
+}
+
+uint64_t sb_splitmix64(uint64_t *x) { return sb_mix64(*x += 0x9e3779b97f4a7c15u); }
+
+uint64_t sb_hash_words(const uint64_t *w, int n) {
+    uint64_t h = 0;
+    for (int i = 0; i < n; i++) h = sb_mix64(h ^ w[i]);
+    return h;
 }
 
 uint64_t sb_fnv1a(uint64_t h, const void *data, size_t n) {
@@ -193,12 +200,6 @@ uint64_t sb_fnv1a(uint64_t h, const void *data, size_t n) {
 }
 
 static inline uint64_t rotl64(uint64_t x, int r) { return x << r | x >> (64 - r); }
-
-static inline uint64_t mix64(uint64_t z) {
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
-    return z ^ (z >> 31);
-}
 
 /* Four lanes of 64-bit words (a multiply and a rotate each), folded and
  * mixed; the tail bytes FNV-style. Several GB/s where sb_fnv1a does one byte
@@ -213,9 +214,9 @@ uint64_t sb_hash_bytes(uint64_t h, const void *data, size_t n) {
             memcpy(&w, p + i + 8 * (size_t)k, 8);
             v[k] = rotl64(v[k] + w * 0xc2b2ae3d27d4eb4fu, 31) * 0x9e3779b97f4a7c15u;
         }
-    uint64_t r = mix64(v[0]) ^ rotl64(mix64(v[1]), 17) ^ rotl64(mix64(v[2]), 31) ^ rotl64(mix64(v[3]), 47);
+    uint64_t r = sb_mix64(v[0]) ^ rotl64(sb_mix64(v[1]), 17) ^ rotl64(sb_mix64(v[2]), 31) ^ rotl64(sb_mix64(v[3]), 47);
     for (; i < n; i++) r = (r ^ p[i]) * 1099511628211ull;
-    return mix64(r ^ (uint64_t)n);
+    return sb_mix64(r ^ (uint64_t)n);
 }
 
 double sb_now_ms(void) {

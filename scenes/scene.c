@@ -123,12 +123,6 @@ static void idx_table_init(idx_table *t, size_t n) {
     t->mask = cap - 1;
 }
 
-static uint64_t mix_key(uint64_t z) {
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
-    return z ^ (z >> 31);
-}
-
 /* Whether the primitive is a closed surface with consistent winding: with
  * vertices welded by position, every directed edge a->b appears once and so
  * does b->a. Then each ray from outside crossing it leaves through a face
@@ -144,7 +138,7 @@ static bool prim_closed(const sb_prim_desc *p) {
         const double *q = p->positions + 3 * (size_t)v;
         uint64_t b[3];
         memcpy(b, q, sizeof b);
-        for (uint64_t h = mix_key(b[0] ^ mix_key(b[1] ^ mix_key(b[2]))) & w.mask;; h = (h + 1) & w.mask) {
+        for (uint64_t h = sb_hash_words(b, 3) & w.mask;; h = (h + 1) & w.mask) {
             uint32_t o = w.slot[h];
             if (o == UINT32_MAX) {
                 w.slot[h] = id[v] = v;
@@ -170,7 +164,7 @@ static bool prim_closed(const sb_prim_desc *p) {
     idx_table et;
     idx_table_init(&et, closed ? ne : 0);
     for (size_t i = 0; closed && i < ne; i++)
-        for (uint64_t h = mix_key(e[i]) & et.mask;; h = (h + 1) & et.mask) {
+        for (uint64_t h = sb_mix64(e[i]) & et.mask;; h = (h + 1) & et.mask) {
             uint32_t o = et.slot[h];
             if (o == UINT32_MAX) {
                 et.slot[h] = (uint32_t)i;
@@ -184,7 +178,7 @@ static bool prim_closed(const sb_prim_desc *p) {
     for (size_t i = 0; closed && i < ne; i++) {
         uint64_t rev = e[i] << 32 | e[i] >> 32;
         bool found = false;
-        for (uint64_t h = mix_key(rev) & et.mask; et.slot[h] != UINT32_MAX && !found; h = (h + 1) & et.mask)
+        for (uint64_t h = sb_mix64(rev) & et.mask; et.slot[h] != UINT32_MAX && !found; h = (h + 1) & et.mask)
             found = e[et.slot[h]] == rev;
         closed = found;
     }
@@ -470,9 +464,9 @@ void sb_scene_find_planes(sb_scene *s) {
     uint32_t gcap = 0;
     for (uint32_t i = 0; i < m; i++) {
         next[i] = UINT32_MAX;
-        uint64_t h = mix_key((uint64_t)pt[i].key[0] ^ mix_key((uint64_t)pt[i].key[1] ^
-                             mix_key((uint64_t)pt[i].key[2] ^ mix_key((uint64_t)pt[i].key[3]))));
-        for (h &= g.mask;; h = (h + 1) & g.mask) {
+        uint64_t words[4];
+        memcpy(words, pt[i].key, sizeof words);
+        for (uint64_t h = sb_hash_words(words, 4) & g.mask;; h = (h + 1) & g.mask) {
             uint32_t k = g.slot[h];
             if (k == UINT32_MAX) {
                 if (ng == gcap) {
@@ -608,15 +602,17 @@ bool sb_scene_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_
     /* the cache is found by the file's bytes; a file that cannot be read gets its message from the load */
     size_t size = 0;
     void *bytes = sb_scene_cache_dir(dir, sizeof dir) ? sb_map_file(path, &size, false) : NULL;
+    bool cache = bytes != NULL;
+    uint64_t key = cache ? sb_scene_cache_key(opts, bytes, size) : 0;
+    sb_unmap_file(bytes, size);
     bool ok;
-    if (bytes && sb_scene_cache_get(s, path, opts, bytes, size)) {
+    if (cache && sb_scene_cache_get(s, path, opts, key)) {
         ok = true;
     } else {
-        if (bytes) sb_scene_cache_begin();
+        if (cache) sb_scene_cache_begin();
         ok = load_file(s, path, opts, err);
-        if (bytes) sb_scene_cache_put(s, opts, bytes, size, ok);
+        if (cache) sb_scene_cache_put(s, key, ok);
     }
-    sb_unmap_file(bytes, size);
     if (ok) s->load_ms = sb_now_ms() - t0;
     return ok;
 }

@@ -59,7 +59,7 @@ void sb_scene_cache_begin(void) {
 
 /* ---- the key and the entry's name ---- */
 
-static uint64_t entry_key(const sb_scene_opts *opts, const void *bytes, size_t size) {
+uint64_t sb_scene_cache_key(const sb_scene_opts *opts, const void *bytes, size_t size) {
     sb_scene_opts o;
     memset(&o, 0, sizeof o);
     if (opts) o = *opts;
@@ -269,9 +269,8 @@ typedef struct {
     uint64_t key, payload_hash, payload_size;
 } header;
 
-bool sb_scene_cache_get(sb_scene *s, const char *path, const sb_scene_opts *opts, const void *bytes, size_t size) {
+bool sb_scene_cache_get(sb_scene *s, const char *path, const sb_scene_opts *opts, uint64_t key) {
     char ep[4096];
-    uint64_t key = entry_key(opts, bytes, size);
     if (!entry_path(key, ep, sizeof ep)) return false;
     size_t n = 0;
     unsigned char *data = sb_map_file(ep, &n, true);
@@ -365,11 +364,11 @@ static void trim(const char *dir) {
     free(es);
 }
 
-void sb_scene_cache_put(const sb_scene *s, const sb_scene_opts *opts, const void *bytes, size_t size, bool ok) {
+void sb_scene_cache_put(const sb_scene *s, uint64_t key, bool ok) {
     g_recording = false;
     sb_log_capture(false);
     char ep[4096], dir[3800];
-    if (!ok || !entry_path(entry_key(opts, bytes, size), ep, sizeof ep) || !sb_scene_cache_dir(dir, sizeof dir)) {
+    if (!ok || !entry_path(key, ep, sizeof ep) || !sb_scene_cache_dir(dir, sizeof dir)) {
         deps_clear();
         return;
     }
@@ -389,20 +388,11 @@ void sb_scene_cache_put(const sb_scene *s, const sb_scene_opts *opts, const void
     put(&b, log, strlen(log));
     write_scene(&b, s);
     memcpy(h.magic, magic, sizeof magic);
-    h.key = entry_key(opts, bytes, size);
+    h.key = key;
     h.payload_size = b.n - sizeof h;
     h.payload_hash = sb_hash_bytes(SB_FNV_SEED, b.p + sizeof h, b.n - sizeof h);
     memcpy(b.p, &h, sizeof h);
-    /* a name of its own per process: two runs writing one entry never share a temporary */
-    char tmp[4200];
-    snprintf(tmp, sizeof tmp, "%s.%ld.tmp", ep, (long)getpid());
     sb_err e;
-    if (sb_mkdir_p(dir, &e)) {
-        FILE *f = fopen(tmp, "wb");
-        bool written = f && fwrite(b.p, 1, b.n, f) == b.n;
-        if (f) written = fclose(f) == 0 && written;
-        if (!written || rename(tmp, ep) != 0) unlink(tmp);
-        else trim(dir);
-    }
+    if (sb_mkdir_p(dir, &e) && sb_write_file_atomic(ep, b.p, b.n, &e)) trim(dir);
     free(b.p);
 }
