@@ -168,9 +168,9 @@ bool sb_autobias_choose(sb_session *s, const sb_run_spec *spec, sb_run_spec *out
                     if (better(&x, t, best, limit)) best = t;
                 }
     }
+    params_at(&x, x.rungs[best], &out->params);
     size_t n = 0;
     for (int a = 0; a < x.na; a++) {
-        set_value(&out->params, x.autos[a], x.def[a] * ladder[x.rungs[best][a]]);
         if (n < len)
             n += (size_t)snprintf(chosen + n, len - n, "%s%s=%s", a ? ":" : "", out->params.v[x.autos[a]].def->name,
                                   out->params.v[x.autos[a]].text);
