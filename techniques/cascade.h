@@ -81,9 +81,9 @@ typedef struct sb_csm {
     const sb_gpu *gpu;
     int count;                            /* maps: d.cascades */
     bool no_clamp;                        /* clip casters at the near plane (PSM's naive ordering) */
-    GLuint moments, moments_tmp;          /* RGBA32F arrays (filtered formats) */
+    GLuint moments, moments_tmp;          /* float arrays of the format's channels (filtered formats) */
     GLuint blur_prog;
-    GLint b_dir, b_radius, b_layer;
+    GLint b_dir, b_layer;
     GLint u_moments, u_bleed, u_exponent, d_exponent[3];
     GLuint raw_sampler;                   /* the map without comparison, for PCSS's blocker search */
     GLint u_depth_raw, u_sun_tan;

@@ -1,11 +1,13 @@
 /* Cascaded techniques rendered for real on llvmpipe: layered and per-cascade
  * submission agree, SDSM's GPU splits read nothing back in the frame loop,
- * stable fits do not shimmer, all-sky frames render no cascade. */
+ * stable fits do not shimmer, all-sky frames render no cascade, the moments
+ * blur is the separable Gaussian a CPU computes from the unblurred map. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <cmocka.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -300,6 +302,80 @@ static void test_cascade_block_layout(void **st) {
     sb_instance_destroy(&in);
 }
 
+/* Every layer of a filtered technique's moments (4 floats a texel, as stored:
+ * channels the format lacks read 0, alpha 1). */
+static float *read_moments(sb_instance *in) {
+    sb_csm *c = (sb_csm *)in->state;
+    float *m = malloc(sizeof(float) * 4 * c->d.res * c->d.res * c->count);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, c->moments);
+    glGetTexImage(GL_TEXTURE_2D_ARRAY, 0, GL_RGBA, GL_FLOAT, m);
+    return m;
+}
+
+/* One direction of the blur on the CPU: clamped at the edges, weights
+ * exp(-i^2 / 2 sigma^2) with sigma = max(r / 2, 1/2), normalised. */
+static void cpu_blur(const float *src, float *dst, int res, int layers, int r, int dx, int dy) {
+    double sigma = fmax(r * 0.5, 0.5);
+    for (int l = 0; l < layers; l++)
+        for (int y = 0; y < res; y++)
+            for (int x = 0; x < res; x++)
+                for (int ch = 0; ch < 4; ch++) {
+                    double sum = 0, wsum = 0;
+                    for (int i = -r; i <= r; i++) {
+                        int qx = x + dx * i, qy = y + dy * i;
+                        qx = qx < 0 ? 0 : qx >= res ? res - 1 : qx;
+                        qy = qy < 0 ? 0 : qy >= res ? res - 1 : qy;
+                        double w = exp(-0.5 * i * i / (sigma * sigma));
+                        sum += w * src[(((size_t)l * res + qy) * res + qx) * 4 + ch];
+                        wsum += w;
+                    }
+                    dst[(((size_t)l * res + y) * res + x) * 4 + ch] = (float)(sum / wsum);
+                }
+}
+
+/* The moments blur (blur.comp: a window of loads per run of texels) against
+ * the CPU's from the same frame rendered with blur=0, for each format's
+ * channels, radii 1 and 3 and a map side that is no multiple of the runs or
+ * the groups, on every cascade of a layered map. */
+static void test_moments_blur_matches_cpu(void **st) {
+    (void)st;
+    const char *formats[] = {"vsm", "esm", "msm"};
+    const int radii[] = {1, 3};
+    for (int fi = 0; fi < 3; fi++)
+        for (int ri = 0; ri < 2; ri++) {
+            char raw_spec[128], blur_spec[128];
+            const char *base = "pssm:cascades=2:res=203:layered=off:exponent=20";
+            snprintf(raw_spec, sizeof raw_spec, "%s:format=%s:blur=0", base, formats[fi]);
+            snprintf(blur_spec, sizeof blur_spec, "%s:format=%s:blur=%d", base, formats[fi], radii[ri]);
+            sb_instance raw, blurred;
+            assert_true(make(&raw, raw_spec));
+            assert_true(make(&blurred, blur_spec));
+            render(&raw, 3, 12, NULL);
+            render(&blurred, 3, 12, NULL);
+            sb_csm *c = (sb_csm *)blurred.state;
+            int res = c->d.res, layers = c->count;
+            for (int k = 0; k < layers; k++) assert_true(c->active[k]);
+            float *src = read_moments(&raw), *gpu = read_moments(&blurred);
+            size_t n = (size_t)4 * res * res * layers;
+            float *tmp = malloc(sizeof(float) * n), *cpu = malloc(sizeof(float) * n);
+            cpu_blur(src, tmp, res, layers, radii[ri], 1, 0);
+            cpu_blur(tmp, cpu, res, layers, radii[ri], 0, 1);
+            double worst = 0, moved = 0;
+            for (size_t i = 0; i < n; i++) {
+                double scale = fmax(fabs(cpu[i]), 1e-6);
+                worst = fmax(worst, fabs(gpu[i] - cpu[i]) / scale);
+                moved = fmax(moved, fabs(src[i] - cpu[i]) / scale);
+            }
+            print_message("%s: worst relative difference from the CPU blur %.3g (the blur moves texels by up to %.3g)\n",
+                          blur_spec, worst, moved);
+            assert_true(moved > 1e-3);   /* the frame has edges for a blur to move */
+            assert_true(worst < 1e-5);
+            free(src), free(gpu), free(tmp), free(cpu);
+            sb_instance_destroy(&raw);
+            sb_instance_destroy(&blurred);
+        }
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_layered_matches_per_cascade),
@@ -307,6 +383,7 @@ int main(void) {
         cmocka_unit_test(test_all_sky_frame),
         cmocka_unit_test(test_stable_no_shimmer),
         cmocka_unit_test(test_cascade_block_layout),
+        cmocka_unit_test(test_moments_blur_matches_cpu),
     };
     return cmocka_run_group_tests_name("cascades", tests, setup, teardown);
 }
