@@ -291,7 +291,8 @@ static void sdsm_frame(void *state, sb_frame *f) {
     glUniform1i(s->r_depth, 1);
     glUniform1f(s->r_near, (float)f->cam.znear);
     glUniform1f(s->r_far, (float)f->cam.zfar);
-    dispatch_pixels(g);
+    /* a group: 8 rows of 64 pixels, a run of 8 an invocation (sdsm_reduce.comp) */
+    glDispatchCompute((GLuint)(g->width + 63) / 64, (GLuint)(g->height + 7) / 8, 1);
     if (s->gpu) {
         gpu_splits(s, f);
     } else {

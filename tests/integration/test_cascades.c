@@ -1,7 +1,8 @@
 /* Cascaded techniques rendered for real on llvmpipe: layered and per-cascade
  * submission agree, SDSM's GPU splits read nothing back in the frame loop,
  * stable fits do not shimmer, all-sky frames render no cascade, the moments
- * blur is the separable Gaussian a CPU computes from the unblurred map. */
+ * blur is the separable Gaussian a CPU computes from the unblurred map, SDSM's
+ * depth statistics are the CPU's over the same depth buffer. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -376,6 +377,61 @@ static void test_moments_blur_matches_cpu(void **st) {
         }
 }
 
+/* SDSM's depth statistics (sdsm_reduce.comp: runs of pixels an invocation)
+ * against the CPU's over the same depth buffer: visible pixels, nearest and
+ * farthest view depth, and the log-depth histogram (a pixel on a bin's edge
+ * may fall either side in float arithmetic: a few in a thousand). */
+static void test_sdsm_statistics_match_cpu(void **st) {
+    (void)st;
+    sb_instance in;
+    assert_true(make(&in, "sdsm:res=512:splits=cpu:latency=0:partition=histogram"));
+    for (int frame = 0; frame < 12; frame += 5) {
+        sb_timer t;
+        sb_timer_init(&t, SB_TIMING_SYNC, 1, 1);
+        sb_timer_frame_begin(&t, 0);
+        sb_frame f;
+        memset(&f, 0, sizeof f);
+        sb_render_frame(&g_s, &in, &f, frame, 12, frame, &t);
+        sb_timer_free(&t);
+        GLint buf = 0;   /* the statistics: binding 1 (sdsm_common.glsl) */
+        glGetIntegeri_v(GL_SHADER_STORAGE_BUFFER_BINDING, 1, &buf);
+        assert_true(buf != 0);
+        uint32_t gpu[4 + 64];
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, (GLuint)buf);
+        glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof gpu, gpu);
+        int w = g_s.gpu.width, h = g_s.gpu.height;
+        float *depth = malloc(sizeof(float) * w * h);
+        glBindTexture(GL_TEXTURE_2D, g_s.gpu.depth_tex);
+        glGetTexImage(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT, GL_FLOAT, depth);
+        float n = (float)f.cam.znear, fa = (float)f.cam.zfar;
+        uint32_t samples = 0, hist[64] = {0};
+        float zmin = INFINITY, zmax = 0;
+        for (int i = 0; i < w * h; i++) {
+            if (!(depth[i] < 1.0f)) continue;
+            float z = 2.0f * n * fa / ((fa + n) - (2.0f * depth[i] - 1.0f) * (fa - n));
+            samples++;
+            zmin = fminf(zmin, z), zmax = fmaxf(zmax, z);
+            int b = (int)(64.0f * logf(z / n) / logf(fa / n));
+            hist[b < 0 ? 0 : b > 63 ? 63 : b]++;
+        }
+        free(depth);
+        float gmin, gmax;   /* sb_unorder of positive depths */
+        uint32_t u = gpu[0] & 0x7fffffffu, v = gpu[1] & 0x7fffffffu;
+        memcpy(&gmin, &u, 4), memcpy(&gmax, &v, 4);
+        uint32_t gsum = 0, off = 0;
+        for (int b = 0; b < 64; b++) gsum += gpu[4 + b], off += (uint32_t)abs((int)gpu[4 + b] - (int)hist[b]);
+        print_message("frame %d: %u visible pixels (cpu %u), depth %.4f..%.3f (cpu %.4f..%.3f), %u histogram "
+                      "counts in another bin\n", frame, gpu[2], samples, gmin, gmax, zmin, zmax, off / 2);
+        assert_true(samples > 1000);
+        assert_int_equal(gpu[2], samples);
+        assert_int_equal(gsum, samples);
+        assert_true(fabsf(gmin - zmin) <= 1e-5f * zmin);
+        assert_true(fabsf(gmax - zmax) <= 1e-5f * zmax);
+        assert_true(off / 2 <= samples / 500);
+    }
+    sb_instance_destroy(&in);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_layered_matches_per_cascade),
@@ -384,6 +440,7 @@ int main(void) {
         cmocka_unit_test(test_stable_no_shimmer),
         cmocka_unit_test(test_cascade_block_layout),
         cmocka_unit_test(test_moments_blur_matches_cpu),
+        cmocka_unit_test(test_sdsm_statistics_match_cpu),
     };
     return cmocka_run_group_tests_name("cascades", tests, setup, teardown);
 }
