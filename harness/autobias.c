@@ -36,9 +36,9 @@ typedef struct {
 static bool score(sb_session *s, const sb_run_spec *spec, const sb_params *p, const int *frames, int nf,
                   calib_score *out, sb_err *err) {
     sb_run_spec rs = {spec->tech, *p};
-    int replay = spec->tech->temporal ? 2 : 0;
     sb_instance in;
-    if (!sb_instance_create(&in, s, &rs, nf * (replay + 1), err)) return false;
+    if (!sb_instance_create(&in, s, &rs, nf, err)) return false;   /* frames: what it keeps per frame (sdsm's splits) */
+    int replay = sb_instance_history(&in);
     sb_eval_buf b;
     sb_eval_buf_init(&b, &s->gpu, false);
     double fs = 0, er = 0;

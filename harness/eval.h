@@ -18,7 +18,7 @@ void sb_eval_buf_init(sb_eval_buf *b, const sb_gpu *g, bool rgba);
 void sb_eval_buf_free(sb_eval_buf *b);
 
 /* Renders path frame pf of n with the evaluation targets bound, after
- * replaying the `replay` frames before it (a temporal technique's frame
+ * replaying the `replay` frames before it (sb_instance_history: a frame
  * depends on them), reads the targets back and measures the error against
  * the scene's reference. *seq is the run sequence number of the first frame
  * rendered and is advanced past the last. f gets the evaluated frame (its

@@ -359,6 +359,8 @@ bool sb_instance_create(sb_instance *in, sb_session *s, const sb_run_spec *spec,
     return ok;
 }
 
+int sb_instance_history(const sb_instance *in) { return in->tech->history ? in->tech->history(in->desc) : 0; }
+
 void sb_instance_destroy(sb_instance *in) {
     if (in->state) in->tech->destroy(in->state);
     free(in->state);
@@ -438,7 +440,7 @@ static bool evaluate(sb_session *s, sb_instance *in, int seq, const char *out_di
         if (!eval_frame_wanted(&s->opts, pf)) continue;
         sb_frame f;
         sb_frame_rec *r = &recs[pf];
-        ok = sb_eval_frame(s, in, pf, n, in->tech->temporal ? 2 : 0, &seq, &b, &f, &r->err, err);
+        ok = sb_eval_frame(s, in, pf, n, sb_instance_history(in), &seq, &b, &f, &r->err, err);
         if (ok && s->opts.error_every > 0 && pf % s->opts.error_every == 0) {
             r->evaluated = true;
         }

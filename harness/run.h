@@ -122,6 +122,8 @@ typedef struct sb_instance {
  * false with the reason when it is not supported here or fails. */
 bool sb_instance_create(sb_instance *in, sb_session *s, const sb_run_spec *spec, int frames, sb_err *err);
 void sb_instance_destroy(sb_instance *in);
+/* Earlier frames a frame of this instance depends on (sb_technique.history). */
+int sb_instance_history(const sb_instance *in);
 /* Renders frame i of n of the path as the run's seq-th frame, timed by timer. */
 void sb_render_frame(sb_session *s, sb_instance *in, sb_frame *f, int i, int n, int seq, struct sb_timer *timer);
 /* Renders an explicit camera (tests, stress cases); eval binds the evaluation targets. */

@@ -357,6 +357,12 @@ static void sdsm_destroy(void *state) {
     sb_csm_destroy(&s->csm);
 }
 
+/* splits=cpu uses the statistics of `latency` frames ago; splits=gpu, the frame's own. */
+static int sdsm_history(const void *desc) {
+    const sdsm_desc *d = desc;
+    return d->splits == SPLITS_CPU ? d->latency : 0;
+}
+
 const sb_technique sb_technique_sdsm = {
     .name = "sdsm",
     .summary = "sample distribution shadow maps (Lauritzen, Salvi & Lefohn 2011)",
@@ -367,7 +373,7 @@ const sb_technique sb_technique_sdsm = {
     .stages = SB_STAGE_BIT(SB_STAGE_ZPASS) | SB_STAGE_BIT(SB_STAGE_MINMAX) | SB_STAGE_BIT(SB_STAGE_CASCADE) |
               SB_STAGE_BIT(SB_STAGE_FINAL),
     .needs = SB_NEEDS_SUN,
-    .temporal = true,
+    .history = sdsm_history,
     .state_size = sizeof(sdsm_state),
     .check = sdsm_check,
     .supported = sdsm_supported,

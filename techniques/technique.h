@@ -114,7 +114,9 @@ typedef struct sb_technique {
     const void *desc_defaults;      /* copied into it before the parameters (NULL: zeros) */
     unsigned stages;                /* SB_STAGE_BIT()s it reports */
     unsigned needs;                 /* SB_NEEDS_* */
-    bool temporal;                  /* a frame depends on earlier frames (replayed before an evaluated one) */
+    /* how many earlier frames a frame with these parameters depends on (the
+       evaluation pass renders them again before an evaluated frame); NULL: none */
+    int (*history)(const void *desc);
     size_t state_size;
     bool (*check)(const void *desc, sb_err *err);
     bool (*supported)(const struct sb_run_ctx *rc, const void *desc, sb_err *why);

@@ -2,7 +2,8 @@
  * submission agree, SDSM's GPU splits read nothing back in the frame loop,
  * stable fits do not shimmer, all-sky frames render no cascade, the moments
  * blur is the separable Gaussian a CPU computes from the unblurred map, SDSM's
- * depth statistics are the CPU's over the same depth buffer. */
+ * depth statistics are the CPU's over the same depth buffer, the evaluation
+ * pass sees what the timed frame saw. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -13,6 +14,7 @@
 #include <string.h>
 
 #include "cascade.h"
+#include "eval.h"
 #include "support.h"
 
 static sb_session g_s;
@@ -432,6 +434,52 @@ static void test_sdsm_statistics_match_cpu(void **st) {
     sb_instance_destroy(&in);
 }
 
+/* The evaluation pass renders a frame again after the run: it must see what
+ * the timed frame saw. SDSM with splits=cpu uses the statistics of `latency`
+ * frames before (replayed first: sb_instance_history); splits=gpu none. The
+ * frames rendered after it leave other frames' statistics behind, so a
+ * replay too short shows. */
+static void test_eval_sees_the_timed_frame(void **st) {
+    (void)st;
+    const char *specs[] = {"sdsm:splits=cpu:latency=2", "sdsm:splits=cpu:latency=1", "sdsm:splits=gpu"};
+    const int want[] = {2, 1, 0}, n = 12, k = 5;
+    int w = g_s.gpu.width, h = g_s.gpu.height;
+    unsigned char *timed = malloc((size_t)w * h);
+    for (int i = 0; i < 3; i++) {
+        sb_instance in;
+        assert_true(make(&in, specs[i]));
+        assert_int_equal(sb_instance_history(&in), want[i]);
+        int seq = 0;
+        for (int j = 0; j < n; j++) {
+            sb_timer t;
+            sb_timer_init(&t, SB_TIMING_SYNC, 1, 1);
+            sb_timer_frame_begin(&t, 0);
+            sb_frame f;
+            memset(&f, 0, sizeof f);
+            sb_render_frame(&g_s, &in, &f, j, n, seq++, &t);
+            if (j == k) sb_gpu_readback(&g_s.gpu, NULL, timed, NULL);
+            sb_timer_free(&t);
+        }
+        sb_eval_buf b;
+        sb_eval_buf_init(&b, &g_s.gpu, false);
+        sb_frame f;
+        sb_error_metrics m;
+        sb_err err;
+        bool ok = sb_eval_frame(&g_s, &in, k, n, sb_instance_history(&in), &seq, &b, &f, &m, &err);
+        if (!ok) print_error("%s\n", err.msg);
+        assert_true(ok);
+        long differ = 0, shadowed = 0;
+        for (int p = 0; p < w * h; p++) differ += b.vis[p] != timed[p], shadowed += timed[p] < 128;
+        print_message("%s: replays %d, %ld of %d pixels differ from the timed frame (%ld shadowed)\n", specs[i],
+                      sb_instance_history(&in), differ, w * h, shadowed);
+        assert_true(shadowed > 100);
+        assert_int_equal(differ, 0);
+        sb_eval_buf_free(&b);
+        sb_instance_destroy(&in);
+    }
+    free(timed);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_layered_matches_per_cascade),
@@ -441,6 +489,7 @@ int main(void) {
         cmocka_unit_test(test_cascade_block_layout),
         cmocka_unit_test(test_moments_blur_matches_cpu),
         cmocka_unit_test(test_sdsm_statistics_match_cpu),
+        cmocka_unit_test(test_eval_sees_the_timed_frame),
     };
     return cmocka_run_group_tests_name("cascades", tests, setup, teardown);
 }
