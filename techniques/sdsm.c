@@ -177,8 +177,10 @@ static void reset_stats(sdsm_state *s) {
     glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof init, &init);
 }
 
+/* The passes over the view's pixels: a group of 8 rows of 64 pixels, a run of
+ * 8 an invocation (sdsm_reduce.comp, sdsm_bounds.comp). */
 static void dispatch_pixels(const sb_gpu *g) {
-    glDispatchCompute((GLuint)(g->width + 15) / 16, (GLuint)(g->height + 15) / 16, 1);
+    glDispatchCompute((GLuint)(g->width + 63) / 64, (GLuint)(g->height + 7) / 8, 1);
 }
 
 /* tight=on: per-partition sample counts and light-space bounds, a second pass over the pixels. */
@@ -291,8 +293,7 @@ static void sdsm_frame(void *state, sb_frame *f) {
     glUniform1i(s->r_depth, 1);
     glUniform1f(s->r_near, (float)f->cam.znear);
     glUniform1f(s->r_far, (float)f->cam.zfar);
-    /* a group: 8 rows of 64 pixels, a run of 8 an invocation (sdsm_reduce.comp) */
-    glDispatchCompute((GLuint)(g->width + 63) / 64, (GLuint)(g->height + 7) / 8, 1);
+    dispatch_pixels(g);
     if (s->gpu) {
         gpu_splits(s, f);
     } else {

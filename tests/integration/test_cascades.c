@@ -15,6 +15,7 @@
 
 #include "cascade.h"
 #include "eval.h"
+#include "lightfit.h"
 #include "support.h"
 
 static sb_session g_s;
@@ -379,59 +380,112 @@ static void test_moments_blur_matches_cpu(void **st) {
         }
 }
 
-/* SDSM's depth statistics (sdsm_reduce.comp: runs of pixels an invocation)
- * against the CPU's over the same depth buffer: visible pixels, nearest and
- * farthest view depth, and the log-depth histogram (a pixel on a bin's edge
- * may fall either side in float arithmetic: a few in a thousand). */
+/* SDSM's depth statistics (sdsm_reduce.comp, sdsm_bounds.comp: runs of pixels
+ * an invocation) against the CPU's over the same depth buffer: visible pixels,
+ * nearest and farthest view depth, the log-depth histogram, and with
+ * tight=on each partition's pixels and light-space x/y bounds. A pixel on a
+ * bin's or a split's edge may fall either side in float arithmetic (a few in
+ * a thousand), which moves a partition's bounds by about its size. */
+static uint32_t order_bits(float f) {
+    uint32_t b;
+    memcpy(&b, &f, 4);
+    return (b & 0x80000000u) ? ~b : (b | 0x80000000u);
+}
+static float unorder_bits(uint32_t u) {
+    uint32_t b = (u & 0x80000000u) ? (u & 0x7fffffffu) : ~u;
+    float f;
+    memcpy(&f, &b, 4);
+    return f;
+}
+
 static void test_sdsm_statistics_match_cpu(void **st) {
     (void)st;
-    sb_instance in;
-    assert_true(make(&in, "sdsm:res=512:splits=cpu:latency=0:partition=histogram"));
-    for (int frame = 0; frame < 12; frame += 5) {
-        sb_timer t;
-        sb_timer_init(&t, SB_TIMING_SYNC, 1, 1);
-        sb_timer_frame_begin(&t, 0);
-        sb_frame f;
-        memset(&f, 0, sizeof f);
-        sb_render_frame(&g_s, &in, &f, frame, 12, frame, &t);
-        sb_timer_free(&t);
-        GLint buf = 0;   /* the statistics: binding 1 (sdsm_common.glsl) */
-        glGetIntegeri_v(GL_SHADER_STORAGE_BUFFER_BINDING, 1, &buf);
-        assert_true(buf != 0);
-        uint32_t gpu[4 + 64];
-        glBindBuffer(GL_SHADER_STORAGE_BUFFER, (GLuint)buf);
-        glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof gpu, gpu);
-        int w = g_s.gpu.width, h = g_s.gpu.height;
-        float *depth = malloc(sizeof(float) * w * h);
-        glBindTexture(GL_TEXTURE_2D, g_s.gpu.depth_tex);
-        glGetTexImage(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT, GL_FLOAT, depth);
-        float n = (float)f.cam.znear, fa = (float)f.cam.zfar;
-        uint32_t samples = 0, hist[64] = {0};
-        float zmin = INFINITY, zmax = 0;
-        for (int i = 0; i < w * h; i++) {
-            if (!(depth[i] < 1.0f)) continue;
-            float z = 2.0f * n * fa / ((fa + n) - (2.0f * depth[i] - 1.0f) * (fa - n));
-            samples++;
-            zmin = fminf(zmin, z), zmax = fmaxf(zmax, z);
-            int b = (int)(64.0f * logf(z / n) / logf(fa / n));
-            hist[b < 0 ? 0 : b > 63 ? 63 : b]++;
+    const char *specs[] = {"sdsm:res=512:splits=cpu:latency=0:partition=histogram",
+                           "sdsm:res=512:splits=gpu:tight=on:partition=histogram"};
+    for (int si = 0; si < 2; si++) {
+        const bool tight = si == 1;
+        sb_instance in;
+        assert_true(make(&in, specs[si]));
+        sb_csm *c = (sb_csm *)in.state;
+        for (int frame = 0; frame < 12; frame += 5) {
+            sb_timer t;
+            sb_timer_init(&t, SB_TIMING_SYNC, 1, 1);
+            sb_timer_frame_begin(&t, 0);
+            sb_frame f;
+            memset(&f, 0, sizeof f);
+            sb_render_frame(&g_s, &in, &f, frame, 12, frame, &t);
+            sb_timer_free(&t);
+            GLint buf = 0;   /* the statistics: binding 1 (sdsm_common.glsl) */
+            glGetIntegeri_v(GL_SHADER_STORAGE_BUFFER_BINDING, 1, &buf);
+            assert_true(buf != 0);
+            uint32_t gpu[4 + 64 + 8 + 32];
+            glBindBuffer(GL_SHADER_STORAGE_BUFFER, (GLuint)buf);
+            glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof gpu, gpu);
+            sb_cascade_block block;   /* the partitions the GPU chose (binding 0) */
+            glBindBuffer(GL_SHADER_STORAGE_BUFFER, c->block);
+            glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof block, &block);
+            int w = g_s.gpu.width, h = g_s.gpu.height, parts = (int)block.info[0];
+            float *depth = malloc(sizeof(float) * w * h);
+            glBindTexture(GL_TEXTURE_2D, g_s.gpu.depth_tex);
+            glGetTexImage(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT, GL_FLOAT, depth);
+            float n = (float)f.cam.znear, fa = (float)f.cam.zfar;
+            uint32_t samples = 0, hist[64] = {0}, pcount[8] = {0}, pb[8][4];
+            for (int k = 0; k < 8; k++) pb[k][0] = pb[k][1] = 0xffffffffu, pb[k][2] = pb[k][3] = 0;
+            float zmin = INFINITY, zmax = 0;
+            sb_m4 inv, lv = sb_light_view(g_s.gpu.sun);
+            assert_true(sb_m4_invert(f.view_proj, &inv));
+            for (int i = 0; i < w * h; i++) {
+                if (!(depth[i] < 1.0f)) continue;
+                float z = 2.0f * n * fa / ((fa + n) - (2.0f * depth[i] - 1.0f) * (fa - n));
+                samples++;
+                zmin = fminf(zmin, z), zmax = fmaxf(zmax, z);
+                int b = (int)(64.0f * logf(z / n) / logf(fa / n));
+                hist[b < 0 ? 0 : b > 63 ? 63 : b]++;
+                if (!tight) continue;
+                int k = parts - 1;
+                for (int j = 0; j < parts; j++)
+                    if (z <= block.s.cascade[j][1]) {
+                        k = j;
+                        break;
+                    }
+                sb_v3 ndc = {((i % w) + 0.5) / w * 2 - 1, ((i / w) + 0.5) / h * 2 - 1, 2.0 * depth[i] - 1};
+                sb_v3 l = sb_m4_point(lv, sb_m4_point(inv, ndc));
+                uint32_t ox = order_bits((float)l.x), oy = order_bits((float)l.y);
+                pcount[k]++;
+                pb[k][0] = ox < pb[k][0] ? ox : pb[k][0], pb[k][1] = oy < pb[k][1] ? oy : pb[k][1];
+                pb[k][2] = ox > pb[k][2] ? ox : pb[k][2], pb[k][3] = oy > pb[k][3] ? oy : pb[k][3];
+            }
+            free(depth);
+            float gmin = unorder_bits(gpu[0]), gmax = unorder_bits(gpu[1]);
+            uint32_t gsum = 0, off = 0;
+            for (int b = 0; b < 64; b++) gsum += gpu[4 + b], off += (uint32_t)abs((int)gpu[4 + b] - (int)hist[b]);
+            print_message("%s frame %d: %u visible pixels (cpu %u), depth %.4f..%.3f (cpu %.4f..%.3f), %u histogram "
+                          "counts in another bin\n", specs[si], frame, gpu[2], samples, gmin, gmax, zmin, zmax, off / 2);
+            assert_true(samples > 1000);
+            assert_int_equal(gpu[2], samples);
+            assert_int_equal(gsum, samples);
+            assert_true(fabsf(gmin - zmin) <= 1e-5f * zmin);
+            assert_true(fabsf(gmax - zmax) <= 1e-5f * zmax);
+            assert_true(off / 2 <= samples / 500);
+            if (!tight) continue;
+            const uint32_t *gcount = gpu + 68, (*gb)[4] = (const uint32_t(*)[4])(gpu + 76);
+            uint32_t psum = 0, poff = 0;
+            for (int k = 0; k < parts; k++) {
+                psum += gcount[k], poff += (uint32_t)abs((int)gcount[k] - (int)pcount[k]);
+                if (pcount[k] < 100) continue;
+                double ext = fmax(unorder_bits(pb[k][2]) - unorder_bits(pb[k][0]),
+                                  unorder_bits(pb[k][3]) - unorder_bits(pb[k][1]));
+                double worst = 0;
+                for (int e = 0; e < 4; e++) worst = fmax(worst, fabs(unorder_bits(gb[k][e]) - unorder_bits(pb[k][e])));
+                print_message("  partition %d: %u pixels (cpu %u), light-space bounds within %.3g of the cpu's "
+                              "(extent %.3g)\n", k, gcount[k], pcount[k], worst, ext);
+                assert_true(worst <= 1e-3 * ext);
+            }
+            assert_int_equal(psum, samples);
+            assert_true(poff / 2 <= samples / 500);
         }
-        free(depth);
-        float gmin, gmax;   /* sb_unorder of positive depths */
-        uint32_t u = gpu[0] & 0x7fffffffu, v = gpu[1] & 0x7fffffffu;
-        memcpy(&gmin, &u, 4), memcpy(&gmax, &v, 4);
-        uint32_t gsum = 0, off = 0;
-        for (int b = 0; b < 64; b++) gsum += gpu[4 + b], off += (uint32_t)abs((int)gpu[4 + b] - (int)hist[b]);
-        print_message("frame %d: %u visible pixels (cpu %u), depth %.4f..%.3f (cpu %.4f..%.3f), %u histogram "
-                      "counts in another bin\n", frame, gpu[2], samples, gmin, gmax, zmin, zmax, off / 2);
-        assert_true(samples > 1000);
-        assert_int_equal(gpu[2], samples);
-        assert_int_equal(gsum, samples);
-        assert_true(fabsf(gmin - zmin) <= 1e-5f * zmin);
-        assert_true(fabsf(gmax - zmax) <= 1e-5f * zmax);
-        assert_true(off / 2 <= samples / 500);
+        sb_instance_destroy(&in);
     }
-    sb_instance_destroy(&in);
 }
 
 /* The evaluation pass renders a frame again after the run: it must see what
