@@ -269,6 +269,16 @@ static int popcount8(unsigned m) {
     return n;
 }
 
+/* The slope-scaled offset (glPolygonOffset factor): `slope` for orthographic
+ * maps, 4x it when a map of this frame is warped (LiSPSM, TSM, PSM), whose
+ * depth is not linear in distance: the default 0.5 is 2 there, as it was
+ * before orthographic maps went to 0.5 (README, shadow-map parameters). */
+static float slope_factor(const sb_csm *c) {
+    for (int k = 0; k < c->count; k++)
+        if (c->active[k] && c->fit[k].warped) return (float)(4 * c->d.slope);
+    return (float)c->d.slope;
+}
+
 void sb_csm_render(sb_csm *c, sb_frame *f) {
     const sb_gpu *g = f->gpu;
     const sb_csm_desc *d = &c->d;
@@ -288,7 +298,7 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
     if (!c->no_clamp) glEnable(GL_DEPTH_CLAMP);   /* casters toward the light stay, at depth 0 */
     if (d->slope != 0) {
         glEnable(GL_POLYGON_OFFSET_FILL);
-        glPolygonOffset((float)d->slope, 0.0f);
+        glPolygonOffset(slope_factor(c), 0.0f);
     }
     glBindVertexArray(g->vao);
     GLuint progs3[3] = {c->prog_cascade, c->prog_gs, c->prog_vs};

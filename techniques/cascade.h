@@ -38,7 +38,7 @@ typedef struct sb_csm_desc {
     SB_PARAM_I(sb_csm_desc, res, 2048, 64, 16384, "shadow map resolution (texels per side, per cascade)"),     \
     SB_PARAM_E(sb_csm_desc, depth, 32f, "16|24|32f", "shadow map depth format"),                               \
     SB_PARAM_FA(sb_csm_desc, bias, 1, 0, 100, "constant depth bias, in shadow texels of world size"),          \
-    SB_PARAM_FA(sb_csm_desc, slope, 2, 0, 100, "slope-scaled bias (glPolygonOffset factor)"),                  \
+    SB_PARAM_FA(sb_csm_desc, slope, 0.5, 0, 100, "slope-scaled bias (glPolygonOffset factor; 4x it for warped maps)"), \
     SB_PARAM_FA(sb_csm_desc, normal, 0.25, 0, 100, "normal offset, in shadow texels"),                          \
     SB_PARAM_E(sb_csm_desc, filter, hw, "none|hw|pcf3|pcf5|poisson16|pcss", "shadow filter"),                   \
     SB_PARAM_F(sb_csm_desc, sun_size, 0.53, 0, 10, "pcss: angular diameter of the sun, degrees"),             \

@@ -18,9 +18,9 @@ static void test_grid(void **st) {
     assert_int_equal(n, 6);
     char c[512];
     sb_params_canonical(&runs[0].params, c, sizeof c);
-    assert_string_equal(c, "res=512:depth=32f:bias=1:slope=2:normal=0.25:filter=none:sun_size=0.53:stable=off:format=depth:blur=2:bleed=0.2:exponent=80");
+    assert_string_equal(c, "res=512:depth=32f:bias=1:slope=0.5:normal=0.25:filter=none:sun_size=0.53:stable=off:format=depth:blur=2:bleed=0.2:exponent=80");
     sb_params_canonical(&runs[5].params, c, sizeof c);
-    assert_string_equal(c, "res=2048:depth=32f:bias=1:slope=2:normal=0.25:filter=pcf3:sun_size=0.53:stable=off:format=depth:blur=2:bleed=0.2:exponent=80");
+    assert_string_equal(c, "res=2048:depth=32f:bias=1:slope=0.5:normal=0.25:filter=pcf3:sun_size=0.53:stable=off:format=depth:blur=2:bleed=0.2:exponent=80");
     double filter, res;
     assert_true(sb_params_find(&runs[5].params, "filter", &filter) && filter == 2);
     assert_true(sb_params_find(&runs[1].params, "res", &res) && res == 512);
@@ -31,7 +31,7 @@ static void test_grid(void **st) {
     assert_true(sb_spec_expand("pssm:bias=auto,0.5:normal=auto", NULL, &runs, &n, &err));
     assert_int_equal(n, 9);
     sb_params_canonical(&runs[7].params, c, sizeof c);
-    assert_non_null(strstr(c, ":bias=auto:slope=2:normal=auto:"));
+    assert_non_null(strstr(c, ":bias=auto:slope=0.5:normal=auto:"));
     double bias;
     assert_true(sb_params_find(&runs[7].params, "bias", &bias) && bias == 1);
     assert_true(runs[7].params.v[2].automatic && !runs[8].params.v[2].automatic && runs[8].params.v[4].automatic);
