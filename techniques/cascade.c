@@ -35,12 +35,14 @@ bool sb_csm_supported(const sb_context *ctx, const sb_csm_desc *d, const char *n
     return true;
 }
 
-/* As many 32-bit float channels as the format stores (moments.frag): esm one,
- * vsm two, msm four. A channel more would be memory traffic in every clear,
- * draw, blur pass and lookup. */
-static GLenum moments_format(int format) {
-    return format == SB_FORMAT_ESM ? GL_R32F : format == SB_FORMAT_VSM ? GL_RG32F : GL_RGBA32F;
-}
+/* A moments map's texel format, for GL and for the blur's image (by
+ * SB_FORMAT_*): as many 32-bit float channels as the format stores
+ * (moments.frag): esm one, vsm two, msm four. A channel more would be memory
+ * traffic in every clear, draw, blur pass and lookup. */
+static const struct {
+    GLenum gl;
+    const char *glsl;
+} moments_format[] = {{0, ""}, {GL_RG32F, "rg32f"}, {GL_R32F, "r32f"}, {GL_RGBA32F, "rgba32f"}};
 
 /* The array depth map (and moments), one framebuffer for all layers and one a layer. */
 static bool create_maps(sb_csm *c, const char *name, sb_err *err) {
@@ -55,7 +57,7 @@ static bool create_maps(sb_csm *c, const char *name, sb_err *err) {
         c->moments_tmp = m[1];
         for (int i = 0; i < 2; i++) {
             glBindTexture(GL_TEXTURE_2D_ARRAY, m[i]);
-            glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, moments_format(d->format), d->res, d->res, c->count);
+            glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, moments_format[d->format].gl, d->res, d->res, c->count);
             glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
             glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
             glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
@@ -115,10 +117,9 @@ static bool create_depth_programs(sb_csm *c, sb_err *err) {
     if (d->format && d->blur > 0) {
         const char *cs[] = {sb_shader_blur_comp};
         const sb_shader_src st[] = {{GL_COMPUTE_SHADER, cs, 1}};
-        static const char *const image_format[] = {"", "rg32f", "r32f", "rgba32f"};
         char defs[96];
         snprintf(defs, sizeof defs, "#define SB_BLUR_RADIUS %d\n#define SB_IMAGE_FORMAT %s\n", d->blur,
-                 image_format[d->format]);
+                 moments_format[d->format].glsl);
         if (!(c->blur_prog = sb_gpu_link("moments blur", defs, st, 1, err))) return false;
         c->b_dir = glGetUniformLocation(c->blur_prog, "u_dir");
         c->b_layer = glGetUniformLocation(c->blur_prog, "u_layer");
@@ -335,12 +336,12 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
     glDisable(GL_DEPTH_CLAMP);
     if (d->format && d->blur > 0) { /* separable Gaussian per rendered layer: moments -> tmp -> moments */
         glUseProgram(c->blur_prog);
+        const GLenum fmt = moments_format[d->format].gl;
         for (int k = 0; k < c->count; k++) {
             if (!c->active[k]) continue;
             glUniform1i(c->b_layer, k);
             for (int pass = 0; pass < 2; pass++) {
                 glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
-                const GLenum fmt = moments_format(d->format);
                 glBindImageTexture(0, pass ? c->moments_tmp : c->moments, 0, GL_TRUE, 0, GL_READ_ONLY, fmt);
                 glBindImageTexture(1, pass ? c->moments : c->moments_tmp, 0, GL_TRUE, 0, GL_WRITE_ONLY, fmt);
                 glUniform2i(c->b_dir, pass ? 0 : 1, pass ? 1 : 0);
