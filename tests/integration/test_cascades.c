@@ -52,16 +52,22 @@ static bool make(sb_instance *in, const char *spec) {
     return ok;
 }
 
-/* Renders path frame i of n and reads the visibility target. */
-static sb_counters render(sb_instance *in, int i, int n, unsigned char *vis) {
+/* Renders path frame i of n as the instance's seq-th frame into *f and reads
+ * the visibility target (vis may be NULL). */
+static void render_seq(sb_instance *in, int i, int n, int seq, sb_frame *f, unsigned char *vis) {
     sb_timer t;
     sb_timer_init(&t, SB_TIMING_SYNC, 1, 1);
     sb_timer_frame_begin(&t, 0);
-    sb_frame f;
-    memset(&f, 0, sizeof f);
-    sb_render_frame(&g_s, in, &f, i, n, 0, &t);
+    memset(f, 0, sizeof *f);
+    sb_render_frame(&g_s, in, f, i, n, seq, &t);
     if (vis) sb_gpu_readback(&g_s.gpu, NULL, vis, NULL);
     sb_timer_free(&t);
+}
+
+/* Renders path frame i of n and reads the visibility target. */
+static sb_counters render(sb_instance *in, int i, int n, unsigned char *vis) {
+    sb_frame f;
+    render_seq(in, i, n, 0, &f, vis);
     return f.counters;
 }
 
@@ -408,13 +414,8 @@ static void test_sdsm_statistics_match_cpu(void **st) {
         assert_true(make(&in, specs[si]));
         sb_csm *c = (sb_csm *)in.state;
         for (int frame = 0; frame < 12; frame += 5) {
-            sb_timer t;
-            sb_timer_init(&t, SB_TIMING_SYNC, 1, 1);
-            sb_timer_frame_begin(&t, 0);
             sb_frame f;
-            memset(&f, 0, sizeof f);
-            sb_render_frame(&g_s, &in, &f, frame, 12, frame, &t);
-            sb_timer_free(&t);
+            render_seq(&in, frame, 12, frame, &f, NULL);
             GLint buf = 0;   /* the statistics: binding 1 (sdsm_common.glsl) */
             glGetIntegeri_v(GL_SHADER_STORAGE_BUFFER_BINDING, 1, &buf);
             assert_true(buf != 0);
@@ -505,14 +506,8 @@ static void test_eval_sees_the_timed_frame(void **st) {
         assert_int_equal(sb_instance_history(&in), want[i]);
         int seq = 0;
         for (int j = 0; j < n; j++) {
-            sb_timer t;
-            sb_timer_init(&t, SB_TIMING_SYNC, 1, 1);
-            sb_timer_frame_begin(&t, 0);
             sb_frame f;
-            memset(&f, 0, sizeof f);
-            sb_render_frame(&g_s, &in, &f, j, n, seq++, &t);
-            if (j == k) sb_gpu_readback(&g_s.gpu, NULL, timed, NULL);
-            sb_timer_free(&t);
+            render_seq(&in, j, n, seq++, &f, j == k ? timed : NULL);
         }
         sb_eval_buf b;
         sb_eval_buf_init(&b, &g_s.gpu, false);
