@@ -525,10 +525,10 @@ int sb_batch_main(const sb_batch_cmd *cmd) {
     double wall_s = (sb_now_ms() - t0) / 1e3;
     printf("%s\n", dir);
     /* how much of the batch the GPU spent on what is measured: the rest is the harness's */
-    sb_log("gpu busy share: %.1f%% (timed GPU work %.1f s of %.1f s wall); reference: %llu rays cast, %d evaluated "
-           "frame(s) reused",
+    sb_log("gpu busy share: %.1f%% (timed GPU work %.1f s of %.1f s wall); reference: %llu rays cast (for %d evaluated "
+           "frame(s) in the background), %d evaluated frame(s) reused",
            wall_s > 0 ? 100.0 * sum.timed_gpu_ms / 1e3 / wall_s : 0.0, sum.timed_gpu_ms / 1e3, wall_s,
-           (unsigned long long)sum.ref_rays, sum.ref_reused);
+           (unsigned long long)sum.ref_rays, sum.ref_background, sum.ref_reused);
     sb_log("%d run(s): %d ok (%d unstable), %d failed, %d skipped; results in %s", sum.count,
            sum.count - sum.failed - sum.skipped, sum.unstable, sum.failed, sum.skipped, dir);
     rc = sum.failed ? 1 : 0;

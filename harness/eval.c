@@ -25,10 +25,10 @@ void sb_eval_buf_free(sb_eval_buf *b) {
     memset(b, 0, sizeof *b);
 }
 
-bool sb_eval_frame(sb_session *s, sb_instance *in, int pf, int n, int replay, int *seq, sb_eval_buf *b, sb_frame *f,
-                   sb_error_metrics *m, sb_err *err) {
-    const sb_reference *ref = sb_session_reference(s, err);
-    if (!ref) return false;
+/* Renders path frame pf of n (after `replay` earlier ones) with the
+ * evaluation targets bound and reads them back; view points into b. */
+static void render_targets(sb_session *s, sb_instance *in, int pf, int n, int replay, int *seq, sb_eval_buf *b,
+                           sb_frame *f, bool vis, sb_m4 *inv, sb_eval_view *view) {
     sb_timer timer;
     sb_timer_init(&timer, SB_TIMING_SYNC, 1, 1);
     for (int k = replay; k >= 0; k--) {
@@ -42,12 +42,54 @@ bool sb_eval_frame(sb_session *s, sb_instance *in, int pf, int n, int replay, in
     }
     sb_timer_free(&timer);
     if (in->tech->collect) in->tech->collect(in->state, f->seq, &f->counters);
-    sb_gpu_readback(&s->gpu, NULL, b->vis, b->rgba);
+    if (vis) sb_gpu_readback(&s->gpu, NULL, b->vis, b->rgba);
     sb_gpu_readback_eval(&s->gpu, b->pos, b->aux);
+    bool have_inv = sb_m4_invert(f->view_proj, inv);
+    *view = (sb_eval_view){b->w, b->h, b->pos, b->aux, sb_v3_sub(f->cam.pos, s->scene.origin), have_inv ? inv : NULL,
+                           f->shade_light};
+}
+
+bool sb_eval_frame(sb_session *s, sb_instance *in, int pf, int n, int replay, int *seq, sb_eval_buf *b, sb_frame *f,
+                   sb_error_metrics *m, sb_err *err) {
+    const sb_reference *ref = sb_session_reference(s, err);
+    if (!ref) return false;
     sb_m4 inv;
-    bool have_inv = sb_m4_invert(f->view_proj, &inv);
-    sb_eval_view view = {b->w, b->h, b->pos, b->aux, sb_v3_sub(f->cam.pos, s->scene.origin), have_inv ? &inv : NULL,
-                         f->shade_light};
+    sb_eval_view view;
+    render_targets(s, in, pf, n, replay, seq, b, f, true, &inv, &view);
     sb_evaluate_frame(ref, s->ref_cache, &view, b->vis, b->ref, m, s->opts.threads);
     return sb_gl_check("evaluation pass", err);
+}
+
+bool sb_eval_background(sb_session *s, sb_err *err) {
+    const sb_run_opts *o = &s->opts;
+    /* auto: not on a CPU rasterizer, which leaves the background no idle core during timed frames and draws
+       the extra frames on the CPU too (measured: a net loss there; README, Overlap) */
+    bool on = o->overlap < 0 ? !s->ctx.software : o->overlap > 0;
+    if (!on || o->error_every <= 0) return true;
+    const sb_reference *ref = sb_session_reference(s, err);
+    if (!ref) return false;
+    if (!sb_ref_background_start(s->ref_cache, ref, o->threads)) {
+        static bool said;
+        if (!said) sb_log("note: no idle CPU priority here; the reference is cast in the evaluation pass, as with --overlap off");
+        said = true;
+        return true;
+    }
+    /* every technique rasterizes a frame's positions and normals the same: draw them once, without shadows */
+    sb_run_spec spec = {.tech = sb_technique_find("none")};
+    sb_params_defaults(&spec.params, spec.tech);
+    sb_instance in;
+    if (!sb_instance_create(&in, s, &spec, 1, err)) return false;
+    sb_eval_buf b;
+    sb_eval_buf_init(&b, &s->gpu, false);
+    int seq = 0;
+    for (int pf = 0; pf < o->frames; pf += o->error_every) {
+        sb_frame f;
+        sb_m4 inv;
+        sb_eval_view view;
+        render_targets(s, &in, pf, o->frames, 0, &seq, &b, &f, false, &inv, &view);
+        if (sb_ref_background_add(s->ref_cache, &view) < 0) break; /* as much as it may hold */
+    }
+    sb_eval_buf_free(&b);
+    sb_instance_destroy(&in);
+    return sb_gl_check("the reference's background frames", err);
 }

@@ -25,3 +25,11 @@ void sb_eval_buf_free(sb_eval_buf *b);
  * camera, shaded light and counters, collected ones included). */
 bool sb_eval_frame(sb_session *s, sb_instance *in, int pf, int n, int replay, int *seq, sb_eval_buf *b, sb_frame *f,
                    sb_error_metrics *m, sb_err *err);
+
+/* --overlap (on, or auto on a GPU), before a scene's runs: draws the frames the runs will
+ * evaluate once (positions and normals, which every technique rasterizes the
+ * same) and hands them to the reference's background (sb_ref_background_*),
+ * which casts their answers while the runs render timed frames. Does
+ * nothing with --overlap off or no evaluated frames; false with err when
+ * the reference cannot be built or the frames not drawn. */
+bool sb_eval_background(sb_session *s, sb_err *err);

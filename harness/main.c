@@ -65,6 +65,8 @@ static void usage(FILE *f) {
             "                         interleave: A1 B1 A2 B2 ..., so slow drift hits every run alike)\n"
             "  --seed N               shuffle's seed (default: chosen, in the summary's seed column)\n"
             "  --threads N            reference ray-casting threads (default: all cores)\n"
+            "  --overlap auto|on|off  cast the reference of evaluated frames in the background, at idle CPU\n"
+            "                         priority, while timed frames render (auto: on a GPU, not on a CPU rasterizer)\n"
             "  --run-timeout S        a run taking longer is recorded as failed\n"
             "  --out DIR              results folder (default results); each run command writes DIR/<UTC time>/\n"
             "  --progress             progress line on stderr (default when stderr is a terminal)\n"

@@ -26,6 +26,7 @@ void sb_run_opts_defaults(sb_run_opts *o) {
     o->error_every = 10;
     o->repeat = 1;
     o->max_repeat = 10;
+    o->overlap = -1;
     long cpus = sysconf(_SC_NPROCESSORS_ONLN);
     o->threads = cpus > 1024 ? 1024 : cpus > 0 ? (int)cpus : 1;
 }
@@ -104,6 +105,10 @@ int sb_run_opts_set(sb_run_opts *o, const char *a, const char *v, sb_err *err) {
     } else if (!strcmp(a, "--threads")) {
         if (!sb_parse_int(v, &n) || n < 1 || n > 1024) return sb_fail(err, "--threads %s: expected 1..1024", v), -1;
         o->threads = (int)n;
+    } else if (!strcmp(a, "--overlap")) {
+        if (!strcmp(v, "auto")) o->overlap = -1;
+        else if (!strcmp(v, "on") || !strcmp(v, "off")) o->overlap = !strcmp(v, "on");
+        else return sb_fail(err, "--overlap %s: expected auto, on or off", v), -1;
     } else if (!strcmp(a, "--run-timeout")) {
         if (!sb_parse_double(v, &o->run_timeout_s) || o->run_timeout_s < 0)
             return sb_fail(err, "--run-timeout %s: expected seconds >= 0", v), -1;
@@ -226,6 +231,7 @@ void sb_session_keep_reference(sb_session *s, const char *results_dir) {
 void sb_session_close_scene(sb_session *s) {
     char file[4200];
     uint64_t tag;
+    if (s->ref_cache) sb_ref_background_stop(s->ref_cache); /* before the reference it casts with goes */
     if (sb_ref_cache_dirty(s->ref_cache) && ref_store_file(s, file, sizeof file, &tag)) {
         sb_err e;
         if (!sb_mkdir_p(s->ref_store, &e) || !sb_ref_cache_save(s->ref_cache, file, tag, &e))
@@ -578,6 +584,7 @@ static bool measured_frames(sb_run *r, int rep, int index, int total) {
     const sb_run_opts *o = &s->opts;
     const int N = o->frames;
     s->timed = true;
+    sb_ref_background_timed(s->ref_cache, true);
     for (int j = 0; j < N; j++) {
         int i = rep * N + j;
         double w0 = sb_now_ms();
@@ -594,11 +601,13 @@ static bool measured_frames(sb_run *r, int rep, int index, int total) {
             snprintf(what, sizeof what, "the run took longer than %g s (frame %d of %d)", o->run_timeout_s, i + 1,
                      r->capacity);
             s->timed = false;
+            sb_ref_background_timed(s->ref_cache, false);
             return fail_run(r, "timeout: %s", what);
         }
     }
     sb_timer_drain(&r->timer); /* between repetitions, never inside a frame */
     s->timed = false;
+    sb_ref_background_timed(s->ref_cache, false);
     if (r->spec->tech->collect)
         for (int j = 0; j < N; j++) r->spec->tech->collect(r->in.state, r->recs[rep * N + j].seq, &r->recs[rep * N + j].counters);
     return true;
@@ -803,10 +812,32 @@ static void run_rounds(sb_session *s, sb_run **runs, int n, int first, int total
     free(perm);
 }
 
+/* --overlap: the reference of the frames the runs evaluate is cast in the
+ * background while they render, when a run will use it: one that is not
+ * skipped and shades with the sun (a lamp's frames have other answers). */
+static void start_background(sb_session *s, const sb_run_spec *const *specs, int n) {
+    bool wanted = false;
+    for (int k = 0; k < n && !wanted; k++)
+        wanted = !(specs[k]->tech->needs & SB_NEEDS_POINT_LIGHT) && !sb_skip_reason(s, specs[k]->tech, &specs[k]->params);
+    sb_err err;
+    if (wanted && !sb_eval_background(s, &err))
+        sb_log("the reference is not cast in the background: %s", err.msg); /* the evaluation says it again */
+}
+
+static void stop_background(sb_session *s) {
+    if (!s->ref_cache) return;
+    sb_ref_background_stats st = sb_ref_background_stop(s->ref_cache);
+    if (st.queued && s->opts.progress)
+        sb_log("reference background: %d frame(s) queued, %d cast (%llu rays, %.0f ms, %.0f ms of it while timed frames "
+               "rendered), %d taken back by the evaluation, %d dropped",
+               st.queued, st.frames, (unsigned long long)st.rays, st.ms, st.timed_ms, st.taken_back, st.dropped);
+}
+
 int sb_run_group(sb_session *s, const sb_run_spec *const *specs, const int *run_index, int n, const char *out_dir,
                  sb_summary *sum, int first, int total) {
     const sb_run_opts *o = &s->opts;
     if (n <= 0) return 0;
+    start_background(s, specs, n);
     int failed = 0, *at = sb_xmalloc(sizeof(int) * (size_t)n);
     sb_run **runs = sb_xmalloc(sizeof *runs * (size_t)n);
     uint64_t rng = o->seed;
@@ -825,6 +856,7 @@ int sb_run_group(sb_session *s, const sb_run_spec *const *specs, const int *run_
         run_rounds(s, runs, n, first, total, &rng);
         for (int k = 0; k < n; k++) failed += !end_run(runs[k], sum);
     }
+    stop_background(s);
     free(runs);
     free(at);
     return failed;

@@ -38,6 +38,7 @@ typedef struct sb_run_opts {
     double target_ci;           /* percent: repeat until the gpu_ms CI half-width is within it (0: off) */
     int max_repeat;             /* cap for target_ci (default 10) */
     int threads;                /* reference ray-casting threads (default: all cores, at most 1024) */
+    int overlap;                /* --overlap: 1 on, 0 off, -1 auto (the default: on for a GPU, off for a CPU rasterizer) */
     double run_timeout_s;       /* a run taking longer fails with a timeout (0: none) */
     bool allow_external_uris;   /* glTF buffers and images may be read from outside the scene's folder */
     sb_blend_policy blend;      /* --blend-casters mask|opaque|none (default mask) */

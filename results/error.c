@@ -1,7 +1,12 @@
 /* error.c - per-frame shadow error against the Embree reference, and the
  * check that rays and rasterizer see one geometry. */
+#ifndef _GNU_SOURCE
+#define _GNU_SOURCE /* SCHED_IDLE */
+#endif
 #include "error.h"
 
+#include <pthread.h>
+#include <sched.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -224,26 +229,81 @@ typedef struct ref_entry {
     uint64_t key[2];
     int m;                     /* evaluated pixels */
     unsigned char *ref;        /* their reference, m bytes */
-    sb_error_metrics geo;      /* the geometry check's figures */
+    sb_error_metrics geo;      /* the geometry check's figures (rays: how many the cast took) */
+    bool fresh;                /* cast in the background and not yet used by an evaluation */
 } ref_entry;
+
+/* A frame queued for the background: its view, copied. */
+typedef struct ref_job {
+    uint64_t key[2];
+    bool casting;              /* taken by the background (else queued) */
+    int w, h;
+    float *pos, *aux;
+    sb_v3 eye;
+    bool have_inv;
+    sb_m4 inv;
+    double light[4];
+    struct ref_job *next;
+} ref_job;
 
 struct sb_ref_cache {
     ref_entry *e;
     int n, cap;
     size_t bytes, max_bytes;
     bool dirty;                /* answers added since it was made or loaded */
+    pthread_mutex_t mu;        /* everything here: the background adds answers while evaluations read them */
+    pthread_cond_t cv;         /* a job was queued, finished, or the background was told to stop */
+    /* the background (sb_ref_background_start) */
+    const sb_reference *r;
+    int threads;
+    bool bg, stop;
+    pthread_t thread;
+    ref_job *jobs;             /* oldest first */
+    size_t queued_bytes;       /* their copied targets */
+    sb_ref_background_stats stats;
+    double *iv;                /* intervals [t0, t1) on sb_now_ms: casting (kind 0) and timed frames (kind 1) */
+    int *iv_kind, niv, iv_cap;
+    double timed_since;        /* the timed frames now rendering began (NAN: none are) */
 };
+
+static void add_interval(sb_ref_cache *c, int kind, double t0, double t1) {
+    if (c->niv == c->iv_cap) {
+        c->iv_cap = c->iv_cap ? 2 * c->iv_cap : 32;
+        c->iv = sb_xrealloc(c->iv, sizeof(double) * 2 * (size_t)c->iv_cap);
+        c->iv_kind = sb_xrealloc(c->iv_kind, sizeof(int) * (size_t)c->iv_cap);
+    }
+    c->iv[2 * c->niv] = t0, c->iv[2 * c->niv + 1] = t1;
+    c->iv_kind[c->niv++] = kind;
+}
+
+/* Time in both casting and timed frames. */
+static double overlap_ms(const sb_ref_cache *c) {
+    double ms = 0;
+    for (int i = 0; i < c->niv; i++)
+        for (int j = 0; c->iv_kind[i] == 0 && j < c->niv; j++)
+            if (c->iv_kind[j] == 1)
+                ms += fmax(0, fmin(c->iv[2 * i + 1], c->iv[2 * j + 1]) - fmax(c->iv[2 * i], c->iv[2 * j]));
+    return ms;
+}
 
 sb_ref_cache *sb_ref_cache_new(size_t max_bytes) {
     sb_ref_cache *c = sb_xcalloc(1, sizeof *c);
     c->max_bytes = max_bytes;
+    c->timed_since = NAN;
+    pthread_mutex_init(&c->mu, NULL);
+    pthread_cond_init(&c->cv, NULL);
     return c;
 }
 
 void sb_ref_cache_free(sb_ref_cache *c) {
     if (!c) return;
+    sb_ref_background_stop(c);
     for (int i = 0; i < c->n; i++) free(c->e[i].ref);
     free(c->e);
+    free(c->iv);
+    free(c->iv_kind);
+    pthread_cond_destroy(&c->cv);
+    pthread_mutex_destroy(&c->mu);
     free(c);
 }
 
@@ -284,15 +344,16 @@ static void view_key(const sb_eval_view *v, uint64_t key[2]) {
     key[1] = mix64(h2 ^ key[0]);
 }
 
-static const ref_entry *cache_find(sb_ref_cache *c, const uint64_t key[2], int m) {
+/* cache_find and cache_put: with the lock held. */
+static ref_entry *cache_find(sb_ref_cache *c, const uint64_t key[2], int m) {
     for (int i = 0; c && i < c->n; i++)
         if (c->e[i].key[0] == key[0] && c->e[i].key[1] == key[1] && c->e[i].m == m) return &c->e[i];
     return NULL;
 }
 
-static void cache_put(sb_ref_cache *c, const uint64_t key[2], int m, const unsigned char *ref,
-                      const sb_error_metrics *geo) {
-    if (!c || (size_t)m > c->max_bytes) return;
+static ref_entry *cache_put(sb_ref_cache *c, const uint64_t key[2], int m, const unsigned char *ref,
+                            const sb_error_metrics *geo) {
+    if (!c || (size_t)m > c->max_bytes) return NULL;
     while (c->n && c->bytes + (size_t)m > c->max_bytes) { /* the oldest go first */
         c->bytes -= (size_t)c->e[0].m;
         free(c->e[0].ref);
@@ -308,17 +369,26 @@ static void cache_put(sb_ref_cache *c, const uint64_t key[2], int m, const unsig
     e->ref = sb_xmalloc((size_t)(m ? m : 1));
     memcpy(e->ref, ref, (size_t)m);
     e->geo = *geo;
+    e->fresh = false;
     c->bytes += (size_t)m;
     c->dirty = true;
+    return e;
 }
 
 /* ---- kept across processes ---- */
 
 static const char ref_magic[8] = {'S', 'B', 'R', 'E', 'F', '0', '0', '1'};
 
-bool sb_ref_cache_dirty(const sb_ref_cache *c) { return c && c->dirty; }
+bool sb_ref_cache_dirty(sb_ref_cache *c) {
+    if (!c) return false;
+    pthread_mutex_lock(&c->mu);
+    bool dirty = c->dirty;
+    pthread_mutex_unlock(&c->mu);
+    return dirty;
+}
 
 bool sb_ref_cache_save(sb_ref_cache *c, const char *path, uint64_t tag, sb_err *err) {
+    pthread_mutex_lock(&c->mu);
     size_t size = 8 + 3 * sizeof(uint64_t), at = 0;
     for (int i = 0; i < c->n; i++) size += 2 * sizeof(uint64_t) + sizeof(int) + sizeof(sb_error_metrics) + (size_t)c->e[i].m;
     unsigned char *b = sb_xmalloc(size);
@@ -336,11 +406,14 @@ bool sb_ref_cache_save(sb_ref_cache *c, const char *path, uint64_t tag, sb_err *
     }
 #undef PUT
     size_t head = 8 + 3 * sizeof(uint64_t);
+    pthread_mutex_unlock(&c->mu);
     sum = sb_hash_bytes(SB_FNV_SEED, b + head, size - head);
     memcpy(b + 8 + 2 * sizeof(uint64_t), &sum, sizeof sum);
     bool ok = sb_write_file_atomic(path, b, size, err);
     free(b);
-    if (ok) c->dirty = false;
+    pthread_mutex_lock(&c->mu);
+    if (ok) c->dirty = false; /* (answers the background added meanwhile are in the next save) */
+    pthread_mutex_unlock(&c->mu);
     return ok;
 }
 
@@ -353,6 +426,7 @@ int sb_ref_cache_load(sb_ref_cache *c, const char *path, uint64_t tag) {
     if (ok) memcpy(h, b + 8, sizeof h);
     ok = ok && h[0] == tag && h[2] == sb_hash_bytes(SB_FNV_SEED, b + head, size - head);
     int loaded = 0;
+    pthread_mutex_lock(&c->mu);
     for (uint64_t i = 0; ok && i < h[1]; i++) {
         uint64_t key[2];
         int m;
@@ -368,9 +442,73 @@ int sb_ref_cache_load(sb_ref_cache *c, const char *path, uint64_t tag) {
         if (!cache_find(c, key, m)) cache_put(c, key, m, b + at, &geo), loaded++;
         at += (size_t)m;
     }
-    sb_unmap_file(b, size);
     c->dirty = false;
+    pthread_mutex_unlock(&c->mu);
+    sb_unmap_file(b, size);
     return ok ? loaded : 0;
+}
+
+/* Casts the reference's answers for a view: ref (m bytes) and the geometry
+ * check's figures in *e. */
+static void cast_frame(const sb_reference *r, const sb_eval_view *v, const sb_ref_point *pts, const int *pix, int m,
+                       unsigned char *ref, sb_error_metrics *e, int threads) {
+    int n = v->w * v->h;
+    memset(e, 0, sizeof *e);
+    e->geom_mismatch = e->err_floor = NAN;
+    e->rays = sb_reference_visibility_light(r, v->light, pts, m, ref, threads);
+    if (v->inv_view_proj) {
+        int *kof = sb_xmalloc(sizeof(int) * (size_t)(n > 0 ? n : 1));
+        for (int i = 0; i < n; i++) kof[i] = -1;
+        for (int k = 0; k < m; k++) kof[pix[k]] = k;
+        geometry_check(r, v, ref, kof, e, threads);
+        free(kof);
+    }
+}
+
+static ref_job *job_find(sb_ref_cache *c, const uint64_t key[2], ref_job ***link) {
+    for (ref_job **l = &c->jobs; *l; l = &(*l)->next)
+        if ((*l)->key[0] == key[0] && (*l)->key[1] == key[1]) {
+            if (link) *link = l;
+            return *l;
+        }
+    return NULL;
+}
+
+static void job_free(sb_ref_cache *c, ref_job *j) {
+    c->queued_bytes -= 2 * sizeof(float) * 4 * (size_t)j->w * j->h;
+    free(j->pos);
+    free(j->aux);
+    free(j);
+}
+
+/* The cached answers for key into ref and *e: true when found. A frame the
+ * background is casting is waited for; one it has queued is taken back (the
+ * caller casts it). */
+static bool cache_take(sb_ref_cache *c, const uint64_t key[2], int m, unsigned char *ref, sb_error_metrics *e) {
+    pthread_mutex_lock(&c->mu);
+    ref_entry *hit;
+    ref_job *j, **link;
+    while (!(hit = cache_find(c, key, m)) && (j = job_find(c, key, &link)) != NULL) {
+        if (!j->casting) { /* not started: cast here, now, with every thread */
+            *link = j->next;
+            job_free(c, j);
+            c->stats.taken_back++;
+            break;
+        }
+        c->stats.waited++;
+        pthread_cond_wait(&c->cv, &c->mu);
+    }
+    if (hit) {
+        memcpy(ref, hit->ref, (size_t)m);
+        *e = hit->geo;
+        /* the first run to use background answers counts their rays as its own (not reused) */
+        e->background = hit->fresh;
+        e->reused = !hit->fresh;
+        if (!hit->fresh) e->rays = 0;
+        hit->fresh = false;
+    }
+    pthread_mutex_unlock(&c->mu);
+    return hit != NULL;
 }
 
 void sb_evaluate_frame(const sb_reference *r, sb_ref_cache *cache, const sb_eval_view *v, const unsigned char *vis,
@@ -384,25 +522,15 @@ void sb_evaluate_frame(const sb_reference *r, sb_ref_cache *cache, const sb_eval
     unsigned char *ref = sb_xmalloc((size_t)(m > 0 ? m : 1));
     uint64_t key[2] = {0, 0};
     if (cache) view_key(v, key);
-    const ref_entry *hit = cache_find(cache, key, m);
-    /* the reference's answers and the geometry check's figures: cast, or kept from an earlier run */
-    sb_error_metrics e = {0};
-    e.geom_mismatch = e.err_floor = NAN;
-    if (hit) {
-        memcpy(ref, hit->ref, (size_t)m);
-        e = hit->geo;
-        e.rays = 0;
-        e.reused = true;
-    } else {
-        e.rays = sb_reference_visibility_light(r, v->light, pts, m, ref, threads);
-        if (v->inv_view_proj) {
-            int *kof = sb_xmalloc(sizeof(int) * (size_t)(n > 0 ? n : 1));
-            for (int i = 0; i < n; i++) kof[i] = -1;
-            for (int k = 0; k < m; k++) kof[pix[k]] = k;
-            geometry_check(r, v, ref, kof, &e, threads);
-            free(kof);
+    /* the reference's answers and the geometry check's figures: kept from an earlier run or the background, or cast */
+    sb_error_metrics e;
+    if (!cache || !cache_take(cache, key, m, ref, &e)) {
+        cast_frame(r, v, pts, pix, m, ref, &e, threads);
+        if (cache) {
+            pthread_mutex_lock(&cache->mu);
+            if (!cache_find(cache, key, m)) cache_put(cache, key, m, ref, &e);
+            pthread_mutex_unlock(&cache->mu);
         }
-        cache_put(cache, key, m, ref, &e);
     }
     compare(v, vis, ref, pix, m, ref_out, &e); /* the technique's own figures */
     e.ray_ms = sb_now_ms() - t0;
@@ -410,4 +538,145 @@ void sb_evaluate_frame(const sb_reference *r, sb_ref_cache *cache, const sb_eval
     free(ref);
     free(pts);
     free(pix);
+}
+
+/* ---- the background ---- */
+
+static void *background(void *arg) {
+    sb_ref_cache *c = arg;
+    pthread_mutex_lock(&c->mu);
+    for (;;) {
+        ref_job *j = c->jobs;
+        while (j && j->casting) j = j->next;
+        if (c->stop) break;
+        if (!j) {
+            pthread_cond_wait(&c->cv, &c->mu);
+            continue;
+        }
+        j->casting = true;
+        pthread_mutex_unlock(&c->mu);
+        sb_eval_view v = {j->w, j->h, j->pos, j->aux, j->eye, j->have_inv ? &j->inv : NULL, j->light};
+        int n = v.w * v.h;
+        sb_ref_point *pts = sb_xmalloc(sizeof *pts * (size_t)(n > 0 ? n : 1));
+        int *pix = sb_xmalloc(sizeof(int) * (size_t)(n > 0 ? n : 1));
+        int m = sb_ref_points(c->r, &v, pts, pix);
+        unsigned char *ref = sb_xmalloc((size_t)(m > 0 ? m : 1));
+        sb_error_metrics e;
+        double t0 = sb_now_ms();
+        cast_frame(c->r, &v, pts, pix, m, ref, &e, c->threads);
+        double ms = sb_now_ms() - t0;
+        pthread_mutex_lock(&c->mu);
+        ref_entry *put = cache_find(c, j->key, m) ? NULL : cache_put(c, j->key, m, ref, &e);
+        if (put) put->fresh = true;
+        c->stats.frames++;
+        c->stats.rays += e.rays;
+        c->stats.ms += ms;
+        add_interval(c, 0, t0, t0 + ms);
+        ref_job **link;
+        if (job_find(c, j->key, &link) == j) *link = j->next;
+        job_free(c, j);
+        pthread_cond_broadcast(&c->cv);
+        free(ref);
+        free(pix);
+        free(pts);
+    }
+    pthread_mutex_unlock(&c->mu);
+    return NULL;
+}
+
+bool sb_ref_background_start(sb_ref_cache *c, const sb_reference *r, int threads) {
+    if (c->bg) return true;
+#ifdef SCHED_IDLE
+    c->r = r;
+    c->threads = threads;
+    c->stop = false;
+    if (pthread_create(&c->thread, NULL, background, c)) return false;
+    /* SCHED_IDLE for it and, inherited, the threads it casts on; it casts nothing before a frame is queued */
+    struct sched_param sp = {0};
+    if (pthread_setschedparam(c->thread, SCHED_IDLE, &sp)) {
+        pthread_mutex_lock(&c->mu);
+        c->stop = true;
+        pthread_cond_broadcast(&c->cv);
+        pthread_mutex_unlock(&c->mu);
+        pthread_join(c->thread, NULL);
+        return false;
+    }
+    c->bg = true;
+    return true;
+#else
+    (void)r, (void)threads;
+    return false; /* no priority below every other thread: casting in the background would slow timed frames */
+#endif
+}
+
+int sb_ref_background_add(sb_ref_cache *c, const sb_eval_view *v) {
+    uint64_t key[2];
+    view_key(v, key);
+    size_t bytes = sizeof(float) * 4 * (size_t)v->w * v->h;
+    pthread_mutex_lock(&c->mu);
+    bool add = c->bg && !job_find(c, key, NULL);
+    for (int i = 0; add && i < c->n; i++) add = !(c->e[i].key[0] == key[0] && c->e[i].key[1] == key[1]);
+    bool full = add && c->queued_bytes + 2 * bytes > SB_REF_BACKGROUND_BYTES;
+    if (add && !full) {
+        ref_job *j = sb_xcalloc(1, sizeof *j), **l = &c->jobs;
+        memcpy(j->key, key, sizeof j->key);
+        j->w = v->w, j->h = v->h;
+        j->pos = sb_xmalloc(bytes ? bytes : 1);
+        j->aux = sb_xmalloc(bytes ? bytes : 1);
+        memcpy(j->pos, v->pos, bytes);
+        memcpy(j->aux, v->aux, bytes);
+        j->eye = v->eye;
+        j->have_inv = v->inv_view_proj != NULL;
+        if (j->have_inv) j->inv = *v->inv_view_proj;
+        memcpy(j->light, v->light, sizeof j->light);
+        while (*l) l = &(*l)->next;
+        *l = j;
+        c->queued_bytes += 2 * bytes;
+        c->stats.queued++;
+        pthread_cond_broadcast(&c->cv);
+    }
+    pthread_mutex_unlock(&c->mu);
+    return full ? -1 : add;
+}
+
+static void mark_timed(sb_ref_cache *c, bool on) {
+    double now = sb_now_ms();
+    if (on && isnan(c->timed_since)) c->timed_since = now;
+    if (!on && !isnan(c->timed_since)) add_interval(c, 1, c->timed_since, now), c->timed_since = NAN;
+}
+
+sb_ref_background_stats sb_ref_background_stop(sb_ref_cache *c) {
+    pthread_mutex_lock(&c->mu);
+    bool running = c->bg;
+    c->stop = true;
+    /* queued frames are dropped; the one being cast finishes */
+    for (ref_job **l = &c->jobs; *l;) {
+        ref_job *j = *l;
+        if (j->casting) {
+            l = &j->next;
+            continue;
+        }
+        *l = j->next;
+        job_free(c, j);
+        c->stats.dropped++;
+    }
+    pthread_cond_broadcast(&c->cv);
+    pthread_mutex_unlock(&c->mu);
+    if (running) pthread_join(c->thread, NULL);
+    pthread_mutex_lock(&c->mu);
+    c->bg = false;
+    mark_timed(c, false);
+    c->stats.timed_ms = overlap_ms(c);
+    sb_ref_background_stats st = c->stats;
+    memset(&c->stats, 0, sizeof c->stats);
+    c->niv = 0;
+    pthread_mutex_unlock(&c->mu);
+    return st;
+}
+
+void sb_ref_background_timed(sb_ref_cache *c, bool on) {
+    if (!c) return;
+    pthread_mutex_lock(&c->mu);
+    mark_timed(c, on);
+    pthread_mutex_unlock(&c->mu);
 }

@@ -25,6 +25,7 @@ typedef struct sb_error_metrics {
     uint64_t rays;                     /* reference rays cast for this frame (0: the answers were reused) */
     double ray_ms;                     /* time in the reference for this frame (casting, or finding the answers) */
     bool reused;                       /* the reference's answers came from the cache */
+    bool background;                   /* they were cast in the background for this run (rays counts them) */
 } sb_error_metrics;
 
 /* The reference's answers for a frame, kept by their exact inputs: the
@@ -43,16 +44,44 @@ void sb_ref_cache_free(sb_ref_cache *c);
  * a missing, stale or damaged file). dirty: answers added since made or loaded. */
 bool sb_ref_cache_save(sb_ref_cache *c, const char *path, uint64_t tag, sb_err *err);
 int sb_ref_cache_load(sb_ref_cache *c, const char *path, uint64_t tag);
-bool sb_ref_cache_dirty(const sb_ref_cache *c);
+bool sb_ref_cache_dirty(sb_ref_cache *c);
 
 /* The frame being evaluated: the targets and the camera. */
-typedef struct sb_eval_view {
+typedef struct sb_eval_view sb_eval_view;
+
+/* The background (overlap): the answers of frames the runs will evaluate,
+ * cast while the GPU renders timed frames, on `threads` threads at the
+ * lowest CPU priority there is (Linux SCHED_IDLE: they run only on cores
+ * nothing else wants, so the timed frames' threads, a CPU rasterizer's
+ * included, always go first). An evaluation that needs a queued frame takes
+ * it back and casts it itself; one being cast is waited for. The first
+ * evaluation to use background answers counts their rays as its own
+ * (`background`, not `reused`). start: false where no such priority exists
+ * (frames are then cast by the evaluation, as without it). add: copies the
+ * view (2 x 16 bytes a pixel): 1 queued, 0 its answers are known or queued
+ * already, -1 the queue holds SB_REF_BACKGROUND_BYTES (the rest are cast by
+ * the evaluation). stop: drops what is queued, waits for the frame being
+ * cast. */
+#define SB_REF_BACKGROUND_BYTES ((size_t)1 << 30)
+typedef struct sb_ref_background_stats {
+    int queued, frames, dropped, taken_back, waited; /* frames queued, cast, dropped at stop, taken back; waits */
+    uint64_t rays;
+    double ms;                         /* casting, on the background's clock */
+    double timed_ms;                   /* of it, while timed frames rendered (sb_ref_background_timed) */
+} sb_ref_background_stats;
+bool sb_ref_background_start(sb_ref_cache *c, const sb_reference *r, int threads);
+int sb_ref_background_add(sb_ref_cache *c, const sb_eval_view *v);
+sb_ref_background_stats sb_ref_background_stop(sb_ref_cache *c);
+/* Timed frames begin (on) and end: how much casting they overlapped is in the stats. */
+void sb_ref_background_timed(sb_ref_cache *c, bool on);
+
+struct sb_eval_view {
     int w, h;
     const float *pos, *aux;            /* the evaluation targets (4 floats a pixel) */
     sb_v3 eye;                         /* camera position relative to the scene origin */
     const sb_m4 *inv_view_proj;        /* origin-relative clip -> world (NULL: no geometry check) */
     const double *light;               /* as sb_reference_visibility_light: the technique's shaded light */
-} sb_eval_view;
+};
 
 /* The points the reference casts from (pts and pix: w*h capacity; pix[k] is
  * the pixel of pts[k]): every pixel that is not sky and faces the light, from

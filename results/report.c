@@ -187,9 +187,9 @@ static sb_cell r_harness_share(const sb_run_row *r, int a) {
 }
 /* The reference's part of a run, from its evaluated frames. */
 typedef struct {
-    int frames, reused;
-    uint64_t rays;
-    double ms, cast_ms; /* all of it; of it, the frames that cast */
+    int frames, reused, background;
+    uint64_t rays, cast_rays;
+    double ms, cast_ms; /* all of it; of it, the frames that cast here */
 } ref_totals;
 
 static ref_totals ref_sum(const sb_frame_rec *recs, int n) {
@@ -199,9 +199,10 @@ static ref_totals ref_sum(const sb_frame_rec *recs, int n) {
         if (!recs[i].evaluated) continue;
         t.frames++;
         t.reused += e->reused;
+        t.background += e->background;
         t.rays += e->rays;
         t.ms += e->ray_ms;
-        if (!e->reused) t.cast_ms += e->ray_ms;
+        if (!e->reused && !e->background) t.cast_ms += e->ray_ms, t.cast_rays += e->rays;
     }
     return t;
 }
@@ -224,13 +225,14 @@ static sb_cell r_pooled(const sb_run_row *r, int a) {
 static sb_cell r_rays_per_s(const sb_run_row *r, int a) {
     (void)a;
     ref_totals t = ref_sum(r->recs, r->n);
-    return number(t.cast_ms > 0 && t.rays ? t.rays / (t.cast_ms / 1e3) : NAN);
+    return number(t.cast_ms > 0 && t.cast_rays ? t.cast_rays / (t.cast_ms / 1e3) : NAN);
 }
-/* a = 0 rays cast, 1 time in the reference, 2 frames whose reference was reused; empty without evaluated frames */
+/* a = 0 rays cast, 1 time in the reference, 2 frames whose reference was reused, 3 cast in the background;
+ * empty without evaluated frames */
 static sb_cell r_ref(const sb_run_row *r, int a) {
     ref_totals t = ref_sum(r->recs, r->n);
     if (!t.frames) return empty();
-    return a == 0 ? integer((long long)t.rays) : a == 1 ? number(t.ms) : integer(t.reused);
+    return a == 0 ? integer((long long)t.rays) : a == 1 ? number(t.ms) : integer(a == 2 ? t.reused : t.background);
 }
 
 #define SERIES(name, stats, flags) {name, NULL, 0, stats, flags, NULL}
@@ -300,7 +302,8 @@ const sb_run_col sb_run_cols[] = {
      "share of sampled evaluated pixels whose reference flips when cast from the exact hit: the error figures' floor"},
     {"ref_rays", r_ref, 0, 0, 0, "reference rays cast for this run: 0 when every evaluated frame's answers were reused"},
     {"ref_reused", r_ref, 2, 0, 0, "evaluated frames whose reference came from an earlier run of the same frame"},
-    {"ref_ms", r_ref, 1, 0, 0, "time in the reference for this run (casting, geometry check, or finding the answers)"},
+    {"ref_background", r_ref, 3, 0, 0, "evaluated frames whose reference was cast in the background for this run (--overlap; their rays are in ref_rays)"},
+    {"ref_ms", r_ref, 1, 0, 0, "time the run spent in the reference (casting, geometry check, finding the answers or waiting for the background)"},
     {"ref_rays_per_s", r_rays_per_s, 0, 0, 0, "reference rays per second on this machine (frames that cast)"},
 };
 const int sb_run_col_count = (int)SB_COUNT(sb_run_cols);
@@ -487,6 +490,7 @@ void sb_summary_add_outcome(sb_summary *sum, const sb_run_info *info, unsigned s
     ref_totals t = ref_sum(recs, recs ? n : 0);
     sum->ref_rays += t.rays;
     sum->ref_reused += t.reused;
+    sum->ref_background += t.background;
     sum->unstable += info->stable && !strcmp(info->stable, "no");
 }
 

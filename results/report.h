@@ -144,6 +144,7 @@ typedef struct sb_summary {
     double timed_gpu_ms;        /* the measured frames' GPU time, summed over the runs added */
     uint64_t ref_rays;          /* reference rays the runs cast */
     int ref_reused;             /* evaluated frames whose reference was reused */
+    int ref_background;         /* evaluated frames whose reference was cast in the background */
     double *calib;              /* the runs' calib_ms_before so far (the batch median) */
     int ncalib;
 } sb_summary;

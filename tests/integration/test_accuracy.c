@@ -12,6 +12,7 @@
 
 #include "autobias.h"
 #include "cascade.h"
+#include "eval.h"
 #include "reference.h"
 #include "support.h"
 
@@ -305,6 +306,53 @@ static void test_evaluation_does_not_touch_timed_frames(void **st) {
 }
 
 
+/* The reference's background (--overlap): whichever way a frame goes (cast
+ * there and found, waited for, or taken back by the evaluation and cast
+ * there), its answers and rays are those of an evaluation with no cache at
+ * all, its first use counts the rays, and every queued frame is accounted for. */
+static void test_background_answers(void **st) {
+    (void)st;
+    sb_run_opts keep = g_towers.opts;
+    enum { N = 8 };
+    g_towers.opts.frames = N;
+    g_towers.opts.error_every = 1;
+    g_towers.opts.overlap = 1;
+    sb_err err;
+    assert_non_null(sb_session_reference(&g_towers, &err));
+    sb_ref_cache *kept = g_towers.ref_cache;
+    g_towers.ref_cache = NULL; /* no answers kept: every frame cast by its evaluation */
+    sb_error_metrics alone[N], bg[N];
+    for (int i = 0; i < N; i++) assert_true(eval_frame(&g_towers, "sm:res=1024", i, N, &alone[i], NULL, NULL, &err));
+    g_towers.ref_cache = sb_ref_cache_new(SB_REF_CACHE_BYTES);
+    assert_true(sb_eval_background(&g_towers, &err));
+    /* the last frames first: they are likely still queued when asked for */
+    for (int i = N - 1; i >= 0; i--) assert_true(eval_frame(&g_towers, "sm:res=1024", i, N, &bg[i], NULL, NULL, &err));
+    sb_ref_background_stats stats = sb_ref_background_stop(g_towers.ref_cache);
+    print_message("background: %d queued, %d cast, %d taken back, %d dropped, %d waits\n", stats.queued, stats.frames,
+                  stats.taken_back, stats.dropped, stats.waited);
+    assert_int_equal(stats.queued, N);
+    assert_int_equal(stats.frames + stats.taken_back + stats.dropped, N);
+    int from_bg = 0;
+    for (int i = 0; i < N; i++) {
+        assert_true(alone[i].rays > 0);
+        assert_int_equal(bg[i].rays, alone[i].rays); /* counted by the first use, cast wherever */
+        assert_false(bg[i].reused);
+        from_bg += bg[i].background;
+        assert_int_equal(bg[i].pixels, alone[i].pixels);
+        assert_true(bg[i].err_rate == alone[i].err_rate && bg[i].vis_mae == alone[i].vis_mae);
+        assert_int_equal(bg[i].geom_mismatches, alone[i].geom_mismatches);
+        assert_int_equal(bg[i].floor_disagree, alone[i].floor_disagree);
+    }
+    assert_int_equal(from_bg, stats.frames);
+    /* a second evaluation of a frame reuses what the first left */
+    sb_error_metrics again;
+    assert_true(eval_frame(&g_towers, "pssm:res=1024", 0, N, &again, NULL, NULL, &err));
+    assert_true(again.reused && again.rays == 0 && !again.background);
+    sb_ref_cache_free(g_towers.ref_cache);
+    g_towers.ref_cache = kept;
+    g_towers.opts = keep;
+}
+
 /* queries mode: every GL_QUERY_RESULT read finds its result available (the
  * frame's fence was waited for first), for a ring of 1 and of 3 frames. */
 static unsigned long g_query_reads, g_unavailable;
@@ -386,6 +434,7 @@ int main(void) {
         cmocka_unit_test(test_error_falls_with_resolution),
         cmocka_unit_test(test_broken_bias_is_detected),
         cmocka_unit_test(test_auto_offsets),
+        cmocka_unit_test(test_background_answers),
         cmocka_unit_test(test_query_reads_never_block),
         cmocka_unit_test(test_evaluation_does_not_touch_timed_frames),
         cmocka_unit_test(test_warps_fit_the_visible_scene),   /* its own session: after g_towers closes */
