@@ -677,6 +677,6 @@ sb_ref_background_stats sb_ref_background_stop(sb_ref_cache *c) {
 void sb_ref_background_timed(sb_ref_cache *c, bool on) {
     if (!c) return;
     pthread_mutex_lock(&c->mu);
-    mark_timed(c, on);
+    if (c->bg) mark_timed(c, on);
     pthread_mutex_unlock(&c->mu);
 }
