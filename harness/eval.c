@@ -63,7 +63,7 @@ bool sb_eval_frame(sb_session *s, sb_instance *in, int pf, int n, int replay, in
 bool sb_eval_background(sb_session *s, sb_err *err) {
     const sb_run_opts *o = &s->opts;
     /* auto: not on a CPU rasterizer, which leaves the background no idle core during timed frames and draws
-       the extra frames on the CPU too (measured: a net loss there; README, Overlap) */
+       the extra frames on the CPU too (measured: a net loss there; README, Error) */
     bool on = o->overlap < 0 ? !s->ctx.software : o->overlap > 0;
     if (!on || o->error_every <= 0) return true;
     const sb_reference *ref = sb_session_reference(s, err);
