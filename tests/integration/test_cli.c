@@ -544,6 +544,7 @@ static void test_reference_background(void **st) {
                        "--threads 1 --progress --overlap %s --out %s/%s 2>%s/%s.log)";
     enum { N = 12 };
     bool ok = false;
+    int overlapped_too_little = 0;
     for (int attempt = 1; attempt <= 3 && !ok; attempt++) {
         double ms[3][N], start[3][N], mean[3], ci[3], during = 0, timed = 0;
         for (int k = 0; k < 3; k++) {
@@ -572,12 +573,16 @@ static void test_reference_background(void **st) {
             during = atof(at);
             free(text);
         }
-        /* the background cast during most of the timed frames (else this measures nothing); it starts
-           before them with frames queued, so those are the first ones */
+        /* the background cast during a good part of the timed frames (else this measures nothing); it
+           starts before them with frames queued, so those are the first ones */
         int n = 0;
         while (n < N && (start[1][n] - start[1][0]) * 1e3 < during) n++;
         print_message("  the background cast during %.0f ms of the %.0f ms of timed frames (%d frames)\n", during, timed, n);
-        assert_true(during > 0.5 * timed && n >= 4);
+        if (during < 0.3 * timed || n < 4) {
+            print_message("  too little overlap to judge: again\n");
+            overlapped_too_little++;
+            continue;
+        }
         double ratio[N], base = 0.5 * (mean[0] + mean[2]), base_ci = 0.5 * (ci[0] + ci[2]);
         for (int i = 0; i < n; i++) ratio[i] = ms[1][i] / (0.5 * (ms[0][i] + ms[2][i]));
         qsort(ratio, (size_t)n, sizeof ratio[0], cmp_double);
@@ -587,6 +592,7 @@ static void test_reference_background(void **st) {
                       mean[1], base, ci[1], base_ci, median, quiet ? "agree" : "disagree (a noisy machine)");
         ok = quiet && fabs(mean[1] - base) <= ci[1] + base_ci && median < 1.15;
     }
+    if (!ok && overlapped_too_little == 3) fail_msg("the background never overlapped the timed frames enough to judge");
     assert_true(ok);
 }
 
