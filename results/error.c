@@ -307,17 +307,9 @@ void sb_ref_cache_free(sb_ref_cache *c) {
     free(c);
 }
 
-static uint64_t mix64(uint64_t h) {
-    h ^= h >> 33;
-    h *= 0xff51afd7ed558ccdULL;
-    h ^= h >> 33;
-    h *= 0xc4ceb9fe1a85ec53ULL;
-    return h ^ (h >> 33);
-}
-
 /* Two independent 64-bit hashes of what determines the reference's answers. */
 static void view_key(const sb_eval_view *v, uint64_t key[2]) {
-    uint64_t h1 = 0x9e3779b97f4a7c15ULL ^ (uint64_t)v->w << 32 ^ (uint64_t)v->h, h2 = mix64(h1 + 1);
+    uint64_t h1 = 0x9e3779b97f4a7c15ULL ^ (uint64_t)v->w << 32 ^ (uint64_t)v->h, h2 = sb_mix64(h1 + 1);
     double cam[16 + 4 + 3] = {0};
     if (v->inv_view_proj) memcpy(cam, v->inv_view_proj->m, sizeof(double) * 16);
     memcpy(cam + 16, v->light, sizeof(double) * 4);
@@ -326,7 +318,7 @@ static void view_key(const sb_eval_view *v, uint64_t key[2]) {
         uint64_t w;
         memcpy(&w, &cam[i], 8);
         h1 = (h1 ^ w) * 0x100000001b3ULL;
-        h2 = mix64(h2 ^ w);
+        h2 = sb_mix64(h2 ^ w);
     }
     size_t n = (size_t)v->w * v->h;
     for (size_t i = 0; i < n; i++) {
@@ -340,20 +332,22 @@ static void view_key(const sb_eval_view *v, uint64_t key[2]) {
         h2 = (h2 + a * 0x165667b19e3779f9ULL) ^ (b + (c << 7 | c >> 57));
         h2 = (h2 << 31 | h2 >> 33) * 0x27d4eb2f165667c5ULL;
     }
-    key[0] = mix64(h1);
-    key[1] = mix64(h2 ^ key[0]);
+    key[0] = sb_mix64(h1);
+    key[1] = sb_mix64(h2 ^ key[0]);
 }
 
-/* cache_find and cache_put: with the lock held. */
+/* cache_find and cache_put: with the lock held. find: m < 0 matches any
+ * number of evaluated pixels. put: the first answers for a key are kept (NULL
+ * when there were some, or they do not fit). */
 static ref_entry *cache_find(sb_ref_cache *c, const uint64_t key[2], int m) {
     for (int i = 0; c && i < c->n; i++)
-        if (c->e[i].key[0] == key[0] && c->e[i].key[1] == key[1] && c->e[i].m == m) return &c->e[i];
+        if (c->e[i].key[0] == key[0] && c->e[i].key[1] == key[1] && (m < 0 || c->e[i].m == m)) return &c->e[i];
     return NULL;
 }
 
 static ref_entry *cache_put(sb_ref_cache *c, const uint64_t key[2], int m, const unsigned char *ref,
                             const sb_error_metrics *geo) {
-    if (!c || (size_t)m > c->max_bytes) return NULL;
+    if (!c || (size_t)m > c->max_bytes || cache_find(c, key, m)) return NULL;
     while (c->n && c->bytes + (size_t)m > c->max_bytes) { /* the oldest go first */
         c->bytes -= (size_t)c->e[0].m;
         free(c->e[0].ref);
@@ -439,13 +433,21 @@ int sb_ref_cache_load(sb_ref_cache *c, const char *path, uint64_t tag) {
         at += sizeof key + sizeof m + sizeof geo;
         ok = m >= 0 && size - at >= (size_t)m;
         if (!ok) break;
-        if (!cache_find(c, key, m)) cache_put(c, key, m, b + at, &geo), loaded++;
+        loaded += cache_put(c, key, m, b + at, &geo) != NULL;
         at += (size_t)m;
     }
     c->dirty = false;
     pthread_mutex_unlock(&c->mu);
     sb_unmap_file(b, size);
     return ok ? loaded : 0;
+}
+
+/* The view's evaluated points (sb_ref_points) in arrays of its size; how many. */
+static int view_points(const sb_reference *r, const sb_eval_view *v, sb_ref_point **pts, int **pix) {
+    size_t n = (size_t)v->w * v->h;
+    *pts = sb_xmalloc(sizeof **pts * (n ? n : 1));
+    *pix = sb_xmalloc(sizeof **pix * (n ? n : 1));
+    return sb_ref_points(r, v, *pts, *pix);
 }
 
 /* Casts the reference's answers for a view: ref (m bytes) and the geometry
@@ -513,12 +515,10 @@ static bool cache_take(sb_ref_cache *c, const uint64_t key[2], int m, unsigned c
 
 void sb_evaluate_frame(const sb_reference *r, sb_ref_cache *cache, const sb_eval_view *v, const unsigned char *vis,
                        unsigned char *ref_out, sb_error_metrics *out, int threads) {
-    int n = v->w * v->h;
     double t0 = sb_now_ms();
-    sb_ref_point *pts = sb_xmalloc(sizeof *pts * (size_t)(n > 0 ? n : 1));
-    int *pix = sb_xmalloc(sizeof(int) * (size_t)(n > 0 ? n : 1));
-    if (ref_out) memset(ref_out, 128, (size_t)n);
-    int m = sb_ref_points(r, v, pts, pix);
+    if (ref_out) memset(ref_out, 128, (size_t)v->w * v->h);
+    sb_ref_point *pts;
+    int *pix, m = view_points(r, v, &pts, &pix);
     unsigned char *ref = sb_xmalloc((size_t)(m > 0 ? m : 1));
     uint64_t key[2] = {0, 0};
     if (cache) view_key(v, key);
@@ -528,7 +528,7 @@ void sb_evaluate_frame(const sb_reference *r, sb_ref_cache *cache, const sb_eval
         cast_frame(r, v, pts, pix, m, ref, &e, threads);
         if (cache) {
             pthread_mutex_lock(&cache->mu);
-            if (!cache_find(cache, key, m)) cache_put(cache, key, m, ref, &e);
+            cache_put(cache, key, m, ref, &e);
             pthread_mutex_unlock(&cache->mu);
         }
     }
@@ -556,17 +556,15 @@ static void *background(void *arg) {
         j->casting = true;
         pthread_mutex_unlock(&c->mu);
         sb_eval_view v = {j->w, j->h, j->pos, j->aux, j->eye, j->have_inv ? &j->inv : NULL, j->light};
-        int n = v.w * v.h;
-        sb_ref_point *pts = sb_xmalloc(sizeof *pts * (size_t)(n > 0 ? n : 1));
-        int *pix = sb_xmalloc(sizeof(int) * (size_t)(n > 0 ? n : 1));
-        int m = sb_ref_points(c->r, &v, pts, pix);
+        sb_ref_point *pts;
+        int *pix, m = view_points(c->r, &v, &pts, &pix);
         unsigned char *ref = sb_xmalloc((size_t)(m > 0 ? m : 1));
         sb_error_metrics e;
         double t0 = sb_now_ms();
         cast_frame(c->r, &v, pts, pix, m, ref, &e, c->threads);
         double ms = sb_now_ms() - t0;
         pthread_mutex_lock(&c->mu);
-        ref_entry *put = cache_find(c, j->key, m) ? NULL : cache_put(c, j->key, m, ref, &e);
+        ref_entry *put = cache_put(c, j->key, m, ref, &e);
         if (put) put->fresh = true;
         c->stats.frames++;
         c->stats.rays += e.rays;
@@ -614,8 +612,7 @@ int sb_ref_background_add(sb_ref_cache *c, const sb_eval_view *v) {
     view_key(v, key);
     size_t bytes = sizeof(float) * 4 * (size_t)v->w * v->h;
     pthread_mutex_lock(&c->mu);
-    bool add = c->bg && !job_find(c, key, NULL);
-    for (int i = 0; add && i < c->n; i++) add = !(c->e[i].key[0] == key[0] && c->e[i].key[1] == key[1]);
+    bool add = c->bg && !job_find(c, key, NULL) && !cache_find(c, key, -1);
     bool full = add && c->queued_bytes + 2 * bytes > SB_REF_BACKGROUND_BYTES;
     if (add && !full) {
         ref_job *j = sb_xcalloc(1, sizeof *j), **l = &c->jobs;
