@@ -6,7 +6,7 @@
  * frames, through the same evaluation pass as the error figures (eval.h),
  * and the reference answers it casts are the ones the run reuses after. */
 #pragma once
-#include "run.h"
+#include "session.h"
 
 /* The offsets tried: each auto parameter's default times these (joint, then
  * a descent: one parameter along the ladder, two a rung together). */

@@ -1,4 +1,5 @@
 /* batch.c - batch file parsing, matrix expansion, shards. */
+#include "scene_load.h"
 #include "batch.h"
 
 #include <stdlib.h>

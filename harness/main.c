@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 
+#include "scene_load.h"
 #include "batch.h"
 #include "compare.h"
 #include "report.h"
@@ -17,6 +18,9 @@
 #include "tune.h"
 #include "version.h"
 
+
+/* Results go here unless --out says otherwise: not a source folder. */
+static const char *const default_out = "out";
 
 static void usage(FILE *f) {
     fprintf(f,
@@ -37,7 +41,7 @@ static void usage(FILE *f) {
             "                                         the cheapest settings within an error bound (or the most\n"
             "                                         accurate within a frame-time budget), by successive halving\n"
             "  shadowbench techniques                 list techniques and their parameters\n"
-            "  shadowbench columns                    the CSV columns (per frame and per run) as CSV\n"
+            "  shadowbench columns [--format csv|markdown]   the CSV columns (per frame and per run)\n"
             "  shadowbench info [SCENE]               backends, GL renderer and features; or what a scene holds\n"
             "  shadowbench path PATH [SCENE] [--frames N]   print the sampled cameras as CSV\n"
             "\n"
@@ -68,9 +72,10 @@ static void usage(FILE *f) {
             "  --overlap auto|on|off  cast the reference of evaluated frames in the background, at idle CPU\n"
             "                         priority, while timed frames render (auto: on a GPU, not on a CPU rasterizer)\n"
             "  --run-timeout S        a run taking longer is recorded as failed\n"
-            "  --out DIR              results folder (default results); each run command writes DIR/<UTC time>/\n"
+            "  --out DIR              results folder (default out); each run command writes DIR/<UTC time>/\n"
             "  --progress             progress line on stderr (default when stderr is a terminal)\n"
             "  --quiet                no notices on stderr\n"
+            "  --verbose              also the notes a user cannot act on (e.g. a software rasterizer has no clock)\n"
             "  --allow-external-uris  let glTF buffers and images be read from outside the scene's folder\n"
             "  --blend-casters mask|opaque|none   glTF BLEND materials: alpha-tested at 0.5 (default), opaque, or left out\n"
             "  --pose T               nodes and skins at time T (seconds) of the file's first animation\n"
@@ -103,7 +108,7 @@ static int bad(const char *fmt, const char *a) {
 static int parse_cli(cli *c, int argc, char **argv) {
     sb_run_opts_defaults(&c->opts);
     c->opts.progress = isatty(2);
-    c->out = "results";
+    c->out = default_out;
     c->threshold = 5;
     c->argc = argc;
     c->argv = argv;
@@ -118,6 +123,7 @@ static int parse_cli(cli *c, int argc, char **argv) {
         }
         if (!strcmp(a, "--progress")) { c->opts.progress = true; continue; }
         if (!strcmp(a, "--quiet")) { sb_set_quiet(true); c->opts.progress = false; continue; }
+        if (!strcmp(a, "--verbose")) { sb_set_verbose(true); continue; }
         if (!strcmp(a, "--dry-run")) { c->dry_run = true; continue; }
         if (!strcmp(a, "--allow-external-uris")) { c->opts.allow_external_uris = true; continue; }
         if (!v) return bad("%s needs a value", a);
@@ -360,7 +366,12 @@ static int cmd_batch(const cli *c) {
     return sb_batch_main(&cmd);
 }
 
-static int cmd_columns(void) {
+static int cmd_columns(const cli *c) {
+    if (c->format && !strcmp(c->format, "markdown")) {
+        sb_report_columns_markdown(stdout);
+        return 0;
+    }
+    if (c->format && strcmp(c->format, "csv")) return bad("columns: --format %s: expected csv or markdown", c->format);
     sb_csv csv = {0};
     sb_report_columns(&csv);
     fputs(csv.buf, stdout);
@@ -432,7 +443,7 @@ static int cmd_compare(const cli *c) {
 }
 
 static int cmd_merge(const cli *c) {
-    if (c->npos < 1 || !strcmp(c->out, "results"))
+    if (c->npos < 1 || c->out == default_out)
         return bad("usage: shadowbench merge DIR... --out MERGED_DIR%s", "");
     sb_err err;
     if (!sb_merge(c->pos, c->npos, c->out, &err)) {
@@ -446,7 +457,7 @@ static int cmd_merge(const cli *c) {
 static int dispatch(const cli *c, const char *cmd) {
     if (!strcmp(cmd, "run")) return cmd_run(c);
     if (!strcmp(cmd, "techniques")) return cmd_techniques();
-    if (!strcmp(cmd, "columns")) return cmd_columns();
+    if (!strcmp(cmd, "columns")) return cmd_columns(c);
     if (!strcmp(cmd, "info")) return cmd_info(c);
     if (!strcmp(cmd, "path")) return cmd_path(c);
     if (!strcmp(cmd, "batch")) return cmd_batch(c);

@@ -5,10 +5,26 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "scene.h"
+#include "gltf_load.h"
+#include "scene_load.h"
 
-bool sb_gltf_camera_path(sb_path *p, const char *path, int cam, const sb_scene_opts *opts,
-                         sb_err *err); /* gltf_load.cc */
+/* An animated glTF camera as a path: a key at every time its node's animations key. */
+static bool camera_path(sb_path *p, const char *file, int cam, const sb_scene_opts *opts, sb_err *err) {
+    sb_camera_keys ck;
+    memset(&ck, 0, sizeof ck);
+    if (!sb_gltf_camera_keys(&ck, file, cam, opts, err)) {
+        free(ck.keys);
+        return false;
+    }
+    if (ck.fov_deg > 0) p->fov_deg = ck.fov_deg;
+    p->znear = ck.znear;
+    p->zfar = ck.zfar;
+    p->key_count = ck.key_count;
+    p->keys = sb_xcalloc((size_t)ck.key_count, sizeof *p->keys);
+    for (int i = 0; i < ck.key_count; i++) p->keys[i] = (sb_path_key){ck.keys[i].t, ck.keys[i].pos, ck.keys[i].rot, 0};
+    free(ck.keys);
+    return true;
+}
 
 static bool add_key(sb_path *p, int *cap, sb_path_key k) {
     if (p->key_count == *cap) {
@@ -228,7 +244,7 @@ bool sb_path_load(sb_path *p, const char *spec, const sb_scene *scene, sb_err *e
         if (!sb_parse_int(hash + 8, &cam) || cam < 0 || cam > INT_MAX)
             return sb_fail(err, "%s: expected FILE#camera=INDEX", spec);
         p->fov_deg = 60;
-        if (!sb_gltf_camera_path(p, file, (int)cam, scene ? &scene->opts : NULL, err)) {
+        if (!camera_path(p, file, (int)cam, scene ? &scene->opts : NULL, err)) {
             sb_path_free(p);
             return false;
         }

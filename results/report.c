@@ -405,6 +405,44 @@ void sb_report_columns(sb_csv *c) {
     }
 }
 
+/* One markdown cell: pipes escaped. */
+static void md_cell(FILE *out, const char *text) {
+    fputs("| ", out);
+    for (const char *p = text; *p; p++) {
+        if (*p == '|') fputc('\\', out);
+        fputc(*p, out);
+    }
+    fputc(' ', out);
+}
+
+void sb_report_columns_markdown(FILE *out) {
+    fprintf(out, "### Per frame (`<run_id>.csv`)\n\n| column | meaning |\n|---|---|\n");
+    for (int k = 0; k < sb_frame_col_count; k++) {
+        char name[80];
+        snprintf(name, sizeof name, "`%s`", sb_frame_cols[k].name);
+        md_cell(out, name);
+        md_cell(out, sb_frame_cols[k].doc);
+        fputs("|\n", out);
+    }
+    fprintf(out, "\n### Per run (`summary.csv`)\n\nA series is a per-frame column summarised as "
+                 "`<column>_<statistic>` for each statistic listed.\n\n| column | statistics | meaning |\n|---|---|---|\n");
+    for (int k = 0; k < sb_run_col_count; k++) {
+        const sb_run_col *r = &sb_run_cols[k];
+        char name[80], stats[120] = "";
+        snprintf(name, sizeof name, "`%s`", r->name);
+        for (int b = 0; b < SB_STAT_COUNT; b++)
+            if (r->stats & (1u << b)) {
+                size_t l = strlen(stats);
+                snprintf(stats + l, sizeof stats - l, "%s%s", l ? ", " : "", sb_stat_names[b]);
+            }
+        const sb_frame_col *fc = r->get ? NULL : frame_col(r->name);
+        md_cell(out, name);
+        md_cell(out, stats);
+        md_cell(out, fc ? fc->doc : r->doc);
+        fputs("|\n", out);
+    }
+}
+
 bool sb_report_metric(const char *name, sb_metric_cols *out) {
     memset(out, 0, sizeof *out);
     for (int k = 0; k < sb_run_col_count; k++) {

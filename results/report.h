@@ -10,7 +10,7 @@
 #pragma once
 #include "csv.h"
 #include "error.h"
-#include "gpu.h"
+#include "stage.h"
 #include "timing.h"
 
 typedef struct sb_frame_rec {
@@ -116,6 +116,9 @@ void sb_report_summary_row(sb_csv *c, const sb_run_info *info, unsigned stages, 
                            const sb_stage_times *times, int n);
 /* The column table as CSV (scope, name, kind, statistics, flags, doc): `shadowbench columns`, columns.csv. */
 void sb_report_columns(sb_csv *c);
+/* The same table as markdown (`shadowbench columns --format markdown`): the
+ * generated part of docs/csv.md, which the csv unit test holds to it. */
+void sb_report_columns_markdown(FILE *out);
 
 /* How a summary metric is read (compare): a series with a median and a
  * confidence interval is a timing (centre: median; separation: mean ± ci95),

@@ -29,7 +29,7 @@ extern "C" {
 #include "anim.h"
 #include "gltf_check.h"
 #include "gltf_draco.h"
-#include "path.h"
+#include "gltf_load.h"
 #include "scene.h"
 #include "scene_cache.h"
 }
@@ -929,9 +929,10 @@ extern "C" bool sb_gltf_load(sb_scene *s, const char *path, const sb_scene_opts 
     }
 }
 
-// An animated glTF camera as a path: keys at every animation time of the
-// camera's node (translation/rotation channels of every animation), parent chain static.
-extern "C" bool sb_gltf_camera_path(sb_path *p, const char *path, int cam, const sb_scene_opts *opts, sb_err *err) {
+// An animated glTF camera's keys at every animation time of the camera's node
+// (translation/rotation channels of every animation), parent chain static.
+extern "C" bool sb_gltf_camera_keys(sb_camera_keys *p, const char *path, int cam, const sb_scene_opts *opts,
+                                    sb_err *err) {
     tinygltf::Model model;
     ImageStore images;
     try {
@@ -968,13 +969,13 @@ extern "C" bool sb_gltf_camera_path(sb_path *p, const char *path, int cam, const
         for (const Channel &ch : chans) times.insert(ch.in.begin(), ch.in.end());
         if (times.empty()) times.insert(0.0);
         const tinygltf::Camera &camera = model.cameras[cam];
-        p->fov_deg = camera.type == "perspective" && camera.perspective.yfov > 0 ? camera.perspective.yfov * 180 / SB_PI : 60;
+        p->fov_deg = camera.type == "perspective" && camera.perspective.yfov > 0 ? camera.perspective.yfov * 180 / SB_PI : 0;
         if (camera.type == "perspective") {
             p->znear = camera.perspective.znear;
             p->zfar = camera.perspective.zfar;
         }
         p->key_count = (int)times.size();
-        p->keys = (sb_path_key *)sb_xcalloc(p->key_count, sizeof(sb_path_key));
+        p->keys = (sb_camera_key *)sb_xcalloc(p->key_count, sizeof(sb_camera_key));
         double t0 = *times.begin();
         int ki = 0;
         for (double t : times) {
@@ -986,7 +987,7 @@ extern "C" bool sb_gltf_camera_path(sb_path *p, const char *path, int cam, const
             }
             sb_m4 w = sb_m4_mul(pw, animated || model.nodes[cn].matrix.size() != 16 ? sb_trs_matrix(&x)
                                                                                     : node_local(model.nodes[cn]));
-            sb_path_key &k = p->keys[ki++];
+            sb_camera_key &k = p->keys[ki++];
             k.t = t - t0;
             k.pos = sb_m4_point(w, sb_v3_make(0, 0, 0));
             sb_v3 f = sb_v3_norm(sb_m4_dir(w, sb_v3_make(0, 0, -1)));

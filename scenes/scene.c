@@ -1,6 +1,5 @@
 /* scene.c - building the flat scene model, re-basing, chunking, bundled names. */
 #include "scene.h"
-#include "scene_cache.h"
 
 #include <limits.h>
 #include <stdlib.h>
@@ -8,7 +7,6 @@
 #include <unistd.h>
 
 
-bool sb_gltf_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_err *err); /* gltf_load.cc */
 
 static void *grow(void *p, uint32_t *cap, uint32_t need, size_t elem) {
     if (need <= *cap) return p;
@@ -400,7 +398,7 @@ bool sb_scene_finish(sb_scene *s, sb_err *err) {
     free(s->build_pos);
     s->build_pos = NULL;
     double t1 = sb_now_ms();
-    sb_bvh_build(s);
+    sb_scene_build_bvh(s);
     double t2 = sb_now_ms();
     sb_scene_find_planes(s);
     s->load_part_ms[SB_LOAD_DRAWS] = t1 - t0;
@@ -548,75 +546,6 @@ const sb_light *sb_scene_point_light(const sb_scene *s, int index, int *count) {
     return found;
 }
 
-static bool exe_dir(char *out, size_t len) {
-    char buf[PATH_MAX];
-    ssize_t n = readlink("/proc/self/exe", buf, sizeof buf - 1);
-    if (n <= 0) return false;
-    buf[n] = 0;
-    char *slash = strrchr(buf, '/');
-    if (!slash) return false;
-    *slash = 0;
-    if (strlen(buf) >= len) return false;
-    memcpy(out, buf, strlen(buf) + 1);
-    return true;
-}
-
-bool sb_resolve_bundled(const char *name, const char *ext, char *out, size_t outlen) {
-    if (strchr(name, '/') || strchr(name, '.')) return false;
-    char dirs[3][PATH_MAX];
-    int nd = 0;
-    const char *env = getenv("SB_DATA_DIR");
-    if (env) snprintf(dirs[nd++], PATH_MAX, "%s", env);
-    char ed[PATH_MAX - 64];
-    if (exe_dir(ed, sizeof ed)) {
-        snprintf(dirs[nd++], PATH_MAX, "%s", ed);
-        snprintf(dirs[nd++], PATH_MAX, "%s/../share/shadowbench", ed);
-    }
-    for (int i = 0; i < nd; i++) {
-        snprintf(out, outlen, "%s/%s%s", dirs[i], name, ext);
-        if (access(out, R_OK) == 0) return true;
-    }
-    return false;
-}
-
-/* The file read, its checks, tinygltf and the flattening: a load without the cache. */
-static bool load_file(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_err *err) {
-    sb_scene_begin(s);
-    s->file = sb_strdup(path);
-    if (opts) s->opts = *opts;
-    if (!sb_gltf_load(s, path, opts, err) || !sb_scene_finish(s, err)) {
-        sb_scene_free(s);
-        return false;
-    }
-    /* options that change what is drawn change the run ids (the defaults leave them as they were) */
-    if (s->opts.blend != SB_BLEND_MASK && s->features.blend)
-        s->content_hash = sb_fnv1a(s->content_hash, &s->opts.blend, sizeof s->opts.blend);
-    if (s->opts.pose) s->content_hash = sb_fnv1a(s->content_hash, &s->opts.pose_time, sizeof s->opts.pose_time);
-    return true;
-}
-
-bool sb_scene_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_err *err) {
-    char resolved[PATH_MAX], dir[PATH_MAX];
-    if (sb_resolve_bundled(path, ".glb", resolved, sizeof resolved)) path = resolved;
-    double t0 = sb_now_ms();
-    /* the cache is found by the file's bytes; a file that cannot be read gets its message from the load */
-    size_t size = 0;
-    void *bytes = sb_scene_cache_dir(dir, sizeof dir) ? sb_map_file(path, &size, false) : NULL;
-    bool cache = bytes != NULL;
-    uint64_t key = cache ? sb_scene_cache_key(opts, bytes, size) : 0;
-    sb_unmap_file(bytes, size);
-    bool ok;
-    if (cache && sb_scene_cache_get(s, path, opts, key)) {
-        ok = true;
-    } else {
-        if (cache) sb_scene_cache_begin();
-        ok = load_file(s, path, opts, err);
-        if (cache) sb_scene_cache_put(s, key, ok);
-    }
-    if (ok) s->load_ms = sb_now_ms() - t0;
-    return ok;
-}
-
 /* Frees *p unless it points into the mapped cache entry. */
 static void free_owned(const sb_scene *s, void *p) {
     const char *m = s->cache_map, *q = p;
@@ -665,4 +594,77 @@ void sb_scene_info(const sb_scene *s, FILE *out) {
     fprintf(out, "Draco-compressed primitives: %u (decoded)\n", f->draco);
     fprintf(out, "vertex-colour alpha on alpha-tested primitives: %u (ignored)\n", f->vertex_alpha_ignored);
     fprintf(out, "degenerate: %s\n", s->degenerate[0] ? s->degenerate : "no");
+}
+
+/* ---- culling and rays over the draws' BVH ---- */
+
+static sb_boxes draw_boxes(const sb_scene *s) {
+    return (sb_boxes){s->draw_count ? &s->draws[0].box : NULL, sizeof(sb_draw), s->draw_count};
+}
+
+void sb_scene_build_bvh(sb_scene *s) { sb_bvh_build(&s->bvh, draw_boxes(s)); }
+
+uint32_t sb_scene_cull(const sb_scene *s, const double (*planes)[4], int plane_count, sb_bvh_visit visit, void *user) {
+    return sb_bvh_cull(&s->bvh, draw_boxes(s), planes, plane_count, visit, user);
+}
+
+typedef struct {
+    uint32_t *out, n;
+} collector;
+
+static void collect(uint32_t d, void *user) {
+    collector *c = user;
+    c->out[c->n++] = d;
+}
+
+uint32_t sb_scene_collect(const sb_scene *s, const double (*planes)[4], int plane_count, uint32_t *out) {
+    collector c = {out, 0};
+    sb_scene_cull(s, planes, plane_count, collect, &c);
+    return c.n;
+}
+
+/* Möller-Trumbore, both sides; t of the hit or INFINITY; *n the (unnormalised) front normal. */
+static double ray_tri(const float *a, const float *b, const float *c, sb_v3 o, sb_v3 d, sb_v3 *n) {
+    sb_v3 A = {a[0], a[1], a[2]}, e1 = sb_v3_sub(sb_v3_make(b[0], b[1], b[2]), A), e2 = sb_v3_sub(sb_v3_make(c[0], c[1], c[2]), A);
+    sb_v3 p = sb_v3_cross(d, e2);
+    double det = sb_v3_dot(e1, p);
+    *n = sb_v3_make(0, 0, 0);
+    if (fabs(det) < 1e-300) return INFINITY;
+    sb_v3 s = sb_v3_sub(o, A), q = sb_v3_cross(s, e1);
+    double u = sb_v3_dot(s, p) / det, v = sb_v3_dot(d, q) / det, t = sb_v3_dot(e2, q) / det;
+    if (u < 0 || v < 0 || u + v > 1 || t <= 0) return INFINITY;
+    *n = sb_v3_cross(e1, e2);
+    return t;
+}
+
+double sb_scene_raycast(const sb_scene *s, sb_v3 o, sb_v3 d, double tmax, bool *backface) {
+    double best = INFINITY;
+    if (!s->bvh.node_count) return best;
+    sb_v3 inv = sb_v3_make(1 / d.x, 1 / d.y, 1 / d.z);
+    int32_t stack[128];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+        const sb_bvh_node *nd = &s->bvh.nodes[stack[--top]];
+        if (!sb_ray_box(&nd->box, o, inv, best < tmax ? best : tmax)) continue;
+        if (nd->left >= 0 && top + 2 <= 128) {
+            stack[top++] = nd->left;
+            stack[top++] = nd->right;
+            continue;
+        }
+        for (uint32_t i = nd->first; i < nd->first + nd->count; i++) {
+            const sb_draw *dr = &s->draws[s->bvh.items[i]];
+            if (!sb_ray_box(&dr->box, o, inv, best < tmax ? best : tmax)) continue;
+            for (uint32_t k = dr->first_index; k + 2 < dr->first_index + dr->index_count; k += 3) {
+                sb_v3 n;
+                double t = ray_tri(sb_vertex(s, s->indices[k]), sb_vertex(s, s->indices[k + 1]),
+                                   sb_vertex(s, s->indices[k + 2]), o, d, &n);
+                if (t < best && t < tmax) {
+                    best = t;
+                    if (backface) *backface = !dr->double_sided && dr->closed && sb_v3_dot(n, d) > 0;
+                }
+            }
+        }
+    }
+    return best;
 }

@@ -11,12 +11,9 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "bvh.h"
 #include "sbmath.h"
 #include "util.h"
-
-typedef struct sb_aabb {
-    sb_v3 lo, hi;
-} sb_aabb;
 
 typedef struct sb_draw {
     uint32_t first_index;   /* into sb_scene.indices */
@@ -73,18 +70,6 @@ typedef struct sb_scene_features {
     uint32_t morph_ignored, vertex_alpha_ignored, undecodable_alpha;
     bool posed;             /* skins and node animation at --pose T */
 } sb_scene_features;
-
-typedef struct sb_bvh_node {
-    sb_aabb box;
-    int32_t left, right;    /* children, -1 for a leaf */
-    uint32_t first, count;  /* leaf: range in sb_bvh.items */
-} sb_bvh_node;
-
-typedef struct sb_bvh {
-    sb_bvh_node *nodes;
-    uint32_t node_count;
-    uint32_t *items;        /* draw indices */
-} sb_bvh;
 
 typedef enum sb_light_type { SB_LIGHT_DIRECTIONAL, SB_LIGHT_POINT, SB_LIGHT_SPOT } sb_light_type;
 
@@ -174,10 +159,6 @@ typedef struct sb_scene {
 /* "parse 40, flatten 120, ..." (ms) into out, or "from the scene cache" */
 void sb_scene_load_parts(const sb_scene *s, char *out, size_t len);
 
-/* Loads .gltf/.glb (through tinygltf, after gltf_check.h's checks) or a bundled
- * name ("plane-box", "desert", ...; looked up in SB_DATA_DIR and the build's
- * scene folder). opts may be NULL. */
-bool sb_scene_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_err *err);
 void sb_scene_free(sb_scene *s);
 /* What the file held and how it is drawn (shadowbench info SCENE), as lines "key: value". */
 void sb_scene_info(const sb_scene *s, FILE *out);
@@ -185,8 +166,6 @@ uint64_t sb_scene_triangles(const sb_scene *s);
 /* The index-th point or spot light of the scene in file order (NULL if there
  * is none); *count (may be NULL) gets how many there are. */
 const sb_light *sb_scene_point_light(const sb_scene *s, int index, int *count);
-/* Resolves a bundled scene or path name to a file; returns false if it is not one. */
-bool sb_resolve_bundled(const char *name, const char *ext, char *out, size_t outlen);
 
 /* Builder used by the glTF adapter: appends one primitive already transformed
  * to world space (double positions); vertices are re-based to the origin later. */
@@ -223,15 +202,12 @@ bool sb_scene_finish(sb_scene *s, sb_err *err);
 
 /* Culling: visits every draw whose AABB is not fully outside any of the planes
  * (plane: n·p + d >= 0 is inside). Exact AABB-vs-plane tests over the BVH. */
-typedef void (*sb_draw_visit)(uint32_t draw, void *user);
-uint32_t sb_bvh_cull(const sb_scene *s, const double (*planes)[4], int plane_count,
-                     sb_draw_visit visit, void *user);
-/* Collects the draws sb_bvh_cull would visit into out (draw_count capacity); returns how many. */
-uint32_t sb_bvh_collect(const sb_scene *s, const double (*planes)[4], int plane_count, uint32_t *out);
-bool sb_aabb_outside_plane(const sb_aabb *b, const double plane[4]);
-void sb_bvh_build(sb_scene *s);
+uint32_t sb_scene_cull(const sb_scene *s, const double (*planes)[4], int plane_count, sb_bvh_visit visit, void *user);
+/* Collects the draws sb_scene_cull would visit into out (draw_count capacity); returns how many. */
+uint32_t sb_scene_collect(const sb_scene *s, const double (*planes)[4], int plane_count, uint32_t *out);
+/* (Re)builds the culling BVH over the draws' boxes. */
+void sb_scene_build_bvh(sb_scene *s);
 /* The nearest triangle (either side) the ray o + t d meets, t in (0, tmax)
  * (origin-relative; d need not be unit): its t, or INFINITY. *backface (may
  * be NULL): it is the inside of a closed single-sided surface (o is inside it). */
 double sb_scene_raycast(const sb_scene *s, sb_v3 o, sb_v3 d, double tmax, bool *backface);
-void sb_bvh_free(sb_bvh *b);

@@ -1,6 +1,8 @@
 /* scene_cache.h - flattened scenes kept on disk, so a scene read before loads
- * in milliseconds: the vertices, indices, draws, planes, materials, lights and
- * cameras as sb_scene_finish left them, and what the load logged.
+ * in milliseconds: an entry holds what the loader wrote into it (scene_load.c:
+ * the vertices, indices, draws, planes, materials, lights and cameras as
+ * sb_scene_finish left them) and what the load logged. The cache stores
+ * bytes and knows nothing of the scene model.
  *
  * An entry is found by the bytes of the scene file (hashed, never by its
  * name or time), the load options and the identity of the running binary
@@ -14,7 +16,11 @@
  * Where: $SB_SCENE_CACHE (a folder, or "off"), else
  * $XDG_CACHE_HOME/shadowbench/scenes, else ~/.cache/shadowbench/scenes. */
 #pragma once
-#include "scene.h"
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "blob.h"
 
 #define SB_SCENE_CACHE_MAX_BYTES ((uint64_t)2 << 30)
 
@@ -24,15 +30,23 @@ bool sb_scene_cache_dir(char *out, size_t len);
 /* While a load runs: files it read besides the scene file, with their hashes (gltf_load.cc). */
 void sb_scene_cache_note_file(const char *path, uint64_t hash);
 
-/* The entry's key: the scene file's bytes, the load options, the binary. */
-uint64_t sb_scene_cache_key(const sb_scene_opts *opts, const void *bytes, size_t size);
+/* The entry's key: the scene file's bytes, the load options (as canonical
+ * bytes), the binary. */
+uint64_t sb_scene_cache_key(const void *opts, size_t opts_len, const void *bytes, size_t size);
 
-/* Fills s from the entry of that key; false on a miss (s untouched). Says
- * again what the load had logged. */
-bool sb_scene_cache_get(sb_scene *s, const char *path, const sb_scene_opts *opts, uint64_t key);
+/* Reads an entry's payload (arrays may be used in place); it owns the mapped
+ * entry (map, len) from the call on, whatever it returns: kept while used,
+ * released with sb_unmap_file. */
+typedef bool (*sb_scene_cache_read)(sb_rbuf *payload, void *map, size_t len, void *user);
+/* Writes the payload of an entry. */
+typedef void (*sb_scene_cache_write)(sb_wbuf *payload, const void *user);
+
+/* Hands the entry of that key to read; false on a miss or when read refuses
+ * it. On a hit says again what the load had logged. */
+bool sb_scene_cache_get(uint64_t key, sb_scene_cache_read read, void *user);
 
 /* Starts recording a load (files read, lines logged); put ends it and, when
- * ok, writes the entry for the scene just loaded. Failing to write is not an
- * error of the load: the next load reads the file again. */
+ * write is not NULL (the load succeeded), writes the entry. Failing to write
+ * is not an error of the load: the next load reads the file again. */
 void sb_scene_cache_begin(void);
-void sb_scene_cache_put(const sb_scene *s, uint64_t key, bool ok);
+void sb_scene_cache_put(uint64_t key, sb_scene_cache_write write, const void *user);

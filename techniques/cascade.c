@@ -213,7 +213,7 @@ static bool slice_has_receivers(const sb_frame *f, double zn, double zf) {
     double d = sb_v3_dot(fw, eye);
     planes[4][0] = fw.x; planes[4][1] = fw.y; planes[4][2] = fw.z; planes[4][3] = -d - zn;
     planes[5][0] = -fw.x; planes[5][1] = -fw.y; planes[5][2] = -fw.z; planes[5][3] = d + zf;
-    return sb_bvh_collect(f->gpu->scene, (const double(*)[4])planes, 6, f->scratch) > 0;
+    return sb_scene_collect(f->gpu->scene, (const double(*)[4])planes, 6, f->scratch) > 0;
 }
 
 static void block_put(sb_csm *c, int k, const sb_light_fit *fit, double zn, double zf, bool active) {
@@ -256,7 +256,7 @@ uint32_t sb_csm_cull(sb_csm *c, sb_frame *f, const sb_light_fit *bound) {
     for (int k = 0; k < c->count; k++) {
         if (!bound && !c->active[k]) continue;
         const sb_light_fit *fit = bound ? bound : &c->fit[k];
-        uint32_t n = sb_bvh_collect(s, (const double(*)[4])fit->planes, 6, list);
+        uint32_t n = sb_scene_collect(s, (const double(*)[4])fit->planes, 6, list);
         for (uint32_t i = 0; i < n; i++) c->mask[list[i]] |= (uint8_t)(1u << k);
     }
     uint32_t casters = 0;

@@ -6,7 +6,7 @@
  * shades and shadows the lamp; evaluation casts the reference rays to it. */
 #include <string.h>
 
-#include "gpu.h"
+#include "render.h"
 #include "shaders.h"
 
 typedef struct cube_desc {
@@ -146,7 +146,7 @@ static void cube_frame(void *state, sb_frame *f) {
     if (s->layered == 0) {
         glUseProgram(s->prog_face);
         for (int k = 0; k < 6; k++) {
-            uint32_t n = sb_bvh_collect(sc, (const double(*)[4])s->planes[k], 6, f->scratch);
+            uint32_t n = sb_scene_collect(sc, (const double(*)[4])s->planes[k], 6, f->scratch);
             if (!n) continue;
             faces++;
             glBindFramebuffer(GL_FRAMEBUFFER, s->fbo_face[k]);
@@ -157,7 +157,7 @@ static void cube_frame(void *state, sb_frame *f) {
         /* casters within the lamp's range: the box around it */
         double box[6][4];
         sb_cube_planes(s->lamp, s->far, box);
-        uint32_t n = sb_bvh_collect(sc, (const double(*)[4])box, 6, f->scratch);
+        uint32_t n = sb_scene_collect(sc, (const double(*)[4])box, 6, f->scratch);
         bool gs = s->layered == 1;
         glUseProgram(gs ? s->prog_gs : s->prog_vs);
         glUniformMatrix4fv(gs ? s->u_face_vp_gs : s->u_face_vp_vs, 6, GL_FALSE, &m[0][0]);

@@ -7,7 +7,7 @@
  * front hemisphere looks down (-Y). */
 #include <string.h>
 
-#include "gpu.h"
+#include "render.h"
 #include "shaders.h"
 
 typedef struct dpsm_desc {
@@ -85,7 +85,7 @@ static void dpsm_frame(void *state, sb_frame *f) {
     sb_stage_begin(f, SB_STAGE_CASCADE);
     double box[6][4];
     sb_cube_planes(s->lamp, s->far, box);
-    uint32_t n = sb_bvh_collect(sc, (const double(*)[4])box, 6, f->scratch);
+    uint32_t n = sb_scene_collect(sc, (const double(*)[4])box, 6, f->scratch);
     glUseProgram(s->prog);
     glUniform3f(s->d_lamp, (float)s->lamp.x, (float)s->lamp.y, (float)s->lamp.z);
     glUniformMatrix3fv(s->d_frame, 1, GL_FALSE, s->frame);

@@ -63,7 +63,7 @@ static void finish_fit(const sb_scene *s, sb_v3 lo, sb_v3 hi, double shi_z, int 
     memcpy(side, all, 4 * sizeof all[0]);      /* x and y planes */
     memcpy(side[4], all[5], sizeof all[0]);    /* far plane: not beyond the receivers */
     caster_scan sc = {s, out->view, hi.z};
-    sb_bvh_cull(s, (const double(*)[4])side, 5, scan_caster, &sc);
+    sb_scene_cull(s, (const double(*)[4])side, 5, scan_caster, &sc);
     double znear_l = sc.zmax, zfar_l = lo.z;   /* light space z: toward the light is +z */
     double pad = 1e-4 * (znear_l - zfar_l) + 1e-9;
     out->l = lo.x;
@@ -591,7 +591,7 @@ static bool psm_receivers(const sb_scene *s, const sb_camera *cam, point_list *p
     sb_frustum_corners(cam, s->origin, cam->znear, cam->zfar, corners);
     draw_depth *near = sb_xmalloc(sizeof *near * (s->draw_count + 1));
     receiver_scan rs = {s, (const double(*)[4])planes, corners, pts, eye, fwd, near, 0};
-    sb_bvh_cull(s, (const double(*)[4])planes, 6, scan_receiver, &rs);
+    sb_scene_cull(s, (const double(*)[4])planes, 6, scan_receiver, &rs);
     double znear = near ? nearest_receiver(s, (const double(*)[4])planes, eye, fwd, near, rs.near_count) : cam->znear;
     free(near);
     if (pts->n == 0 || znear >= 1e300) return false; /* nothing the camera can see */
@@ -604,7 +604,7 @@ static bool psm_receivers(const sb_scene *s, const sb_camera *cam, point_list *p
         sb_frustum_corners(cam, s->origin, zcut, cam->zfar, corners);
         pts->n = 0;
         rs.near = NULL;
-        sb_bvh_cull(s, (const double(*)[4])planes, 6, scan_receiver, &rs);
+        sb_scene_cull(s, (const double(*)[4])planes, 6, scan_receiver, &rs);
     }
     return pts->n > 0;
 }

@@ -2,7 +2,7 @@
  * Shared by every directional-light shadow-map technique (sm now; the
  * cascaded techniques fit one per slice with the same code). */
 #pragma once
-#include "gpu.h"
+#include "render.h"
 
 typedef struct sb_light_fit {
     sb_m4 view, proj, view_proj;     /* origin-relative world -> light clip */

@@ -1,5 +1,5 @@
 /* none.c - no shadows: the baseline every other cost is measured against. */
-#include "gpu.h"
+#include "render.h"
 #include "shaders.h"
 
 typedef struct {

@@ -13,7 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "gpu.h"
+#include "render.h"
 #include "shaders.h"
 
 /* No parameters: everything is the scene's, made once (load). */

@@ -15,7 +15,7 @@
 #include <unistd.h>
 
 #include "error.h"
-#include "gpu.h"
+#include "render.h"
 #include "reference.h"
 #include "shaders.h"
 

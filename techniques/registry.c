@@ -16,7 +16,6 @@ static const sb_technique *const all[] = {
 #undef SB_TECHNIQUE
 };
 
-const char *const sb_stage_names[SB_STAGE_COUNT] = {"zpass", "minmax", "cascade", "final", "volumes", "rays"};
 
 const sb_technique *sb_technique_find(const char *name) {
     for (size_t i = 0; i < SB_COUNT(all); i++)

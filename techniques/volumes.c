@@ -17,7 +17,7 @@
 #include <string.h>
 
 
-#include "gpu.h"
+#include "render.h"
 #include "reference.h"
 #include "shaders.h"
 

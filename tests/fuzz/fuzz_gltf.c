@@ -6,6 +6,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "scene_load.h"
 #include "scene.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);

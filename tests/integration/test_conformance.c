@@ -19,6 +19,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "scene_load.h"
 #include "conformance.h"
 #include "reference.h"
 #include "support.h"

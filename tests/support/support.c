@@ -1,3 +1,4 @@
+#include "scene_load.h"
 #include "support.h"
 
 #include "eval.h"

@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "scene_load.h"
 #include "cascade.h"
 
 void sdsm_partition(int m, int histogram, double zmin, double zmax, double near, double far, const uint32_t *hist,

@@ -11,6 +11,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "scene_load.h"
 #include "json.h"
 #include "support.h"
 

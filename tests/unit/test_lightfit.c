@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "scene_load.h"
 #include "lightfit.h"
 
 static double urand(void) { return rand() / (double)RAND_MAX; }

@@ -9,6 +9,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "scene_load.h"
 #include "scene.h"
 #include "support.h"
 
@@ -283,7 +284,7 @@ static void test_bvh_cull_exact(void **st) {
         }
         memset(hit, 0, s.draw_count);
         mark m = {hit};
-        sb_bvh_cull(&s, (const double(*)[4])planes, 4, visit, &m);
+        sb_scene_cull(&s, (const double(*)[4])planes, 4, visit, &m);
         for (uint32_t d = 0; d < s.draw_count; d++) {
             bool out = false;
             for (int k = 0; k < 4; k++) out |= sb_aabb_outside_plane(&s.draws[d].box, planes[k]);

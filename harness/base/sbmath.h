@@ -8,6 +8,10 @@
 
 typedef struct { double x, y, z; } sb_v3;
 typedef struct { double x, y, z, w; } sb_quat;
+/* An axis-aligned box. */
+typedef struct sb_aabb {
+    sb_v3 lo, hi;
+} sb_aabb;
 typedef struct { double m[16]; } sb_m4;
 
 #define SB_PI 3.14159265358979323846

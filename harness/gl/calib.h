@@ -8,7 +8,7 @@
  * on a software rasterizer (about 6 ms on 2 cores). Each timing is the median
  * of five, after untimed draws (ten the first time: a cold start is slow). */
 #pragma once
-#include "gpu.h"
+#include "gl.h"
 
 typedef struct sb_calib {
     GLuint fbo, tex, prog, vao, query;

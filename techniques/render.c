@@ -1,91 +1,11 @@
-/* gpu.c - scene upload, render target, programs, counted draw submission. */
-#include "gpu.h"
+/* render.c - scene upload, render target, the final-pass program, counted draw submission. */
+#include "render.h"
 
 #include <stdlib.h>
 #include <string.h>
 
 #include "shaders.h"
 #include "timing.h"
-
-bool sb_gl_check(const char *where, sb_err *err) {
-    GLenum e = glGetError();
-    if (e == GL_NO_ERROR) return true;
-    while (glGetError() != GL_NO_ERROR) {}
-    const char *name = e == GL_INVALID_ENUM ? "GL_INVALID_ENUM" : e == GL_INVALID_VALUE ? "GL_INVALID_VALUE"
-                     : e == GL_INVALID_OPERATION ? "GL_INVALID_OPERATION" : e == GL_OUT_OF_MEMORY ? "GL_OUT_OF_MEMORY"
-                     : e == GL_INVALID_FRAMEBUFFER_OPERATION ? "GL_INVALID_FRAMEBUFFER_OPERATION" : "GL error";
-    return sb_fail(err, "%s: %s (0x%x)", where, name, e);
-}
-
-/* What every program of this session's scene compiles with (sb_gpu_init): the
- * alpha test when the scene has alpha-tested draws. One GL context a process. */
-static bool g_scene_alpha;
-
-static GLuint compile(GLenum type, const char *label, const char *defines, bool to_gs, const char *const *parts, int n,
-                      sb_err *err) {
-    const char *src[20];
-    int k = 0;
-    if (n > 14) {
-        sb_fail(err, "%s: %d shader parts, at most 14", label, n);
-        return 0;
-    }
-    src[k++] = "#version 430 core\n";
-    src[k++] = defines ? defines : "";
-    src[k++] = type == GL_VERTEX_SHADER ? (to_gs ? "#define SB_VERTEX\n#define SB_TO_GS\n" : "#define SB_VERTEX\n")
-             : type == GL_GEOMETRY_SHADER ? "#define SB_GEOMETRY\n"
-             : type == GL_FRAGMENT_SHADER ? "#define SB_FRAGMENT\n" : "#define SB_COMPUTE\n";
-    src[k++] = g_scene_alpha ? "#define SB_ALPHA\n" : "";
-    src[k++] = sb_shader_common_glsl;
-    src[k++] = sb_shader_alpha_glsl;
-    for (int i = 0; i < n && k < 20; i++) src[k++] = parts[i];
-    GLuint s = glCreateShader(type);
-    glShaderSource(s, k, src, NULL);
-    glCompileShader(s);
-    GLint ok = 0;
-    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        char log[1024] = {0};
-        glGetShaderInfoLog(s, sizeof log, NULL, log);
-        glDeleteShader(s);
-        const char *kind = type == GL_VERTEX_SHADER ? "vertex" : type == GL_GEOMETRY_SHADER ? "geometry"
-                         : type == GL_COMPUTE_SHADER ? "compute" : "fragment";
-        sb_fail(err, "%s: %s shader does not compile: %s", label, kind, log);
-        return 0;
-    }
-    return s;
-}
-
-GLuint sb_gpu_link(const char *label, const char *defines, const sb_shader_src *stages, int nstages, sb_err *err) {
-    bool gs = false;
-    for (int i = 0; i < nstages; i++) gs |= stages[i].type == GL_GEOMETRY_SHADER;
-    GLuint p = glCreateProgram();
-    for (int i = 0; i < nstages; i++) {
-        GLuint s = compile(stages[i].type, label, defines, gs, stages[i].parts, stages[i].count, err);
-        if (!s) {
-            glDeleteProgram(p);
-            return 0;
-        }
-        glAttachShader(p, s);
-        glDeleteShader(s);
-    }
-    glLinkProgram(p);
-    GLint ok = 0;
-    glGetProgramiv(p, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        char log[1024] = {0};
-        glGetProgramInfoLog(p, sizeof log, NULL, log);
-        glDeleteProgram(p);
-        sb_fail(err, "%s: program does not link: %s", label, log);
-        return 0;
-    }
-    return p;
-}
-
-GLuint sb_gpu_program(const char *label, const char *defines, const char *const *vs, int nvs,
-                      const char *const *fs, int nfs, sb_err *err) {
-    const sb_shader_src st[] = {{GL_VERTEX_SHADER, vs, nvs}, {GL_FRAGMENT_SHADER, fs, nfs}};
-    return sb_gpu_link(label, defines, st, 2, err);
-}
 
 bool sb_final_prog_create_parts(sb_final_prog *fp, const char *label, const char *const *vis_parts, int nvis,
                                 const char *defines, sb_err *err) {
@@ -128,8 +48,11 @@ static GLuint make_tex(GLenum internal, int w, int h) {
 
 /* Materials as alpha.glsl's SbMaterial (48 bytes) and the texels as an R8UI buffer texture. */
 static bool upload_alpha(sb_gpu *g, const sb_scene *s, sb_err *err) {
-    g_scene_alpha = s->alpha_tested_draws > 0;
-    if (!g_scene_alpha) return true;
+    /* every program of the session compiles with the common GLSL, and the alpha test when the scene has one */
+    const char *prelude[] = {s->alpha_tested_draws > 0 ? "#define SB_ALPHA\n" : "", sb_shader_common_glsl,
+                             sb_shader_alpha_glsl};
+    sb_gl_set_prelude(prelude, 3);
+    if (!s->alpha_tested_draws) return true;
     GLint max_texels = 0;
     glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
     if (s->texel_count > (uint32_t)max_texels)
@@ -310,22 +233,6 @@ void sb_gpu_free(sb_gpu *g) {
     memset(g, 0, sizeof *g);
 }
 
-GLuint sb_shadow_texture(GLenum target, GLenum format, int res, int layers, bool linear) {
-    GLuint tex;
-    glGenTextures(1, &tex);
-    glBindTexture(target, tex);
-    if (target == GL_TEXTURE_CUBE_MAP) glTexStorage2D(target, 1, format, res, res);
-    else glTexStorage3D(target, 1, format, res, res, layers);
-    GLint filt = linear ? GL_LINEAR : GL_NEAREST;
-    glTexParameteri(target, GL_TEXTURE_MIN_FILTER, filt);
-    glTexParameteri(target, GL_TEXTURE_MAG_FILTER, filt);
-    glTexParameteri(target, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTexParameteri(target, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glTexParameteri(target, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
-    glTexParameteri(target, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
-    return tex;
-}
-
 void sb_frame_setup(sb_frame *f, const sb_gpu *g, const sb_camera *cam) {
     memset(&f->counters, 0, sizeof f->counters);
     f->gpu = g;
@@ -424,7 +331,7 @@ void sb_zpass(sb_frame *f) {
     glUseProgram(g->zpass_prog);
     sb_set_camera_uniforms(f, g->zpass_u_view, g->zpass_u_proj);
     glBindVertexArray(g->vao);
-    uint32_t n = sb_bvh_collect(g->scene, (const double(*)[4])f->frustum, 6, f->scratch);
+    uint32_t n = sb_scene_collect(g->scene, (const double(*)[4])f->frustum, 6, f->scratch);
     bool culling = true;
     for (uint32_t i = 0; i < n; i++) camera_submit(f, f->scratch[i], &culling);
     glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
@@ -472,7 +379,7 @@ static void draw_scene(sb_frame *f, const sb_final_prog *fp, GLenum depth_func, 
                 (float)f->shade_light[3]);
     glUniform1i(fp->u_eval, f->eval);
     glBindVertexArray(g->vao);
-    uint32_t n = sb_bvh_collect(g->scene, (const double(*)[4])f->frustum, 6, f->scratch);
+    uint32_t n = sb_scene_collect(g->scene, (const double(*)[4])f->frustum, 6, f->scratch);
     bool culling = true;
     for (uint32_t i = 0; i < n; i++) {
         const sb_draw *dr = &g->scene->draws[f->scratch[i]];
@@ -533,16 +440,4 @@ void sb_final_pass_stencil(sb_frame *f, const sb_final_prog *fp, GLint u_lit, GL
     glUniform1f(u_lit, 0.0f);
     sb_final_draw(f, fp, true);     /* the same draws again, without clearing */
     glDisable(GL_STENCIL_TEST);
-}
-
-int sb_layered_resolve(const sb_context *ctx, int layered) {
-    if (layered == SB_LAYERED_ON) return ctx->has_vs_layer ? SB_LAYERED_VS : SB_LAYERED_GS;
-    return layered;
-}
-
-bool sb_layered_supported(const sb_context *ctx, int layered, const char *technique, sb_err *why) {
-    if (layered == SB_LAYERED_VS && !ctx->has_vs_layer)
-        return sb_fail(why, "%s:layered=vs needs GL_ARB_shader_viewport_layer_array, which %s lacks", technique,
-                       ctx->renderer);
-    return true;
 }

@@ -11,9 +11,11 @@
 #include <time.h>
 #include <unistd.h>
 
-static bool g_quiet;
+static bool g_quiet, g_verbose;
 
 void sb_set_quiet(bool quiet) { g_quiet = quiet; }
+void sb_set_verbose(bool verbose) { g_verbose = verbose; }
+bool sb_is_verbose(void) { return g_verbose && !g_quiet; }
 
 bool sb_fail(sb_err *e, const char *fmt, ...) {
     if (e) {
@@ -51,6 +53,15 @@ void sb_log(const char *fmt, ...) {
         g_capture[g_capture_len] = 0;
     }
     if (!g_quiet) fprintf(stderr, "%s\n", line);
+}
+
+void sb_verbose(const char *fmt, ...) {
+    if (!sb_is_verbose()) return;
+    va_list ap;
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
 }
 
 void sb_log_capture(bool on) {

@@ -1,6 +1,7 @@
 /* calib.c - the calibration probe (see calib.h). */
 #include "calib.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 

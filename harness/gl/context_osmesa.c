@@ -5,15 +5,12 @@
  * libOSMesa is opened at run time, on first use: a binary that never asks for
  * the osmesa backend never loads it (nor the LLVM it pulls in), and one built
  * without it (meson -Dosmesa=disabled, no header) says so. */
-#include <stdbool.h>
+#include "context_osmesa.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 
 #include "util.h"
-
-bool sb_osmesa_open(void **ctx, void **buffer, char *why, size_t len);
-void *sb_osmesa_proc(const char *name);
-void sb_osmesa_close(void *ctx, void *buffer);
 
 #if SB_HAVE_OSMESA
 #include <GL/osmesa.h>

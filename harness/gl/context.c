@@ -6,12 +6,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "gpu.h"
+#include "context_osmesa.h"
+#include "glad_gl.h"
 
-/* context_osmesa.c: kept apart because osmesa.h pulls in GL/gl.h, which glad replaces */
-bool sb_osmesa_open(void **ctx, void **buffer, char *why, size_t len);
-void *sb_osmesa_proc(const char *name);
-void sb_osmesa_close(void *ctx, void *buffer);
 
 bool sb_backend_parse(const char *s, sb_backend *out) {
     if (strcmp(s, "egl") == 0) *out = SB_BACKEND_EGL;

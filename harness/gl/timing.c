@@ -1,10 +1,13 @@
 /* timing.c - the query ring and sync timing. */
 #include "timing.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "gpu.h"
+#include "gl.h"
+
+const char *const sb_stage_names[SB_STAGE_COUNT] = {"zpass", "minmax", "cascade", "final", "volumes", "rays"};
 
 bool sb_timing_parse(const char *s, sb_timing_mode *out) {
     if (strcmp(s, "auto") == 0) *out = SB_TIMING_AUTO;

@@ -18,6 +18,11 @@ typedef struct sb_err {
 bool sb_fail(sb_err *e, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 void sb_log(const char *fmt, ...) __attribute__((format(printf, 1, 2)));   /* stderr, newline added */
 void sb_set_quiet(bool quiet);
+/* Notes a user cannot act on (what a software rasterizer lacks, and the like):
+ * printed only with --verbose (and never when quiet), never captured. */
+void sb_verbose(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+void sb_set_verbose(bool verbose);
+bool sb_is_verbose(void);
 /* While on, sb_log also keeps its lines (newline-terminated; quiet or not):
  * what a load said, for the scene cache to say again. on=true clears them. */
 void sb_log_capture(bool on);

@@ -336,7 +336,11 @@ bool sb_clocks_apply(sb_clocks *c, sb_clocks_mode mode, char *used, size_t len, 
         return true;
     }
     if (mode == SB_CLOCKS_LOCK) return sb_fail(err, "--clocks lock: cannot lock the GPU clock: %s", why);
-    sb_log("note: GPU clock not locked (%s); timings follow the clock: see README, Trustworthy GPU numbers", why);
+    /* a note only where there is a clock to lock, once a process; a software rasterizer has none */
+    static bool said;
+    if (c->src == SRC_NONE) sb_verbose("note: no GPU clock to lock (%s)", why);
+    else if (!said) sb_log("note: GPU clock not locked (%s); timings follow the clock: see docs/timing.md", why);
+    if (c->src != SRC_NONE) said = true;
     return true;
 }
 

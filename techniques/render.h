@@ -1,11 +1,10 @@
-/* gpu.h - GL entry points (glad 2, generated at build time) and the GPU side
- * of a run: scene buffers, the camera render target, shader programs, draw
- * submission with counting, what a technique's create receives (sb_run_ctx)
- * and the per-frame state its frame function works on (sb_frame). */
+/* render.h - the GPU side of a run, shared by every technique: scene buffers,
+ * the camera render target, the final-pass program, draw submission with
+ * counting, what a technique's create receives (sb_run_ctx) and the per-frame
+ * state its frame function works on (sb_frame). GL programs and textures
+ * themselves are the GL layer's (gl.h). */
 #pragma once
-#include "glad_gl.h"
-
-#include "context.h"
+#include "gl.h"
 #include "path.h"
 #include "scene.h"
 #include "technique.h"
@@ -71,22 +70,6 @@ typedef struct sb_frame {
 bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *scene, int width, int height, sb_v3 sun,
                  sb_err *err);
 void sb_gpu_free(sb_gpu *g);
-/* One shader stage: its type and the source parts after the common prefix. */
-typedef struct sb_shader_src {
-    GLenum type;
-    const char *const *parts;
-    int count;
-} sb_shader_src;
-
-/* A depth texture with hardware comparison (LEQUAL), clamped to its edge:
- * GL_TEXTURE_2D_ARRAY with `layers` layers, or GL_TEXTURE_CUBE_MAP (layers ignored). */
-GLuint sb_shadow_texture(GLenum target, GLenum format, int res, int layers, bool linear);
-/* Compiles each stage as "#version 430 core" + defines + common.glsl + parts
- * and links them; the label names the program in errors. */
-GLuint sb_gpu_link(const char *label, const char *defines, const sb_shader_src *stages, int nstages, sb_err *err);
-/* Vertex + fragment shortcut of sb_gpu_link. */
-GLuint sb_gpu_program(const char *label, const char *defines, const char *const *vs, int nvs,
-                      const char *const *fs, int nfs, sb_err *err);
 /* The final-pass program with the technique's visibility GLSL. */
 bool sb_final_prog_create(sb_final_prog *fp, const char *label, const char *vis_glsl, const char *defines,
                           sb_err *err);
@@ -127,18 +110,10 @@ void sb_frame_shade_point(sb_frame *f, sb_v3 pos);
  * (stencil & mask) == 0 it is drawn lit (u_lit 1), elsewhere in shadow (0).
  * Depth from the z-pass is reused; the stencil is left enabled off afterwards. */
 void sb_final_pass_stencil(sb_frame *f, const sb_final_prog *fp, GLint u_lit, GLuint mask);
-/* Layered shadow rendering (cascades, cube faces): per layer, routed by a
- * geometry shader, by gl_Layer from the vertex shader, or the best available. */
-enum { SB_LAYERED_OFF, SB_LAYERED_GS, SB_LAYERED_VS, SB_LAYERED_ON };
-int sb_layered_resolve(const sb_context *ctx, int layered);
-/* layered=vs needs GL_ARB_shader_viewport_layer_array: false with the reason when the context lacks it. */
-bool sb_layered_supported(const sb_context *ctx, int layered, const char *technique, sb_err *why);
 /* Uploads the frame's camera view and projection (float) to the bound program. */
 void sb_set_camera_uniforms(const sb_frame *f, GLint u_view, GLint u_proj);
 /* Counts a draw issued by the technique itself (its own geometry). */
 void sb_count_draw(sb_frame *f, uint64_t triangles, int instances);
-/* GL error check: returns false and fills err if one is pending. */
-bool sb_gl_check(const char *where, sb_err *err);
 
 /* Reads the last frame's targets (any pointer may be NULL): depth (float,
  * window [0,1]), visibility (1 byte, 255 lit) and colour (RGBA8). Never

@@ -15,7 +15,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "technique.h"
+#include "stage.h"
 
 typedef enum sb_timing_mode { SB_TIMING_AUTO, SB_TIMING_QUERIES, SB_TIMING_SYNC } sb_timing_mode;
 

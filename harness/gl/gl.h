@@ -1,0 +1,40 @@
+/* gl.h - the GL layer's programs and textures: GL entry points (glad 2,
+ * generated at build time), shader compilation with the session's prelude,
+ * shadow-map textures, GL error checks and the layered-rendering capability.
+ * It knows nothing of scenes or techniques (docs/architecture.md). */
+#pragma once
+#include "glad_gl.h"
+
+#include "context.h"
+
+/* One shader stage: its type and the source parts after the prelude. */
+typedef struct sb_shader_src {
+    GLenum type;
+    const char *const *parts;
+    int count;
+} sb_shader_src;
+
+/* What every program compiles with after "#version 430 core", its defines and
+ * the stage's define (SB_VERTEX, SB_FRAGMENT, ...): at most 3 parts, kept by
+ * pointer. The GPU session sets the scene's common GLSL here; unset, nothing. */
+void sb_gl_set_prelude(const char *const *parts, int n);
+/* Compiles each stage as "#version 430 core" + defines + prelude + parts
+ * and links them; the label names the program in errors. */
+GLuint sb_gpu_link(const char *label, const char *defines, const sb_shader_src *stages, int nstages, sb_err *err);
+/* Vertex + fragment shortcut of sb_gpu_link. */
+GLuint sb_gpu_program(const char *label, const char *defines, const char *const *vs, int nvs,
+                      const char *const *fs, int nfs, sb_err *err);
+
+/* A depth texture with hardware comparison (LEQUAL), clamped to its edge:
+ * GL_TEXTURE_2D_ARRAY with `layers` layers, or GL_TEXTURE_CUBE_MAP (layers ignored). */
+GLuint sb_shadow_texture(GLenum target, GLenum format, int res, int layers, bool linear);
+
+/* Layered shadow rendering (cascades, cube faces): per layer, routed by a
+ * geometry shader, by gl_Layer from the vertex shader, or the best available. */
+enum { SB_LAYERED_OFF, SB_LAYERED_GS, SB_LAYERED_VS, SB_LAYERED_ON };
+int sb_layered_resolve(const sb_context *ctx, int layered);
+/* layered=vs needs GL_ARB_shader_viewport_layer_array: false with the reason when the context lacks it. */
+bool sb_layered_supported(const sb_context *ctx, int layered, const char *technique, sb_err *why);
+
+/* GL error check: returns false and fills err if one is pending. */
+bool sb_gl_check(const char *where, sb_err *err);

@@ -1,0 +1,30 @@
+/* stage.h - the stages of a frame that are timed, and what a frame counts as
+ * it submits: the vocabulary the timer, the techniques and the results share. */
+#pragma once
+#include <stdint.h>
+
+typedef enum sb_stage {
+    SB_STAGE_ZPASS,     /* camera depth pre-pass */
+    SB_STAGE_MINMAX,    /* depth reduction */
+    SB_STAGE_CASCADE,   /* all shadow-map rendering */
+    SB_STAGE_FINAL,     /* camera pass with shadow lookup */
+    SB_STAGE_VOLUMES,   /* stencil shadow volumes */
+    SB_STAGE_RAYS,      /* CPU ray casting */
+    SB_STAGE_COUNT
+} sb_stage;
+
+#define SB_STAGE_BIT(s) (1u << (s))
+extern const char *const sb_stage_names[SB_STAGE_COUNT];
+
+#define SB_MAX_CASCADES 8
+
+/* What a frame submitted, counted as it happens (technique-side counters). */
+typedef struct sb_counters {
+    uint32_t draw_calls, shadow_draw_calls;         /* shadow: cascade and volumes stages */
+    uint32_t stage_draw_calls[SB_STAGE_COUNT];
+    uint64_t triangles, shadow_triangles;           /* triangles x instances submitted */
+    int cascades_rendered, cascades_skipped;
+    int warp_fallbacks;                             /* warped maps (psm, lispsm, tsm) that used the uniform fit */
+    int split_count;                                /* cascades whose far split is known this frame */
+    double splits[SB_MAX_CASCADES];                 /* view-space far distance of each cascade */
+} sb_counters;

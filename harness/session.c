@@ -1,0 +1,390 @@
+/* session.c - run options, sessions (context, scene, path, GPU buffers) and
+ * technique instances rendering a frame: what the run loop, the evaluation and
+ * bias=auto render with (session.h). */
+#include "session.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "image.h"
+#include "reference.h"
+#include "scene_load.h"
+
+void sb_run_opts_defaults(sb_run_opts *o) {
+    memset(o, 0, sizeof *o);
+    o->backend = SB_BACKEND_EGL;
+    o->timing = SB_TIMING_AUTO;
+    o->ring = 3;
+    o->frames = 60;
+    o->warmup = -1;
+    o->width = 1280;
+    o->height = 720;
+    o->error_every = 10;
+    o->repeat = 1;
+    o->max_repeat = 10;
+    o->overlap = -1;
+    long cpus = sysconf(_SC_NPROCESSORS_ONLN);
+    o->threads = cpus > 1024 ? 1024 : cpus > 0 ? (int)cpus : 1;
+}
+
+int sb_run_opts_set(sb_run_opts *o, const char *a, const char *v, sb_err *err) {
+    long n;
+    if (!v) return sb_fail(err, "%s needs a value", a), -1;
+    if (!strcmp(a, "--backend")) {
+        if (!sb_backend_parse(v, &o->backend)) return sb_fail(err, "--backend %s: expected egl or osmesa", v), -1;
+    } else if (!strcmp(a, "--timing")) {
+        if (!sb_timing_parse(v, &o->timing)) return sb_fail(err, "--timing %s: expected auto, queries or sync", v), -1;
+    } else if (!strcmp(a, "--ring")) {
+        if (!sb_parse_int(v, &n) || n < 1 || n > 16) return sb_fail(err, "--ring %s: expected 1..16", v), -1;
+        o->ring = (int)n;
+    } else if (!strcmp(a, "--frames")) {
+        if (!sb_parse_int(v, &n) || n < 1 || n > 1000000) return sb_fail(err, "--frames %s: expected 1..1000000", v), -1;
+        o->frames = (int)n;
+    } else if (!strcmp(a, "--warmup")) {
+        if (!strcmp(v, "auto")) o->warmup = -1;
+        else if (!sb_parse_int(v, &n) || n < 0 || n > 10000)
+            return sb_fail(err, "--warmup %s: expected auto or 0..10000", v), -1;
+        else o->warmup = (int)n;
+    } else if (!strcmp(a, "--clocks")) {
+        if (!sb_clocks_parse(v, &o->clocks)) return sb_fail(err, "--clocks %s: expected auto, lock or free", v), -1;
+    } else if (!strcmp(a, "--order")) {
+        if (!strcmp(v, "matrix")) o->order = SB_ORDER_MATRIX;
+        else if (!strcmp(v, "interleave")) o->order = SB_ORDER_INTERLEAVE;
+        else if (!strcmp(v, "shuffle")) o->order = SB_ORDER_SHUFFLE;
+        else return sb_fail(err, "--order %s: expected matrix, interleave or shuffle", v), -1;
+    } else if (!strcmp(a, "--seed")) {
+        unsigned long long u;
+        char extra;
+        if (sscanf(v, "%llu%c", &u, &extra) != 1 || u == 0 || v[0] == '-')
+            return sb_fail(err, "--seed %s: expected an integer >= 1", v), -1;
+        o->seed = u;
+    } else if (!strcmp(a, "--blend-casters")) {
+        if (!sb_blend_policy_parse(v, &o->blend))
+            return sb_fail(err, "--blend-casters %s: expected mask, opaque or none", v), -1;
+    } else if (!strcmp(a, "--pose")) {
+        if (!sb_parse_double(v, &o->pose_time) || !isfinite(o->pose_time))
+            return sb_fail(err, "--pose %s: expected a time in seconds", v), -1;
+        o->pose = true;
+    } else if (!strcmp(a, "--size")) {
+        int w, h;
+        char extra;
+        if (sscanf(v, "%dx%d%c", &w, &h, &extra) != 2 || w < 1 || h < 1 || w > 16384 || h > 16384)
+            return sb_fail(err, "--size %s: expected WxH, e.g. 1280x720", v), -1;
+        o->width = w;
+        o->height = h;
+    } else if (!strcmp(a, "--sun")) {
+        char buf[64];
+        snprintf(buf, sizeof buf, "%s", v);
+        char *comma = strchr(buf, ',');
+        if (comma) *comma = 0;
+        if (!comma || !sb_parse_double(buf, &o->sun_az) || !sb_parse_double(comma + 1, &o->sun_el) ||
+            o->sun_el < -90 || o->sun_el > 90)
+            return sb_fail(err, "--sun %s: expected AZIMUTH,ELEVATION in degrees (elevation -90..90)", v), -1;
+        o->sun_override = true;
+    } else if (!strcmp(a, "--images")) {
+        if (!sb_parse_int(v, &n) || n < 0 || n > 1000000) return sb_fail(err, "--images %s: expected a frame interval >= 0", v), -1;
+        if (n > 0 && !sb_images_available())
+            return sb_fail(err, "--images %s: %s", v, sb_images_unavailable_reason()), -1;
+        o->images = (int)n;
+    } else if (!strcmp(a, "--error-every")) {
+        if (!sb_parse_int(v, &n) || n < 0 || n > 1000000) return sb_fail(err, "--error-every %s: expected a frame interval >= 0", v), -1;
+        o->error_every = (int)n;
+    } else if (!strcmp(a, "--repeat")) {
+        if (!sb_parse_int(v, &n) || n < 1 || n > 1000) return sb_fail(err, "--repeat %s: expected 1..1000", v), -1;
+        o->repeat = (int)n;
+    } else if (!strcmp(a, "--target-ci")) {
+        if (!sb_parse_double(v, &o->target_ci) || o->target_ci <= 0 || o->target_ci > 100)
+            return sb_fail(err, "--target-ci %s: expected a percentage in (0, 100]", v), -1;
+    } else if (!strcmp(a, "--max-repeat")) {
+        if (!sb_parse_int(v, &n) || n < 1 || n > 1000) return sb_fail(err, "--max-repeat %s: expected 1..1000", v), -1;
+        o->max_repeat = (int)n;
+    } else if (!strcmp(a, "--threads")) {
+        if (!sb_parse_int(v, &n) || n < 1 || n > 1024) return sb_fail(err, "--threads %s: expected 1..1024", v), -1;
+        o->threads = (int)n;
+    } else if (!strcmp(a, "--overlap")) {
+        if (!strcmp(v, "auto")) o->overlap = -1;
+        else if (!strcmp(v, "on") || !strcmp(v, "off")) o->overlap = !strcmp(v, "on");
+        else return sb_fail(err, "--overlap %s: expected auto, on or off", v), -1;
+    } else if (!strcmp(a, "--run-timeout")) {
+        if (!sb_parse_double(v, &o->run_timeout_s) || o->run_timeout_s < 0)
+            return sb_fail(err, "--run-timeout %s: expected seconds >= 0", v), -1;
+    } else {
+        return 0;
+    }
+    return 1;
+}
+
+sb_scene_opts sb_run_scene_opts(const sb_run_opts *o) {
+    return (sb_scene_opts){.allow_external_uris = o->allow_external_uris, .blend = o->blend, .pose = o->pose,
+                           .pose_time = o->pose_time};
+}
+
+void sb_run_opts_finish(sb_run_opts *o) {
+    if (o->order != SB_ORDER_SHUFFLE || o->seed) return;
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    uint64_t x = (uint64_t)ts.tv_sec * 1000000007u ^ (uint64_t)ts.tv_nsec ^ (uint64_t)getpid() << 32;
+    o->seed = (x % 1000000000u) + 1; /* short enough to type back with --seed */
+}
+
+const char *sb_order_name(sb_order o) {
+    return o == SB_ORDER_INTERLEAVE ? "interleave" : o == SB_ORDER_SHUFFLE ? "shuffle" : "matrix";
+}
+
+static void base_name(const char *path, char *out, size_t len) {
+    const char *b = strrchr(path, '/');
+    b = b ? b + 1 : path;
+    snprintf(out, len, "%s", b);
+    char *dot = strrchr(out, '.');
+    if (dot && dot != out && !strchr(dot, '#')) *dot = 0;
+}
+
+/* ---- sessions ---- */
+
+bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, const char *path, sb_err *err) {
+    /* files first: a broken scene or path is refused before any GL is touched */
+    sb_scene sc;
+    sb_path p;
+    sb_scene_opts so = sb_run_scene_opts(o);
+    if (!sb_scene_load(&sc, scene, &so, err)) return false;
+    if (!sb_path_load(&p, path, &sc, err)) {
+        sb_scene_free(&sc);
+        return false;
+    }
+    if (!sb_session_attach(s, o, &sc, &p, err)) return false;
+    base_name(scene, s->scene_name, sizeof s->scene_name);
+    base_name(path, s->path_name, sizeof s->path_name);
+    return true;
+}
+
+bool sb_session_clocks(sb_session *s, const sb_run_opts *o, sb_err *err) {
+    if (s->clocks) return true;
+    s->clocks = sb_clocks_open(&s->ctx, "/sys");
+    return sb_clocks_apply(s->clocks, o->clocks, s->clocks_mode, sizeof s->clocks_mode, err);
+}
+
+bool sb_session_attach(sb_session *s, const sb_run_opts *o, sb_scene *scene, sb_path *path, sb_err *err) {
+    bool have_ctx = s->ctx.renderer[0] != 0;
+    sb_context keep = s->ctx;
+    sb_clocks *clocks = s->clocks;
+    char mode[sizeof s->clocks_mode];
+    memcpy(mode, s->clocks_mode, sizeof mode);
+    memset(s, 0, sizeof *s);
+    s->opts = *o;
+    s->scene = *scene;
+    s->path = *path;
+    memset(scene, 0, sizeof *scene);
+    memset(path, 0, sizeof *path);
+    if (have_ctx) {
+        s->ctx = keep;
+        s->clocks = clocks;
+        memcpy(s->clocks_mode, mode, sizeof mode);
+    }
+    if ((!have_ctx && !sb_context_create(&s->ctx, o->backend, err)) || !sb_session_clocks(s, o, err)) {
+        sb_session_close_scene(s);
+        return false;
+    }
+    sb_v3 sun = s->scene.has_sun ? s->scene.sun : sb_sun_dir(135, 40);
+    if (o->sun_override) sun = sb_sun_dir(o->sun_az, o->sun_el);
+    double t0 = sb_now_ms();
+    if (!sb_gpu_init(&s->gpu, &s->ctx, &s->scene, o->width, o->height, sun, err)) {
+        sb_session_close_scene(s);
+        return false;
+    }
+    glFinish();
+    s->gpu_upload_ms = sb_now_ms() - t0;
+    s->gpu.has_sun = s->scene.has_sun || o->sun_override;
+    s->scratch = sb_xcalloc(s->scene.draw_count + 1, sizeof(uint32_t));
+    s->tech_data = sb_xcalloc((size_t)sb_technique_count(), sizeof *s->tech_data);
+    s->tech_loaded = sb_xcalloc((size_t)sb_technique_count(), sizeof *s->tech_loaded);
+    s->timing = o->timing;
+    if (s->timing == SB_TIMING_AUTO) s->timing = s->ctx.software ? SB_TIMING_SYNC : SB_TIMING_QUERIES;
+    if (s->timing == SB_TIMING_QUERIES && !s->ctx.has_timer_query) {
+        sb_log("note: %s has no timer queries; using sync timing", s->ctx.renderer);
+        s->timing = SB_TIMING_SYNC;
+    }
+    if (!sb_calib_init(&s->calib, &s->ctx, s->timing == SB_TIMING_QUERIES, err)) {
+        sb_session_close_scene(s);
+        return false;
+    }
+    return true;
+}
+
+/* The file of the scene's kept answers and the tag they are kept under. */
+static bool ref_store_file(const sb_session *s, char *out, size_t len, uint64_t *tag) {
+    if (!s->ref_store[0]) return false;
+    uint64_t v[3] = {s->scene.content_hash, sb_binary_identity(), 1 /* format */};
+    *tag = sb_fnv1a(SB_FNV_SEED, v, sizeof v);
+    return (size_t)snprintf(out, len, "%s/%016llx.ref", s->ref_store, (unsigned long long)*tag) < len;
+}
+
+void sb_session_keep_reference(sb_session *s, const char *results_dir) {
+    const char *slash = strrchr(results_dir, '/');
+    int n = slash ? (int)(slash - results_dir) : 0;
+    snprintf(s->ref_store, sizeof s->ref_store, "%.*s%s.reference", n, results_dir, slash ? "/" : "");
+}
+
+void sb_session_close_scene(sb_session *s) {
+    char file[4200];
+    uint64_t tag;
+    if (s->ref_cache) sb_ref_background_stop(s->ref_cache); /* before the reference it casts with goes */
+    if (sb_ref_cache_dirty(s->ref_cache) && ref_store_file(s, file, sizeof file, &tag)) {
+        sb_err e;
+        if (!sb_mkdir_p(s->ref_store, &e) || !sb_ref_cache_save(s->ref_cache, file, tag, &e))
+            sb_log("the reference's answers are not kept for later runs: %s", e.msg);
+    }
+    for (int i = 0; s->tech_loaded && i < sb_technique_count(); i++)
+        if (s->tech_loaded[i] && sb_technique_at(i)->unload) sb_technique_at(i)->unload(s->tech_data[i]);
+    free(s->tech_data);
+    free(s->tech_loaded);
+    s->tech_data = NULL;
+    s->tech_loaded = NULL;
+    if (s->ref) {
+        sb_reference_free(s->ref);
+        free(s->ref);
+        s->ref = NULL;
+    }
+    sb_ref_cache_free(s->ref_cache);
+    s->ref_cache = NULL;
+    free(s->scratch);
+    s->scratch = NULL;
+    sb_calib_free(&s->calib);
+    sb_gpu_free(&s->gpu);
+    sb_path_free(&s->path);
+    sb_scene_free(&s->scene);
+}
+
+void sb_session_close(sb_session *s) {
+    sb_session_close_scene(s);
+    sb_clocks_close(s->clocks);
+    sb_context_destroy(&s->ctx);
+    memset(s, 0, sizeof *s);
+}
+
+const sb_reference *sb_session_reference(sb_session *s, sb_err *err) {
+    if (s->ref) return s->ref;
+    sb_reference *r = sb_xcalloc(1, sizeof *r);
+    if (!sb_reference_build(r, &s->scene, err)) {
+        free(r);
+        return NULL;
+    }
+    s->ref = r;
+    s->ref_cache = sb_ref_cache_new(SB_REF_CACHE_BYTES);
+    char file[4200];
+    uint64_t tag;
+    if (ref_store_file(s, file, sizeof file, &tag)) sb_ref_cache_load(s->ref_cache, file, tag);
+    return r;
+}
+
+/* What the technique's load step made for this scene (made on first use). */
+static bool scene_data(sb_session *s, const sb_technique *t, void **out, sb_err *err) {
+    int i = sb_technique_index(t);
+    *out = NULL;
+    if (!t->load || i < 0) return true;
+    if (!s->tech_loaded[i]) {
+        s->tech_loaded[i] = true;   /* unload frees whatever a failed load left */
+        if (!t->load(&s->gpu, &s->tech_data[i], err)) return false;
+    }
+    *out = s->tech_data[i];
+    return true;
+}
+
+/* ---- why a run cannot apply ---- */
+
+static const char *scene_skip_reason(sb_session *s, const sb_technique *t) {
+    const sb_scene *sc = &s->scene;
+    int points = 0, spots = 0;
+    for (uint32_t i = 0; i < sc->light_count; i++) {
+        points += sc->lights[i].type == SB_LIGHT_POINT;
+        spots += sc->lights[i].type == SB_LIGHT_SPOT;
+    }
+    if (sc->degenerate[0]) {
+        snprintf(s->skip, sizeof s->skip, "the scene is degenerate: %s", sc->degenerate);
+        return s->skip;
+    }
+    if ((t->needs & SB_NEEDS_SUN) && !sc->has_sun && points + spots && !s->opts.sun_override) {
+        char lamps[96];
+        if (points && spots) snprintf(lamps, sizeof lamps, "%d point and %d spot light(s)", points, spots);
+        else snprintf(lamps, sizeof lamps, "%d %s light(s)", points + spots, points ? "point" : "spot");
+        snprintf(s->skip, sizeof s->skip, "the scene is lit only by %s, no sun; --sun AZ,EL adds one", lamps);
+        return s->skip;
+    }
+    if ((t->needs & SB_NEEDS_PLANE) && sc->plane_count == 0) return "the scene has no large planar receiver";
+    if ((t->needs & SB_NEEDS_POINT_LIGHT) && !(points + spots)) return "the scene has no point or spot light";
+    return NULL;
+}
+
+const char *sb_skip_reason(sb_session *s, const sb_technique *t, const sb_params *p) {
+    const char *why = scene_skip_reason(s, t);
+    if (why || !t->supported) return why;
+    sb_params defaults;
+    if (!p) {
+        sb_params_defaults(&defaults, t);
+        p = &defaults;
+    }
+    void *desc = sb_xcalloc(1, t->desc_size ? t->desc_size : 1);
+    sb_params_bind(p, t, desc);
+    sb_run_ctx rc = {.gpu = &s->gpu, .tech = t};
+    sb_err e;
+    bool ok = t->supported(&rc, desc, &e);
+    free(desc);
+    if (ok) return NULL;
+    snprintf(s->skip, sizeof s->skip, "%s", e.msg);
+    return s->skip;
+}
+
+/* ---- instances and frames ---- */
+
+bool sb_instance_create(sb_instance *in, sb_session *s, const sb_run_spec *spec, int frames, sb_err *err) {
+    const sb_technique *t = spec->tech;
+    memset(in, 0, sizeof *in);
+    for (int i = 0; i < spec->params.count; i++)
+        if (spec->params.v[i].automatic)
+            return sb_fail(err, "%s:%s=auto: only run, batch and tune calibrate auto values", t->name,
+                           spec->params.v[i].def->name);
+    in->tech = t;
+    in->params = spec->params;
+    in->desc = sb_xcalloc(1, t->desc_size ? t->desc_size : 1);
+    sb_params_bind(&in->params, t, in->desc);
+    in->rc = (sb_run_ctx){.gpu = &s->gpu, .tech = t, .frames = frames};
+    bool ok = !t->supported || t->supported(&in->rc, in->desc, err);
+    if (ok) ok = scene_data(s, t, &in->rc.scene_data, err);
+    if (ok && (t->needs & SB_NEEDS_REFERENCE)) ok = (in->rc.reference = sb_session_reference(s, err)) != NULL;
+    if (ok) {
+        in->state = sb_xcalloc(1, t->state_size ? t->state_size : 1);
+        ok = t->create(in->state, &in->rc, in->desc, err);
+    }
+    if (!ok) {
+        sb_instance_destroy(in);
+        while (glGetError() != GL_NO_ERROR) {}
+    }
+    return ok;
+}
+
+int sb_instance_history(const sb_instance *in) { return in->tech->history ? in->tech->history(in->desc) : 0; }
+
+void sb_instance_destroy(sb_instance *in) {
+    if (in->state) in->tech->destroy(in->state);
+    free(in->state);
+    free(in->desc);
+    in->state = in->desc = NULL;
+}
+
+void sb_render_camera(sb_session *s, sb_instance *in, sb_frame *f, const sb_camera *cam, int seq, sb_timer *timer,
+                      bool eval) {
+    f->timer = timer;
+    f->seq = seq;
+    sb_frame_setup(f, &s->gpu, cam);
+    f->scratch = s->scratch;
+    f->eval = eval;
+    in->tech->frame(in->state, f);
+}
+
+void sb_render_frame(sb_session *s, sb_instance *in, sb_frame *f, int i, int n, int seq, sb_timer *timer) {
+    sb_camera cam = sb_path_camera(&s->path, i, n, (double)s->opts.width / s->opts.height, &s->scene);
+    f->index = i;
+    f->progress = sb_path_progress(i, n);
+    sb_render_camera(s, in, f, &cam, seq, timer, false);
+}

@@ -1,0 +1,136 @@
+/* session.h - what runs share and what they render with.
+ *
+ * A session holds what runs share (context, scene, path, GPU buffers, the
+ * reference); an instance is one technique with its parameters, rendering a
+ * path frame or an explicit camera into the session's targets. The run loop
+ * (run.h), the evaluation (eval.h), bias=auto (autobias.h) and the stress
+ * battery all render through these, so none of them calls back into another. */
+#pragma once
+#include "calib.h"
+#include "clocks.h"
+#include "context.h"
+#include "csv.h"
+#include "render.h"
+#include "report.h"
+#include "spec.h"
+#include "timing.h"
+
+/* The order of a scene's runs and their repetitions (--order). */
+typedef enum sb_order {
+    SB_ORDER_MATRIX,            /* each run's repetitions together, runs in matrix order */
+    SB_ORDER_INTERLEAVE,        /* rounds: A1 B1 C1, A2 B2 C2, ... */
+    SB_ORDER_SHUFFLE,           /* rounds, each in a random order (seeded) */
+} sb_order;
+const char *sb_order_name(sb_order o);
+
+typedef struct sb_run_opts {
+    sb_backend backend;         /* default egl */
+    sb_timing_mode timing;      /* default auto */
+    int ring;                   /* query ring frames, default 3 */
+    int frames;                 /* default 60 */
+    int warmup;                 /* warm-up frames; -1 (the default): auto, until the GPU is warm */
+    int width, height;          /* default 1280x720 */
+    bool sun_override;
+    double sun_az, sun_el;      /* degrees */
+    bool progress;              /* progress line on stderr */
+    int images;                 /* write images of every K-th frame (0: none), untimed pass */
+    int error_every;            /* evaluate the error of every K-th frame (0: off), untimed pass; default 10 */
+    int repeat;                 /* repetitions of the path (default 1) */
+    double target_ci;           /* percent: repeat until the gpu_ms CI half-width is within it (0: off) */
+    int max_repeat;             /* cap for target_ci (default 10) */
+    int threads;                /* reference ray-casting threads (default: all cores, at most 1024) */
+    int overlap;                /* --overlap: 1 on, 0 off, -1 auto (the default: on for a GPU, off for a CPU rasterizer) */
+    double run_timeout_s;       /* a run taking longer fails with a timeout (0: none) */
+    bool allow_external_uris;   /* glTF buffers and images may be read from outside the scene's folder */
+    sb_blend_policy blend;      /* --blend-casters mask|opaque|none (default mask) */
+    bool pose;                  /* --pose T: the scene at time T of its first animation */
+    double pose_time;
+    sb_clocks_mode clocks;      /* --clocks auto|lock|free (default auto) */
+    sb_order order;             /* --order matrix|interleave|shuffle (default matrix) */
+    uint64_t seed;              /* --seed: shuffle's seed; 0: chosen by sb_run_opts_finish */
+} sb_run_opts;
+
+void sb_run_opts_defaults(sb_run_opts *o);
+/* Sets one option (--frames, --size, ...) from text: 1 set, 0 not a run
+ * option, -1 bad value (err says which and what was expected). */
+int sb_run_opts_set(sb_run_opts *o, const char *name, const char *value, sb_err *err);
+/* How the options read a scene file. */
+sb_scene_opts sb_run_scene_opts(const sb_run_opts *o);
+/* After every option is set: picks shuffle's seed when none was given. */
+void sb_run_opts_finish(sb_run_opts *o);
+
+typedef struct sb_session {
+    sb_run_opts opts;
+    sb_context ctx;
+    sb_scene scene;
+    sb_path path;
+    sb_gpu gpu;
+    sb_timing_mode timing;      /* resolved */
+    char scene_name[256], path_name[256];
+    char skip[SB_ERR_LEN + 64]; /* the last skip reason */
+    uint32_t *scratch;          /* draw_count entries: a frame's culling results */
+    struct sb_reference *ref;   /* the scene's Embree reference, built on first use */
+    double gpu_upload_ms;       /* the scene's buffers and targets made on the GPU (sb_gpu_init, finished) */
+    struct sb_ref_cache *ref_cache; /* its answers per rasterized frame, shared by the runs of the scene */
+    char ref_store[4096];       /* folder keeping those answers across processes ("": none; sb_session_keep_reference) */
+    void **tech_data;           /* per technique (registry index): what its load step made for the scene */
+    bool *tech_loaded;
+    bool timed;                 /* true while a run's timed frames render (tests assert nothing is read back then) */
+    sb_calib calib;             /* the calibration probe */
+    sb_clocks *clocks;          /* the GPU's clock state (kept with the context) */
+    char clocks_mode[64];       /* what the summary's clocks column says */
+} sb_session;
+
+/* Above these shares a run's warnings say its error figures cannot be trusted
+ * (see check_geometry in run.c and the README's "Error" section). */
+/* The reference answers kept per scene (bytes: one per evaluated pixel; 1280x720 frames about 0.9 MB each). */
+#define SB_REF_CACHE_BYTES ((size_t)512 << 20)
+#define SB_GEOM_MISMATCH_WARN 1e-4
+#define SB_ERR_FLOOR_WARN 1e-3
+
+/* The most warm-up frames --warmup auto renders. */
+#define SB_WARMUP_AUTO_CAP 1000
+
+/* Opens the clock reader for the session's context and applies --clocks
+ * (after the context exists; kept with it across scenes). */
+bool sb_session_clocks(sb_session *s, const sb_run_opts *o, sb_err *err);
+/* Loads scene and path, opens the context (if not already), uploads buffers. */
+bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, const char *path, sb_err *err);
+/* The same with a scene and path already loaded: the session takes them over
+ * (freed with it, also when this fails). */
+bool sb_session_attach(sb_session *s, const sb_run_opts *o, sb_scene *scene, sb_path *path, sb_err *err);
+/* Keeps the reference's answers beside a results set: in the hidden folder
+ * `.reference` next to results_dir (OUT/.reference for run's OUT/<UTC>, the
+ * batch's OUT/NAME/.reference: listings of results sets do not see it), read when a scene's reference is first used
+ * and written when the scene closes, so reruns into the same OUT and
+ * --resume cast no ray already cast. */
+void sb_session_keep_reference(sb_session *s, const char *results_dir);
+/* Frees the scene, path and what was made for them but keeps the context (next scene of a batch). */
+void sb_session_close_scene(sb_session *s);
+void sb_session_close(sb_session *s);
+/* The scene's Embree reference (built on the first call); NULL with err on failure. */
+const struct sb_reference *sb_session_reference(sb_session *s, sb_err *err);
+
+/* A live technique instance: its parameters as values and as the bound struct. */
+typedef struct sb_instance {
+    const sb_technique *tech;
+    sb_params params;
+    void *desc;                 /* the parameter struct (sb_params_bind) */
+    void *state;
+    sb_run_ctx rc;
+} sb_instance;
+
+/* Creates the technique for `frames` frames (warm-up and repeats included);
+ * false with the reason when it is not supported here or fails. */
+bool sb_instance_create(sb_instance *in, sb_session *s, const sb_run_spec *spec, int frames, sb_err *err);
+void sb_instance_destroy(sb_instance *in);
+/* Earlier frames a frame of this instance depends on (sb_technique.history). */
+int sb_instance_history(const sb_instance *in);
+/* Renders frame i of n of the path as the run's seq-th frame, timed by timer. */
+void sb_render_frame(sb_session *s, sb_instance *in, sb_frame *f, int i, int n, int seq, struct sb_timer *timer);
+/* Renders an explicit camera (tests, stress cases); eval binds the evaluation targets. */
+void sb_render_camera(sb_session *s, sb_instance *in, sb_frame *f, const sb_camera *cam, int seq,
+                      struct sb_timer *timer, bool eval);
+/* Why a technique (with parameters p; NULL: its defaults) cannot run on this
+ * scene and context, or NULL. The text lives in the session. */
+const char *sb_skip_reason(sb_session *s, const sb_technique *t, const sb_params *p);
