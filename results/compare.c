@@ -217,6 +217,159 @@ static bool agree(const char *a, const char *b, const char *skip) {
     return true;
 }
 
+/* ---- pairs: one table, a row a pair ---- */
+
+enum { PAIR_ITEMS = 64, PAIR_COLS = 40 };
+
+typedef struct {
+    int a, b;
+    char items[PAIR_ITEMS][96];     /* "key=value" of both runs (b's keys a lacks added), without the paired key */
+    int nitems;
+} pair_row;
+
+static int cmp_item(const void *x, const void *y) { return strcmp((const char *)x, (const char *)y); }
+
+static void add_items(pair_row *p, const char *params, const char *skip) {
+    char buf[2048];
+    snprintf(buf, sizeof buf, "%s", params);
+    for (char *t = strtok(buf, ":"); t && p->nitems < PAIR_ITEMS; t = strtok(NULL, ":")) {
+        const char *eq = strchr(t, '=');
+        size_t kl = eq ? (size_t)(eq - t) : strlen(t);
+        if (skip && strlen(skip) == kl && !strncmp(t, skip, kl)) continue;
+        bool have = false;
+        for (int i = 0; i < p->nitems && !have; i++) have = !strncmp(p->items[i], t, kl) && p->items[i][kl] == '=';
+        if (!have) snprintf(p->items[p->nitems++], sizeof p->items[0], "%s", t);
+    }
+}
+
+/* Whether item is in every pair: then it is said once, above the table, not in every row. */
+static bool shared_item(const pair_row *rows, int n, const char *item) {
+    for (int i = 0; i < n; i++) {
+        bool in = false;
+        for (int k = 0; k < rows[i].nitems && !in; k++) in = !strcmp(rows[i].items[k], item);
+        if (!in) return false;
+    }
+    return true;
+}
+
+/* A table of text cells printed as aligned text, CSV or markdown. */
+typedef struct {
+    char head[PAIR_COLS][384];
+    bool numeric[PAIR_COLS];
+    int ncols, nrows;
+    char (*cells)[PAIR_COLS][160];
+} cell_table;
+
+static void table_print(const cell_table *tb, int format, FILE *out) {
+    if (format == SB_FORMAT_CSV) {
+        sb_csv c = {0};
+        for (int k = 0; k < tb->ncols; k++) sb_csv_str(&c, tb->head[k]);
+        sb_csv_end_row(&c);
+        for (int r = 0; r < tb->nrows; r++) {
+            for (int k = 0; k < tb->ncols; k++) sb_csv_str(&c, tb->cells[r][k]);
+            sb_csv_end_row(&c);
+        }
+        fputs(c.buf ? c.buf : "", out);
+        sb_csv_free(&c);
+        return;
+    }
+    int w[PAIR_COLS];
+    for (int k = 0; k < tb->ncols; k++) {
+        w[k] = (int)strlen(tb->head[k]);
+        for (int r = 0; r < tb->nrows; r++)
+            if ((int)strlen(tb->cells[r][k]) > w[k]) w[k] = (int)strlen(tb->cells[r][k]);
+    }
+    bool md = format == SB_FORMAT_MARKDOWN;
+    for (int r = -1; r < tb->nrows; r++) {
+        for (int k = 0; k < tb->ncols; k++) {
+            const char *v = r < 0 ? tb->head[k] : tb->cells[r][k];
+            int width = tb->numeric[k] ? w[k] : -w[k];
+            if (md) fprintf(out, "| %*s ", width, v);
+            else if (k + 1 == tb->ncols && !tb->numeric[k]) fprintf(out, "%s%s", k ? "  " : "", v);
+            else fprintf(out, "%s%*s", k ? "  " : "", width, v);
+        }
+        fputs(md ? "|\n" : "\n", out);
+        if (md && r < 0) {
+            for (int k = 0; k < tb->ncols; k++) fputs(tb->numeric[k] ? "|---:" : "|---", out);
+            fputs("|\n", out);
+        }
+    }
+}
+
+static void cell_num(char *out, double v) {
+    if (isnan(v)) out[0] = 0;
+    else snprintf(out, 160, "%.4g", v);
+}
+
+/* Do runs ra and rb form a pair for key (A's value va, B's vb)? */
+static bool is_pair(const sb_table *t, int ra, int rb, const char *key, const char *va, const char *vb) {
+    const char *pa = sb_table_get(t, ra, "params"), *pb = sb_table_get(t, rb, "params");
+    char v[256];
+    if (ra == rb || strcmp(sb_table_get(t, ra, "status"), "ok") || strcmp(sb_table_get(t, rb, "status"), "ok"))
+        return false;
+    if (strcmp(sb_table_get(t, ra, "scene"), sb_table_get(t, rb, "scene")) ||
+        strcmp(sb_table_get(t, ra, "path"), sb_table_get(t, rb, "path")))
+        return false;
+    if (!strcmp(key, "technique"))
+        return !strcmp(sb_table_get(t, ra, "technique"), va) && !strcmp(sb_table_get(t, rb, "technique"), vb) &&
+               agree(pa, pb, NULL);
+    return !strcmp(sb_table_get(t, ra, "technique"), sb_table_get(t, rb, "technique")) &&
+           param_value(pa, key, v, sizeof v) && !strcmp(v, va) && param_value(pb, key, v, sizeof v) &&
+           !strcmp(v, vb) && agree(pa, pb, key);
+}
+
+/* The table: scene (and path where it is not the scene's), technique (unless it
+ * is the key), the parameters that are not the same in every pair, then for each
+ * metric A's, B's and their ratio, and a verdict. */
+static void pairs_table(const sb_table *t, const pair_row *rows, int n, const char *key, const char *la,
+                        const char *lb, const char *const *metrics, int nm, cell_table *tb) {
+    bool by_tech = !strcmp(key, "technique"), show_path = false;
+    for (int i = 0; i < n; i++) show_path |= strcmp(sb_table_get(t, rows[i].a, "scene"), sb_table_get(t, rows[i].a, "path")) != 0;
+    int k = 0;
+    snprintf(tb->head[k++], sizeof tb->head[0], "scene");
+    if (show_path) snprintf(tb->head[k++], sizeof tb->head[0], "path");
+    if (!by_tech) snprintf(tb->head[k++], sizeof tb->head[0], "technique");
+    bool varying = false;   /* a params column only when some pair has parameters the others do not share */
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < rows[i].nitems; j++) varying |= !shared_item(rows, n, rows[i].items[j]);
+    if (varying) snprintf(tb->head[k++], sizeof tb->head[0], "params");
+    int first_metric = k;
+    for (int m = 0; m < nm && k + 3 < PAIR_COLS; m++) {
+        snprintf(tb->head[k++], sizeof tb->head[0], "%s %s", la, metrics[m]);
+        snprintf(tb->head[k++], sizeof tb->head[0], "%s %s", lb, metrics[m]);
+        snprintf(tb->head[k++], sizeof tb->head[0], "%s ratio", metrics[m]);
+    }
+    for (int c = first_metric; c < k; c++) tb->numeric[c] = true;
+    snprintf(tb->head[k++], sizeof tb->head[0], "verdict");
+    tb->ncols = k;
+    tb->nrows = n;
+    tb->cells = sb_xcalloc((size_t)(n ? n : 1), sizeof *tb->cells);
+    for (int i = 0; i < n; i++) {
+        char (*cell)[160] = tb->cells[i];
+        const pair_row *p = &rows[i];
+        int c = 0;
+        snprintf(cell[c++], 160, "%s", sb_table_get(t, p->a, "scene"));
+        if (show_path) snprintf(cell[c++], 160, "%s", sb_table_get(t, p->a, "path"));
+        if (!by_tech) snprintf(cell[c++], 160, "%s", sb_table_get(t, p->a, "technique"));
+        char *lab = cell[c];
+        c += varying;
+        for (int j = 0; varying && j < p->nitems; j++)
+            if (!shared_item(rows, n, p->items[j])) {
+                size_t l = strlen(lab);
+                snprintf(lab + l, 160 - l, "%s%s", l ? ":" : "", p->items[j]);
+            }
+        bool shaky = unstable_row(t, p->a) || unstable_row(t, p->b), timing_shaky = false;
+        for (int m = 0; m < nm && c + 3 < PAIR_COLS; m++) {
+            metric_value a = metric(t, p->a, metrics[m]), b = metric(t, p->b, metrics[m]);
+            cell_num(cell[c++], a.center);
+            cell_num(cell[c++], b.center);
+            cell_num(cell[c++], a.ok && b.ok ? (a.center != 0 ? b.center / a.center : b.center == 0 ? 1 : INFINITY) : NAN);
+            timing_shaky |= shaky && !isnan(a.ci);
+        }
+        snprintf(cell[c], 160, "%s", timing_shaky ? "UNSTABLE" : "ok");
+    }
+}
+
 int sb_compare_pairs(const char *dir, const sb_compare_opts *o, FILE *out, sb_err *err) {
     char key[128], va[128], vb[128];
     const char *eq = o->pair ? strchr(o->pair, '=') : NULL;
@@ -229,45 +382,46 @@ int sb_compare_pairs(const char *dir, const sb_compare_opts *o, FILE *out, sb_er
     snprintf(vb, sizeof vb, "%s", comma + 1);
     sb_table t;
     if (!load_summary(&t, dir, err)) return -1;
-    const char *defaults[32];
-    const char *const *metrics = o->nmetrics ? o->metrics : defaults;
-    int nm = o->nmetrics ? o->nmetrics : sb_report_default_metrics(defaults, 32);
+    /* default: the two questions a pair answers, time and error */
+    static const char *const pair_defaults[] = {"gpu_ms", "err_rate"};
+    const char *const *metrics = o->nmetrics ? o->metrics : pair_defaults;
+    int nm = o->nmetrics ? o->nmetrics : 2;
     bool by_tech = !strcmp(key, "technique");
-    header(out, o->format, va, vb);
-    int pairs = 0;
-    for (int ra = 0; ra < t.nrows; ra++) {
-        const char *pa = sb_table_get(&t, ra, "params");
-        char v[256];
-        if (strcmp(sb_table_get(&t, ra, "status"), "ok")) continue;
-        if (by_tech ? strcmp(sb_table_get(&t, ra, "technique"), va) : !param_value(pa, key, v, sizeof v) || strcmp(v, va))
-            continue;
+    pair_row *rows = NULL;
+    int n = 0;
+    for (int ra = 0; ra < t.nrows; ra++)
         for (int rb = 0; rb < t.nrows; rb++) {
-            const char *pb = sb_table_get(&t, rb, "params");
-            if (rb == ra || strcmp(sb_table_get(&t, rb, "status"), "ok")) continue;
-            if (strcmp(sb_table_get(&t, ra, "scene"), sb_table_get(&t, rb, "scene")) ||
-                strcmp(sb_table_get(&t, ra, "path"), sb_table_get(&t, rb, "path")))
-                continue;
-            if (by_tech) {
-                if (strcmp(sb_table_get(&t, rb, "technique"), vb) || !agree(pa, pb, NULL)) continue;
-            } else {
-                if (strcmp(sb_table_get(&t, ra, "technique"), sb_table_get(&t, rb, "technique"))) continue;
-                if (!param_value(pb, key, v, sizeof v) || strcmp(v, vb) || !agree(pa, pb, key)) continue;
-            }
-            pairs++;
-            char params[2048];
-            sorted_params(pa, params, sizeof params);
-            bool shaky = unstable_row(&t, ra) || unstable_row(&t, rb);
-            for (int k = 0; k < nm; k++) {
-                metric_value a = metric(&t, ra, metrics[k]), b = metric(&t, rb, metrics[k]);
-                if (a.ok && b.ok)
-                    row(out, o->format, &t, ra, params, metrics[k], a.center, b.center,
-                        shaky && !isnan(a.ci) ? "UNSTABLE" : "");
-            }
+            if (!is_pair(&t, ra, rb, key, va, vb)) continue;
+            rows = sb_xrealloc(rows, (size_t)(n + 1) * sizeof *rows);
+            pair_row *p = &rows[n++];
+            memset(p, 0, sizeof *p);
+            p->a = ra;
+            p->b = rb;
+            add_items(p, sb_table_get(&t, ra, "params"), by_tech ? NULL : key);
+            add_items(p, sb_table_get(&t, rb, "params"), by_tech ? NULL : key);
+            qsort(p->items, (size_t)p->nitems, sizeof p->items[0], cmp_item);
         }
+    char la[300], lb[300];
+    snprintf(la, sizeof la, by_tech ? "%s%s" : "%s=%s", by_tech ? "" : key, va);
+    snprintf(lb, sizeof lb, by_tech ? "%s%s" : "%s=%s", by_tech ? "" : key, vb);
+    cell_table tb;
+    memset(&tb, 0, sizeof tb);
+    pairs_table(&t, rows, n, key, la, lb, metrics, nm, &tb);
+    if (o->format != SB_FORMAT_CSV) {
+        char shared[2048] = "";
+        for (int j = 0; n && j < rows[0].nitems; j++)
+            if (shared_item(rows, n, rows[0].items[j])) {
+                size_t l = strlen(shared);
+                snprintf(shared + l, sizeof shared - l, "%s%s", l ? ":" : "", rows[0].items[j]);
+            }
+        if (shared[0]) fprintf(out, o->format == SB_FORMAT_MARKDOWN ? "Every pair: `%s`\n\n" : "every pair: %s\n", shared);
     }
-    if (o->format == SB_FORMAT_TEXT) fprintf(out, "%d pair(s) %s=%s against %s=%s\n", pairs, key, vb, key, va);
+    if (n) table_print(&tb, o->format, out);
+    if (o->format == SB_FORMAT_TEXT) fprintf(out, "%d pair(s) %s=%s against %s=%s\n", n, key, vb, key, va);
+    free(tb.cells);
+    free(rows);
     sb_table_free(&t);
-    return pairs;
+    return n;
 }
 
 static bool copy_file(const char *from, const char *to, sb_err *err) {
