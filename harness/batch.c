@@ -4,7 +4,6 @@
 
 #include <stdlib.h>
 #include <string.h>
-#include <sys/utsname.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -319,49 +318,13 @@ void sb_batch_shard(const sb_batch *b, int shard, int nshards, bool *selected) {
 
 /* ---- running a batch ---- */
 
-static void cpu_model(char *out, size_t len) {
-    snprintf(out, len, "unknown");
-    FILE *f = fopen("/proc/cpuinfo", "r");
-    if (!f) return;
-    char line[512];
-    while (fgets(line, sizeof line, f))
-        if (!strncmp(line, "model name", 10)) {
-            char *colon = strchr(line, ':');
-            if (colon) {
-                snprintf(out, len, "%s", colon + 2);
-                out[strcspn(out, "\n")] = 0;
-            }
-            break;
-        }
-    fclose(f);
-}
-
-static bool write_meta(const sb_batch_cmd *cmd, const char *dir, const sb_context *ctx, const sb_clocks *s_clocks,
-                       const sb_batch *b, int selected, sb_err *err) {
-    char buf[8192], cpu[256], date[64];
-    cpu_model(cpu, sizeof cpu);
-    struct utsname u;
-    uname(&u);
-    time_t now = time(NULL);
-    struct tm tm;
-    gmtime_r(&now, &tm);
-    strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", &tm);
-    long cores = sysconf(_SC_NPROCESSORS_ONLN);
-    char clocks[1024];
-    sb_clocks_describe(s_clocks, clocks, sizeof clocks);
-    char seed[32] = "";
+static bool write_meta(const sb_batch_cmd *cmd, const char *dir, const sb_session *s, const sb_batch *b,
+                       int selected, sb_err *err) {
+    char extra[4200], seed[32] = "";
     if (b->opts.order == SB_ORDER_SHUFFLE) snprintf(seed, sizeof seed, "%llu", (unsigned long long)b->opts.seed);
-    int n = snprintf(buf, sizeof buf,
-                     "command: %s\nversion: %s\ncommit: %s\ndate: %s\nbatch: %s\nruns: %d of %d%s%s\n"
-                     "backend: %s (%s)\ngl_vendor: %s\ngl_renderer: %s\ngl_version: %s\ncpu: %s\ncores: %ld\n"
-                     "kernel: %s %s %s\norder: %s\nseed: %s\n%s",
-                     cmd->command_line, cmd->version, cmd->commit, date, b->file, selected, b->nruns,
-                     cmd->shard ? ", shard " : "", cmd->shard ? cmd->shard : "", sb_backend_name(ctx->backend),
-                     ctx->device, ctx->vendor, ctx->renderer, ctx->version, cpu, cores, u.sysname, u.release,
-                     u.machine, sb_order_name(b->opts.order), seed, clocks);
-    char path[4200];
-    snprintf(path, sizeof path, "%s/meta", dir);
-    return sb_write_file_atomic(path, buf, (size_t)(n < (int)sizeof buf ? n : (int)sizeof buf - 1), err);
+    snprintf(extra, sizeof extra, "batch: %s\nruns: %d of %d%s%s\norder: %s\nseed: %s\n", b->file, selected, b->nruns,
+             cmd->shard ? ", shard " : "", cmd->shard ? cmd->shard : "", sb_order_name(b->opts.order), seed);
+    return sb_session_write_meta(s, dir, cmd->command_line, cmd->version, cmd->commit, extra, err);
 }
 
 static void print_dry_run(const sb_batch *b, const bool *selected, int nsel, bool sharded) {
@@ -511,7 +474,7 @@ int sb_batch_main(const sb_batch_cmd *cmd) {
         rc = 1;
         goto out;
     }
-    if (!write_meta(cmd, dir, &s.ctx, s.clocks, &b, nsel, &err) || !sb_report_write_columns(dir, &err))
+    if (!write_meta(cmd, dir, &s, &b, nsel, &err) || !sb_report_write_columns(dir, &err))
         fprintf(stderr, "shadowbench: %s\n", err.msg);
     snprintf(sum_path, sizeof sum_path, "%s/summary.csv", dir);
     sb_summary sum;

@@ -259,6 +259,14 @@ static int cmd_path(const cli *c) {
     return 0;
 }
 
+static void command_line(const cli *c, char *out, size_t len) {
+    out[0] = 0;
+    for (int i = 0; i < c->argc; i++) {
+        size_t l = strlen(out);
+        snprintf(out + l, len - l, "%s%s", i ? " " : "", c->argv[i]);
+    }
+}
+
 static int cmd_run(const cli *c) {
     if (c->npos < 3) return bad("usage: shadowbench run SCENE PATH SPEC... (see --help)%s", "");
     sb_err err;
@@ -287,6 +295,10 @@ static int cmd_run(const cli *c) {
         free(runs);
         return 1;
     }
+    char cmdline[2048];
+    command_line(c, cmdline, sizeof cmdline);
+    if (!sb_session_write_meta(&s, dir, cmdline, SB_VERSION, SB_GIT_COMMIT, NULL, &err))
+        fprintf(stderr, "shadowbench: %s\n", err.msg);
     sb_session_keep_reference(&s, dir);
     char parts[256];
     sb_scene_load_parts(&s.scene, parts, sizeof parts);
@@ -351,11 +363,8 @@ static int cmd_tune(const cli *c) {
 
 static int cmd_batch(const cli *c) {
     if (c->npos != 1) return bad("usage: shadowbench batch FILE [--shard I/N] [--resume DIR] [--dry-run]%s", "");
-    char cmdline[2048] = {0};
-    for (int i = 0; i < c->argc; i++) {
-        size_t l = strlen(cmdline);
-        snprintf(cmdline + l, sizeof cmdline - l, "%s%s", i ? " " : "", c->argv[i]);
-    }
+    char cmdline[2048];
+    command_line(c, cmdline, sizeof cmdline);
     sb_run_opts base;
     sb_run_opts_defaults(&base);
     base.progress = c->opts.progress;

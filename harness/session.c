@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <sys/utsname.h>
 #include <unistd.h>
 
 #include "image.h"
@@ -387,4 +388,46 @@ void sb_render_frame(sb_session *s, sb_instance *in, sb_frame *f, int i, int n, 
     f->index = i;
     f->progress = sb_path_progress(i, n);
     sb_render_camera(s, in, f, &cam, seq, timer, false);
+}
+
+static void cpu_model(char *out, size_t len) {
+    snprintf(out, len, "unknown");
+    FILE *f = fopen("/proc/cpuinfo", "r");
+    if (!f) return;
+    char line[512];
+    while (fgets(line, sizeof line, f))
+        if (!strncmp(line, "model name", 10)) {
+            char *colon = strchr(line, ':');
+            if (colon) {
+                snprintf(out, len, "%s", colon + 2);
+                out[strcspn(out, "\n")] = 0;
+            }
+            break;
+        }
+    fclose(f);
+}
+
+bool sb_session_write_meta(const sb_session *s, const char *dir, const char *command_line, const char *version,
+                           const char *commit, const char *extra, sb_err *err) {
+    char buf[12288], cpu[256], date[64], host[256] = "unknown", clocks[1024];
+    cpu_model(cpu, sizeof cpu);
+    struct utsname u;
+    uname(&u);
+    if (gethostname(host, sizeof host - 1)) snprintf(host, sizeof host, "unknown");
+    time_t now = time(NULL);
+    struct tm tm;
+    gmtime_r(&now, &tm);
+    strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    sb_clocks_describe(s->clocks, clocks, sizeof clocks);
+    const sb_context *ctx = &s->ctx;
+    int n = snprintf(buf, sizeof buf,
+                     "command: %s\nversion: %s\ncommit: %s\ndate: %s\nhost: %s\n%s"
+                     "backend: %s (%s)\ngl_vendor: %s\ngl_renderer: %s\ngl_version: %s\ncpu: %s\ncores: %ld\n"
+                     "kernel: %s %s %s\n%s",
+                     command_line, version, commit, date, host, extra ? extra : "", sb_backend_name(ctx->backend),
+                     ctx->device, ctx->vendor, ctx->renderer, ctx->version, cpu, sysconf(_SC_NPROCESSORS_ONLN),
+                     u.sysname, u.release, u.machine, clocks);
+    char path[4200];
+    snprintf(path, sizeof path, "%s/meta", dir);
+    return sb_write_file_atomic(path, buf, (size_t)(n < (int)sizeof buf ? n : (int)sizeof buf - 1), err);
 }

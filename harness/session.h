@@ -108,6 +108,12 @@ void sb_session_keep_reference(sb_session *s, const char *results_dir);
 /* Frees the scene, path and what was made for them but keeps the context (next scene of a batch). */
 void sb_session_close_scene(sb_session *s);
 void sb_session_close(sb_session *s);
+/* Writes DIR/meta ("key: value" lines): the command, shadowbench's version and
+ * commit, the time (UTC), the host, the backend and GL strings, the CPU, the
+ * kernel and the clocks, then `extra` (lines the caller adds). `shadowbench
+ * history add` reads it. */
+bool sb_session_write_meta(const sb_session *s, const char *dir, const char *command_line, const char *version,
+                           const char *commit, const char *extra, sb_err *err);
 /* The scene's Embree reference (built on the first call); NULL with err on failure. */
 const struct sb_reference *sb_session_reference(sb_session *s, sb_err *err);
 
