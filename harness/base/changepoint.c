@@ -1,0 +1,145 @@
+/* changepoint.c - optimal partitioning of a weighted mean-shift cost (changepoint.h). */
+#include "changepoint.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "util.h"
+
+static int cmp_double(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double median_of(double *v, int n) {
+    if (n <= 0) return NAN;
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/* sum w, sum w x, sum w x^2 over [s, t) from prefix sums */
+typedef struct { double *w, *wx, *wxx; } prefix;
+
+static double seg_cost(const prefix *p, int s, int t) {
+    double W = p->w[t] - p->w[s], S = p->wx[t] - p->wx[s], Q = p->wxx[t] - p->wxx[s];
+    if (W <= 0) return 0;
+    double c = Q - S * S / W;
+    return c > 0 ? c : 0;
+}
+
+/* The least-cost cut of v[0..k) into segments of >= m (cost / sigma^2 + beta a change); the cuts (starts of
+   segments after the first) written last first. */
+static int search(const prefix *p, int k, int m, double beta, double sigma, int *cuts) {
+    double s2 = sigma * sigma;
+    double *F = sb_xmalloc(sizeof *F * (size_t)(k + 1));
+    int *last = sb_xmalloc(sizeof *last * (size_t)(k + 1));
+    for (int t = 0; t <= k; t++) F[t] = INFINITY, last[t] = 0;
+    F[0] = -beta;
+    for (int t = m; t <= k; t++)
+        for (int s = 0; s + m <= t; s++) {
+            if ((s > 0 && s < m) || !isfinite(F[s])) continue;
+            double c = F[s] + seg_cost(p, s, t) / s2 + beta;
+            if (c < F[t]) F[t] = c, last[t] = s;
+        }
+    int nc = 0;
+    for (int t = k; t > 0; t = last[t])
+        if (last[t] > 0) cuts[nc++] = last[t];
+    free(F);
+    free(last);
+    return nc;
+}
+
+int sb_changepoints(const double *x, const double *w, int n, const sb_cp_opts *o, sb_cp_change *out, int max,
+                    double *sigma_out) {
+    sb_cp_opts d = o ? *o : (sb_cp_opts){0};
+    double beta = d.penalty > 0 ? d.penalty : SB_CP_PENALTY;
+    int m = d.min_seg > 0 ? d.min_seg : SB_CP_MIN_SEG;
+    /* the nights with a value, on the scale read */
+    double *v = sb_xmalloc(sizeof *v * (size_t)(n + 1)), *wt = sb_xmalloc(sizeof *wt * (size_t)(n + 1));
+    int *idx = sb_xmalloc(sizeof *idx * (size_t)(n + 1));
+    int k = 0;
+    bool logs = d.relative;
+    for (int i = 0; i < n; i++)
+        if (isfinite(x[i]) && x[i] <= 0) logs = false;
+    for (int i = 0; i < n; i++) {
+        if (!isfinite(x[i])) continue;
+        double wi = w ? w[i] : 1.0;
+        if (!(wi > 0)) continue;
+        v[k] = logs ? log(x[i]) : x[i];
+        wt[k] = wi > 1 ? 1 : wi;
+        idx[k++] = i;
+    }
+    int found = 0;
+    double sigma = 0;
+    if (k >= 2) {
+        double *diff = sb_xmalloc(sizeof *diff * (size_t)k);
+        for (int i = 0; i + 1 < k; i++) diff[i] = fabs(v[i + 1] - v[i]);
+        sigma = 1.4826 * median_of(diff, k - 1) / sqrt(2.0);
+        free(diff);
+        double mag = 0;
+        for (int i = 0; i < k; i++) mag += fabs(v[i]);
+        mag /= k;
+        double floor_ = d.noise_floor > 0 ? (logs ? d.noise_floor : d.noise_floor * mag) : 0;
+        if (sigma < floor_) sigma = floor_;
+        if (sigma < 1e-9 * (1 + mag)) sigma = 1e-9 * (1 + mag);   /* a constant series: any shift is a change */
+    }
+    if (k >= 2 * m) {
+        prefix p = {sb_xcalloc((size_t)k + 1, sizeof(double)), sb_xcalloc((size_t)k + 1, sizeof(double)),
+                    sb_xcalloc((size_t)k + 1, sizeof(double))};
+        for (int i = 0; i < k; i++) {
+            p.w[i + 1] = p.w[i] + wt[i];
+            p.wx[i + 1] = p.wx[i] + wt[i] * v[i];
+            p.wxx[i + 1] = p.wxx[i] + wt[i] * v[i] * v[i];
+        }
+        int *cuts = sb_xmalloc(sizeof *cuts * (size_t)k), nc = search(&p, k, m, beta, sigma, cuts);
+        /* the residual noise of that cut: when it is larger than the estimate from the differences (which
+           a short noisy series can underestimate), cut again with it; the larger of the two is kept */
+        for (int it = 0; it < 3; it++) {
+            double rss = 0, wsum = p.w[k];
+            for (int c = 0, a = 0; c <= nc; c++) {
+                int b = c < nc ? cuts[nc - 1 - c] : k;
+                rss += seg_cost(&p, a, b);
+                a = b;
+            }
+            int dof = k - nc - 1;
+            if (dof < 1) break;
+            double sr = sqrt(rss / wsum * k / dof);
+            if (!(sr > sigma * 1.0001)) break;
+            sigma = sr;
+            nc = search(&p, k, m, beta, sigma, cuts);
+        }
+        int places = k - 2 * m + 1;
+        for (int c = nc - 1; c >= 0; c--) {
+            int at = cuts[c], a = c + 1 < nc ? cuts[c + 1] : 0, b = c > 0 ? cuts[c - 1] : k;
+            if (found < max) {
+                sb_cp_change *ch = &out[found];
+                double *tmp = sb_xmalloc(sizeof *tmp * (size_t)k);
+                int nt = 0;
+                for (int i = a; i < at; i++) tmp[nt++] = x[idx[i]];
+                ch->before = median_of(tmp, nt);
+                nt = 0;
+                for (int i = at; i < b; i++) tmp[nt++] = x[idx[i]];
+                ch->after = median_of(tmp, nt);
+                free(tmp);
+                ch->at = idx[at];
+                ch->rel = ch->before != 0 ? ch->after / ch->before - 1 : NAN;
+                double Wa = p.w[at] - p.w[a], Wb = p.w[b] - p.w[at];
+                double ma = (p.wx[at] - p.wx[a]) / Wa, mb = (p.wx[b] - p.wx[at]) / Wb;
+                ch->z = (mb - ma) / (sigma * sqrt(1 / Wa + 1 / Wb));
+                double pv = erfc(fabs(ch->z) / sqrt(2.0)) * (places > 1 ? places : 1);
+                ch->p = pv < 1 ? pv : 1;
+            }
+            found++;
+        }
+        free(cuts);
+        free(p.w);
+        free(p.wx);
+        free(p.wxx);
+    }
+    if (sigma_out) *sigma_out = sigma;
+    free(v);
+    free(wt);
+    free(idx);
+    return found;
+}
