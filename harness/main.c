@@ -11,6 +11,8 @@
 #include "scene_load.h"
 #include "batch.h"
 #include "compare.h"
+#include "history.h"
+#include "site.h"
 #include "report.h"
 #include "run.h"
 #include "stress.h"
@@ -40,6 +42,14 @@ static void usage(FILE *f) {
             "                   [--time-limit D] [--seed N] [--resume DIR]\n"
             "                                         the cheapest settings within an error bound (or the most\n"
             "                                         accurate within a frame-time budget), by successive halving\n"
+            "  shadowbench history add DIR...         keep results sets in the history (--history FILE, default\n"
+            "                                         $SB_HISTORY or out/history.sqlite)\n"
+            "  shadowbench history list               the nights in the history\n"
+            "  shadowbench history regressions [--metric M,...] [--since DATE] [--recent N] [--noise-floor PCT]\n"
+            "                                         changes across the nights per series; exit 1 when a\n"
+            "                                         regression starts in the newest N nights (default 3)\n"
+            "  shadowbench report [DIR | --history FILE] [--out SITE]   a static site to open in a browser\n"
+            "                                         (default out/report)\n"
             "  shadowbench techniques                 list techniques and their parameters\n"
             "  shadowbench columns [--format csv|markdown]   the CSV columns (per frame and per run)\n"
             "  shadowbench info [SCENE]               backends, GL renderer and features; or what a scene holds\n"
@@ -80,6 +90,7 @@ static void usage(FILE *f) {
             "  --blend-casters mask|opaque|none   glTF BLEND materials: alpha-tested at 0.5 (default), opaque, or left out\n"
             "  --pose T               nodes and skins at time T (seconds) of the file's first animation\n"
             "\nenvironment:\n"
+            "  SB_HISTORY=FILE        the history file (default out/history.sqlite)\n"
             "  SB_SCENE_CACHE=DIR|off where scenes read before are kept, flattened (default\n"
             "                         $XDG_CACHE_HOME or ~/.cache, shadowbench/scenes)\n");
 }
@@ -92,6 +103,9 @@ typedef struct cli {
     const char **run_opts;      /* the run options as given, NAME VALUE pairs (batch: they beat defaults) */
     int nrun_opts;
     const char *resume, *shard, *metrics, *format, *pair, *techniques;
+    const char *history, *since;    /* history and report: --history FILE, --since DATE */
+    int recent;                     /* history regressions --recent N */
+    double noise_floor;             /* history regressions --noise-floor PCT */
     double threshold, max_err, budget_ms, time_limit_s;
     bool dry_run;
     int argc;
@@ -148,6 +162,17 @@ static int parse_cli(cli *c, int argc, char **argv) {
             c->format = v;
         } else if (!strcmp(a, "--pair")) {
             c->pair = v;
+        } else if (!strcmp(a, "--history")) {
+            c->history = v;
+        } else if (!strcmp(a, "--since")) {
+            c->since = v;
+        } else if (!strcmp(a, "--recent")) {
+            long n;
+            if (!sb_parse_int(v, &n) || n < 1 || n > 10000) return bad("--recent %s: expected nights, 1..10000", v);
+            c->recent = (int)n;
+        } else if (!strcmp(a, "--noise-floor")) {
+            if (!sb_parse_double(v, &c->noise_floor) || !(c->noise_floor > 0) || c->noise_floor > 100)
+                return bad("--noise-floor %s: expected a percentage in (0, 100]", v);
         } else if (!strcmp(a, "--techniques")) {
             c->techniques = v;
         } else if (!strcmp(a, "--max-err")) {
@@ -463,6 +488,106 @@ static int cmd_merge(const cli *c) {
     return 0;
 }
 
+/* ---- history and report ---- */
+
+static const char *history_path(const cli *c, char *buf, size_t len) {
+    return c->history ? c->history : sb_history_default_path(default_out, buf, len);
+}
+
+static int split_metrics(const char *list, char *buf, size_t len, const char **out, int max) {
+    int n = 0;
+    snprintf(buf, len, "%s", list);
+    for (char *t = strtok(buf, ","); t && n < max; t = strtok(NULL, ",")) out[n++] = t;
+    return n;
+}
+
+static int cmd_history(const cli *c) {
+    static const char *const usage_text =
+        "usage: shadowbench history add DIR... | list | regressions [--metric M,...] [--since DATE] [--recent N]\n"
+        "       [--noise-floor PCT] [--format text|csv]   (the file: --history FILE, $SB_HISTORY or out/history.sqlite)";
+    if (c->npos < 1) return bad("%s", usage_text);
+    char pbuf[4096];
+    const char *path = history_path(c, pbuf, sizeof pbuf);
+    const char *sub = c->pos[0];
+    sb_err err;
+    if (!strcmp(sub, "add")) {
+        if (c->npos < 2) return bad("%s", usage_text);
+        sb_history *h = sb_history_open(path, true, &err);
+        if (!h) {
+            fprintf(stderr, "shadowbench: %s\n", err.msg);
+            return 1;
+        }
+        int rc = 0;
+        for (int i = 1; i < c->npos; i++) {
+            sb_history_added a;
+            double t0 = sb_now_ms();
+            if (!sb_history_add(h, c->pos[i], &a, &err)) {
+                fprintf(stderr, "shadowbench: %s\n", err.msg);
+                rc = 1;
+                continue;
+            }
+            if (a.existed) sb_log("%s: already in %s as night %lld; nothing changed", c->pos[i], path, a.night);
+            else
+                sb_log("%s: night %lld in %s (%d runs, %d per-frame files, %.0f ms)", c->pos[i], a.night, path, a.runs,
+                       a.frames_files, sb_now_ms() - t0);
+        }
+        sb_history_close(h);
+        return rc;
+    }
+    if (c->npos != 1) return bad("%s", usage_text);
+    sb_history *h = sb_history_open(path, false, &err);
+    if (!h) {
+        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        return 2;
+    }
+    int rc = 0;
+    if (!strcmp(sub, "list")) {
+        if (!sb_history_list(h, stdout, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg), rc = 2;
+    } else if (!strcmp(sub, "regressions")) {
+        int format = SB_FORMAT_TEXT;
+        if (c->format && !strcmp(c->format, "csv")) format = SB_FORMAT_CSV;
+        else if (c->format && strcmp(c->format, "text")) rc = bad("history regressions: --format %s: expected text or csv", c->format);
+        sb_history_query q = {.since = c->since, .recent = c->recent, .noise_floor_pct = c->noise_floor};
+        char mbuf[1024];
+        if (c->metrics) q.nmetrics = split_metrics(c->metrics, mbuf, sizeof mbuf, q.metrics, 32);
+        sb_history_change *ch = NULL;
+        int n = rc ? 0 : sb_history_changes(h, &q, &ch, &err);
+        if (n < 0) {
+            fprintf(stderr, "shadowbench: %s\n", err.msg);
+            rc = 2;
+        } else if (!rc) {
+            int recent = 0, regressions = 0;
+            for (int i = 0; i < n; i++) regressions += ch[i].regression, recent += ch[i].regression && ch[i].recent;
+            sb_history_print_changes(ch, n, format, stdout);
+            sb_log("%d change(s), %d regression(s), %d starting in the newest %d night(s)", n, regressions, recent,
+                   q.recent ? q.recent : 3);
+            rc = recent > 0 ? 1 : 0;
+        }
+        free(ch);
+    } else {
+        rc = bad("%s", usage_text);
+    }
+    sb_history_close(h);
+    return rc;
+}
+
+static int cmd_report(const cli *c) {
+    if (c->npos > 1 || (c->npos == 1 && c->history))
+        return bad("usage: shadowbench report [DIR | --history FILE] [--out SITE]%s", "");
+    char pbuf[4096], obuf[4200];
+    const char *site = c->out;
+    if (site == default_out) snprintf(obuf, sizeof obuf, "%s/report", default_out), site = obuf;
+    sb_site_opts so = {.dir = c->npos == 1 ? c->pos[0] : NULL, .out = site, .recent = c->recent};
+    if (!so.dir) so.history = history_path(c, pbuf, sizeof pbuf);
+    sb_err err;
+    if (!sb_site_write(&so, &err)) {
+        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        return 1;
+    }
+    printf("%s/index.html\n", site);
+    return 0;
+}
+
 static int dispatch(const cli *c, const char *cmd) {
     if (!strcmp(cmd, "run")) return cmd_run(c);
     if (!strcmp(cmd, "techniques")) return cmd_techniques();
@@ -474,6 +599,8 @@ static int dispatch(const cli *c, const char *cmd) {
     if (!strcmp(cmd, "merge")) return cmd_merge(c);
     if (!strcmp(cmd, "stress")) return cmd_stress(c);
     if (!strcmp(cmd, "tune")) return cmd_tune(c);
+    if (!strcmp(cmd, "history")) return cmd_history(c);
+    if (!strcmp(cmd, "report")) return cmd_report(c);
     return bad("unknown command '%s' (see shadowbench --help)", cmd);
 }
 

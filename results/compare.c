@@ -44,7 +44,7 @@ static void sorted_params(const char *params, char *out, size_t len) {
     }
 }
 
-static void run_key(const sb_table *t, int r, char *out, size_t len) {
+void sb_compare_run_key(const sb_table *t, int r, char *out, size_t len) {
     char p[2048];
     sorted_params(sb_table_get(t, r, "params"), p, sizeof p);
     snprintf(out, len, "%s|%s|%s|%s", sb_table_get(t, r, "scene"), sb_table_get(t, r, "path"),
@@ -146,11 +146,11 @@ int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FIL
     for (int rb = 0; rb < B.nrows; rb++) {
         if (strcmp(sb_table_get(&B, rb, "status"), "ok")) continue;
         char kb[4096], ka[4096];
-        run_key(&B, rb, kb, sizeof kb);
+        sb_compare_run_key(&B, rb, kb, sizeof kb);
         int ra = -1;
         for (int r = 0; r < A.nrows && ra < 0; r++) {
             if (strcmp(sb_table_get(&A, r, "status"), "ok")) continue;
-            run_key(&A, r, ka, sizeof ka);
+            sb_compare_run_key(&A, r, ka, sizeof ka);
             if (!strcmp(ka, kb)) ra = r;
         }
         if (ra < 0) continue;

@@ -27,6 +27,9 @@ int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FIL
  * (or technique, matching the parameters both techniques have). Returns the
  * number of pairs, or -1. */
 int sb_compare_pairs(const char *dir, const sb_compare_opts *o, FILE *out, sb_err *err);
+struct sb_table;
+/* The key `compare` joins runs by: scene|path|technique|parameters sorted by name. */
+void sb_compare_run_key(const struct sb_table *t, int r, char *out, size_t len);
 /* Merges results folders (shards) into out_dir: per-run CSVs copied, summary
  * rows in matrix order (run_index). */
 bool sb_merge(const char *const *dirs, int n, const char *out_dir, sb_err *err);

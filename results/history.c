@@ -1,0 +1,571 @@
+/* history.c - the results history in SQLite (history.h). */
+#define _XOPEN_SOURCE 700 /* realpath */
+#include "history.h"
+
+#include <errno.h>
+#include <math.h>
+#include <sqlite3.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+#include "changepoint.h"
+#include "compare.h"
+#include "csv.h"
+#include "report.h"
+#include "table.h"
+
+struct sb_history {
+    sqlite3 *db;
+    char path[4096];
+};
+
+sqlite3 *sb_history_db(sb_history *h) { return h->db; }
+
+const char *sb_history_default_path(const char *default_out, char *buf, size_t len) {
+    const char *env = getenv("SB_HISTORY");
+    if (env && *env) snprintf(buf, len, "%s", env);
+    else snprintf(buf, len, "%s/history.sqlite", default_out);
+    return buf;
+}
+
+static bool db_fail(sb_history *h, sb_err *err, const char *what) {
+    return sb_fail(err, "%s: %s: %s", h->path, what, sqlite3_errmsg(h->db));
+}
+
+static bool exec(sb_history *h, const char *sql, sb_err *err) {
+    char *msg = NULL;
+    if (sqlite3_exec(h->db, sql, NULL, NULL, &msg) == SQLITE_OK) return true;
+    sb_fail(err, "%s: %s", h->path, msg ? msg : sqlite3_errmsg(h->db));
+    sqlite3_free(msg);
+    return false;
+}
+
+/* The schema, one step a version: step k takes a file from version k-1 to k.
+   Version 1 kept the summary rows; 2 added each run's per-frame CSV and the
+   night's image count. */
+static const char *const migrations[SB_HISTORY_SCHEMA] = {
+    "CREATE TABLE nights(id INTEGER PRIMARY KEY, set_key TEXT UNIQUE NOT NULL, dir TEXT, date TEXT, host TEXT,"
+    " renderer TEXT, version TEXT, git_commit TEXT, header TEXT, meta TEXT, added TEXT);"
+    "CREATE TABLE runs(id INTEGER PRIMARY KEY, night INTEGER NOT NULL REFERENCES nights(id), run_id TEXT,"
+    " run_index INTEGER, series TEXT, scene TEXT, path TEXT, technique TEXT, params TEXT, size TEXT, status TEXT,"
+    " reason TEXT, stable TEXT, warnings TEXT, line TEXT);"
+    "CREATE TABLE metrics(run INTEGER NOT NULL, name TEXT NOT NULL, value REAL, PRIMARY KEY(run, name)) WITHOUT ROWID;"
+    "CREATE INDEX runs_night ON runs(night);"
+    "CREATE INDEX runs_series ON runs(series);",
+    "CREATE TABLE frames(run INTEGER PRIMARY KEY, csv TEXT);"
+    "ALTER TABLE nights ADD COLUMN images INTEGER NOT NULL DEFAULT 0;",
+};
+
+static bool migrate(sb_history *h, sb_err *err) {
+    sqlite3_stmt *st;
+    if (sqlite3_prepare_v2(h->db, "PRAGMA user_version", -1, &st, NULL) != SQLITE_OK)
+        return db_fail(h, err, "reading the schema version");
+    int v = sqlite3_step(st) == SQLITE_ROW ? sqlite3_column_int(st, 0) : 0;
+    sqlite3_finalize(st);
+    if (v > SB_HISTORY_SCHEMA)
+        return sb_fail(err, "%s: history schema version %d, newer than this shadowbench's %d: use a newer shadowbench",
+                       h->path, v, SB_HISTORY_SCHEMA);
+    for (; v < SB_HISTORY_SCHEMA; v++) {
+        char sql[256];
+        snprintf(sql, sizeof sql, "PRAGMA user_version = %d", v + 1);
+        if (!exec(h, "BEGIN IMMEDIATE", err)) return false;
+        if (!exec(h, migrations[v], err) || !exec(h, sql, err)) {
+            sqlite3_exec(h->db, "ROLLBACK", NULL, NULL, NULL);
+            return false;
+        }
+        if (!exec(h, "COMMIT", err)) return false;
+    }
+    return true;
+}
+
+sb_history *sb_history_open(const char *path, bool write, sb_err *err) {
+    sb_history *h = sb_xcalloc(1, sizeof *h);
+    snprintf(h->path, sizeof h->path, "%s", path);
+    struct stat st;
+    if (!write && stat(path, &st) != 0) {
+        sb_fail(err, "%s: no history here (%s); `shadowbench history add DIR` makes one", path, strerror(errno));
+        free(h);
+        return NULL;
+    }
+    if (write) {
+        char dir[4096];
+        snprintf(dir, sizeof dir, "%s", path);
+        char *slash = strrchr(dir, '/');
+        if (slash && slash != dir) {
+            *slash = 0;
+            if (!sb_mkdir_p(dir, err)) {
+                free(h);
+                return NULL;
+            }
+        }
+    }
+    int flags = write ? SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE : SQLITE_OPEN_READONLY;
+    if (sqlite3_open_v2(path, &h->db, flags, NULL) != SQLITE_OK) {
+        db_fail(h, err, "cannot open");
+        sb_history_close(h);
+        return NULL;
+    }
+    sqlite3_busy_timeout(h->db, 10000);
+    /* a file that is not a database fails on its first read */
+    if (!exec(h, "SELECT count(*) FROM sqlite_master", err) || (write && !migrate(h, err))) {
+        sb_history_close(h);
+        return NULL;
+    }
+    if (!write) {
+        sqlite3_stmt *q;
+        int v = 0;
+        if (sqlite3_prepare_v2(h->db, "PRAGMA user_version", -1, &q, NULL) == SQLITE_OK) {
+            if (sqlite3_step(q) == SQLITE_ROW) v = sqlite3_column_int(q, 0);
+            sqlite3_finalize(q);
+        }
+        if (v != SB_HISTORY_SCHEMA) {
+            sb_fail(err, "%s: history schema version %d, this shadowbench reads %d (%s)", path, v, SB_HISTORY_SCHEMA,
+                    v < SB_HISTORY_SCHEMA ? "`shadowbench history add` migrates it" : "use a newer shadowbench");
+            sb_history_close(h);
+            return NULL;
+        }
+    }
+    return h;
+}
+
+void sb_history_close(sb_history *h) {
+    if (!h) return;
+    if (h->db) sqlite3_close(h->db);
+    free(h);
+}
+
+/* ---- adding a results set ---- */
+
+/* The set's meta (a merged set: its first shard's), as text, and one field of it. */
+static char *read_meta(const char *dir) {
+    char path[4200];
+    snprintf(path, sizeof path, "%s/meta", dir);
+    char *t = sb_read_file(path, NULL, NULL);
+    if (!t) {
+        snprintf(path, sizeof path, "%s/meta.1", dir);
+        t = sb_read_file(path, NULL, NULL);
+    }
+    return t ? t : sb_strdup("");
+}
+
+static void meta_field(const char *meta, const char *key, char *out, size_t len) {
+    out[0] = 0;
+    size_t kl = strlen(key);
+    for (const char *p = meta; p && *p;) {
+        if (!strncmp(p, key, kl) && p[kl] == ':' && p[kl + 1] == ' ') {
+            size_t n = strcspn(p + kl + 2, "\n");
+            snprintf(out, len, "%.*s", (int)n, p + kl + 2);
+            return;
+        }
+        p = strchr(p, '\n');
+        if (p) p++;
+    }
+}
+
+/* The set's date: the meta's, else the folder's stamp (YYYYMMDDTHHMMSSZ), else summary.csv's mtime. */
+static void set_date(const char *dir, const char *meta, const char *summary, char *out, size_t len) {
+    meta_field(meta, "date", out, len);
+    if (out[0]) return;
+    const char *base = strrchr(dir, '/');
+    base = base ? base + 1 : dir;
+    int y, mo, d, hh, mi, ss;
+    if (sscanf(base, "%4d%2d%2dT%2d%2d%2dZ", &y, &mo, &d, &hh, &mi, &ss) == 6) {
+        snprintf(out, len, "%04d-%02d-%02dT%02d:%02d:%02dZ", y, mo, d, hh, mi, ss);
+        return;
+    }
+    struct stat st;
+    struct tm tm;
+    time_t t = stat(summary, &st) == 0 ? st.st_mtime : time(NULL);
+    gmtime_r(&t, &tm);
+    strftime(out, len, "%Y-%m-%dT%H:%M:%SZ", &tm);
+}
+
+static bool bind_text(sqlite3_stmt *st, int i, const char *s) {
+    return sqlite3_bind_text(st, i, s ? s : "", -1, SQLITE_TRANSIENT) == SQLITE_OK;
+}
+
+static int count_images(const char *dir) {
+    char path[4200];
+    snprintf(path, sizeof path, "%s/images", dir);
+    struct stat st;
+    if (stat(path, &st) != 0 || !S_ISDIR(st.st_mode)) return 0;
+    return 1;
+}
+
+bool sb_history_add(sb_history *h, const char *dir, sb_history_added *out, sb_err *err) {
+    memset(out, 0, sizeof *out);
+    char sum_path[4200];
+    snprintf(sum_path, sizeof sum_path, "%s/summary.csv", dir);
+    size_t sum_len = 0;
+    char *sum_text = sb_read_file(sum_path, &sum_len, err);
+    if (!sum_text) return false;
+    sb_table t;
+    if (!sb_table_parse(&t, sum_path, sum_text, err)) {
+        free(sum_text);
+        return false;
+    }
+    const char *need[] = {"run_id", "scene", "path", "technique", "params", "status", "width", "height"};
+    for (size_t i = 0; i < SB_COUNT(need); i++)
+        if (sb_table_col(&t, need[i]) < 0) {
+            sb_table_free(&t);
+            free(sum_text);
+            return sb_fail(err, "%s: not a shadowbench summary (no '%s' column)", sum_path, need[i]);
+        }
+    char *meta = read_meta(dir);
+    char host[256], renderer[512], version[64], commit[128], date[64];
+    meta_field(meta, "host", host, sizeof host);
+    if (!host[0]) snprintf(host, sizeof host, "unknown");
+    meta_field(meta, "version", version, sizeof version);
+    meta_field(meta, "commit", commit, sizeof commit);
+    snprintf(renderer, sizeof renderer, "%s", t.nrows ? sb_table_get(&t, 0, "renderer") : "");
+    if (!renderer[0]) meta_field(meta, "gl_renderer", renderer, sizeof renderer);
+    set_date(dir, meta, sum_path, date, sizeof date);
+    /* the set is its summary's bytes on its host: the same set added twice is found */
+    uint64_t key = sb_fnv1a(sb_fnv1a(1469598103934665603ull, sum_text, sum_len), host, strlen(host));
+    char set_key[32];
+    snprintf(set_key, sizeof set_key, "%016llx", (unsigned long long)key);
+    char absdir[4096];
+    if (!realpath(dir, absdir)) snprintf(absdir, sizeof absdir, "%s", dir);
+    char added[64];
+    time_t now = time(NULL);
+    struct tm tm;
+    gmtime_r(&now, &tm);
+    strftime(added, sizeof added, "%Y-%m-%dT%H:%M:%SZ", &tm);
+
+    bool ok = exec(h, "BEGIN IMMEDIATE", err);
+    sqlite3_stmt *q = NULL, *ins_night = NULL, *ins_run = NULL, *ins_metric = NULL, *ins_frames = NULL;
+    if (ok) {
+        ok = sqlite3_prepare_v2(h->db, "SELECT id FROM nights WHERE set_key = ?", -1, &q, NULL) == SQLITE_OK &&
+             bind_text(q, 1, set_key);
+        if (!ok) db_fail(h, err, "looking the set up");
+        else if (sqlite3_step(q) == SQLITE_ROW) {
+            out->existed = true;
+            out->night = sqlite3_column_int64(q, 0);
+        }
+    }
+    if (ok && !out->existed) {
+        ok = sqlite3_prepare_v2(h->db,
+                                "INSERT INTO nights(set_key, dir, date, host, renderer, version, git_commit, header, meta,"
+                                " added, images) VALUES (?,?,?,?,?,?,?,?,?,?,?)",
+                                -1, &ins_night, NULL) == SQLITE_OK &&
+             sqlite3_prepare_v2(h->db,
+                                "INSERT INTO runs(night, run_id, run_index, series, scene, path, technique, params, size,"
+                                " status, reason, stable, warnings, line) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?)",
+                                -1, &ins_run, NULL) == SQLITE_OK &&
+             sqlite3_prepare_v2(h->db, "INSERT INTO metrics(run, name, value) VALUES (?,?,?)", -1, &ins_metric,
+                                NULL) == SQLITE_OK &&
+             sqlite3_prepare_v2(h->db, "INSERT INTO frames(run, csv) VALUES (?,?)", -1, &ins_frames, NULL) == SQLITE_OK;
+        if (!ok) db_fail(h, err, "preparing the insert");
+        size_t hdr_len = strcspn(sum_text, "\r\n");
+        char *hdr = sb_xmalloc(hdr_len + 1);
+        memcpy(hdr, sum_text, hdr_len);
+        hdr[hdr_len] = 0;
+        if (ok) {
+            ok = bind_text(ins_night, 1, set_key) && bind_text(ins_night, 2, absdir) && bind_text(ins_night, 3, date) &&
+                 bind_text(ins_night, 4, host) && bind_text(ins_night, 5, renderer) &&
+                 bind_text(ins_night, 6, version) && bind_text(ins_night, 7, commit) && bind_text(ins_night, 8, hdr) &&
+                 bind_text(ins_night, 9, meta) && bind_text(ins_night, 10, added) &&
+                 sqlite3_bind_int(ins_night, 11, count_images(dir)) == SQLITE_OK &&
+                 sqlite3_step(ins_night) == SQLITE_DONE;
+            if (!ok) db_fail(h, err, "adding the night");
+            out->night = sqlite3_last_insert_rowid(h->db);
+        }
+        free(hdr);
+        for (int r = 0; ok && r < t.nrows; r++) {
+            char key[3072], series[4096], size[64], params[2048];
+            sb_compare_run_key(&t, r, key, sizeof key);
+            snprintf(size, sizeof size, "%sx%s", sb_table_get(&t, r, "width"), sb_table_get(&t, r, "height"));
+            /* the key's parameters, sorted (its last field) */
+            const char *kp = key;
+            for (int bars = 0; bars < 3 && (kp = strchr(kp, '|')); bars++) kp++;
+            snprintf(params, sizeof params, "%s", kp ? kp : "");
+            snprintf(series, sizeof series, "%s|%s|%s|%s|%s|%s|%s", host, renderer, sb_table_get(&t, r, "scene"),
+                     sb_table_get(&t, r, "path"), size, sb_table_get(&t, r, "technique"), params);
+            const char *run_id = sb_table_get(&t, r, "run_id");
+            sqlite3_reset(ins_run);
+            ok = sqlite3_bind_int64(ins_run, 1, out->night) == SQLITE_OK && bind_text(ins_run, 2, run_id) &&
+                 sqlite3_bind_int(ins_run, 3, atoi(sb_table_get(&t, r, "run_index"))) == SQLITE_OK &&
+                 bind_text(ins_run, 4, series) && bind_text(ins_run, 5, sb_table_get(&t, r, "scene")) &&
+                 bind_text(ins_run, 6, sb_table_get(&t, r, "path")) &&
+                 bind_text(ins_run, 7, sb_table_get(&t, r, "technique")) && bind_text(ins_run, 8, params) &&
+                 bind_text(ins_run, 9, size) && bind_text(ins_run, 10, sb_table_get(&t, r, "status")) &&
+                 bind_text(ins_run, 11, sb_table_get(&t, r, "reason")) &&
+                 bind_text(ins_run, 12, sb_table_get(&t, r, "stable")) &&
+                 bind_text(ins_run, 13, sb_table_get(&t, r, "warnings")) && bind_text(ins_run, 14, t.lines[r]) &&
+                 sqlite3_step(ins_run) == SQLITE_DONE;
+            if (!ok) {
+                db_fail(h, err, "adding a run");
+                break;
+            }
+            long long rid = sqlite3_last_insert_rowid(h->db);
+            out->runs++;
+            for (int c = 0; ok && c < t.cols; c++) {
+                double v;
+                const char *cell = t.rows[r][c];
+                if (!*cell || !sb_parse_double(cell, &v)) continue;
+                sqlite3_reset(ins_metric);
+                ok = sqlite3_bind_int64(ins_metric, 1, rid) == SQLITE_OK && bind_text(ins_metric, 2, t.header[c]) &&
+                     sqlite3_bind_double(ins_metric, 3, v) == SQLITE_OK && sqlite3_step(ins_metric) == SQLITE_DONE;
+                if (!ok) db_fail(h, err, "adding a metric");
+            }
+            char fpath[4200];
+            snprintf(fpath, sizeof fpath, "%s/%s.csv", dir, run_id);
+            char *frames = *run_id ? sb_read_file(fpath, NULL, NULL) : NULL;
+            if (ok && frames) {
+                sqlite3_reset(ins_frames);
+                ok = sqlite3_bind_int64(ins_frames, 1, rid) == SQLITE_OK && bind_text(ins_frames, 2, frames) &&
+                     sqlite3_step(ins_frames) == SQLITE_DONE;
+                if (!ok) db_fail(h, err, "adding a run's frames");
+                out->frames_files++;
+            }
+            free(frames);
+        }
+    }
+    sqlite3_finalize(q);
+    sqlite3_finalize(ins_night);
+    sqlite3_finalize(ins_run);
+    sqlite3_finalize(ins_metric);
+    sqlite3_finalize(ins_frames);
+    if (ok) ok = exec(h, "COMMIT", err);
+    if (!ok) sqlite3_exec(h->db, "ROLLBACK", NULL, NULL, NULL);
+    sb_table_free(&t);
+    free(sum_text);
+    free(meta);
+    return ok;
+}
+
+bool sb_history_list(sb_history *h, FILE *out, sb_err *err) {
+    sqlite3_stmt *st;
+    if (sqlite3_prepare_v2(h->db,
+                           "SELECT n.id, n.date, n.host, n.git_commit, count(r.id), "
+                           "sum(r.status = 'ok'), sum(r.stable = 'no'), n.dir FROM nights n LEFT JOIN runs r "
+                           "ON r.night = n.id GROUP BY n.id ORDER BY n.date, n.id",
+                           -1, &st, NULL) != SQLITE_OK)
+        return db_fail(h, err, "listing the nights");
+    fprintf(out, "%-5s %-20s %-16s %-20s %5s %5s %8s  %s\n", "night", "date", "host", "commit", "runs", "ok",
+            "unstable", "folder");
+    while (sqlite3_step(st) == SQLITE_ROW)
+        fprintf(out, "%-5lld %-20s %-16s %-20s %5d %5d %8d  %s\n", sqlite3_column_int64(st, 0),
+                (const char *)sqlite3_column_text(st, 1), (const char *)sqlite3_column_text(st, 2),
+                (const char *)sqlite3_column_text(st, 3), sqlite3_column_int(st, 4), sqlite3_column_int(st, 5),
+                sqlite3_column_int(st, 6), (const char *)sqlite3_column_text(st, 7));
+    sqlite3_finalize(st);
+    return true;
+}
+
+/* ---- changes ---- */
+
+typedef struct {
+    long long night;
+    char date[32], commit[64], host[256];
+} night_info;
+
+static int cmp_double(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static const char *const default_metrics[] = {"gpu_ms", "final_ms", "cascade_ms", "draw_calls", "shadow_draw_calls",
+                                              "err_rate"};
+
+int sb_history_changes(sb_history *h, const sb_history_query *q, sb_history_change **out, sb_err *err) {
+    *out = NULL;
+    int recent = q->recent > 0 ? q->recent : 3;
+    double floor_pct = q->noise_floor_pct > 0 ? q->noise_floor_pct : 1.0;
+    /* the nights, oldest first, and each host's newest */
+    sqlite3_stmt *st;
+    if (sqlite3_prepare_v2(h->db, "SELECT id, date, git_commit, host FROM nights WHERE date >= ? ORDER BY date, id", -1,
+                           &st, NULL) != SQLITE_OK)
+        return db_fail(h, err, "reading the nights"), -1;
+    bind_text(st, 1, q->since ? q->since : "");
+    night_info *nights = NULL;
+    int nn = 0, cap = 0;
+    while (sqlite3_step(st) == SQLITE_ROW) {
+        if (nn == cap) nights = sb_xrealloc(nights, sizeof *nights * (size_t)(cap = cap ? cap * 2 : 64));
+        night_info *ni = &nights[nn++];
+        ni->night = sqlite3_column_int64(st, 0);
+        snprintf(ni->date, sizeof ni->date, "%s", (const char *)sqlite3_column_text(st, 1));
+        snprintf(ni->commit, sizeof ni->commit, "%s", (const char *)sqlite3_column_text(st, 2));
+        snprintf(ni->host, sizeof ni->host, "%s", (const char *)sqlite3_column_text(st, 3));
+    }
+    sqlite3_finalize(st);
+    /* a night's rank among its host's nights counted from the newest (0: newest) */
+    int *rank = sb_xcalloc((size_t)nn + 1, sizeof *rank);
+    for (int i = 0; i < nn; i++)
+        for (int j = i + 1; j < nn; j++)
+            if (!strcmp(nights[i].host, nights[j].host)) rank[i]++;
+
+    const char *metrics[32];
+    int nm = 0;
+    if (q->nmetrics)
+        for (int i = 0; i < q->nmetrics && nm < 32; i++) metrics[nm++] = q->metrics[i];
+    else
+        for (size_t i = 0; i < SB_COUNT(default_metrics); i++) metrics[nm++] = default_metrics[i];
+    for (int i = 0; i < nm; i++) {
+        sb_metric_cols mc;
+        if (!sb_report_metric(metrics[i], &mc)) {
+            free(nights);
+            free(rank);
+            sb_fail(err, "unknown metric '%s' (summary columns give e.g. gpu_ms, final_ms, draw_calls, err_rate)",
+                    metrics[i]);
+            return -1;
+        }
+    }
+    sb_history_change *ch = NULL;
+    int nch = 0, chcap = 0;
+    int maxn = nn > 0 ? nn : 1;
+    double *x = sb_xmalloc(sizeof *x * (size_t)maxn), *w = sb_xmalloc(sizeof *w * (size_t)maxn),
+           *ci = sb_xmalloc(sizeof *ci * (size_t)maxn), *tmp = sb_xmalloc(sizeof *tmp * (size_t)maxn);
+    int *at_night = sb_xmalloc(sizeof *at_night * (size_t)maxn);
+    bool ok = true;
+    for (int mi = 0; ok && mi < nm; mi++) {
+        sb_metric_cols mc;
+        sb_report_metric(metrics[mi], &mc);
+        ok = sqlite3_prepare_v2(h->db,
+                                "SELECT r.series, r.night, r.stable, c.value, i.value FROM runs r "
+                                "JOIN nights n ON n.id = r.night "
+                                "JOIN metrics c ON c.run = r.id AND c.name = ?1 "
+                                "LEFT JOIN metrics i ON i.run = r.id AND i.name = ?2 "
+                                "WHERE r.status = 'ok' AND n.date >= ?3 ORDER BY r.series, n.date, n.id",
+                                -1, &st, NULL) == SQLITE_OK;
+        if (!ok) {
+            db_fail(h, err, "reading a metric");
+            break;
+        }
+        bind_text(st, 1, mc.center);
+        bind_text(st, 2, mc.ci[0] ? mc.ci : "-");
+        bind_text(st, 3, q->since ? q->since : "");
+        char series[1024] = "";
+        int k = 0;
+        bool more = true;
+        while (more) {
+            more = sqlite3_step(st) == SQLITE_ROW;
+            const char *s = more ? (const char *)sqlite3_column_text(st, 0) : "";
+            if (!more || strcmp(s, series)) {
+                /* the series so far is complete: find its changes */
+                if (k >= 2 * SB_CP_MIN_SEG) {
+                    /* a night whose own CI is wider than the series' usual counts less */
+                    int nci = 0;
+                    for (int i = 0; i < k; i++)
+                        if (ci[i] > 0) tmp[nci++] = ci[i];
+                    double typical = 0;
+                    if (nci) {
+                        qsort(tmp, (size_t)nci, sizeof *tmp, cmp_double);
+                        typical = tmp[nci / 2];
+                    }
+                    for (int i = 0; i < k; i++)
+                        if (typical > 0 && ci[i] > typical) w[i] *= (typical / ci[i]) * (typical / ci[i]);
+                    sb_cp_opts o = {.relative = true, .noise_floor = mc.ci[0] ? floor_pct / 100 : 0};
+                    sb_cp_change cps[64];
+                    int nc = sb_changepoints(x, w, k, &o, cps, 64, NULL);
+                    for (int c = 0; c < nc && c < 64; c++) {
+                        if (nch == chcap) ch = sb_xrealloc(ch, sizeof *ch * (size_t)(chcap = chcap ? 2 * chcap : 16));
+                        sb_history_change *o2 = &ch[nch++];
+                        memset(o2, 0, sizeof *o2);
+                        snprintf(o2->series, sizeof o2->series, "%s", series);
+                        snprintf(o2->metric, sizeof o2->metric, "%s", metrics[mi]);
+                        const night_info *a = &nights[at_night[cps[c].at - 1]], *b = &nights[at_night[cps[c].at]];
+                        o2->night_before = a->night;
+                        o2->night_after = b->night;
+                        snprintf(o2->date_after, sizeof o2->date_after, "%s", b->date);
+                        snprintf(o2->commit_before, sizeof o2->commit_before, "%s", a->commit);
+                        snprintf(o2->commit_after, sizeof o2->commit_after, "%s", b->commit);
+                        o2->before = cps[c].before;
+                        o2->after = cps[c].after;
+                        o2->rel = cps[c].rel;
+                        o2->z = cps[c].z;
+                        o2->p = cps[c].p;
+                        o2->regression = cps[c].after > cps[c].before;
+                        o2->recent = rank[at_night[cps[c].at]] < recent;
+                    }
+                }
+                if (!more) break;
+                snprintf(series, sizeof series, "%s", s);
+                k = 0;
+            }
+            long long night = sqlite3_column_int64(st, 1);
+            int ni = 0;
+            while (ni < nn && nights[ni].night != night) ni++;
+            if (ni == nn) continue;
+            if (k > 0 && at_night[k - 1] == ni) k--;   /* one figure a night: the later run */
+            at_night[k] = ni;
+            x[k] = sqlite3_column_double(st, 3);
+            ci[k] = sqlite3_column_type(st, 4) == SQLITE_NULL ? 0 : sqlite3_column_double(st, 4) / fabs(x[k] ? x[k] : 1);
+            const char *stable = (const char *)sqlite3_column_text(st, 2);
+            w[k] = stable && !strcmp(stable, "no") ? 0.25 : 1.0;
+            k++;
+        }
+        sqlite3_finalize(st);
+    }
+    free(x);
+    free(w);
+    free(ci);
+    free(tmp);
+    free(at_night);
+    free(nights);
+    free(rank);
+    if (!ok) {
+        free(ch);
+        return -1;
+    }
+    *out = ch;
+    return nch;
+}
+
+/* "host|renderer|scene|path|WxH|technique|params" -> "scene path technique params WxH" */
+static void series_label(const char *series, char *out, size_t len, char *host, size_t hlen) {
+    char f[7][256] = {{0}};
+    const char *p = series;
+    for (int i = 0; i < 7 && p; i++) {
+        size_t n = i < 6 ? strcspn(p, "|") : strlen(p);
+        snprintf(f[i], sizeof f[i], "%.*s", (int)(n < 255 ? n : 255), p);
+        p = p[n] ? p + n + 1 : NULL;
+    }
+    snprintf(host, hlen, "%s", f[0]);
+    if (!strcmp(f[2], f[3])) snprintf(out, len, "%s %s%s%s %s", f[2], f[5], f[6][0] ? ":" : "", f[6], f[4]);
+    else snprintf(out, len, "%s/%s %s%s%s %s", f[2], f[3], f[5], f[6][0] ? ":" : "", f[6], f[4]);
+}
+
+void sb_history_print_changes(const sb_history_change *c, int n, int format, FILE *out) {
+    if (format == SB_FORMAT_CSV)
+        fprintf(out, "series,host,metric,night_before,night_after,date_after,before,after,change_pct,z,p,"
+                     "commit_before,commit_after,verdict\n");
+    else
+        fprintf(out, "%-44s %-14s %-6s %-20s %10s %10s %8s %6s %8s  %-25s %s\n", "series", "metric", "night",
+                "first night after", "before", "after", "change", "z", "p", "commits", "verdict");
+    for (int i = 0; i < n; i++) {
+        char label[2048], host[256];
+        series_label(c[i].series, label, sizeof label, host, sizeof host);
+        const char *verdict = c[i].regression ? (c[i].recent ? "REGRESSION (recent)" : "regression")
+                                              : (c[i].recent ? "improvement (recent)" : "improvement");
+        if (format == SB_FORMAT_CSV) {
+            sb_csv row = {0};
+            sb_csv_str(&row, label);
+            sb_csv_str(&row, host);
+            sb_csv_str(&row, c[i].metric);
+            sb_csv_int(&row, c[i].night_before);
+            sb_csv_int(&row, c[i].night_after);
+            sb_csv_str(&row, c[i].date_after);
+            sb_csv_num(&row, c[i].before);
+            sb_csv_num(&row, c[i].after);
+            sb_csv_num(&row, 100 * c[i].rel);
+            sb_csv_num(&row, c[i].z);
+            sb_csv_num(&row, c[i].p);
+            sb_csv_str(&row, c[i].commit_before);
+            sb_csv_str(&row, c[i].commit_after);
+            sb_csv_str(&row, verdict);
+            sb_csv_end_row(&row);
+            fputs(row.buf, out);
+            sb_csv_free(&row);
+        } else {
+            char commits[160];
+            if (!strcmp(c[i].commit_before, c[i].commit_after)) snprintf(commits, sizeof commits, "%.60s (both)", c[i].commit_after);
+            else snprintf(commits, sizeof commits, "%.60s..%.60s", c[i].commit_before, c[i].commit_after);
+            fprintf(out, "%-44s %-14s %-6lld %-20s %10.4g %10.4g %+7.1f%% %6.1f %8.2g  %-25s %s\n", label, c[i].metric,
+                    c[i].night_after, c[i].date_after, c[i].before, c[i].after, 100 * c[i].rel, c[i].z, c[i].p,
+                    commits, verdict);
+        }
+    }
+}

@@ -1,0 +1,376 @@
+/* app.js - the shadowbench report's pages (results/site.c writes the data).
+ * Every page is a shell that calls SB.start(kind): the page's data files are
+ * loaded as scripts (file:// allows no fetch), each calling SB.data(...), and
+ * the page is drawn when all have come. Charts are dygraphs. When the page is
+ * drawn, <body> gets data-ready="yes", data-charts (charts drawn),
+ * data-errors (script errors seen) for tests and tools to read. */
+"use strict";
+var SB = (function () {
+  var errors = [], want = 0, got = {}, kind = "", charts = 0, started = performance.now();
+  window.addEventListener("error", function (e) { errors.push(String(e.message || e)); mark(); });
+
+  function el(tag, attrs, kids) {
+    var e = document.createElement(tag);
+    for (var k in attrs || {}) {
+      if (k === "text") e.textContent = attrs[k];
+      else if (k === "html") e.innerHTML = attrs[k];
+      else e.setAttribute(k, attrs[k]);
+    }
+    (kids || []).forEach(function (c) { if (c) e.appendChild(typeof c === "string" ? document.createTextNode(c) : c); });
+    return e;
+  }
+  function param(name) { return new URLSearchParams(location.search).get(name); }
+  function load(src) {
+    want++;
+    var s = el("script", { src: src });
+    s.onerror = function () { errors.push("cannot load " + src); fail("cannot load " + src); };
+    document.head.appendChild(s);
+  }
+  function fail(msg) {
+    var m = document.getElementById("main");
+    m.innerHTML = "";
+    m.appendChild(el("p", { "class": "error", text: msg }));
+    mark();
+  }
+  function mark() {
+    document.body.dataset.errors = String(errors.length);
+    document.body.dataset.errorText = errors.join(" | ");
+  }
+  function done() {
+    mark();
+    document.body.dataset.charts = String(charts);
+    document.body.dataset.readyMs = String(Math.round(performance.now() - started));
+    document.body.dataset.ready = "yes";
+  }
+  function fmt(v, d) {
+    if (v === null || v === undefined || v === "") return "";
+    if (typeof v !== "number") return String(v);
+    if (v !== 0 && (Math.abs(v) < 1e-3 || Math.abs(v) >= 1e6)) return v.toExponential(2);
+    return String(+v.toPrecision(d || 4));
+  }
+  function pct(v) { return v === null || v === undefined ? "" : (v >= 0 ? "+" : "") + (100 * v).toFixed(1) + "%"; }
+  /* "host|renderer|scene|path|WxH|technique|params" */
+  function series(s) {
+    var f = s.split("|");
+    var p = f.slice(6).join("|");
+    return { host: f[0], renderer: f[1], scene: f[2], path: f[3], size: f[4], technique: f[5], params: p,
+             label: (f[2] === f[3] ? f[2] : f[2] + "/" + f[3]) + " " + f[5] + (p ? ":" + p : "") + " " + f[4] };
+  }
+  function crumbs(parts) {
+    var c = document.getElementById("crumbs");
+    parts.forEach(function (p) { c.appendChild(document.createTextNode(" / ")); c.appendChild(p); });
+  }
+
+  /* a sortable, filterable table: cols [{name, get(row) -> value, cell(row) -> node|string, num}] */
+  function table(cols, rows, opts) {
+    opts = opts || {};
+    var wrap = el("div", { "class": "table" });
+    var filter = el("input", { type: "search", placeholder: "filter rows (words must all appear)", "class": "filter" });
+    var count = el("span", { "class": "count" });
+    var t = el("table", { "class": "sortable" }), thead = el("thead"), tbody = el("tbody");
+    var sortBy = -1, dir = 1;
+    var htr = el("tr");
+    cols.forEach(function (c, i) {
+      var th = el("th", { text: c.name, title: "sort by " + c.name });
+      if (c.num) th.className = "num";
+      th.onclick = function () { dir = sortBy === i ? -dir : 1; sortBy = i; draw(); };
+      htr.appendChild(th);
+    });
+    thead.appendChild(htr);
+    t.appendChild(thead);
+    t.appendChild(tbody);
+    function draw() {
+      var words = filter.value.toLowerCase().split(/\s+/).filter(Boolean);
+      var shown = rows.filter(function (r) {
+        var text = cols.map(function (c) { var v = c.get(r); return v === null || v === undefined ? "" : String(v); })
+                       .join(" ").toLowerCase() + " " + (opts.tags ? opts.tags(r) : "");
+        return words.every(function (w) { return text.indexOf(w) >= 0; });
+      });
+      if (sortBy >= 0) {
+        var g = cols[sortBy].get;
+        shown.sort(function (a, b) {
+          var x = g(a), y = g(b);
+          if (x === y) return 0;
+          if (x === null || x === undefined || x === "") return 1;
+          if (y === null || y === undefined || y === "") return -1;
+          return (x < y ? -1 : 1) * dir;
+        });
+      }
+      tbody.innerHTML = "";
+      shown.forEach(function (r) {
+        var tr = el("tr");
+        if (opts.rowClass) tr.className = opts.rowClass(r);
+        cols.forEach(function (c) {
+          var v = c.cell ? c.cell(r) : fmt(c.get(r));
+          var td = el("td", c.num ? { "class": "num" } : {});
+          if (v && v.nodeType) td.appendChild(v); else td.textContent = v === null || v === undefined ? "" : v;
+          tr.appendChild(td);
+        });
+        tbody.appendChild(tr);
+      });
+      count.textContent = shown.length + " of " + rows.length + " rows";
+    }
+    filter.oninput = draw;
+    draw();
+    wrap.appendChild(el("div", { "class": "tools" }, [filter, count]));
+    wrap.appendChild(t);
+    return wrap;
+  }
+
+  function chart(parent, data, opts, title) {
+    var box = el("div", { "class": "chart" });
+    var legend = el("div", { "class": "legend" });
+    parent.appendChild(el("div", { "class": "chartbox" }, [title ? el("h4", { text: title }) : null, box, legend]));
+    opts.labelsDiv = legend;
+    opts.legend = opts.legend || "always";
+    var drawn = false;
+    var user = opts.drawCallback;
+    opts.drawCallback = function (g, first) {
+      if (!drawn) { drawn = true; charts++; document.body.dataset.charts = String(charts); }
+      if (user) user(g, first);
+    };
+    return new Dygraph(box, data, opts);
+  }
+
+  /* ---- index: the nights, the regressions, the series ---- */
+  function pageIndex(d) {
+    if (d.single && d.nights.length === 1) { location.replace("night.html?n=" + d.nights[0].id); return; }
+    var m = document.getElementById("main");
+    m.innerHTML = "";
+    m.appendChild(el("h1", { text: "Results history" }));
+    m.appendChild(el("p", { text: d.nights.length + " night(s), " + d.series.length + " series, from " + d.source }));
+    var regs = d.changes.filter(function (c) { return c.regression; });
+    regs.sort(function (a, b) { return (b.recent - a.recent) || (a.date_after < b.date_after ? 1 : -1); });
+    var rs = el("section", { id: "regressions" }, [el("h2", { text: "Regressions (" + regs.length + ")" })]);
+    if (!regs.length) rs.appendChild(el("p", { text: "No regression found in any series." }));
+    else rs.appendChild(changesTable(regs));
+    m.appendChild(rs);
+    var others = d.changes.filter(function (c) { return !c.regression; });
+    if (others.length) {
+      var os = el("section", { id: "improvements" }, [el("h2", { text: "Improvements (" + others.length + ")" })]);
+      os.appendChild(changesTable(others));
+      m.appendChild(os);
+    }
+    var ns = el("section", { id: "nights" }, [el("h2", { text: "Nights" })]);
+    ns.appendChild(table([
+      { name: "night", get: function (n) { return n.id; }, cell: function (n) { return el("a", { href: "night.html?n=" + n.id, text: "#" + n.id }); }, num: true },
+      { name: "date", get: function (n) { return n.date; } },
+      { name: "host", get: function (n) { return n.host; } },
+      { name: "commit", get: function (n) { return n.commit; } },
+      { name: "runs", get: function (n) { return n.runs; }, num: true },
+      { name: "ok", get: function (n) { return n.ok; }, num: true },
+      { name: "failed", get: function (n) { return n.failed; }, num: true },
+      { name: "unstable", get: function (n) { return n.unstable; }, num: true },
+    ], d.nights.slice().reverse(), { rowClass: function (n) { return n.failed ? "failed" : n.unstable ? "unstable" : ""; } }));
+    m.appendChild(ns);
+    var changed = {};
+    d.changes.forEach(function (c) { changed[c.sid] = (changed[c.sid] || 0) + 1; });
+    var ss = el("section", { id: "series" }, [el("h2", { text: "Series" })]);
+    ss.appendChild(table([
+      { name: "series", get: function (i) { return series(d.series[i]).label; }, cell: function (i) { return el("a", { href: "series.html?s=" + i, text: series(d.series[i]).label }); } },
+      { name: "host", get: function (i) { return series(d.series[i]).host; } },
+      { name: "changes", get: function (i) { return changed[i] || 0; }, num: true },
+    ], d.series.map(function (_, i) { return i; })));
+    m.appendChild(ss);
+    done();
+  }
+  function changesTable(list) {
+    return table([
+      { name: "series", get: function (c) { return series(c.series).label; }, cell: function (c) { return el("a", { href: "series.html?s=" + c.sid + "#" + c.metric, text: series(c.series).label }); } },
+      { name: "metric", get: function (c) { return c.metric; } },
+      { name: "first night after", get: function (c) { return c.night_after; }, cell: function (c) { return el("span", {}, [el("a", { href: "night.html?n=" + c.night_after, text: "#" + c.night_after }), " " + c.date_after.slice(0, 10) + " (before: ", el("a", { href: "night.html?n=" + c.night_before, text: "#" + c.night_before }), ")"]); } },
+      { name: "before", get: function (c) { return c.before; }, num: true },
+      { name: "after", get: function (c) { return c.after; }, num: true },
+      { name: "change", get: function (c) { return c.rel; }, cell: function (c) { return pct(c.rel); }, num: true },
+      { name: "z", get: function (c) { return c.z; }, num: true },
+      { name: "p", get: function (c) { return c.p; }, num: true },
+      { name: "commits", get: function (c) { return c.commit_before === c.commit_after ? c.commit_after + " (both)" : c.commit_before + ".." + c.commit_after; } },
+      { name: "recent", get: function (c) { return c.recent ? "yes" : ""; } },
+    ], list, { rowClass: function (c) { return c.regression ? (c.recent ? "regression recent" : "regression") : "improvement"; } });
+  }
+
+  /* ---- a night ---- */
+  function rowsOf(d) {
+    return d.rows.map(function (r) { var o = {}; d.columns.forEach(function (c, i) { o[c] = r[i]; }); return o; });
+  }
+  function pageNight(d) {
+    var m = document.getElementById("main");
+    m.innerHTML = "";
+    crumbs([el("a", { href: "night.html?n=" + d.id, text: "night #" + d.id })]);
+    m.appendChild(el("h1", { text: "Night #" + d.id + ": " + d.date }));
+    m.appendChild(el("p", { text: d.host + " · " + d.renderer + " · shadowbench " + d.version + " " + d.commit }));
+    m.appendChild(el("details", {}, [el("summary", { text: "meta" }), el("pre", { text: d.meta })]));
+    var rows = rowsOf(d);
+    var s = el("section", { id: "summary" }, [el("h2", { text: "Runs (" + rows.length + ")" }),
+      el("p", { "class": "keyline", html: "<span class='unstable'>unstable timings (stable=no)</span> <span class='warned'>warnings</span> <span class='failed'>failed</span> · click a header to sort" })]);
+    var num = function (name) { return { name: name, get: function (r) { return r[name]; }, num: true }; };
+    s.appendChild(table([
+      { name: "run", get: function (r) { return r.run_id; }, cell: function (r) { return el("a", { href: "run.html?n=" + d.id + "&r=" + r.run_id, text: r.run_id }); } },
+      { name: "scene", get: function (r) { return r.scene; } },
+      { name: "path", get: function (r) { return r.path; } },
+      { name: "technique", get: function (r) { return r.technique; } },
+      { name: "params", get: function (r) { return r.params; } },
+      { name: "size", get: function (r) { return r.width + "x" + r.height; } },
+      { name: "status", get: function (r) { return r.status; } },
+      { name: "stable", get: function (r) { return r.stable; } },
+      num("gpu_ms_median"), num("gpu_ci_pct"), num("final_ms_median"), num("cascade_ms_median"),
+      num("err_rate_mean"), num("draw_calls_mean"), num("shadow_draw_calls_mean"),
+      { name: "warnings / reason", get: function (r) { return (r.reason || "") + (r.warnings || "") + (r.unstable_reason ? " " + r.unstable_reason : ""); } },
+    ], rows, {
+      rowClass: function (r) { return r.status === "failed" ? "failed" : r.stable === "no" ? "unstable" : r.warnings ? "warned" : ""; },
+      tags: function (r) { return (r.stable === "no" ? "unstable" : "") + (r.warnings ? " warned" : ""); }
+    }));
+    m.appendChild(s);
+    if (d.pairs.length) {
+      var ps = el("section", { id: "pairs" }, [el("h2", { text: "Pairs" })]);
+      d.pairs.forEach(function (p) {
+        ps.appendChild(el("h3", { text: p.key }));
+        ps.appendChild(table(p.columns.map(function (c, i) {
+          return { name: c, get: function (r) { return r[i]; }, num: typeof p.rows[0][i] === "number" };
+        }), p.rows, { rowClass: function (r) { var v = r[r.length - 1]; return /regress|worse|UNSTABLE/i.test(String(v)) ? "warned" : ""; } }));
+      });
+      m.appendChild(ps);
+    }
+    var fs = el("section", { id: "fronts" }, [el("h2", { text: "Time against error, per scene" }),
+      el("p", { text: "Each point a run (median frame time, mean error rate against the exact reference); the line joins the runs no other run beats on both." })]);
+    var scenes = {};
+    rows.forEach(function (r) { if (r.status === "ok" && typeof r.err_rate_mean === "number" && typeof r.gpu_ms_median === "number") (scenes[r.scene] = scenes[r.scene] || []).push(r); });
+    Object.keys(scenes).forEach(function (sc) { front(fs, sc, scenes[sc]); });
+    if (!Object.keys(scenes).length) fs.appendChild(el("p", { text: "No run of this night measured its error." }));
+    m.appendChild(fs);
+    done();
+  }
+  function front(parent, scene, rs) {
+    var techs = [];
+    rs.forEach(function (r) { if (techs.indexOf(r.technique) < 0) techs.push(r.technique); });
+    rs = rs.slice().sort(function (a, b) { return a.gpu_ms_median - b.gpu_ms_median; });
+    var best = Infinity, onFront = [];
+    rs.forEach(function (r) { if (r.err_rate_mean < best) { best = r.err_rate_mean; onFront.push(r); } });
+    var data = rs.map(function (r) {
+      var row = [r.gpu_ms_median];
+      techs.forEach(function (t) { row.push(t === r.technique ? r.err_rate_mean : null); });
+      row.push(onFront.indexOf(r) >= 0 ? r.err_rate_mean : null);
+      return row;
+    });
+    var series = {};
+    techs.forEach(function (t) { series[t] = { strokeWidth: 0, drawPoints: true, pointSize: 4 }; });
+    series.front = { strokeWidth: 1.5, drawPoints: false, connectSeparatedPoints: true, color: "#888" };
+    chart(parent, data, { labels: ["gpu_ms"].concat(techs, ["front"]), series: series, xlabel: "median frame time (ms)",
+      ylabel: "error rate", legend: "always", highlightCircleSize: 5 }, scene);
+    parent.appendChild(el("p", { "class": "small", text: "front: " + onFront.map(function (r) { return r.technique + (r.params ? ":" + r.params : "") + " " + fmt(r.gpu_ms_median) + " ms, " + fmt(r.err_rate_mean); }).join(" · ") }));
+  }
+
+  /* ---- a run ---- */
+  function pageRun(night, frames) {
+    var id = param("r"), m = document.getElementById("main");
+    var r = rowsOf(night).filter(function (x) { return x.run_id === id; })[0];
+    if (!r) return fail("no run " + id + " in night #" + night.id);
+    m.innerHTML = "";
+    crumbs([el("a", { href: "night.html?n=" + night.id, text: "night #" + night.id }), el("span", { text: "run " + id })]);
+    m.appendChild(el("h1", { text: r.scene + " " + r.technique + (r.params ? ":" + r.params : "") }));
+    m.appendChild(el("p", { text: "path " + r.path + " · " + r.width + "x" + r.height + " · status " + r.status + (r.reason ? " (" + r.reason + ")" : "") + " · stable " + (r.stable || "n/a") + (r.warnings ? " · warnings: " + r.warnings : "") }));
+    var fr = frames.runs[id] || [], c = frames.columns;
+    var at = function (name) { return c.indexOf(name); };
+    var stages = ["zpass_ms", "minmax_ms", "cascade_ms", "final_ms", "volumes_ms", "rays_ms"].filter(function (s) {
+      return fr.some(function (f) { return typeof f[at(s)] === "number"; });
+    });
+    var cs = el("section", { id: "frames" }, [el("h2", { text: "Frames" })]);
+    if (!fr.length) cs.appendChild(el("p", { text: "No per-frame figures (the run did not measure frames)." }));
+    else {
+      var x = function (f, i) { return i; };
+      chart(cs, fr.map(function (f, i) { return [x(f, i)].concat(stages.map(function (s) { return f[at(s)] === null ? 0 : f[at(s)]; })); }),
+        { labels: ["frame"].concat(stages), stackedGraph: true, fillGraph: true, xlabel: "measured frame", ylabel: "ms" }, "Frame time by stage (stacked)");
+      chart(cs, fr.map(function (f, i) { return [i, f[at("draw_calls")], f[at("shadow_draw_calls")]]; }),
+        { labels: ["frame", "draw_calls", "shadow_draw_calls"], xlabel: "measured frame" }, "Draw calls");
+      chart(cs, fr.map(function (f, i) { return [i, f[at("triangles")], f[at("shadow_triangles")]]; }),
+        { labels: ["frame", "triangles", "shadow_triangles"], xlabel: "measured frame" }, "Triangles");
+    }
+    m.appendChild(cs);
+    var imgs = night.images.filter(function (n) { return n.indexOf(id + "_f") === 0; });
+    var is = el("section", { id: "images" }, [el("h2", { text: "Images of evaluated frames" })]);
+    if (!imgs.length) is.appendChild(el("p", { text: "None: the run was made without --images." }));
+    var byFrame = {};
+    imgs.forEach(function (n) { var f = n.slice(id.length + 2, id.length + 6); (byFrame[f] = byFrame[f] || []).push(n); });
+    var order = ["color", "vis", "ref", "error", "cascades"];
+    Object.keys(byFrame).sort().forEach(function (f) {
+      var row = el("div", { "class": "imgrow" });
+      order.forEach(function (k) {
+        var n = byFrame[f].filter(function (x) { return x.indexOf("_" + k + ".png") > 0; })[0];
+        if (n) row.appendChild(el("figure", {}, [el("img", { src: "images/" + night.id + "/" + n, alt: k + " of frame " + f, loading: "eager" }), el("figcaption", { text: k })]));
+      });
+      is.appendChild(el("h3", { text: "frame " + (+f) }));
+      is.appendChild(row);
+    });
+    m.appendChild(is);
+    done();
+  }
+
+  /* ---- a series ---- */
+  function pageSeries(d) {
+    var m = document.getElementById("main"), s = series(d.series);
+    m.innerHTML = "";
+    crumbs([el("span", { text: s.label })]);
+    m.appendChild(el("h1", { text: s.label }));
+    m.appendChild(el("p", { text: s.host + " · " + s.renderer }));
+    Object.keys(d.metrics).forEach(function (name) {
+      var mt = d.metrics[name];
+      if (!mt.nights.length) return;
+      var sec = el("section", { id: name }, [el("h2", { text: name })]);
+      var hasCi = mt.nights.some(function (n) { return n[3] !== null; });
+      var data = mt.nights.map(function (n) {
+        var c = n[2], ci = n[3] || 0;
+        return [new Date(n[1]), [c - ci, c, c + ci], n[4] ? [null, null, null] : [c, c, c]];
+      });
+      var cps = mt.changes.map(function (c) { return { date: new Date(c.date_after), c: c }; });
+      chart(sec, data, {
+        labels: ["night", name, "unstable night"], customBars: true, drawPoints: true, pointSize: 3,
+        series: { "unstable night": { strokeWidth: 0, pointSize: 5, color: "#d95f02" } },
+        ylabel: name + (hasCi ? " (bars: 95% CI)" : ""),
+        underlayCallback: function (ctx, area, g) {
+          cps.forEach(function (p) {
+            var x = g.toDomXCoord(p.date.getTime() - 1);
+            ctx.fillStyle = p.c.regression ? "rgba(200,0,0,0.5)" : "rgba(0,130,0,0.5)";
+            ctx.fillRect(x - 1, area.y, 2, area.h);
+          });
+        }
+      }, null);
+      if (mt.changes.length) sec.appendChild(changesTable(mt.changes));
+      var list = el("p", { "class": "small" }, ["nights: "]);
+      mt.nights.forEach(function (n, i) { if (i) list.appendChild(document.createTextNode(" ")); list.appendChild(el("a", { href: "night.html?n=" + n[0], text: "#" + n[0] })); });
+      sec.appendChild(list);
+      m.appendChild(sec);
+    });
+    done();
+  }
+
+  return {
+    start: function (k) {
+      kind = k;
+      if (typeof Dygraph === "undefined") { errors.push("dygraphs did not load"); return fail("The charting library (assets/dygraph.min.js) did not load."); }
+      var n = param("n");
+      if (k === "index") load("data/index.js");
+      else if (k === "night" || k === "run") {
+        if (!/^[0-9]+$/.test(n || "")) return fail("which night? (night.html?n=ID)");
+        load("data/night-" + n + ".js");
+        if (k === "run") load("data/frames-" + n + ".js");
+      } else if (k === "series") {
+        var s = param("s");
+        if (!/^[0-9]+$/.test(s || "")) return fail("which series? (series.html?s=ID)");
+        load("data/series-" + s + ".js");
+      }
+    },
+    data: function (d) {
+      got[d.kind] = d;
+      if (--want > 0) return;
+      try {
+        if (kind === "index") pageIndex(got.index);
+        else if (kind === "night") pageNight(got.night);
+        else if (kind === "run") pageRun(got.night, got.frames);
+        else if (kind === "series") pageSeries(got.series);
+      } catch (e) {
+        errors.push(String(e && e.stack || e));
+        fail("report error: " + e);
+      }
+    }
+  };
+})();
