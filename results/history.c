@@ -357,6 +357,20 @@ bool sb_history_list(sb_history *h, FILE *out, sb_err *err) {
 
 /* ---- changes ---- */
 
+/* "host|renderer|scene|path|WxH|technique|params" split into its seven fields */
+typedef struct { char f[7][1024]; } series_fields;
+static void split_series(const char *series, series_fields *o) {
+    memset(o, 0, sizeof *o);
+    const char *p = series;
+    for (int i = 0; i < 7 && p; i++) {
+        size_t n = i < 6 ? strcspn(p, "|") : strlen(p);
+        snprintf(o->f[i], sizeof o->f[i], "%.*s", (int)(n < 1023 ? n : 1023), p);
+        p = p[n] ? p + n + 1 : NULL;
+    }
+}
+
+
+
 typedef struct {
     long long night;
     char date[32], commit[64], host[256];
@@ -373,7 +387,10 @@ static const char *const default_metrics[] = {"gpu_ms", "final_ms", "cascade_ms"
 int sb_history_changes(sb_history *h, const sb_history_query *q, sb_history_change **out, sb_err *err) {
     *out = NULL;
     int recent = q->recent > 0 ? q->recent : 3;
-    double floor_pct = q->noise_floor_pct > 0 ? q->noise_floor_pct : 1.0;
+    /* night-to-night timing noise is never assumed below this: 1 % on a GPU, 5 % on a software rasterizer,
+       whose times move with everything else on the CPU (the stability tests widen alike) */
+    double floor_gpu = q->noise_floor_pct > 0 ? q->noise_floor_pct : 1.0;
+    double floor_soft = q->noise_floor_pct > 0 ? q->noise_floor_pct : 5.0;
     /* the nights, oldest first, and each host's newest */
     sqlite3_stmt *st;
     if (sqlite3_prepare_v2(h->db, "SELECT id, date, git_commit, host FROM nights WHERE date >= ? ORDER BY date, id", -1,
@@ -446,7 +463,7 @@ int sb_history_changes(sb_history *h, const sb_history_query *q, sb_history_chan
             if (!more || strcmp(s, series)) {
                 /* the series so far is complete: find its changes */
                 if (k >= 2 * SB_CP_MIN_SEG) {
-                    /* a night whose own CI is wider than the series' usual counts less */
+                    /* a night whose own CI is more than twice the series' usual counts less */
                     int nci = 0;
                     for (int i = 0; i < k; i++)
                         if (ci[i] > 0) tmp[nci++] = ci[i];
@@ -456,7 +473,12 @@ int sb_history_changes(sb_history *h, const sb_history_query *q, sb_history_chan
                         typical = tmp[nci / 2];
                     }
                     for (int i = 0; i < k; i++)
-                        if (typical > 0 && ci[i] > typical) w[i] *= (typical / ci[i]) * (typical / ci[i]);
+                        if (typical > 0 && ci[i] > 2 * typical) w[i] *= (2 * typical / ci[i]) * (2 * typical / ci[i]);
+                    series_fields sf;
+                    split_series(series, &sf);
+                    bool soft = strstr(sf.f[1], "llvmpipe") || strstr(sf.f[1], "softpipe") ||
+                                strstr(sf.f[1], "SwiftShader") || strstr(sf.f[1], "lavapipe");
+                    double floor_pct = soft ? floor_soft : floor_gpu;
                     sb_cp_opts o = {.relative = true, .noise_floor = mc.ci[0] ? floor_pct / 100 : 0};
                     sb_cp_change cps[64];
                     int nc = sb_changepoints(x, w, k, &o, cps, 64, NULL);
@@ -510,22 +532,75 @@ int sb_history_changes(sb_history *h, const sb_history_query *q, sb_history_chan
         free(ch);
         return -1;
     }
+    int ns = 0;
+    char **all = sb_history_series(h, &ns), **labels = sb_history_labels(all, ns);
+    for (int c = 0; c < nch; c++)
+        for (int i = 0; i < ns; i++)
+            if (!strcmp(all[i], ch[c].series)) snprintf(ch[c].label, sizeof ch[c].label, "%s", labels[i]);
+    for (int i = 0; i < ns; i++) free(all[i]), free(labels[i]);
+    free(all);
+    free(labels);
     *out = ch;
     return nch;
 }
 
-/* "host|renderer|scene|path|WxH|technique|params" -> "scene path technique params WxH" */
-static void series_label(const char *series, char *out, size_t len, char *host, size_t hlen) {
-    char f[7][256] = {{0}};
-    const char *p = series;
-    for (int i = 0; i < 7 && p; i++) {
-        size_t n = i < 6 ? strcspn(p, "|") : strlen(p);
-        snprintf(f[i], sizeof f[i], "%.*s", (int)(n < 255 ? n : 255), p);
-        p = p[n] ? p + n + 1 : NULL;
+/* Whether ":item:" is in ":params:" */
+static bool has_item(const char *params, const char *item, size_t len) {
+    for (const char *p = params; *p;) {
+        size_t n = strcspn(p, ":");
+        if (n == len && !strncmp(p, item, len)) return true;
+        p += n;
+        if (*p) p++;
     }
-    snprintf(host, hlen, "%s", f[0]);
-    if (!strcmp(f[2], f[3])) snprintf(out, len, "%s %s%s%s %s", f[2], f[5], f[6][0] ? ":" : "", f[6], f[4]);
-    else snprintf(out, len, "%s/%s %s%s%s %s", f[2], f[3], f[5], f[6][0] ? ":" : "", f[6], f[4]);
+    return false;
+}
+
+char **sb_history_labels(char *const *series, int n) {
+    char **out = sb_xcalloc((size_t)(n ? n : 1), sizeof *out);
+    series_fields *f = sb_xmalloc(sizeof *f * (size_t)(n ? n : 1));
+    bool hosts = false;
+    for (int i = 0; i < n; i++) {
+        split_series(series[i], &f[i]);
+        if (i && strcmp(f[i].f[0], f[0].f[0])) hosts = true;
+    }
+    for (int i = 0; i < n; i++) {
+        char kept[1024] = "";
+        for (const char *p = f[i].f[6]; *p;) {
+            size_t len = strcspn(p, ":");
+            bool shared = true;   /* by every series of this technique */
+            for (int j = 0; j < n && shared; j++)
+                if (j != i && !strcmp(f[j].f[5], f[i].f[5]) && !has_item(f[j].f[6], p, len)) shared = false;
+            if (!shared) {
+                size_t l = strlen(kept);
+                snprintf(kept + l, sizeof kept - l, ":%.*s", (int)len, p);
+            }
+            p += len;
+            if (*p) p++;
+        }
+        char buf[4096], where[2100];
+        if (!strcmp(f[i].f[2], f[i].f[3])) snprintf(where, sizeof where, "%s", f[i].f[2]);
+        else snprintf(where, sizeof where, "%s/%s", f[i].f[2], f[i].f[3]);
+        snprintf(buf, sizeof buf, "%s %s%s %s%s%s", where, f[i].f[5], kept, f[i].f[4], hosts ? " @" : "",
+                 hosts ? f[i].f[0] : "");
+        out[i] = sb_strdup(buf);
+    }
+    free(f);
+    return out;
+}
+
+char **sb_history_series(sb_history *h, int *n) {
+    *n = 0;
+    char **out = NULL;
+    sqlite3_stmt *st;
+    if (sqlite3_prepare_v2(h->db, "SELECT DISTINCT series FROM runs ORDER BY series", -1, &st, NULL) != SQLITE_OK)
+        return NULL;
+    while (sqlite3_step(st) == SQLITE_ROW) {
+        out = sb_xrealloc(out, sizeof *out * (size_t)(*n + 1));
+        const char *s = (const char *)sqlite3_column_text(st, 0);
+        out[(*n)++] = sb_strdup(s ? s : "");
+    }
+    sqlite3_finalize(st);
+    return out;
 }
 
 void sb_history_print_changes(const sb_history_change *c, int n, int format, FILE *out) {
@@ -533,11 +608,12 @@ void sb_history_print_changes(const sb_history_change *c, int n, int format, FIL
         fprintf(out, "series,host,metric,night_before,night_after,date_after,before,after,change_pct,z,p,"
                      "commit_before,commit_after,verdict\n");
     else
-        fprintf(out, "%-44s %-14s %-6s %-20s %10s %10s %8s %6s %8s  %-25s %s\n", "series", "metric", "night",
+        fprintf(out, "%-40s %-14s %-6s %-20s %10s %10s %8s %6s %8s  %-25s %s\n", "series", "metric", "night",
                 "first night after", "before", "after", "change", "z", "p", "commits", "verdict");
     for (int i = 0; i < n; i++) {
-        char label[2048], host[256];
-        series_label(c[i].series, label, sizeof label, host, sizeof host);
+        series_fields f;
+        split_series(c[i].series, &f);
+        const char *label = c[i].label, *host = f.f[0];
         const char *verdict = c[i].regression ? (c[i].recent ? "REGRESSION (recent)" : "regression")
                                               : (c[i].recent ? "improvement (recent)" : "improvement");
         if (format == SB_FORMAT_CSV) {
@@ -563,7 +639,7 @@ void sb_history_print_changes(const sb_history_change *c, int n, int format, FIL
             char commits[160];
             if (!strcmp(c[i].commit_before, c[i].commit_after)) snprintf(commits, sizeof commits, "%.60s (both)", c[i].commit_after);
             else snprintf(commits, sizeof commits, "%.60s..%.60s", c[i].commit_before, c[i].commit_after);
-            fprintf(out, "%-44s %-14s %-6lld %-20s %10.4g %10.4g %+7.1f%% %6.1f %8.2g  %-25s %s\n", label, c[i].metric,
+            fprintf(out, "%-40s %-14s %-6lld %-20s %10.4g %10.4g %+7.1f%% %6.1f %8.2g  %-25s %s\n", label, c[i].metric,
                     c[i].night_after, c[i].date_after, c[i].before, c[i].after, 100 * c[i].rel, c[i].z, c[i].p,
                     commits, verdict);
         }

@@ -38,6 +38,8 @@ bool sb_history_list(sb_history *h, FILE *out, sb_err *err);
 
 typedef struct sb_history_change {
     char series[1024];          /* host | renderer | scene | path | WxH | technique | params */
+    char label[512];            /* scene[/path] technique[:the parameters that tell it from the technique's other
+                                   series] WxH[ @host when the history has several] */
     char metric[64];
     long long night_before, night_after;   /* the last night before and the first after */
     char date_after[32], commit_before[64], commit_after[64];
@@ -51,12 +53,18 @@ typedef struct sb_history_query {
     int nmetrics;
     const char *since;          /* nights from this date (YYYY-MM-DD...) on; NULL: all */
     int recent;                 /* 0: 3 */
-    double noise_floor_pct;     /* timings: the least night-to-night noise assumed; 0: 1 */
+    double noise_floor_pct;     /* timings: the least night-to-night noise assumed; 0: 1 on a GPU, 5 on a
+                                   software rasterizer (llvmpipe) */
 } sb_history_query;
 
 /* Runs change-point detection per series and metric. *out (freed by the
  * caller) gets every change, series by series. Returns how many, or -1. */
 int sb_history_changes(sb_history *h, const sb_history_query *q, sb_history_change **out, sb_err *err);
+/* The history's series, sorted (free each and the array); NULL with *n 0 when there are none. */
+char **sb_history_series(sb_history *h, int *n);
+/* Short names of series[0..n) (each malloc'd): the parameters every series of
+ * the same technique shares are left out, and the host unless there are several. */
+char **sb_history_labels(char *const *series, int n);
 /* Prints changes as a table (format: SB_FORMAT_TEXT or _CSV of compare.h). */
 void sb_history_print_changes(const sb_history_change *c, int n, int format, FILE *out);
 

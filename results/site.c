@@ -330,6 +330,9 @@ static void jchange(jbuf *j, const sb_history_change *c, int sid) {
     jput(j, "{");
     jkey(j, "series");
     jstr(j, c->series);
+    jput(j, ",");
+    jkey(j, "label");
+    jstr(j, c->label);
     jput(j, ",\"sid\":");
     jnum(j, sid);
     jput(j, ",");
@@ -373,8 +376,8 @@ static int series_index(char **series, int ns, const char *s) {
     return -1;
 }
 
-static bool write_series(sqlite3 *db, const char *site, char **series, int ns, const sb_history_change *ch, int nch,
-                         sb_err *err) {
+static bool write_series(sqlite3 *db, const char *site, char **series, char **labels, int ns,
+                         const sb_history_change *ch, int nch, sb_err *err) {
     sqlite3_stmt *st;
     if (!prep(db,
               "SELECT r.night, n.date, r.stable, c.value, i.value, n.git_commit FROM runs r JOIN nights n ON "
@@ -388,6 +391,9 @@ static bool write_series(sqlite3 *db, const char *site, char **series, int ns, c
         jput(&j, "{\"kind\":\"series\",");
         jkey(&j, "series");
         jstr(&j, series[s]);
+        jput(&j, ",");
+        jkey(&j, "label");
+        jstr(&j, labels[s]);
         jput(&j, ",\"metrics\":{");
         for (size_t m = 0; m < SB_COUNT(trend_metrics); m++) {
             sb_metric_cols mc;
@@ -443,15 +449,10 @@ static bool write_site(sb_history *h, const sb_site_opts *o, bool single, sb_err
     sb_history_change *ch = NULL;
     int nch = sb_history_changes(h, &q, &ch, err);
     if (nch < 0) return false;
-    char **series = NULL;
     int ns = 0;
-    sqlite3_stmt *st;
-    bool ok = prep(db, "SELECT DISTINCT series FROM runs ORDER BY series", &st, err);
-    while (ok && sqlite3_step(st) == SQLITE_ROW) {
-        series = sb_xrealloc(series, sizeof *series * (size_t)(ns + 1));
-        series[ns++] = sb_strdup(col(st, 0));
-    }
-    if (ok) sqlite3_finalize(st);
+    char **series = sb_history_series(h, &ns), **labels = sb_history_labels(series, ns);
+    sqlite3_stmt *st = NULL;
+    bool ok = true;
     jbuf j = {0};
     jput(&j, "{\"kind\":\"index\",");
     jput(&j, single ? "\"single\":true," : "\"single\":false,");
@@ -484,11 +485,14 @@ static bool write_site(sb_history *h, const sb_site_opts *o, bool single, sb_err
     }
     jput(&j, "],\"series\":[");
     for (int s = 0; s < ns; s++) jput(&j, s ? "," : ""), jstr(&j, series[s]);
+    jput(&j, "],\"labels\":[");
+    for (int s = 0; s < ns; s++) jput(&j, s ? "," : ""), jstr(&j, labels[s]);
     jput(&j, "]}");
-    ok = ok && write_data(o->out, "index.js", &j, err) && write_series(db, o->out, series, ns, ch, nch, err);
+    ok = ok && write_data(o->out, "index.js", &j, err) && write_series(db, o->out, series, labels, ns, ch, nch, err);
     free(j.buf);
-    for (int s = 0; s < ns; s++) free(series[s]);
+    for (int s = 0; s < ns; s++) free(series[s]), free(labels[s]);
     free(series);
+    free(labels);
     free(ch);
     return ok;
 }

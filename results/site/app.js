@@ -52,9 +52,7 @@ var SB = (function () {
   /* "host|renderer|scene|path|WxH|technique|params" */
   function series(s) {
     var f = s.split("|");
-    var p = f.slice(6).join("|");
-    return { host: f[0], renderer: f[1], scene: f[2], path: f[3], size: f[4], technique: f[5], params: p,
-             label: (f[2] === f[3] ? f[2] : f[2] + "/" + f[3]) + " " + f[5] + (p ? ":" + p : "") + " " + f[4] };
+    return { host: f[0], renderer: f[1], scene: f[2], path: f[3], size: f[4], technique: f[5], params: f.slice(6).join("|") };
   }
   function crumbs(parts) {
     var c = document.getElementById("crumbs");
@@ -167,7 +165,7 @@ var SB = (function () {
     d.changes.forEach(function (c) { changed[c.sid] = (changed[c.sid] || 0) + 1; });
     var ss = el("section", { id: "series" }, [el("h2", { text: "Series" })]);
     ss.appendChild(table([
-      { name: "series", get: function (i) { return series(d.series[i]).label; }, cell: function (i) { return el("a", { href: "series.html?s=" + i, text: series(d.series[i]).label }); } },
+      { name: "series", get: function (i) { return d.labels[i]; }, cell: function (i) { return el("a", { href: "series.html?s=" + i, text: d.labels[i] }); } },
       { name: "host", get: function (i) { return series(d.series[i]).host; } },
       { name: "changes", get: function (i) { return changed[i] || 0; }, num: true },
     ], d.series.map(function (_, i) { return i; })));
@@ -176,7 +174,7 @@ var SB = (function () {
   }
   function changesTable(list) {
     return table([
-      { name: "series", get: function (c) { return series(c.series).label; }, cell: function (c) { return el("a", { href: "series.html?s=" + c.sid + "#" + c.metric, text: series(c.series).label }); } },
+      { name: "series", get: function (c) { return c.label; }, cell: function (c) { return el("a", { href: "series.html?s=" + c.sid + "#" + c.metric, text: c.label }); } },
       { name: "metric", get: function (c) { return c.metric; } },
       { name: "first night after", get: function (c) { return c.night_after; }, cell: function (c) { return el("span", {}, [el("a", { href: "night.html?n=" + c.night_after, text: "#" + c.night_after }), " " + c.date_after.slice(0, 10) + " (before: ", el("a", { href: "night.html?n=" + c.night_before, text: "#" + c.night_before }), ")"]); } },
       { name: "before", get: function (c) { return c.before; }, num: true },
@@ -209,7 +207,7 @@ var SB = (function () {
       { name: "scene", get: function (r) { return r.scene; } },
       { name: "path", get: function (r) { return r.path; } },
       { name: "technique", get: function (r) { return r.technique; } },
-      { name: "params", get: function (r) { return r.params; } },
+      { name: "params", get: function (r) { return r.params; }, cell: function (r) { return el("span", { "class": "params", text: r.params }); } },
       { name: "size", get: function (r) { return r.width + "x" + r.height; } },
       { name: "status", get: function (r) { return r.status; } },
       { name: "stable", get: function (r) { return r.stable; } },
@@ -256,7 +254,7 @@ var SB = (function () {
     techs.forEach(function (t) { series[t] = { strokeWidth: 0, drawPoints: true, pointSize: 4 }; });
     series.front = { strokeWidth: 1.5, drawPoints: false, connectSeparatedPoints: true, color: "#888" };
     chart(parent, data, { labels: ["gpu_ms"].concat(techs, ["front"]), series: series, xlabel: "median frame time (ms)",
-      ylabel: "error rate", legend: "always", highlightCircleSize: 5 }, scene);
+      ylabel: "error rate", legend: "always", highlightCircleSize: 5, axes: { y: { axisLabelWidth: 70 } } }, scene);
     parent.appendChild(el("p", { "class": "small", text: "front: " + onFront.map(function (r) { return r.technique + (r.params ? ":" + r.params : "") + " " + fmt(r.gpu_ms_median) + " ms, " + fmt(r.err_rate_mean); }).join(" · ") }));
   }
 
@@ -296,7 +294,11 @@ var SB = (function () {
       var row = el("div", { "class": "imgrow" });
       order.forEach(function (k) {
         var n = byFrame[f].filter(function (x) { return x.indexOf("_" + k + ".png") > 0; })[0];
-        if (n) row.appendChild(el("figure", {}, [el("img", { src: "images/" + night.id + "/" + n, alt: k + " of frame " + f, loading: "eager" }), el("figcaption", { text: k })]));
+        if (!n) return;
+        var img = el("img", { src: "images/" + night.id + "/" + n, alt: k + " of frame " + f, loading: "eager" });
+        img.onload = function () { if (img.naturalWidth > 0) document.body.dataset.imagesLoaded = String(+(document.body.dataset.imagesLoaded || 0) + 1); };
+        img.onerror = function () { errors.push("image " + n + " did not load"); mark(); };
+        row.appendChild(el("figure", {}, [img, el("figcaption", { text: k })]));
       });
       is.appendChild(el("h3", { text: "frame " + (+f) }));
       is.appendChild(row);
@@ -309,9 +311,9 @@ var SB = (function () {
   function pageSeries(d) {
     var m = document.getElementById("main"), s = series(d.series);
     m.innerHTML = "";
-    crumbs([el("span", { text: s.label })]);
-    m.appendChild(el("h1", { text: s.label }));
-    m.appendChild(el("p", { text: s.host + " · " + s.renderer }));
+    crumbs([el("span", { text: d.label })]);
+    m.appendChild(el("h1", { text: d.label }));
+    m.appendChild(el("p", { text: s.host + " · " + s.renderer + " · all parameters: " + (s.params || "none") }));
     Object.keys(d.metrics).forEach(function (name) {
       var mt = d.metrics[name];
       if (!mt.nights.length) return;
@@ -325,7 +327,7 @@ var SB = (function () {
       chart(sec, data, {
         labels: ["night", name, "unstable night"], customBars: true, drawPoints: true, pointSize: 3,
         series: { "unstable night": { strokeWidth: 0, pointSize: 5, color: "#d95f02" } },
-        ylabel: name + (hasCi ? " (bars: 95% CI)" : ""),
+        ylabel: name + (hasCi ? " (bars: 95% CI)" : ""), axes: { y: { axisLabelWidth: 70 } },
         underlayCallback: function (ctx, area, g) {
           cps.forEach(function (p) {
             var x = g.toDomXCoord(p.date.getTime() - 1);

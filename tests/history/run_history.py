@@ -1,0 +1,208 @@
+#!/usr/bin/env python3
+"""The results history on real nights, and its report in a real browser.
+
+Eleven small nights are rendered on llvmpipe. History A is nights 1-5 at the
+default thread count, then nights 6-8 with LP_NUM_THREADS=1: a real, steady
+slowdown with no hook in the code. History B is the same nights 1-5, then
+three more at the default count (rendered interleaved with A's, so the
+machine's drift hits both alike). Then:
+
+- `history regressions` on A names night 6 for the series whose camera pass
+  slowed (final_ms) and finds no change in any error or draw-call metric; it
+  exits 1 (a regression in the newest three nights). On B it finds nothing and
+  exits 0.
+- adding a set twice changes nothing; a history of an older schema is
+  migrated; a newer one and broken input are refused in one line.
+- the report of A is opened in headless Chromium: every page kind loads with
+  no script error, draws its charts, the night's table holds every run, the
+  regressions list holds night 6, the images of the night made with --images
+  load. A screenshot of each page kind is kept in OUT/report-shots/.
+
+usage: run_history.py SHADOWBENCH SOURCE_ROOT BUILD_ROOT
+"""
+import csv
+import io
+import os
+import re
+import shutil
+import sqlite3
+import subprocess
+import sys
+import time
+
+BIN, SRC, BUILD = sys.argv[1:4]
+WORK = os.path.join(BUILD, "test-history")
+SHOTS = os.path.join(BUILD, "report-shots")
+failures = []
+
+
+def check(cond, what):
+    print(("ok   " if cond else "FAIL ") + what, flush=True)
+    if not cond:
+        failures.append(what)
+
+
+def sb(*args, env=None, ok=(0,)):
+    e = dict(os.environ)
+    e.pop("LP_NUM_THREADS", None)
+    e.update(env or {})
+    p = subprocess.run([BIN] + list(args), capture_output=True, text=True, env=e)
+    if p.returncode not in ok:
+        print(p.stdout, p.stderr)
+        raise SystemExit("FAIL: shadowbench %s exited %d" % (" ".join(args), p.returncode))
+    return p
+
+
+def night(name, threads=None, images=False):
+    """One night: three techniques on plane-box, into WORK/name/<stamp>."""
+    args = ["run", "plane-box", "plane-box", "none", "sm", "pssm", "--frames", "16", "--size", "480x270",
+            "--error-every", "8", "--quiet", "--out", os.path.join(WORK, name)]
+    if images:
+        args += ["--images", "8"]
+    p = sb(*args, env={"LP_NUM_THREADS": threads} if threads else None)
+    return p.stdout.strip()
+
+
+def regressions(hist, *extra):
+    p = sb("history", "regressions", "--history", hist, "--format", "csv", *extra, ok=(0, 1))
+    return p.returncode, list(csv.DictReader(io.StringIO(p.stdout))), p.stderr
+
+
+def chromium(url, shot=None):
+    cmd = ["chromium", "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+           "--virtual-time-budget=10000", "--window-size=1300,1100", "--enable-logging=stderr", "--v=0"]
+    cmd += ["--screenshot=" + shot] if shot else ["--dump-dom"]
+    p = subprocess.run(cmd + [url], capture_output=True, text=True, timeout=120)
+    console = [l for l in p.stderr.splitlines() if "CONSOLE" in l and ("ERROR" in l or "Uncaught" in l)]
+    return p.stdout, console
+
+
+def body_attrs(dom):
+    m = re.search(r"<body([^>]*)>", dom)
+    return dict(re.findall(r'data-([a-z-]+)="([^"]*)"', m.group(1))) if m else {}
+
+
+def main():
+    shutil.rmtree(WORK, ignore_errors=True)
+    os.makedirs(WORK)
+    t0 = time.time()
+    night("warm-up")   # not kept: the first runs after a build meet a colder machine
+    base = [night("n%d" % i) for i in range(1, 6)]
+    slow, same = [], []
+    for i in range(6, 9):
+        slow.append(night("a%d" % i, threads="1", images=(i == 8)))
+        same.append(night("b%d" % i))
+    print("12 nights rendered (one to warm up) in %.0f s" % (time.time() - t0))
+    A, B = os.path.join(WORK, "a.sqlite"), os.path.join(WORK, "b.sqlite")
+    for d in base + slow:
+        sb("history", "add", d, "--history", A)
+    sb("history", "add", *(base + same), "--history", B)
+
+    # the same set twice: nothing changes
+    db = sqlite3.connect(A)
+    before = db.execute("SELECT count(*) FROM runs").fetchone()[0]
+    p = sb("history", "add", base[2], "--history", A)
+    after = db.execute("SELECT count(*) FROM runs").fetchone()[0]
+    check(before == after == 24 and "already in" in p.stderr, "adding a set twice changes nothing (%d runs)" % after)
+    nights = [r[0] for r in db.execute("SELECT id FROM nights ORDER BY date, id")]
+    db.close()
+    sixth = nights[5]
+
+    metrics = "final_ms,gpu_ms,err_rate,draw_calls,shadow_draw_calls"
+    rc, rows, err = regressions(A, "--metric", metrics)
+    print(err.strip())
+    for r in rows:
+        print("  A: %s %s night %s %s%% %s" % (r["series"], r["metric"], r["night_after"], r["change_pct"], r["verdict"]))
+    check(rc == 1, "history A: exit 1 (a regression in the newest nights), got %d" % rc)
+    for tech in ("sm", "pssm"):
+        hit = [r for r in rows if r["metric"] == "final_ms" and " %s:" % tech in r["series"]]
+        check(len(hit) == 1 and int(hit[0]["night_after"]) == sixth and hit[0]["verdict"].startswith("REGRESSION"),
+              "history A: %s final_ms regresses from night 6 (#%d): %s" % (tech, sixth,
+              [(h["night_after"], h["change_pct"]) for h in hit]))
+    wrong = [r for r in rows if r["metric"] in ("err_rate", "draw_calls", "shadow_draw_calls")]
+    check(not wrong, "history A: no change in error or draw-call metrics (%d)" % len(wrong))
+    stray = [r for r in rows if int(r["night_after"]) != sixth]
+    check(not stray, "history A: every change found starts at night 6 (others: %d)" % len(stray))
+
+    rc, rows, err = regressions(B, "--metric", metrics)
+    for r in rows:
+        print("  B: %s %s night %s %s%%" % (r["series"], r["metric"], r["night_after"], r["change_pct"]))
+    check(rc == 0 and not rows, "history B (no change): no change found, exit 0 (got %d, %d changes)" % (rc, len(rows)))
+
+    # schema: an older file is migrated forward, a newer one refused
+    old = os.path.join(WORK, "v1.sqlite")
+    db = sqlite3.connect(old)
+    db.executescript(open(os.path.join(SRC, "tests", "history", "schema_v1.sql")).read())
+    db.commit()
+    db.close()
+    sb("history", "add", base[0], "--history", old)
+    db = sqlite3.connect(old)
+    v = db.execute("PRAGMA user_version").fetchone()[0]
+    kept = db.execute("SELECT count(*) FROM nights WHERE set_key = 'v1-night'").fetchone()[0]
+    frames = db.execute("SELECT count(*) FROM frames").fetchone()[0]
+    db.close()
+    check(v == 2 and kept == 1 and frames == 3, "a version 1 history is migrated to 2, its night kept (v%d, %d, %d frames)"
+          % (v, kept, frames))
+    newer = os.path.join(WORK, "v99.sqlite")
+    db = sqlite3.connect(newer)
+    db.execute("PRAGMA user_version = 99")
+    db.close()
+    p = sb("history", "add", base[0], "--history", newer, ok=(1,))
+    check("newer than this shadowbench" in p.stderr and len(p.stderr.strip().splitlines()) == 1,
+          "a newer history is refused in one line: " + p.stderr.strip())
+    p = sb("history", "add", os.path.join(WORK, "nowhere"), "--history", A, ok=(1,))
+    check("nowhere/summary.csv" in p.stderr, "a folder with no summary is named: " + p.stderr.strip())
+    p = sb("history", "regressions", "--history", os.path.join(WORK, "none.sqlite"), ok=(2,))
+    check("no history here" in p.stderr, "a missing history is said: " + p.stderr.strip())
+    p = sb("history", "regressions", "--history", A, "--metric", "gpu_sm", ok=(2,))
+    check("unknown metric 'gpu_sm'" in p.stderr, "an unknown metric is said: " + p.stderr.strip())
+
+    # the report in a browser
+    site = os.path.join(WORK, "site")
+    t1 = time.time()
+    sb("report", "--history", A, "--out", site)
+    print("report written in %.2f s" % (time.time() - t1))
+    shutil.rmtree(SHOTS, ignore_errors=True)
+    os.makedirs(SHOTS)
+    last = nights[-1]
+    db = sqlite3.connect(A)
+    run_ids = [r[0] for r in db.execute("SELECT run_id FROM runs WHERE night = ?", (last,))]
+    pssm_run = db.execute("SELECT run_id FROM runs WHERE night = ? AND technique = 'pssm'", (last,)).fetchone()[0]
+    series = sorted(r[0] for r in db.execute("SELECT DISTINCT series FROM runs"))
+    db.close()
+    pssm_series = [i for i, s in enumerate(series) if "|pssm|" in s][0]
+    pages = {
+        "index": "index.html",
+        "night": "night.html?n=%d" % last,
+        "run": "run.html?n=%d&r=%s" % (last, pssm_run),
+        "series": "series.html?s=%d" % pssm_series,
+    }
+    for kind, page in pages.items():
+        url = "file://" + os.path.abspath(os.path.join(site, page))
+        dom, console = chromium(url)
+        a = body_attrs(dom)
+        check(a.get("ready") == "yes" and a.get("errors") == "0" and not console,
+              "%s page: drawn with no script error (%s %s)" % (kind, a.get("error-text", ""), console[:2]))
+        want_charts = {"index": 0, "night": 1, "run": 3, "series": 5}[kind]
+        check(int(a.get("charts", "0")) >= want_charts, "%s page: %s chart(s) drawn (>= %d)" % (kind, a.get("charts"), want_charts))
+        if kind == "night":
+            missing = [r for r in run_ids if r not in dom]
+            check(not missing and len(run_ids) == 3, "night page: every run in the table (%d, missing %s)" % (len(run_ids), missing))
+        if kind == "index":
+            check("night.html?n=%d" % sixth in dom and 'class="regression recent"' in dom,
+                  "index page: the regressions list links night 6 (#%d) and marks it recent" % sixth)
+        if kind == "run":
+            check(int(a.get("images-loaded", "0")) >= 5, "run page: the evaluated frames' images loaded (%s)" % a.get("images-loaded"))
+        if kind == "series":
+            check("night.html?n=%d" % sixth in dom, "series page: its change links night 6")
+        chromium(url, shot=os.path.join(SHOTS, kind + ".png"))
+    print("screenshots in " + SHOTS)
+    if failures:
+        print("%d check(s) failed" % len(failures))
+        return 1
+    print("all checks passed in %.0f s" % (time.time() - t0))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
