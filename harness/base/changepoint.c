@@ -85,6 +85,21 @@ int sb_changepoints(const double *x, const double *w, int n, const sb_cp_opts *o
         if (sigma < 1e-9 * (1 + mag)) sigma = 1e-9 * (1 + mag);   /* a constant series: any shift is a change */
     }
     if (k >= 2 * m) {
+        /* one odd night is clipped to within 3 sigma of the median of itself and its neighbours (at the ends,
+           of the first or last three): it can neither make a change nor, by inflating the noise, hide one; a
+           level held for two nights is its own median and stays */
+        double *c3 = sb_xmalloc(sizeof *c3 * (size_t)k);
+        for (int i = 0; i < k; i++) {
+            int a = i == 0 ? 0 : i == k - 1 ? k - 3 : i - 1;
+            if (a < 0) a = 0;
+            double t[3];
+            int nt = 0;
+            for (int j = a; j < a + 3 && j < k; j++) t[nt++] = v[j];
+            double med = median_of(t, nt);
+            c3[i] = v[i] > med + 3 * sigma ? med + 3 * sigma : v[i] < med - 3 * sigma ? med - 3 * sigma : v[i];
+        }
+        memcpy(v, c3, sizeof *v * (size_t)k);
+        free(c3);
         prefix p = {sb_xcalloc((size_t)k + 1, sizeof(double)), sb_xcalloc((size_t)k + 1, sizeof(double)),
                     sb_xcalloc((size_t)k + 1, sizeof(double))};
         for (int i = 0; i < k; i++) {
@@ -93,10 +108,10 @@ int sb_changepoints(const double *x, const double *w, int n, const sb_cp_opts *o
             p.wxx[i + 1] = p.wxx[i] + wt[i] * v[i] * v[i];
         }
         int *cuts = sb_xmalloc(sizeof *cuts * (size_t)k), nc = search(&p, k, m, beta, sigma, cuts);
-        /* the residual noise of that cut: when it is larger than the estimate from the differences (which
-           a short noisy series can underestimate), cut again with it; the larger of the two is kept */
+        /* the residual noise of that cut: when it is larger than the estimate from the differences (which a
+           short noisy series can underestimate), cut again with it; the larger of the two is kept */
         for (int it = 0; it < 3; it++) {
-            double rss = 0, wsum = p.w[k];
+            double rss = 0;
             for (int c = 0, a = 0; c <= nc; c++) {
                 int b = c < nc ? cuts[nc - 1 - c] : k;
                 rss += seg_cost(&p, a, b);
@@ -104,7 +119,7 @@ int sb_changepoints(const double *x, const double *w, int n, const sb_cp_opts *o
             }
             int dof = k - nc - 1;
             if (dof < 1) break;
-            double sr = sqrt(rss / wsum * k / dof);
+            double sr = sqrt(rss / p.w[k] * k / dof);
             if (!(sr > sigma * 1.0001)) break;
             sigma = sr;
             nc = search(&p, k, m, beta, sigma, cuts);

@@ -6,7 +6,11 @@
  *
  * - sigma, the night-to-night noise, is estimated robustly from the series
  *   itself: 1.4826 * median |x_{i+1} - x_i| / sqrt(2) (a level shift moves one
- *   difference, not the median), floored at noise_floor.
+ *   difference, not the median), floored at noise_floor; or, when larger,
+ *   from the residuals of the cut found (and the cut made again).
+ * - One odd night is clipped to within 3 sigma of the median of itself and
+ *   its neighbours before the search: it neither makes a change nor, by
+ *   inflating sigma, hides one.
  * - With `relative`, positive series are read on a log scale, so a change is a
  *   ratio (5 % is 5 % at 1 ms or at 100 ms) and noise_floor is relative.
  * - A night's weight (0..1] says how much it counts: the caller lowers it for
@@ -16,16 +20,16 @@
  *   change and a change is reported once two nights show it.
  * - The penalty: with sigma known, adding one change at the best of the n-2m+1
  *   places lowers the cost by the largest of their z^2, each chi-square with
- *   one degree of freedom under no change. A penalty at its 1 - 1/5000
- *   quantile (13.83) bounds the false changes of a series of n nights by
- *   n/5000 (Bonferroni): a fifth of the budget of one in 1,000 series-nights,
- *   the rest paying for sigma being estimated and for cuts into several
- *   segments. tests/unit/test_changepoint.c measures the rates (and
+ *   one degree of freedom under no change. A penalty at its 1 - 1/10000
+ *   quantile (15.14) bounds the false changes of a series of n nights by
+ *   n/10000 (Bonferroni): a tenth of the budget of one in 1,000
+ *   series-nights, the rest paying for sigma being estimated and for cuts
+ *   into several segments. tests/unit/test_changepoint.c measures the rates (and
  *   docs/history.md gives them). */
 #pragma once
 #include <stdbool.h>
 
-#define SB_CP_PENALTY 13.83
+#define SB_CP_PENALTY 15.14
 #define SB_CP_MIN_SEG 2
 
 typedef struct sb_cp_opts {

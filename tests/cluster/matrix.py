@@ -107,9 +107,11 @@ def main():
         page = open(env["GITHUB_STEP_SUMMARY"]).read()
         if "|" not in page:
             sys.exit("FAIL: compare --format markdown wrote no table to $GITHUB_STEP_SUMMARY")
-        plots = os.listdir(os.path.join(ws, "out", "merged", "plots"))
+        night = open(os.path.join(ws, "out", "site", "data", "night-1.js")).read()
+        if night.count('"ok"') < rows:
+            sys.exit("FAIL: the merged night's report does not hold every run")
         print(f"pass: {len(j['shard']['matrix'])} shards merged to {rows} runs, compare's table "
-              f"({page.count(chr(10))} lines), {len(plots)} plots")
+              f"({page.count(chr(10))} lines), a report of the merged night")
     finally:
         if not os.environ.get("SB_KEEP_MATRIX_TMP"):
             shutil.rmtree(tmp, ignore_errors=True)

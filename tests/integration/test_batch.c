@@ -9,6 +9,7 @@
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -297,26 +298,36 @@ static void test_compare_real_runs_and_pairs(void **st) {
     assert_int_equal(sh("%s compare %s --pair technique=sm,pssm", test_binary(), dir), 0);
 }
 
-static void test_plots(void **st) {
+/* The night's report: a site with the charting library, the night's data and every run in it. */
+static void test_report(void **st) {
     (void)st;
     char dir[4096];
     assert_int_equal(sh("ls -d %s/full/nightly/*", g_tmp), 0);
     last_line(dir, sizeof dir);
-    const char *src = getenv("SB_SOURCE_ROOT");
-    assert_int_equal(sh("%s/scripts/plot %s", src ? src : ".", dir), 0);
-    const char *want[] = {"towers-frame-time.png", "towers-draw-calls.png", "towers-stages.png", "pb-stages.png",
-                          "pareto.png"};
-    for (size_t i = 0; i < sizeof want / sizeof want[0]; i++) {
-        char p[4400];
-        snprintf(p, sizeof p, "%s/plots/%s", dir, want[i]);
-        FILE *f = fopen(p, "rb");
-        assert_non_null(f);
-        unsigned char sig[8] = {0};
-        assert_int_equal(fread(sig, 1, 8, f), 8);
-        fclose(f);
-        assert_int_equal(sig[1], 'P');   /* a PNG */
-        assert_int_equal(sig[2], 'N');
+    assert_int_equal(sh("%s report %s --out %s/site", test_binary(), dir, g_tmp), 0);
+    char p[4400];
+    snprintf(p, sizeof p, "%s/site/assets/dygraph.min.js", g_tmp);
+    struct stat sb;
+    assert_int_equal(stat(p, &sb), 0);
+    assert_true(sb.st_size > 10000);
+    snprintf(p, sizeof p, "%s/site/data/night-1.js", g_tmp);
+    char *night = sb_read_file(p, NULL, NULL);
+    assert_non_null(night);
+    snprintf(p, sizeof p, "%s/summary.csv", dir);
+    char *sum = sb_read_file(p, NULL, NULL);
+    assert_non_null(sum);
+    /* every run id of the summary is in the night's data */
+    int runs = 0;
+    for (char *line = strchr(sum, '\n'); line && line[1]; line = strchr(line + 1, '\n')) {
+        char id[17];
+        memcpy(id, line + 1, 16);
+        id[16] = 0;
+        assert_non_null(strstr(night, id));
+        runs++;
     }
+    assert_true(runs >= 8);
+    free(night);
+    free(sum);
 }
 
 static void expect_rejected(const char *body, const char *needle) {
@@ -352,7 +363,7 @@ int main(void) {
         cmocka_unit_test(test_compare_exit_codes),
         cmocka_unit_test(test_compare_real_runs_and_pairs),
         cmocka_unit_test(test_bad_batch_files),
-        cmocka_unit_test(test_plots),
+        cmocka_unit_test(test_report),
     };
     return cmocka_run_group_tests_name("batch", tests, setup, teardown);
 }
