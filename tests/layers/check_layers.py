@@ -28,7 +28,7 @@ LAYERS = [
 # Headers generated at build time, and the layer they belong to.
 GENERATED = {
     "glad_gl.h": "gl", "khrplatform.h": "gl",
-    "shaders.h": "techniques", "technique_list.h": "techniques",
+    "shaders.h": "techniques", "technique_list.h": "techniques", "site_assets.h": "results",
     "version.h": "harness",
 }
 SOURCE_EXT = (".c", ".cc", ".h")
