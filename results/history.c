@@ -222,6 +222,18 @@ bool sb_history_add(sb_history *h, const char *dir, sb_history_added *out, sb_er
     snprintf(renderer, sizeof renderer, "%s", t.nrows ? sb_table_get(&t, 0, "renderer") : "");
     if (!renderer[0]) meta_field(meta, "gl_renderer", renderer, sizeof renderer);
     set_date(dir, meta, sum_path, date, sizeof date);
+    /* a batch (or shard) says how many runs it has: a summary with fewer is a set still running or stopped */
+    char runs_field[128];
+    meta_field(meta, "runs", runs_field, sizeof runs_field);
+    int want = 0;
+    if (runs_field[0] && sscanf(runs_field, "%d", &want) == 1 && t.nrows < want) {
+        sb_fail(err, "%s: %d of the %d runs its meta names are in summary.csv: the set is incomplete (still running, "
+                     "or stopped: `batch --resume` it first)", dir, t.nrows, want);
+        sb_table_free(&t);
+        free(sum_text);
+        free(meta);
+        return false;
+    }
     /* the set is its summary's bytes on its host: the same set added twice is found */
     uint64_t key = sb_fnv1a(sb_fnv1a(1469598103934665603ull, sum_text, sum_len), host, strlen(host));
     char set_key[32];

@@ -152,6 +152,12 @@ def main():
           "a newer history is refused in one line: " + p.stderr.strip())
     p = sb("history", "add", os.path.join(WORK, "nowhere"), "--history", A, ok=(1,))
     check("nowhere/summary.csv" in p.stderr, "a folder with no summary is named: " + p.stderr.strip())
+    part = os.path.join(WORK, "partial")
+    shutil.copytree(base[0], part)
+    with open(os.path.join(part, "meta"), "a") as f:
+        f.write("runs: 9 of 9\n")   # as a batch's meta says: a summary of 3 is a set still running
+    p = sb("history", "add", part, "--history", A, ok=(1,))
+    check("3 of the 9 runs" in p.stderr and "incomplete" in p.stderr, "an incomplete batch is refused: " + p.stderr.strip())
     p = sb("history", "regressions", "--history", os.path.join(WORK, "none.sqlite"), ok=(2,))
     check("no history here" in p.stderr, "a missing history is said: " + p.stderr.strip())
     p = sb("history", "regressions", "--history", A, "--metric", "gpu_sm", ok=(2,))
