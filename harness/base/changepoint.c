@@ -82,7 +82,15 @@ int sb_changepoints(const double *x, const double *w, int n, const sb_cp_opts *o
         mag /= k;
         double floor_ = d.noise_floor > 0 ? (logs ? d.noise_floor : d.noise_floor * mag) : 0;
         if (sigma < floor_) sigma = floor_;
-        if (sigma < 1e-9 * (1 + mag)) sigma = 1e-9 * (1 + mag);   /* a constant series: any shift is a change */
+        /* a deterministic series (counts, error rates): any shift of the figures as written (6 digits) is a
+           change, and rounding in the sums is not */
+        double tiny = logs ? 1e-7 : 1e-7 * (1 + mag);
+        if (sigma < tiny) sigma = tiny;
+        /* centred, so that the sums of squares below carry no rounding of the level itself */
+        double mean = 0;
+        for (int i = 0; i < k; i++) mean += v[i];
+        mean /= k;
+        for (int i = 0; i < k; i++) v[i] -= mean;
     }
     if (k >= 2 * m) {
         /* one odd night is clipped to within 3 sigma of the median of itself and its neighbours (at the ends,

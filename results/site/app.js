@@ -202,12 +202,25 @@ var SB = (function () {
     var s = el("section", { id: "summary" }, [el("h2", { text: "Runs (" + rows.length + ")" }),
       el("p", { "class": "keyline", html: "<span class='unstable'>unstable timings (stable=no)</span> <span class='warned'>warnings</span> <span class='failed'>failed</span> · click a header to sort" })]);
     var num = function (name) { return { name: name, get: function (r) { return r[name]; }, num: true }; };
+    /* the parameters every run of a technique shares are said once, above the table; a row shows the rest */
+    var shared = {};
+    rows.forEach(function (r) {
+      var items = (r.params || "").split(":").filter(Boolean);
+      if (!(r.technique in shared)) shared[r.technique] = items;
+      else shared[r.technique] = shared[r.technique].filter(function (i) { return items.indexOf(i) >= 0; });
+    });
+    var own = function (r) {
+      return (r.params || "").split(":").filter(function (i) { return i && shared[r.technique].indexOf(i) < 0; }).join(":");
+    };
+    var common = el("details", {}, [el("summary", { text: "parameters every run of a technique shares (left out of the rows)" })]);
+    Object.keys(shared).forEach(function (t) { if (shared[t].length) common.appendChild(el("p", { "class": "small", text: t + ": " + shared[t].join(":") })); });
+    s.appendChild(common);
     s.appendChild(table([
       { name: "run", get: function (r) { return r.run_id; }, cell: function (r) { return el("a", { href: "run.html?n=" + d.id + "&r=" + r.run_id, text: r.run_id }); } },
       { name: "scene", get: function (r) { return r.scene; } },
       { name: "path", get: function (r) { return r.path; } },
       { name: "technique", get: function (r) { return r.technique; } },
-      { name: "params", get: function (r) { return r.params; }, cell: function (r) { return el("span", { "class": "params", text: r.params }); } },
+      { name: "params", get: function (r) { return r.params; }, cell: function (r) { return el("span", { "class": "params", title: r.params, text: own(r).replace(/:/g, ":\u200b") }); } },
       { name: "size", get: function (r) { return r.width + "x" + r.height; } },
       { name: "status", get: function (r) { return r.status; } },
       { name: "stable", get: function (r) { return r.stable; } },

@@ -115,7 +115,7 @@ def main():
         print("  A: %s %s night %s %s%% %s" % (r["series"], r["metric"], r["night_after"], r["change_pct"], r["verdict"]))
     check(rc == 1, "history A: exit 1 (a regression in the newest nights), got %d" % rc)
     for tech in ("sm", "pssm"):
-        hit = [r for r in rows if r["metric"] == "final_ms" and " %s:" % tech in r["series"]]
+        hit = [r for r in rows if r["metric"] == "final_ms" and r["series"].split()[1] == tech]
         check(len(hit) == 1 and int(hit[0]["night_after"]) == sixth and hit[0]["verdict"].startswith("REGRESSION"),
               "history A: %s final_ms regresses from night 6 (#%d): %s" % (tech, sixth,
               [(h["night_after"], h["change_pct"]) for h in hit]))
@@ -152,6 +152,18 @@ def main():
           "a newer history is refused in one line: " + p.stderr.strip())
     p = sb("history", "add", os.path.join(WORK, "nowhere"), "--history", A, ok=(1,))
     check("nowhere/summary.csv" in p.stderr, "a folder with no summary is named: " + p.stderr.strip())
+    # another machine's night is a series of its own
+    other = os.path.join(WORK, "other-host")
+    shutil.copytree(base[0], other)
+    meta = open(os.path.join(other, "meta")).read()
+    open(os.path.join(other, "meta"), "w").write(re.sub(r"(?m)^host: .*$", "host: other-machine", meta))
+    C = os.path.join(WORK, "c.sqlite")
+    sb("history", "add", base[0], other, "--history", C)
+    db = sqlite3.connect(C)
+    nseries = db.execute("SELECT count(DISTINCT series) FROM runs").fetchone()[0]
+    db.close()
+    check(nseries == 6, "two machines' nights stay separate series (%d series of 3 runs each)" % nseries)
+
     part = os.path.join(WORK, "partial")
     shutil.copytree(base[0], part)
     with open(os.path.join(part, "meta"), "a") as f:
