@@ -56,8 +56,8 @@ def sb(*args, env=None, ok=(0,)):
 def night(name, threads=None, images=False):
     """One night: three shadowed runs on plane-box (not `none`: a 1-ms frame on a shared CPU moves by
     half between nights for reasons of its own), into WORK/name/<stamp>."""
-    args = ["run", "plane-box", "plane-box", "sm", "sm:filter=pcf3", "pssm", "--frames", "16", "--size", "480x270",
-            "--error-every", "8", "--quiet", "--out", os.path.join(WORK, name)]
+    args = ["run", "plane-box", "plane-box", "sm", "sm:filter=pcf3", "pssm", "--frames", "12", "--size", "480x270",
+            "--error-every", "6", "--quiet", "--out", os.path.join(WORK, name)]
     if images:
         args += ["--images", "8"]
     p = sb(*args, env={"LP_NUM_THREADS": threads} if threads else None)
