@@ -424,15 +424,6 @@ int sb_compare_pairs(const char *dir, const sb_compare_opts *o, FILE *out, sb_er
     return n;
 }
 
-static bool copy_file(const char *from, const char *to, sb_err *err) {
-    size_t n;
-    char *data = sb_read_file(from, &n, err);
-    if (!data) return false;
-    bool ok = sb_write_file_atomic(to, data, n, err);
-    free(data);
-    return ok;
-}
-
 typedef struct {
     double index;
     const char *line;
@@ -524,12 +515,12 @@ bool sb_merge(const char *const *dirs, int n, const char *out_dir, sb_err *err) 
             char from[4400], to[4400];
             snprintf(from, sizeof from, "%s/%s.csv", dirs[i], id);
             snprintf(to, sizeof to, "%s/%s.csv", out_dir, id);
-            if (access(from, R_OK) == 0) ok = copy_file(from, to, err);
+            if (access(from, R_OK) == 0) ok = sb_copy_file(from, to, err);
         }
         char from[4400], to[4400];
         snprintf(from, sizeof from, "%s/meta", dirs[i]);
         snprintf(to, sizeof to, "%s/meta.%d", out_dir, i + 1);
-        if (ok && access(from, R_OK) == 0) ok = copy_file(from, to, err);
+        if (ok && access(from, R_OK) == 0) ok = sb_copy_file(from, to, err);
     }
     if (ok) {
         qsort(rows, (size_t)nrows, sizeof *rows, by_index);

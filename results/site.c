@@ -59,6 +59,18 @@ static void jkey(jbuf *j, const char *k) {
     jstr(j, k);
     jraw(j, ":", 1);
 }
+/* ,"key":"text" and ,"key":number (the first field of an object: start the object with '{' and no comma) */
+static void jsfield(jbuf *j, const char *k, const char *v) {
+    jput(j, ",");
+    jkey(j, k);
+    jstr(j, v);
+}
+static void jnfield(jbuf *j, const char *k, double v) {
+    jput(j, ",");
+    jkey(j, k);
+    jnum(j, v);
+}
+
 /* a CSV cell as a JSON number when it is one, else a string (empty: null) */
 static void jcell(jbuf *j, const char *s) {
     double v;
@@ -81,15 +93,9 @@ static bool write_data(const char *site, const char *name, jbuf *j, sb_err *err)
 
 /* ---- files ---- */
 
-static bool copy_file(const char *from, const char *to, sb_err *err) {
+static bool link_or_copy(const char *from, const char *to, sb_err *err) {
     unlink(to);
-    if (link(from, to) == 0) return true;   /* same filesystem: no copy */
-    size_t n;
-    char *data = sb_read_file(from, &n, err);
-    if (!data) return false;
-    bool ok = sb_write_file_atomic(to, data, n, err);
-    free(data);
-    return ok;
+    return link(from, to) == 0 || sb_copy_file(from, to, err);   /* same filesystem: no copy */
 }
 
 static const char *const page_kinds[] = {"index", "night", "run", "series"};
@@ -208,7 +214,7 @@ static void night_images(const char *site, long long id, const char *dir, jbuf *
             char a[4800], b[4800];
             snprintf(a, sizeof a, "%s/%s", from, de->d_name);
             snprintf(b, sizeof b, "%s/%s", to, de->d_name);
-            if (!copy_file(a, b, &e)) continue;
+            if (!link_or_copy(a, b, &e)) continue;
             jput(j, first ? "" : ",");
             first = false;
             jstr(j, de->d_name);
@@ -291,13 +297,9 @@ static bool write_night(sqlite3 *db, const char *site, sqlite3_stmt *n, sb_err *
     jnum(&j, (double)id);
     const char *keys[] = {"date", "host", "commit", "renderer", "version"};
     const int cols[] = {1, 2, 3, 4, 5};
-    for (size_t k = 0; k < SB_COUNT(keys); k++) jput(&j, ","), jkey(&j, keys[k]), jstr(&j, col(n, cols[k]));
-    jput(&j, ",");
-    jkey(&j, "meta");
-    jstr(&j, col(n, 7));
-    jput(&j, ",");
-    jkey(&j, "dir");
-    jstr(&j, dir);
+    for (size_t k = 0; k < SB_COUNT(keys); k++) jsfield(&j, keys[k], col(n, cols[k]));
+    jsfield(&j, "meta", col(n, 7));
+    jsfield(&j, "dir", dir);
     jput(&j, ",\"columns\":[");
     for (int c = 0; c < t.cols; c++) jput(&j, c ? "," : ""), jstr(&j, t.header[c]);
     jput(&j, "],\"rows\":[");
@@ -327,40 +329,21 @@ static const char *const trend_metrics[] = {"gpu_ms", "final_ms", "cascade_ms", 
                                              "err_rate"};
 
 static void jchange(jbuf *j, const sb_history_change *c, int sid) {
-    jput(j, "{");
-    jkey(j, "series");
-    jstr(j, c->series);
-    jput(j, ",");
-    jkey(j, "label");
-    jstr(j, c->label);
-    jput(j, ",\"sid\":");
+    jput(j, "{\"sid\":");
     jnum(j, sid);
-    jput(j, ",");
-    jkey(j, "metric");
-    jstr(j, c->metric);
-    jput(j, ",\"night_before\":");
-    jnum(j, (double)c->night_before);
-    jput(j, ",\"night_after\":");
-    jnum(j, (double)c->night_after);
-    jput(j, ",");
-    jkey(j, "date_after");
-    jstr(j, c->date_after);
-    jput(j, ",");
-    jkey(j, "commit_before");
-    jstr(j, c->commit_before);
-    jput(j, ",");
-    jkey(j, "commit_after");
-    jstr(j, c->commit_after);
-    jput(j, ",\"before\":");
-    jnum(j, c->before);
-    jput(j, ",\"after\":");
-    jnum(j, c->after);
-    jput(j, ",\"rel\":");
-    jnum(j, c->rel);
-    jput(j, ",\"z\":");
-    jnum(j, c->z);
-    jput(j, ",\"p\":");
-    jnum(j, c->p);
+    jsfield(j, "series", c->series);
+    jsfield(j, "label", c->label);
+    jsfield(j, "metric", c->metric);
+    jnfield(j, "night_before", (double)c->night_before);
+    jnfield(j, "night_after", (double)c->night_after);
+    jsfield(j, "date_after", c->date_after);
+    jsfield(j, "commit_before", c->commit_before);
+    jsfield(j, "commit_after", c->commit_after);
+    jnfield(j, "before", c->before);
+    jnfield(j, "after", c->after);
+    jnfield(j, "rel", c->rel);
+    jnfield(j, "z", c->z);
+    jnfield(j, "p", c->p);
     jput(j, c->regression ? ",\"regression\":true" : ",\"regression\":false");
     jput(j, c->recent ? ",\"recent\":true}" : ",\"recent\":false}");
 }
@@ -388,12 +371,9 @@ static bool write_series(sqlite3 *db, const char *site, char **series, char **la
     bool ok = true;
     for (int s = 0; ok && s < ns; s++) {
         jbuf j = {0};
-        jput(&j, "{\"kind\":\"series\",");
-        jkey(&j, "series");
-        jstr(&j, series[s]);
-        jput(&j, ",");
-        jkey(&j, "label");
-        jstr(&j, labels[s]);
+        jput(&j, "{\"kind\":\"series\"");
+        jsfield(&j, "series", series[s]);
+        jsfield(&j, "label", labels[s]);
         jput(&j, ",\"metrics\":{");
         for (size_t m = 0; m < SB_COUNT(trend_metrics); m++) {
             sb_metric_cols mc;
@@ -471,9 +451,9 @@ static bool write_site(sb_history *h, const sb_site_opts *o, bool single, sb_err
         jput(&j, "\"id\":");
         jnum(&j, (double)sqlite3_column_int64(st, 0));
         const char *keys[] = {"date", "host", "commit", "renderer"};
-        for (int c = 0; c < 4; c++) jput(&j, ","), jkey(&j, keys[c]), jstr(&j, col(st, c + 1));
+        for (int c = 0; c < 4; c++) jsfield(&j, keys[c], col(st, c + 1));
         const char *counts[] = {"runs", "ok", "failed", "unstable", "warned"};
-        for (int c = 0; c < 5; c++) jput(&j, ","), jkey(&j, counts[c]), jnum(&j, sqlite3_column_int(st, c + 9));
+        for (int c = 0; c < 5; c++) jnfield(&j, counts[c], sqlite3_column_int(st, c + 9));
         jput(&j, "}");
         ok = write_night(db, o->out, st, err);
     }

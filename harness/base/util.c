@@ -172,6 +172,15 @@ bool sb_write_file_atomic(const char *path, const void *data, size_t size, sb_er
     return true;
 }
 
+bool sb_copy_file(const char *from, const char *to, sb_err *err) {
+    size_t n;
+    char *data = sb_read_file(from, &n, err);
+    if (!data) return false;
+    bool ok = sb_write_file_atomic(to, data, n, err);
+    free(data);
+    return ok;
+}
+
 bool sb_mkdir_p(const char *path, sb_err *err) {
     char buf[4096];
     snprintf(buf, sizeof buf, "%s", path);

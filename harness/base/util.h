@@ -39,6 +39,8 @@ void *sb_map_file(const char *path, size_t *size, bool writable);
 void sb_unmap_file(void *p, size_t size);
 /* Writes data to path atomically (PATH.PID.tmp, fsync, rename). */
 bool sb_write_file_atomic(const char *path, const void *data, size_t size, sb_err *err);
+/* Copies a file, written atomically (sb_write_file_atomic). */
+bool sb_copy_file(const char *from, const char *to, sb_err *err);
 bool sb_mkdir_p(const char *path, sb_err *err);
 /* Makes BASE/<UTC time> (or <UTC time>-2, -3, ... when taken) into out. */
 bool sb_make_stamped_dir(const char *base, char *out, size_t len, sb_err *err);
