@@ -106,7 +106,9 @@ struct sb_run {
 };
 
 static bool fail_run(sb_run *r, const char *fmt, const char *what) {
-    if (!r->failed) sb_fail(&r->err, fmt, what);
+    char copy[sizeof r->err.msg];   /* `what` is often r->err.msg itself: formatting it into itself lost it */
+    snprintf(copy, sizeof copy, "%s", what);
+    if (!r->failed) sb_fail(&r->err, fmt, copy);
     r->failed = true;
     return false;
 }
