@@ -81,8 +81,8 @@ static bool create_maps(sb_csm *c, const char *name, sb_err *err) {
         glReadBuffer(GL_NONE);
     }
     glGenBuffers(1, &c->block);
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, c->block);
-    glBufferData(GL_SHADER_STORAGE_BUFFER, sizeof(sb_cascade_block), NULL, GL_DYNAMIC_DRAW);
+    glBindBuffer(GL_UNIFORM_BUFFER, c->block);
+    glBufferData(GL_UNIFORM_BUFFER, sizeof(sb_cascade_block), NULL, GL_DYNAMIC_DRAW);
     return true;
 }
 
@@ -129,9 +129,12 @@ static bool create_depth_programs(sb_csm *c, sb_err *err) {
 
 /* The final pass with the cascade lookup (vis_csm.glsl), and its uniforms. */
 static bool create_final(sb_csm *c, const char *name, sb_err *err) {
-    char defines[128];
-    snprintf(defines, sizeof defines, "#define SB_FILTER %d\n#define SB_SELECT %d\n#define SB_FORMAT %d\n", c->d.filter,
-             c->d.select, c->d.format);
+    char defines[192];
+    const sb_csm_desc *d = &c->d;
+    snprintf(defines, sizeof defines,
+             "#define SB_FILTER %d\n#define SB_SELECT %d\n#define SB_FORMAT %d\n#define SB_MAPS %d\n"
+             "#define SB_WARP %d\n#define SB_BLEND %d\n",
+             d->filter, d->select, d->format, c->count, d->warp != SB_WARP_NONE || d->perspective, d->blend > 0);
     const char *vis[] = {sb_shader_csm_block_glsl, sb_shader_vis_csm_glsl};
     if (!sb_final_prog_create_parts(&c->fp, name, vis, 2, defines, err)) return false;
     const char *names[] = {"u_shadow",    "u_bias",  "u_normal",    "u_blend",   "u_light",   "u_texel",
@@ -231,8 +234,8 @@ void sb_csm_upload(sb_csm *c, const double *zn, const double *zf) {
     memset(&c->cpu, 0, sizeof c->cpu);
     c->cpu.info[0] = (float)c->count;
     for (int k = 0; k < c->count; k++) block_put(c, k, &c->fit[k], zn[k], zf[k], c->active[k]);
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, c->block);
-    glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof c->cpu, &c->cpu);
+    glBindBuffer(GL_UNIFORM_BUFFER, c->block);
+    glBufferSubData(GL_UNIFORM_BUFFER, 0, sizeof c->cpu, &c->cpu);
 }
 
 void sb_csm_fit(sb_csm *c, sb_frame *f, const double *splits) {
@@ -284,7 +287,7 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
     const sb_gpu *g = f->gpu;
     const sb_csm_desc *d = &c->d;
     const sb_scene *s = g->scene;
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, c->block);
+    glBindBufferBase(GL_UNIFORM_BUFFER, 0, c->block);
     glBindFramebuffer(GL_FRAMEBUFFER, c->fbo_all);
     glViewport(0, 0, d->res, d->res);
     glEnable(GL_DEPTH_TEST);
@@ -367,7 +370,7 @@ void sb_csm_final(sb_csm *c, sb_frame *f, bool reuse_depth) {
     const sb_gpu *g = f->gpu;
     const sb_csm_desc *d = &c->d;
     glUseProgram(c->fp.prog);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, c->block);
+    glBindBufferBase(GL_UNIFORM_BUFFER, 0, c->block);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D_ARRAY, c->tex);
     glUniform1i(c->u_shadow, 0);

@@ -26,6 +26,7 @@ typedef struct sb_csm_desc {
     int warp;                   /* SB_WARP_* */
     double min_angle;           /* LiSPSM: below this view/light angle, no warp (degrees) */
     double focus;               /* TSM: share of the footprint mapped to 80% of the map */
+    int perspective;            /* not a parameter: the maps may be perspective without a warp (PSM) */
 } sb_csm_desc;
 
 /* The defaults of the fields a technique's table may not have. */
@@ -88,7 +89,7 @@ typedef struct sb_csm {
     GLuint raw_sampler;                   /* the map without comparison, for PCSS's blocker search */
     GLint u_depth_raw, u_sun_tan;
     GLuint tex, fbo_all, fbo_layer[SB_MAX_CASCADES];
-    GLuint block;                         /* SSBO, binding 0 */
+    GLuint block;                         /* uniform block 0 (storage block 0 for SDSM's compute) */
     GLuint prog_cascade, prog_gs, prog_vs;
     GLint u_cascade, u_mask_gs, u_mask_vs;
     sb_final_prog fp;

@@ -52,6 +52,7 @@ static sb_csm_desc maps_of(const psm_desc *d) {
     sb_csm_desc m = d->csm;
     m.cascades = d->cube ? 6 : 1;
     m.select = d->cube ? 1 : 0;
+    m.perspective = 1;
     return m;
 }
 

@@ -7,20 +7,65 @@
 #include "shaders.h"
 #include "timing.h"
 
-bool sb_final_prog_create_parts(sb_final_prog *fp, const char *label, const char *const *vis_parts, int nvis,
-                                const char *defines, sb_err *err) {
+static GLuint final_variant(const char *label, const char *defines, bool eval, const char *const *vis_parts, int nvis,
+                            GLint loc[4], sb_err *err) {
     const char *vs[] = {sb_shader_scene_vert};
     const char *fs[8];
     int n = 0;
     for (int i = 0; i < nvis && n < 7; i++) fs[n++] = vis_parts[i];
     fs[n++] = sb_shader_final_frag;
-    fp->prog = sb_gpu_program(label, defines, vs, 1, fs, n, err);
-    if (!fp->prog) return false;
-    fp->u_view = glGetUniformLocation(fp->prog, "u_view");
-    fp->u_proj = glGetUniformLocation(fp->prog, "u_proj");
-    fp->u_light = glGetUniformLocation(fp->prog, "u_shade_light");
-    fp->u_color = glGetUniformLocation(fp->prog, "u_color");
-    fp->u_eval = glGetUniformLocation(fp->prog, "sb_eval");
+    char defs[1024];
+    snprintf(defs, sizeof defs, "%s%s", eval ? "#define SB_EVAL\n" : "", defines ? defines : "");
+    char name[128];
+    snprintf(name, sizeof name, "%s%s", label, eval ? " (evaluation)" : "");
+    GLuint prog = sb_gpu_program(name, defs, vs, 1, fs, n, err);
+    if (!prog) return 0;
+    const char *names[4] = {"u_view", "u_proj", "u_shade_light", "u_color"};
+    for (int i = 0; i < 4; i++) loc[i] = glGetUniformLocation(prog, names[i]);
+    return prog;
+}
+
+/* The evaluation variant gets the technique's uniforms by copy from the timed
+ * one (sb_gl_copy_uniforms): a uniform only it reads would keep its default,
+ * 0, and the error would be measured on a different picture. Refused here, so
+ * every technique's create says so at once. */
+static bool eval_reads_timed(const sb_final_prog *fp, const char *label, sb_err *err) {
+    GLint count = 0;
+    glGetProgramiv(fp->eval_prog, GL_ACTIVE_UNIFORMS, &count);
+    for (GLuint i = 0; i < (GLuint)count; i++) {
+        char name[256];
+        GLint size = 0, block = -1;
+        GLenum type = 0;
+        glGetActiveUniform(fp->eval_prog, i, sizeof name, NULL, &size, &type, name);
+        glGetActiveUniformsiv(fp->eval_prog, 1, &i, GL_UNIFORM_BLOCK_INDEX, &block);
+        if (block >= 0 || glGetUniformLocation(fp->prog, name) >= 0) continue;
+        bool own = false;   /* set by the shared pass on each variant */
+        const char *shared[] = {"u_view", "u_proj", "u_shade_light", "u_color"};
+        for (size_t k = 0; k < SB_COUNT(shared); k++) own |= !strcmp(name, shared[k]);
+        if (!own)
+            return sb_fail(err, "%s: uniform %s is read by the evaluation variant of the camera pass only: its value "
+                                "would not reach it (use it in the timed variant too, or derive it there)",
+                           label, name);
+    }
+    return true;
+}
+
+bool sb_final_prog_create_parts(sb_final_prog *fp, const char *label, const char *const *vis_parts, int nvis,
+                                const char *defines, sb_err *err) {
+    memset(fp, 0, sizeof *fp);
+    GLint t[4], e[4];
+    fp->prog = final_variant(label, defines, false, vis_parts, nvis, t, err);
+    if (fp->prog) fp->eval_prog = final_variant(label, defines, true, vis_parts, nvis, e, err);
+    if (!fp->eval_prog) {
+        sb_final_prog_free(fp);
+        return false;
+    }
+    if (!eval_reads_timed(fp, label, err)) {
+        sb_final_prog_free(fp);
+        return false;
+    }
+    fp->u_view = t[0], fp->u_proj = t[1], fp->u_light = t[2], fp->u_color = t[3];
+    fp->e_view = e[0], fp->e_proj = e[1], fp->e_light = e[2], fp->e_color = e[3];
     return true;
 }
 
@@ -31,7 +76,8 @@ bool sb_final_prog_create(sb_final_prog *fp, const char *label, const char *vis_
 
 void sb_final_prog_free(sb_final_prog *fp) {
     if (fp->prog) glDeleteProgram(fp->prog);
-    fp->prog = 0;
+    if (fp->eval_prog) glDeleteProgram(fp->eval_prog);
+    fp->prog = fp->eval_prog = 0;
 }
 
 static GLuint make_tex(GLenum internal, int w, int h) {
@@ -338,10 +384,11 @@ void sb_zpass(sb_frame *f) {
     glDisable(GL_CULL_FACE);
 }
 
+/* Timed frames draw colour alone; the evaluation pass all four targets. */
 static void final_targets(const sb_frame *f, GLenum depth_func, bool depth_write) {
     bind_camera_target(f->gpu, depth_func, depth_write);
     const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3};
-    glDrawBuffers(f->eval ? 4 : 2, bufs);
+    glDrawBuffers(f->eval ? 4 : 1, bufs);
 }
 
 static void draw_scene(sb_frame *f, const sb_final_prog *fp, GLenum depth_func, bool depth_write);
@@ -351,8 +398,8 @@ static void camera_pass(sb_frame *f, const sb_final_prog *fp, GLenum depth_func,
     final_targets(f, depth_func, depth_write);
     const float sky[4] = {0.55f, 0.7f, 0.9f, 1.0f}, one[4] = {1, 1, 1, 1}, none[4] = {0, 0, 0, -1};
     glClearBufferfv(GL_COLOR, 0, sky);
-    glClearBufferfv(GL_COLOR, 1, one);
     if (f->eval) {
+        glClearBufferfv(GL_COLOR, 1, one);
         glClearBufferfv(GL_COLOR, 2, none);
         glClearBufferfv(GL_COLOR, 3, none);
     }
@@ -373,17 +420,20 @@ void sb_final_draw(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
 static void draw_scene(sb_frame *f, const sb_final_prog *fp, GLenum depth_func, bool depth_write) {
     const sb_gpu *g = f->gpu;
     final_targets(f, depth_func, depth_write);
-    glUseProgram(fp->prog);
-    sb_set_camera_uniforms(f, fp->u_view, fp->u_proj);
-    glUniform4f(fp->u_light, (float)f->shade_light[0], (float)f->shade_light[1], (float)f->shade_light[2],
+    /* the technique set its uniforms on the timed variant: the (untimed) evaluation pass copies them over */
+    if (f->eval) sb_gl_copy_uniforms(fp->prog, fp->eval_prog);
+    glUseProgram(f->eval ? fp->eval_prog : fp->prog);
+    GLint u_color = f->eval ? fp->e_color : fp->u_color, u_light = f->eval ? fp->e_light : fp->u_light;
+    if (f->eval) sb_set_camera_uniforms(f, fp->e_view, fp->e_proj);
+    else sb_set_camera_uniforms(f, fp->u_view, fp->u_proj);
+    glUniform4f(u_light, (float)f->shade_light[0], (float)f->shade_light[1], (float)f->shade_light[2],
                 (float)f->shade_light[3]);
-    glUniform1i(fp->u_eval, f->eval);
     glBindVertexArray(g->vao);
     uint32_t n = sb_scene_collect(g->scene, (const double(*)[4])f->frustum, 6, f->scratch);
     bool culling = true;
     for (uint32_t i = 0; i < n; i++) {
         const sb_draw *dr = &g->scene->draws[f->scratch[i]];
-        if (fp->u_color >= 0) glUniform4fv(fp->u_color, 1, dr->color);
+        if (u_color >= 0) glUniform4fv(u_color, 1, dr->color);
         camera_submit(f, f->scratch[i], &culling);
     }
     glDisable(GL_CULL_FACE);

@@ -13,10 +13,15 @@ struct sb_timer;
 struct sb_reference;
 
 /* Shared program of the camera pass: scene.vert + final.frag + the technique's
- * visibility function. */
+ * visibility function, linked twice. `prog`, the timed variant, writes colour
+ * alone and holds nothing of the evaluation; techniques use it and set their
+ * uniforms on it. `eval_prog` (SB_EVAL) also writes the visibility, position
+ * and normal targets; the evaluation pass copies the uniforms over and draws
+ * with it. */
 typedef struct sb_final_prog {
-    GLuint prog;
-    GLint u_view, u_proj, u_light, u_color, u_eval;
+    GLuint prog, eval_prog;
+    GLint u_view, u_proj, u_light, u_color;     /* in prog */
+    GLint e_view, e_proj, e_light, e_color;     /* in eval_prog */
 } sb_final_prog;
 
 /* The GPU side of a session: what every run and frame reads, never writes. */
@@ -56,7 +61,8 @@ typedef struct sb_frame {
     sb_camera cam;                      /* world space */
     sb_m4 view, proj, view_proj;        /* from origin-relative world */
     double frustum[6][4];               /* camera planes, origin-relative */
-    bool eval;                          /* evaluation pass: the final pass writes all four targets */
+    bool eval;                          /* evaluation pass: the final pass writes all four targets (timed
+                                           frames: colour alone, with the timed variant) */
     double shade_light[4];              /* the light the frame is lit by: shadow stages draw the triangles
                                            of single-sided draws facing it, the final pass shades it and the
                                            evaluation tests it; xyz toward the sun (w 0) or a point light's

@@ -103,7 +103,9 @@ void sdsm_partition(int m, int histogram, double zmin, double zmax, double near,
 static GLuint compute(const char *label, const char *src, const char *defines, sb_err *err) {
     const char *parts[] = {sb_shader_csm_block_glsl, sb_shader_sdsm_common_glsl, src};
     const sb_shader_src st[] = {{GL_COMPUTE_SHADER, parts, 3}};
-    return sb_gpu_link(label, defines, st, 1, err);
+    char defs[128];
+    snprintf(defs, sizeof defs, "#define SB_CASCADE_STORAGE\n%s", defines ? defines : "");
+    return sb_gpu_link(label, defs, st, 1, err);
 }
 
 static bool sdsm_check(const void *desc, sb_err *err) {

@@ -117,3 +117,82 @@ bool sb_layered_supported(const sb_context *ctx, int layered, const char *techni
                        ctx->renderer);
     return true;
 }
+
+/* Components and kind (f float, i int, bool or sampler, u unsigned) of a uniform type. */
+static int uniform_shape(GLenum type, char *kind) {
+    *kind = 'f';
+    switch (type) {
+    case GL_FLOAT: return 1;
+    case GL_FLOAT_VEC2: return 2;
+    case GL_FLOAT_VEC3: return 3;
+    case GL_FLOAT_VEC4: case GL_FLOAT_MAT2: return 4;
+    case GL_FLOAT_MAT3: return 9;
+    case GL_FLOAT_MAT4: return 16;
+    case GL_UNSIGNED_INT: *kind = 'u'; return 1;
+    case GL_UNSIGNED_INT_VEC2: *kind = 'u'; return 2;
+    case GL_UNSIGNED_INT_VEC3: *kind = 'u'; return 3;
+    case GL_UNSIGNED_INT_VEC4: *kind = 'u'; return 4;
+    case GL_INT_VEC2: case GL_BOOL_VEC2: *kind = 'i'; return 2;
+    case GL_INT_VEC3: case GL_BOOL_VEC3: *kind = 'i'; return 3;
+    case GL_INT_VEC4: case GL_BOOL_VEC4: *kind = 'i'; return 4;
+    default: *kind = 'i'; return 1;   /* int, bool, every sampler and image */
+    }
+}
+
+static void copy_uniform(GLuint from, GLuint to, const char *name, GLenum type) {
+    GLint lf = glGetUniformLocation(from, name), lt = glGetUniformLocation(to, name);
+    if (lf < 0 || lt < 0) return;
+    char kind;
+    int n = uniform_shape(type, &kind);
+    if (kind == 'f') {
+        GLfloat v[16];
+        glGetUniformfv(from, lf, v);
+        switch (type) {
+        case GL_FLOAT_MAT2: glProgramUniformMatrix2fv(to, lt, 1, GL_FALSE, v); return;
+        case GL_FLOAT_MAT3: glProgramUniformMatrix3fv(to, lt, 1, GL_FALSE, v); return;
+        case GL_FLOAT_MAT4: glProgramUniformMatrix4fv(to, lt, 1, GL_FALSE, v); return;
+        }
+        if (n == 1) glProgramUniform1fv(to, lt, 1, v);
+        else if (n == 2) glProgramUniform2fv(to, lt, 1, v);
+        else if (n == 3) glProgramUniform3fv(to, lt, 1, v);
+        else glProgramUniform4fv(to, lt, 1, v);
+    } else if (kind == 'u') {
+        GLuint v[4];
+        glGetUniformuiv(from, lf, v);
+        if (n == 1) glProgramUniform1uiv(to, lt, 1, v);
+        else if (n == 2) glProgramUniform2uiv(to, lt, 1, v);
+        else if (n == 3) glProgramUniform3uiv(to, lt, 1, v);
+        else glProgramUniform4uiv(to, lt, 1, v);
+    } else {
+        GLint v[4];
+        glGetUniformiv(from, lf, v);
+        if (n == 1) glProgramUniform1iv(to, lt, 1, v);
+        else if (n == 2) glProgramUniform2iv(to, lt, 1, v);
+        else if (n == 3) glProgramUniform3iv(to, lt, 1, v);
+        else glProgramUniform4iv(to, lt, 1, v);
+    }
+}
+
+void sb_gl_copy_uniforms(GLuint from, GLuint to) {
+    GLint count = 0;
+    glGetProgramiv(from, GL_ACTIVE_UNIFORMS, &count);
+    for (GLuint i = 0; i < (GLuint)count; i++) {
+        char name[256];
+        GLint size = 0, block = -1;
+        GLenum type = 0;
+        glGetActiveUniform(from, i, sizeof name, NULL, &size, &type, name);
+        glGetActiveUniformsiv(from, 1, &i, GL_UNIFORM_BLOCK_INDEX, &block);
+        if (block >= 0) continue;   /* a block's members live in its buffer, bound alike for both */
+        char *bracket = strstr(name, "[0]");
+        if (!bracket || size <= 1) {
+            copy_uniform(from, to, name, type);
+            continue;
+        }
+        *bracket = 0;
+        for (GLint e = 0; e < size; e++) {
+            char elem[300];
+            snprintf(elem, sizeof elem, "%s[%d]", name, e);
+            copy_uniform(from, to, elem, type);
+        }
+    }
+}

@@ -25,6 +25,13 @@ GLuint sb_gpu_link(const char *label, const char *defines, const sb_shader_src *
 GLuint sb_gpu_program(const char *label, const char *defines, const char *const *vs, int nvs,
                       const char *const *fs, int nfs, sb_err *err);
 
+/* Gives every default-block uniform of `from` that `to` also has the value it
+ * has in `from` (plain values, vectors, matrices, arrays, samplers): a
+ * program's variants (the camera pass's timed and evaluation ones) then draw
+ * alike with one set of uniform calls. Not for timed work: it reads uniforms
+ * back. */
+void sb_gl_copy_uniforms(GLuint from, GLuint to);
+
 /* A depth texture with hardware comparison (LEQUAL), clamped to its edge:
  * GL_TEXTURE_2D_ARRAY with `layers` layers, or GL_TEXTURE_CUBE_MAP (layers ignored). */
 GLuint sb_shadow_texture(GLenum target, GLenum format, int res, int layers, bool linear);

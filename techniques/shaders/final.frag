@@ -1,30 +1,31 @@
 // final.frag - shared camera pass. The technique's GLSL, linked before this,
-// defines sb_visibility(): 1 lit ... 0 shadowed. It is written, unshaded, to
-// the visibility target that error metrics and images read. Targets 2 and 3
-// are bound only in the (untimed) evaluation pass.
+// defines sb_visibility(): 1 lit ... 0 shadowed. Timed frames write the shaded
+// colour alone, as an engine's pass would; the evaluation variant (SB_EVAL,
+// untimed) also writes the visibility, unshaded, that error metrics and
+// images read, and the position and normal targets.
 in vec3 v_pos;
 in vec3 v_nrm;
 in float v_view_z;
 uniform vec4 u_shade_light;   // xyz toward the sun (w 0), or a point light's position (w 1)
 uniform vec4 u_color;
 layout(location = 0) out vec4 o_color;
+#ifdef SB_EVAL
 layout(location = 1) out float o_vis;
 layout(location = 2) out vec4 o_pos;   // origin-relative position, shadow texels per pixel
 layout(location = 3) out vec4 o_aux;   // geometric normal (facing the viewer), cascade index
+#endif
 void main() {
     SB_ALPHA_TEST();
-    sb_out_texel_px = -1.0;
-    sb_out_cascade = -1.0;
     vec3 n = normalize(v_nrm);
     vec3 L = u_shade_light.w > 0.5 ? normalize(u_shade_light.xyz - v_pos) : u_shade_light.xyz;
     float ndl = dot(n, L);
     float vis = sb_visibility(v_pos, n, v_view_z);
-    o_vis = vis;
     o_color = vec4(u_color.rgb * (0.3 + 0.7 * max(ndl, 0.0) * vis), 1.0);
-    if (sb_eval) {
-        vec3 ng = normalize(cross(dFdx(v_pos), dFdy(v_pos)));
-        if (dot(ng, n) < 0.0) ng = -ng;
-        o_pos = vec4(v_pos, sb_out_texel_px);
-        o_aux = vec4(ng, sb_out_cascade);
-    }
+#ifdef SB_EVAL
+    o_vis = vis;
+    vec3 ng = normalize(cross(dFdx(v_pos), dFdy(v_pos)));
+    if (dot(ng, n) < 0.0) ng = -ng;
+    o_pos = vec4(v_pos, sb_out_texel_px);
+    o_aux = vec4(ng, sb_out_cascade);
+#endif
 }

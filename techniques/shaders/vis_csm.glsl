@@ -2,6 +2,11 @@
 // SB_FILTER: 0 none (1 nearest tap), 1 hw (bilinear 2x2 compare), 2 pcf3, 3 pcf5, 4 poisson16,
 //           5 pcss (blocker search, then a Poisson PCF kernel as wide as the penumbra)
 // SB_SELECT: 0 interval (by view depth), 1 map (first map that contains the point)
+// SB_MAPS: the maps in the block; SB_WARP: 1 when a map may be perspective (LiSPSM, TSM,
+// PSM), so the lookup measures its local texel size; SB_BLEND: 1 when u_blend > 0.
+// Each is fixed when the program is made, so a frame pays only for what its
+// technique uses: the loops over the maps unroll, and a plain orthographic
+// lookup has neither the warp's three extra projections nor a second lookup.
 uniform sampler2DArrayShadow u_shadow;
 uniform float u_bias;       // constant bias, in shadow texels
 uniform float u_normal;     // normal offset, in shadow texels
@@ -74,6 +79,7 @@ vec2 sb_map_uv(int k, vec3 p) {
 
 float sb_lookup(int k, vec3 p, vec3 n) {
     float texel = sb_cascade[k].z;
+#if SB_WARP
     bool warped = sb_flags[k].y > 0.5;
     if (warped) {
         // a warped map's texels differ across it: measure the local texel size (world units)
@@ -85,6 +91,9 @@ float sb_lookup(int k, vec3 p, vec3 n) {
         float texels_per_unit = max(d1, d2) / u_texel.x / texel;
         texel = 1.0 / max(texels_per_unit, 1e-20);
     }
+#else
+    const bool warped = false;
+#endif
     float cosl = clamp(dot(n, u_light), -1.0, 1.0);
     vec3 q = p + n * (u_normal * texel * sqrt(1.0 - cosl * cosl));
     // a warped map's depth is not linear in distance: bias in world space instead (toward the light)
@@ -129,41 +138,49 @@ float sb_lookup(int k, vec3 p, vec3 n) {
 #endif
 }
 
+// The first rendered map holding the point (-1: none), without a branch: the
+// maps are tried from the last to the first and the last match kept.
 int sb_select(vec3 p, float view_z) {
-    int n = int(sb_info.x);
+    int k = -1;
+    for (int i = SB_MAPS - 1; i >= 0; i--) {
 #if SB_SELECT == 0
-    for (int k = 0; k < n; k++)
-        if (view_z <= sb_cascade[k].y && sb_flags[k].x > 0.5) return k;
+        bool in_map = view_z <= sb_cascade[i].y;
 #else
-    for (int k = 0; k < n; k++) {
-        if (sb_flags[k].x < 0.5) continue;
-        vec4 h = sb_shadow_mat[k] * vec4(p, 1.0);
-        if (h.w <= 0.0) continue;  // behind a perspective map's centre (PSM's cube faces)
+        vec4 h = sb_shadow_mat[i] * vec4(p, 1.0);
         vec3 c = h.xyz / h.w;
         vec2 m = 2.0 * u_texel;   // keep filter taps inside the map
-        if (all(greaterThanEqual(c.xy, m)) && all(lessThanEqual(c.xy, 1.0 - m)) && c.z <= 1.0 && c.z >= 0.0) return k;
-    }
+        // h.w > 0: in front of a perspective map's centre (PSM's cube faces)
+        bool in_map = h.w > 0.0 && all(greaterThanEqual(c.xy, m)) && all(lessThanEqual(c.xy, 1.0 - m)) &&
+                      c.z <= 1.0 && c.z >= 0.0;
 #endif
-    return -1;
+        if (in_map && sb_flags[i].x > 0.5) k = i;
+    }
+    return k;
 }
 
 float sb_visibility(vec3 p, vec3 n, float view_z) {
     int k = sb_select(p, view_z);
-    if (sb_eval) {
-        // resolution: texels of the selected map per screen pixel (a uniform branch, so
-        // the derivatives are in uniform control flow)
-        vec4 h = sb_shadow_mat[max(k, 0)] * vec4(p, 1.0);
-        vec2 uv = h.xy / h.w / u_texel;
-        sb_out_texel_px = k < 0 ? -1.0 : max(length(dFdx(uv)), length(dFdy(uv)));
-        sb_out_cascade = float(k);
-    }
+#ifdef SB_EVAL
+    // resolution: texels of the selected map per screen pixel (outside any branch, so
+    // the derivatives are in uniform control flow)
+    // (the map's size from the texture: the evaluation variant reads no uniform the timed one lacks)
+#if SB_FORMAT != 0
+    vec2 size = vec2(textureSize(u_moments, 0).xy);
+#else
+    vec2 size = vec2(textureSize(u_shadow, 0).xy);
+#endif
+    vec4 h = sb_shadow_mat[max(k, 0)] * vec4(p, 1.0);
+    vec2 uv = h.xy / h.w * size;
+    SB_EVAL_OUT(k < 0 ? -1.0 : max(length(dFdx(uv)), length(dFdy(uv))), float(k));
+#endif
     if (k < 0) return 1.0;
     float v = sb_lookup(k, p, n);
-    int count = int(sb_info.x);
-    if (u_blend > 0.0 && k + 1 < count && sb_flags[k + 1].x > 0.5) {
+#if SB_BLEND
+    if (k + 1 < SB_MAPS && sb_flags[min(k + 1, SB_MAPS - 1)].x > 0.5) {
         float band = u_blend * (sb_cascade[k].y - sb_cascade[k].x);
         float start = sb_cascade[k].y - band;
         if (view_z > start) v = mix(v, sb_lookup(k + 1, p, n), clamp((view_z - start) / band, 0.0, 1.0));
     }
+#endif
     return v;
 }

@@ -22,7 +22,6 @@ float sb_visibility(vec3 p, vec3 n, float view_z) {
     vec3 L = -d / max(dist, 1e-20);
     float cosl = clamp(dot(n, L), -1.0, 1.0);
     vec3 dq = p + n * (u_normal * texel * sqrt(1.0 - cosl * cosl)) - u_lamp;
-    sb_out_texel_px = -1.0;
 #if SB_FILTER == 2
     vec3 t1 = normalize(cross(dq, abs(dq.y) < 0.9 * length(dq) ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0)));
     vec3 t2 = normalize(cross(dq, t1));

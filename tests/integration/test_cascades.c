@@ -16,6 +16,7 @@
 #include "cascade.h"
 #include "eval.h"
 #include "lightfit.h"
+#include "shaders.h"
 #include "support.h"
 
 static sb_session g_s;
@@ -59,7 +60,8 @@ static void render_seq(sb_instance *in, int i, int n, int seq, sb_frame *f, unsi
     sb_timer_init(&t, SB_TIMING_SYNC, 1, 1);
     sb_timer_frame_begin(&t, 0);
     memset(f, 0, sizeof *f);
-    sb_render_frame(&g_s, in, f, i, n, seq, &t);
+    if (vis) render_frame_eval(&g_s, in, f, i, n, seq, &t);
+    else sb_render_frame(&g_s, in, f, i, n, seq, &t);
     if (vis) sb_gpu_readback(&g_s.gpu, NULL, vis, NULL);
     sb_timer_free(&t);
 }
@@ -193,7 +195,7 @@ static void test_all_sky_frame(void **st) {
         sb_timer_frame_begin(&t, 0);
         sb_frame f;
         memset(&f, 0, sizeof f);
-        sb_render_camera(&g_s, &in, &f, &cam, 0, &t, false);
+        sb_render_camera(&g_s, &in, &f, &cam, 0, &t, true);
         if (in.tech->collect) in.tech->collect(in.state, 0, &f.counters);
         sb_gpu_readback(&g_s.gpu, NULL, vis, NULL);
         print_message("%s: all-sky frame renders %d cascades, skips %d\n", specs[k], f.counters.cascades_rendered,
@@ -275,13 +277,10 @@ static void test_stable_no_shimmer(void **st) {
     }
 }
 
-/* The C struct of the cascade block and the shader's block agree, member by
- * member (the offsets the driver reports for every active variable) and in size. */
-static void test_cascade_block_layout(void **st) {
-    (void)st;
-    sb_instance in;
-    assert_true(make(&in, "pssm:filter=pcss"));
-    GLuint prog = ((sb_csm *)in.state)->fp.prog;
+/* The offsets and size of the cascade block in one program, as the uniform
+ * block readers see (GL_UNIFORM) or as the storage block SDSM's compute
+ * shaders write (GL_BUFFER_VARIABLE), against the C struct. */
+static void check_block_layout(GLuint prog, GLenum var_iface, GLenum block_iface) {
     const struct {
         const char *name;
         size_t offset;
@@ -292,23 +291,46 @@ static void test_cascade_block_layout(void **st) {
                 {"sb_info", offsetof(sb_cascade_block, info)}};
     int active = 0;
     for (size_t i = 0; i < sizeof vars / sizeof vars[0]; i++) {
-        GLuint idx = glGetProgramResourceIndex(prog, GL_BUFFER_VARIABLE, vars[i].name);
+        GLuint idx = glGetProgramResourceIndex(prog, var_iface, vars[i].name);
         if (idx == GL_INVALID_INDEX) continue; /* optimised out of this program */
         const GLenum prop = GL_OFFSET;
         GLint off = -1;
-        glGetProgramResourceiv(prog, GL_BUFFER_VARIABLE, idx, 1, &prop, 1, NULL, &off);
+        glGetProgramResourceiv(prog, var_iface, idx, 1, &prop, 1, NULL, &off);
         print_message("%s: shader offset %d, C offset %zu\n", vars[i].name, off, vars[i].offset);
         assert_int_equal(off, (int)vars[i].offset);
         active++;
     }
     assert_true(active >= 3);
-    GLuint block = glGetProgramResourceIndex(prog, GL_SHADER_STORAGE_BLOCK, "SbCascades");
+    GLuint block = glGetProgramResourceIndex(prog, block_iface, "SbCascades");
     assert_int_not_equal(block, GL_INVALID_INDEX);
     const GLenum prop = GL_BUFFER_DATA_SIZE;
     GLint size = 0;
-    glGetProgramResourceiv(prog, GL_SHADER_STORAGE_BLOCK, block, 1, &prop, 1, NULL, &size);
+    glGetProgramResourceiv(prog, block_iface, block, 1, &prop, 1, NULL, &size);
     print_message("SbCascades: %d bytes in the shader, %zu in C\n", size, sizeof(sb_cascade_block));
     assert_int_equal(size, (int)sizeof(sb_cascade_block));
+}
+
+/* The C struct of the cascade block and the shader's block agree, member by
+ * member (the offsets the driver reports for every active variable) and in
+ * size: in the final pass (a uniform block, both variants) and in a compute
+ * shader that writes it (a storage block, as SDSM's). */
+static void test_cascade_block_layout(void **st) {
+    (void)st;
+    sb_instance in;
+    assert_true(make(&in, "pssm:filter=pcss:warp=lispsm"));
+    const sb_csm *c = in.state;
+    check_block_layout(c->fp.prog, GL_UNIFORM, GL_UNIFORM_BLOCK);
+    check_block_layout(c->fp.eval_prog, GL_UNIFORM, GL_UNIFORM_BLOCK);
+    const char *src = "layout(local_size_x = 1) in;\n"
+                      "void main() { sb_light_vp[1] = sb_shadow_mat[0]; sb_cascade[0] = sb_flags[1] + sb_info; }\n";
+    const char *parts[] = {sb_shader_csm_block_glsl, src};
+    const sb_shader_src cs[] = {{GL_COMPUTE_SHADER, parts, 2}};
+    sb_err err;
+    GLuint prog = sb_gpu_link("block layout", "#define SB_CASCADE_STORAGE\n#define SB_CASCADE_ACCESS\n", cs, 1, &err);
+    if (!prog) print_error("%s\n", err.msg);
+    assert_true(prog != 0);
+    check_block_layout(prog, GL_BUFFER_VARIABLE, GL_SHADER_STORAGE_BLOCK);
+    glDeleteProgram(prog);
     sb_instance_destroy(&in);
 }
 

@@ -116,7 +116,7 @@ static void test_point_light_cube(void **st) {
         sb_timer_frame_begin(&t, 0);
         sb_frame f;
         memset(&f, 0, sizeof f);
-        sb_render_frame(&s, &in, &f, 0, 1, 0, &t);
+        render_frame_eval(&s, &in, &f, 0, 1, 0, &t);
         sb_gpu_readback(&s.gpu, depth, vis, NULL);
         long plane = 0, exact = 0, tech = 0, mismatch = 0;
         for (int y = 0; y < h; y++)

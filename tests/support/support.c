@@ -109,6 +109,13 @@ bool pb_box_blocks(sb_v3 p, sb_v3 d, double tmax) {
     return true;
 }
 
+void render_frame_eval(sb_session *s, sb_instance *in, sb_frame *f, int i, int n, int seq, sb_timer *t) {
+    sb_camera cam = sb_path_camera(&s->path, i, n, (double)s->opts.width / s->opts.height, &s->scene);
+    f->index = i;
+    f->progress = sb_path_progress(i, n);
+    sb_render_camera(s, in, f, &cam, seq, t, true);
+}
+
 bool pb_render(sb_session *s, const char *spec, pb_result *out, unsigned char *vis_out, sb_err *err) {
     sb_run_spec *runs = NULL;
     int n = 0;
@@ -123,7 +130,7 @@ bool pb_render(sb_session *s, const char *spec, pb_result *out, unsigned char *v
     sb_timer timer;
     sb_timer_init(&timer, SB_TIMING_SYNC, 3, 1);
     sb_timer_frame_begin(&timer, 0);
-    sb_render_frame(s, &in, &f, 0, 1, 0, &timer);
+    render_frame_eval(s, &in, &f, 0, 1, 0, &timer);
     int w = s->gpu.width, h = s->gpu.height;
     float *depth = malloc(sizeof(float) * w * h);
     unsigned char *vis = malloc((size_t)w * h);

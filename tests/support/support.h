@@ -22,6 +22,9 @@ bool pb_open(sb_session *s, sb_backend backend, int w, int h, sb_err *err);
 bool pb_open_view(sb_session *s, sb_backend backend, int w, int h, const char *path, double sun_az, double sun_el,
                   sb_err *err);
 /* Renders frame 0 with the spec and classifies it. */
+/* Renders path frame i of n as the evaluation pass does (timed frames write
+ * colour alone): the visibility target then holds this frame's. */
+void render_frame_eval(sb_session *s, sb_instance *in, sb_frame *f, int i, int n, int seq, struct sb_timer *t);
 bool pb_render(sb_session *s, const char *spec, pb_result *out, unsigned char *vis_out, sb_err *err);
 /* Renders path frame i of n with the spec in evaluation mode and measures its
  * error against the reference; pos (w*h*4 floats) and ref (w*h) optional. */
