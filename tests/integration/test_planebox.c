@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "support.h"
+#include "timing.h"
 
 static void check_backend(sb_backend b) {
     sb_session s;
@@ -198,6 +199,107 @@ static void test_backends_agree(void **st) {
     free(vb);
 }
 
+/* Is `name` an output of program p? */
+static bool has_output(GLuint p, const char *name) {
+    return glGetProgramResourceIndex(p, GL_PROGRAM_OUTPUT, name) != GL_INVALID_INDEX;
+}
+
+/* Fills a colour attachment of the camera target with v. */
+static void fill_target(const sb_gpu *g, int att, const float v[4]) {
+    glBindFramebuffer(GL_FRAMEBUFFER, g->fbo);
+    const GLenum all[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3};
+    glDrawBuffers(4, all);
+    glClearBufferfv(GL_COLOR, att, v);
+}
+
+/* Reads attachment att of the camera target (RGBA float). */
+static void read_target(const sb_gpu *g, int att, float *buf) {
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, g->fbo);
+    glReadBuffer(GL_COLOR_ATTACHMENT0 + att);
+    glReadPixels(0, 0, g->width, g->height, GL_RGBA, GL_FLOAT, buf);
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+}
+
+/* Pixels of attachment att that differ from `before` (as read_target read it). */
+static long changed(const sb_gpu *g, int att, const float *before, float *buf) {
+    read_target(g, att, buf);
+    long n = 0;
+    for (long i = 0; i < (long)g->width * g->height; i++) n += memcmp(&buf[4 * i], &before[4 * i], 16) != 0;
+    return n;
+}
+
+/* Timed frames run none of the evaluation's work, for every technique: the
+ * program of their camera pass writes colour alone (no visibility, position or
+ * normal outputs, no evaluation uniform), and the visibility, position and
+ * normal targets come out of the frame as they went in (but raycast's, whose
+ * rays start from the positions its own pass writes). The evaluation pass
+ * of the same technique writes all three. */
+static void test_timed_frames_skip_evaluation(void **st) {
+    (void)st;
+    const int w = 160, h = 90;
+    sb_session s;
+    sb_err err;
+    assert_true(test_open(&s, "plane-box-lamp", "plane-box-lamp", w, h, &err));
+    float *buf = malloc(sizeof(float) * 4 * w * h), *before[4];
+    for (int att = 1; att <= 3; att++) before[att] = malloc(sizeof(float) * 4 * w * h);
+    const float mark[4] = {0.25f, -7, 3, 9};
+    int checked = 0;
+    for (int i = 0; i < sb_technique_count(); i++) {
+        const sb_technique *t = sb_technique_at(i);
+        sb_run_spec *runs = NULL;
+        int n = 0;
+        assert_true(sb_spec_expand(t->name, NULL, &runs, &n, &err));
+        sb_instance in;
+        bool ok = sb_instance_create(&in, &s, &runs[0], 2, &err);
+        free(runs);
+        if (!ok) {
+            print_error("%s: %s\n", t->name, err.msg);
+            fail();
+        }
+        sb_timer timer;
+        sb_timer_init(&timer, SB_TIMING_SYNC, 1, 2);
+        for (int att = 1; att <= 3; att++) {
+            fill_target(&s.gpu, att, mark);
+            read_target(&s.gpu, att, before[att]);
+        }
+        sb_frame f;
+        memset(&f, 0, sizeof f);
+        sb_timer_frame_begin(&timer, 0);
+        sb_render_frame(&s, &in, &f, 0, 1, 0, &timer);
+        GLint prog = 0;
+        glGetIntegerv(GL_CURRENT_PROGRAM, &prog);
+        long vis = changed(&s.gpu, 1, before[1], buf), pos = changed(&s.gpu, 2, before[2], buf),
+             aux = changed(&s.gpu, 3, before[3], buf);
+        print_message("%-8s timed: outputs colour %d vis %d pos %d aux %d; pixels written vis %ld pos %ld aux %ld\n",
+                      t->name, has_output(prog, "o_color"), has_output(prog, "o_vis"), has_output(prog, "o_pos"),
+                      has_output(prog, "o_aux"), vis, pos, aux);
+        /* the camera pass is the last of every technique's frame: its program is the one in use */
+        assert_true(has_output(prog, "o_color"));
+        assert_false(has_output(prog, "o_vis") || has_output(prog, "o_pos") || has_output(prog, "o_aux"));
+        assert_int_equal(glGetUniformLocation(prog, "sb_eval"), -1);
+        /* raycast's position pass (its z-pass stage) is the technique's own work: its rays start there */
+        if (strcmp(t->name, "raycast")) assert_int_equal(vis + pos + aux, 0);
+
+        memset(&f, 0, sizeof f);
+        sb_timer_frame_begin(&timer, 1);
+        render_frame_eval(&s, &in, &f, 0, 1, 1, &timer);
+        glGetIntegerv(GL_CURRENT_PROGRAM, &prog);
+        pos = changed(&s.gpu, 2, before[2], buf);
+        print_message("%-8s evaluation: outputs vis %d pos %d aux %d; position pixels written %ld\n", t->name,
+                      has_output(prog, "o_vis"), has_output(prog, "o_pos"), has_output(prog, "o_aux"), pos);
+        assert_true(has_output(prog, "o_vis") && has_output(prog, "o_pos") && has_output(prog, "o_aux"));
+        assert_true(pos > (long)w * h / 4);
+        assert_true(sb_gl_check(t->name, &err));
+        sb_timer_free(&timer);
+        sb_instance_destroy(&in);
+        checked++;
+    }
+    assert_int_equal(checked, sb_technique_count());
+    for (int att = 1; att <= 3; att++) free(before[att]);
+    free(buf);
+    sb_session_close(&s);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_sm_matches_analytic_egl),
@@ -208,6 +310,7 @@ int main(void) {
         cmocka_unit_test(test_psm_sun_behind_camera),
         cmocka_unit_test(test_pcss_converges_to_hard),
         cmocka_unit_test(test_filtered_formats_converge),
+        cmocka_unit_test(test_timed_frames_skip_evaluation),
     };
     return cmocka_run_group_tests_name("planebox", tests, NULL, NULL);
 }
