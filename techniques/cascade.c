@@ -87,33 +87,39 @@ static bool create_maps(sb_csm *c, const char *name, sb_err *err) {
 }
 
 /* The programs that render the maps: per cascade, layered by a geometry shader
- * or by gl_Layer from the vertex shader, and the moments' blur. */
+ * or by gl_Layer from the vertex shader, and the moments' blur. Each comes in
+ * two variants where the scene has alpha-tested draws: without the alpha test
+ * (opaque draws: no discard, so early depth testing stays) and with it. */
 static bool create_depth_programs(sb_csm *c, sb_err *err) {
     const sb_csm_desc *d = &c->d;
     const char *fs_depth[] = {d->format ? sb_shader_moments_frag : sb_shader_depth_frag};
-    char fmt_define[64];
-    snprintf(fmt_define, sizeof fmt_define, "#define SB_FORMAT %d\n", d->format);
-    const char *vs_cascade[] = {sb_shader_csm_block_glsl, sb_shader_csm_depth_vert};
-    const sb_shader_src per[] = {{GL_VERTEX_SHADER, vs_cascade, 2}, {GL_FRAGMENT_SHADER, fs_depth, 1}};
-    if (!(c->prog_cascade = sb_gpu_link("cascade depth", fmt_define, per, 2, err))) return false;
-    c->u_cascade = glGetUniformLocation(c->prog_cascade, "u_cascade");
-    if (d->layered == SB_LAYERED_GS) {
-        const char *vs[] = {sb_shader_csm_layer_gs_vert};
-        const char *gs[] = {sb_shader_csm_block_glsl, sb_shader_csm_layer_geom};
-        const sb_shader_src st[] = {{GL_VERTEX_SHADER, vs, 1}, {GL_GEOMETRY_SHADER, gs, 2},
-                                    {GL_FRAGMENT_SHADER, fs_depth, 1}};
-        if (!(c->prog_gs = sb_gpu_link("layered (geometry shader)", fmt_define, st, 3, err))) return false;
-        c->u_mask_gs = glGetUniformLocation(c->prog_gs, "u_mask");
-    } else if (d->layered == SB_LAYERED_VS) {
-        const char *vs[] = {sb_shader_csm_block_glsl, sb_shader_csm_layer_vs_vert};
-        const sb_shader_src st[] = {{GL_VERTEX_SHADER, vs, 2}, {GL_FRAGMENT_SHADER, fs_depth, 1}};
-        char defs[160];
-        snprintf(defs, sizeof defs, "#extension GL_ARB_shader_viewport_layer_array : require\n%s", fmt_define);
-        if (!(c->prog_vs = sb_gpu_link("layered (vertex shader)", defs, st, 2, err))) return false;
-        c->u_mask_vs = glGetUniformLocation(c->prog_vs, "u_mask");
+    for (int a = 0; a < (c->gpu->scene->alpha_tested_draws ? 2 : 1); a++) {
+        sb_csm_pass *p = &c->pass[a];
+        char defs[256];
+        snprintf(defs, sizeof defs, "%s#define SB_FORMAT %d\n", a ? "" : sb_opaque_define(c->gpu), d->format);
+        const char *vs_cascade[] = {sb_shader_csm_block_glsl, sb_shader_csm_depth_vert};
+        const sb_shader_src per[] = {{GL_VERTEX_SHADER, vs_cascade, 2}, {GL_FRAGMENT_SHADER, fs_depth, 1}};
+        if (!(p->prog_cascade = sb_gpu_link(a ? "cascade depth (alpha-tested draws)" : "cascade depth", defs, per, 2,
+                                            err)))
+            return false;
+        p->u_cascade = glGetUniformLocation(p->prog_cascade, "u_cascade");
+        if (d->layered == SB_LAYERED_GS) {
+            const char *vs[] = {sb_shader_csm_layer_gs_vert};
+            const char *gs[] = {sb_shader_csm_block_glsl, sb_shader_csm_layer_geom};
+            const sb_shader_src st[] = {{GL_VERTEX_SHADER, vs, 1}, {GL_GEOMETRY_SHADER, gs, 2},
+                                        {GL_FRAGMENT_SHADER, fs_depth, 1}};
+            if (!(p->prog_layered = sb_gpu_link("layered (geometry shader)", defs, st, 3, err))) return false;
+        } else if (d->layered == SB_LAYERED_VS) {
+            const char *vs[] = {sb_shader_csm_block_glsl, sb_shader_csm_layer_vs_vert};
+            const sb_shader_src st[] = {{GL_VERTEX_SHADER, vs, 2}, {GL_FRAGMENT_SHADER, fs_depth, 1}};
+            char vs_defs[320];
+            snprintf(vs_defs, sizeof vs_defs, "#extension GL_ARB_shader_viewport_layer_array : require\n%s", defs);
+            if (!(p->prog_layered = sb_gpu_link("layered (vertex shader)", vs_defs, st, 2, err))) return false;
+        }
+        p->u_mask = p->prog_layered ? glGetUniformLocation(p->prog_layered, "u_mask") : -1;
+        p->e_cascade = glGetUniformLocation(p->prog_cascade, "u_exponent");
+        p->e_layered = p->prog_layered ? glGetUniformLocation(p->prog_layered, "u_exponent") : -1;
     }
-    GLuint progs3[3] = {c->prog_cascade, c->prog_gs, c->prog_vs};
-    for (int i = 0; i < 3; i++) c->d_exponent[i] = progs3[i] ? glGetUniformLocation(progs3[i], "u_exponent") : -1;
     if (d->format && d->blur > 0) {
         const char *cs[] = {sb_shader_blur_comp};
         const sb_shader_src st[] = {{GL_COMPUTE_SHADER, cs, 1}};
@@ -136,7 +142,7 @@ static bool create_final(sb_csm *c, const char *name, sb_err *err) {
              "#define SB_WARP %d\n#define SB_BLEND %d\n",
              d->filter, d->select, d->format, c->count, d->warp != SB_WARP_NONE || d->perspective, d->blend > 0);
     const char *vis[] = {sb_shader_csm_block_glsl, sb_shader_vis_csm_glsl};
-    if (!sb_final_prog_create_parts(&c->fp, name, vis, 2, defines, err)) return false;
+    if (!sb_final_prog_create_parts(&c->fp, c->gpu, name, vis, 2, defines, err)) return false;
     const char *names[] = {"u_shadow",    "u_bias",  "u_normal",    "u_blend",   "u_light",   "u_texel",
                            "u_depth_raw", "u_moments", "u_bleed",   "u_exponent", "u_sun_tan"};
     GLint *locs[] = {&c->u_shadow,    &c->u_bias,    &c->u_normal,  &c->u_blend,    &c->u_light,  &c->u_texel,
@@ -165,9 +171,10 @@ bool sb_csm_create(sb_csm *c, const sb_gpu *g, const sb_csm_desc *d, const char 
 
 void sb_csm_destroy(sb_csm *c) {
     sb_final_prog_free(&c->fp);
-    GLuint progs[] = {c->prog_cascade, c->prog_gs, c->prog_vs};
-    for (size_t i = 0; i < SB_COUNT(progs); i++)
-        if (progs[i]) glDeleteProgram(progs[i]);
+    for (int a = 0; a < 2; a++) {
+        if (c->pass[a].prog_cascade) glDeleteProgram(c->pass[a].prog_cascade);
+        if (c->pass[a].prog_layered) glDeleteProgram(c->pass[a].prog_layered);
+    }
     if (c->fbo_all) glDeleteFramebuffers(1, &c->fbo_all);
     if (c->fbo_layer[0]) glDeleteFramebuffers(c->count, c->fbo_layer);
     if (c->tex) glDeleteTextures(1, &c->tex);
@@ -305,34 +312,34 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
         glPolygonOffset(slope_factor(c), 0.0f);
     }
     glBindVertexArray(g->vao);
-    GLuint progs3[3] = {c->prog_cascade, c->prog_gs, c->prog_vs};
-    for (int i = 0; i < 3; i++)
-        if (progs3[i] && c->d_exponent[i] >= 0) {
-            glUseProgram(progs3[i]);
-            glUniform1f(c->d_exponent[i], (float)d->exponent);
-        }
     int rendered = 0;
     for (int k = 0; k < c->count; k++) rendered += c->active[k];
     f->counters.cascades_rendered = rendered;
     f->counters.cascades_skipped = c->count - rendered;
-    if (d->layered == SB_LAYERED_OFF) {
-        glUseProgram(c->prog_cascade);
-        for (int k = 0; k < c->count; k++) {
-            if (!c->active[k]) continue;
-            glBindFramebuffer(GL_FRAMEBUFFER, c->fbo_layer[k]);
-            glUniform1i(c->u_cascade, k);
-            for (uint32_t d = 0; d < s->draw_count; d++)
-                if (c->mask[d] & (1u << k)) sb_submit(f, d, 1);
-        }
-    } else {
-        bool gs = d->layered == SB_LAYERED_GS;
-        glUseProgram(gs ? c->prog_gs : c->prog_vs);
-        GLint u_mask = gs ? c->u_mask_gs : c->u_mask_vs;
-        for (uint32_t d = 0; d < s->draw_count; d++) {
-            unsigned m = c->mask[d];
-            if (!m) continue;
-            glUniform1ui(u_mask, m);
-            sb_submit(f, d, gs ? 1 : popcount8(m));
+    bool split = c->pass[1].prog_cascade != 0;
+    /* opaque casters first, with the variant without the alpha test; then the alpha-tested ones */
+    for (int a = 0; a < (split ? 2 : 1); a++) {
+        const sb_csm_pass *p = &c->pass[a];
+        if (d->layered == SB_LAYERED_OFF) {
+            glUseProgram(p->prog_cascade);
+            if (p->e_cascade >= 0) glUniform1f(p->e_cascade, (float)d->exponent);
+            for (int k = 0; k < c->count; k++) {
+                if (!c->active[k]) continue;
+                glBindFramebuffer(GL_FRAMEBUFFER, c->fbo_layer[k]);
+                glUniform1i(p->u_cascade, k);
+                for (uint32_t d = 0; d < s->draw_count; d++)
+                    if ((c->mask[d] & (1u << k)) && (!split || sb_draw_alpha_tested(g, d) == a)) sb_submit(f, d, 1);
+            }
+        } else {
+            bool gs = d->layered == SB_LAYERED_GS;
+            glUseProgram(p->prog_layered);
+            if (p->e_layered >= 0) glUniform1f(p->e_layered, (float)d->exponent);
+            for (uint32_t d = 0; d < s->draw_count; d++) {
+                unsigned m = c->mask[d];
+                if (!m || (split && sb_draw_alpha_tested(g, d) != a)) continue;
+                glUniform1ui(p->u_mask, m);
+                sb_submit(f, d, gs ? 1 : popcount8(m));
+            }
         }
     }
     glDisable(GL_POLYGON_OFFSET_FILL);

@@ -75,6 +75,13 @@ typedef struct sb_cascade_block {
     float info[4];                      /* x: count */
 } sb_cascade_block;
 
+/* The programs of the shadow-map stage in one variant: per cascade, and
+ * layered (geometry shader or gl_Layer from the vertex shader) when asked. */
+typedef struct sb_csm_pass {
+    GLuint prog_cascade, prog_layered;
+    GLint u_cascade, u_mask, e_cascade, e_layered;   /* e_: the ESM exponent (u_exponent) */
+} sb_csm_pass;
+
 /* Techniques built on the machinery keep their sb_csm as the first member of
  * their state, so tests can read (and break) the shadow maps of any of them. */
 typedef struct sb_csm {
@@ -85,13 +92,12 @@ typedef struct sb_csm {
     GLuint moments, moments_tmp;          /* float arrays of the format's channels (filtered formats) */
     GLuint blur_prog;
     GLint b_dir, b_layer;
-    GLint u_moments, u_bleed, u_exponent, d_exponent[3];
+    GLint u_moments, u_bleed, u_exponent;
     GLuint raw_sampler;                   /* the map without comparison, for PCSS's blocker search */
     GLint u_depth_raw, u_sun_tan;
     GLuint tex, fbo_all, fbo_layer[SB_MAX_CASCADES];
     GLuint block;                         /* uniform block 0 (storage block 0 for SDSM's compute) */
-    GLuint prog_cascade, prog_gs, prog_vs;
-    GLint u_cascade, u_mask_gs, u_mask_vs;
+    sb_csm_pass pass[2];                  /* without the alpha test, and (alpha-tested draws) with it */
     sb_final_prog fp;
     GLint u_shadow, u_bias, u_normal, u_blend, u_light, u_texel;
     /* this frame */

@@ -114,7 +114,7 @@ static bool cube_create(void *state, const sb_run_ctx *rc, const void *desc, sb_
     }
     char defines[64];
     snprintf(defines, sizeof defines, "#define SB_FILTER %d\n", s->d->filter);
-    if (!sb_final_prog_create(&s->fp, "cube", sb_shader_vis_cube_glsl, defines, err)) return false;
+    if (!sb_final_prog_create(&s->fp, rc->gpu, "cube", sb_shader_vis_cube_glsl, defines, err)) return false;
     const char *names[] = {"u_cube", "u_lamp", "u_near", "u_far", "u_res", "u_bias", "u_normal"};
     GLint *locs[] = {&s->u_cube, &s->u_lamp, &s->u_near, &s->u_far, &s->u_res, &s->u_bias, &s->u_normal};
     for (size_t i = 0; i < SB_COUNT(names); i++) *locs[i] = glGetUniformLocation(s->fp.prog, names[i]);

@@ -69,7 +69,7 @@ static bool dpsm_create(void *state, const sb_run_ctx *rc, const void *desc, sb_
     s->d_side = glGetUniformLocation(s->prog, "u_side");
     s->d_near = glGetUniformLocation(s->prog, "u_near");
     s->d_far = glGetUniformLocation(s->prog, "u_far");
-    if (!sb_final_prog_create(&s->fp, "dpsm", sb_shader_vis_dpsm_glsl, NULL, err)) return false;
+    if (!sb_final_prog_create(&s->fp, rc->gpu, "dpsm", sb_shader_vis_dpsm_glsl, NULL, err)) return false;
     const char *names[] = {"u_maps", "u_lamp", "u_frame", "u_near", "u_far", "u_res", "u_bias", "u_normal"};
     GLint *locs[] = {&s->u_maps, &s->u_lamp, &s->u_frame, &s->u_near, &s->u_far, &s->u_res, &s->u_bias, &s->u_normal};
     for (size_t i = 0; i < SB_COUNT(names); i++) *locs[i] = glGetUniformLocation(s->fp.prog, names[i]);

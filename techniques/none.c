@@ -10,7 +10,7 @@ static bool none_create(void *state, const sb_run_ctx *rc, const void *desc, sb_
     (void)rc;
     (void)desc;
     none_state *s = state;
-    return sb_final_prog_create(&s->fp, "none", sb_shader_vis_none_glsl, NULL, err);
+    return sb_final_prog_create(&s->fp, rc->gpu, "none", sb_shader_vis_none_glsl, NULL, err);
 }
 
 static void none_frame(void *state, sb_frame *f) {

@@ -83,7 +83,7 @@ static bool planar_load(const sb_gpu *g, void **data, sb_err *err) {
     s->f_flatten = glGetUniformLocation(s->prog_flat, "u_flatten");
     s->f_plane = glGetUniformLocation(s->prog_flat, "u_plane");
     s->f_eps = glGetUniformLocation(s->prog_flat, "u_eps");
-    if (!sb_final_prog_create(&s->fp, "planar", sb_shader_vis_volumes_glsl, NULL, err)) return false;
+    if (!sb_final_prog_create(&s->fp, g, "planar", sb_shader_vis_volumes_glsl, NULL, err)) return false;
     s->u_lit = glGetUniformLocation(s->fp.prog, "u_lit");
     return sb_gl_check("planar", err);
 }

@@ -81,7 +81,7 @@ static bool raycast_create(void *state, const sb_run_ctx *rc, const void *desc, 
     glTexStorage2D(GL_TEXTURE_2D, 1, GL_R8, g->width, g->height);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    if (!sb_final_prog_create(&s->fp, "raycast", sb_shader_vis_raycast_glsl, NULL, err)) return false;
+    if (!sb_final_prog_create(&s->fp, rc->gpu, "raycast", sb_shader_vis_raycast_glsl, NULL, err)) return false;
     s->u_rays = glGetUniformLocation(s->fp.prog, "u_rays");
     return sb_gl_check("raycast", err);
 }

@@ -7,77 +7,83 @@
 #include "shaders.h"
 #include "timing.h"
 
-static GLuint final_variant(const char *label, const char *defines, bool eval, const char *const *vis_parts, int nvis,
-                            GLint loc[4], sb_err *err) {
+const char *sb_opaque_define(const sb_gpu *g) {
+    return g->scene->alpha_tested_draws ? "#define SB_NO_ALPHA\n" : "";
+}
+
+bool sb_draw_alpha_tested(const sb_gpu *g, uint32_t d) { return g->scene->draws[d].material != 0; }
+
+/* Links variant i of the camera pass (2 * eval + alpha). */
+static bool final_variant(sb_final_prog *fp, int i, const sb_gpu *g, const char *label, const char *defines,
+                          const char *const *vis_parts, int nvis, sb_err *err) {
+    bool eval = i >> 1, alpha = i & 1;
     const char *vs[] = {sb_shader_scene_vert};
     const char *fs[8];
     int n = 0;
-    for (int i = 0; i < nvis && n < 7; i++) fs[n++] = vis_parts[i];
+    for (int k = 0; k < nvis && n < 7; k++) fs[n++] = vis_parts[k];
     fs[n++] = sb_shader_final_frag;
     char defs[1024];
-    snprintf(defs, sizeof defs, "%s%s", eval ? "#define SB_EVAL\n" : "", defines ? defines : "");
-    char name[128];
-    snprintf(name, sizeof name, "%s%s", label, eval ? " (evaluation)" : "");
-    GLuint prog = sb_gpu_program(name, defs, vs, 1, fs, n, err);
-    if (!prog) return 0;
-    const char *names[4] = {"u_view", "u_proj", "u_shade_light", "u_color"};
-    for (int i = 0; i < 4; i++) loc[i] = glGetUniformLocation(prog, names[i]);
-    return prog;
-}
-
-/* The evaluation variant gets the technique's uniforms by copy from the timed
- * one (sb_gl_copy_uniforms): a uniform only it reads would keep its default,
- * 0, and the error would be measured on a different picture. Refused here, so
- * every technique's create says so at once. */
-static bool eval_reads_timed(const sb_final_prog *fp, const char *label, sb_err *err) {
+    snprintf(defs, sizeof defs, "%s%s%s", eval ? "#define SB_EVAL\n" : "", alpha ? "" : sb_opaque_define(g),
+             defines ? defines : "");
+    char name[160];
+    snprintf(name, sizeof name, "%s%s%s", label, eval ? " (evaluation)" : "", alpha ? " (alpha-tested draws)" : "");
+    sb_final_variant *v = &fp->v[i];
+    if (!(v->prog = sb_gpu_program(name, defs, vs, 1, fs, n, err))) return false;
+    v->u_view = glGetUniformLocation(v->prog, "u_view");
+    v->u_proj = glGetUniformLocation(v->prog, "u_proj");
+    v->u_light = glGetUniformLocation(v->prog, "u_shade_light");
+    v->u_color = glGetUniformLocation(v->prog, "u_color");
+    if (i == 0) return true;
+    /* the technique's uniforms reach this variant by copy from v[0]: one only it read would keep
+       its default, 0 (and the error be measured on another picture). Refused here, at create. */
     GLint count = 0;
-    glGetProgramiv(fp->eval_prog, GL_ACTIVE_UNIFORMS, &count);
-    for (GLuint i = 0; i < (GLuint)count; i++) {
-        char name[256];
+    glGetProgramiv(v->prog, GL_ACTIVE_UNIFORMS, &count);
+    for (GLuint u = 0; u < (GLuint)count; u++) {
+        char un[256];
         GLint size = 0, block = -1;
         GLenum type = 0;
-        glGetActiveUniform(fp->eval_prog, i, sizeof name, NULL, &size, &type, name);
-        glGetActiveUniformsiv(fp->eval_prog, 1, &i, GL_UNIFORM_BLOCK_INDEX, &block);
-        if (block >= 0 || glGetUniformLocation(fp->prog, name) >= 0) continue;
-        bool own = false;   /* set by the shared pass on each variant */
+        glGetActiveUniform(v->prog, u, sizeof un, NULL, &size, &type, un);
+        glGetActiveUniformsiv(v->prog, 1, &u, GL_UNIFORM_BLOCK_INDEX, &block);
+        if (block >= 0 || glGetUniformLocation(fp->v[0].prog, un) >= 0) continue;
+        /* the shared pass's own: set on each variant, or bound by the shader (the alpha test's sb_ samplers) */
+        bool own = !strncmp(un, "sb_", 3);
         const char *shared[] = {"u_view", "u_proj", "u_shade_light", "u_color"};
-        for (size_t k = 0; k < SB_COUNT(shared); k++) own |= !strcmp(name, shared[k]);
+        for (size_t k = 0; k < SB_COUNT(shared); k++) own |= !strcmp(un, shared[k]);
         if (!own)
-            return sb_fail(err, "%s: uniform %s is read by the evaluation variant of the camera pass only: its value "
-                                "would not reach it (use it in the timed variant too, or derive it there)",
-                           label, name);
+            return sb_fail(err, "%s: uniform %s is read by the %s variant of the camera pass only: its value would not "
+                                "reach it (use it in the timed variant too, or derive it there)",
+                           label, un, eval ? "evaluation" : "alpha-tested");
     }
+    if (!sb_gl_links_make(&v->from_timed, fp->v[0].prog, v->prog))
+        return sb_fail(err, "%s: more than %d uniforms to carry to its variants", label, SB_GL_MAX_LINKS);
     return true;
 }
 
-bool sb_final_prog_create_parts(sb_final_prog *fp, const char *label, const char *const *vis_parts, int nvis,
-                                const char *defines, sb_err *err) {
+bool sb_final_prog_create_parts(sb_final_prog *fp, const sb_gpu *g, const char *label, const char *const *vis_parts,
+                                int nvis, const char *defines, sb_err *err) {
     memset(fp, 0, sizeof *fp);
-    GLint t[4], e[4];
-    fp->prog = final_variant(label, defines, false, vis_parts, nvis, t, err);
-    if (fp->prog) fp->eval_prog = final_variant(label, defines, true, vis_parts, nvis, e, err);
-    if (!fp->eval_prog) {
-        sb_final_prog_free(fp);
-        return false;
+    bool alpha = g->scene->alpha_tested_draws > 0;
+    for (int i = 0; i < 4; i++) {
+        if ((i & 1) && !alpha) continue;
+        if (!final_variant(fp, i, g, label, defines, vis_parts, nvis, err)) {
+            sb_final_prog_free(fp);
+            return false;
+        }
     }
-    if (!eval_reads_timed(fp, label, err)) {
-        sb_final_prog_free(fp);
-        return false;
-    }
-    fp->u_view = t[0], fp->u_proj = t[1], fp->u_light = t[2], fp->u_color = t[3];
-    fp->e_view = e[0], fp->e_proj = e[1], fp->e_light = e[2], fp->e_color = e[3];
+    fp->prog = fp->v[0].prog;
+    fp->eval_prog = fp->v[2].prog;
     return true;
 }
 
-bool sb_final_prog_create(sb_final_prog *fp, const char *label, const char *vis_glsl, const char *defines,
-                          sb_err *err) {
-    return sb_final_prog_create_parts(fp, label, &vis_glsl, 1, defines, err);
+bool sb_final_prog_create(sb_final_prog *fp, const sb_gpu *g, const char *label, const char *vis_glsl,
+                          const char *defines, sb_err *err) {
+    return sb_final_prog_create_parts(fp, g, label, &vis_glsl, 1, defines, err);
 }
 
 void sb_final_prog_free(sb_final_prog *fp) {
-    if (fp->prog) glDeleteProgram(fp->prog);
-    if (fp->eval_prog) glDeleteProgram(fp->eval_prog);
-    fp->prog = fp->eval_prog = 0;
+    for (int i = 0; i < 4; i++)
+        if (fp->v[i].prog) glDeleteProgram(fp->v[i].prog);
+    memset(fp, 0, sizeof *fp);
 }
 
 static GLuint make_tex(GLenum internal, int w, int h) {
@@ -245,13 +251,16 @@ bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int
     }
     const char *vs[] = {sb_shader_scene_vert};
     const char *fs[] = {sb_shader_depth_frag};
-    g->zpass_prog = sb_gpu_program("zpass", NULL, vs, 1, fs, 1, err);
-    if (!g->zpass_prog) {
-        sb_gpu_free(g);
-        return false;
+    for (int a = 0; a < (s->alpha_tested_draws ? 2 : 1); a++) {
+        g->zpass_prog[a] = sb_gpu_program(a ? "zpass (alpha-tested draws)" : "zpass", a ? NULL : sb_opaque_define(g),
+                                          vs, 1, fs, 1, err);
+        if (!g->zpass_prog[a]) {
+            sb_gpu_free(g);
+            return false;
+        }
+        g->zpass_u_view[a] = glGetUniformLocation(g->zpass_prog[a], "u_view");
+        g->zpass_u_proj[a] = glGetUniformLocation(g->zpass_prog[a], "u_proj");
     }
-    g->zpass_u_view = glGetUniformLocation(g->zpass_prog, "u_view");
-    g->zpass_u_proj = glGetUniformLocation(g->zpass_prog, "u_proj");
     if (!sb_gl_check("creating GPU resources", err)) {
         sb_gpu_free(g);
         return false;
@@ -260,7 +269,8 @@ bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int
 }
 
 void sb_gpu_free(sb_gpu *g) {
-    if (g->zpass_prog) glDeleteProgram(g->zpass_prog);
+    for (int a = 0; a < 2; a++)
+        if (g->zpass_prog[a]) glDeleteProgram(g->zpass_prog[a]);
     if (g->fbo) glDeleteFramebuffers(1, &g->fbo);
     GLuint tex[] = {g->color_tex, g->vis_tex, g->depth_tex, g->pos_tex, g->aux_tex};
     for (size_t i = 0; i < SB_COUNT(tex); i++) /* nothing to delete (nor a GL) when the session never opened */
@@ -374,12 +384,15 @@ void sb_zpass(sb_frame *f) {
     glStencilMask(0xff);
     glClearStencil(0);
     glClear(GL_DEPTH_BUFFER_BIT | GL_STENCIL_BUFFER_BIT);
-    glUseProgram(g->zpass_prog);
-    sb_set_camera_uniforms(f, g->zpass_u_view, g->zpass_u_proj);
     glBindVertexArray(g->vao);
     uint32_t n = sb_scene_collect(g->scene, (const double(*)[4])f->frustum, 6, f->scratch);
     bool culling = true;
-    for (uint32_t i = 0; i < n; i++) camera_submit(f, f->scratch[i], &culling);
+    for (int a = 0; a < 2 && g->zpass_prog[a]; a++) {   /* opaque draws, then the alpha-tested ones */
+        glUseProgram(g->zpass_prog[a]);
+        sb_set_camera_uniforms(f, g->zpass_u_view[a], g->zpass_u_proj[a]);
+        for (uint32_t i = 0; i < n; i++)
+            if (!g->zpass_prog[1] || sb_draw_alpha_tested(g, f->scratch[i]) == a) camera_submit(f, f->scratch[i], &culling);
+    }
     glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
     glDisable(GL_CULL_FACE);
 }
@@ -420,21 +433,27 @@ void sb_final_draw(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
 static void draw_scene(sb_frame *f, const sb_final_prog *fp, GLenum depth_func, bool depth_write) {
     const sb_gpu *g = f->gpu;
     final_targets(f, depth_func, depth_write);
-    /* the technique set its uniforms on the timed variant: the (untimed) evaluation pass copies them over */
-    if (f->eval) sb_gl_copy_uniforms(fp->prog, fp->eval_prog);
-    glUseProgram(f->eval ? fp->eval_prog : fp->prog);
-    GLint u_color = f->eval ? fp->e_color : fp->u_color, u_light = f->eval ? fp->e_light : fp->u_light;
-    if (f->eval) sb_set_camera_uniforms(f, fp->e_view, fp->e_proj);
-    else sb_set_camera_uniforms(f, fp->u_view, fp->u_proj);
-    glUniform4f(u_light, (float)f->shade_light[0], (float)f->shade_light[1], (float)f->shade_light[2],
-                (float)f->shade_light[3]);
     glBindVertexArray(g->vao);
     uint32_t n = sb_scene_collect(g->scene, (const double(*)[4])f->frustum, 6, f->scratch);
-    bool culling = true;
-    for (uint32_t i = 0; i < n; i++) {
-        const sb_draw *dr = &g->scene->draws[f->scratch[i]];
-        if (u_color >= 0) glUniform4fv(u_color, 1, dr->color);
-        camera_submit(f, f->scratch[i], &culling);
+    bool split = fp->v[1].prog != 0, culling = true;
+    /* opaque draws first, with the variant without the alpha test; then the alpha-tested ones */
+    for (int a = 0; a < (split ? 2 : 1); a++) {
+        const sb_final_variant *v = &fp->v[2 * f->eval + a];
+        uint32_t count = 0;
+        for (uint32_t i = 0; i < n; i++) count += !split || sb_draw_alpha_tested(g, f->scratch[i]) == a;
+        if (!count) continue;
+        /* the technique set its uniforms on v[0] */
+        if (v != &fp->v[0]) sb_gl_links_copy(&v->from_timed, fp->prog, v->prog);
+        glUseProgram(v->prog);
+        sb_set_camera_uniforms(f, v->u_view, v->u_proj);
+        glUniform4f(v->u_light, (float)f->shade_light[0], (float)f->shade_light[1], (float)f->shade_light[2],
+                    (float)f->shade_light[3]);
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t d = f->scratch[i];
+            if (split && sb_draw_alpha_tested(g, d) != a) continue;
+            if (v->u_color >= 0) glUniform4fv(v->u_color, 1, g->scene->draws[d].color);
+            camera_submit(f, d, &culling);
+        }
     }
     glDisable(GL_CULL_FACE);
     glDepthMask(GL_TRUE);

@@ -12,16 +12,28 @@
 struct sb_timer;
 struct sb_reference;
 
+/* One variant of the camera-pass program, with the shared pass's uniforms in
+ * it and the links that bring the technique's uniforms over from `prog`. */
+typedef struct sb_final_variant {
+    GLuint prog;
+    GLint u_view, u_proj, u_light, u_color;
+    sb_gl_links from_timed;
+} sb_final_variant;
+
 /* Shared program of the camera pass: scene.vert + final.frag + the technique's
- * visibility function, linked twice. `prog`, the timed variant, writes colour
- * alone and holds nothing of the evaluation; techniques use it and set their
- * uniforms on it. `eval_prog` (SB_EVAL) also writes the visibility, position
- * and normal targets; the evaluation pass copies the uniforms over and draws
- * with it. */
+ * visibility function, linked as up to four variants, v[2 * eval + alpha]:
+ * timed frames draw with the timed ones, which write colour alone and hold
+ * nothing of the evaluation; the (untimed) evaluation pass with the SB_EVAL
+ * ones, which also write the visibility, position and normal targets. Where
+ * the scene has alpha-tested draws, each comes without the alpha test (its
+ * opaque draws keep early depth testing: no discard) and with it (alpha = 1,
+ * drawn after the opaque draws); otherwise v[1] and v[3] are 0. Techniques use
+ * `prog` (v[0]) and set their uniforms on it; the pass copies them to the
+ * variant it draws with. */
 typedef struct sb_final_prog {
-    GLuint prog, eval_prog;
-    GLint u_view, u_proj, u_light, u_color;     /* in prog */
-    GLint e_view, e_proj, e_light, e_color;     /* in eval_prog */
+    GLuint prog;            /* v[0].prog */
+    GLuint eval_prog;       /* v[2].prog */
+    sb_final_variant v[4];
 } sb_final_prog;
 
 /* The GPU side of a session: what every run and frame reads, never writes. */
@@ -34,8 +46,9 @@ typedef struct sb_gpu {
     GLuint vao, vbo, ibo;
     GLuint fbo, color_tex, vis_tex, depth_tex;
     GLuint pos_tex, aux_tex;            /* evaluation targets (position, normal + cascade) */
-    GLuint zpass_prog;                  /* camera depth-only program (same vertex shader as the final pass) */
-    GLint zpass_u_view, zpass_u_proj;
+    GLuint zpass_prog[2];               /* camera depth-only program (same vertex shader as the final pass):
+                                           without and (alpha-tested draws only) with the alpha test */
+    GLint zpass_u_view[2], zpass_u_proj[2];
     GLuint mat_ssbo, texel_buf, texel_tex;  /* the alpha test's materials (binding 7) and texels (unit 15) */
     struct sb_facing *facing;           /* single-sided draws' triangles ordered by the light they face (harness-owned) */
 } sb_gpu;
@@ -77,11 +90,16 @@ bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *scene, int wi
                  sb_err *err);
 void sb_gpu_free(sb_gpu *g);
 /* The final-pass program with the technique's visibility GLSL. */
-bool sb_final_prog_create(sb_final_prog *fp, const char *label, const char *vis_glsl, const char *defines,
-                          sb_err *err);
+bool sb_final_prog_create(sb_final_prog *fp, const sb_gpu *g, const char *label, const char *vis_glsl,
+                          const char *defines, sb_err *err);
 /* The same with the visibility GLSL in parts (the cascade block, then the lookup). */
-bool sb_final_prog_create_parts(sb_final_prog *fp, const char *label, const char *const *vis_parts, int nvis,
-                                const char *defines, sb_err *err);
+bool sb_final_prog_create_parts(sb_final_prog *fp, const sb_gpu *g, const char *label, const char *const *vis_parts,
+                                int nvis, const char *defines, sb_err *err);
+/* The defines of a scene pass's variant without the alpha test ("" when the
+ * scene has no alpha-tested draw: its one variant is that), and whether draw
+ * d needs the variant with it. */
+const char *sb_opaque_define(const sb_gpu *g);
+bool sb_draw_alpha_tested(const sb_gpu *g, uint32_t d);
 void sb_final_prog_free(sb_final_prog *fp);
 
 /* Sets the frame's camera, matrices and planes, counters to zero and the shaded light to the sun. */

@@ -234,7 +234,7 @@ static bool volumes_load(const sb_gpu *g, void **data, sb_err *err) {
     if (!(geo->prog = sb_gpu_program("volumes", "#define SB_NO_ALPHA\n", vs, 1, fs, 1, err))) return false;
     geo->u_view = glGetUniformLocation(geo->prog, "u_view");
     geo->u_proj = glGetUniformLocation(geo->prog, "u_proj");
-    if (!sb_final_prog_create(&geo->fp, "volumes", sb_shader_vis_volumes_glsl, NULL, err)) return false;
+    if (!sb_final_prog_create(&geo->fp, g, "volumes", sb_shader_vis_volumes_glsl, NULL, err)) return false;
     geo->u_lit = glGetUniformLocation(geo->fp.prog, "u_lit");
     return sb_gl_check("volumes", err);
 }

@@ -139,41 +139,16 @@ static int uniform_shape(GLenum type, char *kind) {
     }
 }
 
-static void copy_uniform(GLuint from, GLuint to, const char *name, GLenum type) {
+static bool link_add(sb_gl_links *l, GLuint from, GLuint to, const char *name, GLenum type) {
     GLint lf = glGetUniformLocation(from, name), lt = glGetUniformLocation(to, name);
-    if (lf < 0 || lt < 0) return;
-    char kind;
-    int n = uniform_shape(type, &kind);
-    if (kind == 'f') {
-        GLfloat v[16];
-        glGetUniformfv(from, lf, v);
-        switch (type) {
-        case GL_FLOAT_MAT2: glProgramUniformMatrix2fv(to, lt, 1, GL_FALSE, v); return;
-        case GL_FLOAT_MAT3: glProgramUniformMatrix3fv(to, lt, 1, GL_FALSE, v); return;
-        case GL_FLOAT_MAT4: glProgramUniformMatrix4fv(to, lt, 1, GL_FALSE, v); return;
-        }
-        if (n == 1) glProgramUniform1fv(to, lt, 1, v);
-        else if (n == 2) glProgramUniform2fv(to, lt, 1, v);
-        else if (n == 3) glProgramUniform3fv(to, lt, 1, v);
-        else glProgramUniform4fv(to, lt, 1, v);
-    } else if (kind == 'u') {
-        GLuint v[4];
-        glGetUniformuiv(from, lf, v);
-        if (n == 1) glProgramUniform1uiv(to, lt, 1, v);
-        else if (n == 2) glProgramUniform2uiv(to, lt, 1, v);
-        else if (n == 3) glProgramUniform3uiv(to, lt, 1, v);
-        else glProgramUniform4uiv(to, lt, 1, v);
-    } else {
-        GLint v[4];
-        glGetUniformiv(from, lf, v);
-        if (n == 1) glProgramUniform1iv(to, lt, 1, v);
-        else if (n == 2) glProgramUniform2iv(to, lt, 1, v);
-        else if (n == 3) glProgramUniform3iv(to, lt, 1, v);
-        else glProgramUniform4iv(to, lt, 1, v);
-    }
+    if (lf < 0 || lt < 0) return true;
+    if (l->n == SB_GL_MAX_LINKS) return false;
+    l->v[l->n++] = (sb_gl_link){lf, lt, type};
+    return true;
 }
 
-void sb_gl_copy_uniforms(GLuint from, GLuint to) {
+bool sb_gl_links_make(sb_gl_links *l, GLuint from, GLuint to) {
+    memset(l, 0, sizeof *l);
     GLint count = 0;
     glGetProgramiv(from, GL_ACTIVE_UNIFORMS, &count);
     for (GLuint i = 0; i < (GLuint)count; i++) {
@@ -185,14 +160,48 @@ void sb_gl_copy_uniforms(GLuint from, GLuint to) {
         if (block >= 0) continue;   /* a block's members live in its buffer, bound alike for both */
         char *bracket = strstr(name, "[0]");
         if (!bracket || size <= 1) {
-            copy_uniform(from, to, name, type);
+            if (!link_add(l, from, to, name, type)) return false;
             continue;
         }
         *bracket = 0;
         for (GLint e = 0; e < size; e++) {
             char elem[300];
             snprintf(elem, sizeof elem, "%s[%d]", name, e);
-            copy_uniform(from, to, elem, type);
+            if (!link_add(l, from, to, elem, type)) return false;
+        }
+    }
+    return true;
+}
+
+void sb_gl_links_copy(const sb_gl_links *l, GLuint from, GLuint to) {
+    for (int k = 0; k < l->n; k++) {
+        const sb_gl_link *u = &l->v[k];
+        char kind;
+        int n = uniform_shape(u->type, &kind);
+        if (kind == 'f') {
+            GLfloat v[16];
+            glGetUniformfv(from, u->from, v);
+            if (u->type == GL_FLOAT_MAT2) glProgramUniformMatrix2fv(to, u->to, 1, GL_FALSE, v);
+            else if (u->type == GL_FLOAT_MAT3) glProgramUniformMatrix3fv(to, u->to, 1, GL_FALSE, v);
+            else if (u->type == GL_FLOAT_MAT4) glProgramUniformMatrix4fv(to, u->to, 1, GL_FALSE, v);
+            else if (n == 1) glProgramUniform1fv(to, u->to, 1, v);
+            else if (n == 2) glProgramUniform2fv(to, u->to, 1, v);
+            else if (n == 3) glProgramUniform3fv(to, u->to, 1, v);
+            else glProgramUniform4fv(to, u->to, 1, v);
+        } else if (kind == 'u') {
+            GLuint v[4];
+            glGetUniformuiv(from, u->from, v);
+            if (n == 1) glProgramUniform1uiv(to, u->to, 1, v);
+            else if (n == 2) glProgramUniform2uiv(to, u->to, 1, v);
+            else if (n == 3) glProgramUniform3uiv(to, u->to, 1, v);
+            else glProgramUniform4uiv(to, u->to, 1, v);
+        } else {
+            GLint v[4];
+            glGetUniformiv(from, u->from, v);
+            if (n == 1) glProgramUniform1iv(to, u->to, 1, v);
+            else if (n == 2) glProgramUniform2iv(to, u->to, 1, v);
+            else if (n == 3) glProgramUniform3iv(to, u->to, 1, v);
+            else glProgramUniform4iv(to, u->to, 1, v);
         }
     }
 }

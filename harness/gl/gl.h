@@ -25,12 +25,24 @@ GLuint sb_gpu_link(const char *label, const char *defines, const sb_shader_src *
 GLuint sb_gpu_program(const char *label, const char *defines, const char *const *vs, int nvs,
                       const char *const *fs, int nfs, sb_err *err);
 
-/* Gives every default-block uniform of `from` that `to` also has the value it
- * has in `from` (plain values, vectors, matrices, arrays, samplers): a
- * program's variants (the camera pass's timed and evaluation ones) then draw
- * alike with one set of uniform calls. Not for timed work: it reads uniforms
- * back. */
-void sb_gl_copy_uniforms(GLuint from, GLuint to);
+/* The default-block uniforms two variants of one program share (the camera
+ * pass's timed, alpha-tested and evaluation ones), by location in each: made
+ * once, so copying the values a technique set on one to another costs a get
+ * and a set a uniform, no name lookup. Plain values, vectors, matrices,
+ * arrays and samplers; blocks are bound, not copied. */
+#define SB_GL_MAX_LINKS 64
+typedef struct sb_gl_link {
+    GLint from, to;
+    GLenum type;
+} sb_gl_link;
+typedef struct sb_gl_links {
+    sb_gl_link v[SB_GL_MAX_LINKS];
+    int n;
+} sb_gl_links;
+/* False when the programs share more than SB_GL_MAX_LINKS uniforms (array elements count one each). */
+bool sb_gl_links_make(sb_gl_links *l, GLuint from, GLuint to);
+/* Gives each linked uniform of `to` the value it has in `from`. */
+void sb_gl_links_copy(const sb_gl_links *l, GLuint from, GLuint to);
 
 /* A depth texture with hardware comparison (LEQUAL), clamped to its edge:
  * GL_TEXTURE_2D_ARRAY with `layers` layers, or GL_TEXTURE_CUBE_MAP (layers ignored). */
