@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cascade.h"
 #include "support.h"
 #include "timing.h"
 
@@ -300,6 +301,53 @@ static void test_timed_frames_skip_evaluation(void **st) {
     sb_session_close(&s);
 }
 
+/* A scene with alpha-tested and opaque draws draws the opaque ones with
+ * variants that have no alpha test (no discard, early depth testing kept) in
+ * every scene pass: z-pass, shadow maps and camera pass; the alpha-tested ones
+ * with it. A scene with none has one variant. (That the alpha test still
+ * shapes the shadows: conformance, test_raster_matches_reference.) */
+static void test_opaque_draws_skip_alpha_test(void **st) {
+    (void)st;
+    sb_session s;
+    sb_err err;
+    assert_true(test_open(&s, "conf-alpha-card", "conf-alpha-card", 160, 90, &err));
+    assert_true(s.scene.alpha_tested_draws > 0 && s.scene.alpha_tested_draws < s.scene.draw_count);
+    sb_run_spec *runs = NULL;
+    int n = 0;
+    assert_true(sb_spec_expand("pssm:layered=gs", NULL, &runs, &n, &err));
+    sb_instance in;
+    assert_true(sb_instance_create(&in, &s, &runs[0], 1, &err));
+    free(runs);
+    const sb_csm *c = in.state;
+    const GLuint progs[][2] = {{s.gpu.zpass_prog[0], s.gpu.zpass_prog[1]},
+                               {c->pass[0].prog_cascade, c->pass[1].prog_cascade},
+                               {c->pass[0].prog_layered, c->pass[1].prog_layered},
+                               {c->fp.v[0].prog, c->fp.v[1].prog},
+                               {c->fp.v[2].prog, c->fp.v[3].prog}};
+    for (size_t k = 0; k < sizeof progs / sizeof progs[0]; k++) {
+        print_message("pass %zu: opaque variant %u (alpha texels %d), alpha-tested variant %u (alpha texels %d)\n", k,
+                      progs[k][0], glGetUniformLocation(progs[k][0], "sb_texels"), progs[k][1],
+                      glGetUniformLocation(progs[k][1], "sb_texels"));
+        assert_true(progs[k][0] && progs[k][1]);
+        assert_int_equal(glGetUniformLocation(progs[k][0], "sb_texels"), -1);
+        assert_true(glGetUniformLocation(progs[k][1], "sb_texels") >= 0);
+    }
+    sb_instance_destroy(&in);
+    sb_session_close(&s);
+
+    assert_true(test_open(&s, "plane-box", "plane-box", 160, 90, &err));
+    runs = NULL;   /* sb_spec_expand appends */
+    n = 0;
+    assert_true(sb_spec_expand("pssm", NULL, &runs, &n, &err));
+    assert_true(sb_instance_create(&in, &s, &runs[0], 1, &err));
+    free(runs);
+    c = in.state;
+    assert_true(c->fp.v[0].prog && c->pass[0].prog_cascade && s.gpu.zpass_prog[0]);
+    assert_true(!c->fp.v[1].prog && !c->fp.v[3].prog && !c->pass[1].prog_cascade && !s.gpu.zpass_prog[1]);
+    sb_instance_destroy(&in);
+    sb_session_close(&s);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_sm_matches_analytic_egl),
@@ -311,6 +359,7 @@ int main(void) {
         cmocka_unit_test(test_pcss_converges_to_hard),
         cmocka_unit_test(test_filtered_formats_converge),
         cmocka_unit_test(test_timed_frames_skip_evaluation),
+        cmocka_unit_test(test_opaque_draws_skip_alpha_test),
     };
     return cmocka_run_group_tests_name("planebox", tests, NULL, NULL);
 }
