@@ -82,6 +82,8 @@ static void usage(FILE *f) {
             "  --overlap auto|on|off  cast the reference of evaluated frames in the background, at idle CPU\n"
             "                         priority, while timed frames render (auto: on a GPU, not on a CPU rasterizer)\n"
             "  --run-timeout S        a run taking longer is recorded as failed\n"
+            "  --gpu-memory SIZE      GPU memory a run may allocate, e.g. 8G (default: what the GL reports\n"
+            "                         free, or on a software rasterizer the system memory available)\n"
             "  --out DIR              results folder (default out); each run command writes DIR/<UTC time>/\n"
             "  --progress             progress line on stderr (default when stderr is a terminal)\n"
             "  --quiet                no notices on stderr\n"
@@ -638,6 +640,11 @@ int main(int argc, char **argv) {
     memset(&c, 0, sizeof c);
     int rc = parse_cli(&c, argc, argv);
     if (!rc) rc = dispatch(&c, argv[1]);
+    if (rc != 2 && sb_result_writes_failed()) {   /* a cron job must not read a lost row as success */
+        fprintf(stderr, "shadowbench: results could not all be written (the files are named above): exit status %d\n",
+                SB_EXIT_WRITE);
+        rc = SB_EXIT_WRITE;
+    }
     free(c.pos);
     free(c.run_opts);
     return rc;

@@ -71,8 +71,9 @@ int sb_run_opts_set(sb_run_opts *o, const char *a, const char *v, sb_err *err) {
     } else if (!strcmp(a, "--size")) {
         int w, h;
         char extra;
-        if (sscanf(v, "%dx%d%c", &w, &h, &extra) != 2 || w < 1 || h < 1 || w > 16384 || h > 16384)
-            return sb_fail(err, "--size %s: expected WxH, e.g. 1280x720", v), -1;
+        if (sscanf(v, "%dx%d%c", &w, &h, &extra) != 2) return sb_fail(err, "--size %s: expected WxH, e.g. 1280x720", v), -1;
+        if (w < 1 || h < 1 || w > 16384 || h > 16384)
+            return sb_fail(err, "--size %s: width and height must be 1..16384", v), -1;
         o->width = w;
         o->height = h;
     } else if (!strcmp(a, "--sun")) {
@@ -108,6 +109,14 @@ int sb_run_opts_set(sb_run_opts *o, const char *a, const char *v, sb_err *err) {
         if (!strcmp(v, "auto")) o->overlap = -1;
         else if (!strcmp(v, "on") || !strcmp(v, "off")) o->overlap = !strcmp(v, "on");
         else return sb_fail(err, "--overlap %s: expected auto, on or off", v), -1;
+    } else if (!strcmp(a, "--gpu-memory")) {
+        double m;
+        char unit = 0, extra;
+        int k = sscanf(v, "%lf%c%c", &m, &unit, &extra);
+        double scale = unit == 'G' || unit == 'g' ? 1073741824.0 : unit == 'M' || unit == 'm' ? 1048576.0 : 0;
+        if (k != 2 || !scale || !isfinite(m) || m <= 0 || m * scale > 1e15)
+            return sb_fail(err, "--gpu-memory %s: expected a size with M or G, e.g. 8G or 512M (up to 1e15 bytes)", v), -1;
+        o->gpu_memory = m * scale;
     } else if (!strcmp(a, "--run-timeout")) {
         if (!sb_parse_double(v, &o->run_timeout_s) || o->run_timeout_s < 0)
             return sb_fail(err, "--run-timeout %s: expected seconds >= 0", v), -1;
@@ -187,6 +196,7 @@ bool sb_session_attach(sb_session *s, const sb_run_opts *o, sb_scene *scene, sb_
         sb_session_close_scene(s);
         return false;
     }
+    s->ctx.memory_limit = o->gpu_memory;
     sb_v3 sun = s->scene.has_sun ? s->scene.sun : sb_sun_dir(135, 40);
     if (o->sun_override) sun = sb_sun_dir(o->sun_az, o->sun_el);
     double t0 = sb_now_ms();
@@ -233,8 +243,13 @@ void sb_session_close_scene(sb_session *s) {
     if (s->ref_cache) sb_ref_background_stop(s->ref_cache); /* before the reference it casts with goes */
     if (sb_ref_cache_dirty(s->ref_cache) && ref_store_file(s, file, sizeof file, &tag)) {
         sb_err e;
-        if (!sb_mkdir_p(s->ref_store, &e) || !sb_ref_cache_save(s->ref_cache, file, tag, &e))
-            sb_log("the reference's answers are not kept for later runs: %s", e.msg);
+        static bool said;   /* a cache: warned once a process (the save itself warns once when a write fails) */
+        if (!sb_mkdir_p(s->ref_store, &e)) {
+            if (!said) sb_log("warning: the reference's answers are not kept for later runs (%s); said once", e.msg);
+            said = true;
+        } else {
+            sb_ref_cache_save(s->ref_cache, file, tag, &e);
+        }
     }
     for (int i = 0; s->tech_loaded && i < sb_technique_count(); i++)
         if (s->tech_loaded[i] && sb_technique_at(i)->unload) sb_technique_at(i)->unload(s->tech_data[i]);

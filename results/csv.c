@@ -86,6 +86,7 @@ bool sb_csv_file_open(sb_csv_file *cf, const char *path, sb_err *err) {
     cf->f = fopen(cf->tmp, "w");
     if (!cf->f) {
         sb_fail(err, "%s: cannot create: %s", cf->tmp, strerror(errno));
+        sb_result_write_failed();
         free(cf->path);
         free(cf->tmp);
         memset(cf, 0, sizeof *cf);
@@ -95,21 +96,24 @@ bool sb_csv_file_open(sb_csv_file *cf, const char *path, sb_err *err) {
 }
 
 bool sb_csv_file_write(sb_csv_file *cf, sb_csv *rows, sb_err *err) {
-    if (rows->len && fwrite(rows->buf, 1, rows->len, cf->f) != rows->len)
-        return sb_fail(err, "%s: write failed", cf->tmp);
-    fflush(cf->f);
+    if ((rows->len && fwrite(rows->buf, 1, rows->len, cf->f) != rows->len) || fflush(cf->f) != 0) {
+        sb_result_write_failed();
+        return sb_fail(err, "%s: write failed: %s", cf->tmp, strerror(errno));
+    }
     sb_csv_reset(rows);
     return true;
 }
 
 bool sb_csv_file_commit(sb_csv_file *cf, sb_err *err) {
-    bool ok = fflush(cf->f) == 0;
-    fsync(fileno(cf->f));
-    ok = fclose(cf->f) == 0 && ok;
+    const char *step = fflush(cf->f) != 0 ? "write" : fsync(fileno(cf->f)) != 0 && errno != EINVAL ? "fsync" : NULL;
+    int saved = errno;
+    if (fclose(cf->f) != 0 && !step) step = "close", saved = errno;
     cf->f = NULL;
-    if (ok && rename(cf->tmp, cf->path) != 0) ok = false;
+    if (!step && rename(cf->tmp, cf->path) != 0) step = "rename", saved = errno;
+    bool ok = !step;
     if (!ok) {
-        sb_fail(err, "%s: cannot complete: %s", cf->path, strerror(errno));
+        sb_fail(err, "%s: %s failed: %s", cf->tmp, step, strerror(saved));
+        sb_result_write_failed();
         unlink(cf->tmp);
     }
     free(cf->path);

@@ -403,7 +403,8 @@ bool sb_ref_cache_save(sb_ref_cache *c, const char *path, uint64_t tag, sb_err *
     pthread_mutex_unlock(&c->mu);
     sum = sb_hash_bytes(SB_FNV_SEED, b + head, size - head);
     memcpy(b + 8 + 2 * sizeof(uint64_t), &sum, sizeof sum);
-    bool ok = sb_write_file_atomic(path, b, size, err);
+    bool ok = sb_write_cache_file_atomic(path, b, size, "the reference's answers");
+    if (!ok) sb_fail(err, "%s: not written", path);
     free(b);
     pthread_mutex_lock(&c->mu);
     if (ok) c->dirty = false; /* (answers the background added meanwhile are in the next save) */

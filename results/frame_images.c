@@ -46,5 +46,6 @@ bool sb_images_write_frame(const char *dir, const char *run_id, int frame, int w
 #undef SB_IMG
     free(rgb);
     free(texel);
+    if (!ok) sb_result_write_failed();
     return ok;
 }

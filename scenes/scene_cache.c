@@ -200,6 +200,12 @@ void sb_scene_cache_put(uint64_t key, sb_scene_cache_write write, const void *us
     h.payload_hash = sb_hash_bytes(SB_FNV_SEED, b.p + sizeof h, b.n - sizeof h);
     memcpy(b.p, &h, sizeof h);
     sb_err e;
-    if (sb_mkdir_p(dir, &e) && sb_write_file_atomic(ep, b.p, b.n, &e)) trim(dir);
+    if (!sb_mkdir_p(dir, &e)) {
+        static bool said;
+        if (!said) sb_log("warning: the scene cache is not kept (%s); going on without it (said once)", e.msg);
+        said = true;
+    } else if (sb_write_cache_file_atomic(ep, b.p, b.n, "the scene cache")) {
+        trim(dir);
+    }
     sb_wbuf_free(&b);
 }

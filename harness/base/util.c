@@ -135,7 +135,13 @@ void sb_unmap_file(void *p, size_t size) {
     if (p) munmap(p, size);
 }
 
-bool sb_write_file_atomic(const char *path, const void *data, size_t size, sb_err *err) {
+static bool g_result_write_failed;
+
+void sb_result_write_failed(void) { g_result_write_failed = true; }
+bool sb_result_writes_failed(void) { return g_result_write_failed; }
+
+/* PATH.PID.tmp, every byte written, fsync, close and rename checked. */
+static bool write_atomic(const char *path, const void *data, size_t size, sb_err *err) {
     size_t len = strlen(path) + 32;
     char *tmp = sb_xmalloc(len);
     snprintf(tmp, len, "%s.%ld.tmp", path, (long)getpid());   /* its own: two writers never share one */
@@ -147,21 +153,26 @@ bool sb_write_file_atomic(const char *path, const void *data, size_t size, sb_er
     }
     const char *p = data;
     size_t left = size;
+    const char *failed = NULL;
     while (left > 0) {
         ssize_t w = write(fd, p, left);
         if (w < 0) {
             if (errno == EINTR) continue;
-            sb_fail(err, "%s: write failed: %s", tmp, strerror(errno));
-            close(fd);
-            unlink(tmp);
-            free(tmp);
-            return false;
+            failed = "write";
+            break;
         }
         p += w;
         left -= (size_t)w;
     }
-    fsync(fd);
-    close(fd);
+    if (!failed && fsync(fd) != 0 && errno != EINVAL) failed = "fsync";
+    int saved = errno;
+    if (close(fd) != 0 && !failed) failed = "close", saved = errno;
+    if (failed) {
+        sb_fail(err, "%s: %s failed: %s", tmp, failed, strerror(saved));
+        unlink(tmp);
+        free(tmp);
+        return false;
+    }
     if (rename(tmp, path) != 0) {
         sb_fail(err, "%s: rename failed: %s", path, strerror(errno));
         unlink(tmp);
@@ -170,6 +181,21 @@ bool sb_write_file_atomic(const char *path, const void *data, size_t size, sb_er
     }
     free(tmp);
     return true;
+}
+
+bool sb_write_file_atomic(const char *path, const void *data, size_t size, sb_err *err) {
+    if (write_atomic(path, data, size, err)) return true;
+    sb_result_write_failed();
+    return false;
+}
+
+bool sb_write_cache_file_atomic(const char *path, const void *data, size_t size, const char *what) {
+    sb_err e;
+    if (write_atomic(path, data, size, &e)) return true;
+    static bool said;
+    if (!said) sb_log("warning: %s not kept (%s); going on without it (said once)", what, e.msg);
+    said = true;
+    return false;
 }
 
 bool sb_copy_file(const char *from, const char *to, sb_err *err) {

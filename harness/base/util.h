@@ -37,8 +37,19 @@ uint64_t sb_binary_identity(void);
  * costs no page faults later); writable: a private copy-on-write mapping. NULL otherwise. */
 void *sb_map_file(const char *path, size_t *size, bool writable);
 void sb_unmap_file(void *p, size_t size);
-/* Writes data to path atomically (PATH.PID.tmp, fsync, rename). */
+/* Writes a result file atomically (PATH.PID.tmp, fsync, close, rename; each
+ * checked): on failure err names the file and the OS error, the temporary is
+ * removed, what was there before stays whole, and the process is marked
+ * (sb_result_write_failed). */
 bool sb_write_file_atomic(const char *path, const void *data, size_t size, sb_err *err);
+/* The same for a cache (the scene cache, kept reference answers), which a run
+ * can do without: a failure is a warning, said once a process, not a mark. */
+bool sb_write_cache_file_atomic(const char *path, const void *data, size_t size, const char *what);
+/* A result (CSV, summary, meta, image, report page) could not be written
+ * whole: the process then exits SB_EXIT_WRITE, whatever else it did. */
+#define SB_EXIT_WRITE 4
+void sb_result_write_failed(void);
+bool sb_result_writes_failed(void);
 /* Copies a file, written atomically (sb_write_file_atomic). */
 bool sb_copy_file(const char *from, const char *to, sb_err *err);
 bool sb_mkdir_p(const char *path, sb_err *err);
