@@ -362,6 +362,7 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
         r->finished = true;
         r->info.status = "skipped";
         r->info.reason = skip;
+        sb_log("run %s (%s): skipped: %s", r->run_id, spec->tech->name, skip);
         return r;
     }
     r->capacity = o->frames * (o->target_ci > 0 ? o->max_repeat : o->repeat);

@@ -41,6 +41,7 @@ typedef struct sb_run_opts {
     int threads;                /* reference ray-casting threads (default: all cores, at most 1024) */
     int overlap;                /* --overlap: 1 on, 0 off, -1 auto (the default: on for a GPU, off for a CPU rasterizer) */
     double run_timeout_s;       /* a run taking longer fails with a timeout (0: none) */
+    double gpu_memory;          /* --gpu-memory: bytes a run may allocate on the GPU (0: what the context says) */
     bool allow_external_uris;   /* glTF buffers and images may be read from outside the scene's folder */
     sb_blend_policy blend;      /* --blend-casters mask|opaque|none (default mask) */
     bool pose;                  /* --pose T: the scene at time T of its first animation */

@@ -35,6 +35,17 @@ bool sb_csm_supported(const sb_context *ctx, const sb_csm_desc *d, const char *n
     return true;
 }
 
+bool sb_csm_memory_fits(const sb_gpu *g, const sb_csm_desc *d, const char *name, sb_err *why) {
+    static const int depth_bytes[] = {2, 4, 4};                 /* 16, 24 (stored in 32 bits), 32f */
+    static const int moment_channels[] = {0, 2, 1, 4};          /* depth, vsm, esm, msm (create_maps) */
+    double texels = (double)d->res * d->res * (d->cascades < 1 ? 1 : d->cascades);
+    double bytes = texels * (depth_bytes[d->depth] + 2.0 * 4 * moment_channels[d->format]);   /* moments and their blur */
+    char who[160];
+    if (d->cascades > 1) snprintf(who, sizeof who, "%s:res=%d:cascades=%d", name, d->res, d->cascades);
+    else snprintf(who, sizeof who, "%s:res=%d", name, d->res);
+    return sb_gpu_memory_fits(g, bytes, who, "shadow maps", why);
+}
+
 /* A moments map's texel format, for GL and for the blur's image (by
  * SB_FORMAT_*): as many 32-bit float channels as the format stores
  * (moments.frag): esm one, vsm two, msm four. A channel more would be memory
@@ -416,7 +427,8 @@ void sb_csm_view_splits(const void *desc, const sb_frame *f, int count, double *
 bool sb_csm_technique_check(const void *desc, sb_err *err) { return sb_csm_check(desc, "", err); }
 
 bool sb_csm_technique_supported(const sb_run_ctx *rc, const void *desc, sb_err *why) {
-    return sb_csm_supported(rc->gpu->ctx, desc, rc->tech->name, why);
+    return sb_csm_supported(rc->gpu->ctx, desc, rc->tech->name, why) &&
+           sb_csm_memory_fits(rc->gpu, desc, rc->tech->name, why);
 }
 
 bool sb_csm_technique_create(void *state, const sb_run_ctx *rc, const void *desc, sb_err *err) {

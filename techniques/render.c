@@ -304,6 +304,25 @@ void sb_frame_setup(sb_frame *f, const sb_gpu *g, const sb_camera *cam) {
     f->shade_light[3] = 0;
 }
 
+static void human_bytes(double b, char *out, size_t len) {
+    if (b >= 1073741824.0) snprintf(out, len, "%.1f GiB", b / 1073741824.0);
+    else snprintf(out, len, "%.0f MiB", b / 1048576.0);
+}
+
+bool sb_gpu_memory_fits(const sb_gpu *g, double bytes, const char *who, const char *what, sb_err *why) {
+    char source[96];
+    double free_bytes = sb_context_memory_free(g->ctx, source, sizeof source);
+    if (free_bytes <= 0) return true;   /* unknown: a failed allocation then fails the run with the GL error */
+    /* the camera targets: colour RGBA8, visibility R8, depth-stencil 32F+8, position and normal RGBA32F */
+    double targets = (double)g->width * g->height * (4 + 1 + 8 + 16 + 16);
+    if (bytes + targets <= free_bytes) return true;
+    char need[32], have[32];
+    human_bytes(bytes, need, sizeof need);
+    human_bytes(free_bytes - targets > 0 ? free_bytes - targets : 0, have, sizeof have);
+    return sb_fail(why, "%s: needs %s of %s, more than the %s %s (beside the camera targets)", who, need, what, have,
+                   source);
+}
+
 bool sb_lamp_supported(const sb_gpu *g, int light, const char *technique, sb_err *why) {
     int k = 0;
     if (!sb_scene_point_light(g->scene, light, &k))

@@ -124,6 +124,10 @@ void sb_zpass(sb_frame *f);
  * the frame's light (they come first in its range: the index buffer is
  * ordered for the light on first use), as the reference's rays see them. */
 void sb_submit(sb_frame *f, uint32_t draw, int instances);
+/* Whether `bytes` of `what` (e.g. "shadow maps") fit beside the camera
+ * targets in the GPU memory the context has (sb_context_memory_free): false
+ * with "WHO: needs 4.0 GiB of shadow maps, ..." in why when they do not. */
+bool sb_gpu_memory_fits(const sb_gpu *g, double bytes, const char *who, const char *what, sb_err *why);
 /* A point-light technique's light=K: false with the reason when the scene has no K-th point or spot light. */
 bool sb_lamp_supported(const sb_gpu *g, int light, const char *technique, sb_err *why);
 /* Makes the frame lit by a point light at pos: call it before the shadow

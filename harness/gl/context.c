@@ -3,6 +3,7 @@
 
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -59,8 +60,40 @@ static bool finish_gl(sb_context *c, GLADloadfunc load, sb_err *err) {
     c->has_compute = c->gl_major * 10 + c->gl_minor >= 43;
     c->has_geometry = c->gl_major * 10 + c->gl_minor >= 32;
     c->has_vs_layer = gl_has_ext("GL_ARB_shader_viewport_layer_array") || gl_has_ext("GL_AMD_vertex_shader_layer");
+    c->has_nvx_meminfo = gl_has_ext("GL_NVX_gpu_memory_info");
+    c->has_ati_meminfo = gl_has_ext("GL_ATI_meminfo");
     while (glGetError() != GL_NO_ERROR) {}
     return true;
+}
+
+double sb_context_memory_free(const sb_context *c, char *source, size_t len) {
+    if (c->memory_limit > 0) {
+        snprintf(source, len, "--gpu-memory");
+        return c->memory_limit;
+    }
+    GLint kib[4] = {0, 0, 0, 0};
+    if (c->has_nvx_meminfo) {
+        glGetIntegerv(0x9049 /* GL_GPU_MEMORY_INFO_CURRENT_AVAILABLE_VIDMEM_NVX */, kib);
+        snprintf(source, len, "free on the GPU (GL_NVX_gpu_memory_info)");
+        return 1024.0 * kib[0];
+    }
+    if (c->has_ati_meminfo) {
+        glGetIntegerv(0x87FC /* GL_TEXTURE_FREE_MEMORY_ATI */, kib);
+        snprintf(source, len, "free on the GPU (GL_ATI_meminfo)");
+        return 1024.0 * kib[0];
+    }
+    if (c->software) {
+        FILE *f = fopen("/proc/meminfo", "r");
+        char line[256];
+        double avail = 0;
+        while (f && fgets(line, sizeof line, f))
+            if (sscanf(line, "MemAvailable: %lf kB", &avail) == 1) break;
+        if (f) fclose(f);
+        snprintf(source, len, "of system memory available to this software rasterizer");
+        return 1024.0 * avail;
+    }
+    snprintf(source, len, "unknown");
+    return 0;
 }
 
 static GLADapiproc egl_load(const char *name) { return (GLADapiproc)eglGetProcAddress(name); }

@@ -17,7 +17,15 @@ typedef struct sb_context {
     int gl_major, gl_minor;
     bool software;               /* llvmpipe, softpipe, swrast */
     bool has_timer_query, has_compute, has_geometry, has_vs_layer;
+    bool has_nvx_meminfo, has_ati_meminfo;
+    double memory_limit;         /* --gpu-memory, bytes (0: what the context reports) */
 } sb_context;
+
+/* GPU memory a run may allocate, in bytes, and where the figure comes from:
+ * --gpu-memory when given; else what the context reports free
+ * (GL_NVX_gpu_memory_info, GL_ATI_meminfo); else, on a software rasterizer,
+ * the system memory available (its textures live there); else 0, unknown. */
+double sb_context_memory_free(const sb_context *c, char *source, size_t len);
 
 bool sb_backend_parse(const char *s, sb_backend *out);
 const char *sb_backend_name(sb_backend b);

@@ -695,6 +695,116 @@ static void test_run_order(void **st) {
                     test_binary());
 }
 
+/* The last line of the output (a run's results folder when stderr came first). */
+static void last_line(char *dir, size_t len) {
+    size_t n = strlen(g_out);
+    while (n && g_out[n - 1] == '\n') n--;
+    size_t start = n;
+    while (start && g_out[start - 1] != '\n') start--;
+    assert_true(n - start < len);
+    memcpy(dir, g_out + start, n - start);
+    dir[n - start] = 0;
+}
+
+/* A run whose shadow maps would not fit in the GPU memory is refused before
+ * it renders, in one line naming the parameter and the amount (skipped, with
+ * that reason in the summary); a bad --gpu-memory is bad input. On a software
+ * rasterizer the limit is the system memory available: the largest maps the
+ * parameters allow (72 GiB) are refused without --gpu-memory too. */
+static void test_gpu_memory_refused(void **st) {
+    (void)st;
+    char d[4096];
+    assert_int_equal(sh("%s run plane-box plane-box pssm:res=16384 pssm:res=256 --frames 1 --warmup 0 --size 64x36 "
+                        "--error-every 0 --gpu-memory 2G --out %s/mem", test_binary(), g_tmp), 0);
+    last_line(d, sizeof d);
+    const char *line = "pssm:res=16384:cascades=4: needs 4.0 GiB of shadow maps, more than the 2.0 GiB --gpu-memory";
+    assert_non_null(strstr(g_out, line));   /* on stderr */
+    sb_table t;
+    summary_table(d, &t);
+    print_message("%s: %s\n", sb_table_get(&t, 0, "status"), sb_table_get(&t, 0, "reason"));
+    assert_string_equal(sb_table_get(&t, 0, "status"), "skipped");
+    assert_non_null(strstr(sb_table_get(&t, 0, "reason"), line));
+    assert_string_equal(sb_table_get(&t, 1, "status"), "ok");
+    sb_table_free(&t);
+    assert_int_equal(sh("%s run plane-box plane-box sm --gpu-memory 12 --out %s/mem", test_binary(), g_tmp), 2);
+    assert_non_null(strstr(g_out, "--gpu-memory 12: expected a size with M or G"));
+
+    FILE *f = fopen("/proc/meminfo", "r");
+    char l[256];
+    double avail_kib = 0;
+    while (f && fgets(l, sizeof l, f))
+        if (sscanf(l, "MemAvailable: %lf kB", &avail_kib) == 1) break;
+    if (f) fclose(f);
+    if (avail_kib <= 0 || avail_kib > 70.0 * 1024 * 1024) {
+        print_message("MemAvailable %.0f kB: the context's own limit is not checked here\n", avail_kib);
+        return;
+    }
+    run_dir(d, sizeof d, "%s run plane-box plane-box pssm:res=16384:cascades=8:format=msm --frames 1 --warmup 0 "
+            "--size 64x36 --error-every 0 --quiet --out %s/mem", test_binary(), g_tmp);
+    summary_table(d, &t);
+    print_message("%s: %s\n", sb_table_get(&t, 0, "status"), sb_table_get(&t, 0, "reason"));
+    assert_string_equal(sb_table_get(&t, 0, "status"), "skipped");
+    assert_non_null(strstr(sb_table_get(&t, 0, "reason"),
+                           "pssm:res=16384:cascades=8: needs 72.0 GiB of shadow maps, more than the "));
+    sb_table_free(&t);
+}
+
+/* Results into a full filesystem (a 40 KiB tmpfs, mounted in a user
+ * namespace): the batch exits 4, naming a file and the OS error; nothing
+ * half-written is left under a final name; after the filesystem grows,
+ * batch --resume completes the set, and its rows are those of a batch that
+ * never failed (timings aside). */
+static void test_full_disk(void **st) {
+    (void)st;
+    if (sh("unshare -rm sh -c 'mount -t tmpfs -o size=40k tmpfs %s && echo mounted'", g_tmp) != 0 ||
+        !strstr(g_out, "mounted")) {
+        print_message("no user namespace with tmpfs here (%s): skipped\n", g_out);
+        skip();
+    }
+    char bench[300];
+    snprintf(bench, sizeof bench, "%s/tiny.bench", g_tmp);
+    FILE *f = fopen(bench, "w");
+    fputs("scene towers towers\npath towers towers\ndefaults --frames 40 --warmup 0 --error-every 10 --size 320x180\n"
+          "sm\npssm\nsdsm\n", f);
+    fclose(f);
+    /* the clean set, on the real disk */
+    char clean[4096];
+    run_dir(clean, sizeof clean, "%s batch %s --out %s/clean --quiet", test_binary(), bench, g_tmp);
+    /* into the tiny one: fails with 4; then more room and --resume; the listing and rows come back out */
+    int rc = sh("unshare -rm sh -c 'D=%s/disk; mkdir -p $D && mount -t tmpfs -o size=40k tmpfs $D && "
+                "%s batch %s --out $D --quiet > %s/dir.txt; echo first=$?; "
+                "mount -o remount,size=64m $D && %s batch %s --resume $(tail -n 1 %s/dir.txt) --quiet; echo second=$?; "
+                "find $D -name \"*.tmp\" | sed s/^/LEFT-BEHIND:/; cp $(tail -n 1 %s/dir.txt)/summary.csv %s/resumed.csv'",
+                g_tmp, test_binary(), bench, g_tmp, test_binary(), bench, g_tmp, g_tmp, g_tmp);
+    print_message("%s\n", g_out);
+    assert_int_equal(rc, 0);
+    assert_non_null(strstr(g_out, "first=4"));
+    assert_non_null(strstr(g_out, "No space left on device"));
+    assert_non_null(strstr(g_out, "/disk/"));                    /* the file is named */
+    assert_non_null(strstr(g_out, "second=0"));
+    assert_null(strstr(g_out, "LEFT-BEHIND:"));                   /* no temporary left behind */
+    sb_table a, b;
+    summary_table(clean, &a);
+    char resumed[300];
+    snprintf(resumed, sizeof resumed, "%s/resumed.csv", g_tmp);
+    sb_err err;
+    assert_true(sb_table_load(&b, resumed, &err));
+    assert_int_equal(a.nrows, 3);
+    assert_int_equal(b.nrows, a.nrows);
+    const char *same[] = {"run_id", "technique", "params", "status", "frames", "draw_calls_mean", "err_rate_mean",
+                          "texel_px_p95_mean"};
+    for (int r = 0; r < a.nrows; r++)
+        for (size_t k = 0; k < sizeof same / sizeof same[0]; k++) {
+            int rb = -1;
+            for (int j = 0; j < b.nrows; j++)
+                if (!strcmp(sb_table_get(&a, r, "run_id"), sb_table_get(&b, j, "run_id"))) rb = j;
+            assert_true(rb >= 0);
+            assert_string_equal(sb_table_get(&a, r, same[k]), sb_table_get(&b, rb, same[k]));
+        }
+    sb_table_free(&a);
+    sb_table_free(&b);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_run_writes_csv),   cmocka_unit_test(test_gltf_camera_path),
@@ -706,6 +816,7 @@ int main(void) {
         cmocka_unit_test(test_repeats_and_target_ci), cmocka_unit_test(test_run_order),
         cmocka_unit_test(test_reference_shared), cmocka_unit_test(test_reference_background),
         cmocka_unit_test(test_auto_offsets),
+        cmocka_unit_test(test_gpu_memory_refused), cmocka_unit_test(test_full_disk),
     };
     return cmocka_run_group_tests_name("cli", tests, setup, teardown);
 }
