@@ -2,12 +2,15 @@
 """The results history on real nights, and its report in a real browser.
 
 Eleven small nights are rendered on llvmpipe. History A is nights 1-5 at the
-default thread count, then nights 6-8 with LP_NUM_THREADS=1: a real, steady
-slowdown with no hook in the code. History B is the same nights 1-5, then
+default thread count, then nights 6-8 with LP_NUM_THREADS=1 on one core that a
+busy loop shares: a real, steady slowdown (about 3x) with no hook in the code,
+well above the nights' own noise on a shared 2-core machine (which moved a
+camera pass by 10-30 % from night to night, more than a 2x step over three
+nights can show at the detector's false-alarm rate). History B is the same nights 1-5, then
 three more at the default count (rendered interleaved with A's, so the
 machine's drift hits both alike). Then:
 
-- `history regressions` on A names night 6 for the series whose camera pass
+- `history regressions --noise-floor 15` on A names night 6 for the series whose camera pass
   slowed (final_ms) and finds no change in any error or draw-call metric; it
   exits 1 (a regression in the newest three nights). On B it finds nothing and
   exits 0.
@@ -42,30 +45,44 @@ def check(cond, what):
         failures.append(what)
 
 
-def sb(*args, env=None, ok=(0,)):
+def sb(*args, env=None, ok=(0,), prefix=()):
     e = dict(os.environ)
     e.pop("LP_NUM_THREADS", None)
     e.update(env or {})
-    p = subprocess.run([BIN] + list(args), capture_output=True, text=True, env=e)
+    p = subprocess.run(list(prefix) + [BIN] + list(args), capture_output=True, text=True, env=e)
     if p.returncode not in ok:
         print(p.stdout, p.stderr)
         raise SystemExit("FAIL: shadowbench %s exited %d" % (" ".join(args), p.returncode))
     return p
 
 
-def night(name, threads=None, images=False):
+def night(name, slow=False, images=False):
     """One night: three shadowed runs on plane-box (not `none`: a 1-ms frame on a shared CPU moves by
-    half between nights for reasons of its own), into WORK/name/<stamp>."""
-    args = ["run", "plane-box", "plane-box", "sm", "sm:filter=pcf3", "pssm", "--frames", "12", "--size", "480x270",
-            "--error-every", "6", "--quiet", "--out", os.path.join(WORK, name)]
+    half between nights for reasons of its own), into WORK/name/<stamp>. A slow night renders with one
+    llvmpipe thread on core 0, beside a busy loop on that core."""
+    args = ["run", "plane-box", "plane-box", "sm", "sm:filter=pcf3", "pssm", "--frames", "24", "--size", "960x540",
+            "--error-every", "12", "--quiet", "--out", os.path.join(WORK, name)]
     if images:
-        args += ["--images", "8"]
-    p = sb(*args, env={"LP_NUM_THREADS": threads} if threads else None)
-    return p.stdout.strip()
+        args += ["--images", "12"]
+    if not slow:
+        return sb(*args).stdout.strip()
+    hog = subprocess.Popen(["taskset", "-c", "0", sys.executable, "-c", "while True: pass"])
+    try:
+        return sb(*args, env={"LP_NUM_THREADS": "1"}, prefix=["taskset", "-c", "0"]).stdout.strip()
+    finally:
+        hog.kill()
+        hog.wait()
+
+
+# What this shared 2-core machine does to unchanged code: a camera pass moved by up to 30 % between
+# nights a minute apart (history B found -29 % and -37 % "changes", +25 % on another day, at the
+# llvmpipe default of 5 %). The test says so, as a user of such a machine would.
+NOISE_FLOOR = "15"
 
 
 def regressions(hist, *extra):
-    p = sb("history", "regressions", "--history", hist, "--format", "csv", *extra, ok=(0, 1))
+    p = sb("history", "regressions", "--history", hist, "--format", "csv", "--noise-floor", NOISE_FLOOR, *extra,
+           ok=(0, 1))
     return p.returncode, list(csv.DictReader(io.StringIO(p.stdout))), p.stderr
 
 
@@ -91,7 +108,7 @@ def main():
     base = [night("n%d" % i) for i in range(1, 6)]
     slow, same = [], []
     for i in range(6, 9):
-        slow.append(night("a%d" % i, threads="1", images=(i == 8)))
+        slow.append(night("a%d" % i, slow=True, images=(i == 8)))
         same.append(night("b%d" % i))
     print("12 nights rendered (one to warm up) in %.0f s" % (time.time() - t0))
     A, B = os.path.join(WORK, "a.sqlite"), os.path.join(WORK, "b.sqlite")
