@@ -842,13 +842,100 @@ static bool check_required(ck *c, const sb_json *root) {
     return true;
 }
 
+/* Morph targets of a primitive (0 without). */
+static uint32_t target_count(const sb_json *prim) {
+    const sb_json *t = sb_json_get(prim, "targets");
+    return t && t->type == SB_JSON_ARRAY ? t->count : 0;
+}
+
+/* The node rules that tie a node to its mesh and skin (glTF 2.0, 5.25 node):
+ * a node with `skin` or `weights` has a mesh; every primitive of a skinned
+ * node's mesh has JOINTS_0 and WEIGHTS_0; a node's `weights` has one weight
+ * per morph target of each of its mesh's primitives (and so does a mesh's
+ * own `weights`). All refused with the JSON path: a loader that went on would
+ * pose or morph something else than the file's author saw. */
+static bool check_node_mesh_rules(ck *c) {
+    for (uint64_t i = 0; i < c->n[K_MESH]; i++) {
+        const sb_json *m = &c->arr[K_MESH]->items[i], *w = sb_json_get(m, "weights"), *prims = sb_json_get(m, "primitives");
+        if (!w || w->type != SB_JSON_ARRAY || !prims) continue;
+        for (uint32_t k = 0; k < prims->count; k++)
+            if (target_count(&prims->items[k]) != w->count)
+                return fail(c, at(at_i("/meshes", i).s, "weights").s,
+                            "%u weight(s), but primitive %u has %u morph target(s)", w->count, k,
+                            target_count(&prims->items[k]));
+    }
+    for (uint64_t i = 0; i < c->n[K_NODE]; i++) {
+        const sb_json *n = &c->arr[K_NODE]->items[i];
+        jpath p = at_i("/nodes", i);
+        const sb_json *skin = sb_json_get(n, "skin"), *weights = sb_json_get(n, "weights"), *mesh = sb_json_get(n, "mesh");
+        if (skin && !mesh) return fail(c, at(p.s, "skin").s, "a node with a skin has a mesh to skin (none here)");
+        if (weights && !mesh) return fail(c, at(p.s, "weights").s, "a node with morph weights has a mesh (none here)");
+        if (!mesh) continue;
+        uint64_t mi;
+        sb_json_u64(mesh, &mi);
+        const sb_json *prims = sb_json_get(&c->arr[K_MESH]->items[mi], "primitives");
+        for (uint32_t k = 0; prims && k < prims->count; k++) {
+            const sb_json *attrs = sb_json_get(&prims->items[k], "attributes");
+            jpath pk = at_i(at(at_i("/meshes", mi).s, "primitives").s, k);
+            if (skin && (!sb_json_get(attrs, "JOINTS_0") || !sb_json_get(attrs, "WEIGHTS_0")))
+                return fail(c, at(pk.s, "attributes").s,
+                            "node %llu skins this mesh, but this primitive has no %s (a skinned mesh's primitives "
+                            "all have JOINTS_0 and WEIGHTS_0)",
+                            (unsigned long long)i, sb_json_get(attrs, "JOINTS_0") ? "WEIGHTS_0" : "JOINTS_0");
+            if (weights && weights->type == SB_JSON_ARRAY && target_count(&prims->items[k]) != weights->count)
+                return fail(c, at(p.s, "weights").s, "%u weight(s), but its mesh %llu's primitive %u has %u morph target(s)",
+                            weights->count, (unsigned long long)mi, k, target_count(&prims->items[k]));
+        }
+    }
+    return true;
+}
+
+/* A skin used by a node of a scene has all its joints in that scene (glTF
+ * 2.0, 3.7.3 skins): refused with the joint's path. */
+static bool check_skin_joints_in_scene(ck *c) {
+    uint8_t *in = sb_xmalloc(c->n[K_NODE] + 1);
+    bool ok = true;
+    for (uint64_t sc = 0; ok && sc < c->n[K_SCENE]; sc++) {
+        const sb_json *roots = sb_json_get(&c->arr[K_SCENE]->items[sc], "nodes");
+        /* a node is in the scene when the walk up its parents ends at one of the scene's roots */
+        memset(in, 0, c->n[K_NODE] + 1);
+        for (uint32_t k = 0; roots && k < roots->count; k++) {
+            uint64_t r;
+            sb_json_u64(&roots->items[k], &r);
+            in[r] = 1;
+        }
+        for (uint64_t i = 0; i < c->n[K_NODE]; i++) {
+            int64_t j = (int64_t)i;
+            while (c->parent[j] >= 0) j = c->parent[j];
+            if (in[j] == 1) in[i] = in[i] ? in[i] : 2;
+        }
+        for (uint64_t i = 0; ok && i < c->n[K_NODE]; i++) {
+            const sb_json *skin = in[i] ? sb_json_get(&c->arr[K_NODE]->items[i], "skin") : NULL;
+            if (!skin) continue;
+            uint64_t si;
+            sb_json_u64(skin, &si);
+            const sb_json *joints = sb_json_get(&c->arr[K_SKIN]->items[si], "joints");
+            for (uint32_t k = 0; ok && joints && k < joints->count; k++) {
+                uint64_t jn;
+                sb_json_u64(&joints->items[k], &jn);
+                if (!in[jn])
+                    ok = fail(c, at_i(at(at_i("/skins", si).s, "joints").s, k).s,
+                              "joint node %llu is not in scene %llu, which draws node %llu with this skin",
+                              (unsigned long long)jn, (unsigned long long)sc, (unsigned long long)i);
+            }
+        }
+    }
+    free(in);
+    return ok;
+}
+
 bool sb_gltf_check(const sb_json *root, const sb_gltf_check_desc *d, sb_err *err) {
     ck c = {.d = d, .err = err};
     if (root->type != SB_JSON_OBJECT) return fail(&c, "/", "the document is %s, not an object", sb_json_type_name(root->type));
     bool ok = check_asset(&c, root) && check_required(&c, root) && collect_arrays(&c, root) && check_buffers(&c) && check_views(&c) &&
               check_accessors(&c) && check_meshes(&c) && check_nodes(&c) && check_scenes(&c, root) && check_lights(&c) &&
               check_cameras(&c) && check_materials(&c) && check_textures_images(&c) && check_skins(&c) &&
-              check_animations(&c);
+              check_node_mesh_rules(&c) && check_skin_joints_in_scene(&c) && check_animations(&c);
     if (ok && c.rotations_normalised)
         sb_log("%s: %u node rotation(s) are not unit quaternions and are normalised, first %s (length %.6g)", d->file,
                c.rotations_normalised, c.first_rotation.s, c.first_rotation_len);

@@ -323,6 +323,34 @@ static void test_node_graphs(void **st) {
     sb_scene_free(&s);
 }
 
+/* The node rules tying a node to its mesh and skin, one file each: a skinned
+ * mesh without joints, node and mesh morph weights that do not match the
+ * targets, a node with a skin or weights and no mesh, a skin whose joints are
+ * not in the scene that draws it. */
+static void test_skin_and_morph_rules(void **st) {
+    (void)st;
+    const char *skin = ",\"skins\":[{\"joints\":[1]}]";
+    refused("skin-no-joints.gltf", &(gltf_tri){.node0 = "\"mesh\":0,\"skin\":0,\"children\":[1]",
+                                                 .nodes_more = ",{}", .root_more = skin},
+            ": /meshes/0/primitives/0/attributes: node 0 skins this mesh, but this primitive has no JOINTS_0");
+    refused("skin-no-mesh.gltf", &(gltf_tri){.node0 = "\"mesh\":0,\"children\":[1]", .nodes_more = ",{\"skin\":0}",
+                                               .root_more = skin},
+            ": /nodes/1/skin: a node with a skin has a mesh to skin (none here)");
+    refused("node-weights.gltf", &(gltf_tri){.node0 = "\"mesh\":0,\"weights\":[0.5]"},
+            ": /nodes/0/weights: 1 weight(s), but its mesh 0's primitive 0 has 0 morph target(s)");
+    refused("weights-no-mesh.gltf", &(gltf_tri){.nodes_more = ",{\"weights\":[0.5]}", .scene_nodes = "[0,1]"},
+            ": /nodes/1/weights: a node with morph weights has a mesh (none here)");
+    refused("mesh-weights.gltf",
+            /* the mesh's own weights after its one primitive (the rest closes an "extras" array) */
+            &(gltf_tri){.prim = "\"attributes\":{\"POSITION\":0},\"indices\":1,\"targets\":[{\"POSITION\":0}]}],"
+                                "\"weights\":[0.5,0.5],\"extras\":[{\"y\":0"},
+            ": /meshes/0/weights: 2 weight(s), but primitive 0 has 1 morph target(s)");
+    refused("joint-off-scene.gltf",
+            &(gltf_tri){.prim = "\"attributes\":{\"POSITION\":0,\"JOINTS_0\":0,\"WEIGHTS_0\":0},\"indices\":1",
+                        .node0 = "\"mesh\":0,\"skin\":0", .nodes_more = ",{}", .root_more = skin},
+            ": /skins/0/joints/0: joint node 1 is not in scene 0, which draws node 0 with this skin");
+}
+
 static void test_degenerate(void **st) {
     (void)st;
     const char *cases[][2] = {
@@ -433,6 +461,7 @@ int main(void) {
         cmocka_unit_test(test_count_wraps),          cmocka_unit_test(test_uri_directory),
         cmocka_unit_test(test_uri_confined),         cmocka_unit_test(test_layouts),
         cmocka_unit_test(test_transforms),           cmocka_unit_test(test_node_graphs),
+        cmocka_unit_test(test_skin_and_morph_rules),
         cmocka_unit_test(test_degenerate),           cmocka_unit_test(test_lights),
         cmocka_unit_test(test_syntax_in_a_file),     cmocka_unit_test(test_required_extensions),
     };
