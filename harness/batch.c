@@ -402,7 +402,7 @@ static void run_scenes(sb_batch *b, const bool *selected, const bool *done, int 
     int k = 0;
     const sb_run_spec **specs = sb_xmalloc(sizeof *specs * (size_t)(b->nruns ? b->nruns : 1));
     int *index = sb_xmalloc(sizeof *index * (size_t)(b->nruns ? b->nruns : 1));
-    for (int sc = 0; sc < b->nscenes; sc++) {
+    for (int sc = 0; sc < b->nscenes && !sb_interrupted(); sc++) {
         bool any = false;
         for (int i = 0; i < b->nruns; i++) any |= b->runs[i].scene == sc && selected[i] && !done[i];
         if (!any) continue;
@@ -493,9 +493,17 @@ int sb_batch_main(const sb_batch_cmd *cmd) {
            "frame(s) in the background), %d evaluated frame(s) reused",
            wall_s > 0 ? 100.0 * sum.timed_gpu_ms / 1e3 / wall_s : 0.0, sum.timed_gpu_ms / 1e3, wall_s,
            (unsigned long long)sum.ref_rays, sum.ref_background, sum.ref_reused);
-    sb_log("%d run(s): %d ok (%d unstable), %d failed, %d skipped; results in %s", sum.count,
-           sum.count - sum.failed - sum.skipped, sum.unstable, sum.failed, sum.skipped, dir);
+    char stopped[32] = "";
+    if (sum.interrupted) snprintf(stopped, sizeof stopped, ", %d interrupted", sum.interrupted);
+    sb_log("%d run(s): %d ok (%d unstable), %d failed, %d skipped%s; results in %s", sum.count,
+           sum.count - sum.failed - sum.skipped - sum.interrupted, sum.unstable, sum.failed, sum.skipped, stopped, dir);
     rc = sum.failed ? 1 : 0;
+    if (sb_interrupted()) {
+        /* said even with --quiet: the user asked for the stop and needs the way back */
+        fprintf(stderr, "shadowbench: interrupted: the completed runs' rows are in %s/summary.csv; the rest: "
+                        "shadowbench batch %s --resume %s\n", dir, cmd->file, dir);
+        rc = 128 + sb_interrupted();
+    }
     sb_summary_free(&sum);
     sb_clocks_close(s.clocks);
     sb_context_destroy(&s.ctx);

@@ -29,7 +29,8 @@ static void usage(FILE *f) {
             "shadowbench " SB_VERSION " - headless benchmark harness for real-time shadow techniques\n"
             "\n"
             "usage:\n"
-            "  shadowbench run SCENE PATH SPEC...     render each technique spec along the path, write CSV\n"
+            "  shadowbench run SCENE PATH SPEC... [--resume DIR]   render each technique spec along the path,\n"
+            "                                         write CSV (--resume: keep DIR's complete runs, render the rest)\n"
             "  shadowbench batch FILE [--shard I/N] [--resume DIR] [--dry-run]   run a matrix from a batch file\n"
             "  shadowbench compare BASE NEW [--metric M,...] [--threshold PCT] [--format text|csv|markdown]\n"
             "                                         exit 1 when a metric regresses, 3 when none does but a\n"
@@ -316,7 +317,16 @@ static int cmd_run(const cli *c) {
         return 1;
     }
     char dir[4096], sum_path[4200];
-    if (!sb_make_stamped_dir(c->out, dir, sizeof dir, &err) || !sb_report_write_columns(dir, &err)) {
+    if (c->resume) { /* the folder of an earlier run of the same command: its complete runs are kept */
+        snprintf(dir, sizeof dir, "%s", c->resume);
+        if (access(dir, W_OK) != 0) {
+            fprintf(stderr, "shadowbench: --resume %s: no such results folder\n", c->resume);
+            sb_session_close(&s);
+            free(runs);
+            return 2;
+        }
+    }
+    if ((!c->resume && !sb_make_stamped_dir(c->out, dir, sizeof dir, &err)) || !sb_report_write_columns(dir, &err)) {
         fprintf(stderr, "shadowbench: %s\n", err.msg);
         sb_session_close(&s);
         free(runs);
@@ -336,15 +346,36 @@ static int cmd_run(const cli *c) {
     sb_summary sum;
     sb_summary_open(&sum, sum_path);
     const sb_run_spec **specs = sb_xmalloc(sizeof *specs * (size_t)nruns);
-    int *index = sb_xmalloc(sizeof *index * (size_t)nruns);
-    for (int i = 0; i < nruns; i++) specs[i] = &runs[i], index[i] = i;
-    sb_run_group(&s, specs, index, nruns, dir, &sum, 0, nruns);
+    int *index = sb_xmalloc(sizeof *index * (size_t)nruns), todo = 0;
+    bool *done = sb_xcalloc((size_t)nruns, 1);
+    if (c->resume) {
+        char (*idbuf)[17] = sb_xmalloc(sizeof *idbuf * (size_t)nruns);
+        const char **ids = sb_xmalloc(sizeof *ids * (size_t)nruns);
+        for (int i = 0; i < nruns; i++) sb_session_run_id(&s, &runs[i], idbuf[i]), ids[i] = idbuf[i];
+        int kept = sb_summary_keep_complete(&sum, dir, ids, nruns, done);
+        sb_log("resuming %s: %d run(s) complete, %d to do", dir, kept, nruns - kept);
+        free(ids);
+        free(idbuf);
+    }
+    for (int i = 0; i < nruns; i++)
+        if (!done[i]) specs[todo] = &runs[i], index[todo++] = i;
+    sb_run_group(&s, specs, index, todo, dir, &sum, 0, todo);
+    if (!sb_summary_flush(&sum, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
     free(specs);
     free(index);
+    free(done);
     printf("%s\n", dir);
-    sb_log("%d run(s): %d ok (%d unstable), %d failed, %d skipped; results in %s", sum.count,
-           sum.count - sum.failed - sum.skipped, sum.unstable, sum.failed, sum.skipped, dir);
+    char stopped[32] = "";
+    if (sum.interrupted) snprintf(stopped, sizeof stopped, ", %d interrupted", sum.interrupted);
+    sb_log("%d run(s): %d ok (%d unstable), %d failed, %d skipped%s; results in %s", sum.count,
+           sum.count - sum.failed - sum.skipped - sum.interrupted, sum.unstable, sum.failed, sum.skipped, stopped, dir);
     int rc = sum.failed ? 1 : 0;
+    if (sb_interrupted()) {
+        /* said even with --quiet: the user asked for the stop and needs the way back */
+        fprintf(stderr, "shadowbench: interrupted: the completed runs' rows are in %s/summary.csv; the rest: the same "
+                        "command with --resume %s\n", dir, dir);
+        rc = 128 + sb_interrupted();
+    }
     sb_summary_free(&sum);
     sb_session_close(&s);
     free(runs);
@@ -639,6 +670,7 @@ int main(int argc, char **argv) {
     cli c;
     memset(&c, 0, sizeof c);
     int rc = parse_cli(&c, argc, argv);
+    if (!rc && (!strcmp(argv[1], "run") || !strcmp(argv[1], "batch"))) sb_interrupt_install();
     if (!rc) rc = dispatch(&c, argv[1]);
     if (rc != 2 && sb_result_writes_failed()) {   /* a cron job must not read a lost row as success */
         fprintf(stderr, "shadowbench: results could not all be written (the files are named above): exit status %d\n",

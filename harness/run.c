@@ -1,6 +1,8 @@
 /* run.c - the timed frame loop: a run's passes, its evaluation and its rows. */
 #include "run.h"
 
+#include <signal.h>
+
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -67,6 +69,11 @@ static bool evaluate(sb_session *s, sb_instance *in, int seq, const char *out_di
     bool ok = true;
     for (int pf = 0; ok && pf < n; pf++) {
         if (!eval_frame_wanted(&s->opts, pf)) continue;
+        if (sb_interrupted()) {
+            sb_fail(err, "interrupted by %s in the evaluation", sb_interrupted() == SIGTERM ? "SIGTERM" : "SIGINT");
+            ok = false;
+            break;
+        }
         sb_frame f;
         sb_frame_rec *r = &recs[pf];
         ok = sb_eval_frame(s, in, pf, n, sb_instance_history(in), &seq, &b, &f, &r->err, err);
@@ -101,6 +108,7 @@ struct sb_run {
     sb_csv rows;
     sb_csv_file cf;
     bool failed, finished;
+    bool interrupted;           /* stopped by SIGINT/SIGTERM: its row says `interrupted` */
     double t_run;
     sb_err err;
 };
@@ -111,6 +119,16 @@ static bool fail_run(sb_run *r, const char *fmt, const char *what) {
     if (!r->failed) sb_fail(&r->err, fmt, copy);
     r->failed = true;
     return false;
+}
+
+/* The stop a signal asked for, at a frame boundary: the run ends `interrupted`. */
+static bool interrupt_run(sb_run *r, const char *where) {
+    if (!sb_interrupted() || r->failed) return false;
+    char what[160];
+    snprintf(what, sizeof what, "%s by %s %s", "interrupted", sb_interrupted() == SIGTERM ? "SIGTERM" : "SIGINT", where);
+    r->interrupted = true;
+    fail_run(r, "%s", what);
+    return true;
 }
 
 static bool ensure_instance(sb_run *r) {
@@ -164,6 +182,7 @@ static void warm_up(sb_run *r) {
     double t[SB_WARMUP_AUTO_CAP], mhz[SB_WARMUP_AUTO_CAP], busy = 0, t0 = sb_now_ms();
     int k = 0;
     for (; fixed >= 0 ? k < fixed : k < cap; k++) {
+        if (sb_interrupted()) break;
         t[k] = warm_frame(r, &wt, k);
         mhz[k] = sb_clocks_mhz(s->clocks);
         busy += t[k];
@@ -221,6 +240,14 @@ static bool measured_frames(sb_run *r, int rep, int index, int total) {
         sb_timer_frame_end(&r->timer);
         record_frame(r, i, j, &f, sb_now_ms() - w0);
         progress_line(s, index, total, r->spec->tech->name, j + 1, N, r->t_run);
+        char where[64];
+        snprintf(where, sizeof where, "after frame %d of %d", i + 1, r->capacity);
+        if (j + 1 < N && interrupt_run(r, where)) {
+            sb_timer_drain(&r->timer);
+            s->timed = false;
+            sb_ref_background_timed(s->ref_cache, false);
+            return false;
+        }
         if (o->run_timeout_s > 0 && sb_now_ms() - r->t_run > o->run_timeout_s * 1e3) {
             char what[128];
             snprintf(what, sizeof what, "the run took longer than %g s (frame %d of %d)", o->run_timeout_s, i + 1,
@@ -244,6 +271,7 @@ bool sb_run_pass(sb_run *r, int index, int total) {
     bool first = r->repeats == 0;
     if (!ensure_instance(r)) return false;
     if (first || !r->keep_instance) warm_up(r);
+    if (interrupt_run(r, "in the warm-up")) return false;
     if (first) r->calib_before = sb_calib_measure(&r->s->calib);
     bool ok = measured_frames(r, r->repeats, index, total);
     if (ok) r->repeats++;
@@ -321,8 +349,10 @@ static bool finish_run(sb_run *r) {
     if (r->failed) return false;
     if (o->error_every > 0 || o->images > 0) {
         if (!ensure_instance(r)) return false;
-        if (!evaluate(r->s, &r->in, r->seq, r->out_dir, r->run_id, r->recs, &r->err))
+        if (!evaluate(r->s, &r->in, r->seq, r->out_dir, r->run_id, r->recs, &r->err)) {
+            r->interrupted = sb_interrupted() != 0;
             return fail_run(r, "%s", r->err.msg);
+        }
     }
     for (; r->written < r->done; r->written++)
         sb_report_frame_row(&r->rows, &r->recs[r->written], &r->timer.times[r->written], r->spec->tech->stages);
@@ -386,8 +416,9 @@ bool sb_run_end(sb_run *r) {
     r->info.repeats = r->repeats;
     r->info.warmup = r->s->opts.warmup < 0 ? (r->repeats ? r->warmup_frames / r->repeats : 0) : r->s->opts.warmup;
     if (!ok) {
-        sb_log("run %s (%s): failed: %s", r->run_id, r->spec->tech->name, r->err.msg);
-        r->info.status = "failed";
+        sb_log("run %s (%s): %s: %s", r->run_id, r->spec->tech->name, r->interrupted ? "interrupted" : "failed",
+               r->err.msg);
+        r->info.status = r->interrupted ? "interrupted" : "failed";
         r->info.reason = r->err.msg;
     }
     bool measured = ok && r->info.status[0] == 'o';
@@ -434,6 +465,8 @@ static void run_rounds(sb_session *s, sb_run **runs, int n, int first, int total
         if (s->opts.order == SB_ORDER_SHUFFLE) shuffle(perm, n, rng);
         for (int k = 0; k < n; k++)
             if (sb_run_wants_more(runs[perm[k]])) sb_run_pass(runs[perm[k]], first + perm[k], total);
+        for (int k = 0; sb_interrupted() && k < n; k++)
+            if (sb_run_wants_more(runs[k])) interrupt_run(runs[k], "between repetitions");
     }
     free(perm);
 }
@@ -472,7 +505,7 @@ int sb_run_group(sb_session *s, const sb_run_spec *const *specs, const int *run_
     bool one_pass = o->repeat == 1 && o->target_ci <= 0;
     if (o->order == SB_ORDER_SHUFFLE && one_pass) shuffle(at, n, &rng);
     if (o->order == SB_ORDER_MATRIX || one_pass) {
-        for (int k = 0; k < n; k++) {
+        for (int k = 0; k < n && !sb_interrupted(); k++) {
             failed += !sb_run_one(s, specs[at[k]], out_dir, sum, run_index[at[k]], first + k, total);
             sb_err e;
             if (!sb_summary_flush(sum, &e)) fprintf(stderr, "shadowbench: %s\n", e.msg);

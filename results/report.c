@@ -255,7 +255,7 @@ const sb_run_col sb_run_cols[] = {
     {"warmup", r_int, I_WARMUP, 0, 0, "warm-up frames, excluded"},
     {"width", r_int, I_WIDTH, 0, 0, "render width"},
     {"height", r_int, I_HEIGHT, 0, 0, "render height"},
-    {"status", r_text, S_STATUS, 0, 0, "ok, failed or skipped"},
+    {"status", r_text, S_STATUS, 0, 0, "ok, failed, skipped or interrupted (SIGINT/SIGTERM; --resume redoes it)"},
     {"reason", r_text, S_REASON, 0, 0, "why a run failed or was skipped"},
     {"stable", r_text, S_STABLE, 0, 0, "yes, or no when the timings cannot be trusted (unstable_reason says why)"},
     {"unstable_reason", r_unstable, 0, 0, 0, "why stable is no: the calibration probe moved, or the frames drifted"},
@@ -517,6 +517,7 @@ void sb_summary_add_calib(sb_summary *sum, double calib_ms) {
 static void count_status(sb_summary *sum, const char *status) {
     sum->count++;
     sum->failed += !strcmp(status, "failed");
+    sum->interrupted += !strcmp(status, "interrupted");
     sum->skipped += !strcmp(status, "skipped");
 }
 

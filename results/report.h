@@ -143,7 +143,7 @@ double sb_report_gpu_ci_pct(const sb_stage_times *times, int n, int per_repeat);
 typedef struct sb_summary {
     char *path;
     sb_csv rows;
-    int count, failed, skipped, unstable;
+    int count, failed, skipped, unstable, interrupted;
     double timed_gpu_ms;        /* the measured frames' GPU time, summed over the runs added */
     uint64_t ref_rays;          /* reference rays the runs cast */
     int ref_reused;             /* evaluated frames whose reference was reused */

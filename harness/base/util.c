@@ -1,6 +1,8 @@
 #define _DEFAULT_SOURCE /* MAP_POPULATE */
 #include "util.h"
 
+#include <signal.h>
+
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
@@ -134,6 +136,32 @@ void *sb_map_file(const char *path, size_t *size, bool writable) {
 void sb_unmap_file(void *p, size_t size) {
     if (p) munmap(p, size);
 }
+
+static volatile sig_atomic_t g_interrupt;
+
+static void on_interrupt(int sig) {
+    if (g_interrupt) {   /* the second: at once, as the default action would */
+        signal(sig, SIG_DFL);
+        raise(sig);
+        return;
+    }
+    g_interrupt = sig;
+    static const char msg[] = "\nshadowbench: stopping after the frame in flight (again to stop at once)\n";
+    ssize_t w = write(2, msg, sizeof msg - 1);
+    (void)w;
+}
+
+void sb_interrupt_install(void) {
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_interrupt;
+    sa.sa_flags = SA_RESTART;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+}
+
+int sb_interrupted(void) { return g_interrupt; }
 
 static bool g_result_write_failed;
 

@@ -48,6 +48,13 @@ bool sb_write_cache_file_atomic(const char *path, const void *data, size_t size,
 /* A result (CSV, summary, meta, image, report page) could not be written
  * whole: the process then exits SB_EXIT_WRITE, whatever else it did. */
 #define SB_EXIT_WRITE 4
+
+/* SIGINT and SIGTERM: the first asks for an orderly stop (the frame in flight
+ * finishes, completed runs keep their rows, the interrupted run gets a row of
+ * status `interrupted`, the process exits 128 + the signal); a second one ends
+ * the process at once. sb_interrupted(): the signal asked for, or 0. */
+void sb_interrupt_install(void);
+int sb_interrupted(void);
 void sb_result_write_failed(void);
 bool sb_result_writes_failed(void);
 /* Copies a file, written atomically (sb_write_file_atomic). */

@@ -1,0 +1,145 @@
+#!/usr/bin/env python3
+"""Ctrl-C and SIGTERM during a batch: an orderly stop, then a resume.
+
+A small batch (three runs on towers, error evaluated) is stopped by SIGINT at
+a random moment, 12 times (the last two by SIGTERM), each time resumed into
+the same folder with `batch --resume`. After every stop:
+  - the exit status is 130 (SIGINT) or 143 (SIGTERM), or 0 when the signal
+    came after the batch's last frame;
+  - no temporary file is left and every per-frame CSV named in the summary is
+    whole (its header, one row a frame);
+  - the summary's rows are the completed runs, `ok`, plus at most one
+    `interrupted` run with its reason.
+At the end the resumed set's rows equal a batch that was never stopped
+(timings aside). A second SIGINT a moment after the first ends the process at
+once (within 2 s, by the signal). `run` stops the same way and `run
+--resume DIR` completes its folder.
+
+usage: interrupt.py SHADOWBENCH BUILD_ROOT
+"""
+import csv
+import glob
+import os
+import random
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+BIN, BUILD = sys.argv[1:3]
+WORK = os.path.join(BUILD, "test-interrupt")
+failures = []
+
+
+def check(cond, what):
+    print(("ok   " if cond else "FAIL ") + what, flush=True)
+    if not cond:
+        failures.append(what)
+
+
+def rows(dir_):
+    with open(os.path.join(dir_, "summary.csv")) as f:
+        return list(csv.DictReader(f))
+
+
+def whole(dir_):
+    """Problems with the folder's files: temporaries left, per-frame files not whole."""
+    bad = [os.path.basename(p) for p in glob.glob(os.path.join(dir_, "**", "*.tmp"), recursive=True)]
+    for r in rows(dir_) if os.path.exists(os.path.join(dir_, "summary.csv")) else []:
+        if r["status"] != "ok":
+            continue
+        p = os.path.join(dir_, r["run_id"] + ".csv")
+        if not os.path.exists(p):
+            bad.append(r["run_id"] + ".csv missing")
+            continue
+        with open(p) as f:
+            lines = f.read().splitlines()
+        if len(lines) != 1 + int(r["frames"]) * int(r["repeats"] or 1):
+            bad.append("%s.csv has %d lines" % (r["run_id"], len(lines)))
+    return bad
+
+
+def main():
+    shutil.rmtree(WORK, ignore_errors=True)
+    os.makedirs(WORK)
+    bench = os.path.join(WORK, "small.bench")
+    with open(bench, "w") as f:
+        f.write("scene towers towers\npath towers towers\n"
+                "defaults --frames 16 --warmup 1 --error-every 8 --size 320x180\nsm\npssm\nsdsm\n")
+    t0 = time.time()
+    clean = subprocess.run([BIN, "batch", bench, "--out", os.path.join(WORK, "clean"), "--quiet"],
+                           capture_output=True, text=True, check=True).stdout.strip().splitlines()[-1]
+    whole_s = time.time() - t0
+    print("the whole batch: %.1f s" % whole_s)
+    rng = random.Random(28)
+    out = os.path.join(WORK, "stopped")
+    dir_ = None
+    stops = 0
+    for k in range(12):
+        sig = signal.SIGTERM if k >= 10 else signal.SIGINT
+        cmd = [BIN, "batch", bench, "--quiet"] + (["--resume", dir_] if dir_ else ["--out", out])
+        p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        time.sleep(rng.uniform(0.05, whole_s * 0.5))
+        p.send_signal(sig)
+        so, se = p.communicate(timeout=120)
+        if dir_ is None:
+            dir_ = so.strip().splitlines()[-1] if so.strip() else sorted(glob.glob(os.path.join(out, "*", "*")))[-1]
+        want = 128 + sig
+        got = p.returncode
+        st = [r["status"] for r in rows(dir_)] if os.path.exists(os.path.join(dir_, "summary.csv")) else []
+        stops += got == want
+        check(got in (want, 0), "try %2d: %s -> exit %d (%s), rows %s" % (k + 1, sig.name, got,
+                                                                         "stopped" if got == want else "had ended", st))
+        check(not whole(dir_), "try %2d: whole files, no temporary left %s" % (k + 1, whole(dir_)))
+        check(all(s in ("ok", "interrupted") for s in st) and st.count("interrupted") <= 1,
+              "try %2d: completed runs ok, at most one interrupted" % (k + 1))
+        if got == want:
+            check("--resume" in se, "try %2d: says how to resume" % (k + 1))
+    check(stops >= 6, "the signal stopped the batch in %d of 12 tries (>= 6)" % stops)
+    p = subprocess.run([BIN, "batch", bench, "--resume", dir_, "--quiet"], capture_output=True, text=True)
+    check(p.returncode == 0, "the last resume completes the set (exit %d)" % p.returncode)
+    a = {r["run_id"]: r for r in rows(clean)}
+    b = {r["run_id"]: r for r in rows(dir_)}
+    check(sorted(a) == sorted(b), "the resumed set has the clean set's runs (%d, %d)" % (len(a), len(b)))
+    same = ["technique", "params", "status", "frames", "draw_calls_mean", "err_rate_mean", "texel_px_p95_mean"]
+    diff = [(i, c) for i in a if i in b for c in same if a[i][c] != b[i][c]]
+    check(not diff, "the resumed rows equal the clean rows, timings aside %s" % diff[:4])
+
+    # `run` stops and resumes the same way
+    cmd = [BIN, "run", "towers", "towers", "sm", "pssm", "sdsm", "--frames", "16", "--warmup", "1", "--error-every", "8",
+           "--size", "320x180", "--quiet"]
+    p = subprocess.Popen(cmd + ["--out", os.path.join(WORK, "run")], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True)
+    time.sleep(whole_s * 0.5)
+    p.send_signal(signal.SIGINT)
+    so, se = p.communicate(timeout=120)
+    run_dir = so.strip().splitlines()[-1]
+    st = [r["status"] for r in rows(run_dir)]
+    check(p.returncode == 130 and "--resume" in se and not whole(run_dir),
+          "run: SIGINT -> exit %d, rows %s, whole files, says how to resume" % (p.returncode, st))
+    p = subprocess.run(cmd + ["--resume", run_dir], capture_output=True, text=True)
+    c = {r["technique"]: r for r in rows(run_dir)}
+    diff = [(r["technique"], k) for r in rows(clean) for k in same if c.get(r["technique"], {}).get(k) != r[k]]
+    check(p.returncode == 0 and len(c) == 3 and not diff,
+          "run --resume completes it (exit %d), rows equal the clean batch's, timings aside %s" % (p.returncode, diff[:4]))
+
+    # a second SIGINT: at once
+    p = subprocess.Popen([BIN, "batch", bench, "--out", os.path.join(WORK, "twice"), "--quiet"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(whole_s * 0.3)
+    p.send_signal(signal.SIGINT)
+    time.sleep(0.05)
+    t1 = time.time()
+    p.send_signal(signal.SIGINT)
+    p.communicate(timeout=60)
+    dt = time.time() - t1
+    check(p.returncode == -signal.SIGINT and dt < 2,
+          "a second SIGINT ends it at once (%.2f s, status %d)" % (dt, p.returncode))
+    if failures:
+        print("%d check(s) failed" % len(failures))
+        sys.exit(1)
+
+
+if __name__ == "__main__":
+    main()
