@@ -750,10 +750,10 @@ static void test_gpu_memory_refused(void **st) {
 }
 
 /* Results into a full filesystem (a 40 KiB tmpfs, mounted in a user
- * namespace): the batch exits 4, naming a file and the OS error; nothing
- * half-written is left under a final name; after the filesystem grows,
- * batch --resume completes the set, and its rows are those of a batch that
- * never failed (timings aside). */
+ * namespace): a batch, then a run, exit 4, naming a file and the OS error;
+ * nothing half-written is left under a final name; after the filesystem
+ * grows, batch --resume and run --resume complete the set, and its rows are
+ * those of a batch that never failed (timings aside). */
 static void test_full_disk(void **st) {
     (void)st;
     if (sh("unshare -rm sh -c 'mount -t tmpfs -o size=40k tmpfs %s && echo mounted'", g_tmp) != 0 ||
@@ -801,6 +801,31 @@ static void test_full_disk(void **st) {
             assert_true(rb >= 0);
             assert_string_equal(sb_table_get(&a, r, same[k]), sb_table_get(&b, rb, same[k]));
         }
+    sb_table_free(&a);
+    sb_table_free(&b);
+
+    /* a run the same way: exit 4 into the tiny one, then run --resume with room completes it */
+    rc = sh("unshare -rm sh -c 'D=%s/rdisk; mkdir -p $D && mount -t tmpfs -o size=40k tmpfs $D && "
+            "%s run towers towers sm pssm sdsm --frames 40 --warmup 0 --error-every 10 --size 320x180 --out $D --quiet "
+            "> %s/rdir.txt; echo first=$?; mount -o remount,size=64m $D && %s run towers towers sm pssm sdsm --frames 40 "
+            "--warmup 0 --error-every 10 --size 320x180 --quiet --resume $(tail -n 1 %s/rdir.txt); echo second=$?; "
+            "find $D -name \"*.tmp\" | sed s/^/LEFT-BEHIND:/; cp $(tail -n 1 %s/rdir.txt)/summary.csv %s/rresumed.csv'",
+            g_tmp, test_binary(), g_tmp, test_binary(), g_tmp, g_tmp, g_tmp);
+    print_message("%s\n", g_out);
+    assert_int_equal(rc, 0);
+    assert_non_null(strstr(g_out, "first=4"));
+    assert_non_null(strstr(g_out, "No space left on device"));
+    assert_non_null(strstr(g_out, "second=0"));
+    assert_null(strstr(g_out, "LEFT-BEHIND:"));
+    snprintf(resumed, sizeof resumed, "%s/rresumed.csv", g_tmp);
+    summary_table(clean, &a);
+    assert_true(sb_table_load(&b, resumed, &err));
+    assert_int_equal(b.nrows, a.nrows);
+    for (int r = 0; r < a.nrows; r++)
+        for (int j = 0; j < b.nrows; j++)
+            if (!strcmp(sb_table_get(&a, r, "technique"), sb_table_get(&b, j, "technique")))
+                for (size_t k = 1; k < sizeof same / sizeof same[0]; k++)
+                    assert_string_equal(sb_table_get(&a, r, same[k]), sb_table_get(&b, j, same[k]));
     sb_table_free(&a);
     sb_table_free(&b);
 }
