@@ -493,17 +493,9 @@ int sb_batch_main(const sb_batch_cmd *cmd) {
            "frame(s) in the background), %d evaluated frame(s) reused",
            wall_s > 0 ? 100.0 * sum.timed_gpu_ms / 1e3 / wall_s : 0.0, sum.timed_gpu_ms / 1e3, wall_s,
            (unsigned long long)sum.ref_rays, sum.ref_background, sum.ref_reused);
-    char stopped[32] = "";
-    if (sum.interrupted) snprintf(stopped, sizeof stopped, ", %d interrupted", sum.interrupted);
-    sb_log("%d run(s): %d ok (%d unstable), %d failed, %d skipped%s; results in %s", sum.count,
-           sum.count - sum.failed - sum.skipped - sum.interrupted, sum.unstable, sum.failed, sum.skipped, stopped, dir);
-    rc = sum.failed ? 1 : 0;
-    if (sb_interrupted()) {
-        /* said even with --quiet: the user asked for the stop and needs the way back */
-        fprintf(stderr, "shadowbench: interrupted: the completed runs' rows are in %s/summary.csv; the rest: "
-                        "shadowbench batch %s --resume %s\n", dir, cmd->file, dir);
-        rc = 128 + sb_interrupted();
-    }
+    char again[4200];
+    snprintf(again, sizeof again, "shadowbench batch %s", cmd->file);
+    rc = sb_summary_conclude(&sum, dir, again);
     sb_summary_free(&sum);
     sb_clocks_close(s.clocks);
     sb_context_destroy(&s.ctx);

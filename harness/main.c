@@ -365,17 +365,7 @@ static int cmd_run(const cli *c) {
     free(index);
     free(done);
     printf("%s\n", dir);
-    char stopped[32] = "";
-    if (sum.interrupted) snprintf(stopped, sizeof stopped, ", %d interrupted", sum.interrupted);
-    sb_log("%d run(s): %d ok (%d unstable), %d failed, %d skipped%s; results in %s", sum.count,
-           sum.count - sum.failed - sum.skipped - sum.interrupted, sum.unstable, sum.failed, sum.skipped, stopped, dir);
-    int rc = sum.failed ? 1 : 0;
-    if (sb_interrupted()) {
-        /* said even with --quiet: the user asked for the stop and needs the way back */
-        fprintf(stderr, "shadowbench: interrupted: the completed runs' rows are in %s/summary.csv; the rest: the same "
-                        "command with --resume %s\n", dir, dir);
-        rc = 128 + sb_interrupted();
-    }
+    int rc = sb_summary_conclude(&sum, dir, "the same command with");
     sb_summary_free(&sum);
     sb_session_close(&s);
     free(runs);

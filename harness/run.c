@@ -1,8 +1,6 @@
 /* run.c - the timed frame loop: a run's passes, its evaluation and its rows. */
 #include "run.h"
 
-#include <signal.h>
-
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -70,7 +68,7 @@ static bool evaluate(sb_session *s, sb_instance *in, int seq, const char *out_di
     for (int pf = 0; ok && pf < n; pf++) {
         if (!eval_frame_wanted(&s->opts, pf)) continue;
         if (sb_interrupted()) {
-            sb_fail(err, "interrupted by %s in the evaluation", sb_interrupted() == SIGTERM ? "SIGTERM" : "SIGINT");
+            sb_fail(err, "interrupted by %s in the evaluation", sb_interrupt_name());
             ok = false;
             break;
         }
@@ -125,7 +123,7 @@ static bool fail_run(sb_run *r, const char *fmt, const char *what) {
 static bool interrupt_run(sb_run *r, const char *where) {
     if (!sb_interrupted() || r->failed) return false;
     char what[160];
-    snprintf(what, sizeof what, "%s by %s %s", "interrupted", sb_interrupted() == SIGTERM ? "SIGTERM" : "SIGINT", where);
+    snprintf(what, sizeof what, "interrupted by %s %s", sb_interrupt_name(), where);
     r->interrupted = true;
     fail_run(r, "%s", what);
     return true;
@@ -490,6 +488,19 @@ static void stop_background(sb_session *s) {
         sb_log("reference background: %d frame(s) queued, %d cast (%llu rays, %.0f ms, %.0f ms of it while timed frames "
                "rendered), %d taken back by the evaluation, %d dropped",
                st.queued, st.frames, (unsigned long long)st.rays, st.ms, st.timed_ms, st.taken_back, st.dropped);
+}
+
+int sb_summary_conclude(const sb_summary *sum, const char *dir, const char *resume_command) {
+    char stopped[32] = "";
+    if (sum->interrupted) snprintf(stopped, sizeof stopped, ", %d interrupted", sum->interrupted);
+    sb_log("%d run(s): %d ok (%d unstable), %d failed, %d skipped%s; results in %s", sum->count,
+           sum->count - sum->failed - sum->skipped - sum->interrupted, sum->unstable, sum->failed, sum->skipped, stopped,
+           dir);
+    if (!sb_interrupted()) return sum->failed ? 1 : 0;
+    /* said even with --quiet: the user asked for the stop and needs the way back */
+    fprintf(stderr, "shadowbench: interrupted: the completed runs' rows are in %s/summary.csv; the rest: %s --resume %s\n",
+            dir, resume_command, dir);
+    return 128 + sb_interrupted();
 }
 
 int sb_run_group(sb_session *s, const sb_run_spec *const *specs, const int *run_index, int n, const char *out_dir,

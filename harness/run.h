@@ -28,6 +28,11 @@ bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_
  * `total`. Returns the number of runs that failed. */
 int sb_run_group(sb_session *s, const sb_run_spec *const *specs, const int *run_index, int n, const char *out_dir,
                  sb_summary *sum, int first, int total);
+/* Says what a run or batch command's summary holds (counts and folder) and,
+ * after a SIGINT/SIGTERM, where the completed rows are and how to resume
+ * (even with --quiet); returns the command's exit status: 128 + the signal
+ * when interrupted, 1 when a run failed, else 0. */
+int sb_summary_conclude(const sb_summary *sum, const char *dir, const char *resume_command);
 /* run_id: hash of scene and path contents, technique, canonical parameters,
  * frames, size, backend (and --sun when given). */
 void sb_run_id(uint64_t scene_hash, uint64_t path_hash, const sb_run_opts *o, const sb_run_spec *spec, char out[17]);

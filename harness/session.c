@@ -243,13 +243,8 @@ void sb_session_close_scene(sb_session *s) {
     if (s->ref_cache) sb_ref_background_stop(s->ref_cache); /* before the reference it casts with goes */
     if (sb_ref_cache_dirty(s->ref_cache) && ref_store_file(s, file, sizeof file, &tag)) {
         sb_err e;
-        static bool said;   /* a cache: warned once a process (the save itself warns once when a write fails) */
-        if (!sb_mkdir_p(s->ref_store, &e)) {
-            if (!said) sb_log("warning: the reference's answers are not kept for later runs (%s); said once", e.msg);
-            said = true;
-        } else {
-            sb_ref_cache_save(s->ref_cache, file, tag, &e);
-        }
+        if (!sb_mkdir_p(s->ref_store, &e)) sb_cache_unkept("the reference's answers", e.msg);
+        else sb_ref_cache_save(s->ref_cache, file, tag, &e);   /* a cache: its save warns (once) itself */
     }
     for (int i = 0; s->tech_loaded && i < sb_technique_count(); i++)
         if (s->tech_loaded[i] && sb_technique_at(i)->unload) sb_technique_at(i)->unload(s->tech_data[i]);

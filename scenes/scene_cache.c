@@ -201,9 +201,7 @@ void sb_scene_cache_put(uint64_t key, sb_scene_cache_write write, const void *us
     memcpy(b.p, &h, sizeof h);
     sb_err e;
     if (!sb_mkdir_p(dir, &e)) {
-        static bool said;
-        if (!said) sb_log("warning: the scene cache is not kept (%s); going on without it (said once)", e.msg);
-        said = true;
+        sb_cache_unkept("the scene cache", e.msg);
     } else if (sb_write_cache_file_atomic(ep, b.p, b.n, "the scene cache")) {
         trim(dir);
     }

@@ -23,19 +23,8 @@ bool sb_csm_check(const sb_csm_desc *d, const char *name, sb_err *err) {
     return true;
 }
 
-bool sb_csm_supported(const sb_context *ctx, const sb_csm_desc *d, const char *name, sb_err *why) {
-    if (!sb_layered_supported(ctx, d->layered, name, why)) return false;
-    GLint max_size = 0, max_layers = 0;
-    glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
-    glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &max_layers);
-    if (d->res > max_size) return sb_fail(why, "%s:res=%d exceeds GL_MAX_TEXTURE_SIZE %d of %s", name, d->res, max_size,
-                                          ctx->renderer);
-    if (d->cascades > max_layers)
-        return sb_fail(why, "%s: %d maps exceed GL_MAX_ARRAY_TEXTURE_LAYERS %d", name, d->cascades, max_layers);
-    return true;
-}
-
-bool sb_csm_memory_fits(const sb_gpu *g, const sb_csm_desc *d, const char *name, sb_err *why) {
+/* Whether the maps (and moments, and their blur copy) fit in the GPU memory the context has. */
+static bool maps_fit(const sb_gpu *g, const sb_csm_desc *d, const char *name, sb_err *why) {
     static const int depth_bytes[] = {2, 4, 4};                 /* 16, 24 (stored in 32 bits), 32f */
     static const int moment_channels[] = {0, 2, 1, 4};          /* depth, vsm, esm, msm (create_maps) */
     double texels = (double)d->res * d->res * (d->cascades < 1 ? 1 : d->cascades);
@@ -44,6 +33,19 @@ bool sb_csm_memory_fits(const sb_gpu *g, const sb_csm_desc *d, const char *name,
     if (d->cascades > 1) snprintf(who, sizeof who, "%s:res=%d:cascades=%d", name, d->res, d->cascades);
     else snprintf(who, sizeof who, "%s:res=%d", name, d->res);
     return sb_gpu_memory_fits(g, bytes, who, "shadow maps", why);
+}
+
+bool sb_csm_supported(const sb_gpu *g, const sb_csm_desc *d, const char *name, sb_err *why) {
+    const sb_context *ctx = g->ctx;
+    if (!sb_layered_supported(ctx, d->layered, name, why)) return false;
+    GLint max_size = 0, max_layers = 0;
+    glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
+    glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &max_layers);
+    if (d->res > max_size) return sb_fail(why, "%s:res=%d exceeds GL_MAX_TEXTURE_SIZE %d of %s", name, d->res, max_size,
+                                          ctx->renderer);
+    if (d->cascades > max_layers)
+        return sb_fail(why, "%s: %d maps exceed GL_MAX_ARRAY_TEXTURE_LAYERS %d", name, d->cascades, max_layers);
+    return maps_fit(g, d, name, why);
 }
 
 /* A moments map's texel format, for GL and for the blur's image (by
@@ -327,9 +329,8 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
     for (int k = 0; k < c->count; k++) rendered += c->active[k];
     f->counters.cascades_rendered = rendered;
     f->counters.cascades_skipped = c->count - rendered;
-    bool split = c->pass[1].prog_cascade != 0;
     /* opaque casters first, with the variant without the alpha test; then the alpha-tested ones */
-    for (int a = 0; a < (split ? 2 : 1); a++) {
+    for (int a = 0; a < 2 && c->pass[a].prog_cascade; a++) {
         const sb_csm_pass *p = &c->pass[a];
         if (d->layered == SB_LAYERED_OFF) {
             glUseProgram(p->prog_cascade);
@@ -339,7 +340,7 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
                 glBindFramebuffer(GL_FRAMEBUFFER, c->fbo_layer[k]);
                 glUniform1i(p->u_cascade, k);
                 for (uint32_t d = 0; d < s->draw_count; d++)
-                    if ((c->mask[d] & (1u << k)) && (!split || sb_draw_alpha_tested(g, d) == a)) sb_submit(f, d, 1);
+                    if ((c->mask[d] & (1u << k)) && sb_draw_variant(g, d) == a) sb_submit(f, d, 1);
             }
         } else {
             bool gs = d->layered == SB_LAYERED_GS;
@@ -347,7 +348,7 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
             if (p->e_layered >= 0) glUniform1f(p->e_layered, (float)d->exponent);
             for (uint32_t d = 0; d < s->draw_count; d++) {
                 unsigned m = c->mask[d];
-                if (!m || (split && sb_draw_alpha_tested(g, d) != a)) continue;
+                if (!m || sb_draw_variant(g, d) != a) continue;
                 glUniform1ui(p->u_mask, m);
                 sb_submit(f, d, gs ? 1 : popcount8(m));
             }
@@ -427,8 +428,7 @@ void sb_csm_view_splits(const void *desc, const sb_frame *f, int count, double *
 bool sb_csm_technique_check(const void *desc, sb_err *err) { return sb_csm_check(desc, "", err); }
 
 bool sb_csm_technique_supported(const sb_run_ctx *rc, const void *desc, sb_err *why) {
-    return sb_csm_supported(rc->gpu->ctx, desc, rc->tech->name, why) &&
-           sb_csm_memory_fits(rc->gpu, desc, rc->tech->name, why);
+    return sb_csm_supported(rc->gpu, desc, rc->tech->name, why);
 }
 
 bool sb_csm_technique_create(void *state, const sb_run_ctx *rc, const void *desc, sb_err *err) {

@@ -110,10 +110,9 @@ typedef struct sb_csm {
 
 /* Parameter combinations that cannot work (no GL): stable with a warp. */
 bool sb_csm_check(const sb_csm_desc *d, const char *name, sb_err *err);
-/* What the context must offer: the resolution, and gl_Layer from the vertex shader for layered=vs. */
-bool sb_csm_supported(const sb_context *ctx, const sb_csm_desc *d, const char *name, sb_err *why);
-/* Whether the maps (and moments) fit in the GPU memory the context has (sb_gpu_memory_fits). */
-bool sb_csm_memory_fits(const sb_gpu *g, const sb_csm_desc *d, const char *name, sb_err *why);
+/* What the context must offer: the resolution, gl_Layer from the vertex shader
+ * for layered=vs, and the memory for the maps and moments (sb_gpu_memory_fits). */
+bool sb_csm_supported(const sb_gpu *g, const sb_csm_desc *d, const char *name, sb_err *why);
 bool sb_csm_create(sb_csm *c, const sb_gpu *g, const sb_csm_desc *d, const char *name, sb_err *err);
 void sb_csm_destroy(sb_csm *c);
 /* CPU fits: cascade k covers view depth [splits[k], splits[k+1]]; a slice

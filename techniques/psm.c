@@ -58,7 +58,7 @@ static sb_csm_desc maps_of(const psm_desc *d) {
 
 static bool psm_supported(const sb_run_ctx *rc, const void *desc, sb_err *why) {
     sb_csm_desc m = maps_of(desc);
-    return sb_csm_supported(rc->gpu->ctx, &m, "psm", why) && sb_csm_memory_fits(rc->gpu, &m, "psm", why);
+    return sb_csm_supported(rc->gpu, &m, "psm", why);
 }
 
 static bool psm_create(void *state, const sb_run_ctx *rc, const void *desc, sb_err *err) {

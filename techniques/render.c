@@ -11,7 +11,7 @@ const char *sb_opaque_define(const sb_gpu *g) {
     return g->scene->alpha_tested_draws ? "#define SB_NO_ALPHA\n" : "";
 }
 
-bool sb_draw_alpha_tested(const sb_gpu *g, uint32_t d) { return g->scene->draws[d].material != 0; }
+int sb_draw_variant(const sb_gpu *g, uint32_t d) { return g->scene->draws[d].material != 0; }
 
 /* Links variant i of the camera pass (2 * eval + alpha). */
 static bool final_variant(sb_final_prog *fp, int i, const sb_gpu *g, const char *label, const char *defines,
@@ -410,7 +410,7 @@ void sb_zpass(sb_frame *f) {
         glUseProgram(g->zpass_prog[a]);
         sb_set_camera_uniforms(f, g->zpass_u_view[a], g->zpass_u_proj[a]);
         for (uint32_t i = 0; i < n; i++)
-            if (!g->zpass_prog[1] || sb_draw_alpha_tested(g, f->scratch[i]) == a) camera_submit(f, f->scratch[i], &culling);
+            if (sb_draw_variant(g, f->scratch[i]) == a) camera_submit(f, f->scratch[i], &culling);
     }
     glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
     glDisable(GL_CULL_FACE);
@@ -454,12 +454,12 @@ static void draw_scene(sb_frame *f, const sb_final_prog *fp, GLenum depth_func, 
     final_targets(f, depth_func, depth_write);
     glBindVertexArray(g->vao);
     uint32_t n = sb_scene_collect(g->scene, (const double(*)[4])f->frustum, 6, f->scratch);
-    bool split = fp->v[1].prog != 0, culling = true;
+    bool culling = true;
     /* opaque draws first, with the variant without the alpha test; then the alpha-tested ones */
-    for (int a = 0; a < (split ? 2 : 1); a++) {
+    for (int a = 0; a < 2 && fp->v[a].prog; a++) {
         const sb_final_variant *v = &fp->v[2 * f->eval + a];
         uint32_t count = 0;
-        for (uint32_t i = 0; i < n; i++) count += !split || sb_draw_alpha_tested(g, f->scratch[i]) == a;
+        for (uint32_t i = 0; i < n; i++) count += sb_draw_variant(g, f->scratch[i]) == a;
         if (!count) continue;
         /* the technique set its uniforms on v[0] */
         if (v != &fp->v[0]) sb_gl_links_copy(&v->from_timed, fp->prog, v->prog);
@@ -469,7 +469,7 @@ static void draw_scene(sb_frame *f, const sb_final_prog *fp, GLenum depth_func, 
                     (float)f->shade_light[3]);
         for (uint32_t i = 0; i < n; i++) {
             uint32_t d = f->scratch[i];
-            if (split && sb_draw_alpha_tested(g, d) != a) continue;
+            if (sb_draw_variant(g, d) != a) continue;
             if (v->u_color >= 0) glUniform4fv(v->u_color, 1, g->scene->draws[d].color);
             camera_submit(f, d, &culling);
         }

@@ -96,10 +96,11 @@ bool sb_final_prog_create(sb_final_prog *fp, const sb_gpu *g, const char *label,
 bool sb_final_prog_create_parts(sb_final_prog *fp, const sb_gpu *g, const char *label, const char *const *vis_parts,
                                 int nvis, const char *defines, sb_err *err);
 /* The defines of a scene pass's variant without the alpha test ("" when the
- * scene has no alpha-tested draw: its one variant is that), and whether draw
- * d needs the variant with it. */
+ * scene has no alpha-tested draw: its one variant is that), and the variant
+ * draw d is drawn with: 1 (with the test) for an alpha-tested draw, else 0.
+ * A pass draws variant 0's draws first, then variant 1's. */
 const char *sb_opaque_define(const sb_gpu *g);
-bool sb_draw_alpha_tested(const sb_gpu *g, uint32_t d);
+int sb_draw_variant(const sb_gpu *g, uint32_t d);
 void sb_final_prog_free(sb_final_prog *fp);
 
 /* Sets the frame's camera, matrices and planes, counters to zero and the shaded light to the sun. */

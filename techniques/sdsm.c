@@ -118,7 +118,7 @@ static bool sdsm_check(const void *desc, sb_err *err) {
 }
 
 static bool sdsm_supported(const sb_run_ctx *rc, const void *desc, sb_err *why) {
-    return sb_csm_supported(rc->gpu->ctx, desc, "sdsm", why) && sb_csm_memory_fits(rc->gpu, desc, "sdsm", why);
+    return sb_csm_supported(rc->gpu, desc, "sdsm", why);
 }
 
 static bool sdsm_create(void *state, const sb_run_ctx *rc, const void *desc, sb_err *err) {

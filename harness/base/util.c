@@ -163,6 +163,8 @@ void sb_interrupt_install(void) {
 
 int sb_interrupted(void) { return g_interrupt; }
 
+const char *sb_interrupt_name(void) { return g_interrupt == SIGTERM ? "SIGTERM" : "SIGINT"; }
+
 static bool g_result_write_failed;
 
 void sb_result_write_failed(void) { g_result_write_failed = true; }
@@ -217,12 +219,16 @@ bool sb_write_file_atomic(const char *path, const void *data, size_t size, sb_er
     return false;
 }
 
+void sb_cache_unkept(const char *what, const char *why) {
+    static bool said;
+    if (!said) sb_log("warning: %s not kept (%s); going on without it (said once)", what, why);
+    said = true;
+}
+
 bool sb_write_cache_file_atomic(const char *path, const void *data, size_t size, const char *what) {
     sb_err e;
     if (write_atomic(path, data, size, &e)) return true;
-    static bool said;
-    if (!said) sb_log("warning: %s not kept (%s); going on without it (said once)", what, e.msg);
-    said = true;
+    sb_cache_unkept(what, e.msg);
     return false;
 }
 

@@ -45,6 +45,8 @@ bool sb_write_file_atomic(const char *path, const void *data, size_t size, sb_er
 /* The same for a cache (the scene cache, kept reference answers), which a run
  * can do without: a failure is a warning, said once a process, not a mark. */
 bool sb_write_cache_file_atomic(const char *path, const void *data, size_t size, const char *what);
+/* A cache that cannot be kept (its folder, its file): the one warning a process. */
+void sb_cache_unkept(const char *what, const char *why);
 /* A result (CSV, summary, meta, image, report page) could not be written
  * whole: the process then exits SB_EXIT_WRITE, whatever else it did. */
 #define SB_EXIT_WRITE 4
@@ -55,6 +57,8 @@ bool sb_write_cache_file_atomic(const char *path, const void *data, size_t size,
  * the process at once. sb_interrupted(): the signal asked for, or 0. */
 void sb_interrupt_install(void);
 int sb_interrupted(void);
+/* "SIGINT" or "SIGTERM": the signal sb_interrupted() reports. */
+const char *sb_interrupt_name(void);
 void sb_result_write_failed(void);
 bool sb_result_writes_failed(void);
 /* Copies a file, written atomically (sb_write_file_atomic). */
