@@ -36,8 +36,23 @@ int run_capture(const char *cmd, char *out, size_t len) {
     snprintf(full, sizeof full, "%s 2>&1", cmd);
     FILE *p = popen(full, "r");
     if (!p) return -1;
-    size_t n = fread(out, 1, len - 1, p);
+    /* read to the end: a child whose output outgrew the buffer would otherwise block on the full pipe
+       while pclose waits for it, for ever. Past len - 1 bytes the tail is kept (the results folder is
+       the last line) and the start marked as cut. */
+    size_t n = 0, cut = 0;
+    char chunk[4096];
+    for (size_t got; (got = fread(chunk, 1, sizeof chunk, p)) > 0;) {
+        if (n + got > len - 1) {
+            size_t drop = n + got - (len - 1) < n ? n + got - (len - 1) : n;
+            memmove(out, out + drop, n - drop);
+            n -= drop, cut += drop;
+        }
+        size_t keep = got > len - 1 ? len - 1 : got;
+        memcpy(out + n, chunk + got - keep, keep);
+        n += keep, cut += got - keep;
+    }
     out[n] = 0;
+    if (cut) printf("(the command's output was %zu bytes longer than the test keeps: its first bytes are cut)\n", cut);
     int st = pclose(p);
     return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
@@ -57,8 +72,12 @@ int run_logged(char *out, size_t len, const char *fmt, ...) {
     va_start(ap, fmt);
     vsnprintf(cmd, sizeof cmd, fmt, ap);
     va_end(ap);
+    /* the command first, so that a test killed by its time limit shows what it was waiting for */
+    printf("$ %s\n", cmd);
+    fflush(stdout);
+    double t0 = sb_now_ms();
     int rc = run_capture(cmd, out, len);
-    printf("$ %s -> %d\n%.2000s", cmd, rc, out);
+    printf("-> %d (%.1f s)\n%.2000s", rc, (sb_now_ms() - t0) / 1e3, out);
     fflush(stdout);
     return rc;
 }

@@ -1,4 +1,5 @@
-/* Small shared helpers: allocation that cannot return NULL. */
+/* Small shared helpers: allocation that cannot return NULL; the tests' own
+ * command runner, which must not hang on a command that prints a lot. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -10,6 +11,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "support.h"
 #include "util.h"
 
 /* Runs fn in a child with stderr in a pipe; returns its exit status and output. */
@@ -54,7 +56,28 @@ static void test_out_of_memory_is_one_line_and_exit_1(void **st) {
     free(p);
 }
 
+/* A command whose output is larger than the buffer and the pipe together: read to the end (a
+ * runner that stopped reading would wait on the child for ever), its exit status kept, and the
+ * tail kept, where a results folder is printed. */
+static void test_run_capture_reads_everything(void **st) {
+    (void)st;
+    static char out[65536];
+    int rc = run_capture("head -c 300000 /dev/zero | tr '\\0' x; echo; echo the-last-line; exit 3", out, sizeof out);
+    assert_int_equal(rc, 3);
+    assert_int_equal(strlen(out), sizeof out - 1);
+    size_t n = strlen(out);
+    assert_string_equal(out + n - strlen("\nthe-last-line\n"), "\nthe-last-line\n");
+    char small[64];
+    assert_int_equal(run_capture("echo short", small, sizeof small), 0);
+    assert_string_equal(small, "short\n");
+    /* a buffer smaller than one read */
+    assert_int_equal(run_capture("seq 1 5000", small, sizeof small), 0);
+    assert_int_equal(strlen(small), sizeof small - 1);
+    assert_string_equal(small + strlen(small) - 5, "5000\n");
+}
+
 int main(void) {
-    const struct CMUnitTest tests[] = {cmocka_unit_test(test_out_of_memory_is_one_line_and_exit_1)};
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_out_of_memory_is_one_line_and_exit_1),
+                                       cmocka_unit_test(test_run_capture_reads_everything)};
     return cmocka_run_group_tests_name("util", tests, NULL, NULL);
 }
