@@ -660,7 +660,8 @@ int main(int argc, char **argv) {
     cli c;
     memset(&c, 0, sizeof c);
     int rc = parse_cli(&c, argc, argv);
-    if (!rc && (!strcmp(argv[1], "run") || !strcmp(argv[1], "batch"))) sb_interrupt_install();
+    if (!rc && (!strcmp(argv[1], "run") || !strcmp(argv[1], "batch") || !strcmp(argv[1], "tune")))
+        sb_interrupt_install();
     if (!rc) rc = dispatch(&c, argv[1]);
     if (rc != 2 && sb_result_writes_failed()) {   /* a cron job must not read a lost row as success */
         fprintf(stderr, "shadowbench: results could not all be written (the files are named above): exit status %d\n",

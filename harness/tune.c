@@ -229,6 +229,7 @@ static void read_rung(tune *t, int rung, const char *sum_path) {
             cand *c = &t->c[i];
             if (strcmp(c->run_id[rung], id)) continue;
             const char *st = sb_table_get(&tb, r, "status");
+            if (!strcmp(st, "interrupted")) continue;   /* not measured: a resumed search renders it again */
             c->rung = rung;
             c->skipped = !strcmp(st, "skipped");
             c->failed = !strcmp(st, "failed");
@@ -256,8 +257,15 @@ static void read_rung(tune *t, int rung, const char *sum_path) {
     sb_table_free(&tb);
 }
 
+/* The search stops where it is: its time limit is spent, or a SIGINT or
+ * SIGTERM came (the run in flight ends `interrupted` at a frame boundary). */
+static bool out_of_time(const tune *t) {
+    return sb_interrupted() || (t->cmd->time_limit_s > 0 && (sb_now_ms() - t->t0) / 1e3 > t->cmd->time_limit_s);
+}
+
 /* Measures every live candidate at the rung (what a resumed folder has is
- * kept), in an order that follows from the seed. False: the time ran out. */
+ * kept), in an order that follows from the seed. False: the time ran out, or
+ * a signal stopped the search. */
 static bool run_rung(tune *t, int rung) {
     sb_session *s = &t->s;
     s->opts.frames = t->rung_frames[rung];
@@ -300,7 +308,7 @@ static bool run_rung(tune *t, int rung) {
     bool in_time = true;
     const bool passes = rung == t->nrungs - 1 && t->final_reps > 1;
     if (passes && todo) {   /* the finalists: their passes interleaved, so a slow spell hits each alike */
-        if (t->cmd->time_limit_s > 0 && (sb_now_ms() - t->t0) / 1e3 > t->cmd->time_limit_s) {
+        if (out_of_time(t)) {
             in_time = false;
         } else {
             const sb_run_spec **specs = sb_xmalloc(sizeof *specs * (size_t)todo);
@@ -311,10 +319,11 @@ static bool run_rung(tune *t, int rung) {
             sb_run_group(s, specs, order, todo, dir, &sum, 0, todo);
             s->opts = keep;
             free(specs);
+            in_time = !sb_interrupted();
         }
     }
     for (int k = 0; !passes && k < todo; k++) {
-        if (t->cmd->time_limit_s > 0 && (sb_now_ms() - t->t0) / 1e3 > t->cmd->time_limit_s) {
+        if (out_of_time(t)) {
             in_time = false;
             break;
         }
@@ -661,7 +670,9 @@ static void print_report(const tune *t, int chosen, bool met) {
         printf("no candidate could be measured\n");
     }
     if (t->kept) printf("  (%d run(s) kept from the resumed folder, not measured again)\n", t->kept);
-    if (t->out_of_time) printf("  (the time limit ended the search after rung %d: figures from fewer frames)\n", t->last_rung);
+    if (t->out_of_time)
+        printf("  (%s ended the search after rung %d: figures from fewer frames)\n",
+               sb_interrupted() ? sb_interrupt_name() : "the time limit", t->last_rung);
     printf("\nPareto front (time against error; frames: how many frames the figures are from):\n");
     printf("  %-52s %10s %9s %10s %9s %6s\n", "setting", "gpu_ms", "+-ci95", "err_rate", "+-ci95", "frames");
     for (int k = 0; k < nv; k++)
@@ -766,5 +777,10 @@ int sb_tune_main(const sb_tune_cmd *cmd) {
     print_report(&t, chosen, met);
     sb_session_close(&t.s);
     free(t.c);
+    if (sb_interrupted()) {   /* said even with --quiet: the folder is half a search */
+        fprintf(stderr, "shadowbench: interrupted: the runs measured so far are in %s; the rest: the same command "
+                        "with --resume %s\n", t.dir, t.dir);
+        return 128 + sb_interrupted();
+    }
     return ok && met ? 0 : 1;
 }

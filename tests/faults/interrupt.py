@@ -13,7 +13,7 @@ the same folder with `batch --resume`. After every stop:
 At the end the resumed set's rows equal a batch that was never stopped
 (timings aside). A second SIGINT a moment after the first ends the process at
 once (within 2 s, by the signal). `run` stops the same way and `run
---resume DIR` completes its folder.
+--resume DIR` completes its folder; so does `tune` with its `--resume DIR`.
 
 usage: interrupt.py SHADOWBENCH BUILD_ROOT
 """
@@ -123,6 +123,32 @@ def main():
     diff = [(r["technique"], k) for r in rows(clean) for k in same if c.get(r["technique"], {}).get(k) != r[k]]
     check(p.returncode == 0 and len(c) == 3 and not diff,
           "run --resume completes it (exit %d), rows equal the clean batch's, timings aside %s" % (p.returncode, diff[:4]))
+
+    # `tune` stops the same way: the outputs from what was measured, and its own --resume completes the search
+    cmd = [BIN, "tune", "towers", "auto", "sm:res=256,512,1024,2048", "pssm:res=256,512,1024:cascades=2,3,4", "--frames", "17",
+           "--size", "320x180", "--max-err", "0.5", "--seed", "3", "--quiet"]
+    t0 = time.time()
+    p = subprocess.run(cmd + ["--out", os.path.join(WORK, "tune-whole")], capture_output=True, text=True)
+    tune_s = time.time() - t0
+    whole_tune = p.stdout.strip().splitlines()[-1]
+    check(p.returncode == 0, "tune, never stopped: exit %d in %.1f s" % (p.returncode, tune_s))
+    p = subprocess.Popen(cmd + ["--out", os.path.join(WORK, "tune")], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True)
+    time.sleep(tune_s * 0.4)
+    p.send_signal(signal.SIGINT)
+    so, se = p.communicate(timeout=120)
+    tune_dir = so.strip().splitlines()[-1]
+    rungs = sorted(glob.glob(os.path.join(tune_dir, "rung-*")))
+    st = [r["status"] for d in rungs for r in rows(d)]
+    check(p.returncode == 130 and "--resume" in se and os.path.exists(os.path.join(tune_dir, "tune.csv"))
+          and not any(whole(d) for d in rungs) and set(st) <= {"ok", "interrupted"},
+          "tune: SIGINT -> exit %d, rung rows %s, whole files, tune.csv written, says how to resume" % (p.returncode, st))
+    p = subprocess.run(cmd + ["--resume", tune_dir], capture_output=True, text=True)
+    a = {r["run_id"]: r["err_rate_mean"] for r in rows(os.path.join(whole_tune, "rung-0"))}
+    b = {r["run_id"]: r["err_rate_mean"] for r in rows(os.path.join(tune_dir, "rung-0"))}
+    check(p.returncode == 0 and a == b and "interrupted" not in [r["status"] for d in rungs for r in rows(d)],
+          "tune --resume completes it (exit %d): rung 0 has the whole search's runs and errors (%d, %d), "
+          "none interrupted" % (p.returncode, len(a), len(b)))
 
     # a second SIGINT: at once
     p = subprocess.Popen([BIN, "batch", bench, "--out", os.path.join(WORK, "twice"), "--quiet"],
