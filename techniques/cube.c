@@ -44,7 +44,8 @@ static const double face_up[6][3] = {{0, -1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -
 static bool cube_supported(const sb_run_ctx *rc, const void *desc, sb_err *why) {
     const cube_desc *d = desc;
     if (!sb_lamp_supported(rc->gpu, d->light, "cube", why)) return false;
-    return sb_layered_supported(rc->gpu->ctx, d->layered, "cube", why);
+    if (!sb_layered_supported(rc->gpu->ctx, d->layered, "cube", why)) return false;
+    return sb_lamp_maps_fit(rc->gpu, "cube", d->res, 6, true, why);   /* six 32F faces */
 }
 
 /* The six faces' matrices and culling planes around the lamp. */

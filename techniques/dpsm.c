@@ -36,7 +36,9 @@ typedef struct {
 } dpsm_state;
 
 static bool dpsm_supported(const sb_run_ctx *rc, const void *desc, sb_err *why) {
-    return sb_lamp_supported(rc->gpu, ((const dpsm_desc *)desc)->light, "dpsm", why);
+    const dpsm_desc *d = desc;
+    if (!sb_lamp_supported(rc->gpu, d->light, "dpsm", why)) return false;
+    return sb_lamp_maps_fit(rc->gpu, "dpsm", d->res, 2, false, why);   /* two 32F paraboloid maps */
 }
 
 static bool dpsm_create(void *state, const sb_run_ctx *rc, const void *desc, sb_err *err) {

@@ -330,6 +330,17 @@ bool sb_lamp_supported(const sb_gpu *g, int light, const char *technique, sb_err
     return true;
 }
 
+bool sb_lamp_maps_fit(const sb_gpu *g, const char *technique, int res, int maps, bool cube, sb_err *why) {
+    GLint max = 0;
+    glGetIntegerv(cube ? GL_MAX_CUBE_MAP_TEXTURE_SIZE : GL_MAX_TEXTURE_SIZE, &max);
+    if (max > 0 && res > max)
+        return sb_fail(why, "%s:res=%d exceeds %s %d of %s", technique, res,
+                       cube ? "GL_MAX_CUBE_MAP_TEXTURE_SIZE" : "GL_MAX_TEXTURE_SIZE", max, g->ctx->renderer);
+    char who[64];
+    snprintf(who, sizeof who, "%s:res=%d", technique, res);
+    return sb_gpu_memory_fits(g, (double)res * res * maps * 4, who, "shadow maps", why);
+}
+
 void sb_frame_shade_point(sb_frame *f, sb_v3 pos) {
     f->shade_light[0] = pos.x;
     f->shade_light[1] = pos.y;

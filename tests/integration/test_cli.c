@@ -730,6 +730,25 @@ static void test_gpu_memory_refused(void **st) {
     assert_non_null(strstr(sb_table_get(&t, 0, "reason"), line));
     assert_string_equal(sb_table_get(&t, 1, "status"), "ok");
     sb_table_free(&t);
+    /* the point-light techniques too: six cube faces and two paraboloid maps of 32-bit depth */
+    assert_int_equal(sh("%s run plane-box-lamp plane-box-lamp cube:res=8192 dpsm:res=8192 cube:res=256 --frames 1 "
+                        "--warmup 0 --size 64x36 --error-every 0 --gpu-memory 1G --out %s/mem", test_binary(), g_tmp), 0);
+    last_line(d, sizeof d);
+    assert_non_null(strstr(g_out, "cube:res=8192: needs 1.5 GiB of shadow maps, more than the 1024 MiB --gpu-memory"));
+    summary_table(d, &t);
+    assert_int_equal(t.nrows, 3);
+    const char *want[][2] = {{"skipped", "cube:res=8192: needs 1.5 GiB"}, {"ok", ""}, {"ok", ""}};
+    assert_string_equal(sb_table_get(&t, 1, "technique"), "dpsm");   /* 512 MiB: fits in 1 GiB */
+    for (int r = 0; r < 3; r++) {
+        print_message("%s %s: %s %s\n", sb_table_get(&t, r, "technique"), sb_table_get(&t, r, "params"),
+                      sb_table_get(&t, r, "status"), sb_table_get(&t, r, "reason"));
+        assert_string_equal(sb_table_get(&t, r, "status"), want[r][0]);
+        assert_non_null(strstr(sb_table_get(&t, r, "reason"), want[r][1]));
+    }
+    sb_table_free(&t);
+    assert_int_equal(sh("%s run plane-box-lamp plane-box-lamp dpsm:res=8192 --frames 1 --warmup 0 --size 64x36 "
+                        "--error-every 0 --gpu-memory 256M --out %s/mem", test_binary(), g_tmp), 0);
+    assert_non_null(strstr(g_out, "dpsm:res=8192: needs 512 MiB of shadow maps, more than the "));
     assert_int_equal(sh("%s run plane-box plane-box sm --gpu-memory 12 --out %s/mem", test_binary(), g_tmp), 2);
     assert_non_null(strstr(g_out, "--gpu-memory 12: expected a size with M or G"));
 
