@@ -85,6 +85,8 @@ static int alpha_card(const char *dir) {
                                 "\"alphaMode\":\"MASK\",\"alphaCutoff\":0.5}");
     const double c[4] = {-SB_CONF_CARD, SB_CONF_CARD, -SB_CONF_CARD, SB_CONF_CARD};
     rect(sb_glb_new_mesh(&s, m), c, SB_CONF_H, true, true);
+    s.lamps[0] = sb_v3_make(SB_CONF_CARD_LAMP_X, SB_CONF_CARD_LAMP_Y, SB_CONF_CARD_LAMP_Z);
+    s.nlamps = 1;
     return finish(&s, dir, "conf-alpha-card");
 }
 

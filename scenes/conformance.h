@@ -13,7 +13,8 @@
  *                      --blend-casters mask: B casts; opaque: both; none: neither
  *   conf-alpha-card    a MASK card with a 4x4 checker alpha texture repeated
  *                      twice by KHR_texture_transform: 1-unit opaque cells where
- *                      floor(x + 4) + floor(z + 4) is even
+ *                      floor(x + 4) + floor(z + 4) is even; a lamp above it
+ *                      for the point-light techniques
  *   conf-skin          an arm of two segments skinned to two joints; the second
  *                      joint's own rotation (90 degrees about z) stands segment
  *                      two up; --pose 0 (its animation) lays it flat again
@@ -33,8 +34,12 @@
 #define SB_CONF_BLEND_ALPHA_A 0.3
 #define SB_CONF_BLEND_ALPHA_B 0.8
 
-/* conf-alpha-card: the card's half size (it spans -4..4 in x and z) */
+/* conf-alpha-card: the card's half size (it spans -4..4 in x and z), and a lamp above it (the
+ * lamp techniques' shadows of the checker: cells twice as large on the floor, from y = 6) */
 #define SB_CONF_CARD 4.0
+#define SB_CONF_CARD_LAMP_X 0.3
+#define SB_CONF_CARD_LAMP_Y 6.0
+#define SB_CONF_CARD_LAMP_Z 0.2
 
 /* conf-skin: segment one x 0..4 and segment two x 4..8, cross-section 1 x 1 around (y 3, z 0);
  * the second joint sits at (4, 3, 0) */

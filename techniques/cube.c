@@ -30,8 +30,10 @@ typedef struct {
     sb_v3 lamp;                 /* origin-relative */
     double near, far;
     GLuint tex, fbo_all, fbo_face[6];
-    GLuint prog_face, prog_gs, prog_vs;
-    GLint u_vp, u_face_vp_gs, u_face_vp_vs;
+    struct {   /* the depth pass: [0] without the alpha test (opaque draws), [1] with it (sb_draw_variant) */
+        GLuint prog;            /* per face, or layered (by `layered`) */
+        GLint u_vp;             /* per face: the face's matrix; layered: the six (u_face_vp) */
+    } pass[2];
     sb_m4 face_vp[6];
     double planes[6][6][4];
     sb_final_prog fp;
@@ -57,6 +59,42 @@ static void face_frusta(cube_state *s) {
         s->face_vp[f] = sb_m4_mul(proj, sb_m4_look_at(s->lamp, sb_v3_add(s->lamp, dir), up));
         sb_frustum_planes(s->face_vp[f], s->planes[f]);
     }
+}
+
+/* The depth pass's program, variant a (1: with the alpha test): per face,
+ * or layered by a geometry shader or by gl_Layer from the vertex shader. */
+static bool create_depth_program(cube_state *s, int a, const char *defines, sb_err *err) {
+    static const char *labels[3][2] = {{"cube face", "cube face (alpha-tested draws)"},
+                                       {"cube layered (geometry shader)", "cube layered (geometry shader) (alpha-tested draws)"},
+                                       {"cube layered (vertex shader)", "cube layered (vertex shader) (alpha-tested draws)"}};
+    const char *label = labels[s->layered][a];
+    const char *fs[] = {sb_shader_depth_frag};
+    GLuint p = 0;
+    if (s->layered == 0) {
+        const char *vs[] = {sb_shader_cube_depth_vert};
+        p = sb_gpu_program(label, defines, vs, 1, fs, 1, err);
+    } else if (s->layered == 1) {
+        const char *vs[] = {sb_shader_csm_layer_gs_vert}, *gs[] = {sb_shader_cube_layer_geom};
+        const sb_shader_src st[] = {{GL_VERTEX_SHADER, vs, 1}, {GL_GEOMETRY_SHADER, gs, 1}, {GL_FRAGMENT_SHADER, fs, 1}};
+        p = sb_gpu_link(label, defines, st, 3, err);
+    } else {
+        static const char vs_src[] =
+            "layout(location = 0) in vec3 a_pos;\n"
+            "uniform mat4 u_face_vp[6];\n"
+            "void main() {\n"
+            "    gl_Layer = gl_InstanceID;\n"
+            "    gl_Position = u_face_vp[gl_InstanceID] * vec4(a_pos, 1.0);\n"
+            "    SB_ALPHA_VS();\n"
+            "}\n";
+        const char *vs[] = {vs_src};
+        const sb_shader_src st[] = {{GL_VERTEX_SHADER, vs, 1}, {GL_FRAGMENT_SHADER, fs, 1}};
+        char defs[256];
+        snprintf(defs, sizeof defs, "#extension GL_ARB_shader_viewport_layer_array : require\n%s", defines ? defines : "");
+        p = sb_gpu_link(label, defs, st, 2, err);
+    }
+    s->pass[a].prog = p;
+    s->pass[a].u_vp = p ? glGetUniformLocation(p, s->layered ? "u_face_vp" : "u_vp") : -1;
+    return p != 0;
 }
 
 static bool cube_create(void *state, const sb_run_ctx *rc, const void *desc, sb_err *err) {
@@ -87,32 +125,8 @@ static bool cube_create(void *state, const sb_run_ctx *rc, const void *desc, sb_
         glDrawBuffer(GL_NONE);
         glReadBuffer(GL_NONE);
     }
-    const char *fs[] = {sb_shader_depth_frag};
-    const char *vs_face[] = {sb_shader_cube_depth_vert};
-    s->prog_face = sb_gpu_program("cube face", NULL, vs_face, 1, fs, 1, err);
-    if (!s->prog_face) return false;
-    s->u_vp = glGetUniformLocation(s->prog_face, "u_vp");
-    if (s->layered == 1) {
-        const char *vs[] = {sb_shader_csm_layer_gs_vert}, *gs[] = {sb_shader_cube_layer_geom};
-        const sb_shader_src st[] = {{GL_VERTEX_SHADER, vs, 1}, {GL_GEOMETRY_SHADER, gs, 1}, {GL_FRAGMENT_SHADER, fs, 1}};
-        if (!(s->prog_gs = sb_gpu_link("cube layered (geometry shader)", NULL, st, 3, err))) return false;
-        s->u_face_vp_gs = glGetUniformLocation(s->prog_gs, "u_face_vp");
-    } else if (s->layered == 2) {
-        static const char vs_src[] =
-            "layout(location = 0) in vec3 a_pos;\n"
-            "uniform mat4 u_face_vp[6];\n"
-            "void main() {\n"
-            "    gl_Layer = gl_InstanceID;\n"
-            "    gl_Position = u_face_vp[gl_InstanceID] * vec4(a_pos, 1.0);\n"
-            "    SB_ALPHA_VS();\n"
-            "}\n";
-        const char *vs[] = {vs_src};
-        const sb_shader_src st[] = {{GL_VERTEX_SHADER, vs, 1}, {GL_FRAGMENT_SHADER, fs, 1}};
-        if (!(s->prog_vs = sb_gpu_link("cube layered (vertex shader)",
-                                       "#extension GL_ARB_shader_viewport_layer_array : require\n", st, 2, err)))
-            return false;
-        s->u_face_vp_vs = glGetUniformLocation(s->prog_vs, "u_face_vp");
-    }
+    for (int a = 0; a < (g->scene->alpha_tested_draws ? 2 : 1); a++)
+        if (!create_depth_program(s, a, a ? NULL : sb_opaque_define(g), err)) return false;
     char defines[64];
     snprintf(defines, sizeof defines, "#define SB_FILTER %d\n", s->d->filter);
     if (!sb_final_prog_create(&s->fp, rc->gpu, "cube", sb_shader_vis_cube_glsl, defines, err)) return false;
@@ -144,15 +158,19 @@ static void cube_frame(void *state, sb_frame *f) {
     float m[6][16];
     for (int k = 0; k < 6; k++) sb_m4_to_float(s->face_vp[k], m[k]);
     int faces = 0;
+    /* opaque casters first, with the variant without the alpha test; then the alpha-tested ones */
     if (s->layered == 0) {
-        glUseProgram(s->prog_face);
         for (int k = 0; k < 6; k++) {
             uint32_t n = sb_scene_collect(sc, (const double(*)[4])s->planes[k], 6, f->scratch);
             if (!n) continue;
             faces++;
             glBindFramebuffer(GL_FRAMEBUFFER, s->fbo_face[k]);
-            glUniformMatrix4fv(s->u_vp, 1, GL_FALSE, m[k]);
-            for (uint32_t i = 0; i < n; i++) sb_submit(f, f->scratch[i], 1);
+            for (int a = 0; a < 2 && s->pass[a].prog; a++) {
+                glUseProgram(s->pass[a].prog);
+                glUniformMatrix4fv(s->pass[a].u_vp, 1, GL_FALSE, m[k]);
+                for (uint32_t i = 0; i < n; i++)
+                    if (sb_draw_variant(g, f->scratch[i]) == a) sb_submit(f, f->scratch[i], 1);
+            }
         }
     } else {
         /* casters within the lamp's range: the box around it */
@@ -160,9 +178,12 @@ static void cube_frame(void *state, sb_frame *f) {
         sb_cube_planes(s->lamp, s->far, box);
         uint32_t n = sb_scene_collect(sc, (const double(*)[4])box, 6, f->scratch);
         bool gs = s->layered == 1;
-        glUseProgram(gs ? s->prog_gs : s->prog_vs);
-        glUniformMatrix4fv(gs ? s->u_face_vp_gs : s->u_face_vp_vs, 6, GL_FALSE, &m[0][0]);
-        for (uint32_t i = 0; i < n; i++) sb_submit(f, f->scratch[i], gs ? 1 : 6);
+        for (int a = 0; a < 2 && s->pass[a].prog; a++) {
+            glUseProgram(s->pass[a].prog);
+            glUniformMatrix4fv(s->pass[a].u_vp, 6, GL_FALSE, &m[0][0]);
+            for (uint32_t i = 0; i < n; i++)
+                if (sb_draw_variant(g, f->scratch[i]) == a) sb_submit(f, f->scratch[i], gs ? 1 : 6);
+        }
         faces = n ? 6 : 0;
     }
     glDisable(GL_POLYGON_OFFSET_FILL);
@@ -188,9 +209,8 @@ static void cube_frame(void *state, sb_frame *f) {
 static void cube_destroy(void *state) {
     cube_state *s = state;
     sb_final_prog_free(&s->fp);
-    GLuint progs[] = {s->prog_face, s->prog_gs, s->prog_vs};
-    for (int i = 0; i < 3; i++)
-        if (progs[i]) glDeleteProgram(progs[i]);
+    for (int a = 0; a < 2; a++)
+        if (s->pass[a].prog) glDeleteProgram(s->pass[a].prog);
     if (s->fbo_all) glDeleteFramebuffers(1, &s->fbo_all);
     if (s->fbo_face[0]) glDeleteFramebuffers(6, s->fbo_face);
     if (s->tex) glDeleteTextures(1, &s->tex);

@@ -29,8 +29,11 @@ typedef struct {
     double near, far;
     sb_v3 lamp;
     float frame[9];
-    GLuint tex, fbo[2], prog;
-    GLint d_lamp, d_frame, d_side, d_near, d_far;
+    GLuint tex, fbo[2];
+    struct {   /* the depth pass: [0] without the alpha test (opaque draws), [1] with it (sb_draw_variant) */
+        GLuint prog;
+        GLint lamp, frame, side, near, far;
+    } pass[2];
     sb_final_prog fp;
     GLint u_maps, u_lamp, u_frame, u_near, u_far, u_res, u_bias, u_normal;
 } dpsm_state;
@@ -65,12 +68,16 @@ static bool dpsm_create(void *state, const sb_run_ctx *rc, const void *desc, sb_
             return sb_fail(err, "dpsm:res=%d: framebuffer is incomplete", s->d->res);
     }
     const char *vs[] = {sb_shader_dpsm_vert}, *fs[] = {sb_shader_depth_frag};
-    if (!(s->prog = sb_gpu_program("dpsm", NULL, vs, 1, fs, 1, err))) return false;
-    s->d_lamp = glGetUniformLocation(s->prog, "u_lamp");
-    s->d_frame = glGetUniformLocation(s->prog, "u_frame");
-    s->d_side = glGetUniformLocation(s->prog, "u_side");
-    s->d_near = glGetUniformLocation(s->prog, "u_near");
-    s->d_far = glGetUniformLocation(s->prog, "u_far");
+    for (int a = 0; a < (g->scene->alpha_tested_draws ? 2 : 1); a++) {
+        const char *label = a ? "dpsm paraboloid (alpha-tested draws)" : "dpsm paraboloid";
+        GLuint p = sb_gpu_program(label, a ? NULL : sb_opaque_define(g), vs, 1, fs, 1, err);
+        if (!(s->pass[a].prog = p)) return false;
+        s->pass[a].lamp = glGetUniformLocation(p, "u_lamp");
+        s->pass[a].frame = glGetUniformLocation(p, "u_frame");
+        s->pass[a].side = glGetUniformLocation(p, "u_side");
+        s->pass[a].near = glGetUniformLocation(p, "u_near");
+        s->pass[a].far = glGetUniformLocation(p, "u_far");
+    }
     if (!sb_final_prog_create(&s->fp, rc->gpu, "dpsm", sb_shader_vis_dpsm_glsl, NULL, err)) return false;
     const char *names[] = {"u_maps", "u_lamp", "u_frame", "u_near", "u_far", "u_res", "u_bias", "u_normal"};
     GLint *locs[] = {&s->u_maps, &s->u_lamp, &s->u_frame, &s->u_near, &s->u_far, &s->u_res, &s->u_bias, &s->u_normal};
@@ -88,11 +95,6 @@ static void dpsm_frame(void *state, sb_frame *f) {
     double box[6][4];
     sb_cube_planes(s->lamp, s->far, box);
     uint32_t n = sb_scene_collect(sc, (const double(*)[4])box, 6, f->scratch);
-    glUseProgram(s->prog);
-    glUniform3f(s->d_lamp, (float)s->lamp.x, (float)s->lamp.y, (float)s->lamp.z);
-    glUniformMatrix3fv(s->d_frame, 1, GL_FALSE, s->frame);
-    glUniform1f(s->d_near, (float)s->near);
-    glUniform1f(s->d_far, (float)s->far);
     glViewport(0, 0, s->d->res, s->d->res);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
@@ -107,8 +109,17 @@ static void dpsm_frame(void *state, sb_frame *f) {
     for (int side = 0; side < 2; side++) {
         glBindFramebuffer(GL_FRAMEBUFFER, s->fbo[side]);
         glClear(GL_DEPTH_BUFFER_BIT);
-        glUniform1f(s->d_side, side ? -1.0f : 1.0f);
-        for (uint32_t i = 0; i < n; i++) sb_submit(f, f->scratch[i], 1);
+        /* opaque casters first, without the alpha test; then the alpha-tested ones */
+        for (int a = 0; a < 2 && s->pass[a].prog; a++) {
+            glUseProgram(s->pass[a].prog);
+            glUniform3f(s->pass[a].lamp, (float)s->lamp.x, (float)s->lamp.y, (float)s->lamp.z);
+            glUniformMatrix3fv(s->pass[a].frame, 1, GL_FALSE, s->frame);
+            glUniform1f(s->pass[a].near, (float)s->near);
+            glUniform1f(s->pass[a].far, (float)s->far);
+            glUniform1f(s->pass[a].side, side ? -1.0f : 1.0f);
+            for (uint32_t i = 0; i < n; i++)
+                if (sb_draw_variant(g, f->scratch[i]) == a) sb_submit(f, f->scratch[i], 1);
+        }
     }
     glDisable(GL_CLIP_DISTANCE0);
     glDisable(GL_POLYGON_OFFSET_FILL);
@@ -135,7 +146,8 @@ static void dpsm_frame(void *state, sb_frame *f) {
 static void dpsm_destroy(void *state) {
     dpsm_state *s = state;
     sb_final_prog_free(&s->fp);
-    if (s->prog) glDeleteProgram(s->prog);
+    for (int a = 0; a < 2; a++)
+        if (s->pass[a].prog) glDeleteProgram(s->pass[a].prog);
     if (s->fbo[0]) glDeleteFramebuffers(2, s->fbo);
     if (s->tex) glDeleteTextures(1, &s->tex);
 }

@@ -81,6 +81,7 @@ GLuint sb_gpu_link(const char *label, const char *defines, const sb_shader_src *
         sb_fail(err, "%s: program does not link: %s", label, log);
         return 0;
     }
+    if (glObjectLabel) glObjectLabel(GL_PROGRAM, p, -1, label);   /* named in GL debuggers (and the tests) */
     return p;
 }
 

@@ -19,7 +19,8 @@ typedef struct sb_shader_src {
  * pointer. The GPU session sets the scene's common GLSL here; unset, nothing. */
 void sb_gl_set_prelude(const char *const *parts, int n);
 /* Compiles each stage as "#version 430 core" + defines + prelude + parts
- * and links them; the label names the program in errors. */
+ * and links them; the label names the program in errors and, where the
+ * context has KHR_debug (GL 4.3), as its object label (glGetObjectLabel). */
 GLuint sb_gpu_link(const char *label, const char *defines, const sb_shader_src *stages, int nstages, sb_err *err);
 /* Vertex + fragment shortcut of sb_gpu_link. */
 GLuint sb_gpu_program(const char *label, const char *defines, const char *const *vs, int nvs,

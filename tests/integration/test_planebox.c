@@ -348,6 +348,69 @@ static void test_opaque_draws_skip_alpha_test(void **st) {
     sb_session_close(&s);
 }
 
+/* The programs alive in the context, by their labels: every one that reads the
+ * alpha test's texels (sb_texels active) is an alpha-tested variant (its label
+ * ends in " (alpha-tested draws)"), and each has its opaque sibling (the same
+ * label without the ending) that does not read them. The number of pairs. */
+static int alpha_variant_pairs(void) {
+    static const char suffix[] = " (alpha-tested draws)";
+    const size_t ls = sizeof suffix - 1;
+    char labels[512][256];
+    bool alpha[512];
+    int n = 0;
+    for (GLuint p = 1; p < 65536 && n < 512; p++) {
+        if (!glIsProgram(p)) continue;
+        GLsizei len = 0;
+        glGetObjectLabel(GL_PROGRAM, p, sizeof labels[n], &len, labels[n]);
+        labels[n][len] = 0;
+        alpha[n] = glGetUniformLocation(p, "sb_texels") >= 0;
+        n++;
+    }
+    int pairs = 0;
+    for (int i = 0; i < n; i++) {
+        size_t len = strlen(labels[i]);
+        bool marked = len > ls && !strcmp(labels[i] + len - ls, suffix);
+        if (alpha[i] != marked) print_message("program '%s': alpha test %s\n", labels[i], alpha[i] ? "on" : "off");
+        assert_int_equal(alpha[i], marked);
+        if (!marked) continue;
+        int sibling = -1;
+        for (int j = 0; j < n && sibling < 0; j++)
+            if (strlen(labels[j]) == len - ls && !strncmp(labels[j], labels[i], len - ls)) sibling = j;
+        print_message("'%s': opaque sibling %s\n", labels[i], sibling >= 0 ? "found" : "missing");
+        assert_true(sibling >= 0 && !alpha[sibling]);
+        pairs++;
+    }
+    return pairs;
+}
+
+/* The point-light techniques' own shadow passes split the same way (their
+ * programs are their own): cube per face and layered both ways, and dpsm, on
+ * the alpha card with its lamp. Only their programs are alive besides the
+ * session's, so the labels tell which passes have both variants. */
+static void test_lamp_passes_skip_alpha_test(void **st) {
+    (void)st;
+    sb_session s;
+    sb_err err;
+    assert_true(test_open(&s, "conf-alpha-card", "conf-alpha-card", 160, 90, &err));
+    const int session = alpha_variant_pairs();   /* the z-pass */
+    assert_true(session >= 1);
+    const char *specs[] = {"cube:layered=off", "cube:layered=gs", "cube:layered=vs", "dpsm"};
+    for (size_t k = 0; k < sizeof specs / sizeof specs[0]; k++) {
+        sb_run_spec *runs = NULL;
+        int n = 0;
+        assert_true(sb_spec_expand(specs[k], NULL, &runs, &n, &err));
+        sb_instance in;
+        assert_true(sb_instance_create(&in, &s, &runs[0], 1, &err));
+        free(runs);
+        /* its shadow pass, and the camera pass's timed and evaluation variants */
+        int pairs = alpha_variant_pairs() - session;
+        print_message("%s: %d pass(es) with both variants\n", specs[k], pairs);
+        assert_int_equal(pairs, 3);
+        sb_instance_destroy(&in);
+    }
+    sb_session_close(&s);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_sm_matches_analytic_egl),
@@ -360,6 +423,7 @@ int main(void) {
         cmocka_unit_test(test_filtered_formats_converge),
         cmocka_unit_test(test_timed_frames_skip_evaluation),
         cmocka_unit_test(test_opaque_draws_skip_alpha_test),
+        cmocka_unit_test(test_lamp_passes_skip_alpha_test),
     };
     return cmocka_run_group_tests_name("planebox", tests, NULL, NULL);
 }
