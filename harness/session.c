@@ -369,7 +369,7 @@ bool sb_instance_create(sb_instance *in, sb_session *s, const sb_run_spec *spec,
     }
     if (!ok) {
         sb_instance_destroy(in);
-        while (glGetError() != GL_NO_ERROR) {}
+        sb_gl_drain_errors();
     }
     return ok;
 }

@@ -62,7 +62,7 @@ static bool finish_gl(sb_context *c, GLADloadfunc load, sb_err *err) {
     c->has_vs_layer = gl_has_ext("GL_ARB_shader_viewport_layer_array") || gl_has_ext("GL_AMD_vertex_shader_layer");
     c->has_nvx_meminfo = gl_has_ext("GL_NVX_gpu_memory_info");
     c->has_ati_meminfo = gl_has_ext("GL_ATI_meminfo");
-    while (glGetError() != GL_NO_ERROR) {}
+    for (int k = 0; k < 64 && glGetError() != GL_NO_ERROR; k++) {}   /* bounded, as sb_gl_drain_errors */
     return true;
 }
 

@@ -6,13 +6,19 @@
 #include <stdlib.h>
 #include <string.h>
 
+void sb_gl_drain_errors(void) {
+    /* bounded: a lost context may report GL_CONTEXT_LOST on every call */
+    for (int k = 0; k < 64 && glGetError() != GL_NO_ERROR; k++) {}
+}
+
 bool sb_gl_check(const char *where, sb_err *err) {
     GLenum e = glGetError();
     if (e == GL_NO_ERROR) return true;
-    while (glGetError() != GL_NO_ERROR) {}
+    sb_gl_drain_errors();
     const char *name = e == GL_INVALID_ENUM ? "GL_INVALID_ENUM" : e == GL_INVALID_VALUE ? "GL_INVALID_VALUE"
                      : e == GL_INVALID_OPERATION ? "GL_INVALID_OPERATION" : e == GL_OUT_OF_MEMORY ? "GL_OUT_OF_MEMORY"
-                     : e == GL_INVALID_FRAMEBUFFER_OPERATION ? "GL_INVALID_FRAMEBUFFER_OPERATION" : "GL error";
+                     : e == GL_INVALID_FRAMEBUFFER_OPERATION ? "GL_INVALID_FRAMEBUFFER_OPERATION"
+                     : e == GL_CONTEXT_LOST ? "GL_CONTEXT_LOST" : "GL error";
     return sb_fail(err, "%s: %s (0x%x)", where, name, e);
 }
 
