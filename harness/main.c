@@ -458,6 +458,7 @@ static int cmd_stress(const cli *c) {
         fprintf(stderr, "shadowbench: %s\n", err.msg);
         return 2;
     }
+    if (sb_interrupted()) return 128 + sb_interrupted();
     return failures ? 1 : 0;
 }
 
@@ -660,7 +661,8 @@ int main(int argc, char **argv) {
     cli c;
     memset(&c, 0, sizeof c);
     int rc = parse_cli(&c, argc, argv);
-    if (!rc && (!strcmp(argv[1], "run") || !strcmp(argv[1], "batch") || !strcmp(argv[1], "tune")))
+    if (!rc && (!strcmp(argv[1], "run") || !strcmp(argv[1], "batch") || !strcmp(argv[1], "tune") ||
+                !strcmp(argv[1], "stress")))
         sb_interrupt_install();
     if (!rc) rc = dispatch(&c, argv[1]);
     if (rc != 2 && sb_result_writes_failed()) {   /* a cron job must not read a lost row as success */

@@ -307,7 +307,8 @@ int sb_stress_run(const sb_run_opts *opts, const char *only, const char *const *
     int failures = 0;
     double *base_err = sb_xmalloc(sizeof(double) * (size_t)nspecs);
     for (int t = 0; t < nspecs; t++) base_err[t] = NAN;
-    for (size_t ci = 0; ci < SB_COUNT(cases); ci++) {
+    /* a SIGINT or SIGTERM stops it between rows: the rows so far stand, the case's files go */
+    for (size_t ci = 0; ci < SB_COUNT(cases) && !sb_interrupted(); ci++) {
         const stress_case *c = &cases[ci];
         if (only && !strstr(c->name, only) && strcmp(c->name, "base")) continue;
         char scene[256], path[256];
@@ -328,7 +329,7 @@ int sb_stress_run(const sb_run_opts *opts, const char *only, const char *const *
             failures++;
             continue;
         }
-        for (int t = 0; t < nspecs; t++) {
+        for (int t = 0; t < nspecs && !sb_interrupted(); t++) {
             row_result r;
             run_row(&s, specs[t], o.frames, &r);
             bool raycast = !strncmp(specs[t], "raycast", 7), none = !strncmp(specs[t], "none", 4);
@@ -356,6 +357,7 @@ int sb_stress_run(const sb_run_opts *opts, const char *only, const char *const *
     else rmdir(dir);
     sb_context_destroy(&s.ctx);
     free(base_err);
+    if (sb_interrupted()) fprintf(out, "interrupted by %s: the rows above were checked, the rest not\n", sb_interrupt_name());
     fprintf(out, "%d failure(s)\n", failures);
     return failures;
 }

@@ -14,6 +14,7 @@ At the end the resumed set's rows equal a batch that was never stopped
 (timings aside). A second SIGINT a moment after the first ends the process at
 once (within 2 s, by the signal). `run` stops the same way and `run
 --resume DIR` completes its folder; so does `tune` with its `--resume DIR`.
+`stress` stops between its rows, keeping them, and removes its scenes.
 
 usage: interrupt.py SHADOWBENCH BUILD_ROOT
 """
@@ -149,6 +150,17 @@ def main():
     check(p.returncode == 0 and a == b and "interrupted" not in [r["status"] for d in rungs for r in rows(d)],
           "tune --resume completes it (exit %d): rung 0 has the whole search's runs and errors (%d, %d), "
           "none interrupted" % (p.returncode, len(a), len(b)))
+
+    # `stress` stops between its rows: the rows so far, said so, and its temporary scenes removed
+    before = set(glob.glob("/tmp/shadowbench-stress-*"))
+    p = subprocess.Popen([BIN, "stress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(3)
+    p.send_signal(signal.SIGINT)
+    so, se = p.communicate(timeout=120)
+    left = set(glob.glob("/tmp/shadowbench-stress-*")) - before
+    rows_ = [l for l in so.splitlines() if l.split()[2:3] in (["ok"], ["FAIL"])]
+    check(p.returncode == 130 and "interrupted by SIGINT" in so and rows_ and not left,
+          "stress: SIGINT -> exit %d, %d row(s) kept, temporary scenes left %s" % (p.returncode, len(rows_), sorted(left)))
 
     # a second SIGINT: at once
     p = subprocess.Popen([BIN, "batch", bench, "--out", os.path.join(WORK, "twice"), "--quiet"],
