@@ -64,10 +64,9 @@ static void face_frusta(cube_state *s) {
 /* The depth pass's program, variant a (1: with the alpha test): per face,
  * or layered by a geometry shader or by gl_Layer from the vertex shader. */
 static bool create_depth_program(cube_state *s, int a, const char *defines, sb_err *err) {
-    static const char *labels[3][2] = {{"cube face", "cube face (alpha-tested draws)"},
-                                       {"cube layered (geometry shader)", "cube layered (geometry shader) (alpha-tested draws)"},
-                                       {"cube layered (vertex shader)", "cube layered (vertex shader) (alpha-tested draws)"}};
-    const char *label = labels[s->layered][a];
+    static const char *const names[3] = {"cube face", "cube layered (geometry shader)", "cube layered (vertex shader)"};
+    char label[96];
+    snprintf(label, sizeof label, "%s%s", names[s->layered], a ? " (alpha-tested draws)" : "");
     const char *fs[] = {sb_shader_depth_frag};
     GLuint p = 0;
     if (s->layered == 0) {
