@@ -238,13 +238,15 @@ static bool measured_frames(sb_run *r, int rep, int index, int total) {
         sb_timer_frame_end(&r->timer);
         record_frame(r, i, j, &f, sb_now_ms() - w0);
         progress_line(s, index, total, r->spec->tech->name, j + 1, N, r->t_run);
-        char where[64];
-        snprintf(where, sizeof where, "after frame %d of %d", i + 1, r->capacity);
-        if (j + 1 < N && interrupt_run(r, where)) {
-            sb_timer_drain(&r->timer);
-            s->timed = false;
-            sb_ref_background_timed(s->ref_cache, false);
-            return false;
+        if (j + 1 < N && sb_interrupted()) {   /* the where is formatted only then: nothing more a frame */
+            char where[64];
+            snprintf(where, sizeof where, "after frame %d of %d", i + 1, r->capacity);
+            if (interrupt_run(r, where)) {
+                sb_timer_drain(&r->timer);
+                s->timed = false;
+                sb_ref_background_timed(s->ref_cache, false);
+                return false;
+            }
         }
         if (o->run_timeout_s > 0 && sb_now_ms() - r->t_run > o->run_timeout_s * 1e3) {
             char what[128];

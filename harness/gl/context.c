@@ -62,8 +62,13 @@ static bool finish_gl(sb_context *c, GLADloadfunc load, sb_err *err) {
     c->has_vs_layer = gl_has_ext("GL_ARB_shader_viewport_layer_array") || gl_has_ext("GL_AMD_vertex_shader_layer");
     c->has_nvx_meminfo = gl_has_ext("GL_NVX_gpu_memory_info");
     c->has_ati_meminfo = gl_has_ext("GL_ATI_meminfo");
-    for (int k = 0; k < 64 && glGetError() != GL_NO_ERROR; k++) {}   /* bounded, as sb_gl_drain_errors */
+    sb_gl_drain_errors();
     return true;
+}
+
+void sb_gl_drain_errors(void) {
+    /* bounded: a lost context may report GL_CONTEXT_LOST on every call */
+    for (int k = 0; k < 64 && glGetError() != GL_NO_ERROR; k++) {}
 }
 
 double sb_context_memory_free(const sb_context *c, char *source, size_t len) {

@@ -27,6 +27,9 @@ typedef struct sb_context {
  * the system memory available (its textures live there); else 0, unknown. */
 double sb_context_memory_free(const sb_context *c, char *source, size_t len);
 
+/* Reads the pending GL errors away (at most 64: a lost context may report one on every call). */
+void sb_gl_drain_errors(void);
+
 bool sb_backend_parse(const char *s, sb_backend *out);
 const char *sb_backend_name(sb_backend b);
 /* Creates a GL 4.3+ core context and loads GL through glad. */

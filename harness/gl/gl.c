@@ -6,11 +6,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-void sb_gl_drain_errors(void) {
-    /* bounded: a lost context may report GL_CONTEXT_LOST on every call */
-    for (int k = 0; k < 64 && glGetError() != GL_NO_ERROR; k++) {}
-}
-
 bool sb_gl_check(const char *where, sb_err *err) {
     GLenum e = glGetError();
     if (e == GL_NO_ERROR) return true;

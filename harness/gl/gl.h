@@ -58,5 +58,3 @@ bool sb_layered_supported(const sb_context *ctx, int layered, const char *techni
 
 /* GL error check: returns false and fills err if one is pending. */
 bool sb_gl_check(const char *where, sb_err *err);
-/* Reads the pending GL errors away (at most 64: a lost context may report one on every call). */
-void sb_gl_drain_errors(void);

@@ -61,6 +61,15 @@ def whole(dir_):
     return bad
 
 
+def stopped(cmd, after, sig=signal.SIGINT):
+    """Runs cmd, sends it sig `after` seconds in, and waits: (exit status, stdout, stderr)."""
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(after)
+    p.send_signal(sig)
+    so, se = p.communicate(timeout=120)
+    return p.returncode, so, se
+
+
 def main():
     shutil.rmtree(WORK, ignore_errors=True)
     os.makedirs(WORK)
@@ -80,14 +89,10 @@ def main():
     for k in range(12):
         sig = signal.SIGTERM if k >= 10 else signal.SIGINT
         cmd = [BIN, "batch", bench, "--quiet"] + (["--resume", dir_] if dir_ else ["--out", out])
-        p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        time.sleep(rng.uniform(0.05, whole_s * 0.5))
-        p.send_signal(sig)
-        so, se = p.communicate(timeout=120)
+        got, so, se = stopped(cmd, rng.uniform(0.05, whole_s * 0.5), sig)
         if dir_ is None:
             dir_ = so.strip().splitlines()[-1] if so.strip() else sorted(glob.glob(os.path.join(out, "*", "*")))[-1]
         want = 128 + sig
-        got = p.returncode
         st = [r["status"] for r in rows(dir_)] if os.path.exists(os.path.join(dir_, "summary.csv")) else []
         stops += got == want
         check(got in (want, 0), "try %2d: %s -> exit %d (%s), rows %s" % (k + 1, sig.name, got,
@@ -110,15 +115,11 @@ def main():
     # `run` stops and resumes the same way
     cmd = [BIN, "run", "towers", "towers", "sm", "pssm", "sdsm", "--frames", "16", "--warmup", "1", "--error-every", "8",
            "--size", "320x180", "--quiet"]
-    p = subprocess.Popen(cmd + ["--out", os.path.join(WORK, "run")], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                         text=True)
-    time.sleep(whole_s * 0.5)
-    p.send_signal(signal.SIGINT)
-    so, se = p.communicate(timeout=120)
+    rc, so, se = stopped(cmd + ["--out", os.path.join(WORK, "run")], whole_s * 0.5)
     run_dir = so.strip().splitlines()[-1]
     st = [r["status"] for r in rows(run_dir)]
-    check(p.returncode == 130 and "--resume" in se and not whole(run_dir),
-          "run: SIGINT -> exit %d, rows %s, whole files, says how to resume" % (p.returncode, st))
+    check(rc == 130 and "--resume" in se and not whole(run_dir),
+          "run: SIGINT -> exit %d, rows %s, whole files, says how to resume" % (rc, st))
     p = subprocess.run(cmd + ["--resume", run_dir], capture_output=True, text=True)
     c = {r["technique"]: r for r in rows(run_dir)}
     diff = [(r["technique"], k) for r in rows(clean) for k in same if c.get(r["technique"], {}).get(k) != r[k]]
@@ -133,17 +134,13 @@ def main():
     tune_s = time.time() - t0
     whole_tune = p.stdout.strip().splitlines()[-1]
     check(p.returncode == 0, "tune, never stopped: exit %d in %.1f s" % (p.returncode, tune_s))
-    p = subprocess.Popen(cmd + ["--out", os.path.join(WORK, "tune")], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                         text=True)
-    time.sleep(tune_s * 0.4)
-    p.send_signal(signal.SIGINT)
-    so, se = p.communicate(timeout=120)
+    rc, so, se = stopped(cmd + ["--out", os.path.join(WORK, "tune")], tune_s * 0.4)
     tune_dir = so.strip().splitlines()[-1]
     rungs = sorted(glob.glob(os.path.join(tune_dir, "rung-*")))
     st = [r["status"] for d in rungs for r in rows(d)]
-    check(p.returncode == 130 and "--resume" in se and os.path.exists(os.path.join(tune_dir, "tune.csv"))
+    check(rc == 130 and "--resume" in se and os.path.exists(os.path.join(tune_dir, "tune.csv"))
           and not any(whole(d) for d in rungs) and set(st) <= {"ok", "interrupted"},
-          "tune: SIGINT -> exit %d, rung rows %s, whole files, tune.csv written, says how to resume" % (p.returncode, st))
+          "tune: SIGINT -> exit %d, rung rows %s, whole files, tune.csv written, says how to resume" % (rc, st))
     p = subprocess.run(cmd + ["--resume", tune_dir], capture_output=True, text=True)
     a = {r["run_id"]: r["err_rate_mean"] for r in rows(os.path.join(whole_tune, "rung-0"))}
     b = {r["run_id"]: r["err_rate_mean"] for r in rows(os.path.join(tune_dir, "rung-0"))}
@@ -153,14 +150,11 @@ def main():
 
     # `stress` stops between its rows: the rows so far, said so, and its temporary scenes removed
     before = set(glob.glob("/tmp/shadowbench-stress-*"))
-    p = subprocess.Popen([BIN, "stress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(3)
-    p.send_signal(signal.SIGINT)
-    so, se = p.communicate(timeout=120)
+    rc, so, se = stopped([BIN, "stress"], 3)
     left = set(glob.glob("/tmp/shadowbench-stress-*")) - before
     rows_ = [l for l in so.splitlines() if l.split()[2:3] in (["ok"], ["FAIL"])]
-    check(p.returncode == 130 and "interrupted by SIGINT" in so and rows_ and not left,
-          "stress: SIGINT -> exit %d, %d row(s) kept, temporary scenes left %s" % (p.returncode, len(rows_), sorted(left)))
+    check(rc == 130 and "interrupted by SIGINT" in so and rows_ and not left,
+          "stress: SIGINT -> exit %d, %d row(s) kept, temporary scenes left %s" % (rc, len(rows_), sorted(left)))
 
     # a second SIGINT: at once
     p = subprocess.Popen([BIN, "batch", bench, "--out", os.path.join(WORK, "twice"), "--quiet"],
