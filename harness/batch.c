@@ -92,19 +92,15 @@ static bool path_line(parse *ps, char **tok, int n) {
     return true;
 }
 
+/* defaults OPTION...: the run options' rows of the option table (options.h), parsed as on the command line. */
 static bool defaults_line(parse *ps, char **tok, int n) {
-    for (int i = 1; i < n; i++) {
-        if (!strcmp(tok[i], "--progress") || !strcmp(tok[i], "--quiet")) continue;
-        if (!strcmp(tok[i], "--allow-external-uris")) {
-            ps->b->opts.allow_external_uris = true;
-            continue;
-        }
-        sb_err e;
-        int rc = sb_run_opts_set(&ps->b->opts, tok[i], i + 1 < n ? tok[i + 1] : NULL, &e);
-        if (rc < 0) return sb_fail(ps->err, "%s:%d: %s", ps->file, ps->line, e.msg);
-        if (rc == 0) return sb_fail(ps->err, "%s:%d: '%s' is not a run option", ps->file, ps->line, tok[i]);
-        i++;
-    }
+    sb_cli_opts o;
+    memset(&o, 0, sizeof o);
+    o.run = ps->b->opts;
+    char where[1100];
+    snprintf(where, sizeof where, "%s:%d", ps->file, ps->line);
+    if (!sb_cli_parse_tokens(&o, tok + 1, n - 1, where, ps->err)) return false;
+    ps->b->opts = o.run;
     return true;
 }
 
@@ -155,12 +151,9 @@ static bool parse_lines(parse *ps, char *text) {
 }
 
 /* Names the file refers to exist; the command line's options beat the file's. */
-static bool check_references(parse *ps, const char *const *cli_opts, int ncli, bool load) {
+static bool check_references(parse *ps, const sb_cli_opts *cli, bool load) {
     sb_batch *b = ps->b;
-    for (int i = 0; i < ncli; i += 2) {
-        sb_err e;
-        if (sb_run_opts_set(&b->opts, cli_opts[i], cli_opts[i + 1], &e) < 0) return sb_fail(ps->err, "%s", e.msg);
-    }
+    if (cli) sb_cli_copy_given(&b->opts, cli);
     if (!b->nscenes) return sb_fail(ps->err, "%s: no 'scene' lines", ps->file);
     if (!ps->nlines) return sb_fail(ps->err, "%s: no run lines (technique specs)", ps->file);
     for (int l = 0; l < ps->nlines; l++)
@@ -226,8 +219,8 @@ static void expand_matrix(parse *ps) {
     }
 }
 
-static bool batch_build(sb_batch *b, const char *file, char *text, const sb_run_opts *base,
-                        const char *const *cli_opts, int ncli, bool load, sb_err *err) {
+static bool batch_build(sb_batch *b, const char *file, char *text, const sb_run_opts *base, const sb_cli_opts *cli,
+                        bool load, sb_err *err) {
     memset(b, 0, sizeof *b);
     b->file = sb_strdup(file);
     const char *slash = strrchr(file, '/');
@@ -236,7 +229,7 @@ static bool batch_build(sb_batch *b, const char *file, char *text, const sb_run_
     if (dot && dot != b->name) *dot = 0;
     b->opts = *base;
     parse ps = {.b = b, .file = file, .err = err};
-    bool ok = parse_lines(&ps, text) && check_references(&ps, cli_opts, ncli, load) && (!load || load_scenes(&ps));
+    bool ok = parse_lines(&ps, text) && check_references(&ps, cli, load) && (!load || load_scenes(&ps));
     if (ok && load) expand_matrix(&ps);
     if (ok) sb_run_opts_finish(&b->opts);
     for (int l = 0; l < ps.nlines; l++) {
@@ -248,11 +241,10 @@ static bool batch_build(sb_batch *b, const char *file, char *text, const sb_run_
     return ok;
 }
 
-bool sb_batch_load(sb_batch *b, const char *file, const sb_run_opts *base, const char *const *cli_opts, int ncli,
-                   sb_err *err) {
+bool sb_batch_load(sb_batch *b, const char *file, const sb_run_opts *base, const sb_cli_opts *cli, sb_err *err) {
     char *text = sb_read_file(file, NULL, err);
     if (!text) return false;
-    bool ok = batch_build(b, file, text, base, cli_opts, ncli, true, err);
+    bool ok = batch_build(b, file, text, base, cli, true, err);
     free(text);
     return ok;
 }
@@ -262,7 +254,7 @@ bool sb_batch_check(const char *name, const char *text, sb_err *err) {
     sb_run_opts_defaults(&o);
     sb_batch b;
     char *copy = sb_strdup(text);
-    bool ok = batch_build(&b, name, copy, &o, NULL, 0, false, err);
+    bool ok = batch_build(&b, name, copy, &o, NULL, false, err);
     if (ok) sb_batch_free(&b);
     free(copy);
     return ok;
@@ -348,12 +340,13 @@ int sb_summary_keep_complete(sb_summary *sum, const char *dir, const char *const
     int kept = 0;
     if (!sb_table_load(&old, sum->path, &err)) return 0;
     for (int r = 0; r < old.nrows; r++) {
-        const char *id = sb_table_get(&old, r, "run_id"), *st = sb_table_get(&old, r, "status");
+        const char *id = sb_table_get(&old, r, "run_id");
+        sb_status st = sb_status_of(sb_table_get(&old, r, "status"));
         for (int i = 0; i < n; i++) {
             if (!ids[i] || done[i] || strcmp(ids[i], id)) continue;
             char csv[4400];
             snprintf(csv, sizeof csv, "%s/%s.csv", dir, id);
-            if (strcmp(st, "skipped") && (strcmp(st, "ok") || access(csv, R_OK) != 0)) continue;
+            if (st != SB_STATUS_SKIPPED && (st != SB_STATUS_OK || access(csv, R_OK) != 0)) continue;
             done[i] = true;
             kept++;
             sb_summary_add_line(sum, old.lines[r], st);
@@ -378,7 +371,7 @@ static void fail_runs(const sb_batch *b, int i, const char *renderer, const char
     sb_params_canonical(&r->spec.params, params, sizeof params);
     sb_run_info info = {.run_id = r->run_id, .run_index = r->index, .scene = bs->name, .path = bs->path_label,
                         .technique = r->spec.tech->name, .params = params, .backend = sb_backend_name(b->opts.backend),
-                        .renderer = renderer, .timing = sb_timing_name(b->opts.timing), .status = "failed",
+                        .renderer = renderer, .timing = sb_timing_name(b->opts.timing), .status = SB_STATUS_FAILED,
                         .reason = why, .frames = b->opts.frames, .warmup = b->opts.warmup, .width = b->opts.width,
                         .height = b->opts.height};
     sb_summary_add_outcome(sum, &info, r->spec.tech->stages, NULL, NULL, 0);
@@ -437,7 +430,7 @@ static void run_scenes(sb_batch *b, const bool *selected, const bool *done, int 
 int sb_batch_main(const sb_batch_cmd *cmd) {
     sb_err err;
     sb_batch b;
-    if (!sb_batch_load(&b, cmd->file, cmd->base, cmd->cli_opts, cmd->ncli, &err)) {
+    if (!sb_batch_load(&b, cmd->file, cmd->base, cmd->cli, &err)) {
         fprintf(stderr, "shadowbench: %s\n", err.msg);
         return 2;
     }

@@ -12,6 +12,7 @@
  * run lines (in order) x each line's grid, which fixes the run order and
  * every run_id. Every error names file:line. */
 #pragma once
+#include "options.h"
 #include "run.h"
 
 typedef struct sb_batch_scene {
@@ -49,9 +50,8 @@ typedef struct sb_batch {
 
 /* Parses and validates the whole file (techniques, parameters, options),
  * loads every scene and path (no GL) and expands the matrix. `base` holds
- * the command line's options, which override the file's defaults. */
-bool sb_batch_load(sb_batch *b, const char *file, const sb_run_opts *base, const char *const *cli_opts, int ncli,
-                   sb_err *err);
+ * the defaults; the run options given in `cli` (NULL: none) beat the file's. */
+bool sb_batch_load(sb_batch *b, const char *file, const sb_run_opts *base, const sb_cli_opts *cli, sb_err *err);
 void sb_batch_free(sb_batch *b);
 /* Parses and validates the text alone (no scene or path is loaded): for
  * fuzzing and quick checks. */
@@ -68,8 +68,7 @@ int sb_summary_keep_complete(sb_summary *sum, const char *dir, const char *const
 typedef struct sb_batch_cmd {
     const char *file;
     const sb_run_opts *base;            /* defaults with the command line's flags (progress, URIs) */
-    const char *const *cli_opts;        /* run options as given, NAME VALUE pairs: they beat the file's */
-    int ncli;
+    const sb_cli_opts *cli;             /* the command line's options: the run options given beat the file's */
     const char *out, *resume, *shard;   /* --out, --resume DIR, --shard I/N (NULL: not given) */
     bool dry_run;
     const char *command_line, *version, *commit;   /* for the meta file */

@@ -381,7 +381,7 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
     r->info = (sb_run_info){
         .run_id = r->run_id, .run_index = run_index, .scene = s->scene_name, .path = s->path_name,
         .technique = spec->tech->name, .params = r->params, .backend = sb_backend_name(o->backend),
-        .renderer = s->ctx.renderer, .timing = sb_timing_name(s->timing), .clocks = s->clocks_mode, .status = "ok",
+        .renderer = s->ctx.renderer, .timing = sb_timing_name(s->timing), .clocks = s->clocks_mode, .status = SB_STATUS_OK,
         .order = sb_order_name(o->order), .seed = o->order == SB_ORDER_SHUFFLE ? o->seed : 0,
         .reason = "", .frames = o->frames, .warmup = o->warmup, .width = o->width, .height = o->height,
         .target_ci = o->target_ci, .scene_triangles = sb_scene_triangles(&s->scene), .load_ms = s->scene.load_ms,
@@ -390,7 +390,7 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
     const char *skip = sb_skip_reason(s, spec->tech, &spec->params);
     if (skip) {
         r->finished = true;
-        r->info.status = "skipped";
+        r->info.status = SB_STATUS_SKIPPED;
         r->info.reason = skip;
         sb_log("run %s (%s): skipped: %s", r->run_id, spec->tech->name, skip);
         return r;
@@ -409,19 +409,19 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
 }
 
 bool sb_run_end(sb_run *r) {
-    bool ok = r->info.status[0] == 's' || finish_run(r); /* skipped runs have nothing to finish */
+    bool ok = r->info.status == SB_STATUS_SKIPPED || finish_run(r); /* skipped runs have nothing to finish */
     drop_instance(r);
     if (r->cf.f && r->failed) sb_csv_file_abort(&r->cf);
     r->info.run_wall_s = (sb_now_ms() - r->t_run) / 1e3;
     r->info.repeats = r->repeats;
     r->info.warmup = r->s->opts.warmup < 0 ? (r->repeats ? r->warmup_frames / r->repeats : 0) : r->s->opts.warmup;
     if (!ok) {
-        sb_log("run %s (%s): %s: %s", r->run_id, r->spec->tech->name, r->interrupted ? "interrupted" : "failed",
-               r->err.msg);
-        r->info.status = r->interrupted ? "interrupted" : "failed";
+        sb_log("run %s (%s): %s: %s", r->run_id, r->spec->tech->name,
+               sb_status_names[r->interrupted ? SB_STATUS_INTERRUPTED : SB_STATUS_FAILED], r->err.msg);
+        r->info.status = r->interrupted ? SB_STATUS_INTERRUPTED : SB_STATUS_FAILED;
         r->info.reason = r->err.msg;
     }
-    bool measured = ok && r->info.status[0] == 'o';
+    bool measured = ok && r->info.status == SB_STATUS_OK;
     sb_summary_add_outcome(r->sum, &r->info, r->spec->tech->stages, measured ? r->recs : NULL, r->timer.times,
                            r->done);
     sb_csv_free(&r->rows);

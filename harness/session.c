@@ -13,119 +13,6 @@
 #include "reference.h"
 #include "scene_load.h"
 
-void sb_run_opts_defaults(sb_run_opts *o) {
-    memset(o, 0, sizeof *o);
-    o->backend = SB_BACKEND_EGL;
-    o->timing = SB_TIMING_AUTO;
-    o->ring = 3;
-    o->frames = 60;
-    o->warmup = -1;
-    o->width = 1280;
-    o->height = 720;
-    o->error_every = 10;
-    o->repeat = 1;
-    o->max_repeat = 10;
-    o->overlap = -1;
-    long cpus = sysconf(_SC_NPROCESSORS_ONLN);
-    o->threads = cpus > 1024 ? 1024 : cpus > 0 ? (int)cpus : 1;
-}
-
-int sb_run_opts_set(sb_run_opts *o, const char *a, const char *v, sb_err *err) {
-    long n;
-    if (!v) return sb_fail(err, "%s needs a value", a), -1;
-    if (!strcmp(a, "--backend")) {
-        if (!sb_backend_parse(v, &o->backend)) return sb_fail(err, "--backend %s: expected egl or osmesa", v), -1;
-    } else if (!strcmp(a, "--timing")) {
-        if (!sb_timing_parse(v, &o->timing)) return sb_fail(err, "--timing %s: expected auto, queries or sync", v), -1;
-    } else if (!strcmp(a, "--ring")) {
-        if (!sb_parse_int(v, &n) || n < 1 || n > 16) return sb_fail(err, "--ring %s: expected 1..16", v), -1;
-        o->ring = (int)n;
-    } else if (!strcmp(a, "--frames")) {
-        if (!sb_parse_int(v, &n) || n < 1 || n > 1000000) return sb_fail(err, "--frames %s: expected 1..1000000", v), -1;
-        o->frames = (int)n;
-    } else if (!strcmp(a, "--warmup")) {
-        if (!strcmp(v, "auto")) o->warmup = -1;
-        else if (!sb_parse_int(v, &n) || n < 0 || n > 10000)
-            return sb_fail(err, "--warmup %s: expected auto or 0..10000", v), -1;
-        else o->warmup = (int)n;
-    } else if (!strcmp(a, "--clocks")) {
-        if (!sb_clocks_parse(v, &o->clocks)) return sb_fail(err, "--clocks %s: expected auto, lock or free", v), -1;
-    } else if (!strcmp(a, "--order")) {
-        if (!strcmp(v, "matrix")) o->order = SB_ORDER_MATRIX;
-        else if (!strcmp(v, "interleave")) o->order = SB_ORDER_INTERLEAVE;
-        else if (!strcmp(v, "shuffle")) o->order = SB_ORDER_SHUFFLE;
-        else return sb_fail(err, "--order %s: expected matrix, interleave or shuffle", v), -1;
-    } else if (!strcmp(a, "--seed")) {
-        unsigned long long u;
-        char extra;
-        if (sscanf(v, "%llu%c", &u, &extra) != 1 || u == 0 || v[0] == '-')
-            return sb_fail(err, "--seed %s: expected an integer >= 1", v), -1;
-        o->seed = u;
-    } else if (!strcmp(a, "--blend-casters")) {
-        if (!sb_blend_policy_parse(v, &o->blend))
-            return sb_fail(err, "--blend-casters %s: expected mask, opaque or none", v), -1;
-    } else if (!strcmp(a, "--pose")) {
-        if (!sb_parse_double(v, &o->pose_time) || !isfinite(o->pose_time))
-            return sb_fail(err, "--pose %s: expected a time in seconds", v), -1;
-        o->pose = true;
-    } else if (!strcmp(a, "--size")) {
-        int w, h;
-        char extra;
-        if (sscanf(v, "%dx%d%c", &w, &h, &extra) != 2) return sb_fail(err, "--size %s: expected WxH, e.g. 1280x720", v), -1;
-        if (w < 1 || h < 1 || w > 16384 || h > 16384)
-            return sb_fail(err, "--size %s: width and height must be 1..16384", v), -1;
-        o->width = w;
-        o->height = h;
-    } else if (!strcmp(a, "--sun")) {
-        char buf[64];
-        snprintf(buf, sizeof buf, "%s", v);
-        char *comma = strchr(buf, ',');
-        if (comma) *comma = 0;
-        if (!comma || !sb_parse_double(buf, &o->sun_az) || !sb_parse_double(comma + 1, &o->sun_el) ||
-            o->sun_el < -90 || o->sun_el > 90)
-            return sb_fail(err, "--sun %s: expected AZIMUTH,ELEVATION in degrees (elevation -90..90)", v), -1;
-        o->sun_override = true;
-    } else if (!strcmp(a, "--images")) {
-        if (!sb_parse_int(v, &n) || n < 0 || n > 1000000) return sb_fail(err, "--images %s: expected a frame interval >= 0", v), -1;
-        if (n > 0 && !sb_images_available())
-            return sb_fail(err, "--images %s: %s", v, sb_images_unavailable_reason()), -1;
-        o->images = (int)n;
-    } else if (!strcmp(a, "--error-every")) {
-        if (!sb_parse_int(v, &n) || n < 0 || n > 1000000) return sb_fail(err, "--error-every %s: expected a frame interval >= 0", v), -1;
-        o->error_every = (int)n;
-    } else if (!strcmp(a, "--repeat")) {
-        if (!sb_parse_int(v, &n) || n < 1 || n > 1000) return sb_fail(err, "--repeat %s: expected 1..1000", v), -1;
-        o->repeat = (int)n;
-    } else if (!strcmp(a, "--target-ci")) {
-        if (!sb_parse_double(v, &o->target_ci) || o->target_ci <= 0 || o->target_ci > 100)
-            return sb_fail(err, "--target-ci %s: expected a percentage in (0, 100]", v), -1;
-    } else if (!strcmp(a, "--max-repeat")) {
-        if (!sb_parse_int(v, &n) || n < 1 || n > 1000) return sb_fail(err, "--max-repeat %s: expected 1..1000", v), -1;
-        o->max_repeat = (int)n;
-    } else if (!strcmp(a, "--threads")) {
-        if (!sb_parse_int(v, &n) || n < 1 || n > 1024) return sb_fail(err, "--threads %s: expected 1..1024", v), -1;
-        o->threads = (int)n;
-    } else if (!strcmp(a, "--overlap")) {
-        if (!strcmp(v, "auto")) o->overlap = -1;
-        else if (!strcmp(v, "on") || !strcmp(v, "off")) o->overlap = !strcmp(v, "on");
-        else return sb_fail(err, "--overlap %s: expected auto, on or off", v), -1;
-    } else if (!strcmp(a, "--gpu-memory")) {
-        double m;
-        char unit = 0, extra;
-        int k = sscanf(v, "%lf%c%c", &m, &unit, &extra);
-        double scale = unit == 'G' || unit == 'g' ? 1073741824.0 : unit == 'M' || unit == 'm' ? 1048576.0 : 0;
-        if (k != 2 || !scale || !isfinite(m) || m <= 0 || m * scale > 1e15)
-            return sb_fail(err, "--gpu-memory %s: expected a size with M or G, e.g. 8G or 512M (up to 1e15 bytes)", v), -1;
-        o->gpu_memory = m * scale;
-    } else if (!strcmp(a, "--run-timeout")) {
-        if (!sb_parse_double(v, &o->run_timeout_s) || o->run_timeout_s < 0)
-            return sb_fail(err, "--run-timeout %s: expected seconds >= 0", v), -1;
-    } else {
-        return 0;
-    }
-    return 1;
-}
-
 sb_scene_opts sb_run_scene_opts(const sb_run_opts *o) {
     return (sb_scene_opts){.allow_external_uris = o->allow_external_uris, .blend = o->blend, .pose = o->pose,
                            .pose_time = o->pose_time};
@@ -158,6 +45,7 @@ bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, con
     sb_scene sc;
     sb_path p;
     sb_scene_opts so = sb_run_scene_opts(o);
+    s->files_refused = true;
     if (!sb_scene_load(&sc, scene, &so, err)) return false;
     if (!sb_path_load(&p, path, &sc, err)) {
         sb_scene_free(&sc);

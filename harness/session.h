@@ -51,10 +51,8 @@ typedef struct sb_run_opts {
     uint64_t seed;              /* --seed: shuffle's seed; 0: chosen by sb_run_opts_finish */
 } sb_run_opts;
 
-void sb_run_opts_defaults(sb_run_opts *o);
-/* Sets one option (--frames, --size, ...) from text: 1 set, 0 not a run
- * option, -1 bad value (err says which and what was expected). */
-int sb_run_opts_set(sb_run_opts *o, const char *name, const char *value, sb_err *err);
+/* The run options are rows of the option table: their defaults, parsing and
+ * help are options.h's (sb_run_opts_defaults). */
 /* How the options read a scene file. */
 sb_scene_opts sb_run_scene_opts(const sb_run_opts *o);
 /* After every option is set: picks shuffle's seed when none was given. */
@@ -80,6 +78,7 @@ typedef struct sb_session {
     sb_calib calib;             /* the calibration probe */
     sb_clocks *clocks;          /* the GPU's clock state (kept with the context) */
     char clocks_mode[64];       /* what the summary's clocks column says */
+    bool files_refused;         /* sb_session_open failed on the scene or path file (bad input), not on the GL */
 } sb_session;
 
 /* Above these shares a run's warnings say its error figures cannot be trusted
@@ -95,7 +94,8 @@ typedef struct sb_session {
 /* Opens the clock reader for the session's context and applies --clocks
  * (after the context exists; kept with it across scenes). */
 bool sb_session_clocks(sb_session *s, const sb_run_opts *o, sb_err *err);
-/* Loads scene and path, opens the context (if not already), uploads buffers. */
+/* Loads scene and path, opens the context (if not already), uploads buffers.
+ * On failure files_refused says whether a file was refused (exit 2) or the GL failed. */
 bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, const char *path, sb_err *err);
 /* The same with a scene and path already loaded: the session takes them over
  * (freed with it, also when this fails). */

@@ -296,6 +296,16 @@ int sb_stress_run(const sb_run_opts *opts, const char *only, const char *const *
         free(runs);
         if (!ok) return -1;
     }
+    if (only) { /* a CASE that matches none is a typo, not an empty battery */
+        bool any = false;
+        char names[1024] = "";
+        for (size_t ci = 0; ci < SB_COUNT(cases); ci++) {
+            any |= strstr(cases[ci].name, only) != NULL;
+            size_t l = strlen(names);
+            snprintf(names + l, sizeof names - l, "%s%s", ci ? ", " : "", cases[ci].name);
+        }
+        if (!any) return sb_fail(err, "stress: no case matches '%s' (cases: %s, or all)", only, names), -1;
+    }
     /* SB_STRESS_KEEP=1 keeps each case's .glb and .path, to rerun a failing case with `run --images` */
     bool keep = getenv("SB_STRESS_KEEP") != NULL;
     char dir[] = "/tmp/shadowbench-stress-XXXXXX";

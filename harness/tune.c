@@ -83,19 +83,6 @@ typedef struct tune {
     int final_reps;             /* passes of the path each finalist renders, interleaved */
 } tune;
 
-bool sb_parse_duration(const char *text, double *seconds) {
-    char *end;
-    double v = strtod(text, &end);
-    if (end == text || !(v >= 0) || isinf(v)) return false;
-    double unit = 1;
-    if (!strcmp(end, "") || !strcmp(end, "s")) unit = 1;
-    else if (!strcmp(end, "m") || !strcmp(end, "min")) unit = 60;
-    else if (!strcmp(end, "h")) unit = 3600;
-    else return false;
-    *seconds = v * unit;
-    return true;
-}
-
 /* ---- the candidates ---- */
 
 static void short_label(const sb_run_spec *r, char *out, size_t len) {
@@ -228,11 +215,11 @@ static void read_rung(tune *t, int rung, const char *sum_path) {
         for (int i = 0; i < t->n; i++) {
             cand *c = &t->c[i];
             if (strcmp(c->run_id[rung], id)) continue;
-            const char *st = sb_table_get(&tb, r, "status");
-            if (!strcmp(st, "interrupted")) continue;   /* not measured: a resumed search renders it again */
+            sb_status st = sb_status_of(sb_table_get(&tb, r, "status"));
+            if (st == SB_STATUS_INTERRUPTED) continue;   /* not measured: a resumed search renders it again */
             c->rung = rung;
-            c->skipped = !strcmp(st, "skipped");
-            c->failed = !strcmp(st, "failed");
+            c->skipped = st == SB_STATUS_SKIPPED;
+            c->failed = st == SB_STATUS_FAILED;
             snprintf(c->reason, sizeof c->reason, "%s", sb_table_get(&tb, r, "reason"));
             double v;
             /* early rungs: the fastest frame, which a slow spell on a shared machine does not lower (all
@@ -539,7 +526,10 @@ static bool write_csv(const tune *t, sb_err *err) {
         sb_csv_str(&csv, c->label);
         sb_csv_int(&csv, c->rung);
         sb_csv_int(&csv, c->rung >= 0 ? c->frames : 0);
-        sb_csv_str(&csv, c->rung < 0 ? "not_run" : c->skipped ? "skipped" : c->failed ? "failed" : "ok");
+        sb_csv_str(&csv, c->rung < 0 ? "not_run"
+                         : sb_status_names[c->skipped  ? SB_STATUS_SKIPPED
+                                          : c->failed ? SB_STATUS_FAILED
+                                                      : SB_STATUS_OK]);
         sb_csv_str(&csv, c->reason);
         sb_csv_num(&csv, c->time_ms);
         sb_csv_num(&csv, c->time_ci);
@@ -693,7 +683,7 @@ static void print_report(const tune *t, int chosen, bool met) {
 int sb_tune_main(const sb_tune_cmd *cmd) {
     if ((cmd->max_err > 0) == (cmd->budget_ms > 0)) {
         fprintf(stderr, "shadowbench: tune needs one of --max-err E or --budget-ms B\n");
-        return 2;
+        return SB_EXIT_BAD_INPUT;
     }
     tune t;
     memset(&t, 0, sizeof t);
@@ -703,7 +693,7 @@ int sb_tune_main(const sb_tune_cmd *cmd) {
     sb_err err;
     if (!make_candidates(&t, &err)) {
         fprintf(stderr, "shadowbench: %s\n", err.msg);
-        return 2;
+        return SB_EXIT_BAD_INPUT;
     }
     if (cmd->opts->error_every <= 0) {
         fprintf(stderr, "shadowbench: tune needs the error: --error-every must be at least 1\n");
@@ -720,9 +710,10 @@ int sb_tune_main(const sb_tune_cmd *cmd) {
     }
     if (!sb_session_open(&t.s, cmd->opts, cmd->scene, cmd->path ? cmd->path : "auto", &err)) {
         fprintf(stderr, "shadowbench: %s\n", err.msg);
+        int rc = t.s.files_refused ? SB_EXIT_BAD_INPUT : SB_EXIT_FAILED;
         sb_session_close(&t.s);
         free(t.c);
-        return 1;
+        return rc;
     }
     if (cmd->resume) {
         snprintf(t.dir, sizeof t.dir, "%s", cmd->resume);
@@ -733,7 +724,7 @@ int sb_tune_main(const sb_tune_cmd *cmd) {
             fprintf(stderr, "shadowbench: %s\n", err.msg);
             sb_session_close(&t.s);
             free(t.c);
-            return 1;
+            return SB_EXIT_WRITE;   /* the results folder could not be made */
         }
     }
     sb_session_keep_reference(&t.s, t.dir);   /* OUT/tune-SCENE/.reference: reruns and --resume cast no ray twice */

@@ -27,8 +27,6 @@ typedef struct sb_tune_cmd {
     const char *out, *resume;           /* results base folder; or a tune folder to resume */
 } sb_tune_cmd;
 
-/* Parses a duration: "90", "90s", "5m", "1.5h" (seconds out). */
-bool sb_parse_duration(const char *text, double *seconds);
 /* Runs the search and prints the recommendation, the Pareto front and a batch
  * line; writes tune.csv, front.svg, tune.bench and each rung's results under
  * OUT/tune-SCENE/<UTC time>/. Returns 0 (a recommendation), 1 (nothing met

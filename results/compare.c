@@ -80,9 +80,9 @@ static bool known_metric(const sb_table *t, const char *m) {
 }
 
 static void header(FILE *out, int format, const char *a, const char *b) {
-    if (format == SB_FORMAT_CSV)
+    if (format == SB_OUTPUT_CSV)
         fprintf(out, "scene,path,technique,params,metric,%s,%s,ratio,verdict\n", a, b);
-    else if (format == SB_FORMAT_MARKDOWN)
+    else if (format == SB_OUTPUT_MARKDOWN)
         fprintf(out, "| scene | path | technique | params | metric | %s | %s | ratio | verdict |\n|---|---|---|---|---|---:|---:|---:|---|\n", a, b);
 }
 
@@ -91,7 +91,7 @@ static void row(FILE *out, int format, const sb_table *t, int r, const char *par
     double ratio = a != 0 ? b / a : (b == 0 ? 1 : INFINITY);
     const char *scene = sb_table_get(t, r, "scene"), *path = sb_table_get(t, r, "path"),
                *tech = sb_table_get(t, r, "technique");
-    if (format == SB_FORMAT_CSV) {
+    if (format == SB_OUTPUT_CSV) {
         sb_csv c = {0};
         sb_csv_str(&c, scene);
         sb_csv_str(&c, path);
@@ -105,7 +105,7 @@ static void row(FILE *out, int format, const sb_table *t, int r, const char *par
         sb_csv_end_row(&c);
         fputs(c.buf, out);
         sb_csv_free(&c);
-    } else if (format == SB_FORMAT_MARKDOWN) {
+    } else if (format == SB_OUTPUT_MARKDOWN) {
         fprintf(out, "| %s | %s | %s | `%s` | %s | %.4g | %.4g | %.3f | %s |\n", scene, path, tech, params, m, a, b,
                 ratio, verdict);
     } else {
@@ -144,12 +144,12 @@ int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FIL
     int regressions = 0, matched = 0, shaky = 0;
     header(out, o->format, "base", "new");
     for (int rb = 0; rb < B.nrows; rb++) {
-        if (strcmp(sb_table_get(&B, rb, "status"), "ok")) continue;
+        if (sb_status_of(sb_table_get(&B, rb, "status")) != SB_STATUS_OK) continue;
         char kb[4096], ka[4096];
         sb_compare_run_key(&B, rb, kb, sizeof kb);
         int ra = -1;
         for (int r = 0; r < A.nrows && ra < 0; r++) {
-            if (strcmp(sb_table_get(&A, r, "status"), "ok")) continue;
+            if (sb_status_of(sb_table_get(&A, r, "status")) != SB_STATUS_OK) continue;
             sb_compare_run_key(&A, r, ka, sizeof ka);
             if (!strcmp(ka, kb)) ra = r;
         }
@@ -174,7 +174,7 @@ int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FIL
                 regressed ? "REGRESSED" : worse ? "worse, within noise" : "ok");
         }
     }
-    if (o->format == SB_FORMAT_TEXT)
+    if (o->format == SB_OUTPUT_TEXT)
         fprintf(out, "%d run(s) matched, %d regression(s) beyond %.3g%%, %d timing(s) UNSTABLE\n", matched, regressions,
                 o->threshold_pct, shaky);
     if (unstable) *unstable = shaky;
@@ -261,7 +261,7 @@ typedef struct {
 } cell_table;
 
 static void table_print(const cell_table *tb, int format, FILE *out) {
-    if (format == SB_FORMAT_CSV) {
+    if (format == SB_OUTPUT_CSV) {
         sb_csv c = {0};
         for (int k = 0; k < tb->ncols; k++) sb_csv_str(&c, tb->head[k]);
         sb_csv_end_row(&c);
@@ -279,7 +279,7 @@ static void table_print(const cell_table *tb, int format, FILE *out) {
         for (int r = 0; r < tb->nrows; r++)
             if ((int)strlen(tb->cells[r][k]) > w[k]) w[k] = (int)strlen(tb->cells[r][k]);
     }
-    bool md = format == SB_FORMAT_MARKDOWN;
+    bool md = format == SB_OUTPUT_MARKDOWN;
     for (int r = -1; r < tb->nrows; r++) {
         for (int k = 0; k < tb->ncols; k++) {
             const char *v = r < 0 ? tb->head[k] : tb->cells[r][k];
@@ -305,7 +305,8 @@ static void cell_num(char *out, double v) {
 static bool is_pair(const sb_table *t, int ra, int rb, const char *key, const char *va, const char *vb) {
     const char *pa = sb_table_get(t, ra, "params"), *pb = sb_table_get(t, rb, "params");
     char v[256];
-    if (ra == rb || strcmp(sb_table_get(t, ra, "status"), "ok") || strcmp(sb_table_get(t, rb, "status"), "ok"))
+    if (ra == rb || sb_status_of(sb_table_get(t, ra, "status")) != SB_STATUS_OK ||
+        sb_status_of(sb_table_get(t, rb, "status")) != SB_STATUS_OK)
         return false;
     if (strcmp(sb_table_get(t, ra, "scene"), sb_table_get(t, rb, "scene")) ||
         strcmp(sb_table_get(t, ra, "path"), sb_table_get(t, rb, "path")))
@@ -407,17 +408,17 @@ int sb_compare_pairs(const char *dir, const sb_compare_opts *o, FILE *out, sb_er
     cell_table tb;
     memset(&tb, 0, sizeof tb);
     pairs_table(&t, rows, n, key, la, lb, metrics, nm, &tb);
-    if (o->format != SB_FORMAT_CSV) {
+    if (o->format != SB_OUTPUT_CSV) {
         char shared[2048] = "";
         for (int j = 0; n && j < rows[0].nitems; j++)
             if (shared_item(rows, n, rows[0].items[j])) {
                 size_t l = strlen(shared);
                 snprintf(shared + l, sizeof shared - l, "%s%s", l ? ":" : "", rows[0].items[j]);
             }
-        if (shared[0]) fprintf(out, o->format == SB_FORMAT_MARKDOWN ? "Every pair: `%s`\n\n" : "every pair: %s\n", shared);
+        if (shared[0]) fprintf(out, o->format == SB_OUTPUT_MARKDOWN ? "Every pair: `%s`\n\n" : "every pair: %s\n", shared);
     }
     if (n) table_print(&tb, o->format, out);
-    if (o->format == SB_FORMAT_TEXT) fprintf(out, "%d pair(s) %s=%s against %s=%s\n", n, key, vb, key, va);
+    if (o->format == SB_OUTPUT_TEXT) fprintf(out, "%d pair(s) %s=%s against %s=%s\n", n, key, vb, key, va);
     free(tb.cells);
     free(rows);
     sb_table_free(&t);

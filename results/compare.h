@@ -5,7 +5,8 @@
 
 #include "util.h"
 
-enum { SB_FORMAT_TEXT, SB_FORMAT_CSV, SB_FORMAT_MARKDOWN };
+/* How a table is written (--format). */
+typedef enum sb_output_format { SB_OUTPUT_TEXT, SB_OUTPUT_CSV, SB_OUTPUT_MARKDOWN } sb_output_format;
 
 typedef struct sb_compare_opts {
     const char *metrics[32];    /* default: final_ms, cascade_ms, gpu_ms, shadow_draw_calls, err_rate */

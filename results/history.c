@@ -616,7 +616,7 @@ char **sb_history_series(sb_history *h, int *n) {
 }
 
 void sb_history_print_changes(const sb_history_change *c, int n, int format, FILE *out) {
-    if (format == SB_FORMAT_CSV)
+    if (format == SB_OUTPUT_CSV)
         fprintf(out, "series,host,metric,night_before,night_after,date_after,before,after,change_pct,z,p,"
                      "commit_before,commit_after,verdict\n");
     else
@@ -628,7 +628,7 @@ void sb_history_print_changes(const sb_history_change *c, int n, int format, FIL
         const char *label = c[i].label, *host = f.f[0];
         const char *verdict = c[i].regression ? (c[i].recent ? "REGRESSION (recent)" : "regression")
                                               : (c[i].recent ? "improvement (recent)" : "improvement");
-        if (format == SB_FORMAT_CSV) {
+        if (format == SB_OUTPUT_CSV) {
             sb_csv row = {0};
             sb_csv_str(&row, label);
             sb_csv_str(&row, host);

@@ -65,7 +65,7 @@ char **sb_history_series(sb_history *h, int *n);
 /* Short names of series[0..n) (each malloc'd): the parameters every series of
  * the same technique shares are left out, and the host unless there are several. */
 char **sb_history_labels(char *const *series, int n);
-/* Prints changes as a table (format: SB_FORMAT_TEXT or _CSV of compare.h). */
+/* Prints changes as a table (format: SB_OUTPUT_TEXT or _CSV of compare.h). */
 void sb_history_print_changes(const sb_history_change *c, int n, int format, FILE *out);
 
 /* The database, for the report (site.c) to read. */

@@ -142,7 +142,7 @@ enum { I_RUN_INDEX, I_FRAMES, I_WARMUP, I_WIDTH, I_HEIGHT, I_SCENE_TRIS };
 static sb_cell r_text(const sb_run_row *r, int a) {
     const sb_run_info *in = r->info;
     const char *v[] = {in->run_id, in->scene, in->path, in->technique, in->params, in->backend, in->renderer,
-                       in->timing, in->status, in->reason, in->clocks, in->stable, in->order};
+                       in->timing, sb_status_names[in->status], in->reason, in->clocks, in->stable, in->order};
     return text(v[a]);
 }
 static sb_cell r_int(const sb_run_row *r, int a) {
@@ -514,11 +514,21 @@ void sb_summary_add_calib(sb_summary *sum, double calib_ms) {
     sum->calib[sum->ncalib++] = calib_ms;
 }
 
-static void count_status(sb_summary *sum, const char *status) {
+const char *const sb_status_names[SB_STATUS_COUNT] = {"ok", "skipped", "interrupted", "failed"};
+
+sb_status sb_status_of(const char *name) {
+    for (int s = 0; s < SB_STATUS_COUNT; s++) { /* the one place a name is read back */
+        const char *n = sb_status_names[s];
+        if (name && !strcmp(name, n)) return s;
+    }
+    return SB_STATUS_FAILED;
+}
+
+static void count_status(sb_summary *sum, sb_status status) {
     sum->count++;
-    sum->failed += !strcmp(status, "failed");
-    sum->interrupted += !strcmp(status, "interrupted");
-    sum->skipped += !strcmp(status, "skipped");
+    sum->failed += status == SB_STATUS_FAILED;
+    sum->interrupted += status == SB_STATUS_INTERRUPTED;
+    sum->skipped += status == SB_STATUS_SKIPPED;
 }
 
 /* $SB_AUDIT_OUTCOMES (the test suite sets it): every run that did not end ok
@@ -526,14 +536,14 @@ static void count_status(sb_summary *sum, const char *status) {
  * summary it wrote that none ended without a reason. */
 static void audit_outcome(const sb_run_info *info) {
     const char *file = getenv("SB_AUDIT_OUTCOMES");
-    if (!file || !*file || !strcmp(info->status, "ok")) return;
+    if (!file || !*file || info->status == SB_STATUS_OK) return;
     FILE *f = fopen(file, "a");
     if (!f) return;
     char reason[1100];
     snprintf(reason, sizeof reason, "%s", info->reason ? info->reason : "");
     for (char *p = reason; *p; p++)
         if (*p == '\t' || *p == '\n') *p = ' ';
-    fprintf(f, "%s\t%s\t%s\t%s\n", info->status, info->run_id ? info->run_id : "", info->technique ? info->technique : "",
+    fprintf(f, "%s\t%s\t%s\t%s\n", sb_status_names[info->status], info->run_id ? info->run_id : "", info->technique ? info->technique : "",
             reason);
     fclose(f);
 }
@@ -551,7 +561,7 @@ void sb_summary_add_outcome(sb_summary *sum, const sb_run_info *info, unsigned s
     sum->unstable += info->stable && !strcmp(info->stable, "no");
 }
 
-void sb_summary_add_line(sb_summary *sum, const char *line, const char *status) {
+void sb_summary_add_line(sb_summary *sum, const char *line, sb_status status) {
     sb_csv_line(&sum->rows, line);
     count_status(sum, status);
 }

@@ -26,8 +26,21 @@ typedef struct sb_frame_rec {
     sb_error_metrics err;
 } sb_frame_rec;
 
+/* A run's status, ordered by severity (the summary's `status` column holds its name). */
+typedef enum sb_status {
+    SB_STATUS_OK,
+    SB_STATUS_SKIPPED,          /* not supported here (a reason says why); nothing to measure */
+    SB_STATUS_INTERRUPTED,      /* SIGINT/SIGTERM stopped it; --resume renders it again */
+    SB_STATUS_FAILED,
+    SB_STATUS_COUNT
+} sb_status;
+extern const char *const sb_status_names[SB_STATUS_COUNT];
+/* The status a summary's cell names; a name that is none of them reads as failed (the most severe). */
+sb_status sb_status_of(const char *name);
+
 typedef struct sb_run_info {
-    const char *run_id, *scene, *path, *technique, *params, *backend, *renderer, *timing, *status, *reason;
+    const char *run_id, *scene, *path, *technique, *params, *backend, *renderer, *timing, *reason;
+    sb_status status;
     const char *clocks;         /* "free", "locked at N MHz" */
     const char *order;          /* --order */
     uint64_t seed;              /* shuffle's seed (0: none) */
@@ -153,14 +166,13 @@ typedef struct sb_summary {
 } sb_summary;
 
 void sb_summary_open(sb_summary *sum, const char *path);
-/* Records one run: its row, counted by info->status ("ok", "failed",
- * "skipped"); recs/times as sb_report_summary_row. */
+/* Records one run: its row, counted by info->status; recs/times as sb_report_summary_row. */
 void sb_summary_add_outcome(sb_summary *sum, const sb_run_info *info, unsigned stages, const sb_frame_rec *recs,
                             const sb_stage_times *times, int n);
 /* Notes a run's probe for the batch median (NaN ignored). */
 void sb_summary_add_calib(sb_summary *sum, double calib_ms);
 /* A row kept as it was from an earlier summary (resume), counted by its status. */
-void sb_summary_add_line(sb_summary *sum, const char *line, const char *status);
+void sb_summary_add_line(sb_summary *sum, const char *line, sb_status status);
 bool sb_summary_flush(sb_summary *sum, sb_err *err);
 void sb_summary_free(sb_summary *sum);
 /* Writes DIR/columns.csv (sb_report_columns): a results set describes its own columns. */

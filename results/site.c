@@ -162,7 +162,7 @@ static void night_pairs(const char *summary_path, jbuf *j) {
         size_t len = 0;
         FILE *mem = open_memstream(&text, &len);
         if (!mem) continue;
-        sb_compare_opts o = {.format = SB_FORMAT_CSV, .pair = keys[k], .threshold_pct = 5};
+        sb_compare_opts o = {.format = SB_OUTPUT_CSV, .pair = keys[k], .threshold_pct = 5};
         sb_err e;
         int n = sb_compare_pairs(summary_path, &o, mem, &e);
         fclose(mem);

@@ -27,12 +27,6 @@ const char *sb_blend_policy_name(sb_blend_policy p) {
     return p == SB_BLEND_OPAQUE ? "opaque" : p == SB_BLEND_NONE ? "none" : "mask";
 }
 
-bool sb_blend_policy_parse(const char *v, sb_blend_policy *out) {
-    for (int p = SB_BLEND_MASK; p <= SB_BLEND_NONE; p++)
-        if (!strcmp(v, sb_blend_policy_name((sb_blend_policy)p))) return *out = (sb_blend_policy)p, true;
-    return false;
-}
-
 uint32_t sb_scene_add_material(sb_scene *s, const sb_material *m) {
     if (!m->test) return 0;
     for (uint32_t i = 1; i < s->material_count; i++)

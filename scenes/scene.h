@@ -61,7 +61,6 @@ typedef enum sb_blend_policy {
     SB_BLEND_NONE,          /* left out: neither seen, nor casting, nor hit */
 } sb_blend_policy;
 const char *sb_blend_policy_name(sb_blend_policy p);
-bool sb_blend_policy_parse(const char *s, sb_blend_policy *out);
 
 /* What a loaded file held and how it was treated (shadowbench info SCENE). */
 typedef struct sb_scene_features {

@@ -49,7 +49,7 @@ bool sb_csm_supported(const sb_gpu *g, const sb_csm_desc *d, const char *name, s
 }
 
 /* A moments map's texel format, for GL and for the blur's image (by
- * SB_FORMAT_*): as many 32-bit float channels as the format stores
+ * SB_MAP_*): as many 32-bit float channels as the format stores
  * (moments.frag): esm one, vsm two, msm four. A channel more would be memory
  * traffic in every clear, draw, blur pass and lookup. */
 static const struct {
@@ -109,7 +109,7 @@ static bool create_depth_programs(sb_csm *c, sb_err *err) {
     for (int a = 0; a < (c->gpu->scene->alpha_tested_draws ? 2 : 1); a++) {
         sb_csm_pass *p = &c->pass[a];
         char defs[256];
-        snprintf(defs, sizeof defs, "%s#define SB_FORMAT %d\n", a ? "" : sb_opaque_define(c->gpu), d->format);
+        snprintf(defs, sizeof defs, "%s#define SB_MAP_FORMAT %d\n", a ? "" : sb_opaque_define(c->gpu), d->format);
         const char *vs_cascade[] = {sb_shader_csm_block_glsl, sb_shader_csm_depth_vert};
         const sb_shader_src per[] = {{GL_VERTEX_SHADER, vs_cascade, 2}, {GL_FRAGMENT_SHADER, fs_depth, 1}};
         if (!(p->prog_cascade = sb_gpu_link(a ? "cascade depth (alpha-tested draws)" : "cascade depth", defs, per, 2,
@@ -151,7 +151,7 @@ static bool create_final(sb_csm *c, const char *name, sb_err *err) {
     char defines[192];
     const sb_csm_desc *d = &c->d;
     snprintf(defines, sizeof defines,
-             "#define SB_FILTER %d\n#define SB_SELECT %d\n#define SB_FORMAT %d\n#define SB_MAPS %d\n"
+             "#define SB_FILTER %d\n#define SB_SELECT %d\n#define SB_MAP_FORMAT %d\n#define SB_MAPS %d\n"
              "#define SB_WARP %d\n#define SB_BLEND %d\n",
              d->filter, d->select, d->format, c->count, d->warp != SB_WARP_NONE || d->perspective, d->blend > 0);
     const char *vis[] = {sb_shader_csm_block_glsl, sb_shader_vis_csm_glsl};
@@ -315,7 +315,7 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
     glDepthMask(GL_TRUE);
     if (d->format) { /* moments of the far plane: nothing occludes */
         const float z = 1.0f, e = (float)exp(d->exponent);
-        const float far[4] = {d->format == SB_FORMAT_ESM ? e : z, z, z, z};
+        const float far[4] = {d->format == SB_MAP_ESM ? e : z, z, z, z};
         glClearBufferfv(GL_COLOR, 0, far);
     }
     glClear(GL_DEPTH_BUFFER_BIT);   /* every layer */

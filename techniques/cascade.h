@@ -12,7 +12,8 @@
 #include "lightfit.h"
 
 enum { SB_WARP_NONE, SB_WARP_LISPSM, SB_WARP_TSM };
-enum { SB_FORMAT_DEPTH, SB_FORMAT_VSM, SB_FORMAT_ESM, SB_FORMAT_MSM };
+/* What a shadow map stores (format=): depth, or the moments of a filtered format. */
+enum { SB_MAP_DEPTH, SB_MAP_VSM, SB_MAP_ESM, SB_MAP_MSM };
 enum { SB_FILTER_NONE, SB_FILTER_HW, SB_FILTER_PCF3, SB_FILTER_PCF5, SB_FILTER_POISSON16, SB_FILTER_PCSS };
 
 /* Every shadow-map setting; a technique's parameter struct starts with one. */

@@ -305,12 +305,6 @@ double sb_now_ms(void) {
     return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
 }
 
-double sb_cpu_ms(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
-
 char *sb_strdup(const char *s) {
     size_t n = strlen(s) + 1;
     char *d = malloc(n);
@@ -372,3 +366,19 @@ void *sb_xrealloc(void *p, size_t n) { return checked(realloc(p, n ? n : 1), n);
 static double g_start_ms;
 __attribute__((constructor)) static void note_start(void) { g_start_ms = sb_now_ms(); }
 double sb_process_start_ms(void) { return g_start_ms; }
+
+const sb_exit_status sb_exit_statuses[] = {
+    {SB_EXIT_OK, "ok", "every run succeeded or was skipped with a reason; compare and history regressions: no regression"},
+    {SB_EXIT_FAILED, "failed",
+     "a run failed (recorded in the summary; the others still ran); compare: a regression; history regressions: a "
+     "regression starts in the newest --recent nights; history add: a set could not be added"},
+    {SB_EXIT_BAD_INPUT, "bad-input",
+     "bad input of any kind: an unknown, misplaced or out-of-range option, a missing or invalid scene, path, batch, "
+     "results or history file; nothing was rendered"},
+    {SB_EXIT_UNSTABLE, "unstable", "compare: no regression, but a compared timing is UNSTABLE (a run marked stable=no)"},
+    {SB_EXIT_WRITE, "not-written",
+     "a result file could not be written whole (a full disk, a failed fsync, close or rename; named on stderr)"},
+    {SB_EXIT_SIGNAL + 2, "interrupted", "SIGINT stopped it in order (completed runs kept; --resume DIR goes on)"},
+    {SB_EXIT_SIGNAL + 15, "terminated", "SIGTERM stopped it in order, as SIGINT"},
+};
+const int sb_exit_status_count = (int)SB_COUNT(sb_exit_statuses);

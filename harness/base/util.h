@@ -47,9 +47,24 @@ bool sb_write_file_atomic(const char *path, const void *data, size_t size, sb_er
 bool sb_write_cache_file_atomic(const char *path, const void *data, size_t size, const char *what);
 /* A cache that cannot be kept (its folder, its file): the one warning a process. */
 void sb_cache_unkept(const char *what, const char *why);
-/* A result (CSV, summary, meta, image, report page) could not be written
- * whole: the process then exits SB_EXIT_WRITE, whatever else it did. */
-#define SB_EXIT_WRITE 4
+/* The exit statuses, one table (sb_exit_statuses): every command exits with
+ * one of these, `shadowbench --help` lists them, and the docs check reads
+ * them from there into docs/cli.md and the man page. */
+enum {
+    SB_EXIT_OK = 0,
+    SB_EXIT_FAILED = 1,         /* a run failed (recorded; the others ran), or compare/history found a regression */
+    SB_EXIT_BAD_INPUT = 2,      /* options, unreadable or invalid scene, path, batch, results or history files */
+    SB_EXIT_UNSTABLE = 3,       /* compare: no regression, but a compared timing is UNSTABLE */
+    SB_EXIT_WRITE = 4,          /* a result (CSV, summary, meta, image, report page) could not be written whole */
+    SB_EXIT_SIGNAL = 128,       /* + the signal: SIGINT (130) or SIGTERM (143) stopped it in order */
+};
+typedef struct sb_exit_status {
+    int code;
+    const char *name;           /* one word: ok, failed, bad-input, ... */
+    const char *meaning;
+} sb_exit_status;
+extern const sb_exit_status sb_exit_statuses[];
+extern const int sb_exit_status_count;
 
 /* SIGINT and SIGTERM: the first asks for an orderly stop (the frame in flight
  * finishes, completed runs keep their rows, the interrupted run gets a row of
@@ -80,7 +95,6 @@ uint64_t sb_hash_words(const uint64_t *w, int n);
 
 double sb_now_ms(void);          /* CLOCK_MONOTONIC in milliseconds */
 double sb_process_start_ms(void);   /* sb_now_ms() when the process started */
-double sb_cpu_ms(void);          /* process CPU time in milliseconds */
 
 /* Allocation that cannot return NULL: out of memory prints one line
  * ("shadowbench: out of memory (N bytes)") and exits with status 1. */

@@ -210,14 +210,6 @@ static double amd_sclk(const char *path) {
 
 /* ---- the reader ---- */
 
-bool sb_clocks_parse(const char *s, sb_clocks_mode *out) {
-    if (!strcmp(s, "auto")) *out = SB_CLOCKS_AUTO;
-    else if (!strcmp(s, "lock")) *out = SB_CLOCKS_LOCK;
-    else if (!strcmp(s, "free")) *out = SB_CLOCKS_FREE;
-    else return false;
-    return true;
-}
-
 sb_clocks *sb_clocks_open(const sb_context *ctx, const char *sysfs_root) {
     sb_clocks *c = sb_xcalloc(1, sizeof *c);
     char why_nv[200] = "", why_fs[200] = "";
@@ -239,7 +231,6 @@ void sb_clocks_close(sb_clocks *c) {
 }
 
 const char *sb_clocks_source(const sb_clocks *c) { return c ? c->source : "none"; }
-bool sb_clocks_readable(const sb_clocks *c) { return c && c->src != SRC_NONE; }
 
 void sb_clocks_sample(const sb_clocks *c, sb_clock_sample *s) {
     s->gfx_mhz = s->mem_mhz = s->power_w = s->temp_c = NAN;

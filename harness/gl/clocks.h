@@ -23,8 +23,6 @@
 
 typedef enum sb_clocks_mode { SB_CLOCKS_AUTO, SB_CLOCKS_LOCK, SB_CLOCKS_FREE } sb_clocks_mode;
 
-bool sb_clocks_parse(const char *s, sb_clocks_mode *out);
-
 typedef struct sb_clock_sample {
     double gfx_mhz, mem_mhz, power_w, temp_c;   /* NaN when not readable */
     uint64_t throttle;                          /* NVML clock event (throttle) reason bits */
@@ -39,7 +37,6 @@ void sb_clocks_close(sb_clocks *c);
 /* Where the values come from ("nvml: NVIDIA H100 ...", "sysfs: amdgpu card0"),
  * or why there are none ("none: ..."). */
 const char *sb_clocks_source(const sb_clocks *c);
-bool sb_clocks_readable(const sb_clocks *c);
 /* The graphics clock now, MHz (NaN when not readable; NULL reader allowed). */
 double sb_clocks_mhz(const sb_clocks *c);
 void sb_clocks_sample(const sb_clocks *c, sb_clock_sample *out);

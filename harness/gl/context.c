@@ -11,13 +11,6 @@
 #include "glad_gl.h"
 
 
-bool sb_backend_parse(const char *s, sb_backend *out) {
-    if (strcmp(s, "egl") == 0) *out = SB_BACKEND_EGL;
-    else if (strcmp(s, "osmesa") == 0) *out = SB_BACKEND_OSMESA;
-    else return false;
-    return true;
-}
-
 const char *sb_backend_name(sb_backend b) { return b == SB_BACKEND_OSMESA ? "osmesa" : "egl"; }
 
 static bool has_ext(const char *list, const char *name) {

@@ -30,7 +30,6 @@ double sb_context_memory_free(const sb_context *c, char *source, size_t len);
 /* Reads the pending GL errors away (at most 64: a lost context may report one on every call). */
 void sb_gl_drain_errors(void);
 
-bool sb_backend_parse(const char *s, sb_backend *out);
 const char *sb_backend_name(sb_backend b);
 /* Creates a GL 4.3+ core context and loads GL through glad. */
 bool sb_context_create(sb_context *c, sb_backend b, sb_err *err);

@@ -9,14 +9,6 @@
 
 const char *const sb_stage_names[SB_STAGE_COUNT] = {"zpass", "minmax", "cascade", "final", "volumes", "rays"};
 
-bool sb_timing_parse(const char *s, sb_timing_mode *out) {
-    if (strcmp(s, "auto") == 0) *out = SB_TIMING_AUTO;
-    else if (strcmp(s, "queries") == 0) *out = SB_TIMING_QUERIES;
-    else if (strcmp(s, "sync") == 0) *out = SB_TIMING_SYNC;
-    else return false;
-    return true;
-}
-
 const char *sb_timing_name(sb_timing_mode m) {
     return m == SB_TIMING_QUERIES ? "queries" : m == SB_TIMING_SYNC ? "sync" : "auto";
 }

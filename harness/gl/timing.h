@@ -19,7 +19,6 @@
 
 typedef enum sb_timing_mode { SB_TIMING_AUTO, SB_TIMING_QUERIES, SB_TIMING_SYNC } sb_timing_mode;
 
-bool sb_timing_parse(const char *s, sb_timing_mode *out);
 const char *sb_timing_name(sb_timing_mode m);
 
 /* The ring bookkeeping, separate from GL so it can be tested on its own. */

@@ -26,7 +26,7 @@ float sb_tap(vec3 c, float layer, vec2 off) {
     return texture(u_shadow, vec4(c.xy + off * u_texel, layer, c.z));
 }
 
-// Filtered formats (SB_FORMAT 1 vsm, 2 esm, 3 msm): visibility from the blurred moments.
+// Filtered formats (SB_MAP_FORMAT 1 vsm, 2 esm, 3 msm): visibility from the blurred moments.
 uniform sampler2DArray u_moments;
 uniform float u_bleed;      // light-bleeding reduction (vsm, msm)
 uniform float u_exponent;   // esm
@@ -36,13 +36,13 @@ float sb_reduce_bleed(float p) { return clamp((p - u_bleed) / (1.0 - u_bleed), 0
 float sb_filtered(vec3 c, float layer) {
     vec4 m = texture(u_moments, vec3(c.xy, layer));
     float z = c.z;
-#if SB_FORMAT == 1
+#if SB_MAP_FORMAT == 1
     // Chebyshev's one-sided bound (Donnelly & Lauritzen 2006)
     if (z <= m.x) return 1.0;
     float var = max(m.y - m.x * m.x, 1e-7);
     float d = z - m.x;
     return sb_reduce_bleed(var / (var + d * d));
-#elif SB_FORMAT == 2
+#elif SB_MAP_FORMAT == 2
     // exp(c (occluder - receiver)) (Annen et al. 2008)
     return clamp(m.x * exp(-u_exponent * z), 0.0, 1.0);
 #else
@@ -103,7 +103,7 @@ float sb_lookup(int k, vec3 p, vec3 n) {
     if (c.x < 0.0 || c.x > 1.0 || c.y < 0.0 || c.y > 1.0 || c.z > 1.0) return 1.0;
     if (!warped) c.z -= u_bias * texel / sb_cascade[k].w;
     float layer = float(k);
-#if SB_FORMAT != 0
+#if SB_MAP_FORMAT != 0
     return sb_filtered(c, layer);
 #elif SB_FILTER == 0 || SB_FILTER == 1
     return sb_tap(c, layer, vec2(0.0));
@@ -164,7 +164,7 @@ float sb_visibility(vec3 p, vec3 n, float view_z) {
     // resolution: texels of the selected map per screen pixel (outside any branch, so
     // the derivatives are in uniform control flow)
     // (the map's size from the texture: the evaluation variant reads no uniform the timed one lacks)
-#if SB_FORMAT != 0
+#if SB_MAP_FORMAT != 0
     vec2 size = vec2(textureSize(u_moments, 0).xy);
 #else
     vec2 size = vec2(textureSize(u_shadow, 0).xy);

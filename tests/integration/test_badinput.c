@@ -13,6 +13,8 @@
 
 #include "support.h"
 
+#include <sys/stat.h>
+
 static char g_tmp[64];
 
 static int setup(void **st) {
@@ -94,11 +96,95 @@ static void test_malformed_path(void **st) {
     expect_cli_fail("bad.path:3: '1O' is not a finite number", "%s run plane-box %s sm --out %s/x", test_binary(), f, g_tmp);
 }
 
+static void write_text(const char *path, const char *text) {
+    FILE *fp = fopen(path, "w");
+    assert_non_null(fp);
+    fputs(text, fp);
+    fclose(fp);
+}
+
+/* Every command, with each kind of bad input it can get: an unknown option, an
+ * option of another command, a value out of range, a missing file, a
+ * malformed file. Each is exit 2 and one line naming the option or the file. */
+static void test_every_command_exit_2(void **st) {
+    (void)st;
+    const char *b = test_binary(), *t = g_tmp;
+    char glb[256], path[256], bench[256], csvdir[256], hist[256];
+    snprintf(glb, sizeof glb, "%s/broken.glb", t);
+    write_text(glb, "glTF this is no binary glTF");
+    snprintf(path, sizeof path, "%s/typo.path", t);
+    write_text(path, "fov 60\nlook 0 0 5 10 0 0 0\nlok 1 5 5 1 0 0 0\n");
+    snprintf(bench, sizeof bench, "%s/typo.bench", t);
+    write_text(bench, "scene a plane-box\ndefaults --frames 4\nsm:rez=2\n");
+    snprintf(csvdir, sizeof csvdir, "%s/set", t);
+    mkdir(csvdir, 0755);
+    char sum[300];
+    snprintf(sum, sizeof sum, "%s/summary.csv", csvdir);
+    write_text(sum, "run_id,scene\n\"unterminated\n");
+    snprintf(hist, sizeof hist, "%s/not.sqlite", t);
+    write_text(hist, "this is not an SQLite database, not even close to one, padded past its header size.....");
+    /* options: unknown, another command's, out of range */
+    for (int c = 0; c < SB_CMD_COUNT; c++) {
+        const char *cmd = sb_commands[c].name;
+        char want[128];
+        snprintf(want, sizeof want, "%s: unknown option --nope", cmd);
+        expect_cli_fail(want, "%s %s --nope 1", b, cmd);
+        const char *foreign = c == SB_CMD_COMPARE ? "--frames 3" : "--pair technique=a,b";
+        snprintf(want, sizeof want, "is not an option of %s", cmd);
+        expect_cli_fail(want, "%s %s %s", b, cmd, foreign);
+        for (int i = 0; i < sb_option_count; i++) { /* the first ranged option the command takes */
+            const sb_option *o = &sb_options[i];
+            if (!(o->commands & SB_IN(c)) || (o->kind != SB_OPT_INT && o->kind != SB_OPT_NUM) || isinf(o->max)) continue;
+            char v[64], head[128];
+            snprintf(v, sizeof v, "%.15g", o->max * 2 + 1);
+            snprintf(head, sizeof head, "%s %s: expected", o->name, v);
+            expect_cli_fail(head, "%s %s %s %s", b, cmd, o->name, v);
+            break;
+        }
+    }
+    /* files: missing, then malformed */
+    expect_cli_fail("nosuch.glb", "%s run %s/nosuch.glb auto sm --out %s/x", b, t, t);
+    expect_cli_fail("broken.glb", "%s run %s auto sm --out %s/x", b, glb, t);
+    expect_cli_fail("nosuch.path", "%s run plane-box %s/nosuch.path sm --out %s/x", b, t, t);
+    expect_cli_fail("typo.path:3", "%s run plane-box %s sm --out %s/x", b, path, t);
+    expect_cli_fail("nosuch.bench", "%s batch %s/nosuch.bench --out %s/x", b, t, t);
+    expect_cli_fail("typo.bench:3", "%s batch %s --out %s/x", b, bench, t);
+    expect_cli_fail("nosuch", "%s compare %s/nosuch %s", b, t, csvdir);
+    expect_cli_fail("summary.csv", "%s compare %s %s", b, csvdir, csvdir);
+    expect_cli_fail("summary.csv", "%s compare %s --pair technique=sm,pssm", b, csvdir);
+    expect_cli_fail("nosuch", "%s merge %s/nosuch --out %s/m", b, t, t);
+    expect_cli_fail("summary.csv", "%s merge %s --out %s/m", b, csvdir, t);
+    expect_cli_fail("nosuch.glb", "%s tune %s/nosuch.glb --max-err 0.1 --out %s/x", b, t, t);
+    expect_cli_fail("broken.glb", "%s tune %s --max-err 0.1 --out %s/x", b, glb, t);
+    expect_cli_fail("nosuchcase", "%s stress nosuchcase", b);
+    expect_cli_fail("smm", "%s stress all smm", b);
+    expect_cli_fail("nosuch", "%s history add %s/nosuch --history %s/h.sqlite", b, t, t);
+    expect_cli_fail("summary.csv", "%s history add %s --history %s/h.sqlite", b, csvdir, t);
+    expect_cli_fail("nosuch.sqlite", "%s history list --history %s/nosuch.sqlite", b, t);
+    expect_cli_fail("not.sqlite", "%s history regressions --history %s", b, hist);
+    expect_cli_fail("nosuch.sqlite", "%s report --history %s/nosuch.sqlite --out %s/site", b, t, t);
+    expect_cli_fail("not.sqlite", "%s report --history %s --out %s/site", b, hist, t);
+    expect_cli_fail("nosuch", "%s report %s/nosuch --out %s/site", b, t, t);
+    expect_cli_fail("summary.csv", "%s report %s --out %s/site", b, csvdir, t);
+    expect_cli_fail("nosuch.glb", "%s info %s/nosuch.glb", b, t);
+    expect_cli_fail("broken.glb", "%s info %s", b, glb);
+    expect_cli_fail("nosuch.path", "%s path %s/nosuch.path", b, t);
+    expect_cli_fail("typo.path:3", "%s path %s", b, path);
+    /* operands a command does not take */
+    expect_cli_fail("usage: shadowbench techniques", "%s techniques extra", b);
+    expect_cli_fail("usage: shadowbench columns", "%s columns extra", b);
+    expect_cli_fail("unknown command 'rnu'", "%s rnu plane-box", b);
+    /* nothing was written by any of them */
+    char x[300];
+    snprintf(x, sizeof x, "%s/x", t);
+    assert_int_not_equal(access(x, F_OK), 0);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_truncated_glb),     cmocka_unit_test(test_nan_vertex),
         cmocka_unit_test(test_bad_index),         cmocka_unit_test(test_unknown_parameter),
-        cmocka_unit_test(test_malformed_path),
+        cmocka_unit_test(test_malformed_path),    cmocka_unit_test(test_every_command_exit_2),
     };
     return cmocka_run_group_tests_name("badinput", tests, setup, teardown);
 }

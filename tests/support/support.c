@@ -267,7 +267,7 @@ const char *expect_cli_fail(const char *needle, const char *fmt, ...) {
     vsnprintf(cmd, sizeof cmd, fmt, ap);
     va_end(ap);
     int rc = run_logged(out, sizeof out, "%s", cmd);
-    assert_int_not_equal(rc, 0);
+    assert_int_equal(rc, SB_EXIT_BAD_INPUT);   /* bad input of any kind: exit 2 */
     assert_non_null(strstr(out, needle));
     /* one line */
     assert_true(strchr(out, '\n') == NULL || strchr(out, '\n') == out + strlen(out) - 1);

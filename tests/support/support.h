@@ -3,6 +3,7 @@
 #include <stdbool.h>
 
 #include "error.h"
+#include "options.h"
 #include "run.h"
 
 /* Classification of a rendered plane-box frame against the analytic shadow. */
@@ -76,7 +77,7 @@ void expect_scene_refused(const char *path, const char *needle);
 struct sb_table;
 void summary_table(const char *dir, struct sb_table *t);
 
-/* Runs the printf-formatted command (logged) expecting a non-zero exit and
+/* Runs the printf-formatted command (logged) expecting exit 2 (bad input) and
  * one line of output holding needle; returns that output. */
 const char *expect_cli_fail(const char *needle, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 /* Copies the bundled scene file `name` (from SB_DATA_DIR) to dst. */

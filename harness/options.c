@@ -1,0 +1,787 @@
+/* options.c - the commands and the option table; one parser for both
+ * (options.h). */
+#include "options.h"
+
+#include <math.h>
+#include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "compare.h"
+#include "image.h"
+
+const sb_command_def sb_commands[SB_CMD_COUNT] = {
+    [SB_CMD_RUN] = {"run", "run SCENE PATH SPEC... [--resume DIR]",
+                    "render each technique spec along the path, write CSV "
+                    "(--resume: keep DIR's complete runs)"},
+    [SB_CMD_BATCH] = {"batch", "batch FILE [--shard I/N] [--resume DIR] [--dry-run]", "run a matrix from a batch file"},
+    [SB_CMD_COMPARE] = {"compare",
+                        "compare BASE NEW [--metric M,...] [--threshold PCT] [--format "
+                        "text|csv|markdown]\n"
+                        "compare RESULTS --pair KEY=A,B",
+                        "two results sets, or the runs of one set that differ only in KEY; "
+                        "exit 1 on a "
+                        "regression, 3 when none but a compared timing is UNSTABLE"},
+    [SB_CMD_MERGE] = {"merge", "merge DIR... --out DIR", "merge shard outputs into one results set"},
+    [SB_CMD_TUNE] = {"tune",
+                     "tune SCENE [PATH] [SPEC...] --max-err E | --budget-ms B "
+                     "[--techniques LIST] [--time-limit D]",
+                     "the cheapest settings within an error bound (or the most "
+                     "accurate within a frame-time budget), "
+                     "by successive halving"},
+    [SB_CMD_STRESS] = {"stress", "stress [CASE|all [SPEC...]]",
+                       "numerical-stability battery; SPECs replace the battery's techniques"},
+    [SB_CMD_HISTORY] = {"history",
+                        "history add DIR...\n"
+                        "history list\n"
+                        "history regressions [--metric M,...] [--since DATE] [--recent N] "
+                        "[--noise-floor PCT]",
+                        "keep results sets in the history, list its nights, find changes "
+                        "across the nights per series "
+                        "(exit 1 when a regression starts in the newest --recent nights)"},
+    [SB_CMD_REPORT] = {"report", "report [DIR | --history FILE] [--out SITE]", "a static site to open in a browser"},
+    [SB_CMD_TECHNIQUES] = {"techniques", "techniques", "list techniques and their parameters"},
+    [SB_CMD_COLUMNS] = {"columns", "columns [--format csv|markdown]", "the CSV columns (per frame and per run)"},
+    [SB_CMD_INFO] = {"info", "info [SCENE]", "backends, GL renderer and features; or what a scene holds"},
+    [SB_CMD_PATH] = {"path", "path PATH [SCENE] [--frames N]", "print the sampled cameras as CSV"},
+};
+
+int sb_command_find(const char *name) {
+    for (int c = 0; c < SB_CMD_COUNT; c++)
+        if (!strcmp(sb_commands[c].name, name)) return c;
+    return -1;
+}
+
+/* Who takes what: the run options go to the commands that render (and, marked
+ * SB_IN_FILE, to a batch file's defaults line). */
+#define RUN_BATCH (SB_IN(SB_CMD_RUN) | SB_IN(SB_CMD_BATCH) | SB_IN_FILE)
+#define RENDER (RUN_BATCH | SB_IN(SB_CMD_TUNE))
+#define RENDER_STRESS (RENDER | SB_IN(SB_CMD_STRESS))
+#define READS_SCENES (RENDER | SB_IN(SB_CMD_INFO) | SB_IN(SB_CMD_PATH))
+#define EVERY ((1u << SB_CMD_COUNT) - 1)
+
+/* --images needs the image writer, which a build may leave out. */
+static bool images_built(const char *v, const sb_cli_opts *o, sb_err *err) {
+    if (o->run.images > 0 && !sb_images_available())
+        return sb_fail(err, "--images %s: %s", v, sb_images_unavailable_reason());
+    return true;
+}
+
+#define F(f) offsetof(sb_cli_opts, f)
+#define RUN(f) offsetof(sb_cli_opts, run.f)
+
+static const int overlap_values[] = {-1, 1, 0};
+static const int compare_formats[] = {SB_OUTPUT_TEXT, SB_OUTPUT_CSV, SB_OUTPUT_MARKDOWN};
+static const int history_formats[] = {SB_OUTPUT_TEXT, SB_OUTPUT_CSV};
+static const int columns_formats[] = {SB_OUTPUT_CSV, SB_OUTPUT_MARKDOWN};
+
+const sb_option sb_options[] = {
+    /* the context and timing */
+    {.name = "--backend",
+     .kind = SB_OPT_CHOICE,
+     .arg = "egl|osmesa",
+     .def = "egl",
+     .commands = RENDER_STRESS | SB_IN(SB_CMD_INFO),
+     .field = RUN(backend),
+     .help = "GL context"},
+    {.name = "--timing",
+     .kind = SB_OPT_CHOICE,
+     .arg = "auto|queries|sync",
+     .def = "auto",
+     .commands = RENDER_STRESS,
+     .field = RUN(timing),
+     .help = "stage timing (auto: sync on software rasterizers)"},
+    {.name = "--ring",
+     .kind = SB_OPT_INT,
+     .arg = "N",
+     .min = 1,
+     .max = 16,
+     .def = "3",
+     .commands = RENDER_STRESS,
+     .field = RUN(ring),
+     .help = "timer-query ring depth in frames"},
+    {.name = "--clocks",
+     .kind = SB_OPT_CHOICE,
+     .arg = "auto|lock|free",
+     .def = "auto",
+     .commands = RENDER_STRESS,
+     .field = RUN(clocks),
+     .help = "lock the GPU clock for the invocation (NVML; auto: when permitted)"},
+    {.name = "--gpu-memory",
+     .kind = SB_OPT_BYTES,
+     .arg = "SIZE",
+     .min = 1,
+     .max = 1e15,
+     .def_help = "what the GL reports free, or on a software rasterizer the "
+                 "system memory available",
+     .commands = RENDER_STRESS,
+     .field = RUN(gpu_memory),
+     .help = "GPU memory a run may allocate, e.g. 8G or 512M"},
+    /* what is rendered */
+    {.name = "--frames",
+     .kind = SB_OPT_INT,
+     .arg = "N",
+     .min = 1,
+     .max = 1000000,
+     .def = "60",
+     .def_help = "60; tune 33, stress 3",
+     .commands = RENDER_STRESS | SB_IN(SB_CMD_PATH),
+     .field = RUN(frames),
+     .help = "frames sampled along the path"},
+    {.name = "--warmup",
+     .kind = SB_OPT_INT,
+     .arg = "auto|N",
+     .max = 10000,
+     .can_auto = true,
+     .def = "auto",
+     .def_help = "auto: until the GPU's times and clocks settle; tune 1",
+     .commands = RENDER,
+     .field = RUN(warmup),
+     .help = "warm-up frames, excluded"},
+    {.name = "--size",
+     .kind = SB_OPT_SIZE,
+     .arg = "WxH",
+     .min = 1,
+     .max = 16384,
+     .def = "1280x720",
+     .def_help = "1280x720; stress 320x180",
+     .commands = RENDER_STRESS | SB_IN(SB_CMD_PATH),
+     .field = RUN(width),
+     .field2 = RUN(height),
+     .help = "render size"},
+    {.name = "--sun",
+     .kind = SB_OPT_ANGLES,
+     .arg = "AZ,EL",
+     .min = -90,
+     .max = 90,
+     .def_help = "the scene's first directional light, else 135,40",
+     .commands = RENDER,
+     .field = RUN(sun_az),
+     .field2 = RUN(sun_el),
+     .given_field = RUN(sun_override),
+     .help = "sun azimuth and elevation in degrees"},
+    {.name = "--error-every",
+     .kind = SB_OPT_INT,
+     .arg = "K",
+     .max = 1000000,
+     .def = "10",
+     .def_help = "10; tune 1",
+     .commands = RENDER,
+     .field = RUN(error_every),
+     .help = "shadow error against the exact ray-cast reference on every K-th "
+             "frame (0 off), untimed"},
+    {.name = "--images",
+     .kind = SB_OPT_INT,
+     .arg = "K",
+     .max = 1000000,
+     .def = "0",
+     .commands = RENDER,
+     .field = RUN(images),
+     .help = "images of every K-th frame: colour, visibility, reference, "
+             "error, cascades (0 none)",
+     .check = images_built},
+    {.name = "--repeat",
+     .kind = SB_OPT_INT,
+     .arg = "K",
+     .min = 1,
+     .max = 1000,
+     .def = "1",
+     .commands = RENDER,
+     .field = RUN(repeat),
+     .help = "run the path K times"},
+    {.name = "--target-ci",
+     .kind = SB_OPT_NUM,
+     .arg = "PCT",
+     .max = 100,
+     .open_min = true,
+     .def_help = "off",
+     .commands = RENDER,
+     .field = RUN(target_ci),
+     .help = "repeat the path until the 95% CI of mean gpu_ms is within PCT% "
+             "of it"},
+    {.name = "--max-repeat",
+     .kind = SB_OPT_INT,
+     .arg = "N",
+     .min = 1,
+     .max = 1000,
+     .def = "10",
+     .commands = RENDER,
+     .field = RUN(max_repeat),
+     .help = "at most N repetitions for --target-ci"},
+    {.name = "--order",
+     .kind = SB_OPT_CHOICE,
+     .arg = "matrix|interleave|shuffle",
+     .def = "matrix",
+     .commands = RUN_BATCH,
+     .field = RUN(order),
+     .help = "order of a scene's runs and repetitions (interleave: A1 B1 A2 B2 "
+             "...; tune always shuffles)"},
+    {.name = "--seed",
+     .kind = SB_OPT_SEED,
+     .arg = "N",
+     .min = 1,
+     .max = 1.8e19,
+     .def_help = "chosen, in the summary's seed column; tune 1",
+     .commands = RENDER,
+     .field = RUN(seed),
+     .help = "shuffle's seed"},
+    {.name = "--threads",
+     .kind = SB_OPT_INT,
+     .arg = "N",
+     .min = 1,
+     .max = 1024,
+     .def_help = "all cores",
+     .commands = RENDER_STRESS,
+     .field = RUN(threads),
+     .help = "reference ray-casting threads"},
+    {.name = "--overlap",
+     .kind = SB_OPT_CHOICE,
+     .arg = "auto|on|off",
+     .values = overlap_values,
+     .def = "auto",
+     .def_help = "auto: on on a GPU, off on a CPU rasterizer",
+     .commands = RENDER,
+     .field = RUN(overlap),
+     .help = "cast the reference of evaluated frames in the background while "
+             "timed frames render"},
+    {.name = "--run-timeout",
+     .kind = SB_OPT_NUM,
+     .arg = "S",
+     .max = INFINITY,
+     .def = "0",
+     .def_help = "none",
+     .commands = RENDER,
+     .field = RUN(run_timeout_s),
+     .help = "a run taking longer is recorded as failed"},
+    /* how scene files are read */
+    {.name = "--allow-external-uris",
+     .kind = SB_OPT_FLAG,
+     .commands = READS_SCENES,
+     .field = RUN(allow_external_uris),
+     .help = "let glTF buffers and images be read from outside the scene's folder"},
+    {.name = "--blend-casters",
+     .kind = SB_OPT_CHOICE,
+     .arg = "mask|opaque|none",
+     .def = "mask",
+     .commands = READS_SCENES,
+     .field = RUN(blend),
+     .help = "glTF BLEND materials: alpha-tested at 0.5, opaque, or left out"},
+    {.name = "--pose",
+     .kind = SB_OPT_NUM,
+     .arg = "T",
+     .min = -INFINITY,
+     .max = INFINITY,
+     .def_help = "the rest pose",
+     .commands = READS_SCENES,
+     .field = RUN(pose_time),
+     .given_field = RUN(pose),
+     .help = "nodes and skins at time T (seconds) of the file's first animation"},
+    /* where results go, and what is said */
+    {.name = "--out",
+     .kind = SB_OPT_TEXT,
+     .arg = "DIR",
+     .def = "out",
+     .commands = SB_IN(SB_CMD_RUN) | SB_IN(SB_CMD_BATCH) | SB_IN(SB_CMD_TUNE),
+     .field = F(out),
+     .help = "results folder; run and tune write DIR/<UTC time>/, batch "
+             "DIR/<batch name>/<UTC time>/"},
+    {.name = "--out",
+     .kind = SB_OPT_TEXT,
+     .arg = "DIR",
+     .def_help = "required",
+     .commands = SB_IN(SB_CMD_MERGE),
+     .field = F(out),
+     .help = "the merged results set"},
+    {.name = "--out",
+     .kind = SB_OPT_TEXT,
+     .arg = "SITE",
+     .def = "out/report",
+     .commands = SB_IN(SB_CMD_REPORT),
+     .field = F(out),
+     .help = "the site's folder"},
+    {.name = "--resume",
+     .kind = SB_OPT_TEXT,
+     .arg = "DIR",
+     .commands = SB_IN(SB_CMD_RUN) | SB_IN(SB_CMD_BATCH) | SB_IN(SB_CMD_TUNE),
+     .field = F(resume),
+     .help = "keep DIR's complete runs and render the rest into it"},
+    {.name = "--shard",
+     .kind = SB_OPT_TEXT,
+     .arg = "I/N",
+     .commands = SB_IN(SB_CMD_BATCH),
+     .field = F(shard),
+     .help = "render share I of N of the matrix (cost-balanced)"},
+    {.name = "--dry-run",
+     .kind = SB_OPT_FLAG,
+     .commands = SB_IN(SB_CMD_BATCH),
+     .field = F(dry_run),
+     .help = "print the matrix (and the shard's share), render nothing"},
+    {.name = "--progress",
+     .kind = SB_OPT_FLAG,
+     .def_help = "when stderr is a terminal",
+     .commands = SB_IN(SB_CMD_RUN) | SB_IN(SB_CMD_BATCH) | SB_IN(SB_CMD_TUNE) | SB_IN(SB_CMD_STRESS),
+     .field = RUN(progress),
+     .help = "progress line on stderr"},
+    {.name = "--quiet", .kind = SB_OPT_FLAG, .commands = EVERY, .field = F(quiet), .help = "no notices on stderr"},
+    {.name = "--verbose",
+     .kind = SB_OPT_FLAG,
+     .commands = EVERY,
+     .field = F(verbose),
+     .help = "also the notes a user cannot act on (e.g. a software rasterizer "
+             "has no clock)"},
+    /* compare */
+    {.name = "--metric",
+     .kind = SB_OPT_TEXT,
+     .arg = "M,...",
+     .def_help = "the metrics marked for it (shadowbench columns)",
+     .commands = SB_IN(SB_CMD_COMPARE) | SB_IN(SB_CMD_HISTORY),
+     .field = F(metrics),
+     .help = "the metrics compared"},
+    {.name = "--threshold",
+     .kind = SB_OPT_NUM,
+     .arg = "PCT",
+     .max = INFINITY,
+     .def = "5",
+     .commands = SB_IN(SB_CMD_COMPARE),
+     .field = F(threshold),
+     .help = "a change smaller than PCT% is no regression"},
+    {.name = "--format",
+     .kind = SB_OPT_CHOICE,
+     .arg = "text|csv|markdown",
+     .values = compare_formats,
+     .def = "text",
+     .commands = SB_IN(SB_CMD_COMPARE),
+     .field = F(format),
+     .help = "how the table is written"},
+    {.name = "--format",
+     .kind = SB_OPT_CHOICE,
+     .arg = "text|csv",
+     .values = history_formats,
+     .def = "text",
+     .commands = SB_IN(SB_CMD_HISTORY),
+     .field = F(format),
+     .help = "how the changes are written"},
+    {.name = "--format",
+     .kind = SB_OPT_CHOICE,
+     .arg = "csv|markdown",
+     .values = columns_formats,
+     .def = "csv",
+     .commands = SB_IN(SB_CMD_COLUMNS),
+     .field = F(format),
+     .help = "how the columns are written"},
+    {.name = "--pair",
+     .kind = SB_OPT_TEXT,
+     .arg = "KEY=A,B",
+     .commands = SB_IN(SB_CMD_COMPARE),
+     .field = F(pair),
+     .help = "the runs of one set that differ only in KEY "
+             "(technique=pssm,sdsm, layered=off,gs)"},
+    /* history and report */
+    {.name = "--history",
+     .kind = SB_OPT_TEXT,
+     .arg = "FILE",
+     .def_help = "$SB_HISTORY, else out/history.sqlite",
+     .commands = SB_IN(SB_CMD_HISTORY) | SB_IN(SB_CMD_REPORT),
+     .field = F(history),
+     .help = "the results history"},
+    {.name = "--since",
+     .kind = SB_OPT_TEXT,
+     .arg = "DATE",
+     .commands = SB_IN(SB_CMD_HISTORY),
+     .field = F(since),
+     .help = "regressions: only the nights from DATE on"},
+    {.name = "--recent",
+     .kind = SB_OPT_INT,
+     .arg = "N",
+     .min = 1,
+     .max = 10000,
+     .def = "3",
+     .commands = SB_IN(SB_CMD_HISTORY) | SB_IN(SB_CMD_REPORT),
+     .field = F(recent),
+     .help = "a regression starting in the newest N nights is recent (exit 1, "
+             "the report's index)"},
+    {.name = "--noise-floor",
+     .kind = SB_OPT_NUM,
+     .arg = "PCT",
+     .max = 100,
+     .open_min = true,
+     .def_help = "1, 5 on a software rasterizer",
+     .commands = SB_IN(SB_CMD_HISTORY),
+     .field = F(noise_floor),
+     .help = "the least night-to-night timing noise assumed"},
+    /* tune */
+    {.name = "--max-err",
+     .kind = SB_OPT_NUM,
+     .arg = "E",
+     .max = 1,
+     .open_min = true,
+     .commands = SB_IN(SB_CMD_TUNE),
+     .field = F(max_err),
+     .help = "the cheapest settings whose err_rate stays within E"},
+    {.name = "--budget-ms",
+     .kind = SB_OPT_NUM,
+     .arg = "B",
+     .max = INFINITY,
+     .open_min = true,
+     .commands = SB_IN(SB_CMD_TUNE),
+     .field = F(budget_ms),
+     .help = "the most accurate settings whose frame time stays within B ms"},
+    {.name = "--techniques",
+     .kind = SB_OPT_TEXT,
+     .arg = "LIST",
+     .def_help = "every technique with a shadow map",
+     .commands = SB_IN(SB_CMD_TUNE),
+     .field = F(techniques),
+     .help = "the techniques searched (comma list)"},
+    {.name = "--time-limit",
+     .kind = SB_OPT_DURATION,
+     .arg = "D",
+     .max = INFINITY,
+     .open_min = true,
+     .def_help = "none",
+     .commands = SB_IN(SB_CMD_TUNE),
+     .field = F(time_limit_s),
+     .help = "stop the search after D (600, 90s, 10m, 1.5h)"},
+};
+const int sb_option_count = (int)SB_COUNT(sb_options);
+
+_Static_assert(SB_COUNT(sb_options) <= SB_OPTION_MAX, "raise SB_OPTION_MAX");
+
+const sb_option *sb_option_find(const char *name, int cmd) {
+    for (int i = 0; i < sb_option_count; i++)
+        if (!strcmp(sb_options[i].name, name) && (cmd < 0 || (sb_options[i].commands & (1u << cmd))))
+            return &sb_options[i];
+    return NULL;
+}
+
+static void *at(sb_cli_opts *o, size_t field) { return (char *)o + field; }
+
+/* "[1, 16]", "(0, 100]", ">= 0", "> 0" */
+static void range_text(const sb_option *opt, char *out, size_t len) {
+    if (isinf(opt->min))
+        snprintf(out, len, "a finite number");
+    else if (isinf(opt->max))
+        snprintf(out, len, "a number %s %.15g", opt->open_min ? ">" : ">=", opt->min);
+    else
+        snprintf(out, len, "%s in %c%.15g, %.15g]",
+                 opt->kind == SB_OPT_INT || opt->kind == SB_OPT_SEED ? "an integer" : "a number",
+                 opt->open_min ? '(' : '[', opt->min, opt->max);
+}
+
+static bool in_range(const sb_option *opt, double v) {
+    return isfinite(v) ? (opt->open_min ? v > opt->min : v >= opt->min) && v <= opt->max : false;
+}
+
+/* "expected matrix, interleave or shuffle" */
+static void choices_text(const char *choices, char *out, size_t len) {
+    out[0] = 0;
+    int n = 1;
+    for (const char *c = choices; *c; c++)
+        n += *c == '|';
+    const char *c = choices;
+    for (int k = 0; k < n; k++) {
+        size_t w = strcspn(c, "|");
+        size_t l = strlen(out);
+        snprintf(out + l, len - l, "%s%.*s", k == 0 ? "" : k == n - 1 ? " or " : ", ", (int)w, c);
+        c += w + (c[w] == '|');
+    }
+}
+
+static bool bad_value(const sb_option *opt, const char *v, sb_err *err) {
+    char what[160];
+    switch (opt->kind) {
+    case SB_OPT_CHOICE: choices_text(opt->arg, what, sizeof what); break;
+    case SB_OPT_SIZE:
+        snprintf(what, sizeof what, "WxH, width and height integers in [%g, %g], e.g. 1280x720", opt->min, opt->max);
+        break;
+    case SB_OPT_ANGLES:
+        snprintf(what, sizeof what, "AZIMUTH,ELEVATION in degrees, the elevation in [%g, %g]", opt->min, opt->max);
+        break;
+    case SB_OPT_BYTES:
+        snprintf(what, sizeof what, "a size with M or G, e.g. 8G or 512M (up to %g bytes)", opt->max);
+        break;
+    case SB_OPT_DURATION: snprintf(what, sizeof what, "a duration > 0 such as 600, 90s, 10m or 1.5h"); break;
+    default:
+        range_text(opt, what, sizeof what);
+        if (opt->can_auto) {
+            size_t l = strlen(what);
+            snprintf(what + l, sizeof what - l, " or auto");
+        }
+    }
+    return sb_fail(err, "%s %s: expected %s", opt->name, v, what);
+}
+
+static bool parse_duration(const char *text, double *seconds) {
+    char *end;
+    double v = strtod(text, &end);
+    if (end == text || !isfinite(v)) return false;
+    double unit = !strcmp(end, "") || !strcmp(end, "s")      ? 1
+                  : !strcmp(end, "m") || !strcmp(end, "min") ? 60
+                  : !strcmp(end, "h")                        ? 3600
+                                                             : 0;
+    *seconds = v * unit;
+    return unit > 0;
+}
+
+/* Parses v for opt into o; false with the range when it does not fit. */
+static bool set_value(sb_cli_opts *o, const sb_option *opt, const char *v, sb_err *err) {
+    double d;
+    long n;
+    char extra;
+    switch (opt->kind) {
+    case SB_OPT_FLAG: *(bool *)at(o, opt->field) = true; break;
+    case SB_OPT_INT:
+        if (opt->can_auto && !strcmp(v, "auto"))
+            n = -1;
+        else if (!sb_parse_int(v, &n) || !in_range(opt, (double)n))
+            return bad_value(opt, v, err);
+        *(int *)at(o, opt->field) = (int)n;
+        break;
+    case SB_OPT_SEED: {
+        unsigned long long u;
+        if (sscanf(v, "%llu%c", &u, &extra) != 1 || v[0] == '-' || !in_range(opt, (double)u))
+            return bad_value(opt, v, err);
+        *(uint64_t *)at(o, opt->field) = u;
+        break;
+    }
+    case SB_OPT_NUM:
+        if (!sb_parse_double(v, &d) || !in_range(opt, d)) return bad_value(opt, v, err);
+        *(double *)at(o, opt->field) = d;
+        break;
+    case SB_OPT_DURATION:
+        if (!parse_duration(v, &d) || !in_range(opt, d)) return bad_value(opt, v, err);
+        *(double *)at(o, opt->field) = d;
+        break;
+    case SB_OPT_BYTES: {
+        char unit = 0;
+        int k = sscanf(v, "%lf%c%c", &d, &unit, &extra);
+        double scale = unit == 'G' || unit == 'g' ? 1073741824.0 : unit == 'M' || unit == 'm' ? 1048576.0 : 0;
+        if (k != 2 || !scale || !in_range(opt, d * scale)) return bad_value(opt, v, err);
+        *(double *)at(o, opt->field) = d * scale;
+        break;
+    }
+    case SB_OPT_CHOICE: {
+        const char *c = opt->arg;
+        for (int k = 0; *c; k++) {
+            size_t w = strcspn(c, "|");
+            if (strlen(v) == w && !strncmp(v, c, w)) {
+                *(int *)at(o, opt->field) = opt->values ? opt->values[k] : k;
+                return true;
+            }
+            c += w + (c[w] == '|');
+        }
+        return bad_value(opt, v, err);
+    }
+    case SB_OPT_TEXT: *(const char **)at(o, opt->field) = v; break;
+    case SB_OPT_SIZE: {
+        int w, h;
+        if (sscanf(v, "%dx%d%c", &w, &h, &extra) != 2 || !in_range(opt, w) || !in_range(opt, h))
+            return bad_value(opt, v, err);
+        *(int *)at(o, opt->field) = w;
+        *(int *)at(o, opt->field2) = h;
+        break;
+    }
+    case SB_OPT_ANGLES: {
+        char buf[64];
+        double az, el;
+        snprintf(buf, sizeof buf, "%s", v);
+        char *comma = strchr(buf, ',');
+        if (comma) *comma = 0;
+        if (!comma || !sb_parse_double(buf, &az) || !sb_parse_double(comma + 1, &el) || !in_range(opt, el))
+            return bad_value(opt, v, err);
+        *(double *)at(o, opt->field) = az;
+        *(double *)at(o, opt->field2) = el;
+        break;
+    }
+    }
+    if (opt->given_field) *(bool *)at(o, opt->given_field) = true;
+    return true;
+}
+
+void sb_cli_defaults(sb_cli_opts *o, int cmd) {
+    memset(o, 0, sizeof *o);
+    for (int i = 0; i < sb_option_count; i++) {
+        const sb_option *opt = &sb_options[i];
+        if (!opt->def || !(opt->commands & (SB_IN_FILE | (cmd >= 0 ? SB_IN(cmd) : 0)))) continue;
+        sb_err e;
+        bool was = opt->given_field && *(bool *)at(o, opt->given_field);
+        if (!set_value(o, opt, opt->def, &e))
+            abort(); /* a row whose default is out of its own range: the unit test
+                        says which */
+        if (opt->given_field) *(bool *)at(o, opt->given_field) = was;
+    }
+    long cpus = sysconf(_SC_NPROCESSORS_ONLN); /* --threads: all cores */
+    o->run.threads = cpus > 1024 ? 1024 : cpus > 0 ? (int)cpus : 1;
+}
+
+void sb_run_opts_defaults(sb_run_opts *o) {
+    sb_cli_opts c;
+    sb_cli_defaults(&c, -1);
+    *o = c.run;
+}
+
+/* One option at argv-like position: value from `v`; *used: whether v was taken.
+ */
+static bool take(sb_cli_opts *o, const sb_option *opt, const char *v, bool *used, sb_err *err) {
+    *used = false;
+    if (opt->kind != SB_OPT_FLAG) {
+        if (!v) return sb_fail(err, "%s needs a value (%s)", opt->name, opt->arg);
+        *used = true;
+    }
+    if (!set_value(o, opt, v, err) || (opt->check && !opt->check(v, o, err))) return false;
+    o->given[opt - sb_options] = true;
+    return true;
+}
+
+bool sb_cli_parse(sb_cli_opts *o, sb_command cmd, int argc, char **argv, int first, const char **pos, int *npos,
+                  sb_err *err) {
+    *npos = 0;
+    for (int i = first; i < argc; i++) {
+        const char *a = argv[i];
+        if (strncmp(a, "--", 2) != 0 || !a[2]) {
+            pos[(*npos)++] = a;
+            continue;
+        }
+        const sb_option *opt = sb_option_find(a, (int)cmd);
+        if (!opt) {
+            if (sb_option_find(a, -1))
+                return sb_fail(err, "%s: %s is not an option of %s (see shadowbench %s --help)", sb_commands[cmd].name,
+                               a, sb_commands[cmd].name, sb_commands[cmd].name);
+            return sb_fail(err, "%s: unknown option %s (see shadowbench %s --help)", sb_commands[cmd].name, a,
+                           sb_commands[cmd].name);
+        }
+        bool used;
+        if (!take(o, opt, i + 1 < argc ? argv[i + 1] : NULL, &used, err)) return false;
+        i += used;
+    }
+    return true;
+}
+
+bool sb_cli_parse_tokens(sb_cli_opts *o, char **tok, int n, const char *where, sb_err *err) {
+    for (int i = 0; i < n; i++) {
+        const sb_option *opt = NULL;
+        for (int k = 0; k < sb_option_count && !opt; k++)
+            if (!strcmp(sb_options[k].name, tok[i]) && (sb_options[k].commands & SB_IN_FILE)) opt = &sb_options[k];
+        if (!opt) return sb_fail(err, "%s: '%s' is not a run option", where, tok[i]);
+        bool used;
+        sb_err e;
+        if (!take(o, opt, i + 1 < n ? tok[i + 1] : NULL, &used, &e)) return sb_fail(err, "%s: %s", where, e.msg);
+        i += used;
+    }
+    return true;
+}
+
+bool sb_cli_given(const sb_cli_opts *o, const char *name) {
+    for (int i = 0; i < sb_option_count; i++)
+        if (o->given[i] && !strcmp(sb_options[i].name, name)) return true;
+    return false;
+}
+
+static size_t kind_size(sb_opt_kind k) {
+    switch (k) {
+    case SB_OPT_FLAG: return sizeof(bool);
+    case SB_OPT_INT:
+    case SB_OPT_CHOICE:
+    case SB_OPT_SIZE: return sizeof(int);
+    case SB_OPT_SEED: return sizeof(uint64_t);
+    case SB_OPT_TEXT: return sizeof(const char *);
+    default: return sizeof(double);
+    }
+}
+
+void sb_cli_copy_given(sb_run_opts *to, const sb_cli_opts *from) {
+    sb_cli_opts dst;
+    dst.run = *to;
+    for (int i = 0; i < sb_option_count; i++) {
+        const sb_option *opt = &sb_options[i];
+        if (!from->given[i] || !(opt->commands & SB_IN_FILE)) continue; /* the run options */
+        size_t fields[] = {opt->field, opt->field2, opt->given_field};
+        for (int k = 0; k < 3; k++)
+            if (fields[k])
+                memcpy(at(&dst, fields[k]), (const char *)from + fields[k],
+                       k == 2 ? sizeof(bool) : kind_size(opt->kind));
+    }
+    *to = dst.run;
+}
+
+void sb_option_synopsis(const sb_option *opt, char *out, size_t len) {
+    snprintf(out, len, "%s%s%s", opt->name, opt->arg ? " " : "", opt->arg ? opt->arg : "");
+}
+
+/* "  --frames N   frames sampled along the path (default 60)", the text wrapped at 100 columns. */
+static void option_line(FILE *f, const sb_option *opt, const char *extra) {
+    char syn[64], text[512];
+    sb_option_synopsis(opt, syn, sizeof syn);
+    const char *def = opt->def_help ? opt->def_help : opt->def;
+    snprintf(text, sizeof text, "%s%s%s%s%s", opt->help, def ? " (default " : "", def ? def : "", def ? ")" : "",
+             extra ? extra : "");
+    enum { COL = 30, WIDTH = 100 };
+    int at_col = fprintf(f, "  %s", syn);
+    const char *t = text;
+    while (*t) {
+        if (at_col >= COL - 1) fputc('\n', f), at_col = 0;
+        fprintf(f, "%*s", COL - at_col, "");
+        size_t n = strlen(t);
+        if (n > WIDTH - COL) { /* break at the last space that fits */
+            n = WIDTH - COL;
+            while (n > 0 && t[n] != ' ') n--;
+            if (n == 0) n = strcspn(t, " ");
+        }
+        fprintf(f, "%.*s\n", (int)n, t);
+        t += n;
+        while (*t == ' ') t++;
+        at_col = 0;
+    }
+}
+
+static void usage_lines(FILE *f, const sb_command_def *c) {
+    for (const char *u = c->usage; *u;) {
+        size_t w = strcspn(u, "\n");
+        fprintf(f, "  shadowbench %.*s\n", (int)w, u);
+        u += w + (u[w] == '\n');
+    }
+}
+
+static const char *const operands = "SCENE: a .gltf/.glb file or a bundled scene (plane-box, desert, towers, "
+                                    "overhangs, plane-box-lamp,\n"
+                                    "       towers-night, conf-*)\n"
+                                    "PATH:  a .path file, a bundled path (same names), auto, orbit, or "
+                                    "FILE.glb#camera=K\n"
+                                    "SPEC:  technique[:param=value[,value...]]...  e.g. "
+                                    "sm:res=1024,2048:filter=pcf3 (lists make a grid)\n";
+
+void sb_cli_help(FILE *f, int cmd) {
+    if (cmd >= 0) {
+        const sb_command_def *c = &sb_commands[cmd];
+        fprintf(f, "usage:\n");
+        usage_lines(f, c);
+        fprintf(f, "\n%s\n\noptions:\n", c->summary);
+        for (int i = 0; i < sb_option_count; i++)
+            if (sb_options[i].commands & SB_IN(cmd)) option_line(f, &sb_options[i], NULL);
+        return;
+    }
+    fprintf(f, "usage:\n");
+    for (int c = 0; c < SB_CMD_COUNT; c++)
+        usage_lines(f, &sb_commands[c]);
+    fprintf(f,
+            "\n%s\noptions (shadowbench COMMAND --help: the options of one "
+            "command):\n",
+            operands);
+    for (int i = 0; i < sb_option_count; i++) {
+        const sb_option *opt = &sb_options[i];
+        char cmds[160] = "";
+        for (int c = 0; c < SB_CMD_COUNT && opt->commands != EVERY; c++)
+            if (opt->commands & SB_IN(c)) {
+                size_t l = strlen(cmds);
+                snprintf(cmds + l, sizeof cmds - l, "%s%s", l ? ", " : "; ", sb_commands[c].name);
+            }
+        option_line(f, opt, cmds);
+    }
+    fprintf(f, "\nenvironment:\n"
+               "  SB_HISTORY=FILE        the history file (default out/history.sqlite)\n"
+               "  SB_SCENE_CACHE=DIR|off where scenes read before are kept, flattened "
+               "(default\n"
+               "                         $XDG_CACHE_HOME or ~/.cache, "
+               "shadowbench/scenes)\n");
+}

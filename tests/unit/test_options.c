@@ -1,0 +1,271 @@
+/* The option table walked row by row: every option is taken by exactly the
+ * commands its row lists and refused by the others (naming the command), is
+ * in each of its commands' --help, in the man page and in docs/cli.md; a value
+ * out of range is refused with the range; every default parses; the batch
+ * file's defaults line takes the run options and nothing else; and the exit
+ * statuses of the table are the ones the docs say. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "compare.h"
+#include "support.h"
+
+/* A value the row accepts. */
+static const char *good_value(const sb_option *o, char *buf, size_t len) {
+    switch (o->kind) {
+    case SB_OPT_FLAG: return NULL;
+    case SB_OPT_CHOICE: snprintf(buf, len, "%.*s", (int)strcspn(o->arg, "|"), o->arg); return buf;
+    case SB_OPT_TEXT: return "x";
+    case SB_OPT_SIZE: return "64x32";
+    case SB_OPT_ANGLES: return "30,40";
+    case SB_OPT_BYTES: return "1G";
+    case SB_OPT_DURATION: return "90s";
+    default: snprintf(buf, len, "%.15g", isinf(o->min) ? 1 : o->open_min ? o->min + 0.5 : o->min); return buf;
+    }
+}
+
+/* A value just out of the row's range (NULL: the kind has none to test). */
+static const char *bad_value(const sb_option *o, char *buf, size_t len) {
+    switch (o->kind) {
+    case SB_OPT_INT:
+    case SB_OPT_NUM:
+    case SB_OPT_SEED:
+        if (isinf(o->min)) return "nan";
+        snprintf(buf, len, "%.15g", o->open_min ? o->min : o->min - 1);
+        return buf;
+    case SB_OPT_SIZE: snprintf(buf, len, "%.15gx10", o->max + 1); return buf;
+    case SB_OPT_ANGLES: snprintf(buf, len, "0,%.15g", o->max + 1); return buf;
+    case SB_OPT_CHOICE: return "sideways";
+    case SB_OPT_DURATION: return "0";
+    case SB_OPT_BYTES: return "12";
+    default: return NULL;
+    }
+}
+
+static bool parse(sb_command cmd, const char *name, const char *value, sb_cli_opts *o, sb_err *err) {
+    char *argv[] = {"shadowbench", (char *)sb_commands[cmd].name, (char *)name, (char *)value, NULL};
+    const char *pos[5];
+    int npos;
+    sb_cli_defaults(o, cmd);
+    return sb_cli_parse(o, cmd, value ? 4 : 3, argv, 2, pos, &npos, err) && npos == 0;
+}
+
+static void test_every_option_by_command(void **st) {
+    (void)st;
+    int checks = 0;
+    for (int i = 0; i < sb_option_count; i++) {
+        const sb_option *opt = &sb_options[i];
+        assert_true(opt->commands != 0);
+        for (int c = 0; c < SB_CMD_COUNT; c++) {
+            const sb_option *row = sb_option_find(opt->name, c);
+            char buf[64];
+            const char *v = good_value(row ? row : opt, buf, sizeof buf);
+            sb_cli_opts o;
+            sb_err err = {{0}};
+            bool ok = parse((sb_command)c, opt->name, v, &o, &err);
+            if (row) { /* taken: and marked given */
+                if (!ok) print_error("%s %s %s: %s\n", sb_commands[c].name, opt->name, v ? v : "", err.msg);
+                assert_true(ok);
+                assert_true(sb_cli_given(&o, opt->name));
+            } else { /* refused, naming the command and the option */
+                assert_false(ok);
+                char want[128];
+                snprintf(want, sizeof want, "%s: %s is not an option of %s", sb_commands[c].name, opt->name,
+                         sb_commands[c].name);
+                if (!strstr(err.msg, want)) print_error("'%s' lacks '%s'\n", err.msg, want);
+                assert_non_null(strstr(err.msg, want));
+            }
+            checks++;
+        }
+    }
+    print_message("%d option x command checks\n", checks);
+}
+
+static void test_out_of_range_names_the_range(void **st) {
+    (void)st;
+    for (int i = 0; i < sb_option_count; i++) {
+        const sb_option *opt = &sb_options[i];
+        char buf[64];
+        const char *v = bad_value(opt, buf, sizeof buf);
+        if (!v) continue;
+        int cmd = 0;
+        while (!(opt->commands & SB_IN(cmd))) cmd++;
+        sb_cli_opts o;
+        sb_err err;
+        assert_false(parse((sb_command)cmd, opt->name, v, &o, &err));
+        print_message("%s\n", err.msg);
+        char head[128];
+        snprintf(head, sizeof head, "%s %s: expected ", opt->name, v);
+        assert_non_null(strstr(err.msg, head));
+        char range[64] = "";
+        if (opt->kind == SB_OPT_CHOICE) snprintf(range, sizeof range, "%.*s", (int)strcspn(opt->arg, "|"), opt->arg);
+        else if (!isinf(opt->max) && opt->kind != SB_OPT_BYTES) snprintf(range, sizeof range, "%.15g]", opt->max);
+        else if (!isinf(opt->min)) snprintf(range, sizeof range, "%.15g", opt->min);
+        assert_non_null(strstr(err.msg, range));
+    }
+}
+
+static void test_defaults_parse(void **st) {
+    (void)st;
+    for (int c = 0; c < SB_CMD_COUNT; c++) {
+        sb_cli_opts o;
+        sb_cli_defaults(&o, c);   /* aborts on a row whose default is out of its own range */
+        for (int i = 0; i < sb_option_count; i++) assert_false(o.given[i]);
+    }
+    sb_run_opts r;
+    sb_run_opts_defaults(&r);
+    assert_int_equal(r.frames, 60);
+    assert_int_equal(r.width, 1280);
+    assert_int_equal(r.height, 720);
+    assert_int_equal(r.warmup, -1);
+    assert_int_equal(r.overlap, -1);
+    assert_int_equal(r.error_every, 10);
+    assert_true(r.threads >= 1);
+    /* the per-command rows of one field keep their own defaults */
+    sb_cli_opts o;
+    sb_cli_defaults(&o, SB_CMD_COLUMNS);
+    assert_int_equal(o.format, SB_OUTPUT_CSV);
+    sb_cli_defaults(&o, SB_CMD_COMPARE);
+    assert_int_equal(o.format, SB_OUTPUT_TEXT);
+    assert_string_equal(o.out ? o.out : "", "");
+    sb_cli_defaults(&o, SB_CMD_REPORT);
+    assert_string_equal(o.out, "out/report");
+}
+
+static void test_values_reach_their_fields(void **st) {
+    (void)st;
+    sb_cli_opts o;
+    sb_err err;
+    assert_true(parse(SB_CMD_RUN, "--size", "320x180", &o, &err));
+    assert_int_equal(o.run.width, 320);
+    assert_int_equal(o.run.height, 180);
+    assert_true(parse(SB_CMD_RUN, "--sun", "-30,45", &o, &err));
+    assert_true(o.run.sun_override);
+    assert_true(o.run.sun_az == -30 && o.run.sun_el == 45);
+    assert_true(parse(SB_CMD_RUN, "--overlap", "off", &o, &err));
+    assert_int_equal(o.run.overlap, 0);
+    assert_true(parse(SB_CMD_RUN, "--warmup", "auto", &o, &err));
+    assert_int_equal(o.run.warmup, -1);
+    assert_true(parse(SB_CMD_RUN, "--gpu-memory", "512M", &o, &err));
+    assert_true(o.run.gpu_memory == 512.0 * 1048576);
+    assert_true(parse(SB_CMD_TUNE, "--time-limit", "1.5h", &o, &err));
+    assert_true(o.time_limit_s == 5400);
+    assert_true(parse(SB_CMD_HISTORY, "--format", "csv", &o, &err));
+    assert_int_equal(o.format, SB_OUTPUT_CSV);
+    assert_true(parse(SB_CMD_RUN, "--pose", "-2.5", &o, &err));
+    assert_true(o.run.pose && o.run.pose_time == -2.5);
+    /* the value is the next word, even one that starts with a dash */
+    assert_false(parse(SB_CMD_RUN, "--frames", NULL, &o, &err));
+    assert_non_null(strstr(err.msg, "--frames needs a value"));
+    /* a format of another command is not this one's */
+    assert_false(parse(SB_CMD_HISTORY, "--format", "markdown", &o, &err));
+    assert_non_null(strstr(err.msg, "expected text or csv"));
+}
+
+static void test_batch_defaults_line(void **st) {
+    (void)st;
+    for (int i = 0; i < sb_option_count; i++) {
+        const sb_option *opt = &sb_options[i];
+        bool run_option = false;
+        for (int k = 0; k < sb_option_count; k++)
+            run_option |= !strcmp(sb_options[k].name, opt->name) && (sb_options[k].commands & SB_IN_FILE);
+        if (!run_option) {
+            /* not a run option: the defaults line refuses it */
+            char *tok[] = {(char *)opt->name, "1"};
+            sb_cli_opts o;
+            sb_err err;
+            sb_cli_defaults(&o, -1);
+            assert_false(sb_cli_parse_tokens(&o, tok, 2, "n.bench:3", &err));
+            assert_non_null(strstr(err.msg, "n.bench:3: '"));
+            assert_non_null(strstr(err.msg, "is not a run option"));
+        }
+    }
+    /* the command line's run options beat the file's, field by field */
+    sb_cli_opts file, cli;
+    sb_err err;
+    sb_cli_defaults(&file, -1);
+    char *tok[] = {"--frames", "30", "--size", "96x54", "--sun", "10,20"};
+    assert_true(sb_cli_parse_tokens(&file, tok, 6, "n.bench:2", &err));
+    assert_true(parse(SB_CMD_BATCH, "--size", "64x32", &cli, &err));
+    sb_run_opts r = file.run;
+    sb_cli_copy_given(&r, &cli);
+    assert_int_equal(r.frames, 30);
+    assert_int_equal(r.width, 64);
+    assert_int_equal(r.height, 32);
+    assert_true(r.sun_override && r.sun_el == 20);
+}
+
+static char *source_file(const char *rel) {
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s", getenv("SB_SOURCE_ROOT"), rel);
+    sb_err err;
+    char *text = sb_read_file(path, NULL, &err);
+    assert_non_null(text);
+    return text;
+}
+
+static void test_help_and_docs_name_every_option(void **st) {
+    (void)st;
+    char *man = source_file("docs/shadowbench.1"), *cli = source_file("docs/cli.md");
+    /* the man page writes "\-" for "-" */
+    for (char *r = man, *w = man;; r++) {
+        if (r[0] == '\\' && r[1] == '-') r++;
+        *w++ = *r;
+        if (!*r) break;
+    }
+    for (int c = 0; c < SB_CMD_COUNT; c++) {
+        char *help = NULL;
+        size_t len = 0;
+        FILE *f = open_memstream(&help, &len);
+        sb_cli_help(f, c);
+        fclose(f);
+        for (int i = 0; i < sb_option_count; i++) {
+            const sb_option *opt = &sb_options[i];
+            char syn[64];
+            sb_option_synopsis(opt, syn, sizeof syn);
+            bool takes = opt->commands & SB_IN(c);
+            if (takes != (strstr(help, syn) != NULL) && !(!takes && sb_option_find(opt->name, c)))
+                print_error("shadowbench %s --help %s %s\n", sb_commands[c].name, takes ? "lacks" : "lists", syn);
+            if (takes) assert_non_null(strstr(help, syn));
+            else if (!sb_option_find(opt->name, c)) assert_null(strstr(help, opt->name));
+        }
+        free(help);
+    }
+    for (int i = 0; i < sb_option_count; i++) {
+        const char *n = sb_options[i].name;
+        if (!strstr(man, n)) print_error("docs/shadowbench.1 does not name %s\n", n);
+        if (!strstr(cli, n)) print_error("docs/cli.md does not name %s\n", n);
+        assert_non_null(strstr(man, n));
+        assert_non_null(strstr(cli, n));
+    }
+    for (int c = 0; c < SB_CMD_COUNT; c++) {
+        char want[64];
+        snprintf(want, sizeof want, "shadowbench %s", sb_commands[c].name);
+        assert_non_null(strstr(cli, want));
+    }
+    /* every exit status of the table, with its code, in both */
+    for (int i = 0; i < sb_exit_status_count; i++) {
+        char code[16];
+        snprintf(code, sizeof code, "%d", sb_exit_statuses[i].code);
+        if (!strstr(man, code) || !strstr(cli, code)) print_error("exit status %s not in the docs\n", code);
+        assert_non_null(strstr(man, code));
+        assert_non_null(strstr(cli, code));
+    }
+    free(man);
+    free(cli);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_every_option_by_command),  cmocka_unit_test(test_out_of_range_names_the_range),
+        cmocka_unit_test(test_defaults_parse),           cmocka_unit_test(test_values_reach_their_fields),
+        cmocka_unit_test(test_batch_defaults_line),      cmocka_unit_test(test_help_and_docs_name_every_option),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
