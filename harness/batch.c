@@ -467,7 +467,7 @@ int sb_batch_main(const sb_batch_cmd *cmd) {
         rc = 1;
         goto out;
     }
-    if (!write_meta(cmd, dir, &s, &b, nsel, &err) || !sb_report_write_columns(dir, &err))
+    if (!write_meta(cmd, dir, &s, &b, nsel, &err) || !sb_columns_write(dir, &err))
         fprintf(stderr, "shadowbench: %s\n", err.msg);
     snprintf(sum_path, sizeof sum_path, "%s/summary.csv", dir);
     sb_summary sum;

@@ -13,7 +13,7 @@
 #include "compare.h"
 #include "history.h"
 #include "site.h"
-#include "report.h"
+#include "columns.h"
 #include "run.h"
 #include "stress.h"
 #include "table.h"
@@ -179,7 +179,7 @@ static int cmd_run(const cli *c) {
             return SB_EXIT_BAD_INPUT;
         }
     }
-    if ((!c->o.resume && !sb_make_stamped_dir(c->o.out, dir, sizeof dir, &err)) || !sb_report_write_columns(dir, &err)) {
+    if ((!c->o.resume && !sb_make_stamped_dir(c->o.out, dir, sizeof dir, &err)) || !sb_columns_write(dir, &err)) {
         fprintf(stderr, "shadowbench: %s\n", err.msg);
         sb_session_close(&s);
         free(runs);
@@ -272,11 +272,11 @@ static int cmd_batch(const cli *c) {
 static int cmd_columns(const cli *c) {
     if (c->npos) return bad_usage(c);
     if (c->o.format == SB_OUTPUT_MARKDOWN) {
-        sb_report_columns_markdown(stdout);
+        sb_columns_markdown(stdout);
         return 0;
     }
     sb_csv csv = {0};
-    sb_report_columns(&csv);
+    sb_columns_csv(&csv);
     fputs(csv.buf, stdout);
     sb_csv_free(&csv);
     return 0;

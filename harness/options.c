@@ -68,6 +68,14 @@ static bool images_built(const char *v, const sb_cli_opts *o, sb_err *err) {
     return true;
 }
 
+/* --backend osmesa needs OSMesa's header at build time. */
+static bool backend_built(const char *v, const sb_cli_opts *o, sb_err *err) {
+    if (o->run.backend == SB_BACKEND_OSMESA && !SB_HAVE_OSMESA)
+        return sb_fail(err, "--backend %s: this shadowbench was built without OSMesa (meson -Dosmesa=disabled); use "
+                            "--backend egl", v);
+    return true;
+}
+
 #define F(f) offsetof(sb_cli_opts, f)
 #define RUN(f) offsetof(sb_cli_opts, run.f)
 
@@ -84,7 +92,8 @@ const sb_option sb_options[] = {
      .def = "egl",
      .commands = RENDER_STRESS | SB_IN(SB_CMD_INFO),
      .field = RUN(backend),
-     .help = "GL context"},
+     .help = "GL context",
+     .check = backend_built},
     {.name = "--timing",
      .kind = SB_OPT_CHOICE,
      .arg = "auto|queries|sync",

@@ -10,7 +10,7 @@
 #include "eval.h"
 #include "image.h"
 #include "reference.h"
-#include "report.h"
+#include "columns.h"
 #include "stability.h"
 #include "stats.h"
 
@@ -280,7 +280,7 @@ bool sb_run_pass(sb_run *r, int index, int total) {
     if (!ok) return false;
     if (o->error_every == 0) { /* nothing fills these rows later: they can go out now */
         for (; r->written < r->done; r->written++)
-            sb_report_frame_row(&r->rows, &r->recs[r->written], &r->timer.times[r->written], r->spec->tech->stages);
+            sb_columns_frame_row(&r->rows, &r->recs[r->written], &r->timer.times[r->written], r->spec->tech->stages);
         if (!sb_csv_file_write(&r->cf, &r->rows, &r->err)) return fail_run(r, "%s", r->err.msg);
     }
     return true;
@@ -290,7 +290,7 @@ bool sb_run_wants_more(const sb_run *r) {
     const sb_run_opts *o = &r->s->opts;
     if (r->failed || r->finished || r->repeats * o->frames >= r->capacity) return false;
     if (o->target_ci <= 0) return r->repeats < o->repeat;
-    return r->repeats == 0 || sb_report_gpu_ci_pct(r->timer.times, r->done, o->frames) > o->target_ci;
+    return r->repeats == 0 || sb_columns_gpu_ci_pct(r->timer.times, r->done, o->frames) > o->target_ci;
 }
 
 /* A technique with shadow stages that drew no caster in any measured frame
@@ -355,7 +355,7 @@ static bool finish_run(sb_run *r) {
         }
     }
     for (; r->written < r->done; r->written++)
-        sb_report_frame_row(&r->rows, &r->recs[r->written], &r->timer.times[r->written], r->spec->tech->stages);
+        sb_columns_frame_row(&r->rows, &r->recs[r->written], &r->timer.times[r->written], r->spec->tech->stages);
     if (!sb_csv_file_write(&r->cf, &r->rows, &r->err) || !sb_gl_check(r->spec->tech->name, &r->err) ||
         !sb_csv_file_commit(&r->cf, &r->err))
         return fail_run(r, "%s", r->err.msg);
@@ -399,7 +399,7 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
     sb_timer_init(&r->timer, s->timing, o->ring, r->capacity);
     r->recs = sb_xcalloc((size_t)r->capacity, sizeof *r->recs);
     if (sb_csv_file_open(&r->cf, r->csv_path, &r->err)) {
-        sb_report_frame_header(&r->rows);
+        sb_columns_frame_header(&r->rows);
         if (!sb_csv_file_write(&r->cf, &r->rows, &r->err)) fail_run(r, "%s", r->err.msg);
     } else {
         fail_run(r, "%s", r->err.msg);

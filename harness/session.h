@@ -11,7 +11,7 @@
 #include "context.h"
 #include "csv.h"
 #include "render.h"
-#include "report.h"
+#include "columns.h"
 #include "spec.h"
 #include "timing.h"
 

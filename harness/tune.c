@@ -261,7 +261,7 @@ static bool run_rung(tune *t, int rung) {
     snprintf(dir, sizeof dir, "%s/rung-%d", t->dir, rung);
     snprintf(sum_path, sizeof sum_path, "%s/summary.csv", dir);
     sb_err err;
-    if (!sb_mkdir_p(dir, &err) || !sb_report_write_columns(dir, &err)) {
+    if (!sb_mkdir_p(dir, &err) || !sb_columns_write(dir, &err)) {
         fprintf(stderr, "shadowbench: %s\n", err.msg);
         return false;
     }

@@ -10,7 +10,7 @@
 #include <unistd.h>
 
 #include "csv.h"
-#include "report.h"
+#include "columns.h"
 #include "table.h"
 
 static bool load_summary(sb_table *t, const char *where, sb_err *err) {
@@ -61,11 +61,11 @@ static double num(const char *s) {
     return *s && sb_parse_double(s, &v) ? v : NAN;
 }
 
-/* A metric of row r, read the way the column table says (report.h). */
+/* A metric of row r, read the way the column table says (columns.h). */
 static metric_value metric(const sb_table *t, int r, const char *m) {
     metric_value v = {NAN, NAN, NAN, false};
     sb_metric_cols mc;
-    if (!sb_report_metric(m, &mc)) return v;
+    if (!sb_columns_metric(m, &mc)) return v;
     v.center = num(sb_table_get(t, r, mc.center));
     v.mean = num(sb_table_get(t, r, mc.mean));
     if (mc.ci[0]) v.ci = num(sb_table_get(t, r, mc.ci));
@@ -76,7 +76,7 @@ static metric_value metric(const sb_table *t, int r, const char *m) {
 /* A metric the table knows and the summary has. */
 static bool known_metric(const sb_table *t, const char *m) {
     sb_metric_cols mc;
-    return sb_report_metric(m, &mc) && sb_table_col(t, mc.center) >= 0;
+    return sb_columns_metric(m, &mc) && sb_table_col(t, mc.center) >= 0;
 }
 
 static void header(FILE *out, int format, const char *a, const char *b) {
@@ -128,7 +128,7 @@ int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FIL
     if (o->nmetrics) {
         for (int k = 0; k < o->nmetrics; k++) metrics[nm++] = o->metrics[k];
     } else { /* the defaults this summary has */
-        int nd = sb_report_default_metrics(defaults, 32);
+        int nd = sb_columns_default_metrics(SB_USE_COMPARE, defaults, 32);
         for (int k = 0; k < nd; k++)
             if (known_metric(&A, defaults[k])) metrics[nm++] = defaults[k];
     }
@@ -160,9 +160,12 @@ int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FIL
         for (int k = 0; k < nm; k++) {
             metric_value a = metric(&A, ra, metrics[k]), b = metric(&B, rb, metrics[k]);
             if (!a.ok || !b.ok) continue;
-            bool worse = b.center > a.center * (1 + thr) + 1e-12;
+            sb_metric_cols mc;
+            sb_columns_metric(metrics[k], &mc);
+            bool worse = mc.lower_worse ? b.center < a.center * (1 - thr) - 1e-12 : b.center > a.center * (1 + thr) + 1e-12;
             /* timings also need the confidence intervals of the means apart */
-            bool separated = isnan(a.ci) || isnan(b.ci) || b.mean - b.ci > a.mean + a.ci;
+            bool separated = isnan(a.ci) || isnan(b.ci) ||
+                             (mc.lower_worse ? b.mean + b.ci < a.mean - a.ci : b.mean - b.ci > a.mean + a.ci);
             if (!isnan(a.ci) && (unstable_row(&A, ra) || unstable_row(&B, rb))) { /* a timing of an unstable run */
                 shaky++;
                 row(out, o->format, &B, rb, params, metrics[k], a.center, b.center, "UNSTABLE");
@@ -383,10 +386,11 @@ int sb_compare_pairs(const char *dir, const sb_compare_opts *o, FILE *out, sb_er
     snprintf(vb, sizeof vb, "%s", comma + 1);
     sb_table t;
     if (!load_summary(&t, dir, err)) return -1;
-    /* default: the two questions a pair answers, time and error */
-    static const char *const pair_defaults[] = {"gpu_ms", "err_rate"};
+    /* default: the questions a pair answers (the SB_USE_PAIR metrics: time and error) */
+    const char *pair_defaults[32];
+    int npd = sb_columns_default_metrics(SB_USE_PAIR, pair_defaults, 32);
     const char *const *metrics = o->nmetrics ? o->metrics : pair_defaults;
-    int nm = o->nmetrics ? o->nmetrics : 2;
+    int nm = o->nmetrics ? o->nmetrics : npd;
     bool by_tech = !strcmp(key, "technique");
     pair_row *rows = NULL;
     int n = 0;
@@ -540,7 +544,7 @@ bool sb_merge(const char *const *dirs, int n, const char *out_dir, sb_err *err) 
         }
         char path[4200];
         snprintf(path, sizeof path, "%s/summary.csv", out_dir);
-        ok = sb_write_file_atomic(path, text, (size_t)(p - text), err) && sb_report_write_columns(out_dir, err);
+        ok = sb_write_file_atomic(path, text, (size_t)(p - text), err) && sb_columns_write(out_dir, err);
         free(text);
     }
     for (int i = 0; i < n; i++) sb_table_free(&t[i]);

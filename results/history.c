@@ -13,7 +13,7 @@
 #include "changepoint.h"
 #include "compare.h"
 #include "csv.h"
-#include "report.h"
+#include "columns.h"
 #include "table.h"
 
 struct sb_history {
@@ -393,8 +393,6 @@ static int cmp_double(const void *a, const void *b) {
     return (x > y) - (x < y);
 }
 
-static const char *const default_metrics[] = {"gpu_ms", "final_ms", "cascade_ms", "draw_calls", "shadow_draw_calls",
-                                              "err_rate"};
 
 int sb_history_changes(sb_history *h, const sb_history_query *q, sb_history_change **out, sb_err *err) {
     *out = NULL;
@@ -431,10 +429,10 @@ int sb_history_changes(sb_history *h, const sb_history_query *q, sb_history_chan
     if (q->nmetrics)
         for (int i = 0; i < q->nmetrics && nm < 32; i++) metrics[nm++] = q->metrics[i];
     else
-        for (size_t i = 0; i < SB_COUNT(default_metrics); i++) metrics[nm++] = default_metrics[i];
+        nm = sb_columns_default_metrics(SB_USE_HISTORY, metrics, 32);
     for (int i = 0; i < nm; i++) {
         sb_metric_cols mc;
-        if (!sb_report_metric(metrics[i], &mc)) {
+        if (!sb_columns_metric(metrics[i], &mc)) {
             free(nights);
             free(rank);
             sb_fail(err, "unknown metric '%s' (summary columns give e.g. gpu_ms, final_ms, draw_calls, err_rate)",
@@ -451,7 +449,7 @@ int sb_history_changes(sb_history *h, const sb_history_query *q, sb_history_chan
     bool ok = true;
     for (int mi = 0; ok && mi < nm; mi++) {
         sb_metric_cols mc;
-        sb_report_metric(metrics[mi], &mc);
+        sb_columns_metric(metrics[mi], &mc);
         ok = sqlite3_prepare_v2(h->db,
                                 "SELECT r.series, r.night, r.stable, c.value, i.value FROM runs r "
                                 "JOIN nights n ON n.id = r.night "
@@ -511,7 +509,7 @@ int sb_history_changes(sb_history *h, const sb_history_query *q, sb_history_chan
                         o2->rel = cps[c].rel;
                         o2->z = cps[c].z;
                         o2->p = cps[c].p;
-                        o2->regression = cps[c].after > cps[c].before;
+                        o2->regression = mc.lower_worse ? cps[c].after < cps[c].before : cps[c].after > cps[c].before;
                         o2->recent = rank[at_night[cps[c].at]] < recent;
                     }
                 }

@@ -13,7 +13,7 @@
 
 #include "compare.h"
 #include "history.h"
-#include "report.h"
+#include "columns.h"
 #include "site_assets.h"
 #include "table.h"
 
@@ -224,10 +224,20 @@ static void night_images(const char *site, long long id, const char *dir, jbuf *
     jput(j, "]");
 }
 
-/* Per-frame figures of every run of a night, only the columns the run page draws. */
-static const char *const frame_cols[] = {"frame", "repeat", "zpass_ms", "minmax_ms", "cascade_ms", "final_ms",
-                                         "volumes_ms", "rays_ms", "gpu_ms", "draw_calls", "shadow_draw_calls",
-                                         "triangles", "shadow_triangles", "err_rate"};
+/* Per-frame figures of every run of a night, only the columns the run page draws: the stage times
+ * (every SB_COL_STAGE_TIME column, named from sb_stage_names) and these. */
+static const char *const drawn_cols[] = {"frame", "repeat", "gpu_ms", "draw_calls", "shadow_draw_calls", "triangles",
+                                         "shadow_triangles", "err_rate"};
+enum { MAX_FRAME_COLS = 32 };
+
+static int frame_cols(const char **out, bool stages_only) {
+    int n = 0, nf;
+    const sb_frame_col *fc = sb_frame_cols(&nf);
+    for (size_t c = 0; c < SB_COUNT(drawn_cols) && !stages_only; c++) out[n++] = drawn_cols[c];
+    for (int k = 0; k < nf && n < MAX_FRAME_COLS; k++)
+        if (fc[k].flags & SB_COL_STAGE_TIME) out[n++] = fc[k].name;
+    return n;
+}
 
 static bool write_frames(sqlite3 *db, const char *site, long long id, sb_err *err) {
     sqlite3_stmt *st;
@@ -235,23 +245,27 @@ static bool write_frames(sqlite3 *db, const char *site, long long id, sb_err *er
         return false;
     sqlite3_bind_int64(st, 1, id);
     jbuf j = {0};
+    const char *cols[MAX_FRAME_COLS], *stages[MAX_FRAME_COLS];
+    int ncols = frame_cols(cols, false), nstages = frame_cols(stages, true);
     jput(&j, "{\"kind\":\"frames\",\"columns\":[");
-    for (size_t c = 0; c < SB_COUNT(frame_cols); c++) jput(&j, c ? "," : ""), jstr(&j, frame_cols[c]);
+    for (int c = 0; c < ncols; c++) jput(&j, c ? "," : ""), jstr(&j, cols[c]);
+    jput(&j, "],\"stages\":[");   /* the stacked chart's series, in stage order */
+    for (int c = 0; c < nstages; c++) jput(&j, c ? "," : ""), jstr(&j, stages[c]);
     jput(&j, "],\"runs\":{");
     bool first = true;
     while (sqlite3_step(st) == SQLITE_ROW) {
         sb_table t;
         sb_err e;
         if (!sb_table_parse(&t, "frames", col(st, 1), &e)) continue;
-        int idx[SB_COUNT(frame_cols)];
-        for (size_t c = 0; c < SB_COUNT(frame_cols); c++) idx[c] = sb_table_col(&t, frame_cols[c]);
+        int idx[MAX_FRAME_COLS];
+        for (int c = 0; c < ncols; c++) idx[c] = sb_table_col(&t, cols[c]);
         jput(&j, first ? "" : ",");
         first = false;
         jkey(&j, col(st, 0));
         jput(&j, "[");
         for (int r = 0; r < t.nrows; r++) {
             jput(&j, r ? ",[" : "[");
-            for (size_t c = 0; c < SB_COUNT(frame_cols); c++) {
+            for (int c = 0; c < ncols; c++) {
                 jput(&j, c ? "," : "");
                 if (idx[c] < 0) jput(&j, "null");
                 else jcell(&j, t.rows[r][idx[c]]);
@@ -325,8 +339,6 @@ static bool write_night(sqlite3 *db, const char *site, sqlite3_stmt *n, sb_err *
 
 /* ---- series and changes ---- */
 
-static const char *const trend_metrics[] = {"gpu_ms", "final_ms", "cascade_ms", "draw_calls", "shadow_draw_calls",
-                                             "err_rate"};
 
 static void jchange(jbuf *j, const sb_history_change *c, int sid) {
     jput(j, "{\"sid\":");
@@ -375,9 +387,11 @@ static bool write_series(sqlite3 *db, const char *site, char **series, char **la
         jsfield(&j, "series", series[s]);
         jsfield(&j, "label", labels[s]);
         jput(&j, ",\"metrics\":{");
-        for (size_t m = 0; m < SB_COUNT(trend_metrics); m++) {
+        const char *trend_metrics[32];   /* the SB_USE_REPORT metrics of the column table */
+        int ntrend = sb_columns_default_metrics(SB_USE_REPORT, trend_metrics, 32);
+        for (int m = 0; m < ntrend; m++) {
             sb_metric_cols mc;
-            if (!sb_report_metric(trend_metrics[m], &mc)) continue;
+            if (!sb_columns_metric(trend_metrics[m], &mc)) continue;
             sqlite3_reset(st);
             sqlite3_bind_text(st, 1, series[s], -1, SQLITE_STATIC);
             sqlite3_bind_text(st, 2, mc.center, -1, SQLITE_STATIC);

@@ -282,7 +282,7 @@ var SB = (function () {
     m.appendChild(el("p", { text: "path " + r.path + " · " + r.width + "x" + r.height + " · status " + r.status + (r.reason ? " (" + r.reason + ")" : "") + " · stable " + (r.stable || "n/a") + (r.warnings ? " · warnings: " + r.warnings : "") }));
     var fr = frames.runs[id] || [], c = frames.columns;
     var at = function (name) { return c.indexOf(name); };
-    var stages = ["zpass_ms", "minmax_ms", "cascade_ms", "final_ms", "volumes_ms", "rays_ms"].filter(function (s) {
+    var stages = frames.stages.filter(function (s) {   // the stage times, named by the tool (sb_stage_names)
       return fr.some(function (f) { return typeof f[at(s)] === "number"; });
     });
     var cs = el("section", { id: "frames" }, [el("h2", { text: "Frames" })]);

@@ -171,10 +171,10 @@ def main():
     db = sqlite3.connect(newer)
     db.execute("PRAGMA user_version = 99")
     db.close()
-    p = sb("history", "add", base[0], "--history", newer, ok=(1,))
+    p = sb("history", "add", base[0], "--history", newer, ok=(2,))   # an unreadable history: bad input
     check("newer than this shadowbench" in p.stderr and len(p.stderr.strip().splitlines()) == 1,
           "a newer history is refused in one line: " + p.stderr.strip())
-    p = sb("history", "add", os.path.join(WORK, "nowhere"), "--history", A, ok=(1,))
+    p = sb("history", "add", os.path.join(WORK, "nowhere"), "--history", A, ok=(2,))   # not a results set: bad input
     check("nowhere/summary.csv" in p.stderr, "a folder with no summary is named: " + p.stderr.strip())
     # another machine's night is a series of its own
     other = os.path.join(WORK, "other-host")
@@ -192,7 +192,7 @@ def main():
     shutil.copytree(base[0], part)
     with open(os.path.join(part, "meta"), "a") as f:
         f.write("runs: 9 of 9\n")   # as a batch's meta says: a summary of 3 is a set still running
-    p = sb("history", "add", part, "--history", A, ok=(1,))
+    p = sb("history", "add", part, "--history", A, ok=(2,))
     check("3 of the 9 runs" in p.stderr and "incomplete" in p.stderr, "an incomplete batch is refused: " + p.stderr.strip())
     p = sb("history", "regressions", "--history", os.path.join(WORK, "none.sqlite"), ok=(2,))
     check("no history here" in p.stderr, "a missing history is said: " + p.stderr.strip())

@@ -360,7 +360,7 @@ static void test_usage_and_threads(void **st) {
  * on a software rasterizer (no clock at all) says nothing unless --verbose. */
 static void test_clocks_modes(void **st) {
     (void)st;
-    const char *out = expect_cli_fail("--clocks lock: cannot lock the GPU clock: ",
+    const char *out = expect_cli_exit(1, "--clocks lock: cannot lock the GPU clock: ",
                                       "%s run plane-box plane-box sm --clocks lock --frames 1 --size 64x36 --out %s/lock",
                                       test_binary(), g_tmp);
     assert_non_null(strstr(out, "NVML"));

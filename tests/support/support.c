@@ -259,18 +259,31 @@ void expect_scene_refused(const char *path, const char *needle) {
     assert_null(strchr(err.msg, '\n'));
 }
 
-const char *expect_cli_fail(const char *needle, const char *fmt, ...) {
+static const char *expect_exit_v(int status, const char *needle, const char *fmt, va_list ap) {
     static char out[16384];
     char cmd[8192];
-    va_list ap;
-    va_start(ap, fmt);
     vsnprintf(cmd, sizeof cmd, fmt, ap);
-    va_end(ap);
     int rc = run_logged(out, sizeof out, "%s", cmd);
-    assert_int_equal(rc, SB_EXIT_BAD_INPUT);   /* bad input of any kind: exit 2 */
+    assert_int_equal(rc, status);
     assert_non_null(strstr(out, needle));
     /* one line */
     assert_true(strchr(out, '\n') == NULL || strchr(out, '\n') == out + strlen(out) - 1);
+    return out;
+}
+
+const char *expect_cli_fail(const char *needle, const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    const char *out = expect_exit_v(SB_EXIT_BAD_INPUT, needle, fmt, ap);   /* bad input of any kind: exit 2 */
+    va_end(ap);
+    return out;
+}
+
+const char *expect_cli_exit(int status, const char *needle, const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    const char *out = expect_exit_v(status, needle, fmt, ap);
+    va_end(ap);
     return out;
 }
 

@@ -80,6 +80,8 @@ void summary_table(const char *dir, struct sb_table *t);
 /* Runs the printf-formatted command (logged) expecting exit 2 (bad input) and
  * one line of output holding needle; returns that output. */
 const char *expect_cli_fail(const char *needle, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* The same for another exit status (1: the GL or the machine failed, not the input). */
+const char *expect_cli_exit(int status, const char *needle, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 /* Copies the bundled scene file `name` (from SB_DATA_DIR) to dst. */
 void copy_bundled(const char *name, const char *dst);
 /* A fresh folder /tmp/<prefix>XXXXXX into dir (len >= 64); 0 on success (a cmocka group setup's result). */

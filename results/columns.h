@@ -1,8 +1,8 @@
-/* report.h - the CSV contract: one table of per-frame columns and one of
+/* columns.h - the CSV contract: one table of per-frame columns and one of
  * per-run (summary) columns, each row a name and a getter. Headers, rows,
  * `compare`'s metric lookup and `shadowbench columns` (columns.csv beside
  * every results set) are all produced from these two tables: adding a column
- * is adding one row to report.c.
+ * is adding one row to columns.c.
  *
  * A per-run column is either a scalar (run_id, load_ms, ...) or a series: a
  * per-frame column summarised by a set of statistics, named
@@ -94,19 +94,33 @@ enum {
 #define SB_STAT_COUNT 8
 extern const char *const sb_stat_names[SB_STAT_COUNT];   /* "mean", "median", ... in bit order */
 
+/* A column's flags. The SB_USE_ bits make a column a default metric of a
+ * command: which ones `compare`, `compare --pair`, `history regressions` and
+ * the report's trend charts use when no --metric says. */
 enum {
     SB_COL_STAGE_TIME = 1u << 0,    /* a per-frame stage time (<stage>_ms): plots stack these */
-    SB_COL_DEFAULT_METRIC = 1u << 1 /* compared by default (`compare` with no --metric) */
+    SB_USE_COMPARE = 1u << 1,       /* compare BASE NEW */
+    SB_USE_PAIR = 1u << 2,          /* compare --pair, the report's pair tables */
+    SB_USE_HISTORY = 1u << 3,       /* history regressions */
+    SB_USE_REPORT = 1u << 4,        /* the report's trend charts and its night table */
+    SB_LOWER_WORSE = 1u << 5,       /* a metric that gets worse as it falls (default: as it rises) */
 };
 
+/* A per-frame column. With stats, it is also a metric of the summary: the
+ * series `<name>_<stat>` for each statistic (one row declares both). */
 typedef struct sb_frame_col {
     const char *name;
     sb_cell (*get)(const sb_frame_row *r, int arg);
     int arg;
-    unsigned flags;
+    unsigned flags;             /* SB_COL_STAGE_TIME, SB_USE_*, SB_LOWER_WORSE */
     const char *doc;
+    unsigned stats;             /* the summary's statistics of it (SB_STAT_* bits; 0: not in the summary) */
+    const char *unit;           /* "ms", "share", "count", ... (NULL: not a number) */
 } sb_frame_col;
 
+/* A per-run column of the summary. The series rows (get NULL, stats set) are
+ * made from the frame columns that have stats, where the run table's one
+ * SB_RUN_SERIES row stands. */
 typedef struct sb_run_col {
     const char *name;           /* a scalar column, or the frame column a series summarises */
     sb_cell (*get)(const sb_run_row *r, int arg);   /* NULL: a series */
@@ -114,24 +128,25 @@ typedef struct sb_run_col {
     unsigned stats;             /* a series: SB_STAT_* bits */
     unsigned flags;
     const char *doc;
+    const char *unit;           /* a scalar that is a metric: its unit (NULL: not a metric) */
 } sb_run_col;
 
-extern const sb_frame_col sb_frame_cols[];
-extern const int sb_frame_col_count;
-extern const sb_run_col sb_run_cols[];
-extern const int sb_run_col_count;
+/* The per-frame columns in order (the stage times named from sb_stage_names; a table made once, in static storage). */
+const sb_frame_col *sb_frame_cols(int *count);
+/* The summary's columns in order, the series expanded (a table built once, in static storage). */
+const sb_run_col *sb_run_cols(int *count);
 
-void sb_report_frame_header(sb_csv *c);
-void sb_report_frame_row(sb_csv *c, const sb_frame_rec *r, const sb_stage_times *t, unsigned stages);
-void sb_report_summary_header(sb_csv *c);
+void sb_columns_frame_header(sb_csv *c);
+void sb_columns_frame_row(sb_csv *c, const sb_frame_rec *r, const sb_stage_times *t, unsigned stages);
+void sb_columns_summary_header(sb_csv *c);
 /* recs/times: the n measured frames (NULL for a run that failed or was skipped). */
-void sb_report_summary_row(sb_csv *c, const sb_run_info *info, unsigned stages, const sb_frame_rec *recs,
+void sb_columns_summary_row(sb_csv *c, const sb_run_info *info, unsigned stages, const sb_frame_rec *recs,
                            const sb_stage_times *times, int n);
 /* The column table as CSV (scope, name, kind, statistics, flags, doc): `shadowbench columns`, columns.csv. */
-void sb_report_columns(sb_csv *c);
+void sb_columns_csv(sb_csv *c);
 /* The same table as markdown (`shadowbench columns --format markdown`): the
  * generated part of docs/csv.md, which the csv unit test holds to it. */
-void sb_report_columns_markdown(FILE *out);
+void sb_columns_markdown(FILE *out);
 
 /* How a summary metric is read (compare): a series with a median and a
  * confidence interval is a timing (centre: median; separation: mean ± ci95),
@@ -139,17 +154,21 @@ void sb_report_columns_markdown(FILE *out);
  * name the table does not have. */
 typedef struct sb_metric_cols {
     char center[96], mean[96], ci[96];   /* column names; ci empty when the metric has none */
+    bool lower_worse;                    /* SB_LOWER_WORSE */
+    const char *unit;
 } sb_metric_cols;
-bool sb_report_metric(const char *name, sb_metric_cols *out);
-/* The metrics `compare` uses by default, in table order; returns how many (<= max). */
-int sb_report_default_metrics(const char **out, int max);
+bool sb_columns_metric(const char *name, sb_metric_cols *out);
+/* The metrics a command uses by default (use: one SB_USE_* bit), in table order; returns how many (<= max). */
+int sb_columns_default_metrics(unsigned use, const char **out, int max);
+/* Every metric (a series, or a scalar with a unit), in table order; returns how many (<= max). */
+int sb_columns_metrics(const char **out, int max);
 
 /* Relative half-width (percent) of the 95% confidence interval of the mean
  * gpu_ms. With two or more complete repetitions of the path (per_repeat frames
  * each) the samples are the repetitions' means: that measures how well the
  * path's time is known, not how much frames differ along the path. With one,
  * the samples are the frames. */
-double sb_report_gpu_ci_pct(const sb_stage_times *times, int n, int per_repeat);
+double sb_columns_gpu_ci_pct(const sb_stage_times *times, int n, int per_repeat);
 
 /* The summary rows of one invocation (summary.csv), rewritten atomically
  * after every run. */
@@ -166,7 +185,7 @@ typedef struct sb_summary {
 } sb_summary;
 
 void sb_summary_open(sb_summary *sum, const char *path);
-/* Records one run: its row, counted by info->status; recs/times as sb_report_summary_row. */
+/* Records one run: its row, counted by info->status; recs/times as sb_columns_summary_row. */
 void sb_summary_add_outcome(sb_summary *sum, const sb_run_info *info, unsigned stages, const sb_frame_rec *recs,
                             const sb_stage_times *times, int n);
 /* Notes a run's probe for the batch median (NaN ignored). */
@@ -175,5 +194,5 @@ void sb_summary_add_calib(sb_summary *sum, double calib_ms);
 void sb_summary_add_line(sb_summary *sum, const char *line, sb_status status);
 bool sb_summary_flush(sb_summary *sum, sb_err *err);
 void sb_summary_free(sb_summary *sum);
-/* Writes DIR/columns.csv (sb_report_columns): a results set describes its own columns. */
-bool sb_report_write_columns(const char *dir, sb_err *err);
+/* Writes DIR/columns.csv (sb_columns_csv): a results set describes its own columns. */
+bool sb_columns_write(const char *dir, sb_err *err);

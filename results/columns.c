@@ -1,0 +1,681 @@
+/* columns.c - the two column tables of the CSV contract (see columns.h). A
+ * stage a technique does not have, or a metric not measured for a frame, is
+ * an empty field, not 0. */
+#include "columns.h"
+
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "clocks.h"
+#include "stats.h"
+
+const char *const sb_stat_names[SB_STAT_COUNT] = {"mean", "median", "p95", "p99", "std", "ci95", "min", "max"};
+
+static sb_cell empty(void) { return (sb_cell){SB_CELL_EMPTY, 0, NAN, NULL}; }
+static sb_cell integer(long long v) { return (sb_cell){SB_CELL_INT, v, (double)v, NULL}; }
+static sb_cell number(double v) { return (sb_cell){SB_CELL_NUM, 0, v, NULL}; }
+static sb_cell text(const char *s) { return (sb_cell){SB_CELL_STR, 0, NAN, s}; }
+
+static void put(sb_csv *c, sb_cell v) {
+    switch (v.kind) {
+    case SB_CELL_EMPTY: sb_csv_empty(c); break;
+    case SB_CELL_INT: sb_csv_int(c, v.i); break;
+    case SB_CELL_NUM: sb_csv_num(c, v.num); break;
+    case SB_CELL_STR: sb_csv_str(c, v.str); break;
+    }
+}
+
+static bool has(unsigned stages, int s) { return stages & SB_STAGE_BIT(s); }
+
+static double gpu_ms(const sb_stage_times *t) {
+    double sum = 0;
+    for (int s = 0; s < SB_STAGE_COUNT; s++)
+        if (t->mask & SB_STAGE_BIT(s)) sum += t->ms[s];
+    return sum;
+}
+
+/* ---- per-frame columns ---- */
+
+enum { C_DRAWS, C_SHADOW_DRAWS, C_TRIS, C_SHADOW_TRIS, C_RENDERED, C_SKIPPED, C_WARP };
+
+static sb_cell f_frame(const sb_frame_row *r, int a) { (void)a; return integer(r->rec->frame); }
+static sb_cell f_repeat(const sb_frame_row *r, int a) { (void)a; return integer(r->rec->repeat); }
+static sb_cell f_progress(const sb_frame_row *r, int a) { (void)a; return number(r->rec->progress); }
+
+static sb_cell f_counter(const sb_frame_row *r, int a) {
+    const sb_counters *k = &r->rec->counters;
+    switch (a) {
+    case C_DRAWS: return integer(k->draw_calls);
+    case C_SHADOW_DRAWS: return integer(k->shadow_draw_calls);
+    case C_TRIS: return integer((long long)k->triangles);
+    case C_SHADOW_TRIS: return integer((long long)k->shadow_triangles);
+    }
+    if (!has(r->stages, SB_STAGE_CASCADE)) return empty(); /* no shadow maps: no cascades */
+    return integer(a == C_RENDERED ? k->cascades_rendered : a == C_SKIPPED ? k->cascades_skipped : k->warp_fallbacks);
+}
+
+static sb_cell f_stage_ms(const sb_frame_row *r, int s) {
+    return has(r->stages, s) && (r->t->mask & SB_STAGE_BIT(s)) ? number(r->t->ms[s]) : empty();
+}
+static sb_cell f_gpu_ms(const sb_frame_row *r, int a) { (void)a; return number(gpu_ms(r->t)); }
+static sb_cell f_cpu_ms(const sb_frame_row *r, int a) { (void)a; return number(r->rec->cpu_ms); }
+static sb_cell f_start_s(const sb_frame_row *r, int a) { (void)a; return number(r->rec->start_s); }
+static sb_cell f_gpu_clock(const sb_frame_row *r, int a) { (void)a; return number(r->rec->gpu_clock_mhz); }
+static sb_cell f_cpu_wait_ms(const sb_frame_row *r, int a) { (void)a; return number(r->t->cpu_wait_ms); }
+static sb_cell f_gpu_idle_ms(const sb_frame_row *r, int a) { (void)a; return number(r->t->gpu_idle_ms); }
+static sb_cell f_wall_ms(const sb_frame_row *r, int a) { (void)a; return number(r->rec->wall_ms); }
+static sb_cell f_stage_draws(const sb_frame_row *r, int s) {
+    return has(r->stages, s) ? integer(r->rec->counters.stage_draw_calls[s]) : empty();
+}
+static sb_cell f_split(const sb_frame_row *r, int k) {
+    return k < r->rec->counters.split_count ? number(r->rec->counters.splits[k]) : empty();
+}
+static sb_cell f_eval_pixels(const sb_frame_row *r, int a) {
+    (void)a;
+    return r->rec->evaluated ? integer(r->rec->err.pixels) : empty();
+}
+/* an error metric: arg is its offset in sb_error_metrics (a double) */
+static sb_cell f_error(const sb_frame_row *r, int off) {
+    if (!r->rec->evaluated) return empty();
+    return number(*(const double *)((const char *)&r->rec->err + off));
+}
+
+/* The rows. A metric row says its unit, its summary statistics (its series),
+ * which way is worse (SB_LOWER_WORSE; else higher is worse) and which
+ * commands use it by default (SB_USE_*): a new metric is one row here (and
+ * its figure in the frame record). */
+#define COL(n, g, a, d) {.name = n, .get = g, .arg = a, .doc = d}
+#define METRIC(n, g, a, u, st, fl, d) {.name = n, .get = g, .arg = a, .unit = u, .stats = st, .flags = fl, .doc = d}
+/* a stage's time: named "<stage>_ms" from sb_stage_names (sb_frame_cols) */
+#define STAGE_MS(s, fl, d) METRIC(NULL, f_stage_ms, s, "ms", SB_STATS_TIMING, SB_COL_STAGE_TIME | (fl), d)
+#define ERROR(n, field, u, st, fl, d) METRIC(n, f_error, offsetof(sb_error_metrics, field), u, st, fl, d)
+#define SPLIT(k) COL("split_" #k, f_split, k - 1, "view-space far distance of cascade " #k " this frame")
+#define ALL_USES (SB_USE_COMPARE | SB_USE_HISTORY | SB_USE_REPORT)
+#define ERR_STATS (SB_STAT_MEAN | SB_STAT_P95)
+
+static const sb_frame_col frame_cols[] = {
+    COL("frame", f_frame, 0, "frame of the path (0..frames-1)"),
+    COL("repeat", f_repeat, 0, "repetition of the path (0-based)"),
+    COL("progress", f_progress, 0, "position along the path in [0, 1]"),
+    COL("start_s", f_start_s, 0, "when the frame began, seconds since the process started (the order of runs and repeats)"),
+    METRIC("draw_calls", f_counter, C_DRAWS, "count", SB_STAT_MEAN, SB_USE_HISTORY | SB_USE_REPORT,
+           "draw calls submitted in the frame"),
+    METRIC("shadow_draw_calls", f_counter, C_SHADOW_DRAWS, "count", SB_STAT_MEAN, ALL_USES,
+           "draw calls of the shadow stages (cascade, volumes)"),
+    COL("triangles", f_counter, C_TRIS, "triangles submitted (instances counted)"),
+    METRIC("shadow_triangles", f_counter, C_SHADOW_TRIS, "count", SB_STAT_MEAN, 0,
+           "triangles submitted in the shadow stages"),
+    METRIC("cascades_rendered", f_counter, C_RENDERED, "count", SB_STAT_MEAN, 0,
+           "shadow maps rendered (empty: no shadow maps)"),
+    METRIC("cascades_skipped", f_counter, C_SKIPPED, "count", SB_STAT_MEAN, 0,
+           "shadow maps skipped for want of receivers"),
+    METRIC("warp_fallbacks", f_counter, C_WARP, "count", SB_STAT_MEAN, 0,
+           "warped maps that fell back to the uniform fit"),
+    STAGE_MS(SB_STAGE_ZPASS, 0, "camera depth pre-pass"),
+    STAGE_MS(SB_STAGE_MINMAX, 0, "depth reduction"),
+    STAGE_MS(SB_STAGE_CASCADE, ALL_USES, "all shadow-map rendering"),
+    STAGE_MS(SB_STAGE_FINAL, ALL_USES, "camera pass with the shadow lookup"),
+    STAGE_MS(SB_STAGE_VOLUMES, 0, "stencil shadow volumes (and planar casters)"),
+    STAGE_MS(SB_STAGE_RAYS, 0, "CPU ray casting (raycast)"),
+    METRIC("gpu_ms", f_gpu_ms, 0, "ms", SB_STATS_TIMING | SB_STAT_MIN, ALL_USES | SB_USE_PAIR,
+           "sum of the stage times"),
+    METRIC("cpu_ms", f_cpu_ms, 0, "ms", SB_STATS_TIMING, 0, "frame wall time not spent waiting for the GPU"),
+    METRIC("wall_ms", f_wall_ms, 0, "ms", SB_STATS_TIMING, 0, "frame wall time"),
+    METRIC("cpu_wait_ms", f_cpu_wait_ms, 0, "ms", SB_STAT_MEAN, 0,
+           "CPU time blocked on the GPU (the fence of the frame a ring back, or glFinish)"),
+    METRIC("gpu_idle_ms", f_gpu_idle_ms, 0, "ms", SB_STAT_MEAN, 0,
+           "queries: the frame's GPU span not covered by a stage (the GPU waiting for the CPU)"),
+    METRIC("gpu_clock_mhz", f_gpu_clock, 0, "MHz", SB_STAT_MIN | SB_STAT_MEDIAN | SB_STAT_MAX, SB_LOWER_WORSE,
+           "the GPU's graphics clock at the frame's end (empty: not readable)"),
+    COL("zpass_draw_calls", f_stage_draws, SB_STAGE_ZPASS, "draw calls of the z-pass"),
+    COL("cascade_draw_calls", f_stage_draws, SB_STAGE_CASCADE, "draw calls of the cascade stage"),
+    COL("final_draw_calls", f_stage_draws, SB_STAGE_FINAL, "draw calls of the final pass"),
+    COL("volumes_draw_calls", f_stage_draws, SB_STAGE_VOLUMES, "draw calls of the volumes stage"),
+    SPLIT(1), SPLIT(2), SPLIT(3), SPLIT(4), SPLIT(5), SPLIT(6), SPLIT(7), SPLIT(8),
+    COL("eval_pixels", f_eval_pixels, 0, "pixels evaluated against the reference (lit-facing, not sky)"),
+    ERROR("err_rate", err_rate, "share", SB_STAT_MEAN | SB_STAT_P95 | SB_STAT_CI95, ALL_USES | SB_USE_PAIR,
+          "share of evaluated pixels whose shadow state differs from the reference"),
+    ERROR("err_false_shadow", false_shadow, "share", ERR_STATS, 0, "share shadowed by the technique, lit in the reference"),
+    ERROR("err_false_lit", false_lit, "share", ERR_STATS, 0, "share lit by the technique, shadowed in the reference"),
+    ERROR("vis_mae", vis_mae, "visibility", ERR_STATS, 0, "mean absolute visibility difference"),
+    ERROR("res_err_mean", res_err_mean, "octaves", ERR_STATS, 0, "mean of max(-log2(shadow texels per pixel), 0)"),
+    ERROR("res_err_p95", res_err_p95, "octaves", ERR_STATS, 0, "95th percentile of the resolution error"),
+    ERROR("texel_px_p95", texel_px_p95, "texels/px", ERR_STATS, SB_LOWER_WORSE,
+          "95th percentile of shadow texels per pixel"),
+    ERROR("geom_mismatch", geom_mismatch, "share", 0, 0,
+          "share of sampled pixels where a camera ray's first hit is not the rasterized surface (one geometry?)"),
+    ERROR("err_floor", err_floor, "share", 0, 0,
+          "share of sampled evaluated pixels whose reference changes when cast from the ray's exact hit point"),
+};
+
+/* The frame table with the stage rows named from sb_stage_names ("<stage>_ms"), made once. */
+const sb_frame_col *sb_frame_cols(int *count) {
+    static sb_frame_col cols[SB_COUNT(frame_cols)];
+    static char stage_names[SB_STAGE_COUNT][32];
+    if (!cols[0].name)
+        for (size_t k = 0; k < SB_COUNT(frame_cols); k++) {
+            cols[k] = frame_cols[k];
+            if (cols[k].flags & SB_COL_STAGE_TIME) {
+                snprintf(stage_names[cols[k].arg], sizeof stage_names[0], "%s_ms", sb_stage_names[cols[k].arg]);
+                cols[k].name = stage_names[cols[k].arg];
+            }
+        }
+    *count = (int)SB_COUNT(frame_cols);
+    return cols;
+}
+
+/* ---- per-run columns ---- */
+
+enum {
+    S_RUN_ID, S_SCENE, S_PATH, S_TECHNIQUE, S_PARAMS, S_BACKEND, S_RENDERER, S_TIMING, S_STATUS, S_REASON, S_CLOCKS,
+    S_STABLE, S_ORDER
+};
+enum { I_RUN_INDEX, I_FRAMES, I_WARMUP, I_WIDTH, I_HEIGHT, I_SCENE_TRIS };
+
+static sb_cell r_text(const sb_run_row *r, int a) {
+    const sb_run_info *in = r->info;
+    const char *v[] = {in->run_id, in->scene, in->path, in->technique, in->params, in->backend, in->renderer,
+                       in->timing, sb_status_names[in->status], in->reason, in->clocks, in->stable, in->order};
+    return text(v[a]);
+}
+static sb_cell r_int(const sb_run_row *r, int a) {
+    const sb_run_info *in = r->info;
+    const long long v[] = {in->run_index, in->frames, in->warmup, in->width, in->height,
+                           (long long)in->scene_triangles};
+    return integer(v[a]);
+}
+static sb_cell r_seed(const sb_run_row *r, int a) {
+    (void)a;
+    return r->info->seed ? integer((long long)r->info->seed) : empty();
+}
+static sb_cell r_unstable(const sb_run_row *r, int a) { (void)a; return text(r->info->unstable_reason); }
+static sb_cell r_calib(const sb_run_row *r, int a) {
+    return number(r->n ? (a ? r->info->calib_ms_after : r->info->calib_ms_before) : NAN);
+}
+static sb_cell r_throttle(const sb_run_row *r, int a) {
+    (void)a;
+    static char names[256];
+    uint64_t bits = 0;
+    for (int i = 0; i < r->n; i++) bits |= r->recs[i].throttle;
+    sb_throttle_names(bits, names, sizeof names);
+    return text(names);
+}
+static sb_cell r_warnings(const sb_run_row *r, int a) { (void)a; return text(r->info->warnings); }
+static sb_cell r_auto(const sb_run_row *r, int a) { (void)a; return text(r->info->auto_params); }
+static sb_cell r_repeats(const sb_run_row *r, int a) { (void)a; return integer(r->n ? r->info->repeats : 0); }
+static sb_cell r_target_ci(const sb_run_row *r, int a) {
+    (void)a;
+    return number(r->info->target_ci > 0 ? r->info->target_ci : NAN);
+}
+static sb_cell r_gpu_ci(const sb_run_row *r, int a) {
+    (void)a;
+    return number(r->n ? sb_columns_gpu_ci_pct(r->times, r->n, r->info->frames) : NAN);
+}
+static sb_cell r_load_ms(const sb_run_row *r, int a) { (void)a; return number(r->info->load_ms); }
+static sb_cell r_wall_s(const sb_run_row *r, int a) { (void)a; return number(r->info->run_wall_s); }
+static sb_cell r_harness_share(const sb_run_row *r, int a) {
+    (void)a;
+    const sb_run_info *in = r->info;
+    return number(r->n && in->run_wall_s > 0 ? 1.0 - in->frames_wall_ms / (in->run_wall_s * 1e3) : NAN);
+}
+/* The reference's part of a run, from its evaluated frames. */
+typedef struct {
+    int frames, reused, background;
+    uint64_t rays, cast_rays;
+    double ms, cast_ms; /* all of it; of it, the frames that cast here */
+} ref_totals;
+
+static ref_totals ref_sum(const sb_frame_rec *recs, int n) {
+    ref_totals t = {0};
+    for (int i = 0; i < n; i++) {
+        const sb_error_metrics *e = &recs[i].err;
+        if (!recs[i].evaluated) continue;
+        t.frames++;
+        t.reused += e->reused;
+        t.background += e->background;
+        t.rays += e->rays;
+        t.ms += e->ray_ms;
+        if (!e->reused && !e->background) t.cast_ms += e->ray_ms, t.cast_rays += e->rays;
+    }
+    return t;
+}
+
+static sb_cell r_error_frames(const sb_run_row *r, int a) {
+    (void)a;
+    return integer(ref_sum(r->recs, r->n).frames);
+}
+/* Pooled over the evaluated frames: a = 0 geometry mismatches, 1 the floor. */
+static sb_cell r_pooled(const sb_run_row *r, int a) {
+    long hit = 0, n = 0;
+    for (int i = 0; i < r->n; i++) {
+        const sb_error_metrics *e = &r->recs[i].err;
+        if (!r->recs[i].evaluated) continue;
+        hit += a ? e->floor_disagree : e->geom_mismatches;
+        n += a ? e->floor_samples : e->geom_samples;
+    }
+    return number(n ? (double)hit / n : NAN);
+}
+static sb_cell r_rays_per_s(const sb_run_row *r, int a) {
+    (void)a;
+    ref_totals t = ref_sum(r->recs, r->n);
+    return number(t.cast_ms > 0 && t.cast_rays ? t.cast_rays / (t.cast_ms / 1e3) : NAN);
+}
+/* a = 0 rays cast, 1 time in the reference, 2 frames whose reference was reused, 3 cast in the background;
+ * empty without evaluated frames */
+static sb_cell r_ref(const sb_run_row *r, int a) {
+    ref_totals t = ref_sum(r->recs, r->n);
+    if (!t.frames) return empty();
+    return a == 0 ? integer((long long)t.rays) : a == 1 ? number(t.ms) : integer(a == 2 ? t.reused : t.background);
+}
+
+#define RUN(n, g, a, d) {.name = n, .get = g, .arg = a, .doc = d}
+#define RUN_METRIC(n, g, a, u, d) {.name = n, .get = g, .arg = a, .unit = u, .doc = d}
+/* Where the series stand: one for each frame column with stats, in frame-table order. */
+#define SB_RUN_SERIES {.name = NULL}
+
+static const sb_run_col run_cols[] = {
+    RUN("run_id", r_text, S_RUN_ID, "hash of scene and path contents, technique, parameters, frames, size, backend"),
+    RUN("run_index", r_int, I_RUN_INDEX, "position in the expanded matrix"),
+    RUN("scene", r_text, S_SCENE, "scene name"),
+    RUN("path", r_text, S_PATH, "path name"),
+    RUN("technique", r_text, S_TECHNIQUE, "technique"),
+    RUN("params", r_text, S_PARAMS, "every parameter, in table order"),
+    RUN("auto_params", r_auto, 0, "the values a run calibrated for its parameters given as auto (bias=auto...)"),
+    RUN("backend", r_text, S_BACKEND, "egl or osmesa"),
+    RUN("renderer", r_text, S_RENDERER, "GL_RENDERER"),
+    RUN("timing", r_text, S_TIMING, "queries or sync: the timing mode used"),
+    RUN("clocks", r_text, S_CLOCKS, "the GPU clock during the run: free, or locked at N MHz (--clocks)"),
+    RUN("order", r_text, S_ORDER, "matrix, interleave or shuffle: the order of runs and repetitions (--order)"),
+    RUN("seed", r_seed, 0, "shuffle's seed (--seed reproduces the order); empty for the other orders"),
+    RUN("frames", r_int, I_FRAMES, "frames sampled along the path"),
+    RUN("warmup", r_int, I_WARMUP, "warm-up frames, excluded"),
+    RUN("width", r_int, I_WIDTH, "render width"),
+    RUN("height", r_int, I_HEIGHT, "render height"),
+    RUN("status", r_text, S_STATUS, "ok, skipped, interrupted (SIGINT/SIGTERM; --resume redoes it) or failed"),
+    RUN("reason", r_text, S_REASON, "why a run failed or was skipped"),
+    RUN("stable", r_text, S_STABLE, "yes, or no when the timings cannot be trusted (unstable_reason says why)"),
+    RUN("unstable_reason", r_unstable, 0, "why stable is no: the calibration probe moved, or the frames drifted"),
+    RUN_METRIC("calib_ms_before", r_calib, 0, "ms", "the calibration probe just before the timed frames"),
+    RUN_METRIC("calib_ms_after", r_calib, 1, "ms", "the calibration probe just after them"),
+    RUN("warnings", r_warnings, 0, "what the tool cannot stand behind in this run, \"; \"-separated"),
+    RUN("repeats", r_repeats, 0, "repetitions of the path measured"),
+    RUN("target_ci_pct", r_target_ci, 0, "--target-ci"),
+    RUN_METRIC("gpu_ci_pct", r_gpu_ci, 0, "percent", "95% CI half-width of mean gpu_ms, percent of the mean"),
+    RUN("scene_triangles", r_int, I_SCENE_TRIS, "triangles in the scene"),
+    RUN_METRIC("load_ms", r_load_ms, 0, "ms", "scene load time"),
+    RUN_METRIC("run_wall_s", r_wall_s, 0, "s", "wall time of the run"),
+    RUN_METRIC("harness_share", r_harness_share, 0, "share", "share of the run's wall time outside rendered frames"),
+    RUN("throttle_reasons", r_throttle, 0, "clock event (throttle) reasons seen in the measured frames (NVML)"),
+    RUN("error_frames", r_error_frames, 0, "frames evaluated against the reference"),
+    SB_RUN_SERIES,
+    RUN_METRIC("geom_mismatch", r_pooled, 0, "share",
+               "share of sampled pixels (all evaluated frames) where rays and rasterizer disagree on the first surface"),
+    RUN_METRIC("err_floor", r_pooled, 1, "share",
+               "share of sampled evaluated pixels whose reference flips when cast from the exact hit: the error figures' floor"),
+    RUN_METRIC("ref_rays", r_ref, 0, "count", "reference rays cast for this run: 0 when every evaluated frame's answers were reused"),
+    RUN("ref_reused", r_ref, 2, "evaluated frames whose reference came from an earlier run of the same frame"),
+    RUN("ref_background", r_ref, 3, "evaluated frames whose reference was cast in the background for this run (--overlap; their rays are in ref_rays)"),
+    RUN_METRIC("ref_ms", r_ref, 1, "ms", "time the run spent in the reference (casting, geometry check, finding the answers or waiting for the background)"),
+    {.name = "ref_rays_per_s", .get = r_rays_per_s, .unit = "rays/s", .flags = SB_LOWER_WORSE,
+     .doc = "reference rays per second on this machine (frames that cast)"},
+};
+
+const sb_run_col *sb_run_cols(int *count) {
+    static sb_run_col cols[SB_COUNT(run_cols) + SB_COUNT(frame_cols)];
+    static int n;
+    int nf;
+    const sb_frame_col *fcols = sb_frame_cols(&nf);
+    if (!n)
+        for (size_t k = 0; k < SB_COUNT(run_cols); k++) {
+            if (run_cols[k].name) {
+                cols[n++] = run_cols[k];
+                continue;
+            }
+            for (int f = 0; f < nf; f++) {
+                const sb_frame_col *fc = &fcols[f];
+                if (fc->stats)
+                    cols[n++] = (sb_run_col){.name = fc->name, .stats = fc->stats, .flags = fc->flags,
+                                             .doc = fc->doc, .unit = fc->unit};
+            }
+        }
+    *count = n;
+    return cols;
+}
+
+/* ---- writing ---- */
+
+static const sb_frame_col *frame_col(const char *name) {
+    int n;
+    const sb_frame_col *cols = sb_frame_cols(&n);
+    for (int k = 0; k < n; k++)
+        if (!strcmp(cols[k].name, name)) return &cols[k];
+    return NULL;
+}
+
+static void stat_name(char *out, size_t len, const char *series, int bit) {
+    snprintf(out, len, "%s_%s", series, sb_stat_names[bit]);
+}
+
+void sb_columns_frame_header(sb_csv *c) {
+    int n;
+    const sb_frame_col *cols = sb_frame_cols(&n);
+    for (int k = 0; k < n; k++) sb_csv_str(c, cols[k].name);
+    sb_csv_end_row(c);
+}
+
+void sb_columns_frame_row(sb_csv *c, const sb_frame_rec *r, const sb_stage_times *t, unsigned stages) {
+    const sb_frame_row row = {r, t, stages};
+    int n;
+    const sb_frame_col *cols = sb_frame_cols(&n);
+    for (int k = 0; k < n; k++) put(c, cols[k].get(&row, cols[k].arg));
+    sb_csv_end_row(c);
+}
+
+void sb_columns_summary_header(sb_csv *c) {
+    char name[128];
+    int ncols;
+    const sb_run_col *cols = sb_run_cols(&ncols);
+    for (int k = 0; k < ncols; k++) {
+        const sb_run_col *col = &cols[k];
+        if (col->get) {
+            sb_csv_str(c, col->name);
+            continue;
+        }
+        for (int b = 0; b < SB_STAT_COUNT; b++)
+            if (col->stats & (1u << b)) {
+                stat_name(name, sizeof name, col->name, b);
+                sb_csv_str(c, name);
+            }
+    }
+    sb_csv_end_row(c);
+}
+
+void sb_columns_summary_row(sb_csv *c, const sb_run_info *info, unsigned stages, const sb_frame_rec *recs,
+                           const sb_stage_times *times, int n) {
+    if (!recs) n = 0;
+    const sb_run_row row = {info, recs, times, n, stages};
+    double *v = sb_xmalloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
+    int ncols;
+    const sb_run_col *cols = sb_run_cols(&ncols);
+    for (int k = 0; k < ncols; k++) {
+        const sb_run_col *col = &cols[k];
+        if (col->get) {
+            put(c, col->get(&row, col->arg));
+            continue;
+        }
+        const sb_frame_col *fc = frame_col(col->name);
+        for (int i = 0; i < n; i++) {
+            const sb_frame_row fr = {&recs[i], &times[i], stages};
+            sb_cell cell = fc->get(&fr, fc->arg);
+            v[i] = cell.kind == SB_CELL_INT || cell.kind == SB_CELL_NUM ? cell.num : NAN;
+        }
+        sb_stats st = sb_stats_compute(v, n);
+        const double s[SB_STAT_COUNT] = {st.mean, st.median, st.p95, st.p99, st.std, st.ci95, st.min, st.max};
+        for (int b = 0; b < SB_STAT_COUNT; b++)
+            if (col->stats & (1u << b)) sb_csv_num(c, s[b]);
+    }
+    sb_csv_end_row(c);
+    free(v);
+}
+
+/* "mean|p95" (sep "|") or "mean, p95" */
+static void stats_text(unsigned stats, const char *sep, char *out, size_t len) {
+    out[0] = 0;
+    for (int b = 0; b < SB_STAT_COUNT; b++)
+        if (stats & (1u << b)) {
+            size_t l = strlen(out);
+            snprintf(out + l, len - l, "%s%s", l ? sep : "", sb_stat_names[b]);
+        }
+}
+
+/* "compare|history|report" (sep "|"): the commands that use a metric by default */
+static void uses_text(unsigned flags, const char *sep, char *out, size_t len) {
+    static const struct { unsigned bit; const char *name; } uses[] = {
+        {SB_USE_COMPARE, "compare"}, {SB_USE_PAIR, "pair"}, {SB_USE_HISTORY, "history"}, {SB_USE_REPORT, "report"}};
+    out[0] = 0;
+    for (size_t i = 0; i < SB_COUNT(uses); i++)
+        if (flags & uses[i].bit) {
+            size_t l = strlen(out);
+            snprintf(out + l, len - l, "%s%s", l ? sep : "", uses[i].name);
+        }
+}
+
+static const char *worse_text(const char *unit, unsigned flags) {
+    return !unit ? "" : flags & SB_LOWER_WORSE ? "lower" : "higher";
+}
+
+void sb_columns_csv(sb_csv *c) {
+    const char *hdr[] = {"scope", "name", "statistics", "unit", "worse", "default_for", "flags", "doc"};
+    for (size_t i = 0; i < SB_COUNT(hdr); i++) sb_csv_str(c, hdr[i]);
+    sb_csv_end_row(c);
+    char stats[96], uses[96];
+    int nf;
+    const sb_frame_col *fcols = sb_frame_cols(&nf);
+    for (int k = 0; k < nf; k++) {
+        const sb_frame_col *f = &fcols[k];
+        stats_text(f->stats, "|", stats, sizeof stats);
+        uses_text(f->flags, "|", uses, sizeof uses);
+        const char *row[] = {"frame", f->name, stats, f->unit ? f->unit : "", worse_text(f->unit, f->flags), uses,
+                             f->flags & SB_COL_STAGE_TIME ? "stage_time" : "", f->doc};
+        for (size_t i = 0; i < SB_COUNT(row); i++) sb_csv_str(c, row[i]);
+        sb_csv_end_row(c);
+    }
+    int n;
+    const sb_run_col *cols = sb_run_cols(&n);
+    for (int k = 0; k < n; k++) {
+        const sb_run_col *r = &cols[k];
+        stats_text(r->stats, "|", stats, sizeof stats);
+        uses_text(r->flags, "|", uses, sizeof uses);
+        const char *row[] = {"run", r->name, stats, r->unit ? r->unit : "", worse_text(r->unit, r->flags), uses, "",
+                             r->doc};
+        for (size_t i = 0; i < SB_COUNT(row); i++) sb_csv_str(c, row[i]);
+        sb_csv_end_row(c);
+    }
+}
+
+/* One markdown cell: pipes escaped. */
+static void md_cell(FILE *out, const char *text) {
+    fputs("| ", out);
+    for (const char *p = text; *p; p++) {
+        if (*p == '|') fputc('\\', out);
+        fputc(*p, out);
+    }
+    fputc(' ', out);
+}
+
+void sb_columns_markdown(FILE *out) {
+    fprintf(out, "### Per frame (`<run_id>.csv`)\n\n| column | unit | meaning |\n|---|---|---|\n");
+    int nf;
+    const sb_frame_col *fcols = sb_frame_cols(&nf);
+    for (int k = 0; k < nf; k++) {
+        char name[80];
+        snprintf(name, sizeof name, "`%s`", fcols[k].name);
+        md_cell(out, name);
+        md_cell(out, fcols[k].unit ? fcols[k].unit : "");
+        md_cell(out, fcols[k].doc);
+        fputs("|\n", out);
+    }
+    fprintf(out, "\n### Per run (`summary.csv`)\n\nA series is a per-frame column summarised as "
+                 "`<column>_<statistic>` for each statistic listed. A metric (a series, or a column with a "
+                 "unit) can be named by `compare --metric` and `history regressions --metric`; *worse* says "
+                 "which way it regresses, *default for* which commands use it when no `--metric` is given "
+                 "(`pair`: `compare --pair` and the report's pair tables; `report`: the report's trend "
+                 "charts).\n\n| column | statistics | unit | worse | default for | meaning |\n"
+                 "|---|---|---|---|---|---|\n");
+    int n;
+    const sb_run_col *cols = sb_run_cols(&n);
+    for (int k = 0; k < n; k++) {
+        const sb_run_col *r = &cols[k];
+        char name[80], stats[120], uses[96];
+        snprintf(name, sizeof name, "`%s`", r->name);
+        stats_text(r->stats, ", ", stats, sizeof stats);
+        uses_text(r->flags, ", ", uses, sizeof uses);
+        md_cell(out, name);
+        md_cell(out, stats);
+        md_cell(out, r->unit ? r->unit : "");
+        md_cell(out, worse_text(r->unit, r->flags));
+        md_cell(out, uses);
+        md_cell(out, r->doc);
+        fputs("|\n", out);
+    }
+}
+
+bool sb_columns_metric(const char *name, sb_metric_cols *out) {
+    memset(out, 0, sizeof *out);
+    int n;
+    const sb_run_col *cols = sb_run_cols(&n);
+    for (int k = 0; k < n; k++) {
+        const sb_run_col *r = &cols[k];
+        if (strcmp(r->name, name)) continue;
+        if (r->get && !r->unit) return false;   /* not a number: no metric */
+        out->lower_worse = r->flags & SB_LOWER_WORSE;
+        out->unit = r->unit;
+        if (r->get) {
+            snprintf(out->center, sizeof out->center, "%s", name);
+            snprintf(out->mean, sizeof out->mean, "%s", name);
+        } else if ((r->stats & SB_STAT_MEDIAN) && (r->stats & SB_STAT_CI95)) {
+            snprintf(out->center, sizeof out->center, "%s_median", name);
+            snprintf(out->mean, sizeof out->mean, "%s_mean", name);
+            snprintf(out->ci, sizeof out->ci, "%s_ci95", name);
+        } else {
+            snprintf(out->center, sizeof out->center, "%s_%s", name,
+                     r->stats & SB_STAT_MEAN ? "mean" : r->stats & SB_STAT_MEDIAN ? "median" : "min");
+            snprintf(out->mean, sizeof out->mean, "%s", out->center);
+        }
+        return true;
+    }
+    return false;
+}
+
+int sb_columns_default_metrics(unsigned use, const char **out, int max) {
+    int n = 0, ncols;
+    const sb_run_col *cols = sb_run_cols(&ncols);
+    for (int k = 0; k < ncols && n < max; k++)
+        if (cols[k].flags & use) out[n++] = cols[k].name;
+    return n;
+}
+
+int sb_columns_metrics(const char **out, int max) {
+    int n = 0, ncols;
+    const sb_run_col *cols = sb_run_cols(&ncols);
+    for (int k = 0; k < ncols && n < max; k++)
+        if (cols[k].stats || cols[k].unit) out[n++] = cols[k].name;
+    return n;
+}
+
+double sb_columns_gpu_ci_pct(const sb_stage_times *times, int n, int per_repeat) {
+    double *v = sb_xmalloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
+    int m = 0;
+    if (per_repeat > 0 && n >= 2 * per_repeat) {
+        for (int r = 0; r + per_repeat <= n; r += per_repeat) {
+            double sum = 0;
+            for (int i = r; i < r + per_repeat; i++) sum += gpu_ms(&times[i]);
+            v[m++] = sum / per_repeat;
+        }
+    } else {
+        for (int i = 0; i < n; i++) v[m++] = gpu_ms(&times[i]);
+    }
+    sb_stats st = sb_stats_compute(v, m);
+    free(v);
+    return st.mean > 0 ? 100.0 * st.ci95 / st.mean : NAN;
+}
+
+void sb_run_warn(sb_run_info *info, const char *fmt, ...) {
+    size_t n = strlen(info->warnings);
+    if (n && n + 2 < sizeof info->warnings) {
+        memcpy(info->warnings + n, "; ", 3);
+        n += 2;
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(info->warnings + n, sizeof info->warnings - n, fmt, ap);
+    va_end(ap);
+}
+
+/* ---- the summary file ---- */
+
+void sb_summary_open(sb_summary *sum, const char *path) {
+    memset(sum, 0, sizeof *sum);
+    sum->path = sb_strdup(path);
+    sb_columns_summary_header(&sum->rows);
+}
+
+void sb_summary_add_calib(sb_summary *sum, double calib_ms) {
+    if (!(calib_ms > 0)) return;
+    sum->calib = sb_xrealloc(sum->calib, sizeof(double) * (size_t)(sum->ncalib + 1));
+    sum->calib[sum->ncalib++] = calib_ms;
+}
+
+const char *const sb_status_names[SB_STATUS_COUNT] = {"ok", "skipped", "interrupted", "failed"};
+
+sb_status sb_status_of(const char *name) {
+    for (int s = 0; s < SB_STATUS_COUNT; s++) { /* the one place a name is read back */
+        const char *n = sb_status_names[s];
+        if (name && !strcmp(name, n)) return s;
+    }
+    return SB_STATUS_FAILED;
+}
+
+static void count_status(sb_summary *sum, sb_status status) {
+    sum->count++;
+    sum->failed += status == SB_STATUS_FAILED;
+    sum->interrupted += status == SB_STATUS_INTERRUPTED;
+    sum->skipped += status == SB_STATUS_SKIPPED;
+}
+
+/* $SB_AUDIT_OUTCOMES (the test suite sets it): every run that did not end ok
+ * is appended there, status and reason, so the suite can check over every
+ * summary it wrote that none ended without a reason. */
+static void audit_outcome(const sb_run_info *info) {
+    const char *file = getenv("SB_AUDIT_OUTCOMES");
+    if (!file || !*file || info->status == SB_STATUS_OK) return;
+    FILE *f = fopen(file, "a");
+    if (!f) return;
+    char reason[1100];
+    snprintf(reason, sizeof reason, "%s", info->reason ? info->reason : "");
+    for (char *p = reason; *p; p++)
+        if (*p == '\t' || *p == '\n') *p = ' ';
+    fprintf(f, "%s\t%s\t%s\t%s\n", sb_status_names[info->status], info->run_id ? info->run_id : "", info->technique ? info->technique : "",
+            reason);
+    fclose(f);
+}
+
+void sb_summary_add_outcome(sb_summary *sum, const sb_run_info *info, unsigned stages, const sb_frame_rec *recs,
+                            const sb_stage_times *times, int n) {
+    audit_outcome(info);
+    sb_columns_summary_row(&sum->rows, info, stages, recs, times, n);
+    count_status(sum, info->status);
+    for (int i = 0; times && i < n; i++) sum->timed_gpu_ms += gpu_ms(&times[i]);
+    ref_totals t = ref_sum(recs, recs ? n : 0);
+    sum->ref_rays += t.rays;
+    sum->ref_reused += t.reused;
+    sum->ref_background += t.background;
+    sum->unstable += info->stable && !strcmp(info->stable, "no");
+}
+
+void sb_summary_add_line(sb_summary *sum, const char *line, sb_status status) {
+    sb_csv_line(&sum->rows, line);
+    count_status(sum, status);
+}
+
+bool sb_summary_flush(sb_summary *sum, sb_err *err) {
+    return sb_write_file_atomic(sum->path, sum->rows.buf, sum->rows.len, err);
+}
+
+void sb_summary_free(sb_summary *sum) {
+    free(sum->path);
+    free(sum->calib);
+    sb_csv_free(&sum->rows);
+    memset(sum, 0, sizeof *sum);
+}
+
+bool sb_columns_write(const char *dir, sb_err *err) {
+    sb_csv c = {0};
+    sb_columns_csv(&c);
+    char path[4200];
+    snprintf(path, sizeof path, "%s/columns.csv", dir);
+    bool ok = sb_write_file_atomic(path, c.buf, c.len, err);
+    sb_csv_free(&c);
+    return ok;
+}

@@ -1,0 +1,128 @@
+/* The metric table walked row by row on a real results set: every metric (a
+ * series or a scalar with a unit, results/columns.c) is in the summary's
+ * header, in `shadowbench columns`, accepted by `compare --metric` and
+ * `history regressions --metric`, and in docs/csv.md; the commands' default
+ * metrics are the table's SB_USE_ rows. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "support.h"
+
+static char g_tmp[64], g_out[65536], g_dir[8192];
+
+static int setup(void **st) {
+    (void)st;
+    if (tmp_folder(g_tmp, sizeof g_tmp, "sbmetric")) return -1;
+    /* a small set: a technique without maps and one with, every frame evaluated */
+    if (run_logged(g_out, sizeof g_out, "%s run plane-box plane-box none sm:res=256 sdsm:res=256 volumes raycast --frames 3 --size 96x54 "
+                   "--error-every 1 --warmup 0 --out %s/r --quiet", test_binary(), g_tmp) != 0)
+        return -1;
+    char *nl = strrchr(g_out, '\n');
+    if (nl && nl > g_out) *nl = 0;
+    nl = strrchr(g_out, '\n');
+    snprintf(g_dir, sizeof g_dir, "%.4000s", nl ? nl + 1 : g_out);
+    return run_logged(g_out, sizeof g_out, "%s history add %s --history %s/h.sqlite --quiet", test_binary(), g_dir,
+                      g_tmp);
+}
+
+static int teardown(void **st) {
+    (void)st;
+    return tmp_remove(g_tmp);
+}
+
+static void test_every_metric_everywhere(void **st) {
+    (void)st;
+    const char *metrics[128];
+    int n = sb_columns_metrics(metrics, 128);
+    assert_true(n > 20);
+    char path[8400];
+    snprintf(path, sizeof path, "%s/summary.csv", g_dir);
+    sb_err err;
+    char *summary = sb_read_file(path, NULL, &err);
+    assert_non_null(summary);
+    *strchr(summary, '\n') = 0;   /* the header */
+    snprintf(path, sizeof path, "%s/docs/csv.md", getenv("SB_SOURCE_ROOT"));
+    char *doc = sb_read_file(path, NULL, &err);
+    assert_non_null(doc);
+    sb_csv cols = {0};
+    sb_columns_csv(&cols);
+    int measured = 0;
+    for (int i = 0; i < n; i++) {
+        const char *m = metrics[i];
+        sb_metric_cols mc;
+        assert_true(sb_columns_metric(m, &mc));
+        char want[160];
+        snprintf(want, sizeof want, ",%s,", mc.center);   /* the column compare reads is in the header */
+        char header[8192];
+        snprintf(header, sizeof header, ",%s,", summary);
+        if (!strstr(header, want)) print_error("summary.csv has no %s (metric %s)\n", mc.center, m);
+        assert_non_null(strstr(header, want));
+        snprintf(want, sizeof want, "run,%s,", m);
+        assert_non_null(strstr(cols.buf, want));
+        snprintf(want, sizeof want, "| `%s` |", m);
+        if (!strstr(doc, want)) print_error("docs/csv.md has no row for %s\n", m);
+        assert_non_null(strstr(doc, want));
+        int rc = run_logged(g_out, sizeof g_out, "%s compare %s %s --metric %s --format csv", test_binary(), g_dir,
+                            g_dir, m);
+        assert_true(rc == 0 || rc == 3);   /* the same set: no regression (3: a timing of an unstable run) */
+        assert_null(strstr(g_out, "unknown metric"));
+        snprintf(want, sizeof want, ",%s,", m);   /* a row for it, unless no run of the set measures it */
+        if (!strstr(g_out, want)) print_message("no run of the set measures %s\n", m);
+        measured += strstr(g_out, want) != NULL;
+        rc = run_logged(g_out, sizeof g_out, "%s history regressions --history %s/h.sqlite --metric %s --quiet",
+                        test_binary(), g_tmp, m);
+        assert_int_equal(rc, 0);
+    }
+    assert_true(measured >= n - 4);   /* llvmpipe has no clock; warp_fallbacks... are 0, which is a row */
+    /* a name that is a column but not a number is no metric */
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s compare %s %s --metric renderer", test_binary(), g_dir, g_dir),
+                     2);
+    assert_non_null(strstr(g_out, "unknown metric 'renderer'"));
+    sb_csv_free(&cols);
+    free(summary);
+    free(doc);
+}
+
+/* compare with no --metric compares the SB_USE_COMPARE rows, in table order. */
+static void test_default_metrics_are_the_table_rows(void **st) {
+    (void)st;
+    const char *def[32];
+    int n = sb_columns_default_metrics(SB_USE_COMPARE, def, 32);
+    assert_true(n >= 3);
+    assert_int_not_equal(run_logged(g_out, sizeof g_out, "%s compare %s %s --format csv", test_binary(), g_dir, g_dir), 2);
+    /* sm's rows: every default metric once, nothing else */
+    int rows = 0;
+    for (char *line = strtok(g_out, "\n"); line; line = strtok(NULL, "\n")) {
+        if (!strstr(line, ",sm,")) continue;
+        bool known = false;
+        for (int k = 0; k < n; k++) {
+            char want[96];
+            snprintf(want, sizeof want, ",%s,", def[k]);
+            known |= strstr(line, want) != NULL;
+        }
+        if (!known) print_error("compare's default row is no SB_USE_COMPARE metric: %s\n", line);
+        assert_true(known);
+        rows++;
+    }
+    assert_int_equal(rows, n);
+    const char *hist[32];
+    int nh = sb_columns_default_metrics(SB_USE_HISTORY, hist, 32);
+    const char *rep[32];
+    int nr = sb_columns_default_metrics(SB_USE_REPORT, rep, 32);
+    assert_true(nh >= 1 && nr >= 1);
+    const char *pair[32];
+    assert_int_equal(sb_columns_default_metrics(SB_USE_PAIR, pair, 32), 2);   /* time and error */
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_every_metric_everywhere),
+        cmocka_unit_test(test_default_metrics_are_the_table_rows),
+    };
+    return cmocka_run_group_tests_name("metrics", tests, setup, teardown);
+}
