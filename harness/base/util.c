@@ -371,10 +371,10 @@ const sb_exit_status sb_exit_statuses[] = {
     {SB_EXIT_OK, "ok", "every run succeeded or was skipped with a reason; compare and history regressions: no regression"},
     {SB_EXIT_FAILED, "failed",
      "a run failed (recorded in the summary; the others still ran); compare: a regression; history regressions: a "
-     "regression starts in the newest --recent nights; history add: a set could not be added"},
+     "regression starts in the newest --recent nights"},
     {SB_EXIT_BAD_INPUT, "bad-input",
      "bad input of any kind: an unknown, misplaced or out-of-range option, a missing or invalid scene, path, batch, "
-     "results or history file; nothing was rendered"},
+     "results or history file (history add: the others are still added); nothing was rendered"},
     {SB_EXIT_UNSTABLE, "unstable", "compare: no regression, but a compared timing is UNSTABLE (a run marked stable=no)"},
     {SB_EXIT_WRITE, "not-written",
      "a result file could not be written whole (a full disk, a failed fsync, close or rename; named on stderr)"},
