@@ -2,7 +2,7 @@
 // perspective faces). The reference depth is the face's perspective depth of
 // the point's major-axis distance; bias and normal offset scale with the
 // texel size at that distance. SB_FILTER: 0 none, 1 hw (bilinear compare), 2 pcf (8 taps)
-uniform samplerCubeShadow u_cube;
+uniform samplerCubeShadow u_map;
 uniform vec3 u_lamp;
 uniform float u_near, u_far, u_res, u_bias, u_normal;
 
@@ -12,7 +12,7 @@ float sb_cube_tap(vec3 dq) {
     axis -= u_bias * texel;
     if (axis >= u_far) return 1.0;
     float z = (u_far + u_near) / (u_far - u_near) - 2.0 * u_far * u_near / ((u_far - u_near) * max(axis, u_near));
-    return texture(u_cube, vec4(dq, 0.5 * z + 0.5));
+    return texture(u_map, vec4(dq, 0.5 * z + 0.5));
 }
 
 float sb_visibility(vec3 p, vec3 n, float view_z) {

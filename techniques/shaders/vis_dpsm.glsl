@@ -1,6 +1,6 @@
 // vis_dpsm.glsl - dual-paraboloid lookup: the hemisphere of the point picks
 // the map; the reference is the point's distance to the lamp.
-uniform sampler2DArrayShadow u_maps;
+uniform sampler2DArrayShadow u_map;
 uniform vec3 u_lamp;
 uniform mat3 u_frame;
 uniform float u_near, u_far, u_res, u_bias, u_normal;
@@ -21,5 +21,5 @@ float sb_visibility(vec3 p, vec3 n, float view_z) {
     vec2 uv = d.xy / (1.0 + d.z) * 0.5 + 0.5;
     float ref = (len - u_bias * texel - u_near) / (u_far - u_near);
     if (ref >= 1.0) return 1.0;
-    return texture(u_maps, vec4(uv, layer, ref));
+    return texture(u_map, vec4(uv, layer, ref));
 }
