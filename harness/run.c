@@ -89,6 +89,7 @@ static bool evaluate(sb_session *s, sb_instance *in, int seq, const char *out_di
 
 struct sb_run {
     sb_session *s;
+    bool writes_failed_before;  /* a result write had failed before this run began (sb_result_writes_failed) */
     const sb_run_spec *spec;
     sb_run_spec used;           /* spec with its "auto" values chosen (autobias.h) */
     bool calibrated;
@@ -374,6 +375,7 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
     r->sum = sum;
     r->keep_instance = keep_instance;
     r->t_run = sb_now_ms();
+    r->writes_failed_before = sb_result_writes_failed();
     sb_session_run_id(s, spec, r->run_id);
     sb_params_canonical(&spec->params, r->params, sizeof r->params);
     snprintf(r->csv_path, sizeof r->csv_path, "%s/%s.csv", out_dir, r->run_id);
@@ -416,8 +418,11 @@ bool sb_run_end(sb_run *r) {
     r->info.repeats = r->repeats;
     r->info.warmup = r->s->opts.warmup < 0 ? (r->repeats ? r->warmup_frames / r->repeats : 0) : r->s->opts.warmup;
     if (!ok) {
-        sb_log("run %s (%s): %s: %s", r->run_id, r->spec->tech->name,
-               sb_status_names[r->interrupted ? SB_STATUS_INTERRUPTED : SB_STATUS_FAILED], r->err.msg);
+        /* a result this run could not write is named even with --quiet: the exit status (4) says "named above" */
+        bool lost = !r->writes_failed_before && sb_result_writes_failed();
+        const char *status = sb_status_names[r->interrupted ? SB_STATUS_INTERRUPTED : SB_STATUS_FAILED];
+        if (lost) fprintf(stderr, "shadowbench: run %s (%s): %s: %s\n", r->run_id, r->spec->tech->name, status, r->err.msg);
+        else sb_log("run %s (%s): %s: %s", r->run_id, r->spec->tech->name, status, r->err.msg);
         r->info.status = r->interrupted ? SB_STATUS_INTERRUPTED : SB_STATUS_FAILED;
         r->info.reason = r->err.msg;
     }

@@ -222,7 +222,7 @@ static bool agree(const char *a, const char *b, const char *skip) {
 
 /* ---- pairs: one table, a row a pair ---- */
 
-enum { PAIR_ITEMS = 64, PAIR_COLS = 40 };
+enum { PAIR_ITEMS = 64, PAIR_COLS = SB_PAIR_COLS };
 
 typedef struct {
     int a, b;
@@ -255,15 +255,7 @@ static bool shared_item(const pair_row *rows, int n, const char *item) {
     return true;
 }
 
-/* A table of text cells printed as aligned text, CSV or markdown. */
-typedef struct {
-    char head[PAIR_COLS][384];
-    bool numeric[PAIR_COLS];
-    int ncols, nrows;
-    char (*cells)[PAIR_COLS][160];
-} cell_table;
-
-static void table_print(const cell_table *tb, int format, FILE *out) {
+static void table_print(const sb_pair_table *tb, int format, FILE *out) {
     if (format == SB_OUTPUT_CSV) {
         sb_csv c = {0};
         for (int k = 0; k < tb->ncols; k++) sb_csv_str(&c, tb->head[k]);
@@ -326,7 +318,7 @@ static bool is_pair(const sb_table *t, int ra, int rb, const char *key, const ch
  * is the key), the parameters that are not the same in every pair, then for each
  * metric A's, B's and their ratio, and a verdict. */
 static void pairs_table(const sb_table *t, const pair_row *rows, int n, const char *key, const char *la,
-                        const char *lb, const char *const *metrics, int nm, cell_table *tb) {
+                        const char *lb, const char *const *metrics, int nm, sb_pair_table *tb) {
     bool by_tech = !strcmp(key, "technique"), show_path = false;
     for (int i = 0; i < n; i++) show_path |= strcmp(sb_table_get(t, rows[i].a, "scene"), sb_table_get(t, rows[i].a, "path")) != 0;
     int k = 0;
@@ -374,7 +366,8 @@ static void pairs_table(const sb_table *t, const pair_row *rows, int n, const ch
     }
 }
 
-int sb_compare_pairs(const char *dir, const sb_compare_opts *o, FILE *out, sb_err *err) {
+int sb_compare_pair_table(const sb_table *t, const sb_compare_opts *o, sb_pair_table *tb, sb_err *err) {
+    memset(tb, 0, sizeof *tb);
     char key[128], va[128], vb[128];
     const char *eq = o->pair ? strchr(o->pair, '=') : NULL;
     const char *comma = eq ? strchr(eq, ',') : NULL;
@@ -384,8 +377,6 @@ int sb_compare_pairs(const char *dir, const sb_compare_opts *o, FILE *out, sb_er
     snprintf(key, sizeof key, "%.*s", (int)(eq - o->pair), o->pair);
     snprintf(va, sizeof va, "%.*s", (int)(comma - eq - 1), eq + 1);
     snprintf(vb, sizeof vb, "%s", comma + 1);
-    sb_table t;
-    if (!load_summary(&t, dir, err)) return -1;
     /* default: the questions a pair answers (the SB_USE_PAIR metrics: time and error) */
     const char *pair_defaults[32];
     int npd = sb_columns_default_metrics(SB_USE_PAIR, pair_defaults, 32);
@@ -394,37 +385,49 @@ int sb_compare_pairs(const char *dir, const sb_compare_opts *o, FILE *out, sb_er
     bool by_tech = !strcmp(key, "technique");
     pair_row *rows = NULL;
     int n = 0;
-    for (int ra = 0; ra < t.nrows; ra++)
-        for (int rb = 0; rb < t.nrows; rb++) {
-            if (!is_pair(&t, ra, rb, key, va, vb)) continue;
+    for (int ra = 0; ra < t->nrows; ra++)
+        for (int rb = 0; rb < t->nrows; rb++) {
+            if (!is_pair(t, ra, rb, key, va, vb)) continue;
             rows = sb_xrealloc(rows, (size_t)(n + 1) * sizeof *rows);
             pair_row *p = &rows[n++];
             memset(p, 0, sizeof *p);
             p->a = ra;
             p->b = rb;
-            add_items(p, sb_table_get(&t, ra, "params"), by_tech ? NULL : key);
-            add_items(p, sb_table_get(&t, rb, "params"), by_tech ? NULL : key);
+            add_items(p, sb_table_get(t, ra, "params"), by_tech ? NULL : key);
+            add_items(p, sb_table_get(t, rb, "params"), by_tech ? NULL : key);
             qsort(p->items, (size_t)p->nitems, sizeof p->items[0], cmp_item);
         }
     char la[300], lb[300];
     snprintf(la, sizeof la, by_tech ? "%s%s" : "%s=%s", by_tech ? "" : key, va);
     snprintf(lb, sizeof lb, by_tech ? "%s%s" : "%s=%s", by_tech ? "" : key, vb);
-    cell_table tb;
-    memset(&tb, 0, sizeof tb);
-    pairs_table(&t, rows, n, key, la, lb, metrics, nm, &tb);
-    if (o->format != SB_OUTPUT_CSV) {
-        char shared[2048] = "";
-        for (int j = 0; n && j < rows[0].nitems; j++)
-            if (shared_item(rows, n, rows[0].items[j])) {
-                size_t l = strlen(shared);
-                snprintf(shared + l, sizeof shared - l, "%s%s", l ? ":" : "", rows[0].items[j]);
-            }
-        if (shared[0]) fprintf(out, o->format == SB_OUTPUT_MARKDOWN ? "Every pair: `%s`\n\n" : "every pair: %s\n", shared);
-    }
-    if (n) table_print(&tb, o->format, out);
-    if (o->format == SB_OUTPUT_TEXT) fprintf(out, "%d pair(s) %s=%s against %s=%s\n", n, key, vb, key, va);
-    free(tb.cells);
+    pairs_table(t, rows, n, key, la, lb, metrics, nm, tb);
+    for (int j = 0; n && j < rows[0].nitems; j++)
+        if (shared_item(rows, n, rows[0].items[j])) {
+            size_t l = strlen(tb->shared);
+            snprintf(tb->shared + l, sizeof tb->shared - l, "%s%s", l ? ":" : "", rows[0].items[j]);
+        }
+    snprintf(tb->caption, sizeof tb->caption, "%d pair(s) %s=%s against %s=%s", n, key, vb, key, va);
     free(rows);
+    return n;
+}
+
+void sb_pair_table_free(sb_pair_table *tb) {
+    free(tb->cells);
+    tb->cells = NULL;
+}
+
+int sb_compare_pairs(const char *dir, const sb_compare_opts *o, FILE *out, sb_err *err) {
+    sb_table t;
+    if (!load_summary(&t, dir, err)) return -1;
+    sb_pair_table tb;
+    int n = sb_compare_pair_table(&t, o, &tb, err);
+    if (n >= 0) {
+        if (o->format != SB_OUTPUT_CSV && tb.shared[0])
+            fprintf(out, o->format == SB_OUTPUT_MARKDOWN ? "Every pair: `%s`\n\n" : "every pair: %s\n", tb.shared);
+        if (n) table_print(&tb, o->format, out);
+        if (o->format == SB_OUTPUT_TEXT) fprintf(out, "%s\n", tb.caption);
+    }
+    sb_pair_table_free(&tb);
     sb_table_free(&t);
     return n;
 }

@@ -28,6 +28,22 @@ int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FIL
  * (or technique, matching the parameters both techniques have). Returns the
  * number of pairs, or -1. */
 int sb_compare_pairs(const char *dir, const sb_compare_opts *o, FILE *out, sb_err *err);
+
+/* The same pairs as a table in memory (what sb_compare_pairs prints; the report's pair tables): the column
+ * names, which are numbers, the rows' cells, the parameters every pair shares, and a caption. Returns the number
+ * of pairs (free with sb_pair_table_free), or -1. */
+#define SB_PAIR_COLS 40
+typedef struct sb_pair_table {
+    char head[SB_PAIR_COLS][384];
+    bool numeric[SB_PAIR_COLS];
+    int ncols, nrows;
+    char (*cells)[SB_PAIR_COLS][160];
+    char shared[2048];
+    char caption[1024];
+} sb_pair_table;
+struct sb_table;
+int sb_compare_pair_table(const struct sb_table *summary, const sb_compare_opts *o, sb_pair_table *out, sb_err *err);
+void sb_pair_table_free(sb_pair_table *t);
 struct sb_table;
 /* The key `compare` joins runs by: scene|path|technique|parameters sorted by name. */
 void sb_compare_run_key(const struct sb_table *t, int r, char *out, size_t len);

@@ -21,8 +21,6 @@ struct sb_history {
     char path[4096];
 };
 
-sqlite3 *sb_history_db(sb_history *h) { return h->db; }
-
 const char *sb_history_default_path(const char *default_out, char *buf, size_t len) {
     const char *env = getenv("SB_HISTORY");
     if (env && *env) snprintf(buf, len, "%s", env);
@@ -349,21 +347,15 @@ bool sb_history_add(sb_history *h, const char *dir, sb_history_added *out, sb_er
 }
 
 bool sb_history_list(sb_history *h, FILE *out, sb_err *err) {
-    sqlite3_stmt *st;
-    if (sqlite3_prepare_v2(h->db,
-                           "SELECT n.id, n.date, n.host, n.git_commit, count(r.id), "
-                           "sum(r.status = 'ok'), sum(r.stable = 'no'), n.dir FROM nights n LEFT JOIN runs r "
-                           "ON r.night = n.id GROUP BY n.id ORDER BY n.date, n.id",
-                           -1, &st, NULL) != SQLITE_OK)
-        return db_fail(h, err, "listing the nights");
+    sb_history_night *n = NULL;
+    int nn = sb_history_nights(h, &n, err);
+    if (nn < 0) return false;
     fprintf(out, "%-5s %-20s %-16s %-20s %5s %5s %8s  %s\n", "night", "date", "host", "commit", "runs", "ok",
             "unstable", "folder");
-    while (sqlite3_step(st) == SQLITE_ROW)
-        fprintf(out, "%-5lld %-20s %-16s %-20s %5d %5d %8d  %s\n", sqlite3_column_int64(st, 0),
-                (const char *)sqlite3_column_text(st, 1), (const char *)sqlite3_column_text(st, 2),
-                (const char *)sqlite3_column_text(st, 3), sqlite3_column_int(st, 4), sqlite3_column_int(st, 5),
-                sqlite3_column_int(st, 6), (const char *)sqlite3_column_text(st, 7));
-    sqlite3_finalize(st);
+    for (int i = 0; i < nn; i++)
+        fprintf(out, "%-5lld %-20s %-16s %-20s %5d %5d %8d  %s\n", n[i].id, n[i].date, n[i].host, n[i].commit, n[i].runs,
+                n[i].ok, n[i].unstable, n[i].dir);
+    sb_history_nights_free(n, nn);
     return true;
 }
 
@@ -654,4 +646,116 @@ void sb_history_print_changes(const sb_history_change *c, int n, int format, FIL
                     commits, verdict);
         }
     }
+}
+
+/* ---- what the report asks ---- */
+
+static void copy_col(char *dst, size_t len, sqlite3_stmt *st, int i) {
+    const char *s = (const char *)sqlite3_column_text(st, i);
+    snprintf(dst, len, "%s", s ? s : "");
+}
+
+int sb_history_nights(sb_history *h, sb_history_night **out, sb_err *err) {
+    *out = NULL;
+    sqlite3_stmt *st;
+    if (sqlite3_prepare_v2(h->db,
+                           "SELECT n.id, n.date, n.host, n.git_commit, n.renderer, n.version, n.header, n.meta, n.dir, "
+                           "count(r.id), sum(r.status = 'ok'), sum(r.status = 'failed'), sum(r.stable = 'no'), "
+                           "sum(r.warnings != '') FROM nights n LEFT JOIN runs r ON r.night = n.id GROUP BY n.id "
+                           "ORDER BY n.date, n.id",
+                           -1, &st, NULL) != SQLITE_OK)
+        return db_fail(h, err, "reading the nights"), -1;
+    int n = 0;
+    while (sqlite3_step(st) == SQLITE_ROW) {
+        *out = sb_xrealloc(*out, sizeof **out * (size_t)(n + 1));
+        sb_history_night *x = &(*out)[n++];
+        memset(x, 0, sizeof *x);
+        x->id = sqlite3_column_int64(st, 0);
+        copy_col(x->date, sizeof x->date, st, 1);
+        copy_col(x->host, sizeof x->host, st, 2);
+        copy_col(x->commit, sizeof x->commit, st, 3);
+        copy_col(x->renderer, sizeof x->renderer, st, 4);
+        copy_col(x->version, sizeof x->version, st, 5);
+        const char *header = (const char *)sqlite3_column_text(st, 6), *meta = (const char *)sqlite3_column_text(st, 7);
+        x->header = sb_strdup(header ? header : "");
+        x->meta = sb_strdup(meta ? meta : "");
+        copy_col(x->dir, sizeof x->dir, st, 8);
+        int *counts[] = {&x->runs, &x->ok, &x->failed, &x->unstable, &x->warned};
+        for (int c = 0; c < 5; c++) *counts[c] = sqlite3_column_int(st, 9 + c);
+    }
+    sqlite3_finalize(st);
+    return n;
+}
+
+void sb_history_nights_free(sb_history_night *n, int count) {
+    for (int i = 0; i < count; i++) free(n[i].header), free(n[i].meta);
+    free(n);
+}
+
+char *sb_history_night_summary(sb_history *h, const sb_history_night *night, sb_err *err) {
+    sqlite3_stmt *st;
+    if (sqlite3_prepare_v2(h->db, "SELECT line FROM runs WHERE night = ? ORDER BY run_index, id", -1, &st, NULL) !=
+        SQLITE_OK)
+        return db_fail(h, err, "reading a night's runs"), NULL;
+    sqlite3_bind_int64(st, 1, night->id);
+    size_t len = strlen(night->header), cap = len + 2;
+    char *text = sb_xmalloc(cap);
+    memcpy(text, night->header, len);
+    text[len++] = '\n';
+    while (sqlite3_step(st) == SQLITE_ROW) {
+        const char *line = (const char *)sqlite3_column_text(st, 0);
+        size_t n = line ? strlen(line) : 0;
+        if (len + n + 2 > cap) text = sb_xrealloc(text, cap = (len + n + 2) * 2);
+        memcpy(text + len, line ? line : "", n);
+        len += n;
+        text[len++] = '\n';
+    }
+    text[len] = 0;
+    sqlite3_finalize(st);
+    return text;
+}
+
+bool sb_history_night_frames(sb_history *h, long long night, void (*fn)(const char *run_id, const char *csv, void *arg),
+                             void *arg, sb_err *err) {
+    sqlite3_stmt *st;
+    if (sqlite3_prepare_v2(h->db, "SELECT r.run_id, f.csv FROM frames f JOIN runs r ON r.id = f.run WHERE r.night = ?",
+                           -1, &st, NULL) != SQLITE_OK)
+        return db_fail(h, err, "reading a night's frames");
+    sqlite3_bind_int64(st, 1, night);
+    while (sqlite3_step(st) == SQLITE_ROW) {
+        const char *id = (const char *)sqlite3_column_text(st, 0), *csv = (const char *)sqlite3_column_text(st, 1);
+        fn(id ? id : "", csv ? csv : "", arg);
+    }
+    sqlite3_finalize(st);
+    return true;
+}
+
+int sb_history_points(sb_history *h, const char *series, const char *metric, sb_history_point **out, sb_err *err) {
+    *out = NULL;
+    sb_metric_cols mc;
+    if (!sb_columns_metric(metric, &mc)) return sb_fail(err, "unknown metric '%s'", metric), -1;
+    sqlite3_stmt *st;
+    if (sqlite3_prepare_v2(h->db,
+                           "SELECT r.night, n.date, r.stable, c.value, i.value, n.git_commit FROM runs r JOIN nights n "
+                           "ON n.id = r.night JOIN metrics c ON c.run = r.id AND c.name = ?2 LEFT JOIN metrics i ON "
+                           "i.run = r.id AND i.name = ?3 WHERE r.series = ?1 AND r.status = 'ok' ORDER BY n.date, n.id",
+                           -1, &st, NULL) != SQLITE_OK)
+        return db_fail(h, err, "reading a series"), -1;
+    bind_text(st, 1, series);
+    bind_text(st, 2, mc.center);
+    bind_text(st, 3, mc.ci[0] ? mc.ci : "-");
+    int n = 0;
+    while (sqlite3_step(st) == SQLITE_ROW) {
+        *out = sb_xrealloc(*out, sizeof **out * (size_t)(n + 1));
+        sb_history_point *p = &(*out)[n++];
+        p->night = sqlite3_column_int64(st, 0);
+        copy_col(p->date, sizeof p->date, st, 1);
+        const char *stable = (const char *)sqlite3_column_text(st, 2);
+        p->stable = !stable || strcmp(stable, "no");
+        p->value = sqlite3_column_double(st, 3);
+        p->ci = sqlite3_column_type(st, 4) == SQLITE_NULL ? NAN : sqlite3_column_double(st, 4);
+        copy_col(p->commit, sizeof p->commit, st, 5);
+    }
+    sqlite3_finalize(st);
+    return n;
 }

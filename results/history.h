@@ -44,12 +44,12 @@ typedef struct sb_history_change {
     long long night_before, night_after;   /* the last night before and the first after */
     char date_after[32], commit_before[64], commit_after[64];
     double before, after, rel, z, p;
-    bool regression;            /* worse (every metric: higher is worse) */
+    bool regression;            /* worse (up, or down for a SB_LOWER_WORSE metric) */
     bool recent;                /* starts in one of the newest `recent` nights of its host */
 } sb_history_change;
 
 typedef struct sb_history_query {
-    const char *metrics[32];    /* none: gpu_ms, final_ms, cascade_ms, draw_calls, shadow_draw_calls, err_rate */
+    const char *metrics[32];    /* none: the column table's SB_USE_HISTORY metrics */
     int nmetrics;
     const char *since;          /* nights from this date (YYYY-MM-DD...) on; NULL: all */
     int recent;                 /* 0: 3 */
@@ -68,5 +68,30 @@ char **sb_history_labels(char *const *series, int n);
 /* Prints changes as a table (format: SB_OUTPUT_TEXT or _CSV of compare.h). */
 void sb_history_print_changes(const sb_history_change *c, int n, int format, FILE *out);
 
-/* The database, for the report (site.c) to read. */
-struct sqlite3 *sb_history_db(sb_history *h);
+/* ---- what the report asks (no SQL outside history.c) ---- */
+
+/* A night and its runs' counts. */
+typedef struct sb_history_night {
+    long long id;
+    char date[32], host[256], commit[64], renderer[256], version[64], dir[4096];
+    char *header, *meta;        /* the summary's header line and the meta file (malloc'd) */
+    int runs, ok, failed, unstable, warned;
+} sb_history_night;
+/* Every night, oldest first; returns how many (free with sb_history_nights_free), or -1. */
+int sb_history_nights(sb_history *h, sb_history_night **out, sb_err *err);
+void sb_history_nights_free(sb_history_night *n, int count);
+/* A night's summary as it was written (its header, then its rows in run order), as CSV text (malloc'd); NULL on failure. */
+char *sb_history_night_summary(sb_history *h, const sb_history_night *night, sb_err *err);
+/* A night's per-frame CSVs, one call of fn a run. */
+bool sb_history_night_frames(sb_history *h, long long night, void (*fn)(const char *run_id, const char *csv, void *arg),
+                             void *arg, sb_err *err);
+
+/* One night of a series, for one metric (the ok runs only). */
+typedef struct sb_history_point {
+    long long night;
+    char date[32], commit[64];
+    double value, ci;           /* ci: NaN when the metric has none */
+    bool stable;
+} sb_history_point;
+/* A series' points of a metric, oldest first; returns how many (free *out), or -1. */
+int sb_history_points(sb_history *h, const char *series, const char *metric, sb_history_point **out, sb_err *err);

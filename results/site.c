@@ -4,7 +4,6 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
-#include <sqlite3.h>
 #include <stdlib.h>
 #include <string.h>
 #include <dirent.h>
@@ -142,53 +141,47 @@ static bool write_assets(const char *site, sb_err *err) {
 
 /* ---- the pieces of a page's data ---- */
 
-static const char *col(sqlite3_stmt *st, int i) {
-    const char *s = (const char *)sqlite3_column_text(st, i);
-    return s ? s : "";
+/* A table as JSON, the one writer for every table of the site: "columns":[...],"rows":[[...],...], each cell a
+ * number where it is one (cell(src, -1, c) is column c's name). */
+static void jtable(jbuf *j, int ncols, int nrows, const char *(*cell)(const void *src, int r, int c), const void *src) {
+    jput(j, "\"columns\":[");
+    for (int c = 0; c < ncols; c++) jput(j, c ? "," : ""), jstr(j, cell(src, -1, c));
+    jput(j, "],\"rows\":[");
+    for (int r = 0; r < nrows; r++) {
+        jput(j, r ? ",[" : "[");
+        for (int c = 0; c < ncols; c++) jput(j, c ? "," : ""), jcell(j, cell(src, r, c));
+        jput(j, "]");
+    }
+    jput(j, "]");
 }
-
-static bool prep(sqlite3 *db, const char *sql, sqlite3_stmt **st, sb_err *err) {
-    if (sqlite3_prepare_v2(db, sql, -1, st, NULL) == SQLITE_OK) return true;
-    return sb_fail(err, "report: %s", sqlite3_errmsg(db));
+static const char *summary_cell(const void *src, int r, int c) {
+    const sb_table *t = src;
+    return r < 0 ? t->header[c] : t->rows[r][c];
+}
+static const char *pair_cell(const void *src, int r, int c) {
+    const sb_pair_table *t = src;
+    return r < 0 ? t->head[c] : t->cells[r][c];
 }
 
 /* The pairs users compare (PSSM against SDSM, layered against per-cascade), as compare --pair makes them. */
-static void night_pairs(const char *summary_path, jbuf *j) {
+static void night_pairs(const sb_table *summary, jbuf *j) {
     static const char *const keys[] = {"technique=pssm,sdsm", "layered=off,on", "layered=off,gs"};
     jput(j, "[");
     bool first = true;
     for (size_t k = 0; k < SB_COUNT(keys); k++) {
-        char *text = NULL;
-        size_t len = 0;
-        FILE *mem = open_memstream(&text, &len);
-        if (!mem) continue;
-        sb_compare_opts o = {.format = SB_OUTPUT_CSV, .pair = keys[k], .threshold_pct = 5};
+        sb_compare_opts o = {.pair = keys[k], .threshold_pct = 5};
+        sb_pair_table pt;
         sb_err e;
-        int n = sb_compare_pairs(summary_path, &o, mem, &e);
-        fclose(mem);
-        sb_table t;
-        if (n > 0 && sb_table_parse(&t, "pairs", text, &e)) {
-            jput(j, first ? "" : ",");
+        if (sb_compare_pair_table(summary, &o, &pt, &e) > 0) {
+            jput(j, first ? "{" : ",{");
             first = false;
-            jput(j, "{");
             jkey(j, "key");
             jstr(j, keys[k]);
             jput(j, ",");
-            jkey(j, "columns");
-            jput(j, "[");
-            for (int c = 0; c < t.cols; c++) jput(j, c ? "," : ""), jstr(j, t.header[c]);
-            jput(j, "],");
-            jkey(j, "rows");
-            jput(j, "[");
-            for (int r = 0; r < t.nrows; r++) {
-                jput(j, r ? ",[" : "[");
-                for (int c = 0; c < t.cols; c++) jput(j, c ? "," : ""), jcell(j, t.rows[r][c]);
-                jput(j, "]");
-            }
-            jput(j, "]}");
-            sb_table_free(&t);
+            jtable(j, pt.ncols, pt.nrows, pair_cell, &pt);
+            jput(j, "}");
         }
-        free(text);
+        sb_pair_table_free(&pt);
     }
     jput(j, "]");
 }
@@ -239,11 +232,38 @@ static int frame_cols(const char **out, bool stages_only) {
     return n;
 }
 
-static bool write_frames(sqlite3 *db, const char *site, long long id, sb_err *err) {
-    sqlite3_stmt *st;
-    if (!prep(db, "SELECT r.run_id, f.csv FROM frames f JOIN runs r ON r.id = f.run WHERE r.night = ?", &st, err))
-        return false;
-    sqlite3_bind_int64(st, 1, id);
+typedef struct {
+    jbuf *j;
+    const char **cols;
+    int ncols;
+    bool first;
+} frames_json;
+
+static void frame_run(const char *run_id, const char *csv, void *arg) {
+    frames_json *fj = arg;
+    sb_table t;
+    sb_err e;
+    if (!sb_table_parse(&t, "frames", csv, &e)) return;
+    int idx[MAX_FRAME_COLS];
+    for (int c = 0; c < fj->ncols; c++) idx[c] = sb_table_col(&t, fj->cols[c]);
+    jput(fj->j, fj->first ? "" : ",");
+    fj->first = false;
+    jkey(fj->j, run_id);
+    jput(fj->j, "[");
+    for (int r = 0; r < t.nrows; r++) {
+        jput(fj->j, r ? ",[" : "[");
+        for (int c = 0; c < fj->ncols; c++) {
+            jput(fj->j, c ? "," : "");
+            if (idx[c] < 0) jput(fj->j, "null");
+            else jcell(fj->j, t.rows[r][idx[c]]);
+        }
+        jput(fj->j, "]");
+    }
+    jput(fj->j, "]");
+    sb_table_free(&t);
+}
+
+static bool write_frames(sb_history *h, const char *site, long long id, sb_err *err) {
     jbuf j = {0};
     const char *cols[MAX_FRAME_COLS], *stages[MAX_FRAME_COLS];
     int ncols = frame_cols(cols, false), nstages = frame_cols(stages, true);
@@ -252,87 +272,43 @@ static bool write_frames(sqlite3 *db, const char *site, long long id, sb_err *er
     jput(&j, "],\"stages\":[");   /* the stacked chart's series, in stage order */
     for (int c = 0; c < nstages; c++) jput(&j, c ? "," : ""), jstr(&j, stages[c]);
     jput(&j, "],\"runs\":{");
-    bool first = true;
-    while (sqlite3_step(st) == SQLITE_ROW) {
-        sb_table t;
-        sb_err e;
-        if (!sb_table_parse(&t, "frames", col(st, 1), &e)) continue;
-        int idx[MAX_FRAME_COLS];
-        for (int c = 0; c < ncols; c++) idx[c] = sb_table_col(&t, cols[c]);
-        jput(&j, first ? "" : ",");
-        first = false;
-        jkey(&j, col(st, 0));
-        jput(&j, "[");
-        for (int r = 0; r < t.nrows; r++) {
-            jput(&j, r ? ",[" : "[");
-            for (int c = 0; c < ncols; c++) {
-                jput(&j, c ? "," : "");
-                if (idx[c] < 0) jput(&j, "null");
-                else jcell(&j, t.rows[r][idx[c]]);
-            }
-            jput(&j, "]");
-        }
-        jput(&j, "]");
-        sb_table_free(&t);
-    }
-    sqlite3_finalize(st);
+    frames_json fj = {&j, cols, ncols, true};
+    bool ok = sb_history_night_frames(h, id, frame_run, &fj, err);
     jput(&j, "}}");
     char name[64];
     snprintf(name, sizeof name, "frames-%lld.js", id);
-    bool ok = write_data(site, name, &j, err);
+    ok = ok && write_data(site, name, &j, err);
     free(j.buf);
     return ok;
 }
 
-static bool write_night(sqlite3 *db, const char *site, sqlite3_stmt *n, sb_err *err) {
-    long long id = sqlite3_column_int64(n, 0);
-    const char *header = col(n, 6), *dir = col(n, 8);
-    /* the summary as it was, for the table and for compare --pair */
-    jbuf sum = {0};
-    jput(&sum, header);
-    jput(&sum, "\n");
-    sqlite3_stmt *st;
-    if (!prep(db, "SELECT line FROM runs WHERE night = ? ORDER BY run_index, id", &st, err)) return false;
-    sqlite3_bind_int64(st, 1, id);
-    while (sqlite3_step(st) == SQLITE_ROW) jput(&sum, col(st, 0)), jput(&sum, "\n");
-    sqlite3_finalize(st);
-    char tmp[4400];
-    snprintf(tmp, sizeof tmp, "%s/data/.summary-%lld.csv", site, id);
-    bool ok = sb_write_file_atomic(tmp, sum.buf, sum.len, err);
+static bool write_night(sb_history *h, const char *site, const sb_history_night *n, sb_err *err) {
+    /* the summary as it was, for the table and for the pairs */
+    char *text = sb_history_night_summary(h, n, err);
     sb_table t;
-    ok = ok && sb_table_parse(&t, tmp, sum.buf, err);
-    if (!ok) {
-        free(sum.buf);
+    if (!text || !sb_table_parse(&t, "summary", text, err)) {
+        free(text);
         return false;
     }
     jbuf j = {0};
     jput(&j, "{\"kind\":\"night\",");
     jkey(&j, "id");
-    jnum(&j, (double)id);
-    const char *keys[] = {"date", "host", "commit", "renderer", "version"};
-    const int cols[] = {1, 2, 3, 4, 5};
-    for (size_t k = 0; k < SB_COUNT(keys); k++) jsfield(&j, keys[k], col(n, cols[k]));
-    jsfield(&j, "meta", col(n, 7));
-    jsfield(&j, "dir", dir);
-    jput(&j, ",\"columns\":[");
-    for (int c = 0; c < t.cols; c++) jput(&j, c ? "," : ""), jstr(&j, t.header[c]);
-    jput(&j, "],\"rows\":[");
-    for (int r = 0; r < t.nrows; r++) {
-        jput(&j, r ? ",[" : "[");
-        for (int c = 0; c < t.cols; c++) jput(&j, c ? "," : ""), jcell(&j, t.rows[r][c]);
-        jput(&j, "]");
-    }
-    jput(&j, "],\"pairs\":");
-    night_pairs(tmp, &j);
+    jnum(&j, (double)n->id);
+    const char *keys[] = {"date", "host", "commit", "renderer", "version", "meta", "dir"};
+    const char *vals[] = {n->date, n->host, n->commit, n->renderer, n->version, n->meta, n->dir};
+    for (size_t k = 0; k < SB_COUNT(keys); k++) jsfield(&j, keys[k], vals[k]);
+    jput(&j, ",");
+    jtable(&j, t.cols, t.nrows, summary_cell, &t);
+    jput(&j, ",\"pairs\":");
+    night_pairs(&t, &j);
     jput(&j, ",\"images\":");
-    night_images(site, id, dir, &j);
+    night_images(site, n->id, n->dir, &j);
     jput(&j, "}");
-    unlink(tmp);
     sb_table_free(&t);
-    free(sum.buf);
+    free(text);
     char name[64];
-    snprintf(name, sizeof name, "night-%lld.js", id);
-    ok = write_data(site, name, &j, err) && write_frames(db, site, id, err);
+    snprintf(name, sizeof name, "night-%lld.js", n->id);
+    bool ok = write_data(site, name, &j, err) && write_frames(h, site, n->id, err);
     free(j.buf);
     return ok;
 }
@@ -371,15 +347,10 @@ static int series_index(char **series, int ns, const char *s) {
     return -1;
 }
 
-static bool write_series(sqlite3 *db, const char *site, char **series, char **labels, int ns,
+static bool write_series(sb_history *h, const char *site, char **series, char **labels, int ns,
                          const sb_history_change *ch, int nch, sb_err *err) {
-    sqlite3_stmt *st;
-    if (!prep(db,
-              "SELECT r.night, n.date, r.stable, c.value, i.value, n.git_commit FROM runs r JOIN nights n ON "
-              "n.id = r.night JOIN metrics c ON c.run = r.id AND c.name = ?2 LEFT JOIN metrics i ON i.run = r.id AND "
-              "i.name = ?3 WHERE r.series = ?1 AND r.status = 'ok' ORDER BY n.date, n.id",
-              &st, err))
-        return false;
+    const char *trend_metrics[32];   /* the SB_USE_REPORT metrics of the column table */
+    int ntrend = sb_columns_default_metrics(SB_USE_REPORT, trend_metrics, 32);
     bool ok = true;
     for (int s = 0; ok && s < ns; s++) {
         jbuf j = {0};
@@ -387,33 +358,27 @@ static bool write_series(sqlite3 *db, const char *site, char **series, char **la
         jsfield(&j, "series", series[s]);
         jsfield(&j, "label", labels[s]);
         jput(&j, ",\"metrics\":{");
-        const char *trend_metrics[32];   /* the SB_USE_REPORT metrics of the column table */
-        int ntrend = sb_columns_default_metrics(SB_USE_REPORT, trend_metrics, 32);
-        for (int m = 0; m < ntrend; m++) {
-            sb_metric_cols mc;
-            if (!sb_columns_metric(trend_metrics[m], &mc)) continue;
-            sqlite3_reset(st);
-            sqlite3_bind_text(st, 1, series[s], -1, SQLITE_STATIC);
-            sqlite3_bind_text(st, 2, mc.center, -1, SQLITE_STATIC);
-            sqlite3_bind_text(st, 3, mc.ci[0] ? mc.ci : "-", -1, SQLITE_STATIC);
+        for (int m = 0; ok && m < ntrend; m++) {
+            sb_history_point *pt = NULL;
+            int np = sb_history_points(h, series[s], trend_metrics[m], &pt, err);
+            ok = np >= 0;
             jput(&j, m ? "," : "");
             jkey(&j, trend_metrics[m]);
             jput(&j, "{\"nights\":[");
-            int k = 0;
-            while (sqlite3_step(st) == SQLITE_ROW) {
-                jput(&j, k++ ? ",[" : "[");
-                jnum(&j, (double)sqlite3_column_int64(st, 0));
+            for (int k = 0; k < np; k++) {
+                jput(&j, k ? ",[" : "[");
+                jnum(&j, (double)pt[k].night);
                 jput(&j, ",");
-                jstr(&j, col(st, 1));
+                jstr(&j, pt[k].date);
                 jput(&j, ",");
-                jnum(&j, sqlite3_column_double(st, 3));
+                jnum(&j, pt[k].value);
                 jput(&j, ",");
-                if (sqlite3_column_type(st, 4) == SQLITE_NULL) jput(&j, "null");
-                else jnum(&j, sqlite3_column_double(st, 4));
-                jput(&j, !strcmp(col(st, 2), "no") ? ",false," : ",true,");
-                jstr(&j, col(st, 5));
+                jnum(&j, pt[k].ci);
+                jput(&j, pt[k].stable ? ",true," : ",false,");
+                jstr(&j, pt[k].commit);
                 jput(&j, "]");
             }
+            free(pt);
             jput(&j, "],\"changes\":[");
             int nc = 0;
             for (int c = 0; c < nch; c++)
@@ -424,17 +389,15 @@ static bool write_series(sqlite3 *db, const char *site, char **series, char **la
         jput(&j, "}}");
         char name[64];
         snprintf(name, sizeof name, "series-%d.js", s);
-        ok = write_data(site, name, &j, err);
+        ok = ok && write_data(site, name, &j, err);
         free(j.buf);
     }
-    sqlite3_finalize(st);
     return ok;
 }
 
 /* ---- the site ---- */
 
 static bool write_site(sb_history *h, const sb_site_opts *o, bool single, sb_err *err) {
-    sqlite3 *db = sb_history_db(h);
     char path[4400];
     snprintf(path, sizeof path, "%s/data", o->out);
     if (!sb_mkdir_p(path, err) || !write_assets(o->out, err) || !write_shells(o->out, err)) return false;
@@ -443,35 +406,31 @@ static bool write_site(sb_history *h, const sb_site_opts *o, bool single, sb_err
     sb_history_change *ch = NULL;
     int nch = sb_history_changes(h, &q, &ch, err);
     if (nch < 0) return false;
+    sb_history_night *nights = NULL;
+    int nn = sb_history_nights(h, &nights, err);
     int ns = 0;
     char **series = sb_history_series(h, &ns), **labels = sb_history_labels(series, ns);
-    sqlite3_stmt *st = NULL;
-    bool ok = true;
+    bool ok = nn >= 0;
     jbuf j = {0};
     jput(&j, "{\"kind\":\"index\",");
     jput(&j, single ? "\"single\":true," : "\"single\":false,");
     jkey(&j, "source");
     jstr(&j, o->dir ? o->dir : o->history);
     jput(&j, ",\"nights\":[");
-    ok = ok && prep(db,
-                    "SELECT n.id, n.date, n.host, n.git_commit, n.renderer, n.version, n.header, n.meta, n.dir, "
-                    "count(r.id), sum(r.status = 'ok'), sum(r.status = 'failed'), sum(r.stable = 'no'), "
-                    "sum(r.warnings != '') FROM nights n LEFT JOIN runs r ON r.night = n.id GROUP BY n.id "
-                    "ORDER BY n.date, n.id",
-                    &st, err);
-    int k = 0;
-    while (ok && sqlite3_step(st) == SQLITE_ROW) {
-        jput(&j, k++ ? ",{" : "{");
+    for (int k = 0; ok && k < nn; k++) {
+        const sb_history_night *n = &nights[k];
+        jput(&j, k ? ",{" : "{");
         jput(&j, "\"id\":");
-        jnum(&j, (double)sqlite3_column_int64(st, 0));
+        jnum(&j, (double)n->id);
         const char *keys[] = {"date", "host", "commit", "renderer"};
-        for (int c = 0; c < 4; c++) jsfield(&j, keys[c], col(st, c + 1));
+        const char *vals[] = {n->date, n->host, n->commit, n->renderer};
+        for (int c = 0; c < 4; c++) jsfield(&j, keys[c], vals[c]);
         const char *counts[] = {"runs", "ok", "failed", "unstable", "warned"};
-        for (int c = 0; c < 5; c++) jnfield(&j, counts[c], sqlite3_column_int(st, c + 9));
+        const int nums[] = {n->runs, n->ok, n->failed, n->unstable, n->warned};
+        for (int c = 0; c < 5; c++) jnfield(&j, counts[c], nums[c]);
         jput(&j, "}");
-        ok = write_night(db, o->out, st, err);
+        ok = write_night(h, o->out, n, err);
     }
-    if (st) sqlite3_finalize(st);
     jput(&j, "],\"changes\":[");
     for (int c = 0; c < nch; c++) {
         jput(&j, c ? "," : "");
@@ -482,12 +441,13 @@ static bool write_site(sb_history *h, const sb_site_opts *o, bool single, sb_err
     jput(&j, "],\"labels\":[");
     for (int s = 0; s < ns; s++) jput(&j, s ? "," : ""), jstr(&j, labels[s]);
     jput(&j, "]}");
-    ok = ok && write_data(o->out, "index.js", &j, err) && write_series(db, o->out, series, labels, ns, ch, nch, err);
+    ok = ok && write_data(o->out, "index.js", &j, err) && write_series(h, o->out, series, labels, ns, ch, nch, err);
     free(j.buf);
     for (int s = 0; s < ns; s++) free(series[s]), free(labels[s]);
     free(series);
     free(labels);
     free(ch);
+    if (nn > 0) sb_history_nights_free(nights, nn);
     return ok;
 }
 

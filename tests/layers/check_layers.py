@@ -8,7 +8,9 @@
 A file may include only headers of its own layer or of a layer below it, and
 modules (a header and the files defining what it declares) form no circle.
 Every sb_ function a source file exports is declared in a header (never only in
-another .c file, which would hide a call from the includes)."""
+another .c file, which would hide a call from the includes). Only the history
+module speaks SQL: no other file includes <sqlite3.h> (the report asks the
+history's queries)."""
 import os
 import re
 import shutil
@@ -32,6 +34,9 @@ GENERATED = {
     "version.h": "harness",
 }
 SOURCE_EXT = (".c", ".cc", ".h")
+# The one module that may include <sqlite3.h>.
+SQL_MODULE = "results/history.c"
+SQL_INCLUDE = re.compile(r'^\s*#\s*include\s+<sqlite3\.h>', re.M)
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
 # An exported definition: at the start of a line, not static, an sb_ name, then
 # a parameter list whose line does not end the declaration.
@@ -120,6 +125,12 @@ def check(root):
                     if mod != target:
                         edges.setdefault(mod, set()).add(target)
 
+    for rel, text in files.items():
+        m = SQL_INCLUDE.search(text)
+        if m and rel != SQL_MODULE:
+            line = text.count("\n", 0, m.start()) + 1
+            problems.append(f"{rel}:{line}: includes <sqlite3.h>: only {SQL_MODULE} speaks SQL (add a query there)")
+
     for cycle in circles(edges):
         problems.append("circle: " + " -> ".join(cycle + [cycle[0]]))
     return problems
@@ -187,6 +198,7 @@ def selftest(root):
          "bool sb_hidden_helper(int x) {\n    return x > 0;\n}\n", "sb_hidden_helper is exported but declared in no header"),
         ("a declaration in a .c file", "paths/path.c",
          "bool sb_gltf_secret(int cam); /* gltf_load.cc */\n", "declares sb_gltf_secret outside a header"),
+        ("SQL outside the history", "results/site.c", "#include <sqlite3.h>\n", "results/site.c:"),
     ]
     failures = 0
     for what, rel, text, expect in cases:
@@ -214,7 +226,7 @@ def main():
     print(f"layers: {len(problems)} violation(s) in {root}")
     if "--selftest" in sys.argv:
         failed += selftest(root)
-    passed = 1 + (4 if "--selftest" in sys.argv else 0) - failed
+    passed = 1 + (5 if "--selftest" in sys.argv else 0) - failed
     print(f"{passed} passed, {failed} failed")
     sys.exit(1 if failed else 0)
 
