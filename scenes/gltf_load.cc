@@ -260,6 +260,15 @@ struct PrimData {
     int skin_sets = 0;
 };
 
+// A primitive decoded once for every node that draws its mesh (when nothing
+// per node changes it: no skin, no morph targets): its vertices, triangle
+// list and whether it is closed (known after its first instance).
+struct Decoded {
+    PrimData d;
+    std::vector<uint32_t> tris;
+    int closed_known = 0;   // sb_prim_desc.closed_known
+};
+
 struct Loader {
     Ctx c;
     sb_scene *s;
@@ -270,6 +279,9 @@ struct Loader {
     std::vector<std::vector<double>> weights;   // per node: morph weights (posed)
     std::vector<int> order;                     // nodes of the scene in visit order
     std::map<int, int32_t> tex_cache;           // glTF texture -> scene texture (-1: not decodable)
+    std::map<std::pair<int, int>, std::shared_ptr<Decoded>> decoded = {};   // (mesh, primitive) -> decoded once
+    std::vector<double> wp = {}, wn = {};       // emit's world positions and normals, reused
+    std::vector<uint32_t> wt = {};              // and its triangles
 
     bool fail(const std::string &where, const std::string &what) { return c.fail(where, what); }
 
@@ -558,7 +570,8 @@ struct Loader {
     bool prim(int node, int mesh, int pi, const std::vector<sb_m4> &instances);
     bool triangles(const tinygltf::Primitive &p, const std::string &where, const PrimData &d, std::vector<uint32_t> &tris);
     void emit(const PrimData &d, const std::vector<uint32_t> &tris, const sb_m4 *w, int node, uint32_t mat,
-              bool double_sided, const float color[4]);
+              bool double_sided, const float color[4], int *closed_known);
+    void reserve();
     bool instances(int ni, std::vector<sb_m4> &out);
     bool light(int ni);
     bool emit_nodes();
@@ -593,11 +606,15 @@ bool Loader::triangles(const tinygltf::Primitive &p, const std::string &where, c
 }
 
 // Adds the primitive to the scene in world space: under w (NULL: already there, skinned).
+// closed_known: what is known of the primitive's closedness (0: nothing yet), updated after the first instance.
 void Loader::emit(const PrimData &d, const std::vector<uint32_t> &tris_in, const sb_m4 *w, int node, uint32_t mat,
-                  bool double_sided, const float color[4]) {
+                  bool double_sided, const float color[4], int *closed_known) {
     size_t nv = d.pos.size() / 3;
-    std::vector<uint32_t> tris = tris_in;
-    std::vector<double> wp(d.pos), wn(d.nrm);
+    std::vector<uint32_t> &tris = wt;
+    tris.assign(tris_in.begin(), tris_in.end());
+    wp.assign(d.pos.begin(), d.pos.end());
+    wn.assign(d.nrm.begin(), d.nrm.end());
+    bool collapses = w && det3(*w) == 0;   // a zero scale can weld what was apart: work closedness out again
     if (w) {
         if (det3(*w) < 0) // a mirroring transform turns the winding: front faces stay front faces
             for (size_t i = 0; i < tris.size(); i += 3) std::swap(tris[i + 1], tris[i + 2]);
@@ -622,7 +639,39 @@ void Loader::emit(const PrimData &d, const std::vector<uint32_t> &tris_in, const
     pd.double_sided = double_sided;
     pd.material = mat;
     pd.node = (uint32_t)node;
+    pd.closed_known = collapses ? 0 : *closed_known;
     sb_scene_add_prim(s, &pd);
+    if (!collapses && !*closed_known && !double_sided) *closed_known = s->draws[s->draw_count - 1].closed ? 2 : 1;
+}
+
+// Room for every vertex, index and draw the scene's nodes will add (from the accessors' counts), so that the
+// scene's arrays are not grown and copied as a large scene is flattened.
+void Loader::reserve() {
+    const tinygltf::Model &m = *c.m;
+    uint64_t nv = 0, ni = 0;
+    uint32_t nd = 0;
+    auto count = [&](int a) -> uint64_t { return a >= 0 && a < (int)m.accessors.size() ? m.accessors[a].count : 0; };
+    for (int ni_ : order) {
+        const tinygltf::Node &n = m.nodes[ni_];
+        if (n.mesh < 0 || n.mesh >= (int)m.meshes.size()) continue;
+        uint64_t copies = 1;
+        auto ext = n.extensions.find("EXT_mesh_gpu_instancing");
+        if (ext != n.extensions.end() && ext->second.Has("attributes"))
+            for (const char *name : {"TRANSLATION", "ROTATION", "SCALE"}) {
+                const tinygltf::Value &a = ext->second.Get("attributes");
+                if (a.Has(name) && a.Get(name).IsInt()) copies = std::max<uint64_t>(1, count(a.Get(name).GetNumberAsInt()));
+            }
+        for (const tinygltf::Primitive &p : m.meshes[n.mesh].primitives) {
+            if (p.mode >= 0 && p.mode < 4) continue;
+            auto pos = p.attributes.find("POSITION");
+            uint64_t v = pos == p.attributes.end() ? 0 : count(pos->second), i = p.indices >= 0 ? count(p.indices) : v;
+            if (p.mode == 5 || p.mode == 6) i = i >= 3 ? 3 * (i - 2) : 0;
+            nv += v * copies;
+            ni += i * copies;
+            nd += (uint32_t)std::min<uint64_t>(copies, UINT32_MAX - nd);
+        }
+    }
+    if (nv < (1ull << 32) && ni < (1ull << 32)) sb_scene_reserve(s, nv, ni, nd);
 }
 
 bool Loader::prim(int node, int mesh, int pi, const std::vector<sb_m4> &inst) {
@@ -642,15 +691,25 @@ bool Loader::prim(int node, int mesh, int pi, const std::vector<sb_m4> &inst) {
     if (pm && pm->alphaMode == "MASK") s->features.mask++;
     if (drop) return true;
     bool skinned = n.skin >= 0 && n.skin < (int)m.skins.size();
-    PrimData d;
-    auto dr = p.extensions.find("KHR_draco_mesh_compression");
-    if (!(dr != p.extensions.end() ? read_draco(p, dr->second, where, uv_set, skinned, d)
-                                   : read_prim(p, where, uv_set, skinned, d)))
-        return false;
-    std::vector<uint32_t> tris;
-    if (!triangles(p, where, d, tris)) return false;
+    // decoded once for every node that shares the mesh, unless a skin or morph targets make it the node's own
+    bool shared = !skinned && p.targets.empty();
+    std::shared_ptr<Decoded> dec;
+    auto found = shared ? decoded.find({mesh, pi}) : decoded.end();
+    if (found != decoded.end()) {
+        dec = found->second;
+    } else {
+        dec = std::make_shared<Decoded>();
+        auto dr = p.extensions.find("KHR_draco_mesh_compression");
+        if (!(dr != p.extensions.end() ? read_draco(p, dr->second, where, uv_set, skinned, dec->d)
+                                       : read_prim(p, where, uv_set, skinned, dec->d)) ||
+            !triangles(p, where, dec->d, dec->tris))
+            return false;
+        if (!dec->tris.empty() && !p.targets.empty() && !morph(p, where, weights[node], dec->d)) return false;
+        if (shared) decoded[{mesh, pi}] = dec;
+    }
+    PrimData &d = dec->d;
+    const std::vector<uint32_t> &tris = dec->tris;
     if (tris.empty()) return true;
-    if (!p.targets.empty() && !morph(p, where, weights[node], d)) return false;
     if (mat && p.attributes.count("COLOR_0") && m.accessors[p.attributes.at("COLOR_0")].type == TINYGLTF_TYPE_VEC4)
         s->features.vertex_alpha_ignored++;
     skinned = skinned && d.skin_sets > 0;
@@ -663,10 +722,11 @@ bool Loader::prim(int node, int mesh, int pi, const std::vector<sb_m4> &inst) {
     s->features.double_sided += ds;
     s->features.skinned += skinned;
     if (skinned) { // a skinned mesh ignores its node's transform (and instancing)
-        emit(d, tris, nullptr, node, mat, ds, color);
+        int unknown = 0;
+        emit(d, tris, nullptr, node, mat, ds, color, &unknown);
         return true;
     }
-    for (const sb_m4 &w : inst) emit(d, tris, &w, node, mat, ds, color);
+    for (const sb_m4 &w : inst) emit(d, tris, &w, node, mat, ds, color, &dec->closed_known);
     return true;
 }
 
@@ -918,7 +978,9 @@ extern "C" bool sb_gltf_load(sb_scene *s, const char *path, const sb_scene_opts 
         Loader L{Ctx{path, &model, err}, s, opts, &images, {}, {}, {}, {}, {}, {}};
         read_cameras(s, model);
         std::vector<int> roots;
-        if (!scene_roots(path, model, roots, err) || !L.pose() || !L.walk(roots) || !L.emit_nodes()) return false;
+        if (!scene_roots(path, model, roots, err) || !L.pose() || !L.walk(roots)) return false;
+        L.reserve();
+        if (!L.emit_nodes()) return false;
         s->features.textures_skipped = (uint32_t)model.images.size() - s->features.textures_decoded;
         s->content_hash = hash;
         log_features(path, s, model);

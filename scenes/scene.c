@@ -16,6 +16,17 @@ static void *grow(void *p, uint32_t *cap, uint32_t need, size_t elem) {
     return sb_xrealloc(p, (size_t)c * elem);
 }
 
+void sb_scene_reserve(sb_scene *s, uint64_t vertices, uint64_t indices, uint32_t draws) {
+    if (vertices > UINT32_MAX - s->vertex_count || indices > UINT32_MAX - s->index_count) return;   /* refused later */
+    uint32_t nv = s->vertex_count + (uint32_t)vertices, ni = s->index_count + (uint32_t)indices;
+    uint32_t cap = s->build_cap;
+    if (nv > s->vertex_cap) s->vertices = sb_xrealloc(s->vertices, (size_t)nv * SB_VERTEX_BYTES), s->vertex_cap = nv;
+    if (nv > cap) s->build_pos = sb_xrealloc(s->build_pos, (size_t)nv * 3 * sizeof(double)), s->build_cap = nv;
+    if (ni > s->index_cap) s->indices = sb_xrealloc(s->indices, (size_t)ni * sizeof(uint32_t)), s->index_cap = ni;
+    if (s->draw_count + draws > s->draw_cap)
+        s->draws = sb_xrealloc(s->draws, (size_t)(s->draw_count + draws) * sizeof(sb_draw)), s->draw_cap = s->draw_count + draws;
+}
+
 void sb_scene_begin(sb_scene *s) {
     memset(s, 0, sizeof *s);
     s->materials = sb_xcalloc(1, sizeof *s->materials); /* material 0: no alpha test, no texture */
@@ -217,7 +228,7 @@ void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p) {
     d->index_count = p->index_count;
     memcpy(d->color, p->color, sizeof d->color);
     d->double_sided = p->double_sided;
-    d->closed = !p->double_sided && prim_closed(p);
+    d->closed = !p->double_sided && (p->closed_known ? p->closed_known == 2 : prim_closed(p));
     d->material = p->material;
     d->node = p->node;
 }
@@ -287,36 +298,68 @@ typedef struct {
     uint32_t n, cap;
 } leaf_list;
 
-/* Orders triangles [tri_first, tri_first+n) of the index array spatially (median
- * splits on the longest axis) and records each final run as a leaf. */
-static void split_order(sb_scene *s, tri_key *order, uint32_t tri_first, uint32_t n, leaf_list *out) {
+/* Puts the m smallest keys (by tri_less: a total order) first, in no order: quickselect, linear on average. */
+static void select_tri_keys(tri_key *k, size_t n, size_t m) {
+    while (n > 16 && m > 0 && m < n) {
+        tri_key a = k[0], b = k[n / 2], c = k[n - 1], pivot;   /* median of three */
+        pivot = tri_less(&a, &b) ? (tri_less(&b, &c) ? b : tri_less(&a, &c) ? c : a)
+                                 : (tri_less(&a, &c) ? a : tri_less(&b, &c) ? c : b);
+        size_t i = 0, j = n - 1;
+        for (;;) {
+            while (tri_less(&k[i], &pivot)) i++;
+            while (tri_less(&pivot, &k[j])) j--;
+            if (i >= j) break;
+            tri_key t = k[i];
+            k[i++] = k[j];
+            k[j--] = t;
+        }
+        size_t left = j + 1;   /* [0, left) <= pivot <= [left, n) */
+        if (m < left) n = left;
+        else k += left, n -= left, m -= left;
+    }
+    if (m > 0 && m < n) sort_tri_keys(k, n);
+}
+
+/* Orders triangles [0, n) of a draw's index run spatially (median splits on
+ * the longest axis of their centroids) and records each final run as a leaf.
+ * idx: the run's indices (3 a triangle); cen: each triangle's centroid times
+ * three, beside it in the same order (both permuted together, read in
+ * sequence); first: the run's first triangle in the scene. The halves are
+ * chosen by selection (linear), not by sorting: a level costs O(n), and the
+ * order inside a leaf is the selection's (deterministic, not spatial). */
+static void split_order(uint32_t *idx, double *cen, tri_key *k, uint32_t first, uint32_t n, leaf_list *out) {
     if (n <= SB_CHUNK_TRIS) {
         uint32_t c1 = out->cap, c2 = out->cap;
         out->first = grow(out->first, &c1, out->n + 1, sizeof(uint32_t));
         out->count = grow(out->count, &c2, out->n + 1, sizeof(uint32_t));
         out->cap = c1;
-        out->first[out->n] = tri_first;
+        out->first[out->n] = first;
         out->count[out->n++] = n;
         return;
     }
-    sb_aabb b = tri_range_box(s, tri_first * 3, n * 3);
-    sb_v3 e = sb_v3_sub(b.hi, b.lo);
-    int axis = e.x >= e.y && e.x >= e.z ? 0 : e.y >= e.z ? 1 : 2;
-    tri_key *k = order;
-    for (uint32_t i = 0; i < n; i++) {
-        const uint32_t *t = s->indices + 3 * (size_t)(tri_first + i);
-        const double *p = s->build_pos;
-        k[i] = (tri_key){p[3 * (size_t)t[0] + axis] + p[3 * (size_t)t[1] + axis] + p[3 * (size_t)t[2] + axis],
-                         tri_first + i};
-    }
-    sort_tri_keys(k, n);
-    uint32_t *tmp = sb_xmalloc((size_t)n * 3 * sizeof(uint32_t));
-    for (uint32_t i = 0; i < n; i++) memcpy(tmp + 3 * (size_t)i, s->indices + 3 * (size_t)k[i].tri, 12);
-    memcpy(s->indices + 3 * (size_t)tri_first, tmp, (size_t)n * 12);
-    free(tmp);
+    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+    for (uint32_t i = 0; i < n; i++)
+        for (int a = 0; a < 3; a++) {
+            double v = cen[3 * (size_t)i + a];
+            lo[a] = v < lo[a] ? v : lo[a];
+            hi[a] = v > hi[a] ? v : hi[a];
+        }
+    int axis = hi[0] - lo[0] >= hi[1] - lo[1] && hi[0] - lo[0] >= hi[2] - lo[2] ? 0 : hi[1] - lo[1] >= hi[2] - lo[2] ? 1 : 2;
+    for (uint32_t i = 0; i < n; i++) k[i] = (tri_key){cen[3 * (size_t)i + axis], i};
     uint32_t half = n / 2;
-    split_order(s, order, tri_first, half, out);
-    split_order(s, order, tri_first + half, n - half, out);
+    select_tri_keys(k, n, half);
+    uint32_t *ti = sb_xmalloc((size_t)n * 3 * sizeof(uint32_t));
+    double *tc = sb_xmalloc((size_t)n * 3 * sizeof(double));
+    for (uint32_t i = 0; i < n; i++) {
+        memcpy(ti + 3 * (size_t)i, idx + 3 * (size_t)k[i].tri, 3 * sizeof(uint32_t));
+        memcpy(tc + 3 * (size_t)i, cen + 3 * (size_t)k[i].tri, 3 * sizeof(double));
+    }
+    memcpy(idx, ti, (size_t)n * 3 * sizeof(uint32_t));
+    memcpy(cen, tc, (size_t)n * 3 * sizeof(double));
+    free(ti);
+    free(tc);
+    split_order(idx, cen, k, first, half, out);
+    split_order(idx + 3 * (size_t)half, cen + 3 * (size_t)half, k, first + half, n - half, out);
 }
 
 static void chunk_draws(sb_scene *s) {
@@ -325,10 +368,18 @@ static void chunk_draws(sb_scene *s) {
         sb_draw d = s->draws[di];
         uint32_t tris = d.index_count / 3;
         if (tris <= SB_CHUNK_TRIS) continue;
+        uint32_t *idx = s->indices + d.first_index;
+        double *cen = sb_xmalloc((size_t)tris * 3 * sizeof(double));
+        for (uint32_t t = 0; t < tris; t++)
+            for (int a = 0; a < 3; a++)
+                cen[3 * (size_t)t + a] = s->build_pos[3 * (size_t)idx[3 * t] + a] +
+                                         s->build_pos[3 * (size_t)idx[3 * t + 1] + a] +
+                                         s->build_pos[3 * (size_t)idx[3 * t + 2] + a];
         tri_key *order = sb_xmalloc(tris * sizeof *order);
         leaf_list leaves = {0};
-        split_order(s, order, d.first_index / 3, tris, &leaves);
+        split_order(idx, cen, order, d.first_index / 3, tris, &leaves);
         free(order);
+        free(cen);
         for (uint32_t c = 0; c < leaves.n; c++) {
             sb_draw nd = d;
             nd.first_index = 3 * leaves.first[c];
@@ -414,17 +465,79 @@ void sb_scene_load_parts(const sb_scene *s, char *out, size_t len) {
         n += (size_t)snprintf(out + n, len - n, "%s%s %.0f", i ? ", " : "", sb_load_part_names[i], s->load_part_ms[i]);
 }
 
+/* A plane group: its quantised key (normal, distance), its first and last
+ * triangle (chained in triangle order through next[]), its area and count. */
 typedef struct {
-    int64_t key[4];     /* quantised plane */
-    uint32_t tri;
+    int64_t key[4];
+    uint32_t head, tail, count, index;
     double area;
-} plane_tri;
+} plane_group;
 
-static int cmp_plane_tri(const void *a, const void *b) {
-    const plane_tri *x = a, *y = b;
+static int cmp_plane_group(const void *a, const void *b) {
+    const plane_group *x = *(const plane_group *const *)a, *y = *(const plane_group *const *)b;
     for (int k = 0; k < 4; k++)
         if (x->key[k] != y->key[k]) return x->key[k] < y->key[k] ? -1 : 1;
-    return x->tri < y->tri ? -1 : x->tri > y->tri;
+    return 0;
+}
+
+/* round half away from zero, as llround, inline */
+static inline int64_t round_key(double x) { return x >= 0 ? (int64_t)(x + 0.5) : -(int64_t)(0.5 - x); }
+
+/* The open-addressing table of groups: slot = hash's high half << 32 | group + 1 (0: empty), grown at half
+ * full. Its size follows the groups, not the triangles, so a large scene's lookups stay in the caches. */
+typedef struct {
+    uint64_t *slot;
+    uint64_t mask;
+} group_table;
+
+static void group_table_put(group_table *t, uint64_t h, uint32_t g) {
+    uint64_t i = h & t->mask;
+    while (t->slot[i]) i = (i + 1) & t->mask;
+    t->slot[i] = (h >> 32) << 32 | (uint64_t)(g + 1);
+}
+
+static uint64_t key_hash(const int64_t key[4]) {
+    uint64_t w[4];
+    memcpy(w, key, sizeof w);
+    return sb_hash_words(w, 4);
+}
+
+/* The group of key in (*g)[0..*ng), added (with triangle t and its area) when new; returns its index. */
+static uint32_t group_of(group_table *tab, plane_group **g, uint32_t *ng, uint32_t *gcap, const int64_t key[4],
+                         uint32_t t, double area, uint32_t *next) {
+    uint64_t h = key_hash(key);
+    for (uint64_t i = h & tab->mask; tab->slot[i]; i = (i + 1) & tab->mask)
+        if (tab->slot[i] >> 32 == h >> 32 && !memcmp((*g)[(uint32_t)tab->slot[i] - 1].key, key, 4 * sizeof(int64_t))) {
+            plane_group *x = &(*g)[(uint32_t)tab->slot[i] - 1];
+            if (next) next[x->tail] = t;
+            x->tail = t;
+            x->area += area;
+            x->count++;
+            return x->index;
+        }
+    if (*ng == *gcap) *g = sb_xrealloc(*g, (*gcap = *gcap ? 2 * *gcap : 1024) * sizeof **g);
+    (*g)[*ng] = (plane_group){{key[0], key[1], key[2], key[3]}, t, t, 1, *ng, area};
+    if (2 * (uint64_t)(*ng + 1) > tab->mask + 1) { /* grow: every group again */
+        free(tab->slot);
+        tab->mask = 2 * (tab->mask + 1) - 1;
+        tab->slot = sb_xcalloc(tab->mask + 1, sizeof(uint64_t));
+        for (uint32_t q = 0; q < *ng; q++) group_table_put(tab, key_hash((*g)[q].key), q);
+    }
+    group_table_put(tab, h, *ng);
+    return (*ng)++;
+}
+
+/* Triangle t's unit normal, plane distance and area (0: degenerate). */
+static double tri_plane(const sb_scene *s, uint32_t t, sb_v3 *n, double *d) {
+    const float *a = sb_vertex(s, s->indices[3 * t]), *b = sb_vertex(s, s->indices[3 * t + 1]),
+                *c = sb_vertex(s, s->indices[3 * t + 2]);
+    sb_v3 x = sb_v3_cross(sb_v3_make(b[0] - a[0], b[1] - a[1], b[2] - a[2]),
+                          sb_v3_make(c[0] - a[0], c[1] - a[1], c[2] - a[2]));
+    double area = 0.5 * sb_v3_len(x);
+    if (!(area > 0)) return 0;
+    *n = sb_v3_norm(x);
+    *d = -(n->x * a[0] + n->y * a[1] + n->z * a[2]);
+    return area;
 }
 
 void sb_scene_find_planes(sb_scene *s) {
@@ -432,70 +545,53 @@ void sb_scene_find_planes(sb_scene *s) {
     sb_v3 ext = sb_v3_sub(s->bounds.hi, s->bounds.lo);
     double face = fmax(ext.x * ext.y, fmax(ext.y * ext.z, ext.x * ext.z)), diag = sb_v3_len(ext);
     if (ntri == 0 || face <= 0) return;
-    plane_tri *pt = sb_xmalloc(sizeof *pt * ntri);
-    uint32_t m = 0;
+    /* 1: the triangles by quantised normal alone (few groups): a plane's area is at most its normal's, so only
+     * triangles of a normal with 0.1 face or more can be in a large plane */
+    uint32_t *normal_of = sb_xmalloc(sizeof(uint32_t) * ntri);
+    double *dist = sb_xmalloc(sizeof(double) * ntri), *areas = sb_xmalloc(sizeof(double) * ntri);
+    plane_group *ngrp = NULL;
+    uint32_t nn = 0, ncap = 0;
+    group_table tab = {sb_xcalloc(1024, sizeof(uint64_t)), 1023};
     for (uint32_t t = 0; t < ntri; t++) {
-        const float *a = sb_vertex(s, s->indices[3 * t]), *b = sb_vertex(s, s->indices[3 * t + 1]),
-                    *c = sb_vertex(s, s->indices[3 * t + 2]);
-        sb_v3 n = sb_v3_cross(sb_v3_make(b[0] - a[0], b[1] - a[1], b[2] - a[2]),
-                              sb_v3_make(c[0] - a[0], c[1] - a[1], c[2] - a[2]));
-        double area = 0.5 * sb_v3_len(n);
+        sb_v3 n;
+        double d, area = tri_plane(s, t, &n, &d);
+        normal_of[t] = UINT32_MAX;
         if (area <= 0) continue;
-        n = sb_v3_norm(n);
-        double d = -(n.x * a[0] + n.y * a[1] + n.z * a[2]);
-        pt[m++] = (plane_tri){{llround(n.x * 1e3), llround(n.y * 1e3), llround(n.z * 1e3), llround(d / diag * 1e4)},
-                              t, area};
+        int64_t key[4] = {round_key(n.x * 1e3), round_key(n.y * 1e3), round_key(n.z * 1e3), 0};
+        normal_of[t] = group_of(&tab, &ngrp, &nn, &ncap, key, t, area, NULL);
+        dist[t] = d;
+        areas[t] = area;
     }
-    /* group by quantised plane in linear time: each group's triangles chained
-     * in triangle order; then the large groups in key order, as a sort would visit them */
-    uint32_t *next = sb_xmalloc(sizeof(uint32_t) * (m ? m : 1)), *head = NULL, *tail = NULL, ng = 0;
-    double *garea = NULL;
-    uint32_t *gcount = NULL;
-    idx_table g;
-    idx_table_init(&g, m);
-    uint32_t gcap = 0;
-    for (uint32_t i = 0; i < m; i++) {
-        next[i] = UINT32_MAX;
-        uint64_t words[4];
-        memcpy(words, pt[i].key, sizeof words);
-        for (uint64_t h = sb_hash_words(words, 4) & g.mask;; h = (h + 1) & g.mask) {
-            uint32_t k = g.slot[h];
-            if (k == UINT32_MAX) {
-                if (ng == gcap) {
-                    gcap = gcap ? 2 * gcap : 1024;
-                    head = sb_xrealloc(head, gcap * sizeof *head);
-                    tail = sb_xrealloc(tail, gcap * sizeof *tail);
-                    garea = sb_xrealloc(garea, gcap * sizeof *garea);
-                    gcount = sb_xrealloc(gcount, gcap * sizeof *gcount);
-                }
-                g.slot[h] = ng;
-                head[ng] = tail[ng] = i;
-                garea[ng] = pt[i].area;
-                gcount[ng++] = 1;
-                break;
-            }
-            if (!memcmp(pt[head[k]].key, pt[i].key, sizeof pt[i].key)) {
-                next[tail[k]] = i;
-                tail[k] = i;
-                garea[k] += pt[i].area;
-                gcount[k]++;
-                break;
-            }
-        }
+    free(tab.slot);
+    /* 2: those triangles by quantised plane, each group's triangles chained in triangle order; then the large
+     * groups in key order, as a sort would visit them */
+    uint32_t *next = sb_xmalloc(sizeof(uint32_t) * ntri);
+    plane_group *g = NULL;
+    uint32_t ng = 0, gcap = 0;
+    tab = (group_table){sb_xcalloc(1024, sizeof(uint64_t)), 1023};
+    for (uint32_t t = 0; t < ntri; t++) {
+        next[t] = UINT32_MAX;
+        if (normal_of[t] == UINT32_MAX || ngrp[normal_of[t]].area < 0.1 * face) continue;
+        const int64_t *nk = ngrp[normal_of[t]].key;
+        int64_t key[4] = {nk[0], nk[1], nk[2], round_key(dist[t] / diag * 1e4)};
+        group_of(&tab, &g, &ng, &gcap, key, t, areas[t], next);
     }
-    free(g.slot);
-    plane_tri *big = NULL;   /* one per large group: its first triangle's key, the group in .tri, its area */
+    free(tab.slot);
+    free(ngrp);
+    free(normal_of);
+    free(dist);
+    free(areas);
+    plane_group **big = NULL;   /* the large groups */
     uint32_t nbig = 0;
     for (uint32_t k = 0; k < ng; k++)
-        if (garea[k] >= 0.1 * face) {
+        if (g[k].area >= 0.1 * face) {
             big = sb_xrealloc(big, (nbig + 1) * sizeof *big);
-            big[nbig] = pt[head[k]];
-            big[nbig++].tri = k;
+            big[nbig++] = &g[k];
         }
-    if (nbig > 1) qsort(big, nbig, sizeof *big, cmp_plane_tri);
+    if (nbig > 1) qsort(big, nbig, sizeof *big, cmp_plane_group);
     for (uint32_t b = 0; b < nbig; b++) {
-        uint32_t k = big[b].tri;
-        double area = garea[k];
+        const plane_group *grp = big[b];
+        double area = grp->area;
         /* keep the largest SB_MAX_PLANES */
         int slot = -1;
         if (s->plane_count < SB_MAX_PLANES) slot = (int)s->plane_count++;
@@ -505,28 +601,22 @@ void sb_scene_find_planes(sb_scene *s) {
         if (slot < 0) continue;
         sb_plane *p = &s->planes[slot];
         free(p->tris);
-        const uint32_t t0 = pt[head[k]].tri;
-        const float *a = sb_vertex(s, s->indices[3 * t0]), *bb = sb_vertex(s, s->indices[3 * t0 + 1]),
-                    *c = sb_vertex(s, s->indices[3 * t0 + 2]);
-        sb_v3 n = sb_v3_norm(sb_v3_cross(sb_v3_make(bb[0] - a[0], bb[1] - a[1], bb[2] - a[2]),
-                                         sb_v3_make(c[0] - a[0], c[1] - a[1], c[2] - a[2])));
+        sb_v3 n;
+        double d;
+        tri_plane(s, grp->head, &n, &d);
         p->n[0] = n.x;
         p->n[1] = n.y;
         p->n[2] = n.z;
-        p->d = -(n.x * a[0] + n.y * a[1] + n.z * a[2]);
+        p->d = d;
         p->area = area;
-        p->tri_count = gcount[k];
+        p->tri_count = grp->count;
         p->tris = sb_xmalloc(sizeof(uint32_t) * p->tri_count);
         uint32_t j = 0;
-        for (uint32_t i = head[k]; i != UINT32_MAX; i = next[i]) p->tris[j++] = pt[i].tri;
+        for (uint32_t t = grp->head; t != UINT32_MAX && j < grp->count; t = next[t]) p->tris[j++] = t;
     }
     free(big);
     free(next);
-    free(head);
-    free(tail);
-    free(garea);
-    free(gcount);
-    free(pt);
+    free(g);
 }
 
 uint64_t sb_scene_triangles(const sb_scene *s) { return s->index_count / 3; }
@@ -570,6 +660,9 @@ void sb_scene_info(const sb_scene *s, FILE *out) {
     sb_v3 e = sb_v3_sub(s->bounds.hi, s->bounds.lo);
     fprintf(out, "scene: %s\ntriangles: %llu in %u draws (%u primitives, %u mesh nodes)\n", s->file,
             (unsigned long long)sb_scene_triangles(s), s->draw_count, f->prims, s->nodes_drawn);
+    char parts[256];
+    sb_scene_load_parts(s, parts, sizeof parts);
+    fprintf(out, "loaded in: %.0f ms (%s)\n", s->load_ms, parts);
     fprintf(out, "size: %.6g x %.6g x %.6g\nsun: %s\nlights: %u\ncameras: %u\n", e.x, e.y, e.z,
             s->has_sun ? "from the file" : "none in the file (default or --sun)", s->light_count, s->camera_count);
     fprintf(out, "double-sided primitives: %u (back faces drawn and hit)\n", f->double_sided);

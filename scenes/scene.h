@@ -179,9 +179,13 @@ typedef struct sb_prim_desc {
     bool double_sided;
     uint32_t material;           /* from sb_scene_add_material, 0: none */
     uint32_t node;
+    int closed_known;            /* 0: work out whether it is closed; 1: it is not; 2: it is (an instance of a
+                                    primitive already added: the answer does not change with the transform) */
 } sb_prim_desc;
 
 void sb_scene_begin(sb_scene *s);
+/* Room for this many more vertices, indices and draws (a loader that knows them: no growing as it adds). */
+void sb_scene_reserve(sb_scene *s, uint64_t vertices, uint64_t indices, uint32_t draws);
 /* Adds a material (the alpha test) and returns its index; equal ones are shared. */
 uint32_t sb_scene_add_material(sb_scene *s, const sb_material *m);
 /* Adds a texture's alpha (w*h bytes, copied) and returns its index. */

@@ -5,6 +5,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <cmocka.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -260,6 +261,59 @@ static void test_truck_town(void **st) { (void)st; load_shared("truck_town/town_
 static void test_zdm2(void **st) { (void)st; load_shared("sauerbraten_zdm2/zdm2.glb", 58772); }
 static void test_hallway(void **st) { (void)st; load_shared("space_ship_hallway/space_ship_hallway.glb", 53400); }
 
+/* A real level tiled 3x3 by node instancing (scripts/tile-gltf): every mesh
+ * decoded once and placed nine times. The copies must be the original moved:
+ * nine times its triangles, draws, single-sided and closed draws, and its
+ * large planes; the tiles' boxes one grid step apart. */
+static void test_tiled_level(void **st) {
+    (void)st;
+    const char *src = shared("sauerbraten_zdm2/zdm2.glb");
+    if (access(src, R_OK) != 0) {
+        print_message("%s not present; skipped\n", src);
+        skip();
+    }
+    char tiled[64] = "/tmp/sbtileXXXXXX", cmd[8192];
+    assert_non_null(mkdtemp(tiled));
+    strcat(tiled, "/zdm2x3.glb");
+    snprintf(cmd, sizeof cmd, "%s/scripts/tile-gltf %s %s 3 3 > /dev/null", getenv("SB_SOURCE_ROOT"), src, tiled);
+    assert_int_equal(system(cmd), 0);
+    sb_scene one, nine;
+    sb_err err;
+    assert_true(sb_scene_load(&one, src, NULL, &err));
+    assert_true(sb_scene_load(&nine, tiled, NULL, &err));
+    print_message("zdm2: %llu triangles, %u draws; 3x3: %llu, %u draws, %.0f ms\n",
+                  (unsigned long long)sb_scene_triangles(&one), one.draw_count,
+                  (unsigned long long)sb_scene_triangles(&nine), nine.draw_count, nine.load_ms);
+    assert_int_equal(sb_scene_triangles(&nine), 9 * sb_scene_triangles(&one));
+    assert_int_equal(nine.vertex_count, 9 * one.vertex_count);
+    assert_int_equal(nine.draw_count, 9 * one.draw_count);
+    assert_int_equal(nine.single_sided_draws, 9 * one.single_sided_draws);
+    uint32_t closed1 = 0, closed9 = 0;
+    for (uint32_t i = 0; i < one.draw_count; i++) closed1 += one.draws[i].closed;
+    for (uint32_t i = 0; i < nine.draw_count; i++) closed9 += nine.draws[i].closed;
+    assert_int_equal(closed9, 9 * closed1);
+    /* the extent: the level, then two more tiles 1.1 level widths apart in X and Z (3.2 widths), the height
+     * unchanged: the tiles do not overlap */
+    sb_v3 e1 = sb_v3_sub(one.bounds.hi, one.bounds.lo), e9 = sb_v3_sub(nine.bounds.hi, nine.bounds.lo);
+    print_message("extent %g x %g x %g -> %g x %g x %g\n", e1.x, e1.y, e1.z, e9.x, e9.y, e9.z);
+    assert_true(fabs(e9.y - e1.y) < 1e-3 * e1.y);
+    assert_true(fabs(e9.x - 3.2 * e1.x) < 1e-3 * e1.x && fabs(e9.z - 3.2 * e1.z) < 1e-3 * e1.z);
+    /* every vertex of the first tile's first draw is the original's, moved by the same offset */
+    sb_v3 off = sb_v3_sub(one.origin, nine.origin);
+    double worst = 0;
+    for (uint32_t i = 0; i < one.vertex_count; i++) {
+        const float *a = sb_vertex(&one, i), *b = sb_vertex(&nine, i);
+        worst = fmax(worst, fabs(a[0] + off.x - b[0]) + fabs(a[1] + off.y - b[1]) + fabs(a[2] + off.z - b[2]));
+    }
+    print_message("tile (0, 0) against the level: largest vertex difference %.3g\n", worst);
+    assert_true(worst < 1e-3);
+    sb_scene_free(&one);
+    sb_scene_free(&nine);
+    remove(tiled);
+    *strrchr(tiled, '/') = 0;
+    rmdir(tiled);
+}
+
 typedef struct {
     char *hit;
 } mark;
@@ -313,7 +367,7 @@ int main(void) {
         cmocka_unit_test(test_plane_box), cmocka_unit_test(test_desert_size), cmocka_unit_test(test_truck_town),
         cmocka_unit_test(test_zdm2),      cmocka_unit_test(test_hallway),     cmocka_unit_test(test_bvh_cull_exact),
         cmocka_unit_test(test_missing_file),       cmocka_unit_test(test_closed_and_planes),
-        cmocka_unit_test(test_scene_cache),
+        cmocka_unit_test(test_scene_cache),        cmocka_unit_test(test_tiled_level),
     };
     return cmocka_run_group_tests_name("scene", tests, NULL, NULL);
 }
