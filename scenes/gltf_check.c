@@ -653,27 +653,40 @@ static bool check_lights(ck *c) {
     return true;
 }
 
+static bool check_camera(ck *c, uint64_t i) {
+    const sb_json *cam = &c->arr[K_CAMERA]->items[i], *o;
+    jpath p = at_i("/cameras", i);
+    const char *type;
+    double znear, zfar, v;
+    if (!get_choice(c, cam, p.s, "type", true, "perspective|orthographic", &type)) return false;
+    bool persp = !strcmp(type, "perspective");
+    if (!field(c, cam, p.s, type, SB_JSON_OBJECT, true, &o)) return false;
+    jpath po = at(p.s, type);
+    if (persp) {
+        if (!get_number(c, o, po.s, "yfov", true, 0, 0, true, SB_PI, true, &v)) return false;
+        if (!get_number(c, o, po.s, "aspectRatio", false, 1, 0, true, INFINITY, true, &v)) return false;
+        if (!get_number(c, o, po.s, "znear", true, 0, 0, true, INFINITY, true, &znear)) return false;
+        if (!get_number(c, o, po.s, "zfar", false, INFINITY, znear, true, INFINITY, false, &zfar)) return false;
+    } else {
+        if (!get_number(c, o, po.s, "xmag", true, 0, -INFINITY, true, INFINITY, true, &v)) return false;
+        if (!get_number(c, o, po.s, "ymag", true, 0, -INFINITY, true, INFINITY, true, &v)) return false;
+        if (!get_number(c, o, po.s, "znear", true, 0, 0, false, INFINITY, true, &znear)) return false;
+        if (!get_number(c, o, po.s, "zfar", true, 0, znear, true, INFINITY, true, &zfar)) return false;
+    }
+    return true;
+}
+
+/* Cameras draw nothing: one that breaks a rule is a note, refused only where a path uses it. */
 static bool check_cameras(ck *c) {
     for (uint64_t i = 0; i < c->n[K_CAMERA]; i++) {
-        const sb_json *cam = &c->arr[K_CAMERA]->items[i], *o;
-        jpath p = at_i("/cameras", i);
-        const char *type;
-        double znear, zfar, v;
-        if (!get_choice(c, cam, p.s, "type", true, "perspective|orthographic", &type)) return false;
-        bool persp = !strcmp(type, "perspective");
-        if (!field(c, cam, p.s, type, SB_JSON_OBJECT, true, &o)) return false;
-        jpath po = at(p.s, type);
-        if (persp) {
-            if (!get_number(c, o, po.s, "yfov", true, 0, 0, true, SB_PI, true, &v)) return false;
-            if (!get_number(c, o, po.s, "aspectRatio", false, 1, 0, true, INFINITY, true, &v)) return false;
-            if (!get_number(c, o, po.s, "znear", true, 0, 0, true, INFINITY, true, &znear)) return false;
-            if (!get_number(c, o, po.s, "zfar", false, INFINITY, znear, true, INFINITY, false, &zfar)) return false;
-        } else {
-            if (!get_number(c, o, po.s, "xmag", true, 0, -INFINITY, true, INFINITY, true, &v)) return false;
-            if (!get_number(c, o, po.s, "ymag", true, 0, -INFINITY, true, INFINITY, true, &v)) return false;
-            if (!get_number(c, o, po.s, "znear", true, 0, 0, false, INFINITY, true, &znear)) return false;
-            if (!get_number(c, o, po.s, "zfar", true, 0, znear, true, INFINITY, true, &zfar)) return false;
-        }
+        if (c->arr[K_CAMERA]->items[i].type != SB_JSON_OBJECT) return fail(c, at_i("/cameras", i).s, "expected an object");
+        sb_err why;
+        ck one = *c;
+        one.err = &why;
+        size_t skip = strlen(c->d->file) + 2;   /* the note is about this file: without its name */
+        if (!check_camera(&one, i) && c->d->unused)
+            sb_gltf_note(c->d->unused, c->d->unused_len, "%s (no path uses it here; one that does is refused)",
+                         strlen(why.msg) > skip ? why.msg + skip : why.msg);
     }
     return true;
 }
@@ -775,6 +788,13 @@ static bool check_animations(ck *c) {
             if (!field(c, ch, pc.s, "target", SB_JSON_OBJECT, true, &target)) return false;
             jpath pt = at(pc.s, "target");
             if (!get_index(c, target, pt.s, "node", false, K_NODE, &node)) return false;
+            const sb_json *ext = sb_json_get(target, "extensions");
+            if (ext && sb_json_get(ext, "KHR_animation_pointer")) { /* animates what we do not: left out, said */
+                if (!get_choice(c, target, pt.s, "path", true, "pointer", &path)) return false;
+                if (c->d->unused)
+                    sb_gltf_note(c->d->unused, c->d->unused_len, "%s: KHR_animation_pointer is not applied", pc.s);
+                continue;
+            }
             if (!get_choice(c, target, pt.s, "path", true, "translation|rotation|scale|weights", &path)) return false;
         }
     }
@@ -929,6 +949,22 @@ static bool check_skin_joints_in_scene(ck *c) {
     return ok;
 }
 
+void sb_gltf_note(char *list, size_t len, const char *fmt, ...) {
+    char note[SB_ERR_LEN];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(note, sizeof note, fmt, ap);
+    va_end(ap);
+    size_t n = strlen(list);
+    if (n + strlen(note) + 3 < len) snprintf(list + n, len - n, "%s%s", n ? "; " : "", note);
+}
+
+bool sb_gltf_check_camera(const sb_json *root, const sb_gltf_check_desc *d, uint64_t k, sb_err *err) {
+    ck c = {.d = d, .err = err};
+    bool ok = root->type == SB_JSON_OBJECT && collect_arrays(&c, root) && (k >= c.n[K_CAMERA] || check_camera(&c, k));
+    return ok;
+}
+
 bool sb_gltf_check(const sb_json *root, const sb_gltf_check_desc *d, sb_err *err) {
     ck c = {.d = d, .err = err};
     if (root->type != SB_JSON_OBJECT) return fail(&c, "/", "the document is %s, not an object", sb_json_type_name(root->type));
@@ -953,15 +989,21 @@ static uint32_t le32(const unsigned char *p) {
 }
 
 bool sb_glb_split(const unsigned char *data, uint64_t size, const char *file, const char **json, uint64_t *json_len,
-                  const unsigned char **bin, uint64_t *bin_len, sb_err *err) {
+                  const unsigned char **bin, uint64_t *bin_len, uint64_t *used, char *unused, size_t unused_len,
+                  sb_err *err) {
     *bin = NULL;
     *bin_len = 0;
     if (size < 20 || memcmp(data, "glTF", 4) != 0) return sb_fail(err, "%s: not a .glb file (no 'glTF' header)", file);
     uint32_t version = le32(data + 4), length = le32(data + 8);
     if (version != 2) return sb_fail(err, "%s: .glb container version %u (expected 2)", file, version);
-    if (length != size)
-        return sb_fail(err, "%s: the .glb header says %u bytes, the file has %llu (truncated or padded?)", file, length,
+    if (length > size)
+        return sb_fail(err, "%s: the .glb header says %u bytes, the file has %llu (truncated?)", file, length,
                        (unsigned long long)size);
+    if (length < size && unused)   /* padding after the container: nothing in it is read */
+        sb_gltf_note(unused, unused_len, "%llu byte(s) after the .glb's declared length of %u",
+                     (unsigned long long)(size - length), length);
+    size = length;
+    if (used) *used = length;
     uint32_t len0 = le32(data + 12), type0 = le32(data + 16);
     if (type0 != 0x4E4F534Au) return sb_fail(err, "%s: the first .glb chunk is not JSON", file);
     if (!fits(20, len0, size))

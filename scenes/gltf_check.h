@@ -26,14 +26,26 @@ typedef struct sb_gltf_check_desc {
     bool glb;                   /* buffer 0 may be the BIN chunk */
     uint64_t bin_size;          /* size of the BIN chunk (0: none) */
     bool allow_external_uris;   /* URIs may leave base_dir (still regular files only) */
+    /* Parts nothing draws are held leniently: what is wrong with them, or that they are left out, is added here
+       ("; "-separated, NULL: not kept) instead of refusing the file. Lenient: cameras (checked strictly when a path
+       uses one: sb_gltf_check_camera), KHR_animation_pointer channels (not applied). */
+    char *unused;
+    size_t unused_len;
 } sb_gltf_check_desc;
 
 bool sb_gltf_check(const sb_json *root, const sb_gltf_check_desc *d, sb_err *err);
+/* Camera k held strictly (a path uses it): false with the file and the JSON path. */
+bool sb_gltf_check_camera(const sb_json *root, const sb_gltf_check_desc *d, uint64_t k, sb_err *err);
+/* Adds a note to a "; "-separated list (dropped when it would not fit whole). */
+void sb_gltf_note(char *list, size_t len, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 
 /* The chunks of a .glb: the JSON text and the BIN chunk (NULL, 0 if none),
- * with the header and every chunk length checked against the file size. */
+ * with the header and every chunk length checked against the file size.
+ * Bytes after the header's declared length are left out (*used: the
+ * declared length; a note in unused, when kept); fewer are a refusal. */
 bool sb_glb_split(const unsigned char *data, uint64_t size, const char *file, const char **json, uint64_t *json_len,
-                  const unsigned char **bin, uint64_t *bin_len, sb_err *err);
+                  const unsigned char **bin, uint64_t *bin_len, uint64_t *used, char *unused, size_t unused_len,
+                  sb_err *err);
 
 /* Resolves a file URI (percent-decoded here) against base_dir into out with
  * sb_file_confined; other schemes than a relative or absolute path are refused. */

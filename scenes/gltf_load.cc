@@ -880,8 +880,9 @@ void hide_draco_indices(const sb_json *root, char *json, size_t len) {
 
 // Reads the file once, checks the raw document (gltf_check.h), then lets
 // tinygltf parse it from memory. *hash: of the file and the files it refers to.
+// unused: where the check's notes go (NULL: not kept); camera >= 0: that camera is checked strictly (a path uses it).
 bool load_model(const char *path, const sb_scene_opts *opts, tinygltf::Model &model, ImageStore *images,
-                uint64_t *hash, sb_err *err) {
+                uint64_t *hash, char *unused, size_t unused_len, int camera, sb_err *err) {
     size_t size = 0;
     char *bytes = sb_read_file(path, &size, err);
     if (!bytes) return false;
@@ -892,14 +893,17 @@ bool load_model(const char *path, const sb_scene_opts *opts, tinygltf::Model &mo
     const char *json = bytes;
     uint64_t json_len = size, bin_len = 0;
     const unsigned char *bin = nullptr;
-    if (glb && !sb_glb_split(u, size, path, &json, &json_len, &bin, &bin_len, err)) return false;
+    uint64_t used = size;
+    if (glb && !sb_glb_split(u, size, path, &json, &json_len, &bin, &bin_len, &used, unused, unused_len, err))
+        return false;
     std::string base_dir(path);
     size_t slash = base_dir.find_last_of('/');
     base_dir = slash == std::string::npos ? std::string(".") : slash == 0 ? std::string("/") : base_dir.substr(0, slash);
     sb_json_doc doc;
     if (!sb_json_parse(&doc, path, json, json_len, err)) return false;
-    sb_gltf_check_desc cd = {path, base_dir.c_str(), glb, bin ? bin_len : 0, opts && opts->allow_external_uris};
-    bool ok = sb_gltf_check(doc.root, &cd, err);
+    sb_gltf_check_desc cd = {path, base_dir.c_str(), glb, bin ? bin_len : 0, opts && opts->allow_external_uris,
+                             unused, unused_len};
+    bool ok = sb_gltf_check(doc.root, &cd, err) && (camera < 0 || sb_gltf_check_camera(doc.root, &cd, (uint64_t)camera, err));
     uint64_t h = sb_hash_bytes(SB_FNV_SEED, bytes, size);
     if (ok) hide_draco_indices(doc.root, const_cast<char *>(json), json_len);
     sb_json_free(&doc);
@@ -910,7 +914,7 @@ bool load_model(const char *path, const sb_scene_opts *opts, tinygltf::Model &mo
     FsCtx fs_ctx{base_dir, cd.allow_external_uris, h};
     loader.SetFsCallbacks(tinygltf::FsCallbacks{fs_exists, fs_expand, fs_read, fs_write, &fs_ctx});
     std::string e, w;
-    ok = glb ? loader.LoadBinaryFromMemory(&model, &e, &w, u, (unsigned)size, base_dir)
+    ok = glb ? loader.LoadBinaryFromMemory(&model, &e, &w, u, (unsigned)used, base_dir)
              : loader.LoadASCIIFromString(&model, &e, &w, bytes, (unsigned)size, base_dir);
     if (!ok) return sb_fail(err, "%s: %s", path, e.empty() ? "not a valid glTF file" : first_line(e).c_str());
     *hash = fs_ctx.hash;
@@ -972,7 +976,8 @@ extern "C" bool sb_gltf_load(sb_scene *s, const char *path, const sb_scene_opts 
     try {
         uint64_t hash;
         double t0 = sb_now_ms();
-        if (!load_model(path, opts, model, &images, &hash, err)) return false;
+        if (!load_model(path, opts, model, &images, &hash, s->unused, sizeof s->unused, -1, err)) return false;
+        if (s->unused[0]) sb_log("%s: left out, not refused: %s", path, s->unused);
         double t1 = sb_now_ms();
         s->load_part_ms[SB_LOAD_PARSE] = t1 - t0;
         Loader L{Ctx{path, &model, err}, s, opts, &images, {}, {}, {}, {}, {}, {}};
@@ -999,7 +1004,7 @@ extern "C" bool sb_gltf_camera_keys(sb_camera_keys *p, const char *path, int cam
     ImageStore images;
     try {
         uint64_t hash;
-        if (!load_model(path, opts, model, &images, &hash, err)) return false;
+        if (!load_model(path, opts, model, &images, &hash, NULL, 0, cam, err)) return false;
         Ctx c{path, &model, err};
         if (cam < 0 || cam >= (int)model.cameras.size())
             return sb_fail(err, "%s#camera=%d: the file has %zu camera(s)", path, cam, model.cameras.size());

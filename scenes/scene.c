@@ -681,6 +681,7 @@ void sb_scene_info(const sb_scene *s, FILE *out) {
     fprintf(out, "Draco-compressed primitives: %u (decoded)\n", f->draco);
     fprintf(out, "vertex-colour alpha on alpha-tested primitives: %u (ignored)\n", f->vertex_alpha_ignored);
     fprintf(out, "degenerate: %s\n", s->degenerate[0] ? s->degenerate : "no");
+    fprintf(out, "unused (left out, not refused): %s\n", s->unused[0] ? s->unused : "nothing");
 }
 
 /* ---- culling and rays over the draws' BVH ---- */

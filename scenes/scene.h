@@ -149,6 +149,8 @@ typedef struct sb_scene {
     sb_plane planes[SB_MAX_PLANES];
     uint32_t plane_count;
     char degenerate[128];        /* why nothing in it can cast or receive a shadow ("" if it can) */
+    char unused[512];            /* what the file holds that nothing draws and is left out, or breaks a rule
+                                    there ("; "-separated; "" if nothing): info and every run's warnings say it */
 
     /* builder scratch, freed by sb_scene_finish */
     double *build_pos;

@@ -22,6 +22,7 @@ typedef struct {
     uint32_t vertex_count, index_count, draw_count, light_count, camera_count, material_count, texture_count,
         texel_count, alpha_tested_draws, single_sided_draws, nodes_drawn, plane_count, has_sun;
     char degenerate[128];
+    char unused[512];
     struct {
         double n[3], d, area;
         uint32_t tri_count;
@@ -50,6 +51,7 @@ static void write_scene(sb_wbuf *b, const sb_scene *s) {
     c.plane_count = s->plane_count;
     c.has_sun = s->has_sun;
     memcpy(c.degenerate, s->degenerate, sizeof c.degenerate);
+    memcpy(c.unused, s->unused, sizeof c.unused);
     for (uint32_t i = 0; i < s->plane_count; i++) {
         memcpy(c.planes[i].n, s->planes[i].n, sizeof c.planes[i].n);
         c.planes[i].d = s->planes[i].d;
@@ -86,6 +88,8 @@ static bool read_scene(sb_rbuf *r, sb_scene *s) {
     s->has_sun = c.has_sun != 0;
     memcpy(s->degenerate, c.degenerate, sizeof s->degenerate);
     s->degenerate[sizeof s->degenerate - 1] = 0;
+    memcpy(s->unused, c.unused, sizeof s->unused);
+    s->unused[sizeof s->unused - 1] = 0;
     s->vertices = sb_rbuf_take_array(r, c.vertex_count, SB_VERTEX_BYTES);
     s->vertex_count = s->vertex_cap = c.vertex_count;
     s->indices = sb_rbuf_take_array(r, c.index_count, sizeof *s->indices);

@@ -211,6 +211,33 @@ static void run_dir(char *dir, size_t len, const char *fmt, ...) {
     dir[dl] = 0;
 }
 
+/* A part of the file nothing draws is left out, not refused: info says it, and so does every run's warnings
+ * column (here: a byte after a .glb's declared length). */
+static void test_unused_parts_said(void **st) {
+    (void)st;
+    char f[256];
+    snprintf(f, sizeof f, "%s/padded.glb", g_tmp);
+    copy_bundled("plane-box.glb", f);
+    FILE *fp = fopen(f, "ab");
+    assert_non_null(fp);
+    fputc(0, fp);
+    fclose(fp);
+    assert_int_equal(sh("%s info %s", test_binary(), f), 0);
+    assert_non_null(strstr(g_out, "unused (left out, not refused): 1 byte(s) after the .glb's declared length"));
+    char dir[4096];
+    run_dir(dir, sizeof dir, "%s run %s plane-box none --frames 1 --warmup 0 --size 64x36 --error-every 1 --quiet "
+            "--out %s/unused", test_binary(), f, g_tmp);
+    sb_table t;
+    summary_table(dir, &t);
+    assert_int_equal(t.nrows, 1);
+    print_message("warnings: %s\n", sb_table_get(&t, 0, "warnings"));
+    assert_non_null(strstr(sb_table_get(&t, 0, "warnings"), "parts nothing draws, left out: 1 byte(s) after"));
+    sb_table_free(&t);
+    /* the bundled scenes hold nothing unused: the default benchmark carries no such warning */
+    assert_int_equal(sh("%s info desert", test_binary()), 0);
+    assert_non_null(strstr(g_out, "unused (left out, not refused): nothing"));
+}
+
 static void test_backends_same_draw_calls(void **st) {
     (void)st;
     char a[4096], b[4096];
@@ -856,6 +883,7 @@ static void test_full_disk(void **st) {
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_run_writes_csv),   cmocka_unit_test(test_gltf_camera_path),
+        cmocka_unit_test(test_unused_parts_said),
         cmocka_unit_test(test_builtin_paths),    cmocka_unit_test(test_skip_reasons),
         cmocka_unit_test(test_usage_and_threads),
         cmocka_unit_test(test_clocks_modes),

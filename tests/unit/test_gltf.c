@@ -11,6 +11,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "path.h"
 #include "scene_load.h"
 #include "json.h"
 #include "support.h"
@@ -437,6 +438,66 @@ static void test_required_extensions(void **st) {
                                           : "built without Draco");
 }
 
+/* What nothing draws is held leniently: it loads, and the scene says what was left out (info, every run's
+ * warnings); where something does use it, the same rule refuses it. */
+static void loads_with_note(const char *file, const char *needle) {
+    sb_scene s;
+    sb_err err = {{0}};
+    bool ok = sb_scene_load(&s, file, NULL, &err);
+    if (!ok) print_error("%s\n", err.msg);
+    assert_true(ok);
+    print_message("unused: %s\n", s.unused);
+    assert_non_null(strstr(s.unused, needle));
+    assert_int_equal(sb_scene_triangles(&s), 1);   /* what is drawn is all there */
+    sb_scene_free(&s);
+}
+
+static void test_unused_parts_lenient(void **st) {
+    (void)st;
+    /* a camera no path uses, with yfov >= pi; the path that uses it is refused with the same rule */
+    const char *f = tmp_file("camera.gltf");
+    assert_true(gltf_tri_write(f, &(gltf_tri){.nodes_more = ",{\"camera\":0}", .scene_nodes = "[0,1]",
+                                              .root_more = ",\"cameras\":[{\"type\":\"perspective\",\"perspective\":"
+                                                           "{\"yfov\":4.0,\"znear\":0.1}}]"}));
+    loads_with_note(f, "/cameras/0/perspective/yfov: 4.0 is out of range (0, 3.14159)");
+    char spec[300];
+    snprintf(spec, sizeof spec, "%s#camera=0", f);
+    sb_path p;
+    sb_err err = {{0}};
+    assert_false(sb_path_load(&p, spec, NULL, &err));
+    print_message("%s\n", err.msg);
+    assert_non_null(strstr(err.msg, "/cameras/0/perspective/yfov: 4.0 is out of range"));
+    /* an animation channel of KHR_animation_pointer: not applied, said; path "pointer" without it is refused */
+    static const char anim[] = ",\"extensionsUsed\":[\"KHR_animation_pointer\"],\"animations\":[{\"samplers\":"
+                               "[{\"input\":1,\"output\":0}],\"channels\":[{\"sampler\":0,\"target\":{\"path\":"
+                               "\"pointer\",\"extensions\":{\"KHR_animation_pointer\":{\"pointer\":"
+                               "\"/materials/0/alphaCutoff\"}}}}]}]";
+    f = tmp_file("pointer.gltf");
+    assert_true(gltf_tri_write(f, &(gltf_tri){.root_more = anim}));
+    loads_with_note(f, "/animations/0/channels/0: KHR_animation_pointer is not applied");
+    refused("pointer-bare.gltf",
+            &(gltf_tri){.root_more = ",\"animations\":[{\"samplers\":[{\"input\":1,\"output\":0}],\"channels\":"
+                                     "[{\"sampler\":0,\"target\":{\"path\":\"pointer\"}}]}]"},
+            "/animations/0/channels/0/target/path: \"pointer\" is not one of translation|rotation|scale|weights");
+    /* bytes after a .glb's declared length: left out; fewer than it declares: refused */
+    f = tmp_file("padded.glb");
+    copy_bundled("plane-box.glb", f);
+    FILE *fp = fopen(f, "ab");
+    assert_non_null(fp);
+    fputc(0, fp);
+    fclose(fp);
+    sb_scene s;
+    assert_true(sb_scene_load(&s, f, NULL, &err));
+    print_message("unused: %s\n", s.unused);
+    assert_non_null(strstr(s.unused, "1 byte(s) after the .glb's declared length"));
+    assert_int_equal(sb_scene_triangles(&s), 24);
+    sb_scene_free(&s);
+    f = tmp_file("short.glb");
+    copy_bundled("plane-box.glb", f);
+    assert_int_equal(truncate(f, 1000), 0);
+    expect_scene_refused(f, "the file has 1000 (truncated?)");
+}
+
 static void test_syntax_in_a_file(void **st) {
     (void)st;
     const char *f = tmp_file("syntax.gltf");
@@ -464,6 +525,7 @@ int main(void) {
         cmocka_unit_test(test_skin_and_morph_rules),
         cmocka_unit_test(test_degenerate),           cmocka_unit_test(test_lights),
         cmocka_unit_test(test_syntax_in_a_file),     cmocka_unit_test(test_required_extensions),
+        cmocka_unit_test(test_unused_parts_lenient),
     };
     return cmocka_run_group_tests_name("gltf", tests, setup, teardown);
 }
