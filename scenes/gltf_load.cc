@@ -36,23 +36,11 @@ extern "C" {
 
 namespace {
 
-// Images are kept encoded while tinygltf reads the file; only the ones an
-// alpha test needs are decoded afterwards (shadows need no other texture).
+// Images are kept encoded as they are read; only the ones an alpha test needs
+// are decoded afterwards (shadows need no other texture).
 struct ImageStore {
     std::map<int, std::vector<unsigned char>> bytes;
 };
-
-bool keep_image(tinygltf::Image *, const int index, std::string *, std::string *, int, int, const unsigned char *data,
-                int size, void *user) {
-    if (data && size > 0) static_cast<ImageStore *>(user)->bytes[index].assign(data, data + size);
-    return true;
-}
-
-std::string first_line(const std::string &s) {
-    std::string r = s.substr(0, s.find('\n'));
-    while (!r.empty() && (r.back() == '\r' || r.back() == ' ')) r.pop_back();
-    return r;
-}
 
 struct Ctx {
     const char *file;
@@ -812,75 +800,346 @@ bool Loader::emit_nodes() {
     return true;
 }
 
-// tinygltf reads external buffers and images through these: only regular
-// files inside the scene's folder (unless allowed), never shell expansion.
-struct FsCtx {
+// ---- the document into tinygltf's model ----
+//
+// The file is parsed once, by the project's exact JSON reader, and held to the
+// specification as parsed (gltf_check.h); tinygltf's model is then filled from
+// that same document: tinygltf 2.7 takes only text (it would parse it a second
+// time) and coerces numbers on the way (a negative offset read as 0, an index
+// above 2^31 truncated), which the checks had already refused. Every value
+// read here has passed them, so this reads without re-checking ranges.
+
+// Buffers and images are read from here: data: URIs, the .glb's BIN chunk, or
+// files inside the scene's folder (unless allowed), each file hashed for the
+// scene cache and the content hash.
+struct Source {
     std::string base_dir;
     bool allow_external;
-    uint64_t hash;   /* of the file, then of every file read through here (buffers, images), in order */
+    const unsigned char *bin;
+    uint64_t bin_len;
+    uint64_t hash;   // of the file, then of every file read (buffers, images), in order
 };
 
-bool fs_exists(const std::string &path, void *user) {
-    FsCtx *f = static_cast<FsCtx *>(user);
-    char real[PATH_MAX];
-    sb_err e;
-    return sb_file_confined(f->base_dir.c_str(), path.c_str(), f->allow_external, real, sizeof real, &e);
+const sb_json *member(const sb_json *o, const char *key) { return o ? sb_json_get(o, key) : nullptr; }
+int int_of(const sb_json *o, const char *key, int def) {
+    const sb_json *v = member(o, key);
+    return v && v->type == SB_JSON_NUMBER ? (int)v->num : def;
+}
+size_t size_of(const sb_json *o, const char *key) {
+    uint64_t u = 0;
+    const sb_json *v = member(o, key);
+    return v && sb_json_u64(v, &u) ? (size_t)u : 0;
+}
+double num_of(const sb_json *o, const char *key, double def) {
+    const sb_json *v = member(o, key);
+    return v && v->type == SB_JSON_NUMBER ? v->num : def;
+}
+bool bool_of(const sb_json *o, const char *key, bool def) {
+    const sb_json *v = member(o, key);
+    return v && v->type == SB_JSON_BOOL ? v->b : def;
+}
+std::string str_of(const sb_json *o, const char *key, const char *def) {
+    const sb_json *v = member(o, key);
+    return v && v->type == SB_JSON_STRING ? v->text : def;
+}
+std::vector<double> nums_of(const sb_json *o, const char *key) {
+    std::vector<double> r;
+    const sb_json *v = member(o, key);
+    for (uint32_t i = 0; v && v->type == SB_JSON_ARRAY && i < v->count; i++) r.push_back(v->items[i].num);
+    return r;
+}
+std::vector<int> ints_of(const sb_json *o, const char *key) {
+    std::vector<int> r;
+    const sb_json *v = member(o, key);
+    for (uint32_t i = 0; v && v->type == SB_JSON_ARRAY && i < v->count; i++) r.push_back((int)v->items[i].num);
+    return r;
+}
+// Each item of an array member (nothing when absent).
+template <typename F> void each(const sb_json *o, const char *key, F f) {
+    const sb_json *v = member(o, key);
+    for (uint32_t i = 0; v && v->type == SB_JSON_ARRAY && i < v->count; i++) f(&v->items[i]);
 }
 
-std::string fs_expand(const std::string &path, void *) { return path; }
+tinygltf::Value value_of(const sb_json *v) {
+    switch (v->type) {
+    case SB_JSON_BOOL: return tinygltf::Value(v->b);
+    case SB_JSON_NUMBER:
+        if (v->num == std::floor(v->num) && std::fabs(v->num) < 2147483648.0 && !strpbrk(v->text, ".eE"))
+            return tinygltf::Value((int)v->num);
+        return tinygltf::Value(v->num);
+    case SB_JSON_STRING: return tinygltf::Value(std::string(v->text));
+    case SB_JSON_ARRAY: {
+        tinygltf::Value::Array a;
+        for (uint32_t i = 0; i < v->count; i++) a.push_back(value_of(&v->items[i]));
+        return tinygltf::Value(std::move(a));
+    }
+    case SB_JSON_OBJECT: {
+        tinygltf::Value::Object o;
+        for (uint32_t i = 0; i < v->count; i++) o.emplace(v->items[i].key, value_of(&v->items[i]));   // the first wins
+        return tinygltf::Value(std::move(o));
+    }
+    default: return tinygltf::Value();
+    }
+}
+tinygltf::ExtensionMap extensions_of(const sb_json *o) {
+    tinygltf::ExtensionMap m;
+    const sb_json *e = member(o, "extensions");
+    for (uint32_t i = 0; e && e->type == SB_JSON_OBJECT && i < e->count; i++) m.emplace(e->items[i].key, value_of(&e->items[i]));
+    return m;
+}
 
-bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::string &path, void *user) {
-    FsCtx *f = static_cast<FsCtx *>(user);
+bool base64_decode(const char *s, std::vector<unsigned char> &out) {
+    uint32_t acc = 0;
+    int bits = 0;
+    for (; *s && *s != '='; s++) {
+        const char *p = strchr("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/", *s);
+        if (!p || !*s) return false;
+        acc = acc << 6 | (uint32_t)(p - "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/");
+        if ((bits += 6) >= 8) out.push_back((unsigned char)(acc >> (bits -= 8)));
+    }
+    return true;
+}
+
+// The bytes a buffer's or image's uri names (a data: URI, or a file checked by sb_uri_resolve).
+bool read_uri(Source &src, const char *file, const std::string &where, const char *uri, std::vector<unsigned char> &out,
+              sb_err *err) {
+    if (!strncmp(uri, "data:", 5)) {
+        const char *comma = strchr(uri, ',');
+        if (!comma || !strstr(std::string(uri, comma).c_str(), ";base64") || !base64_decode(comma + 1, out))
+            return sb_fail(err, "%s: %s/uri: a data: URI that is not base64", file, where.c_str());
+        return true;
+    }
     char real[PATH_MAX];
     sb_err e;
+    if (!sb_uri_resolve(src.base_dir.c_str(), uri, src.allow_external, real, sizeof real, &e))
+        return sb_fail(err, "%s: %s/uri: %s", file, where.c_str(), e.msg);
     size_t n = 0;
-    char *data = nullptr;
-    if (sb_file_confined(f->base_dir.c_str(), path.c_str(), f->allow_external, real, sizeof real, &e))
-        data = sb_read_file(real, &n, &e);
-    if (!data) {
-        if (err) *err = e.msg;
-        return false;
-    }
+    char *data = sb_read_file(real, &n, &e);
+    if (!data) return sb_fail(err, "%s: %s/uri: %s", file, where.c_str(), e.msg);
     uint64_t h = sb_hash_bytes(SB_FNV_SEED, data, n);
-    f->hash = sb_fnv1a(f->hash, &h, sizeof h);
+    src.hash = sb_fnv1a(src.hash, &h, sizeof h);
     sb_scene_cache_note_file(real, h);
-    out->assign(data, data + n);
+    out.assign(data, data + n);
     free(data);
     return true;
 }
 
-bool fs_write(std::string *err, const std::string &, const std::vector<unsigned char> &, void *) {
-    if (err) *err = "shadowbench writes no glTF files";
-    return false;
-}
-
-// tinygltf refuses an indices accessor without a bufferView, which is how
-// KHR_draco_mesh_compression primitives come (their indices are in the
-// bitstream): their "indices" keys are renamed in place ("_ndices", same
-// length, so a .glb's chunk sizes hold) for tinygltf to pass over them.
-void hide_draco_indices(const sb_json *root, char *json, size_t len) {
-    std::vector<size_t> line_start(1, 0);
-    for (size_t i = 0; i < len; i++)
-        if (json[i] == '\n') line_start.push_back(i + 1);
-    const sb_json *meshes = sb_json_get(root, "meshes");
-    for (uint32_t i = 0; meshes && meshes->type == SB_JSON_ARRAY && i < meshes->count; i++) {
-        const sb_json *prims = sb_json_get(&meshes->items[i], "primitives");
-        for (uint32_t k = 0; prims && prims->type == SB_JSON_ARRAY && k < prims->count; k++) {
-            const sb_json *p = &prims->items[k], *ext = sb_json_get(p, "extensions"), *ind = sb_json_get(p, "indices");
-            if (!ind || !ext || !sb_json_get(ext, "KHR_draco_mesh_compression") || ind->line == 0 ||
-                ind->line > line_start.size())
-                continue;
-            size_t at = line_start[ind->line - 1] + ind->col - 1;
-            std::string text(json, std::min(at, len));
-            size_t key = text.rfind("\"indices\"");
-            if (key != std::string::npos) json[key + 1] = '_';
+bool read_buffers(const sb_json *root, Source &src, const char *file, tinygltf::Model &m, sb_err *err) {
+    const sb_json *bs = member(root, "buffers");
+    for (uint32_t i = 0; bs && i < bs->count; i++) {
+        const sb_json *b = &bs->items[i];
+        std::string where = "/buffers/" + std::to_string(i);
+        tinygltf::Buffer buf;
+        size_t len = size_of(b, "byteLength");
+        const sb_json *uri = member(b, "uri");
+        if (uri) {
+            if (!read_uri(src, file, where, uri->text, buf.data, err)) return false;
+            if (buf.data.size() < len)
+                return sb_fail(err, "%s: %s/byteLength: %zu bytes, but its uri holds %zu", file, where.c_str(), len,
+                               buf.data.size());
+            buf.data.resize(len);
+        } else {
+            buf.data.assign(src.bin, src.bin + len);   // the .glb's BIN chunk (the check saw that it fits)
         }
+        m.buffers.push_back(std::move(buf));
     }
+    return true;
 }
 
-// Reads the file once, checks the raw document (gltf_check.h), then lets
-// tinygltf parse it from memory. *hash: of the file and the files it refers to.
-// unused: where the check's notes go (NULL: not kept); camera >= 0: that camera is checked strictly (a path uses it).
+// Every image's encoded bytes (decoded later, only for the alpha tests that read them).
+bool read_images(const sb_json *root, Source &src, const char *file, const tinygltf::Model &m, ImageStore *images,
+                 sb_err *err) {
+    const sb_json *is = member(root, "images");
+    for (uint32_t i = 0; is && i < is->count; i++) {
+        const sb_json *img = &is->items[i];
+        std::string where = "/images/" + std::to_string(i);
+        std::vector<unsigned char> bytes;
+        const sb_json *uri = member(img, "uri");
+        if (uri) {
+            if (!read_uri(src, file, where, uri->text, bytes, err)) return false;
+        } else {
+            int v = int_of(img, "bufferView", -1);
+            if (v < 0 || v >= (int)m.bufferViews.size()) continue;
+            const tinygltf::BufferView &bv = m.bufferViews[v];
+            const std::vector<unsigned char> &data = m.buffers[bv.buffer].data;
+            bytes.assign(data.begin() + (ptrdiff_t)bv.byteOffset, data.begin() + (ptrdiff_t)(bv.byteOffset + bv.byteLength));
+        }
+        if (!bytes.empty()) images->bytes[(int)i] = std::move(bytes);
+    }
+    return true;
+}
+
+int accessor_type(const std::string &t) {
+    static const std::pair<const char *, int> types[] = {
+        {"SCALAR", TINYGLTF_TYPE_SCALAR}, {"VEC2", TINYGLTF_TYPE_VEC2}, {"VEC3", TINYGLTF_TYPE_VEC3},
+        {"VEC4", TINYGLTF_TYPE_VEC4},     {"MAT2", TINYGLTF_TYPE_MAT2}, {"MAT3", TINYGLTF_TYPE_MAT3},
+        {"MAT4", TINYGLTF_TYPE_MAT4}};
+    for (const auto &x : types)
+        if (t == x.first) return x.second;
+    return -1;
+}
+
+std::map<std::string, int> attributes_of(const sb_json *o) {
+    std::map<std::string, int> m;
+    for (uint32_t i = 0; o && o->type == SB_JSON_OBJECT && i < o->count; i++) m.emplace(o->items[i].key, (int)o->items[i].num);
+    return m;
+}
+
+// The checked document into tinygltf's model (buffers and images read as it goes).
+bool build_model(const sb_json *root, Source &src, const char *file, tinygltf::Model &m, ImageStore *images,
+                 sb_err *err) {
+    if (!read_buffers(root, src, file, m, err)) return false;
+    each(root, "bufferViews", [&](const sb_json *o) {
+        tinygltf::BufferView v;
+        v.buffer = int_of(o, "buffer", -1);
+        v.byteOffset = size_of(o, "byteOffset");
+        v.byteLength = size_of(o, "byteLength");
+        v.byteStride = size_of(o, "byteStride");
+        m.bufferViews.push_back(v);
+    });
+    bool ok = true;
+    each(root, "accessors", [&](const sb_json *o) {
+        tinygltf::Accessor a;
+        a.bufferView = int_of(o, "bufferView", -1);
+        a.byteOffset = size_of(o, "byteOffset");
+        a.normalized = bool_of(o, "normalized", false);
+        a.componentType = int_of(o, "componentType", -1);
+        a.count = size_of(o, "count");
+        a.type = accessor_type(str_of(o, "type", ""));
+        a.minValues = nums_of(o, "min");
+        a.maxValues = nums_of(o, "max");
+        const sb_json *sp = member(o, "sparse");
+        a.sparse.isSparse = sp != nullptr;
+        if (sp) {
+            const sb_json *in = member(sp, "indices"), *va = member(sp, "values");
+            size_t count = size_of(sp, "count"), io = size_of(in, "byteOffset"), vo = size_of(va, "byteOffset");
+            if (count > INT_MAX || io > INT_MAX || vo > INT_MAX) ok = false;   // tinygltf's sparse fields are int
+            a.sparse.count = (int)count;
+            a.sparse.indices.bufferView = int_of(in, "bufferView", -1);
+            a.sparse.indices.byteOffset = (int)io;
+            a.sparse.indices.componentType = int_of(in, "componentType", -1);
+            a.sparse.values.bufferView = int_of(va, "bufferView", -1);
+            a.sparse.values.byteOffset = (int)vo;
+        }
+        m.accessors.push_back(a);
+    });
+    if (!ok) return sb_fail(err, "%s: a sparse accessor's count or offset is beyond 2^31 - 1, which is not supported", file);
+    each(root, "meshes", [&](const sb_json *o) {
+        tinygltf::Mesh mesh;
+        each(o, "primitives", [&](const sb_json *q) {
+            tinygltf::Primitive p;
+            p.attributes = attributes_of(member(q, "attributes"));
+            p.indices = int_of(q, "indices", -1);
+            p.material = int_of(q, "material", -1);
+            p.mode = int_of(q, "mode", TINYGLTF_MODE_TRIANGLES);
+            each(q, "targets", [&](const sb_json *t) { p.targets.push_back(attributes_of(t)); });
+            p.extensions = extensions_of(q);
+            mesh.primitives.push_back(std::move(p));
+        });
+        mesh.weights = nums_of(o, "weights");
+        m.meshes.push_back(std::move(mesh));
+    });
+    each(root, "nodes", [&](const sb_json *o) {
+        tinygltf::Node n;
+        n.mesh = int_of(o, "mesh", -1);
+        n.skin = int_of(o, "skin", -1);
+        n.camera = int_of(o, "camera", -1);
+        n.children = ints_of(o, "children");
+        n.matrix = nums_of(o, "matrix");
+        n.translation = nums_of(o, "translation");
+        n.rotation = nums_of(o, "rotation");
+        n.scale = nums_of(o, "scale");
+        n.weights = nums_of(o, "weights");
+        n.extensions = extensions_of(o);
+        m.nodes.push_back(std::move(n));
+    });
+    each(root, "skins", [&](const sb_json *o) {
+        tinygltf::Skin s;
+        s.inverseBindMatrices = int_of(o, "inverseBindMatrices", -1);
+        s.skeleton = int_of(o, "skeleton", -1);
+        s.joints = ints_of(o, "joints");
+        m.skins.push_back(std::move(s));
+    });
+    each(root, "animations", [&](const sb_json *o) {
+        tinygltf::Animation an;
+        each(o, "samplers", [&](const sb_json *q) {
+            tinygltf::AnimationSampler s;
+            s.input = int_of(q, "input", -1);
+            s.output = int_of(q, "output", -1);
+            s.interpolation = str_of(q, "interpolation", "LINEAR");
+            an.samplers.push_back(s);
+        });
+        each(o, "channels", [&](const sb_json *q) {
+            tinygltf::AnimationChannel c;
+            const sb_json *t = member(q, "target");
+            c.sampler = int_of(q, "sampler", -1);
+            c.target_node = int_of(t, "node", -1);
+            c.target_path = str_of(t, "path", "");
+            an.channels.push_back(c);
+        });
+        m.animations.push_back(std::move(an));
+    });
+    each(root, "materials", [&](const sb_json *o) {
+        tinygltf::Material mat;
+        mat.alphaMode = str_of(o, "alphaMode", "OPAQUE");
+        mat.alphaCutoff = num_of(o, "alphaCutoff", 0.5);
+        mat.doubleSided = bool_of(o, "doubleSided", false);
+        const sb_json *pbr = member(o, "pbrMetallicRoughness");
+        std::vector<double> f = nums_of(pbr, "baseColorFactor");
+        if (f.size() == 4) mat.pbrMetallicRoughness.baseColorFactor = f;
+        const sb_json *bt = member(pbr, "baseColorTexture");
+        if (bt) {
+            mat.pbrMetallicRoughness.baseColorTexture.index = int_of(bt, "index", -1);
+            mat.pbrMetallicRoughness.baseColorTexture.texCoord = int_of(bt, "texCoord", 0);
+            mat.pbrMetallicRoughness.baseColorTexture.extensions = extensions_of(bt);
+        }
+        m.materials.push_back(std::move(mat));
+    });
+    each(root, "textures", [&](const sb_json *o) {
+        tinygltf::Texture t;
+        t.source = int_of(o, "source", -1);
+        t.sampler = int_of(o, "sampler", -1);
+        m.textures.push_back(t);
+    });
+    each(root, "samplers", [&](const sb_json *o) {
+        tinygltf::Sampler s;
+        s.wrapS = int_of(o, "wrapS", TINYGLTF_TEXTURE_WRAP_REPEAT);
+        s.wrapT = int_of(o, "wrapT", TINYGLTF_TEXTURE_WRAP_REPEAT);
+        m.samplers.push_back(s);
+    });
+    each(root, "images", [&](const sb_json *) { m.images.emplace_back(); });
+    each(root, "cameras", [&](const sb_json *o) {
+        tinygltf::Camera c;
+        c.type = str_of(o, "type", "");
+        const sb_json *p = member(o, "perspective");
+        if (p) {
+            c.perspective.yfov = num_of(p, "yfov", 0);
+            c.perspective.znear = num_of(p, "znear", 0);
+            c.perspective.zfar = num_of(p, "zfar", 0);
+            c.perspective.aspectRatio = num_of(p, "aspectRatio", 0);
+        }
+        m.cameras.push_back(c);
+    });
+    each(member(member(root, "extensions"), "KHR_lights_punctual"), "lights", [&](const sb_json *o) {
+        tinygltf::Light l;
+        l.type = str_of(o, "type", "");
+        l.color = nums_of(o, "color");
+        l.intensity = num_of(o, "intensity", 1.0);
+        l.range = num_of(o, "range", 0.0);
+        m.lights.push_back(l);
+    });
+    each(root, "scenes", [&](const sb_json *o) {
+        tinygltf::Scene sc;
+        sc.nodes = ints_of(o, "nodes");
+        m.scenes.push_back(std::move(sc));
+    });
+    m.defaultScene = int_of(root, "scene", -1);
+    return read_images(root, src, file, m, images, err);
+}
+
+// Reads the file once, parses it once and checks that document (gltf_check.h), then fills tinygltf's model from
+// it (build_model). *hash: of the file and the files it refers to. unused: where the check's notes go (NULL: not
+// kept); camera >= 0: that camera is checked strictly (a path uses it).
 bool load_model(const char *path, const sb_scene_opts *opts, tinygltf::Model &model, ImageStore *images,
                 uint64_t *hash, char *unused, size_t unused_len, int camera, sb_err *err) {
     size_t size = 0;
@@ -903,22 +1162,13 @@ bool load_model(const char *path, const sb_scene_opts *opts, tinygltf::Model &mo
     if (!sb_json_parse(&doc, path, json, json_len, err)) return false;
     sb_gltf_check_desc cd = {path, base_dir.c_str(), glb, bin ? bin_len : 0, opts && opts->allow_external_uris,
                              unused, unused_len};
-    bool ok = sb_gltf_check(doc.root, &cd, err) && (camera < 0 || sb_gltf_check_camera(doc.root, &cd, (uint64_t)camera, err));
-    uint64_t h = sb_hash_bytes(SB_FNV_SEED, bytes, size);
-    if (ok) hide_draco_indices(doc.root, const_cast<char *>(json), json_len);
+    Source src{base_dir, cd.allow_external_uris, bin, bin_len, sb_hash_bytes(SB_FNV_SEED, bytes, size)};
+    bool ok = sb_gltf_check(doc.root, &cd, err) &&
+              (camera < 0 || sb_gltf_check_camera(doc.root, &cd, (uint64_t)camera, err)) &&
+              build_model(doc.root, src, path, model, images, err);
     sb_json_free(&doc);
-    if (!ok) return false;
-
-    tinygltf::TinyGLTF loader;
-    loader.SetImageLoader(keep_image, images);
-    FsCtx fs_ctx{base_dir, cd.allow_external_uris, h};
-    loader.SetFsCallbacks(tinygltf::FsCallbacks{fs_exists, fs_expand, fs_read, fs_write, &fs_ctx});
-    std::string e, w;
-    ok = glb ? loader.LoadBinaryFromMemory(&model, &e, &w, u, (unsigned)used, base_dir)
-             : loader.LoadASCIIFromString(&model, &e, &w, bytes, (unsigned)size, base_dir);
-    if (!ok) return sb_fail(err, "%s: %s", path, e.empty() ? "not a valid glTF file" : first_line(e).c_str());
-    *hash = fs_ctx.hash;
-    return true;
+    if (ok) *hash = src.hash;
+    return ok;
 }
 
 // What the file held that is not drawn as its author made it, said once at load.
