@@ -311,8 +311,19 @@ static bool check_buffers(ck *c) {
         if (!get_uint(c, b, p.s, "byteLength", true, 0, 1, UINT64_MAX, &c->buf_len[i])) return false;
         bool has_uri;
         if (!check_uri(c, b, p.s, &has_uri)) return false;
+        if (!has_uri && (!c->d->glb || i != 0)) {
+            /* no bytes anywhere: refused if a bufferView reads it, else left out */
+            for (uint64_t v = 0; v < c->n[K_VIEW]; v++) {
+                uint64_t bi;
+                const sb_json *bv = sb_json_get(&c->arr[K_VIEW]->items[v], "buffer");
+                if (bv && sb_json_u64(bv, &bi) && bi == i)
+                    return fail(c, p.s, "no uri (only the first buffer of a .glb may omit it), and bufferView %llu reads it",
+                                (unsigned long long)v);
+            }
+            if (c->d->unused) sb_gltf_note(c->d->unused, c->d->unused_len, "%s: a buffer with no uri that nothing reads", p.s);
+            continue;
+        }
         if (!has_uri) {
-            if (!c->d->glb || i != 0) return fail(c, p.s, "no uri (only the first buffer of a .glb may omit it)");
             if (c->buf_len[i] > c->d->bin_size)
                 return fail(c, at(p.s, "byteLength").s, "%llu is beyond the .glb's BIN chunk of %llu bytes",
                             (unsigned long long)c->buf_len[i], (unsigned long long)c->d->bin_size);

@@ -28,7 +28,8 @@ typedef struct sb_gltf_check_desc {
     bool allow_external_uris;   /* URIs may leave base_dir (still regular files only) */
     /* Parts nothing draws are held leniently: what is wrong with them, or that they are left out, is added here
        ("; "-separated, NULL: not kept) instead of refusing the file. Lenient: cameras (checked strictly when a path
-       uses one: sb_gltf_check_camera), KHR_animation_pointer channels (not applied). */
+       uses one: sb_gltf_check_camera), KHR_animation_pointer channels (not applied), a buffer with no uri that no
+       bufferView reads. */
     char *unused;
     size_t unused_len;
 } sb_gltf_check_desc;

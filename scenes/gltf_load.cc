@@ -938,9 +938,9 @@ bool read_buffers(const sb_json *root, Source &src, const char *file, tinygltf::
                 return sb_fail(err, "%s: %s/byteLength: %zu bytes, but its uri holds %zu", file, where.c_str(), len,
                                buf.data.size());
             buf.data.resize(len);
-        } else {
+        } else if (i == 0 && src.bin) {
             buf.data.assign(src.bin, src.bin + len);   // the .glb's BIN chunk (the check saw that it fits)
-        }
+        }   // else: no bytes, and nothing reads it (the check saw to that)
         m.buffers.push_back(std::move(buf));
     }
     return true;

@@ -452,6 +452,21 @@ static void loads_with_note(const char *file, const char *needle) {
     sb_scene_free(&s);
 }
 
+/* Adds a second buffer of 8 bytes with no uri to a file gltf_tri_write wrote. */
+static void add_buffer_without_uri(const char *f) {
+    sb_err err;
+    char *doc = sb_read_file(f, NULL, &err);
+    assert_non_null(doc);
+    char *at = strstr(doc, "\"buffers\":[{");
+    assert_non_null(at);
+    char *close = strchr(at, ']');
+    FILE *g = fopen(f, "w");
+    assert_non_null(g);
+    fprintf(g, "%.*s,{\"byteLength\":8}%s", (int)(close - doc), doc, close);
+    fclose(g);
+    free(doc);
+}
+
 static void test_unused_parts_lenient(void **st) {
     (void)st;
     /* a camera no path uses, with yfov >= pi; the path that uses it is refused with the same rule */
@@ -479,6 +494,15 @@ static void test_unused_parts_lenient(void **st) {
             &(gltf_tri){.root_more = ",\"animations\":[{\"samplers\":[{\"input\":1,\"output\":0}],\"channels\":"
                                      "[{\"sampler\":0,\"target\":{\"path\":\"pointer\"}}]}]"},
             "/animations/0/channels/0/target/path: \"pointer\" is not one of translation|rotation|scale|weights");
+    /* a buffer with no uri that no bufferView reads: left out; one that a bufferView reads: refused */
+    f = tmp_file("nouri.gltf");
+    assert_true(gltf_tri_write(f, &(gltf_tri){0}));
+    add_buffer_without_uri(f);
+    loads_with_note(f, "/buffers/1: a buffer with no uri that nothing reads");
+    f = tmp_file("nouri-read.gltf");
+    assert_true(gltf_tri_write(f, &(gltf_tri){.view1 = "\"buffer\":1,\"byteOffset\":0,\"byteLength\":6"}));
+    add_buffer_without_uri(f);
+    expect_scene_refused(f, "/buffers/1: no uri (only the first buffer of a .glb may omit it), and bufferView 1 reads it");
     /* bytes after a .glb's declared length: left out; fewer than it declares: refused */
     f = tmp_file("padded.glb");
     copy_bundled("plane-box.glb", f);
