@@ -246,24 +246,29 @@ static inline bool tri_less(const tri_key *x, const tri_key *y) {
     return x->key < y->key || (x->key == y->key && x->tri < y->tri);
 }
 
+/* Hoare partition of k[0..n) (n > 2) around the median of three: returns left, with [0, left) <= pivot <=
+ * [left, n) by tri_less. */
+static size_t partition_tri_keys(tri_key *k, size_t n) {
+    tri_key a = k[0], b = k[n / 2], c = k[n - 1], pivot;
+    pivot = tri_less(&a, &b) ? (tri_less(&b, &c) ? b : tri_less(&a, &c) ? c : a)
+                             : (tri_less(&a, &c) ? a : tri_less(&b, &c) ? c : b);
+    size_t i = 0, j = n - 1;
+    for (;;) {
+        while (tri_less(&k[i], &pivot)) i++;
+        while (tri_less(&pivot, &k[j])) j--;
+        if (i >= j) return j + 1;
+        tri_key t = k[i];
+        k[i++] = k[j];
+        k[j--] = t;
+    }
+}
+
 /* Sorts by (key, tri): a total order (tri numbers are unique), so the result
  * is the one any sort gives; typed and inlined, several times qsort's speed. */
 static void sort_tri_keys(tri_key *k, size_t n) {
     while (n > 16) {
-        tri_key a = k[0], b = k[n / 2], c = k[n - 1], pivot;   /* median of three */
-        pivot = tri_less(&a, &b) ? (tri_less(&b, &c) ? b : tri_less(&a, &c) ? c : a)
-                                 : (tri_less(&a, &c) ? a : tri_less(&b, &c) ? c : b);
-        size_t i = 0, j = n - 1;
-        for (;;) {
-            while (tri_less(&k[i], &pivot)) i++;
-            while (tri_less(&pivot, &k[j])) j--;
-            if (i >= j) break;
-            tri_key t = k[i];
-            k[i++] = k[j];
-            k[j--] = t;
-        }
-        /* [0, j] <= pivot <= [j+1, n): recurse into the smaller part, loop on the larger */
-        size_t left = j + 1;
+        /* recurse into the smaller part, loop on the larger */
+        size_t left = partition_tri_keys(k, n);
         if (left < n - left) {
             sort_tri_keys(k, left);
             k += left;
@@ -301,19 +306,7 @@ typedef struct {
 /* Puts the m smallest keys (by tri_less: a total order) first, in no order: quickselect, linear on average. */
 static void select_tri_keys(tri_key *k, size_t n, size_t m) {
     while (n > 16 && m > 0 && m < n) {
-        tri_key a = k[0], b = k[n / 2], c = k[n - 1], pivot;   /* median of three */
-        pivot = tri_less(&a, &b) ? (tri_less(&b, &c) ? b : tri_less(&a, &c) ? c : a)
-                                 : (tri_less(&a, &c) ? a : tri_less(&b, &c) ? c : b);
-        size_t i = 0, j = n - 1;
-        for (;;) {
-            while (tri_less(&k[i], &pivot)) i++;
-            while (tri_less(&pivot, &k[j])) j--;
-            if (i >= j) break;
-            tri_key t = k[i];
-            k[i++] = k[j];
-            k[j--] = t;
-        }
-        size_t left = j + 1;   /* [0, left) <= pivot <= [left, n) */
+        size_t left = partition_tri_keys(k, n);
         if (m < left) n = left;
         else k += left, n -= left, m -= left;
     }
