@@ -42,9 +42,24 @@ struct ImageStore {
     std::map<int, std::vector<unsigned char>> bytes;
 };
 
+// What the model's buffers are: each buffer's bytes, in the file as it is
+// mapped (a .glb's BIN chunk: not copied) or in vectors of their own (data:
+// URIs, files); alive while the model is read.
+struct Document {
+    void *map = nullptr;
+    size_t map_len = 0;
+    std::vector<std::vector<unsigned char>> owned;
+    std::vector<std::pair<const unsigned char *, size_t>> bufs;
+    Document() = default;
+    Document(const Document &) = delete;
+    Document &operator=(const Document &) = delete;
+    ~Document() { sb_unmap_file(map, map_len); }
+};
+
 struct Ctx {
     const char *file;
     const tinygltf::Model *m;
+    const Document *doc;
     sb_err *err;
     bool fail(const std::string &where, const std::string &what) {
         sb_fail(err, "%s: %s: %s", file, where.c_str(), what.c_str());
@@ -62,17 +77,17 @@ bool view_range(Ctx &c, int view, size_t off, size_t count, size_t elem, size_t 
     const tinygltf::Model &m = *c.m;
     if (view < 0 || view >= (int)m.bufferViews.size()) return c.fail(where + "/bufferView", "missing or out of range");
     const tinygltf::BufferView &bv = m.bufferViews[view];
-    if (bv.buffer < 0 || bv.buffer >= (int)m.buffers.size())
+    if (bv.buffer < 0 || bv.buffer >= (int)c.doc->bufs.size())
         return c.fail("/bufferViews/" + std::to_string(view) + "/buffer", "missing or out of range");
-    const tinygltf::Buffer &b = m.buffers[bv.buffer];
-    if (!fits(bv.byteOffset, bv.byteLength, b.data.size()))
+    const std::pair<const unsigned char *, size_t> &b = c.doc->bufs[bv.buffer];
+    if (!fits(bv.byteOffset, bv.byteLength, b.second))
         return c.fail("/bufferViews/" + std::to_string(view), "range exceeds buffer " + std::to_string(bv.buffer) +
-                                                                 " of " + std::to_string(b.data.size()) + " bytes");
+                                                                 " of " + std::to_string(b.second) + " bytes");
     size_t need;
     if (count == 0 || __builtin_mul_overflow(stride, count - 1, &need) || __builtin_add_overflow(need, elem, &need) ||
         !fits(off, need, bv.byteLength))
         return c.fail(where, "count " + std::to_string(count) + " runs past the end of bufferView " + std::to_string(view));
-    *data = b.data.data() + bv.byteOffset + off;
+    *data = b.first + bv.byteOffset + off;
     return true;
 }
 
@@ -924,31 +939,33 @@ bool read_uri(Source &src, const char *file, const std::string &where, const cha
     return true;
 }
 
-bool read_buffers(const sb_json *root, Source &src, const char *file, tinygltf::Model &m, sb_err *err) {
+bool read_buffers(const sb_json *root, Source &src, const char *file, Document &doc, sb_err *err) {
     const sb_json *bs = member(root, "buffers");
+    doc.owned.resize(bs ? bs->count : 0);
     for (uint32_t i = 0; bs && i < bs->count; i++) {
         const sb_json *b = &bs->items[i];
         std::string where = "/buffers/" + std::to_string(i);
-        tinygltf::Buffer buf;
         size_t len = size_of(b, "byteLength");
         const sb_json *uri = member(b, "uri");
+        std::vector<unsigned char> &own = doc.owned[i];
         if (uri) {
-            if (!read_uri(src, file, where, uri->text, buf.data, err)) return false;
-            if (buf.data.size() < len)
+            if (!read_uri(src, file, where, uri->text, own, err)) return false;
+            if (own.size() < len)
                 return sb_fail(err, "%s: %s/byteLength: %zu bytes, but its uri holds %zu", file, where.c_str(), len,
-                               buf.data.size());
-            buf.data.resize(len);
+                               own.size());
+            doc.bufs.emplace_back(own.data(), len);
         } else if (i == 0 && src.bin) {
-            buf.data.assign(src.bin, src.bin + len);   // the .glb's BIN chunk (the check saw that it fits)
-        }   // else: no bytes, and nothing reads it (the check saw to that)
-        m.buffers.push_back(std::move(buf));
+            doc.bufs.emplace_back(src.bin, len);   // the .glb's BIN chunk, where it is (the check saw that it fits)
+        } else {
+            doc.bufs.emplace_back(nullptr, 0);   // no bytes, and nothing reads it (the check saw to that)
+        }
     }
     return true;
 }
 
 // Every image's encoded bytes (decoded later, only for the alpha tests that read them).
-bool read_images(const sb_json *root, Source &src, const char *file, const tinygltf::Model &m, ImageStore *images,
-                 sb_err *err) {
+bool read_images(const sb_json *root, Source &src, const char *file, const tinygltf::Model &m, const Document &doc,
+                 ImageStore *images, sb_err *err) {
     const sb_json *is = member(root, "images");
     for (uint32_t i = 0; is && i < is->count; i++) {
         const sb_json *img = &is->items[i];
@@ -961,8 +978,8 @@ bool read_images(const sb_json *root, Source &src, const char *file, const tinyg
             int v = int_of(img, "bufferView", -1);
             if (v < 0 || v >= (int)m.bufferViews.size()) continue;
             const tinygltf::BufferView &bv = m.bufferViews[v];
-            const std::vector<unsigned char> &data = m.buffers[bv.buffer].data;
-            bytes.assign(data.begin() + (ptrdiff_t)bv.byteOffset, data.begin() + (ptrdiff_t)(bv.byteOffset + bv.byteLength));
+            const unsigned char *data = doc.bufs[bv.buffer].first;
+            if (data) bytes.assign(data + bv.byteOffset, data + bv.byteOffset + bv.byteLength);
         }
         if (!bytes.empty()) images->bytes[(int)i] = std::move(bytes);
     }
@@ -986,9 +1003,9 @@ std::map<std::string, int> attributes_of(const sb_json *o) {
 }
 
 // The checked document into tinygltf's model (buffers and images read as it goes).
-bool build_model(const sb_json *root, Source &src, const char *file, tinygltf::Model &m, ImageStore *images,
-                 sb_err *err) {
-    if (!read_buffers(root, src, file, m, err)) return false;
+bool build_model(const sb_json *root, Source &src, const char *file, tinygltf::Model &m, Document &doc,
+                 ImageStore *images, sb_err *err) {
+    if (!read_buffers(root, src, file, doc, err)) return false;
     each(root, "bufferViews", [&](const sb_json *o) {
         tinygltf::BufferView v;
         v.buffer = int_of(o, "buffer", -1);
@@ -1134,18 +1151,23 @@ bool build_model(const sb_json *root, Source &src, const char *file, tinygltf::M
         m.scenes.push_back(std::move(sc));
     });
     m.defaultScene = int_of(root, "scene", -1);
-    return read_images(root, src, file, m, images, err);
+    return read_images(root, src, file, m, doc, images, err);
 }
 
 // Reads the file once, parses it once and checks that document (gltf_check.h), then fills tinygltf's model from
 // it (build_model). *hash: of the file and the files it refers to. unused: where the check's notes go (NULL: not
 // kept); camera >= 0: that camera is checked strictly (a path uses it).
-bool load_model(const char *path, const sb_scene_opts *opts, tinygltf::Model &model, ImageStore *images,
-                uint64_t *hash, char *unused, size_t unused_len, int camera, sb_err *err) {
+bool load_model(const char *path, const sb_scene_opts *opts, tinygltf::Model &model, Document &docm,
+                ImageStore *images, uint64_t *hash, char *unused, size_t unused_len, int camera, sb_err *err) {
     size_t size = 0;
-    char *bytes = sb_read_file(path, &size, err);
-    if (!bytes) return false;
-    std::unique_ptr<char, decltype(&free)> hold(bytes, &free);
+    docm.map = sb_map_file(path, &docm.map_len, false);   // the file where it is: no copy
+    if (!docm.map) {   // why not (no file, an empty one...), as reading it says
+        char *text = sb_read_file(path, &size, err);
+        free(text);
+        return text ? sb_fail(err, "%s: an empty file", path) : false;
+    }
+    size = docm.map_len;
+    const char *bytes = static_cast<const char *>(docm.map);
     if (size > UINT_MAX) return sb_fail(err, "%s: %zu bytes: files over 4 GiB are not supported", path, size);
     const unsigned char *u = reinterpret_cast<const unsigned char *>(bytes);
     bool glb = size >= 4 && memcmp(bytes, "glTF", 4) == 0;
@@ -1165,7 +1187,7 @@ bool load_model(const char *path, const sb_scene_opts *opts, tinygltf::Model &mo
     Source src{base_dir, cd.allow_external_uris, bin, bin_len, sb_hash_bytes(SB_FNV_SEED, bytes, size)};
     bool ok = sb_gltf_check(doc.root, &cd, err) &&
               (camera < 0 || sb_gltf_check_camera(doc.root, &cd, (uint64_t)camera, err)) &&
-              build_model(doc.root, src, path, model, images, err);
+              build_model(doc.root, src, path, model, docm, images, err);
     sb_json_free(&doc);
     if (ok) *hash = src.hash;
     return ok;
@@ -1219,6 +1241,7 @@ bool scene_roots(const char *path, const tinygltf::Model &model, std::vector<int
 
 extern "C" bool sb_gltf_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_err *err) {
     tinygltf::Model model;
+    Document doc;
     ImageStore images;
     sb_scene_opts defaults;
     memset(&defaults, 0, sizeof defaults);
@@ -1226,11 +1249,11 @@ extern "C" bool sb_gltf_load(sb_scene *s, const char *path, const sb_scene_opts 
     try {
         uint64_t hash;
         double t0 = sb_now_ms();
-        if (!load_model(path, opts, model, &images, &hash, s->unused, sizeof s->unused, -1, err)) return false;
+        if (!load_model(path, opts, model, doc, &images, &hash, s->unused, sizeof s->unused, -1, err)) return false;
         if (s->unused[0]) sb_log("%s: left out, not refused: %s", path, s->unused);
         double t1 = sb_now_ms();
         s->load_part_ms[SB_LOAD_PARSE] = t1 - t0;
-        Loader L{Ctx{path, &model, err}, s, opts, &images, {}, {}, {}, {}, {}, {}};
+        Loader L{Ctx{path, &model, &doc, err}, s, opts, &images, {}, {}, {}, {}, {}, {}};
         read_cameras(s, model);
         std::vector<int> roots;
         if (!scene_roots(path, model, roots, err) || !L.pose() || !L.walk(roots)) return false;
@@ -1251,11 +1274,12 @@ extern "C" bool sb_gltf_load(sb_scene *s, const char *path, const sb_scene_opts 
 extern "C" bool sb_gltf_camera_keys(sb_camera_keys *p, const char *path, int cam, const sb_scene_opts *opts,
                                     sb_err *err) {
     tinygltf::Model model;
+    Document doc;
     ImageStore images;
     try {
         uint64_t hash;
-        if (!load_model(path, opts, model, &images, &hash, NULL, 0, cam, err)) return false;
-        Ctx c{path, &model, err};
+        if (!load_model(path, opts, model, doc, &images, &hash, NULL, 0, cam, err)) return false;
+        Ctx c{path, &model, &doc, err};
         if (cam < 0 || cam >= (int)model.cameras.size())
             return sb_fail(err, "%s#camera=%d: the file has %zu camera(s)", path, cam, model.cameras.size());
         int cn = -1;
