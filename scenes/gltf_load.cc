@@ -152,12 +152,33 @@ bool read_accessor(Ctx &c, int acc, const std::string &where, int want_type, std
     size_t total;
     if (__builtin_mul_overflow(a.count, (size_t)ncomp, &total) || total > ((size_t)1 << 32))
         return c.fail(ap + "/count", std::to_string(a.count) + " elements are more than shadowbench reads");
+    bool contiguous_floats = a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT && rows == ncomp && !a.sparse.isSparse &&
+                             a.bufferView >= 0 && a.bufferView < (int)m.bufferViews.size() &&
+                             (m.bufferViews[a.bufferView].byteStride == 0 || m.bufferViews[a.bufferView].byteStride == elem);
+    if (contiguous_floats) { // the common case: converted as they come, without a pass of zeros first
+        const unsigned char *d;
+        if (!view_range(c, a.bufferView, a.byteOffset, a.count, elem, elem, ap, &d)) return false;
+        const float *f = reinterpret_cast<const float *>(d);   // 4-byte aligned: the check saw to that
+        out.assign(f, f + total);
+        return true;
+    }
     out.assign(total, 0.0);
+    bool plain_floats = a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT && rows == ncomp;   // no matrix padding
     auto decode = [&](const unsigned char *d, size_t stride, size_t n, size_t first) {
+        double *o = out.data() + first * ncomp;
+        if (plain_floats) { // the common case, without a call per component
+            for (size_t i = 0; i < n; i++, d += stride)
+                for (int k = 0; k < ncomp; k++) {
+                    float f;
+                    memcpy(&f, d + 4 * k, 4);
+                    *o++ = f;
+                }
+            return;
+        }
         for (size_t i = 0; i < n; i++)
             for (int k = 0; k < ncomp; k++)
-                out[(first + i) * ncomp + k] =
-                    component(d + i * stride + (size_t)(k / rows) * col + (size_t)(k % rows) * csize, a.componentType, a.normalized);
+                *o++ = component(d + i * stride + (size_t)(k / rows) * col + (size_t)(k % rows) * csize, a.componentType,
+                                 a.normalized);
     };
     if (a.bufferView >= (int)m.bufferViews.size()) return c.fail(ap + "/bufferView", "out of range");
     if (a.bufferView >= 0) {
@@ -613,14 +634,19 @@ bool Loader::triangles(const tinygltf::Primitive &p, const std::string &where, c
 void Loader::emit(const PrimData &d, const std::vector<uint32_t> &tris_in, const sb_m4 *w, int node, uint32_t mat,
                   bool double_sided, const float color[4], int *closed_known) {
     size_t nv = d.pos.size() / 3;
-    std::vector<uint32_t> &tris = wt;
-    tris.assign(tris_in.begin(), tris_in.end());
-    wp.assign(d.pos.begin(), d.pos.end());
-    wn.assign(d.nrm.begin(), d.nrm.end());
+    const sb_m4 id = sb_m4_identity();
+    if (w && !memcmp(w, &id, sizeof id)) w = nullptr;   // in place already: the vertices as they are, not a copy
     bool collapses = w && det3(*w) == 0;   // a zero scale can weld what was apart: work closedness out again
+    const std::vector<uint32_t> *tris = &tris_in;
+    const double *pos = d.pos.data(), *nrm = d.nrm.data();
     if (w) {
-        if (det3(*w) < 0) // a mirroring transform turns the winding: front faces stay front faces
-            for (size_t i = 0; i < tris.size(); i += 3) std::swap(tris[i + 1], tris[i + 2]);
+        if (det3(*w) < 0) { // a mirroring transform turns the winding: front faces stay front faces
+            wt.assign(tris_in.begin(), tris_in.end());
+            for (size_t i = 0; i < wt.size(); i += 3) std::swap(wt[i + 1], wt[i + 2]);
+            tris = &wt;
+        }
+        wp.resize(d.pos.size());
+        wn.resize(d.nrm.size());
         sb_m4 nm = normal_matrix(*w);
         for (size_t v = 0; v < nv; v++) {
             sb_v3 q = sb_m4_point(*w, sb_v3_make(d.pos[3 * v], d.pos[3 * v + 1], d.pos[3 * v + 2]));
@@ -629,15 +655,16 @@ void Loader::emit(const PrimData &d, const std::vector<uint32_t> &tris_in, const
             sb_v3 n = sb_m4_dir(nm, sb_v3_make(d.nrm[3 * v], d.nrm[3 * v + 1], d.nrm[3 * v + 2]));
             wn[3 * v] = n.x, wn[3 * v + 1] = n.y, wn[3 * v + 2] = n.z;
         }
+        pos = wp.data(), nrm = wn.data();
     }
     sb_prim_desc pd;
     memset(&pd, 0, sizeof pd);
-    pd.positions = wp.data();
-    pd.normals = d.have_n ? wn.data() : nullptr;
+    pd.positions = pos;
+    pd.normals = d.have_n ? nrm : nullptr;
     pd.uv = d.have_uv && mat ? d.uv.data() : nullptr;
     pd.vertex_count = (uint32_t)nv;
-    pd.indices = tris.data();
-    pd.index_count = (uint32_t)tris.size();
+    pd.indices = tris->data();
+    pd.index_count = (uint32_t)tris->size();
     memcpy(pd.color, color, sizeof pd.color);
     pd.double_sided = double_sided;
     pd.material = mat;

@@ -489,10 +489,10 @@ static void group_table_put(group_table *t, uint64_t h, uint32_t g) {
     t->slot[i] = (h >> 32) << 32 | (uint64_t)(g + 1);
 }
 
+/* One mix of the four keys multiplied apart: a table probe per triangle is the cost here. */
 static uint64_t key_hash(const int64_t key[4]) {
-    uint64_t w[4];
-    memcpy(w, key, sizeof w);
-    return sb_hash_words(w, 4);
+    return sb_mix64((uint64_t)key[0] * 0x9e3779b97f4a7c15u ^ (uint64_t)key[1] * 0xc2b2ae3d27d4eb4fu ^
+                    (uint64_t)key[2] * 0x165667b19e3779f9u ^ (uint64_t)key[3] * 0x27d4eb2f165667c5u);
 }
 
 /* The group of key in (*g)[0..*ng), added (with triangle t and its area) when new; returns its index. */

@@ -256,19 +256,7 @@ bool sb_mkdir_p(const char *path, sb_err *err) {
     return true;
 }
 
-uint64_t sb_mix64(uint64_t z) {
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
-    return z ^ (z >> 31);
-}
-
 uint64_t sb_splitmix64(uint64_t *x) { return sb_mix64(*x += 0x9e3779b97f4a7c15u); }
-
-uint64_t sb_hash_words(const uint64_t *w, int n) {
-    uint64_t h = 0;
-    for (int i = 0; i < n; i++) h = sb_mix64(h ^ w[i]);
-    return h;
-}
 
 uint64_t sb_fnv1a(uint64_t h, const void *data, size_t n) {
     const unsigned char *p = data;

@@ -85,12 +85,20 @@ bool sb_make_stamped_dir(const char *base, char *out, size_t len, sb_err *err);
 uint64_t sb_fnv1a(uint64_t h, const void *data, size_t n);
 /* A fast 64-bit hash of large data (scene files): chained like sb_fnv1a (h: the hash so far). Not cryptographic. */
 uint64_t sb_hash_bytes(uint64_t h, const void *data, size_t n);
-/* splitmix64's finalizer: every bit of z spread over the result. */
-uint64_t sb_mix64(uint64_t z);
+/* splitmix64's finalizer: every bit of z spread over the result (inline: hash tables call it per element). */
+static inline uint64_t sb_mix64(uint64_t z) {
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
+    return z ^ (z >> 31);
+}
 /* splitmix64: the next number of the sequence x (shuffles: the same seed, the same order everywhere). */
 uint64_t sb_splitmix64(uint64_t *x);
 /* A hash of n 64-bit words (hash-table keys). */
-uint64_t sb_hash_words(const uint64_t *w, int n);
+static inline uint64_t sb_hash_words(const uint64_t *w, int n) {
+    uint64_t h = 0;
+    for (int i = 0; i < n; i++) h = sb_mix64(h ^ w[i]);
+    return h;
+}
 #define SB_FNV_SEED 1469598103934665603ull
 
 double sb_now_ms(void);          /* CLOCK_MONOTONIC in milliseconds */
