@@ -318,8 +318,9 @@ static void select_tri_keys(tri_key *k, size_t n, size_t m) {
  * idx: the run's indices (3 a triangle); cen: each triangle's centroid times
  * three, beside it in the same order (both permuted together, read in
  * sequence); first: the run's first triangle in the scene. The halves are
- * chosen by selection (linear), not by sorting: a level costs O(n), and the
- * order inside a leaf is the selection's (deterministic, not spatial). */
+ * chosen by selection (linear), not by sorting: a level costs O(n); a half
+ * that is a leaf is then sorted along the axis, so each draw's triangles run
+ * along it as a full sort at every level left them. */
 static void split_order(uint32_t *idx, double *cen, tri_key *k, uint32_t first, uint32_t n, leaf_list *out) {
     if (n <= SB_CHUNK_TRIS) {
         uint32_t c1 = out->cap, c2 = out->cap;
@@ -341,6 +342,9 @@ static void split_order(uint32_t *idx, double *cen, tri_key *k, uint32_t first, 
     for (uint32_t i = 0; i < n; i++) k[i] = (tri_key){cen[3 * (size_t)i + axis], i};
     uint32_t half = n / 2;
     select_tri_keys(k, n, half);
+    /* a half that is a leaf keeps its triangles in order along the axis (as drawn: spatially coherent runs) */
+    if (half <= SB_CHUNK_TRIS) sort_tri_keys(k, half);
+    if (n - half <= SB_CHUNK_TRIS) sort_tri_keys(k + half, n - half);
     uint32_t *ti = sb_xmalloc((size_t)n * 3 * sizeof(uint32_t));
     double *tc = sb_xmalloc((size_t)n * 3 * sizeof(double));
     for (uint32_t i = 0; i < n; i++) {

@@ -308,7 +308,11 @@ static bool parse_value(parser *p, sb_json *v, int depth) {
     }
 }
 
+static uint64_t g_parses;
+uint64_t sb_json_parses(void) { return g_parses; }
+
 bool sb_json_parse(sb_json_doc *doc, const char *name, const char *text, size_t len, sb_err *err) {
+    g_parses++;
     memset(doc, 0, sizeof *doc);
     parser p = {.name = name, .s = text, .len = len, .line = 1, .err = err};
     if (len >= 3 && !memcmp(text, "\xef\xbb\xbf", 3)) p.pos = p.line_start = 3; /* a UTF-8 byte order mark */

@@ -47,6 +47,8 @@ typedef struct sb_json_doc {
  * line L, column C: what was expected" and returns false. */
 bool sb_json_parse(sb_json_doc *doc, const char *name, const char *text, size_t len, sb_err *err);
 void sb_json_free(sb_json_doc *doc);
+/* How many documents this process has parsed (a test holds a glTF load to one). */
+uint64_t sb_json_parses(void);
 
 /* Member of an object by name (the first one), or NULL. */
 const sb_json *sb_json_get(const sb_json *obj, const char *key);

@@ -10,6 +10,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "json.h"
 #include "scene_load.h"
 #include "scene.h"
 #include "support.h"
@@ -314,6 +315,26 @@ static void test_tiled_level(void **st) {
     rmdir(tiled);
 }
 
+/* A glTF file is parsed once a load: by the project's reader, its checks and tinygltf's model built from that one
+ * document (tinygltf's own parsers are not even linked: the features test's ldd and nm see to the library). */
+static void test_one_parse_a_load(void **st) {
+    (void)st;
+    const char *files[] = {"desert", SB_HAVE_DRACO ? "towers-draco" : "towers", "conf-skin",
+                           shared("sauerbraten_zdm2/zdm2.glb")};
+    setenv("SB_SCENE_CACHE", "off", 1);
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+        if (i == 3 && access(files[i], R_OK) != 0) continue;
+        uint64_t before = sb_json_parses();
+        sb_scene s;
+        sb_err err;
+        assert_true(sb_scene_load(&s, files[i], NULL, &err));
+        print_message("%s: %llu parse(s)\n", files[i], (unsigned long long)(sb_json_parses() - before));
+        assert_int_equal(sb_json_parses() - before, 1);
+        sb_scene_free(&s);
+    }
+    unsetenv("SB_SCENE_CACHE");
+}
+
 typedef struct {
     char *hit;
 } mark;
@@ -368,6 +389,7 @@ int main(void) {
         cmocka_unit_test(test_zdm2),      cmocka_unit_test(test_hallway),     cmocka_unit_test(test_bvh_cull_exact),
         cmocka_unit_test(test_missing_file),       cmocka_unit_test(test_closed_and_planes),
         cmocka_unit_test(test_scene_cache),        cmocka_unit_test(test_tiled_level),
+        cmocka_unit_test(test_one_parse_a_load),
     };
     return cmocka_run_group_tests_name("scene", tests, NULL, NULL);
 }
