@@ -461,14 +461,10 @@ void sb_option_synopsis(const sb_option *opt, char *out, size_t len) {
 }
 
 /* "  --frames N   frames sampled along the path (default 60)", the text wrapped at 100 columns. */
-static void option_line(FILE *f, const sb_option *opt, const char *extra) {
-    char syn[64], text[512];
-    sb_option_synopsis(opt, syn, sizeof syn);
-    const char *def = opt->def_help ? opt->def_help : opt->def;
-    snprintf(text, sizeof text, "%s%s%s%s%s", opt->help, def ? " (default " : "", def ? def : "", def ? ")" : "",
-             extra ? extra : "");
+/* "  LABEL        text ...": the text from column 30, wrapped at 100. */
+static void labelled(FILE *f, const char *label, const char *text) {
     enum { COL = 30, WIDTH = 100 };
-    int at_col = fprintf(f, "  %s", syn);
+    int at_col = fprintf(f, "  %s", label);
     const char *t = text;
     while (*t) {
         if (at_col >= COL - 1) fputc('\n', f), at_col = 0;
@@ -484,6 +480,16 @@ static void option_line(FILE *f, const sb_option *opt, const char *extra) {
         while (*t == ' ') t++;
         at_col = 0;
     }
+}
+
+/* "  --frames N   frames sampled along the path (default 60)" */
+static void option_line(FILE *f, const sb_option *opt, const char *extra) {
+    char syn[64], text[512];
+    sb_option_synopsis(opt, syn, sizeof syn);
+    const char *def = opt->def_help ? opt->def_help : opt->def;
+    snprintf(text, sizeof text, "%s%s%s%s%s", opt->help, def ? " (default " : "", def ? def : "", def ? ")" : "",
+             extra ? extra : "");
+    labelled(f, syn, text);
 }
 
 static void usage_lines(FILE *f, const sb_command_def *c) {
@@ -534,6 +540,9 @@ void sb_cli_help(FILE *f, int cmd) {
                "  SB_SCENE_CACHE=DIR|off where scenes read before are kept, flattened (default\n"
                "                         $XDG_CACHE_HOME or ~/.cache, shadowbench/scenes)\n");
     fprintf(f, "\nexit status (every command):\n");
-    for (int i = 0; i < sb_exit_status_count; i++)
-        fprintf(f, "  %-4d %-12s %s\n", sb_exit_statuses[i].code, sb_exit_statuses[i].name, sb_exit_statuses[i].meaning);
+    for (int i = 0; i < sb_exit_status_count; i++) {
+        char label[32];
+        snprintf(label, sizeof label, "%-4d %s", sb_exit_statuses[i].code, sb_exit_statuses[i].name);
+        labelled(f, label, sb_exit_statuses[i].meaning);
+    }
 }
