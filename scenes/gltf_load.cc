@@ -208,6 +208,33 @@ bool read_vec(Ctx &c, int acc, const std::string &where, int ncomp, std::vector<
 }
 
 bool read_indices(Ctx &c, int acc, const std::string &where, std::vector<uint32_t> &out) {
+    const tinygltf::Model &m = *c.m;
+    if (acc >= 0 && acc < (int)m.accessors.size()) { // the common case: packed unsigned integers, read as they are
+        const tinygltf::Accessor &a = m.accessors[acc];
+        int csize = a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT     ? 4
+                    : a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ? 2
+                    : a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE  ? 1
+                                                                                : 0;
+        if (csize && a.type == TINYGLTF_TYPE_SCALAR && !a.sparse.isSparse && a.bufferView >= 0 &&
+            a.bufferView < (int)m.bufferViews.size() &&
+            (m.bufferViews[a.bufferView].byteStride == 0 || m.bufferViews[a.bufferView].byteStride == (size_t)csize) &&
+            a.count <= ((size_t)1 << 32)) {
+            const unsigned char *d;
+            std::string ap = "/accessors/" + std::to_string(acc);
+            if (!view_range(c, a.bufferView, a.byteOffset, a.count, (size_t)csize, (size_t)csize, ap, &d)) return false;
+            out.resize(a.count);
+            if (csize == 4) memcpy(out.data(), d, a.count * 4);
+            else if (csize == 2)
+                for (size_t i = 0; i < a.count; i++) {
+                    uint16_t x;
+                    memcpy(&x, d + 2 * i, 2);
+                    out[i] = x;
+                }
+            else
+                for (size_t i = 0; i < a.count; i++) out[i] = d[i];
+            return true;
+        }
+    }
     std::vector<double> v;
     if (!read_accessor(c, acc, where, TINYGLTF_TYPE_SCALAR, v)) return false;
     int ct = c.m->accessors[acc].componentType;

@@ -231,6 +231,16 @@ void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p) {
     d->closed = !p->double_sided && (p->closed_known ? p->closed_known == 2 : prim_closed(p));
     d->material = p->material;
     d->node = p->node;
+    /* its box, while its positions are at hand (chunking gives its pieces their own) */
+    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+    for (uint32_t i = 0; i < p->index_count; i++) {
+        const double *q = p->positions + 3 * (size_t)p->indices[i];
+        for (int k = 0; k < 3; k++) {
+            lo[k] = q[k] < lo[k] ? q[k] : lo[k];
+            hi[k] = q[k] > hi[k] ? q[k] : hi[k];
+        }
+    }
+    d->box = (sb_aabb){{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
 }
 
 /* ---- chunking: split a draw's triangles at the centroid median until small ---- */
@@ -381,6 +391,7 @@ static void chunk_draws(sb_scene *s) {
             sb_draw nd = d;
             nd.first_index = 3 * leaves.first[c];
             nd.index_count = 3 * leaves.count[c];
+            nd.box = tri_range_box(s, nd.first_index, nd.index_count);
             if (c == 0) {
                 s->draws[di] = nd;
             } else {
@@ -406,8 +417,7 @@ bool sb_scene_finish(sb_scene *s, sb_err *err) {
         s->single_sided_draws += !s->draws[i].double_sided;
     }
     sb_aabb all = {{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
-    for (uint32_t i = 0; i < s->draw_count; i++) {
-        s->draws[i].box = tri_range_box(s, s->draws[i].first_index, s->draws[i].index_count);
+    for (uint32_t i = 0; i < s->draw_count; i++) {   /* the draws' boxes: made as they were added or chunked */
         all.lo = sb_v3_min(all.lo, s->draws[i].box.lo);
         all.hi = sb_v3_max(all.hi, s->draws[i].box.hi);
     }
