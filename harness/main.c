@@ -302,16 +302,21 @@ static int cmd_stress(const cli *c) {
 
 /* ---- compare and merge ---- */
 
+/* --metric M,...: the names, pointing into buf. */
+static int split_metrics(const char *list, char *buf, size_t len, const char **out, int max) {
+    int n = 0;
+    snprintf(buf, len, "%s", list);
+    for (char *t = strtok(buf, ","); t && n < max; t = strtok(NULL, ",")) out[n++] = t;
+    return n;
+}
+
 static int cmd_compare(const cli *c) {
     sb_compare_opts o;
     memset(&o, 0, sizeof o);
     o.threshold_pct = c->o.threshold;
     o.pair = c->o.pair;
     char metrics[1024];
-    if (c->o.metrics) {
-        snprintf(metrics, sizeof metrics, "%s", c->o.metrics);
-        for (char *t = strtok(metrics, ","); t && o.nmetrics < 32; t = strtok(NULL, ",")) o.metrics[o.nmetrics++] = t;
-    }
+    if (c->o.metrics) o.nmetrics = split_metrics(c->o.metrics, metrics, sizeof metrics, o.metrics, 32);
     o.format = c->o.format;
     sb_err err;
     if (c->o.pair) {
@@ -337,13 +342,6 @@ static int cmd_merge(const cli *c) {
 
 static const char *history_path(const cli *c, char *buf, size_t len) {
     return c->o.history ? c->o.history : sb_history_default_path(default_out, buf, len);
-}
-
-static int split_metrics(const char *list, char *buf, size_t len, const char **out, int max) {
-    int n = 0;
-    snprintf(buf, len, "%s", list);
-    for (char *t = strtok(buf, ","); t && n < max; t = strtok(NULL, ",")) out[n++] = t;
-    return n;
 }
 
 static int cmd_history(const cli *c) {

@@ -199,12 +199,14 @@ const int sb_option_count = (int)SB_COUNT(sb_options);
 
 _Static_assert(SB_COUNT(sb_options) <= SB_OPTION_MAX, "raise SB_OPTION_MAX");
 
-const sb_option *sb_option_find(const char *name, int cmd) {
+/* The row of `name` taken where `mask` says (SB_IN bits, SB_IN_FILE), or NULL. */
+static const sb_option *find_row(const char *name, unsigned mask) {
     for (int i = 0; i < sb_option_count; i++)
-        if (!strcmp(sb_options[i].name, name) && (cmd < 0 || (sb_options[i].commands & (1u << cmd))))
-            return &sb_options[i];
+        if (!strcmp(sb_options[i].name, name) && (sb_options[i].commands & mask)) return &sb_options[i];
     return NULL;
 }
+
+const sb_option *sb_option_find(const char *name, int cmd) { return find_row(name, cmd < 0 ? ~0u : SB_IN(cmd)); }
 
 static void *at(sb_cli_opts *o, size_t field) { return (char *)o + field; }
 
@@ -411,9 +413,7 @@ bool sb_cli_parse(sb_cli_opts *o, sb_command cmd, int argc, char **argv, int fir
 
 bool sb_cli_parse_tokens(sb_cli_opts *o, char **tok, int n, const char *where, sb_err *err) {
     for (int i = 0; i < n; i++) {
-        const sb_option *opt = NULL;
-        for (int k = 0; k < sb_option_count && !opt; k++)
-            if (!strcmp(sb_options[k].name, tok[i]) && (sb_options[k].commands & SB_IN_FILE)) opt = &sb_options[k];
+        const sb_option *opt = find_row(tok[i], SB_IN_FILE);
         if (!opt) return sb_fail(err, "%s: '%s' is not a run option", where, tok[i]);
         bool used;
         sb_err e;

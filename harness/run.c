@@ -307,8 +307,6 @@ static void check_shadows_drawn(sb_run *r) {
 /* When the evaluation cannot stand behind its figures: rays and rasterizer
  * disagree on the geometry, or the reference itself is not exact enough. */
 static void check_geometry(sb_run *r) {
-    if (r->s->scene.unused[0])   /* what the file holds and the run does not draw */
-        sb_run_warn(&r->info, "the scene file holds parts nothing draws, left out: %s", r->s->scene.unused);
     long mism = 0, ns = 0, flip = 0, nf = 0;
     for (int i = 0; i < r->done; i++) {
         if (!r->recs[i].evaluated) continue;
@@ -363,6 +361,8 @@ static bool finish_run(sb_run *r) {
         !sb_csv_file_commit(&r->cf, &r->err))
         return fail_run(r, "%s", r->err.msg);
     check_shadows_drawn(r);
+    if (r->s->scene.unused[0])   /* what the file holds and the run does not draw: every run of the scene says it */
+        sb_run_warn(&r->info, "the scene file holds parts nothing draws, left out: %s", r->s->scene.unused);
     check_geometry(r);
     judge_stability(r);
     return true;

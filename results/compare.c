@@ -54,6 +54,7 @@ void sb_compare_run_key(const sb_table *t, int r, char *out, size_t len) {
 typedef struct {
     double center, mean, ci;    /* ci NaN when the metric has none */
     bool ok;
+    bool lower_worse;           /* the column table's SB_LOWER_WORSE */
 } metric_value;
 
 static double num(const char *s) {
@@ -63,9 +64,10 @@ static double num(const char *s) {
 
 /* A metric of row r, read the way the column table says (columns.h). */
 static metric_value metric(const sb_table *t, int r, const char *m) {
-    metric_value v = {NAN, NAN, NAN, false};
+    metric_value v = {NAN, NAN, NAN, false, false};
     sb_metric_cols mc;
     if (!sb_columns_metric(m, &mc)) return v;
+    v.lower_worse = mc.lower_worse;
     v.center = num(sb_table_get(t, r, mc.center));
     v.mean = num(sb_table_get(t, r, mc.mean));
     if (mc.ci[0]) v.ci = num(sb_table_get(t, r, mc.ci));
@@ -160,12 +162,10 @@ int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FIL
         for (int k = 0; k < nm; k++) {
             metric_value a = metric(&A, ra, metrics[k]), b = metric(&B, rb, metrics[k]);
             if (!a.ok || !b.ok) continue;
-            sb_metric_cols mc;
-            sb_columns_metric(metrics[k], &mc);
-            bool worse = mc.lower_worse ? b.center < a.center * (1 - thr) - 1e-12 : b.center > a.center * (1 + thr) + 1e-12;
+            bool worse = b.lower_worse ? b.center < a.center * (1 - thr) - 1e-12 : b.center > a.center * (1 + thr) + 1e-12;
             /* timings also need the confidence intervals of the means apart */
             bool separated = isnan(a.ci) || isnan(b.ci) ||
-                             (mc.lower_worse ? b.mean + b.ci < a.mean - a.ci : b.mean - b.ci > a.mean + a.ci);
+                             (b.lower_worse ? b.mean + b.ci < a.mean - a.ci : b.mean - b.ci > a.mean + a.ci);
             if (!isnan(a.ci) && (unstable_row(&A, ra) || unstable_row(&B, rb))) { /* a timing of an unstable run */
                 shaky++;
                 row(out, o->format, &B, rb, params, metrics[k], a.center, b.center, "UNSTABLE");

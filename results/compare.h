@@ -9,7 +9,7 @@
 typedef enum sb_output_format { SB_OUTPUT_TEXT, SB_OUTPUT_CSV, SB_OUTPUT_MARKDOWN } sb_output_format;
 
 typedef struct sb_compare_opts {
-    const char *metrics[32];    /* default: final_ms, cascade_ms, gpu_ms, shadow_draw_calls, err_rate */
+    const char *metrics[32];    /* none: the column table's SB_USE_COMPARE metrics (SB_USE_PAIR with pair) */
     int nmetrics;
     double threshold_pct;       /* default 5 */
     int format;
