@@ -28,6 +28,7 @@
 #include <stdarg.h>
 
 #include "batch.h"
+#include "site.h"
 #include "table.h"
 
 /* A formatted line into a text buffer. */
@@ -547,67 +548,33 @@ static bool write_csv(const tune *t, sb_err *err) {
     return ok;
 }
 
-/* time against error: every candidate, the front joined, the choice ringed. */
-static bool write_svg(const tune *t, int chosen, sb_err *err) {
-    const double W = 720, H = 440, L = 70, R = 20, T = 30, B = 50;
-    double xmax = 0, ymax = 0;
-    for (int i = 0; i < t->n; i++)
-        if (usable(&t->c[i])) xmax = fmax(xmax, t->c[i].time_ms), ymax = fmax(ymax, t->c[i].err);
-    if (t->cmd->max_err > 0) ymax = fmax(ymax, t->cmd->max_err);
-    else xmax = fmax(xmax, t->cmd->budget_ms);
-    xmax = xmax > 0 ? xmax * 1.08 : 1, ymax = ymax > 0 ? ymax * 1.08 : 1;
-#define X(v) (L + (v) / xmax * (W - L - R))
-#define Y(v) (H - B - (v) / ymax * (H - T - B))
-    sb_csv o = {0};
-    line(&o, "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%g\" height=\"%g\" font-family=\"sans-serif\" "
-                   "font-size=\"12\">", W, H);
-    line(&o, "<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>");
-    line(&o, "<text x=\"%g\" y=\"18\">%s: gpu_ms median against err_rate mean</text>", L, t->s.scene_name);
-    line(&o, "<line x1=\"%g\" y1=\"%g\" x2=\"%g\" y2=\"%g\" stroke=\"black\"/>", L, H - B, W - R, H - B);
-    line(&o, "<line x1=\"%g\" y1=\"%g\" x2=\"%g\" y2=\"%g\" stroke=\"black\"/>", L, T, L, H - B);
-    for (int k = 0; k <= 4; k++) {
-        double xv = xmax * k / 4, yv = ymax * k / 4;
-        line(&o, "<text x=\"%g\" y=\"%g\" text-anchor=\"middle\">%.3g</text>", X(xv), H - B + 16, xv);
-        line(&o, "<text x=\"%g\" y=\"%g\" text-anchor=\"end\">%.3g</text>", L - 4, Y(yv) + 4, yv);
+/* front.html (the report's chart): every candidate measured, the front joined, the choice ringed, the bound
+ * dashed. A build without the charting library says so and writes the rest. */
+static bool write_front(const tune *t, int chosen, bool met, sb_err *err) {
+    if (!sb_site_available()) {
+        sb_log("no front.html: this shadowbench was built without the charting library (libjs-dygraphs)");
+        return true;
     }
-    line(&o, "<text x=\"%g\" y=\"%g\" text-anchor=\"middle\">gpu_ms (median)</text>", (L + W - R) / 2, H - 12);
-    line(&o, "<text x=\"14\" y=\"%g\" transform=\"rotate(-90 14 %g)\" text-anchor=\"middle\">err_rate</text>",
-               (T + H - B) / 2, (T + H - B) / 2);
-    if (t->cmd->max_err > 0)
-        line(&o, "<line x1=\"%g\" y1=\"%g\" x2=\"%g\" y2=\"%g\" stroke=\"red\" stroke-dasharray=\"4 3\"/>", L,
-                   Y(t->cmd->max_err), W - R, Y(t->cmd->max_err));
-    else
-        line(&o, "<line x1=\"%g\" y1=\"%g\" x2=\"%g\" y2=\"%g\" stroke=\"red\" stroke-dasharray=\"4 3\"/>",
-                   X(t->cmd->budget_ms), T, X(t->cmd->budget_ms), H - B);
-    const cand **f = sb_xmalloc(sizeof *f * (size_t)t->n);
-    int nf = 0;
-    for (int i = 0; i < t->n; i++)
-        if (t->c[i].front) f[nf++] = &t->c[i];
-    qsort(f, (size_t)nf, sizeof *f, cmp_time);
-    sb_csv o2 = {0};
-    for (int k = 0; k < nf; k++) line(&o2, "%.1f,%.1f", X(f[k]->time_ms), Y(f[k]->err));
-    for (size_t k = 0; k < o2.len; k++)
-        if (o2.buf[k] == '\n') o2.buf[k] = ' ';
-    line(&o, "<polyline fill=\"none\" stroke=\"#2060c0\" points=\"%s\"/>", o2.len ? o2.buf : "");
-    sb_csv_free(&o2);
-    free(f);
+    sb_site_point *p = sb_xcalloc((size_t)t->n, sizeof *p);
+    int n = 0;
     for (int i = 0; i < t->n; i++) {
         const cand *c = &t->c[i];
         if (!usable(c)) continue;
-        line(&o, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"%d\" fill=\"%s\" fill-opacity=\"0.7\"><title>%s: %.3g ms, "
-                       "err %.3g (%d frames)</title></circle>", X(c->time_ms), Y(c->err), c->front ? 4 : 3,
-                   c->front ? "#2060c0" : "#999999", c->label, c->time_ms, c->err, c->frames);
+        p[n++] = (sb_site_point){.technique = c->spec.tech->name, .label = c->label, .x = c->time_ms, .y = c->err,
+                                 .frames = c->frames, .front = c->front, .chosen = i == chosen};
     }
-    if (chosen >= 0)
-        line(&o, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"8\" fill=\"none\" stroke=\"red\" stroke-width=\"2\"/>",
-                   X(t->c[chosen].time_ms), Y(t->c[chosen].err));
-    line(&o, "</svg>");
-#undef X
-#undef Y
-    char path[4200];
-    snprintf(path, sizeof path, "%s/front.svg", t->dir);
-    bool ok = sb_write_file_atomic(path, o.buf, o.len, err);
-    sb_csv_free(&o);
+    char title[1024], about[1024];
+    snprintf(title, sizeof title, "tune %s along %s, %dx%d: %s %g", t->s.scene_name, t->s.path_name,
+             t->cmd->opts->width, t->cmd->opts->height, t->cmd->max_err > 0 ? "err_rate at most" : "gpu_ms at most",
+             bound_of(t));
+    snprintf(about, sizeof about, "Each point a candidate at the last rung it reached: the median frame time at the "
+             "last rung (the fastest frame at earlier ones) against the mean error rate against the exact reference.");
+    sb_site_front f = {.out = t->dir, .title = title, .about = about, .xlabel = "gpu_ms", .ylabel = "err_rate",
+                       .bound = bound_of(t), .bound_on_x = t->cmd->max_err <= 0,
+                       .chosen_is = met ? "the recommended setting" : "the closest (nothing met the bound)",
+                       .points = p, .n = n};
+    bool ok = sb_site_write_front(&f, err);
+    free(p);
     return ok;
 }
 
@@ -676,7 +643,7 @@ static void print_report(const tune *t, int chosen, bool met) {
     for (int i = 0, shown = 0; i < t->n && shown < 5; i++)
         if (t->c[i].skipped) printf("  skipped %s: %s\n", t->c[i].label, t->c[i].reason), shown++;
     if (chosen >= 0 && met) printf("\nbatch line (pin it in a nightly):\n  @%s %s\n", t->s.scene_name, t->c[chosen].label);
-    printf("\nfront.svg, tune.csv and tune.bench in\n%s\n", t->dir);
+    printf("\nfront.html (open it in a browser), tune.csv and tune.bench in\n%s\n", t->dir);
     free(v);
 }
 
@@ -763,7 +730,7 @@ int sb_tune_main(const sb_tune_cmd *cmd) {
     if (!met && rung >= 0) chosen = closest(&t, rung);
     if (chosen >= 0) t.c[chosen].chosen = true;
     mark_front(&t);
-    bool ok = write_csv(&t, &err) && write_svg(&t, chosen, &err) && write_bench(&t, met ? chosen : -1, &err);
+    bool ok = write_csv(&t, &err) && write_front(&t, chosen, met, &err) && write_bench(&t, met ? chosen : -1, &err);
     if (!ok) fprintf(stderr, "shadowbench: %s\n", err.msg);
     print_report(&t, chosen, met);
     sb_session_close(&t.s);

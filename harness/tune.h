@@ -28,7 +28,7 @@ typedef struct sb_tune_cmd {
 } sb_tune_cmd;
 
 /* Runs the search and prints the recommendation, the Pareto front and a batch
- * line; writes tune.csv, front.svg, tune.bench and each rung's results under
+ * line; writes tune.csv, front.html (the report's chart), tune.bench and each rung's results under
  * OUT/tune-SCENE/<UTC time>/. Returns 0 (a recommendation), 1 (nothing met
  * the bound, or a failure) or 2 (bad input). */
 int sb_tune_main(const sb_tune_cmd *cmd);

@@ -97,12 +97,11 @@ static bool link_or_copy(const char *from, const char *to, sb_err *err) {
     return link(from, to) == 0 || sb_copy_file(from, to, err);   /* same filesystem: no copy */
 }
 
-static const char *const page_kinds[] = {"index", "night", "run", "series"};
-
-static bool write_shells(const char *site, sb_err *err) {
-    for (size_t k = 0; k < SB_COUNT(page_kinds); k++) {
+/* The pages' shells: each loads the assets and calls SB.start(kind); home is the header's link. */
+static bool write_shells(const char *site, const char *const *kinds, size_t nk, const char *home, sb_err *err) {
+    for (size_t k = 0; k < nk; k++) {
         char path[4400], html[2048];
-        snprintf(path, sizeof path, "%s/%s.html", site, page_kinds[k]);
+        snprintf(path, sizeof path, "%s/%s.html", site, kinds[k]);
         int n = snprintf(html, sizeof html,
                          "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n"
                          "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
@@ -111,11 +110,11 @@ static bool write_shells(const char *site, sb_err *err) {
                          "<link rel=\"stylesheet\" href=\"assets/app.css\">\n"
                          "<script src=\"assets/dygraph.min.js\"></script>\n"
                          "<script src=\"assets/app.js\"></script>\n"
-                         "</head><body data-page=\"%s\">\n<header><a href=\"index.html\">shadowbench</a> "
+                         "</head><body data-page=\"%s\">\n<header><a href=\"%s.html\">shadowbench</a> "
                          "<span id=\"crumbs\"></span></header>\n<main id=\"main\"><p>Loading&hellip;</p></main>\n"
                          "<footer>Charts: <a href=\"assets/LICENSE-dygraphs.txt\">dygraphs</a> (MIT).</footer>\n"
                          "<script>SB.start(\"%s\");</script>\n</body></html>\n",
-                         page_kinds[k], page_kinds[k]);
+                         kinds[k], home, kinds[k]);
         if (!sb_write_file_atomic(path, html, (size_t)n, err)) return false;
     }
     return true;
@@ -400,7 +399,9 @@ static bool write_series(sb_history *h, const char *site, char **series, char **
 static bool write_site(sb_history *h, const sb_site_opts *o, bool single, sb_err *err) {
     char path[4400];
     snprintf(path, sizeof path, "%s/data", o->out);
-    if (!sb_mkdir_p(path, err) || !write_assets(o->out, err) || !write_shells(o->out, err)) return false;
+    static const char *const kinds[] = {"index", "night", "run", "series"};
+    if (!sb_mkdir_p(path, err) || !write_assets(o->out, err) || !write_shells(o->out, kinds, SB_COUNT(kinds), "index", err))
+        return false;
     /* changes first: the index lists them and the series pages draw them */
     sb_history_query q = {.recent = o->recent};
     sb_history_change *ch = NULL;
@@ -469,5 +470,42 @@ bool sb_site_write(const sb_site_opts *o, sb_err *err) {
     if (!h) return false;
     bool ok = write_site(h, o, o->dir != NULL, err);
     sb_history_close(h);
+    return ok;
+}
+
+bool sb_site_write_front(const sb_site_front *f, sb_err *err) {
+    if (!sb_site_available())
+        return sb_fail(err, "this shadowbench was built without the charting library (Debian's libjs-dygraphs; "
+                            "scripts/setup installs it)");
+    char path[4400];
+    snprintf(path, sizeof path, "%s/data", f->out);
+    static const char *const kinds[] = {"front"};
+    if (!sb_mkdir_p(path, err) || !write_assets(f->out, err) || !write_shells(f->out, kinds, 1, "front", err))
+        return false;
+    jbuf j = {0};
+    jput(&j, "{\"kind\":\"front\"");
+    jsfield(&j, "title", f->title);
+    jsfield(&j, "about", f->about);
+    jsfield(&j, "xlabel", f->xlabel);
+    jsfield(&j, "ylabel", f->ylabel);
+    jnfield(&j, "bound", f->bound > 0 ? f->bound : NAN);
+    jsfield(&j, "bound_on", f->bound_on_x ? "x" : "y");
+    jsfield(&j, "chosen_is", f->chosen_is ? f->chosen_is : "chosen");
+    jput(&j, ",\"points\":[");
+    for (int i = 0; i < f->n; i++) {
+        const sb_site_point *p = &f->points[i];
+        jput(&j, i ? ",{" : "{");
+        jkey(&j, "technique");
+        jstr(&j, p->technique);
+        jsfield(&j, "label", p->label);
+        jnfield(&j, "x", p->x);
+        jnfield(&j, "y", p->y);
+        jnfield(&j, "frames", p->frames);
+        jput(&j, p->front ? ",\"front\":true" : ",\"front\":false");
+        jput(&j, p->chosen ? ",\"chosen\":true}" : ",\"chosen\":false}");
+    }
+    jput(&j, "]}");
+    bool ok = write_data(f->out, "front.js", &j, err);
+    free(j.buf);
     return ok;
 }

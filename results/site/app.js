@@ -246,29 +246,90 @@ var SB = (function () {
       el("p", { text: "Each point a run (median frame time, mean error rate against the exact reference); the line joins the runs no other run beats on both." })]);
     var scenes = {};
     rows.forEach(function (r) { if (r.status === "ok" && typeof r.err_rate_mean === "number" && typeof r.gpu_ms_median === "number") (scenes[r.scene] = scenes[r.scene] || []).push(r); });
-    Object.keys(scenes).forEach(function (sc) { front(fs, sc, scenes[sc]); });
+    Object.keys(scenes).forEach(function (sc) {
+      front(fs, sc, scenes[sc].map(function (r) {
+        return { technique: r.technique, label: r.technique + (r.params ? ":" + r.params : ""), x: r.gpu_ms_median, y: r.err_rate_mean };
+      }));
+    });
     if (!Object.keys(scenes).length) fs.appendChild(el("p", { text: "No run of this night measured its error." }));
     m.appendChild(fs);
     done();
   }
-  function front(parent, scene, rs) {
+  /* Time against error: each point {technique, label, x, y[, front, chosen]}, a series per technique, the
+   * front joined (the points' own flags, else the points no other beats on both), the chosen one ringed and
+   * a bound (o.bound on o.boundOn "x" or "y") dashed. The night page and tune's front page draw it. */
+  function front(parent, title, pts, o) {
+    o = o || {};
     var techs = [];
-    rs.forEach(function (r) { if (techs.indexOf(r.technique) < 0) techs.push(r.technique); });
-    rs = rs.slice().sort(function (a, b) { return a.gpu_ms_median - b.gpu_ms_median; });
+    pts.forEach(function (p) { if (techs.indexOf(p.technique) < 0) techs.push(p.technique); });
+    pts = pts.slice().sort(function (a, b) { return a.x - b.x || a.y - b.y; });
+    var flagged = pts.some(function (p) { return p.front !== undefined; });
     var best = Infinity, onFront = [];
-    rs.forEach(function (r) { if (r.err_rate_mean < best) { best = r.err_rate_mean; onFront.push(r); } });
-    var data = rs.map(function (r) {
-      var row = [r.gpu_ms_median];
-      techs.forEach(function (t) { row.push(t === r.technique ? r.err_rate_mean : null); });
-      row.push(onFront.indexOf(r) >= 0 ? r.err_rate_mean : null);
+    pts.forEach(function (p) {
+      if (flagged ? p.front : p.y < best) { best = Math.min(best, p.y); onFront.push(p); }
+    });
+    var data = pts.map(function (p) {
+      var row = [p.x];
+      techs.forEach(function (t) { row.push(t === p.technique ? p.y : null); });
+      row.push(onFront.indexOf(p) >= 0 ? p.y : null);
       return row;
     });
     var series = {};
     techs.forEach(function (t) { series[t] = { strokeWidth: 0, drawPoints: true, pointSize: 4 }; });
     series.front = { strokeWidth: 1.5, drawPoints: false, connectSeparatedPoints: true, color: "#888" };
-    chart(parent, data, { labels: ["gpu_ms"].concat(techs, ["front"]), series: series, xlabel: "median frame time (ms)",
-      ylabel: "error rate", legend: "always", highlightCircleSize: 5, axes: { y: { axisLabelWidth: 70 } } }, scene);
-    parent.appendChild(el("p", { "class": "small", text: "front: " + onFront.map(function (r) { return r.technique + (r.params ? ":" + r.params : "") + " " + fmt(r.gpu_ms_median) + " ms, " + fmt(r.err_rate_mean); }).join(" · ") }));
+    var chosen = pts.filter(function (p) { return p.chosen; })[0];
+    var opts = { labels: ["time"].concat(techs, ["front"]), series: series, xlabel: o.xlabel || "median frame time (ms)",
+      ylabel: o.ylabel || "error rate", legend: "always", highlightCircleSize: 5,
+      axes: { y: { axisLabelWidth: 70, axisLabelFormatter: function (v) { return fmt(v, 3); } } },
+      underlayCallback: function (ctx, area, g) {
+        if (typeof o.bound === "number") {   /* the bound, dashed red across the plot */
+          ctx.save();
+          ctx.strokeStyle = "#d00";
+          ctx.setLineDash([5, 4]);
+          ctx.beginPath();
+          if (o.boundOn === "x") { var bx = g.toDomXCoord(o.bound); ctx.moveTo(bx, area.y); ctx.lineTo(bx, area.y + area.h); }
+          else { var by = g.toDomYCoord(o.bound); ctx.moveTo(area.x, by); ctx.lineTo(area.x + area.w, by); }
+          ctx.stroke();
+          ctx.restore();
+        }
+        if (chosen) {
+          ctx.save();
+          ctx.strokeStyle = "#d00";
+          ctx.lineWidth = 2;
+          ctx.beginPath();
+          ctx.arc(g.toDomXCoord(chosen.x), g.toDomYCoord(chosen.y), 9, 0, 2 * Math.PI);
+          ctx.stroke();
+          ctx.restore();
+        }
+      } };
+    /* tune's page: both axes from zero, and far enough to show the bound */
+    if (o.fromZero) {
+      var xs = pts.map(function (p) { return p.x; }), ys = pts.map(function (p) { return p.y; });
+      if (typeof o.bound === "number") (o.boundOn === "x" ? xs : ys).push(o.bound);
+      opts.dateWindow = [0, Math.max.apply(null, xs.concat([0])) * 1.08 || 1];
+      opts.valueRange = [0, Math.max.apply(null, ys.concat([0])) * 1.08 || 1];
+    }
+    chart(parent, data, opts, title);
+    parent.appendChild(el("p", { "class": "small", text: "front: " + onFront.map(function (p) { return p.label + " " + fmt(p.x) + " ms, " + fmt(p.y); }).join(" · ") }));
+  }
+
+  /* ---- tune's search: front.html ---- */
+  function pageFront(d) {
+    var m = document.getElementById("main");
+    m.innerHTML = "";
+    m.appendChild(el("h1", { text: d.title }));
+    m.appendChild(el("p", { text: d.about }));
+    front(m, null, d.points, { xlabel: d.xlabel, ylabel: d.ylabel, bound: d.bound, boundOn: d.bound_on, fromZero: true });
+    m.appendChild(el("p", { "class": "small", text: "Dashed red: the bound. Ringed: " + d.chosen_is + "." }));
+    m.appendChild(table([
+      { name: "setting", get: function (p) { return p.label; } },
+      { name: "time (ms)", get: function (p) { return p.x; }, num: true },
+      { name: "error", get: function (p) { return p.y; }, num: true },
+      { name: "frames", get: function (p) { return p.frames; }, num: true },
+      { name: "front", get: function (p) { return p.front ? "yes" : ""; } },
+      { name: "chosen", get: function (p) { return p.chosen ? "yes" : ""; } },
+    ], d.points, { rowClass: function (p) { return p.chosen ? "improvement" : ""; } }));
+    done();
   }
 
   /* ---- a run ---- */
@@ -368,6 +429,8 @@ var SB = (function () {
         if (!/^[0-9]+$/.test(n || "")) return fail("which night? (night.html?n=ID)");
         load("data/night-" + n + ".js");
         if (k === "run") load("data/frames-" + n + ".js");
+      } else if (k === "front") {
+        load("data/front.js");
       } else if (k === "series") {
         var s = param("s");
         if (!/^[0-9]+$/.test(s || "")) return fail("which series? (series.html?s=ID)");
@@ -382,6 +445,7 @@ var SB = (function () {
         else if (kind === "night") pageNight(got.night);
         else if (kind === "run") pageRun(got.night, got.frames);
         else if (kind === "series") pageSeries(got.series);
+        else if (kind === "front") pageFront(got.front);
       } catch (e) {
         errors.push(String(e && e.stack || e));
         fail("report error: " + e);
