@@ -12,6 +12,12 @@ typedef struct sb_eval_buf {
     unsigned char *rgba;        /* colour, when asked for (images) */
     unsigned char *ref;         /* the reference: 255 lit, 0 shadowed, 128 not evaluated */
     float *pos, *aux;           /* origin-relative position + texels per pixel; normal + cascade */
+    /* the flicker twin's (made on first use): its lookup's visibility and
+       positions, its own depth; flicker (rgb, when rgba is asked for): the
+       points that flipped, black where nothing was compared */
+    unsigned char *twin_vis, *flicker;
+    float *twin_pos, *twin_depth;
+    bool flicker_drawn;         /* flicker holds this frame's */
 } sb_eval_buf;
 
 void sb_eval_buf_init(sb_eval_buf *b, const sb_gpu *g, bool rgba);
@@ -25,6 +31,16 @@ void sb_eval_buf_free(sb_eval_buf *b);
  * camera, shaded light and counters, collected ones included). */
 bool sb_eval_frame(sb_session *s, sb_instance *in, int pf, int n, int replay, int *seq, sb_eval_buf *b, sb_frame *f,
                    sb_error_metrics *m, sb_err *err);
+
+/* After sb_eval_frame of the same frame (b and f as it left them): the
+ * frame's twin, --flicker-dt of path time later, rendered next by the same
+ * instance (its state goes on as in a run), with its camera pass drawing the
+ * frame's camera, so that the frame's points are looked up in the twin's
+ * maps; then the twin's own depth, for which of those points its camera sees.
+ * Fills m's flicker figures (NaN with --flicker-dt 0, or where the
+ * technique's final pass is not a lookup). */
+bool sb_eval_flicker(sb_session *s, sb_instance *in, int pf, int n, int *seq, sb_eval_buf *b, const sb_frame *f,
+                     sb_error_metrics *m, sb_err *err);
 
 /* --overlap (on, or auto on a GPU), before a scene's runs: draws the frames the runs will
  * evaluate once (positions and normals, which every technique rasterizes the

@@ -235,6 +235,7 @@ static int cmd_tune(const cli *c) {
     if (!sb_cli_given(&c->o, "--frames")) o.frames = 33;
     if (!sb_cli_given(&c->o, "--warmup")) o.warmup = 1;
     if (!sb_cli_given(&c->o, "--error-every")) o.error_every = 1;
+    if (!sb_cli_given(&c->o, "--flicker-dt")) o.flicker_dt = 0;   /* tune bounds the error alone */
     if (!sb_cli_given(&c->o, "--seed")) o.seed = 1;
     o.order = SB_ORDER_SHUFFLE;   /* the summary's seed column records the plan's seed */
     sb_run_opts_finish(&o);

@@ -105,6 +105,10 @@ const sb_option sb_options[] = {
     {.name = "--error-every", .kind = SB_OPT_INT, .arg = "K", .max = 1000000, .def = "10", .def_help = "10; tune 1",
      .commands = RENDER, .field = RUN(error_every),
      .help = "shadow error against the exact ray-cast reference on every K-th frame (0 off), untimed"},
+    {.name = "--flicker-dt", .kind = SB_OPT_NUM, .arg = "S", .max = 10, .def = "0.0166667",
+     .def_help = "1/60 s, one display frame at 60 Hz; tune 0", .commands = RENDER, .field = RUN(flicker_dt),
+     .help = "path time from an evaluated frame to its twin, whose shadow maps look the frame's points up again "
+             "(flicker_rate; 0 off)"},
     {.name = "--images", .kind = SB_OPT_INT, .arg = "K", .max = 1000000, .def = "0", .commands = RENDER,
      .field = RUN(images),
      .help = "images of every K-th frame: colour, visibility, reference, error, cascades (0 none)",

@@ -74,12 +74,14 @@ static bool evaluate(sb_session *s, sb_instance *in, int seq, const char *out_di
         }
         sb_frame f;
         sb_frame_rec *r = &recs[pf];
-        ok = sb_eval_frame(s, in, pf, n, sb_instance_history(in), &seq, &b, &f, &r->err, err);
+        ok = sb_eval_frame(s, in, pf, n, sb_instance_history(in), &seq, &b, &f, &r->err, err) &&
+             sb_eval_flicker(s, in, pf, n, &seq, &b, &f, &r->err, err);
         if (ok && s->opts.error_every > 0 && pf % s->opts.error_every == 0) {
             r->evaluated = true;
         }
         if (ok && s->opts.images > 0 && pf % s->opts.images == 0)
-            ok = sb_images_write_frame(dir, run_id, pf, b.w, b.h, b.rgba, b.vis, b.ref, b.pos, b.aux, err);
+            ok = sb_images_write_frame(dir, run_id, pf, b.w, b.h, b.rgba, b.vis, b.ref, b.pos, b.aux, err) &&
+                 (!b.flicker_drawn || sb_images_write_flicker(dir, run_id, pf, b.w, b.h, b.flicker, err));
     }
     sb_eval_buf_free(&b);
     return ok;
@@ -134,6 +136,9 @@ static bool ensure_instance(sb_run *r) {
     if (r->have_instance) return true;
     const sb_run_opts *o = &r->s->opts;
     int frames = (o->warmup < 0 ? SB_WARMUP_AUTO_CAP : o->warmup) + o->frames * (r->keep_instance ? r->capacity / o->frames : 1);
+    /* and the evaluation pass's: per evaluated frame, the frames it replays (sdsm: at most its latency, 2),
+       the frame and its flicker twin (what a technique keeps per frame, sdsm's splits, covers them too) */
+    for (int pf = 0; pf < o->frames; pf++) frames += eval_frame_wanted(o, pf) ? 4 : 0;
     if (!r->calibrated) { /* once per run, before its first frame */
         if (!sb_autobias_choose(r->s, r->spec, &r->used, r->info.auto_params, sizeof r->info.auto_params, NULL, &r->err))
             return fail_run(r, "auto offsets: %s", r->err.msg);

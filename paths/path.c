@@ -340,9 +340,13 @@ sb_camera sb_camera_look(sb_v3 pos, sb_v3 dir, double fov_deg, double aspect, do
 }
 
 sb_camera sb_path_camera(const sb_path *p, int i, int n, double aspect, const sb_scene *s) {
+    return sb_path_camera_at(p, sb_path_progress(i, n) * sb_path_duration(p), aspect, s);
+}
+
+sb_camera sb_path_camera_at(const sb_path *p, double t, double aspect, const sb_scene *s) {
     sb_camera c;
     memset(&c, 0, sizeof c);
-    sb_path_eval(p, sb_path_progress(i, n) * sb_path_duration(p), &c.pos, &c.rot, &c.fov_deg);
+    sb_path_eval(p, t, &c.pos, &c.rot, &c.fov_deg);
     camera_axes(&c);
     c.aspect = aspect;
     c.znear = p->znear;

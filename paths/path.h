@@ -59,6 +59,8 @@ double sb_path_duration(const sb_path *p);
 void sb_path_eval(const sb_path *p, double t, sb_v3 *pos, sb_quat *rot, double *fov_deg);
 /* Frame i of n: the camera, with near/far from the path or derived from the scene. */
 sb_camera sb_path_camera(const sb_path *p, int i, int n, double aspect, const struct sb_scene *scene);
+/* The same at path time t (clamped to the path). */
+sb_camera sb_path_camera_at(const sb_path *p, double t, double aspect, const struct sb_scene *scene);
 /* A camera at pos looking along dir (y up). */
 sb_camera sb_camera_look(sb_v3 pos, sb_v3 dir, double fov_deg, double aspect, double znear, double zfar);
 /* progress of frame i of n in [0,1] */

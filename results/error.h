@@ -22,6 +22,16 @@ typedef struct sb_error_metrics {
      * evaluated pixels: how exact the error figures can be. */
     long geom_samples, geom_mismatches, floor_samples, floor_disagree;
     double geom_mismatch, err_floor;   /* shares; NaN without samples */
+    /* Flicker (eval.c's twin, a short step of path time later, looks the
+     * frame's points up in its own maps): over the evaluated points the twin's
+     * camera also sees, the share whose shadow state changes while the
+     * reference does not (flicker_rate), their mean |visibility change|
+     * (flicker_vis), the share whose reference changes (ref_flicker: a moving
+     * light), and the largest relative change of a cascade split
+     * (split_jitter). NaN: not measured (--flicker-dt 0, or a technique whose
+     * shadows are not a lookup). */
+    double flicker_rate, flicker_vis, ref_flicker, split_jitter;
+    long flicker_points;                /* the points they are over */
     uint64_t rays;                     /* reference rays cast for this frame (0: the answers were reused) */
     double ray_ms;                     /* time in the reference for this frame (casting, or finding the answers) */
     bool reused;                       /* the reference's answers came from the cache */

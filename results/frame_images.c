@@ -49,3 +49,10 @@ bool sb_images_write_frame(const char *dir, const char *run_id, int frame, int w
     if (!ok) sb_result_write_failed();
     return ok;
 }
+
+bool sb_images_write_flicker(const char *dir, const char *run_id, int frame, int w, int h, const unsigned char *rgb,
+                             sb_err *err) {
+    char path[4600];
+    snprintf(path, sizeof path, "%s/%s_f%04d_flicker.png", dir, run_id, frame);
+    return sb_image_write_u8(path, w, h, 3, rgb, err);
+}

@@ -23,6 +23,9 @@ bool sb_image_write_f32(const char *path, int w, int h, int channels, const floa
  * light blue, agreement in grey), cascades.png (cascade 0 red, 1 green,
  * 2 blue, 3 cyan, 4 magenta, 5 orange, 6 violet, 7 white, outside every map
  * yellow) and texel_px.exr (shadow texels per pixel, float). */
+/* RUN_fNNNN_flicker.png: the flicker twin's map of the frame (eval.h: red lit -> shadowed, blue shadowed -> lit). */
+bool sb_images_write_flicker(const char *dir, const char *run_id, int frame, int w, int h, const unsigned char *rgb,
+                             sb_err *err);
 bool sb_images_write_frame(const char *dir, const char *run_id, int frame, int w, int h, const unsigned char *rgba,
                            const unsigned char *vis, const unsigned char *ref, const float *pos, const float *aux,
                            sb_err *err);

@@ -105,7 +105,7 @@ static void raycast_frame(void *state, sb_frame *f) {
 
     sb_stage_begin(f, SB_STAGE_RAYS);
     sb_gpu_readback_eval(g, s->pos, s->aux);
-    sb_eval_view view = {w, h, s->pos, s->aux, sb_v3_sub(f->cam.pos, g->scene->origin), NULL, f->shade_light};
+    sb_eval_view view = {w, h, s->pos, s->aux, sb_frame_eye(f), NULL, f->shade_light};
     int m = sb_ref_points(s->ref, &view, s->pts, s->pix);
     memset(s->vis, 255, (size_t)w * h);
     sb_reference_visibility_light(s->ref, f->shade_light, s->pts, m, s->hits, s->threads);

@@ -33,6 +33,7 @@ static bool final_variant(sb_final_prog *fp, int i, const sb_gpu *g, const char 
     v->u_proj = glGetUniformLocation(v->prog, "u_proj");
     v->u_light = glGetUniformLocation(v->prog, "u_shade_light");
     v->u_color = glGetUniformLocation(v->prog, "u_color");
+    v->u_depth_view = glGetUniformLocation(v->prog, "u_depth_view");
     if (i == 0) return true;
     /* the technique's uniforms reach this variant by copy from v[0]: one only it read would keep
        its default, 0 (and the error be measured on another picture). Refused here, at create. */
@@ -47,7 +48,7 @@ static bool final_variant(sb_final_prog *fp, int i, const sb_gpu *g, const char 
         if (block >= 0 || glGetUniformLocation(fp->v[0].prog, un) >= 0) continue;
         /* the shared pass's own: set on each variant, or bound by the shader (the alpha test's sb_ samplers) */
         bool own = !strncmp(un, "sb_", 3);
-        const char *shared[] = {"u_view", "u_proj", "u_shade_light", "u_color"};
+        const char *shared[] = {"u_view", "u_proj", "u_shade_light", "u_color", "u_depth_view"};
         for (size_t k = 0; k < SB_COUNT(shared); k++) own |= !strcmp(un, shared[k]);
         if (!own)
             return sb_fail(err, "%s: uniform %s is read by the %s variant of the camera pass only: its value would not "
@@ -407,8 +408,13 @@ static void bind_camera_target(const sb_gpu *g, GLenum depth_func, bool depth_wr
     glCullFace(GL_BACK);
 }
 
+sb_v3 sb_frame_eye(const sb_frame *f) {
+    return f->look ? f->look->eye : sb_v3_sub(f->cam.pos, f->gpu->scene->origin);
+}
+
 void sb_zpass(sb_frame *f) {
     const sb_gpu *g = f->gpu;
+    f->look_depth = false;   /* the frame's own camera: a look's pass cannot reuse it */
     bind_camera_target(g, GL_LESS, true);
     glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
     glStencilMask(0xff);
@@ -451,12 +457,17 @@ static void camera_pass(sb_frame *f, const sb_final_prog *fp, GLenum depth_func,
 }
 
 void sb_final_pass(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
+    if (f->look && !f->look_depth) reuse_depth = false;
     camera_pass(f, fp, reuse_depth ? GL_LEQUAL : GL_LESS, !reuse_depth, !reuse_depth);
 }
 
-void sb_gbuffer_pass(sb_frame *f, const sb_final_prog *fp) { camera_pass(f, fp, GL_LEQUAL, true, true); }
+void sb_gbuffer_pass(sb_frame *f, const sb_final_prog *fp) {
+    camera_pass(f, fp, GL_LEQUAL, true, true);
+    f->look_depth = f->look != NULL;
+}
 
 void sb_final_draw(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
+    if (f->look && !f->look_depth) reuse_depth = false;
     draw_scene(f, fp, reuse_depth ? GL_LEQUAL : GL_LESS, !reuse_depth);
 }
 
@@ -464,8 +475,11 @@ static void draw_scene(sb_frame *f, const sb_final_prog *fp, GLenum depth_func, 
     const sb_gpu *g = f->gpu;
     final_targets(f, depth_func, depth_write);
     glBindVertexArray(g->vao);
-    uint32_t n = sb_scene_collect(g->scene, (const double(*)[4])f->frustum, 6, f->scratch);
+    const double(*planes)[4] = (const double(*)[4])(f->look ? f->look->frustum : f->frustum);
+    uint32_t n = sb_scene_collect(g->scene, planes, 6, f->scratch);
     bool culling = true;
+    float depth_view[16];
+    sb_m4_to_float(f->view, depth_view);
     /* opaque draws first, with the variant without the alpha test; then the alpha-tested ones */
     for (int a = 0; a < 2 && fp->v[a].prog; a++) {
         const sb_final_variant *v = &fp->v[2 * f->eval + a];
@@ -475,7 +489,16 @@ static void draw_scene(sb_frame *f, const sb_final_prog *fp, GLenum depth_func, 
         /* the technique set its uniforms on v[0] */
         if (v != &fp->v[0]) sb_gl_links_copy(&v->from_timed, fp->prog, v->prog);
         glUseProgram(v->prog);
-        sb_set_camera_uniforms(f, v->u_view, v->u_proj);
+        if (f->look) {
+            float m[16];
+            sb_m4_to_float(f->look->view, m);
+            glUniformMatrix4fv(v->u_view, 1, GL_FALSE, m);
+            sb_m4_to_float(f->look->proj, m);
+            glUniformMatrix4fv(v->u_proj, 1, GL_FALSE, m);
+        } else {
+            sb_set_camera_uniforms(f, v->u_view, v->u_proj);
+        }
+        if (v->u_depth_view >= 0) glUniformMatrix4fv(v->u_depth_view, 1, GL_FALSE, depth_view);
         glUniform4f(v->u_light, (float)f->shade_light[0], (float)f->shade_light[1], (float)f->shade_light[2],
                     (float)f->shade_light[3]);
         for (uint32_t i = 0; i < n; i++) {
@@ -528,6 +551,7 @@ void sb_gpu_readback_eval(const sb_gpu *g, float *pos, float *aux) {
 }
 
 void sb_final_pass_stencil(sb_frame *f, const sb_final_prog *fp, GLint u_lit, GLuint mask) {
+    if (f->look) f->look_failed = true;   /* the stencil holds the frame's own view's shadows */
     glEnable(GL_STENCIL_TEST);
     glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
     glStencilFunc(GL_EQUAL, 0, mask);

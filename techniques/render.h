@@ -17,6 +17,7 @@ struct sb_reference;
 typedef struct sb_final_variant {
     GLuint prog;
     GLint u_view, u_proj, u_light, u_color;
+    GLint u_depth_view;     /* evaluation variants: the view the lookup's depth is in */
     sb_gl_links from_timed;
 } sb_final_variant;
 
@@ -63,6 +64,19 @@ typedef struct sb_run_ctx {
     const struct sb_reference *reference;   /* the Embree reference, for SB_NEEDS_REFERENCE (else NULL) */
 } sb_run_ctx;
 
+/* The flicker twin's lookup (eval.c): the camera pass of a frame with one
+ * draws this camera instead of the frame's own (the evaluated frame's, a
+ * short step before), so that the same world points are looked up in this
+ * frame's shadow maps, the view depth of the lookup (cascade selection) still
+ * the frame's. Depth a z-pass of the frame's own camera left is not reused;
+ * a pass that cannot look other points up (the stencil-split final pass of
+ * volumes and planar) marks the frame's look_failed. */
+typedef struct sb_look {
+    sb_m4 view, proj;                   /* from origin-relative world */
+    double frustum[6][4];
+    sb_v3 eye;                          /* origin-relative */
+} sb_look;
+
 /* One frame: the camera and everything that varies from frame to frame. */
 typedef struct sb_frame {
     const sb_gpu *gpu;
@@ -84,6 +98,9 @@ typedef struct sb_frame {
     uint32_t *scratch;                  /* draw_count entries, for culling results */
     sb_stage stage;                     /* the stage being recorded (for draw counts) */
     sb_counters counters;
+    const sb_look *look;                /* the flicker twin's lookup (NULL: the frame's own camera) */
+    bool look_depth;                    /* the target's depth is the look camera's (a G-buffer pass drew it) */
+    bool look_failed;                   /* the technique's final pass could not look the points up */
 } sb_frame;
 
 bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *scene, int width, int height, sb_v3 sun,
@@ -117,6 +134,8 @@ void sb_final_pass(sb_frame *f, const sb_final_prog *fp, bool reuse_depth);
 void sb_gbuffer_pass(sb_frame *f, const sb_final_prog *fp);
 /* The same draws without clearing anything (a second pass over the frame). */
 void sb_final_draw(sb_frame *f, const sb_final_prog *fp, bool reuse_depth);
+/* The eye the camera pass draws from (origin-relative): the frame's, or its look's. */
+sb_v3 sb_frame_eye(const sb_frame *f);
 /* Depth-only camera pass into the render target's depth (the z-pass). */
 void sb_zpass(sb_frame *f);
 /* Issues one draw (instanced when instances > 1) with whatever program is

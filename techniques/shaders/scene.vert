@@ -7,12 +7,22 @@ uniform mat4 u_proj;
 out vec3 v_pos;
 out vec3 v_nrm;
 out float v_view_z;
+#ifdef SB_EVAL
+// the view the shadow lookup's depth is taken in: u_view, except in the
+// flicker twin's lookup, where the evaluated frame's points are drawn through
+// its camera (u_view) and looked up as the twin would (its view)
+uniform mat4 u_depth_view;
+#endif
 invariant gl_Position;
 void main() {
     vec4 vp = u_view * vec4(a_pos, 1.0);
     v_pos = a_pos;
     v_nrm = a_nrm;
+#ifdef SB_EVAL
+    v_view_z = -(u_depth_view * vec4(a_pos, 1.0)).z;
+#else
     v_view_z = -vp.z;
+#endif
     gl_Position = u_proj * vp;
     SB_ALPHA_VS();
 }

@@ -116,7 +116,10 @@ static void test_default_metrics_are_the_table_rows(void **st) {
     int nr = sb_columns_default_metrics(SB_USE_REPORT, rep, 32);
     assert_true(nh >= 1 && nr >= 1);
     const char *pair[32];
-    assert_int_equal(sb_columns_default_metrics(SB_USE_PAIR, pair, 32), 2);   /* time and error */
+    int np = sb_columns_default_metrics(SB_USE_PAIR, pair, 32);
+    assert_int_equal(np, 4);   /* time, error, flicker and the splits' jitter */
+    const char *want[] = {"gpu_ms", "err_rate", "flicker_rate", "split_jitter"};
+    for (int k = 0; k < 4; k++) assert_string_equal(pair[k], want[k]);
 }
 
 int main(void) {

@@ -1,0 +1,127 @@
+/* Flicker, measured on real renders (harness/eval.c's twin): on a slow pan
+ * over towers with fixed near and far, a fit that follows the camera
+ * (stable=off) flickers and a texel-snapped one (stable=on) does not; the
+ * exact ray-cast technique never does; a twin at the same instant finds no
+ * flicker in any technique; --flicker-dt 0 measures nothing; the reference
+ * does not change under a still light; pssm's splits do not move on such a
+ * path and sdsm's, which follow the depth buffer, do. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "support.h"
+#include "table.h"
+
+#define SPECS "sm:stable=off sm:stable=on pssm:stable=off pssm:stable=on sdsm raycast volumes"
+#define COMMON "--frames 9 --error-every 2 --size 320x180 --warmup 0 --quiet"
+
+static char g_tmp[64], g_out[65536];
+
+static int setup(void **st) {
+    (void)st;
+    return tmp_folder(g_tmp, sizeof g_tmp, "sbflicker");
+}
+
+static int teardown(void **st) {
+    (void)st;
+    return tmp_remove(g_tmp);
+}
+
+/* Runs the specs along the pan and loads the summary. */
+static void run_pan(const char *extra, const char *sub, sb_table *t) {
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s run towers %s " SPECS " " COMMON " %s --out %s/%s",
+                                test_binary(), test_data("towers-pan.path"), extra, g_tmp, sub), 0);
+    char *nl = strrchr(g_out, '\n');
+    if (nl && nl > g_out && nl[1] == 0) *nl = 0;
+    nl = strrchr(g_out, '\n');
+    summary_table(nl ? nl + 1 : g_out, t);
+    assert_int_equal(t->nrows, 7);
+}
+
+/* A run's cell as a number; NaN when empty. */
+static double cell(const sb_table *t, const char *tech, const char *stable, const char *col) {
+    for (int r = 0; r < t->nrows; r++) {
+        if (strcmp(sb_table_get(t, r, "technique"), tech)) continue;
+        if (stable && !strstr(sb_table_get(t, r, "params"), stable)) continue;
+        const char *v = sb_table_get(t, r, col);
+        return *v ? atof(v) : NAN;
+    }
+    fail_msg("no %s run", tech);
+    return NAN;
+}
+
+static void test_pan(void **st) {
+    (void)st;
+    sb_table t;
+    run_pan("", "pan", &t);
+    double sm_off = cell(&t, "sm", "stable=off", "flicker_rate_mean"), sm_on = cell(&t, "sm", "stable=on", "flicker_rate_mean");
+    double ps_off = cell(&t, "pssm", "stable=off", "flicker_rate_mean"),
+           ps_on = cell(&t, "pssm", "stable=on", "flicker_rate_mean");
+    printf("flicker_rate: sm stable=off %.6g, on %.6g; pssm off %.6g, on %.6g; sdsm %.6g; raycast %.6g\n", sm_off, sm_on,
+           ps_off, ps_on, cell(&t, "sdsm", NULL, "flicker_rate_mean"), cell(&t, "raycast", NULL, "flicker_rate_mean"));
+    assert_true(sm_off > 0 && sm_off >= 10 * sm_on);
+    assert_true(ps_off > 0 && ps_off >= 10 * ps_on);
+    assert_true(cell(&t, "sm", "stable=off", "flicker_vis_mean") > 0);
+    assert_true(cell(&t, "raycast", NULL, "flicker_rate_mean") == 0);
+    assert_true(cell(&t, "raycast", NULL, "flicker_vis_mean") == 0);
+    /* a still light: no point's reference changes */
+    const char *techs[] = {"sm", "pssm", "sdsm", "raycast"};
+    for (size_t k = 0; k < 4; k++) assert_true(cell(&t, techs[k], NULL, "ref_flicker_mean") == 0);
+    /* volumes' shadows are a stencil of its own view, not a lookup: nothing measured, said empty */
+    assert_true(isnan(cell(&t, "volumes", NULL, "flicker_rate_mean")));
+    /* near and far fixed: pssm's splits stay; sdsm's follow the depth buffer */
+    double pj = cell(&t, "pssm", "stable=off", "split_jitter_mean"), sj = cell(&t, "sdsm", NULL, "split_jitter_mean");
+    printf("split_jitter: pssm %.6g, sdsm %.6g\n", pj, sj);
+    assert_true(pj == 0);
+    assert_true(sj > 0);
+    sb_table_free(&t);
+}
+
+static void test_same_instant_and_off(void **st) {
+    (void)st;
+    sb_table t;
+    /* a twin a nanosecond on: the same camera, the same maps, the same answer in every technique */
+    run_pan("--flicker-dt 1e-9", "same", &t);
+    for (int r = 0; r < t.nrows; r++) {
+        const char *tech = sb_table_get(&t, r, "technique"), *v = sb_table_get(&t, r, "flicker_rate_mean");
+        printf("same instant: %s flicker_rate %s, flicker_vis %s\n", tech, v, sb_table_get(&t, r, "flicker_vis_mean"));
+        if (!strcmp(tech, "volumes")) {
+            assert_string_equal(v, "");
+            continue;
+        }
+        assert_true(*v && atof(v) == 0);
+        assert_true(atof(sb_table_get(&t, r, "flicker_vis_mean")) == 0);
+    }
+    sb_table_free(&t);
+    /* off: no twin, no figure (and the error figures as without it) */
+    run_pan("--flicker-dt 0", "off", &t);
+    sb_table on;
+    run_pan("", "on", &on);
+    for (int r = 0; r < t.nrows; r++) {
+        assert_string_equal(sb_table_get(&t, r, "flicker_rate_mean"), "");
+        assert_string_equal(sb_table_get(&t, r, "split_jitter_mean"), "");
+        assert_string_equal(sb_table_get(&t, r, "err_rate_mean"), sb_table_get(&on, r, "err_rate_mean"));
+    }
+    sb_table_free(&t);
+    sb_table_free(&on);
+}
+
+static void test_bad_input(void **st) {
+    (void)st;
+    expect_cli_fail("--flicker-dt -1", "%s run towers auto sm --flicker-dt -1", test_binary());
+    expect_cli_fail("[0, 10]", "%s run towers auto sm --flicker-dt 11", test_binary());
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_pan),
+        cmocka_unit_test(test_same_instant_and_off),
+        cmocka_unit_test(test_bad_input),
+    };
+    return cmocka_run_group_tests_name("flicker", tests, setup, teardown);
+}
