@@ -130,10 +130,10 @@ bool sb_eval_flicker(sb_session *s, sb_instance *in, int pf, int n, int *seq, sb
         int *pix = sb_xmalloc(sizeof(int) * np);
         unsigned char *hit = sb_xmalloc(np);
         int k = sb_ref_points(ref, &view, pts, pix);
-        sb_reference_visibility_light(ref, tw.shade_light, pts, k, hit, s->opts.threads);
+        sb_reference_visibility_view(ref, tw.shade_light, pts, pix, k, b->w, b->h, hit, s->opts.threads);
         ref2 = sb_xmalloc(np);
         memset(ref2, 128, np);
-        for (int i = 0; i < k; i++) ref2[pix[i]] = hit[i] ? 255 : 0;
+        for (int i = 0; i < k; i++) ref2[pix[i]] = hit[i];
         free(pts);
         free(pix);
         free(hit);
@@ -163,7 +163,7 @@ bool sb_eval_flicker(sb_session *s, sb_instance *in, int pf, int n, int *seq, sb
         sb_v3 vz = sb_m4_point(inv_proj, sb_v3_make(0, 0, 2.0 * d - 1.0));   /* the depth's view-space point */
         if (c[3] > -vz.z * 1.01) continue;
         seen++;
-        bool ref_flip = ref2 && ref2[i] != 128 && ref2[i] != b->ref[i];
+        bool ref_flip = ref2 && ref2[i] != 128 && (ref2[i] < 128) != (b->ref[i] < 128);
         if (ref_flip) {
             ref_changed++;
             continue;

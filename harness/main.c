@@ -235,7 +235,7 @@ static int cmd_tune(const cli *c) {
     if (!sb_cli_given(&c->o, "--frames")) o.frames = 33;
     if (!sb_cli_given(&c->o, "--warmup")) o.warmup = 1;
     if (!sb_cli_given(&c->o, "--error-every")) o.error_every = 1;
-    if (!sb_cli_given(&c->o, "--flicker-dt")) o.flicker_dt = 0;   /* tune bounds the error alone */
+    if (!sb_cli_given(&c->o, "--flicker-dt") && c->o.max_flicker <= 0) o.flicker_dt = 0;   /* no flicker bound: no twins */
     if (!sb_cli_given(&c->o, "--seed")) o.seed = 1;
     o.order = SB_ORDER_SHUFFLE;   /* the summary's seed column records the plan's seed */
     sb_run_opts_finish(&o);
@@ -248,7 +248,7 @@ static int cmd_tune(const cli *c) {
         if (!sb_technique_find(name)) path = c->pos[1], first_spec = 2;
     }
     sb_tune_cmd cmd = {.scene = c->pos[0], .path = path, .specs = c->pos + first_spec, .nspecs = c->npos - first_spec,
-                       .techniques = c->o.techniques, .max_err = c->o.max_err, .budget_ms = c->o.budget_ms,
+                       .techniques = c->o.techniques, .max_err = c->o.max_err, .max_flicker = c->o.max_flicker, .budget_ms = c->o.budget_ms,
                        .time_limit_s = c->o.time_limit_s, .opts = &o, .out = c->o.out, .resume = c->o.resume};
     if (cmd.nspecs && cmd.techniques) return bad("tune: give SPECs or --techniques, not both%s", "");
     return sb_tune_main(&cmd);

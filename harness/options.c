@@ -21,7 +21,7 @@ const sb_command_def sb_commands[SB_CMD_COUNT] = {
                         "two results sets, or the runs of one set that differ only in KEY; exit 1 on a regression, "
                         "3 when none but a compared timing is UNSTABLE"},
     [SB_CMD_MERGE] = {"merge", "merge DIR... --out DIR", "merge shard outputs into one results set"},
-    [SB_CMD_TUNE] = {"tune", "tune SCENE [PATH] [SPEC...] --max-err E | --budget-ms B [--techniques LIST] [--time-limit D]",
+    [SB_CMD_TUNE] = {"tune", "tune SCENE [PATH] [SPEC...] --max-err E | --budget-ms B [--max-flicker F] [--techniques LIST] [--time-limit D]",
                      "the cheapest settings within an error bound (or the most accurate within a frame-time budget), "
                      "by successive halving"},
     [SB_CMD_STRESS] = {"stress", "stress [CASE|all [SPEC...]]",
@@ -105,6 +105,14 @@ const sb_option sb_options[] = {
     {.name = "--error-every", .kind = SB_OPT_INT, .arg = "K", .max = 1000000, .def = "10", .def_help = "10; tune 1",
      .commands = RENDER, .field = RUN(error_every),
      .help = "shadow error against the exact ray-cast reference on every K-th frame (0 off), untimed"},
+    {.name = "--sun-size", .kind = SB_OPT_NUM, .arg = "DEG", .max = 10, .def = "0", .def_help = "0, a sun of no size",
+     .commands = RENDER, .field = RUN(sun_size),
+     .help = "the sun's angular diameter: the reference casts rays over its disc (soft shadows; the real sun: 0.53)"},
+    {.name = "--lamp-radius", .kind = SB_OPT_NUM, .arg = "M", .max = INFINITY, .def = "0", .def_help = "0, no size",
+     .commands = RENDER, .field = RUN(lamp_radius),
+     .help = "point and spot lights' radius in scene units: the reference casts rays over it"},
+    {.name = "--ref-samples", .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 4096, .def = "64", .commands = RENDER,
+     .field = RUN(ref_samples), .help = "rays over a sized light at a penumbra point (centre and rim decide the rest)"},
     {.name = "--flicker-dt", .kind = SB_OPT_NUM, .arg = "S", .max = 10, .def = "0.0166667",
      .def_help = "1/60 s, one display frame at 60 Hz; tune 0", .commands = RENDER, .field = RUN(flicker_dt),
      .help = "path time from an evaluated frame to its twin, whose shadow maps look the frame's points up again "
@@ -191,6 +199,9 @@ const sb_option sb_options[] = {
     /* tune */
     {.name = "--max-err", .kind = SB_OPT_NUM, .arg = "E", .max = 1, .open_min = true, .commands = SB_IN(SB_CMD_TUNE),
      .field = F(max_err), .help = "the cheapest settings whose err_rate stays within E"},
+    {.name = "--max-flicker", .kind = SB_OPT_NUM, .arg = "F", .max = 1, .open_min = true, .def_help = "none",
+     .commands = SB_IN(SB_CMD_TUNE), .field = F(max_flicker),
+     .help = "and whose flicker_rate (twins --flicker-dt later) stays within F"},
     {.name = "--budget-ms", .kind = SB_OPT_NUM, .arg = "B", .max = INFINITY, .open_min = true,
      .commands = SB_IN(SB_CMD_TUNE), .field = F(budget_ms),
      .help = "the most accurate settings whose frame time stays within B ms"},

@@ -30,11 +30,17 @@ void sb_run_id(uint64_t scene_hash, uint64_t path_hash, const sb_run_opts *o, co
         double sun[2] = {o->sun_az, o->sun_el};
         h = sb_fnv1a(h, sun, sizeof sun);
     }
+    if (o->sun_size > 0 || o->lamp_radius > 0) {   /* another reference: another run (none: the ids of before) */
+        double size[3] = {o->sun_size, o->lamp_radius, o->ref_samples};
+        h = sb_fnv1a(h, size, sizeof size);
+    }
     snprintf(out, 17, "%016llx", (unsigned long long)h);
 }
 
 void sb_session_run_id(const sb_session *s, const sb_run_spec *spec, char out[17]) {
-    sb_run_id(s->scene.content_hash, s->path.content_hash, &s->opts, spec, out);
+    sb_run_spec as_run = *spec;   /* the id of the run sb_run_begin makes of it */
+    sb_spec_light_size(&as_run, s->opts.sun_size);
+    sb_run_id(s->scene.content_hash, s->path.content_hash, &s->opts, &as_run, out);
 }
 
 static void progress_line(const sb_session *s, int index, int total, const char *tech, int frame, int frames,
@@ -92,7 +98,8 @@ static bool evaluate(sb_session *s, sb_instance *in, int seq, const char *out_di
 struct sb_run {
     sb_session *s;
     bool writes_failed_before;  /* a result write had failed before this run began (sb_result_writes_failed) */
-    const sb_run_spec *spec;
+    const sb_run_spec *spec;    /* &own */
+    sb_run_spec own;            /* the spec as run: a technique's sun_size follows --sun-size (sb_spec_light_size) */
     sb_run_spec used;           /* spec with its "auto" values chosen (autobias.h) */
     bool calibrated;
     sb_summary *sum;
@@ -366,6 +373,14 @@ static bool finish_run(sb_run *r) {
         !sb_csv_file_commit(&r->cf, &r->err))
         return fail_run(r, "%s", r->err.msg);
     check_shadows_drawn(r);
+    /* a size for a light the run does not shade is no size at all: said, not ignored in silence */
+    double light = -1;
+    bool lamp = (r->spec->tech->needs & SB_NEEDS_POINT_LIGHT) ||
+                (sb_params_find(&r->spec->params, "light", &light) && light >= 0);   /* raycast:light=K */
+    if (o->sun_size > 0 && lamp)
+        sb_run_warn(&r->info, "--sun-size %g: this run shades a point or spot light, whose size is --lamp-radius", o->sun_size);
+    if (o->lamp_radius > 0 && !lamp)
+        sb_run_warn(&r->info, "--lamp-radius %g: this run shades the sun, whose size is --sun-size", o->lamp_radius);
     if (r->s->scene.unused[0])   /* what the file holds and the run does not draw: every run of the scene says it */
         sb_run_warn(&r->info, "the scene file holds parts nothing draws, left out: %s", r->s->scene.unused);
     check_geometry(r);
@@ -378,7 +393,9 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
     sb_run *r = sb_xcalloc(1, sizeof *r);
     const sb_run_opts *o = &s->opts;
     r->s = s;
-    r->spec = spec;
+    r->own = *spec;
+    sb_spec_light_size(&r->own, o->sun_size);
+    r->spec = spec = &r->own;
     r->sum = sum;
     r->keep_instance = keep_instance;
     r->t_run = sb_now_ms();

@@ -169,6 +169,7 @@ const sb_reference *sb_session_reference(sb_session *s, sb_err *err) {
         free(r);
         return NULL;
     }
+    sb_reference_set_light_size(r, s->opts.sun_size, s->opts.lamp_radius, s->opts.ref_samples);
     s->ref = r;
     s->ref_cache = sb_ref_cache_new(SB_REF_CACHE_BYTES);
     char file[4200];

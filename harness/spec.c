@@ -101,9 +101,22 @@ bool sb_spec_expand(const char *spec, const char *where, sb_run_spec **runs, int
             int k = rem % axes[a].nvalues;
             rem /= axes[a].nvalues;
             sb_param_set(&rs->params, axes[a].param, &t->params[axes[a].param], axes[a].values[k], t->name, err);
+            rs->params.v[axes[a].param].given = true;
         }
         if (t->check && !check_combination(t, &rs->params, pre, err)) return false;
     }
     *count += total;
     return true;
+}
+
+void sb_spec_light_size(sb_run_spec *rs, double sun_size_deg) {
+    if (sun_size_deg <= 0) return;
+    for (int i = 0; i < rs->params.count; i++) {
+        const sb_param_def *d = rs->params.v[i].def;
+        if (strcmp(d->name, "sun_size") || rs->params.v[i].given) continue;
+        char v[32];
+        snprintf(v, sizeof v, "%g", sun_size_deg);
+        sb_err e;
+        sb_param_set(&rs->params, i, d, v, rs->tech->name, &e);   /* in its range: --sun-size's is sun_size's */
+    }
 }

@@ -63,6 +63,7 @@ typedef struct cand {
     bool skipped, failed;
     char reason[512];
     double time_ms, time_ci, err, err_ci;   /* at its highest rung: gpu_ms median and CI, err_rate mean and CI */
+    double flicker;             /* flicker_rate mean there (NaN: not measured) */
     int frames;                 /* timed frames of that measurement */
     bool front, chosen;
 } cand;
@@ -204,6 +205,12 @@ static double constraint_of(const tune *t, const cand *c) { return t->cmd->max_e
 static double objective_of(const tune *t, const cand *c) { return t->cmd->max_err > 0 ? c->time_ms : c->err; }
 static double bound_of(const tune *t) { return t->cmd->max_err > 0 ? t->cmd->max_err : t->cmd->budget_ms; }
 
+/* The flicker bound, with a slack (a share of it): met when there is none, or the candidate's flicker_rate is
+ * within it (a technique that measures no flicker cannot be vouched for). */
+static bool flicker_ok(const tune *t, const cand *c, double slack) {
+    return t->cmd->max_flicker <= 0 || (!isnan(c->flicker) && c->flicker <= t->cmd->max_flicker * (1 + slack));
+}
+
 static bool measured_at(const cand *c, int rung) { return c->rung == rung && !c->skipped && !c->failed; }
 
 /* Reads the rung's summary back into the candidates. */
@@ -230,6 +237,7 @@ static void read_rung(tune *t, int rung, const char *sum_path) {
             c->time_ci = sb_parse_double(sb_table_get(&tb, r, "gpu_ms_ci95"), &v) ? v : NAN;
             c->err = sb_parse_double(sb_table_get(&tb, r, "err_rate_mean"), &v) ? v : NAN;
             c->err_ci = sb_parse_double(sb_table_get(&tb, r, "err_rate_ci95"), &v) ? v : NAN;
+            c->flicker = sb_parse_double(sb_table_get(&tb, r, "flicker_rate_mean"), &v) ? v : NAN;
             long fr = 0, wu = 0, rep = 1;
             sb_parse_int(sb_table_get(&tb, r, "frames"), &fr);
             sb_parse_int(sb_table_get(&tb, r, "warmup"), &wu);
@@ -401,10 +409,10 @@ static void promote(tune *t, int rung, int keep, double margin) {
             c->alive = false;
             continue;
         }
-        bool maybe = constraint_of(t, c) <= b * (1 + margin);
+        bool maybe = constraint_of(t, c) <= b * (1 + margin) && flicker_ok(t, c, margin);
         rk[m++] = (rank){maybe ? 0 : INT_MAX, maybe ? objective_of(t, c) : constraint_of(t, c), i};
-        within[i] = constraint_of(t, c) <= b;
-        if (constraint_of(t, c) <= b * (1 - margin / 2) &&
+        within[i] = constraint_of(t, c) <= b && flicker_ok(t, c, 0);
+        if (constraint_of(t, c) <= b * (1 - margin / 2) && flicker_ok(t, c, -margin / 2) &&
             (best_clear < 0 || objective_of(t, c) < objective_of(t, &t->c[best_clear])))
             best_clear = i;
     }
@@ -475,7 +483,9 @@ static int choose(tune *t, int rung) {
     const double b = bound_of(t);
     for (int i = 0; i < t->n; i++) {
         const cand *c = &t->c[i];
-        if (!measured_at(c, rung) || isnan(c->err) || isnan(c->time_ms) || constraint_of(t, c) > b) continue;
+        if (!measured_at(c, rung) || isnan(c->err) || isnan(c->time_ms) || constraint_of(t, c) > b ||
+            !flicker_ok(t, c, 0))
+            continue;
         if (best < 0 || objective_of(t, c) < objective_of(t, &t->c[best])) best = i;
     }
     return best;
@@ -516,7 +526,7 @@ static int cmp_time(const void *a, const void *b) {
 static bool write_csv(const tune *t, sb_err *err) {
     sb_csv csv = {0};
     static const char *const head[] = {"candidate", "technique", "spec", "rung", "frames", "status", "reason",
-                                       "gpu_ms_median", "gpu_ms_ci95", "err_rate_mean", "err_rate_ci95", "front",
+                                       "gpu_ms_median", "gpu_ms_ci95", "err_rate_mean", "err_rate_ci95", "flicker_rate_mean", "front",
                                        "recommended", "run_id"};
     for (size_t k = 0; k < SB_COUNT(head); k++) sb_csv_str(&csv, head[k]);
     sb_csv_end_row(&csv);
@@ -536,6 +546,7 @@ static bool write_csv(const tune *t, sb_err *err) {
         sb_csv_num(&csv, c->time_ci);
         sb_csv_num(&csv, c->err);
         sb_csv_num(&csv, c->err_ci);
+        sb_csv_num(&csv, c->flicker);
         sb_csv_str(&csv, c->front ? "yes" : "no");
         sb_csv_str(&csv, c->chosen ? "yes" : "no");
         sb_csv_str(&csv, c->rung >= 0 ? c->run_id[c->rung] : "");
@@ -567,6 +578,10 @@ static bool write_front(const tune *t, int chosen, bool met, sb_err *err) {
     snprintf(title, sizeof title, "tune %s along %s, %dx%d: %s %g", t->s.scene_name, t->s.path_name,
              t->cmd->opts->width, t->cmd->opts->height, t->cmd->max_err > 0 ? "err_rate at most" : "gpu_ms at most",
              bound_of(t));
+    if (t->cmd->max_flicker > 0) {
+        size_t l = strlen(title);
+        snprintf(title + l, sizeof title - l, ", flicker_rate at most %g", t->cmd->max_flicker);
+    }
     snprintf(about, sizeof about, "Each point a candidate at the last rung it reached: the median frame time at the "
              "last rung (the fastest frame at earlier ones) against the mean error rate against the exact reference.");
     sb_site_front f = {.out = t->dir, .title = title, .about = about, .xlabel = "gpu_ms", .ylabel = "err_rate",
@@ -616,13 +631,16 @@ static void print_report(const tune *t, int chosen, bool met) {
         if (t->c[i].front) v[nv++] = &t->c[i];
     }
     qsort(v, (size_t)nv, sizeof *v, cmp_time);
-    printf("%s along %s, %dx%d, %s %g\n", t->s.scene_name, t->s.path_name, cmd->opts->width, cmd->opts->height,
+    printf("%s along %s, %dx%d, %s %g", t->s.scene_name, t->s.path_name, cmd->opts->width, cmd->opts->height,
            cmd->max_err > 0 ? "err_rate at most" : "gpu_ms at most", bound_of(t));
+    if (cmd->max_flicker > 0) printf(", flicker_rate at most %g", cmd->max_flicker);
+    printf("\n");
     if (chosen >= 0) {
         const cand *c = &t->c[chosen];
         printf("%s: %s\n  gpu_ms median %.3g (95%% CI of the mean +-%.2g), err_rate %.4g (+-%.2g), %d frames\n",
                met ? "recommended" : "nothing met the bound; closest", c->label, c->time_ms, c->time_ci, c->err,
                c->err_ci, c->frames);
+        if (cmd->max_flicker > 0) printf("  flicker_rate %.4g\n", c->flicker);
     } else {
         printf("no candidate could be measured\n");
     }

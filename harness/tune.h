@@ -1,12 +1,13 @@
 /* tune.h - `shadowbench tune`: which technique and settings to ship for a
  * scene and path.
  *
- *   shadowbench tune SCENE [PATH] [SPEC...] --max-err E | --budget-ms B
+ *   shadowbench tune SCENE [PATH] [SPEC...] --max-err E | --budget-ms B [--max-flicker F]
  *                    [--techniques LIST] [--time-limit D] [--seed N] [--resume DIR]
  *
  * With --max-err: the cheapest setting (median gpu_ms) whose mean err_rate is
  * at most E; with --budget-ms: the most accurate one whose median gpu_ms is at
- * most B. The candidates are the SPECs' grids, or every technique of LIST (by
+ * most B; with --max-flicker F as well, only settings whose mean flicker_rate
+ * (error.md, Flicker) is at most F meet the bound. The candidates are the SPECs' grids, or every technique of LIST (by
  * default every technique but `none` and `raycast`) over tune's axes (res,
  * cascades, lambda, filter: see tune.c). The search is successive halving:
  * every candidate measured on a few frames of the path, the promising ones on
@@ -22,6 +23,7 @@ typedef struct sb_tune_cmd {
     int nspecs;
     const char *techniques;             /* --techniques a,b,c (NULL: all but none and raycast) */
     double max_err, budget_ms;          /* exactly one > 0 */
+    double max_flicker;                 /* > 0: a setting also keeps its mean flicker_rate within it */
     double time_limit_s;                /* 0: none */
     const sb_run_opts *opts;            /* frames: the full measurement; seed: the plan's */
     const char *out, *resume;           /* results base folder; or a tune folder to resume */

@@ -37,17 +37,21 @@ static void compare(const sb_eval_view *v, const unsigned char *vis, const unsig
     double *res_err = sb_xmalloc(sizeof(double) * (size_t)(m > 0 ? m : 1));
     double *texel = sb_xmalloc(sizeof(double) * (size_t)(m > 0 ? m : 1));
     int nres = 0;
-    long wrong = 0, fshadow = 0, flit = 0;
-    double mae = 0;
+    long wrong = 0, fshadow = 0, flit = 0, pen = 0;
+    double mae = 0, pen_err = 0;
     for (int k = 0; k < m; k++) {
         int i = pix[k];
-        double vv = vis[i] / 255.0;
-        bool tech_shadow = vis[i] < 128, ref_shadow = ref[k] == 0;
-        if (ref_out) ref_out[i] = ref_shadow ? 0 : 255;
+        double vv = vis[i] / 255.0, rv = ref[k] / 255.0;   /* a light with a size: the reference is fractional */
+        bool tech_shadow = vis[i] < 128, ref_shadow = ref[k] < 128;
+        if (ref_out) ref_out[i] = ref[k];
         wrong += tech_shadow != ref_shadow;
         fshadow += tech_shadow && !ref_shadow;
         flit += !tech_shadow && ref_shadow;
-        mae += fabs(vv - (ref_shadow ? 0.0 : 1.0));
+        mae += fabs(vv - rv);
+        if (ref[k] != 0 && ref[k] != 255) {   /* strictly inside the penumbra */
+            pen++;
+            pen_err += fabs(vv - rv);
+        }
         float d = v->pos[4 * (size_t)i + 3];
         if (d > 0) {
             texel[nres] = d;
@@ -60,7 +64,9 @@ static void compare(const sb_eval_view *v, const unsigned char *vis, const unsig
         out->false_shadow = (double)fshadow / m;
         out->false_lit = (double)flit / m;
         out->vis_mae = mae / m;
+        out->penumbra_px = (double)pen / m;
     }
+    out->penumbra_err = pen ? pen_err / pen : NAN;
     out->res_err_mean = out->res_err_p95 = out->texel_px_p95 = NAN;
     if (nres > 0) {
         double sum = 0;
@@ -205,7 +211,7 @@ static void geometry_check(const sb_reference *r, const sb_eval_view *v, const u
     unsigned char *exact = sb_xmalloc((size_t)(np ? np : 1));
     sb_reference_visibility_light(r, v->light, pts, np, exact, threads);
     long disagree = 0;
-    for (int k = 0; k < np; k++) disagree += (exact[k] != 0) != (ref[which[k]] != 0);
+    for (int k = 0; k < np; k++) disagree += (exact[k] < 128) != (ref[which[k]] < 128);
     out->geom_samples = ns;
     out->geom_mismatches = mism;
     out->floor_samples = np;
@@ -308,8 +314,15 @@ void sb_ref_cache_free(sb_ref_cache *c) {
 }
 
 /* Two independent 64-bit hashes of what determines the reference's answers. */
-static void view_key(const sb_eval_view *v, uint64_t key[2]) {
+static void view_key(const sb_reference *r, const sb_eval_view *v, uint64_t key[2]) {
     uint64_t h1 = 0x9e3779b97f4a7c15ULL ^ (uint64_t)v->w << 32 ^ (uint64_t)v->h, h2 = sb_mix64(h1 + 1);
+    if (r && (r->sun_size_deg > 0 || r->lamp_radius > 0)) {   /* the light's size and samples decide the answers too */
+        double size[3] = {r->sun_size_deg, r->lamp_radius, r->samples};
+        uint64_t w[3];
+        memcpy(w, size, sizeof w);
+        h1 ^= sb_hash_words(w, 3);
+        h2 = sb_mix64(h2 ^ h1);
+    }
     double cam[16 + 4 + 3] = {0};
     if (v->inv_view_proj) memcpy(cam, v->inv_view_proj->m, sizeof(double) * 16);
     memcpy(cam + 16, v->light, sizeof(double) * 4);
@@ -458,7 +471,7 @@ static void cast_frame(const sb_reference *r, const sb_eval_view *v, const sb_re
     int n = v->w * v->h;
     memset(e, 0, sizeof *e);
     e->geom_mismatch = e->err_floor = NAN;
-    e->rays = sb_reference_visibility_light(r, v->light, pts, m, ref, threads);
+    e->rays = sb_reference_visibility_view(r, v->light, pts, pix, m, v->w, v->h, ref, threads);
     if (v->inv_view_proj) {
         int *kof = sb_xmalloc(sizeof(int) * (size_t)(n > 0 ? n : 1));
         for (int i = 0; i < n; i++) kof[i] = -1;
@@ -522,7 +535,7 @@ void sb_evaluate_frame(const sb_reference *r, sb_ref_cache *cache, const sb_eval
     int *pix, m = view_points(r, v, &pts, &pix);
     unsigned char *ref = sb_xmalloc((size_t)(m > 0 ? m : 1));
     uint64_t key[2] = {0, 0};
-    if (cache) view_key(v, key);
+    if (cache) view_key(r, v, key);
     /* the reference's answers and the geometry check's figures: kept from an earlier run or the background, or cast */
     sb_error_metrics e;
     if (!cache || !cache_take(cache, key, m, ref, &e)) {
@@ -610,7 +623,7 @@ bool sb_ref_background_start(sb_ref_cache *c, const sb_reference *r, int threads
 
 int sb_ref_background_add(sb_ref_cache *c, const sb_eval_view *v) {
     uint64_t key[2];
-    view_key(v, key);
+    view_key(c->r, v, key);
     size_t bytes = sizeof(float) * 4 * (size_t)v->w * v->h;
     pthread_mutex_lock(&c->mu);
     bool add = c->bg && !job_find(c, key, NULL) && !cache_find(c, key, -1);

@@ -3,7 +3,8 @@
  * Evaluated pixels: not sky, and facing the light (geometric normal · sun > 0).
  * err_rate: share whose binary state (visibility < 0.5 is shadow) differs from
  * the reference, split into false shadow and false light; vis_mae: mean
- * |visibility - reference| (fractional for filtered techniques); resolution
+ * |visibility - reference| (fractional for filtered techniques, and for the
+ * reference of a light with a size); resolution
  * error per pixel: max(-log2(shadow texels per pixel), 0), undersampling only. */
 #pragma once
 #include <stdint.h>
@@ -13,6 +14,10 @@
 typedef struct sb_error_metrics {
     long pixels;                       /* evaluated */
     double err_rate, false_shadow, false_lit, vis_mae;
+    /* a light with a size (--sun-size, --lamp-radius): the share of evaluated
+       pixels the reference puts strictly inside a penumbra, and the mean
+       |visibility - reference| over them (NaN: none) */
+    double penumbra_px, penumbra_err;
     double res_err_mean, res_err_p95, texel_px_p95;   /* NaN when the technique has no map */
     /* One geometry: camera rays through every 2nd pixel of every 2nd row. A
      * sample mismatches when the first surface the ray meets is not where the

@@ -4,6 +4,7 @@
 #include "reference.h"
 
 #include <embree3/rtcore.h>
+#include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
@@ -78,6 +79,13 @@ static uint8_t *triangle_flags(const sb_scene *s) {
     return f;
 }
 
+void sb_reference_set_light_size(sb_reference *r, double sun_size_deg, double lamp_radius, int samples) {
+    r->sun_size_deg = sun_size_deg > 0 ? sun_size_deg : 0;
+    r->sun_tan = r->sun_size_deg > 0 ? tan(r->sun_size_deg * SB_PI / 360) : 0;   /* half the diameter */
+    r->lamp_radius = lamp_radius > 0 ? (float)lamp_radius : 0;
+    r->samples = samples > 0 ? samples : 64;
+}
+
 bool sb_reference_build(sb_reference *r, const sb_scene *s, sb_err *err) {
     memset(r, 0, sizeof *r);
     double t0 = sb_now_ms();
@@ -145,32 +153,117 @@ typedef struct job {
     const float (*to)[3];
     sb_ref_hit *hits;
     int first, count;
+    uint64_t rays;              /* cast by this part (occlusion) */
+    const int *idx;             /* occlusion: the points to answer (NULL: all) */
+    bool hard;                  /* the centre ray alone */
+    bool known;                 /* vis holds the centre rays' answers */
 } job;
 
+/* Whether the ray from point q toward light direction L (unit; a point light: toward target, `far` away)
+ * reaches it: 1 lit, 0 blocked. */
+static int lit_toward(const job *j, ray_ctx *rc, const sb_ref_point *q, const float L[3], float far) {
+    float eps = q->eps;
+    struct RTCRay ray = {.org_x = q->p[0] + (q->n[0] + L[0]) * eps, .org_y = q->p[1] + (q->n[1] + L[1]) * eps,
+                         .org_z = q->p[2] + (q->n[2] + L[2]) * eps, .dir_x = L[0], .dir_y = L[1], .dir_z = L[2],
+                         .tnear = 0, .tfar = far > 0 ? far : 0, .mask = 0xffffffffu};
+    rtcOccluded1((RTCScene)j->r->scene, &rc->ctx, &ray);
+    return ray.tfar == -INFINITY ? 0 : 1;
+}
+
+/* The light's sample (x, y) on its unit disc, seen from q: the direction (and for a lamp the distance) of the
+ * ray toward it. The sun's disc is the cone of tan(half angle) around L; a lamp's is its sphere's disc facing q. */
+static float sample_dir(const job *j, const sb_ref_point *q, const float c[3], const float t[3], const float b[3],
+                        float x, float y, float L[3]) {
+    float far = INFINITY;
+    if (j->point) {
+        float d[3];
+        for (int k = 0; k < 3; k++) d[k] = c[k] + j->r->lamp_radius * (x * t[k] + y * b[k]) - q->p[k];
+        float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        for (int k = 0; k < 3; k++) L[k] = len > 0 ? d[k] / len : 0;
+        return len - 2 * q->eps;
+    }
+    float k_ = (float)j->r->sun_tan;
+    for (int k = 0; k < 3; k++) L[k] = c[k] + k_ * (x * t[k] + y * b[k]);
+    float len = sqrtf(L[0] * L[0] + L[1] * L[1] + L[2] * L[2]);
+    for (int k = 0; k < 3; k++) L[k] /= len;
+    return far;
+}
+
+/* One point's answer toward a sized light, its centre ray's answer known (lit) or cast here (lit < 0):
+ * the 8 rim points first; agreeing, full light or umbra; else the N spiral points. *rays += what it cast. */
+static unsigned char soft_point(const job *j, ray_ctx *rc, const sb_ref_point *q, int lit, uint64_t *rays) {
+    const sb_reference *r = j->r;
+    float L[3] = {j->sun[0], j->sun[1], j->sun[2]}, far = INFINITY;
+    if (j->point) {
+        float d[3] = {j->sun[0] - q->p[0], j->sun[1] - q->p[1], j->sun[2] - q->p[2]};
+        float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        if (len <= 0) return 255;
+        for (int k = 0; k < 3; k++) L[k] = d[k] / len;
+        far = len - 2 * q->eps;
+    }
+    if (lit < 0) {
+        lit = lit_toward(j, rc, q, L, far);
+        ++*rays;
+    }
+    const bool soft = j->point ? r->lamp_radius > 0 : r->sun_tan > 0;
+    if (!soft) return lit ? 255 : 0;
+    /* the light's disc, perpendicular to the direction toward its centre */
+    float t[3], b[3], c[3] = {j->sun[0], j->sun[1], j->sun[2]};
+    float up[3] = {fabsf(L[1]) < 0.9f ? 0.0f : 1.0f, fabsf(L[1]) < 0.9f ? 1.0f : 0.0f, 0};
+    t[0] = up[1] * L[2] - up[2] * L[1], t[1] = up[2] * L[0] - up[0] * L[2], t[2] = up[0] * L[1] - up[1] * L[0];
+    float tl = sqrtf(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+    for (int k = 0; k < 3; k++) t[k] /= tl;
+    b[0] = L[1] * t[2] - L[2] * t[1], b[1] = L[2] * t[0] - L[0] * t[2], b[2] = L[0] * t[1] - L[1] * t[0];
+    bool agree = true;
+    for (int k = 0; k < 8 && agree; k++) {
+        float a = (float)(k * SB_PI / 4), D[3];
+        float fr = sample_dir(j, q, c, t, b, cosf(a), sinf(a), D);
+        agree = lit_toward(j, rc, q, D, fr) == lit;
+        ++*rays;
+    }
+    if (agree) return lit ? 255 : 0;
+    /* a penumbra: N points of a golden-angle spiral over the disc, equal area each */
+    int n = r->samples, on = 0;
+    for (int k = 0; k < n; k++) {
+        float rad = sqrtf((k + 0.5f) / n), a = (float)(k * 2.399963229728653), D[3];
+        float fr = sample_dir(j, q, c, t, b, rad * cosf(a), rad * sinf(a), D);
+        on += lit_toward(j, rc, q, D, fr);
+    }
+    *rays += (uint64_t)n;
+    int v = (int)lrintf(255.0f * on / n);
+    if (v == 128) v = 129;   /* 128 is "not evaluated" in the reference images */
+    return (unsigned char)v;
+}
+
+/* Items [first, first + count): points idx[i] (or i). hard: the centre ray alone; else soft_point, from the
+ * centre answers vis already holds when `known`. */
 static void occlusion(job *j) {
     ray_ctx rc;
     rtcInitIntersectContext(&rc.ctx);
     rc.camera = false;
+    uint64_t rays = 0;
     for (int i = j->first; i < j->first + j->count; i++) {
-        const sb_ref_point *q = &j->pts[i];
-        float eps = q->eps;
-        float L[3] = {j->sun[0], j->sun[1], j->sun[2]}, far = INFINITY;
-        if (j->point) {
-            float d[3] = {j->sun[0] - q->p[0], j->sun[1] - q->p[1], j->sun[2] - q->p[2]};
-            float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-            if (len <= 0) {
-                j->vis[i] = 1;
-                continue;
+        int k = j->idx ? j->idx[i] : i;
+        const sb_ref_point *q = &j->pts[k];
+        if (j->hard) {
+            float L[3] = {j->sun[0], j->sun[1], j->sun[2]}, far = INFINITY;
+            if (j->point) {
+                float d[3] = {j->sun[0] - q->p[0], j->sun[1] - q->p[1], j->sun[2] - q->p[2]};
+                float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                if (len <= 0) {
+                    j->vis[k] = 255;
+                    continue;
+                }
+                for (int c = 0; c < 3; c++) L[c] = d[c] / len;
+                far = len - 2 * q->eps;
             }
-            for (int k = 0; k < 3; k++) L[k] = d[k] / len;
-            far = len - 2 * eps;
+            j->vis[k] = lit_toward(j, &rc, q, L, far) ? 255 : 0;
+            rays++;
+            continue;
         }
-        struct RTCRay ray = {.org_x = q->p[0] + (q->n[0] + L[0]) * eps, .org_y = q->p[1] + (q->n[1] + L[1]) * eps,
-                             .org_z = q->p[2] + (q->n[2] + L[2]) * eps, .dir_x = L[0], .dir_y = L[1], .dir_z = L[2],
-                             .tnear = 0, .tfar = far > 0 ? far : 0, .mask = 0xffffffffu};
-        rtcOccluded1((RTCScene)j->r->scene, &rc.ctx, &ray);
-        j->vis[i] = ray.tfar == -INFINITY ? 0 : 1;
+        j->vis[k] = soft_point(j, &rc, q, j->known ? j->vis[k] >= 128 : -1, &rays);
     }
+    j->rays = rays;
 }
 
 static void first_hits(job *j) {
@@ -213,8 +306,8 @@ static void *work(void *arg) {
     return NULL;
 }
 
-/* Runs `proto` over n items on up to `threads` threads. */
-static void run_jobs(const job *proto, int n, int threads) {
+/* Runs `proto` over n items on up to `threads` threads; the rays the parts cast. */
+static uint64_t run_jobs(const job *proto, int n, int threads) {
     if (threads < 1) threads = 1;
     if (threads > n) threads = n > 0 ? n : 1; /* no idle threads on a small frame */
     pthread_t *th = sb_xmalloc(sizeof *th * (size_t)threads);
@@ -229,8 +322,11 @@ static void run_jobs(const job *proto, int n, int threads) {
     }
     work(&jobs[0]);
     for (int t = 1; t < threads; t++) pthread_join(th[t], NULL);
+    uint64_t rays = 0;
+    for (int t = 0; t < threads; t++) rays += jobs[t].rays;
     free(th);
     free(jobs);
+    return rays;
 }
 
 uint64_t sb_reference_visibility(const sb_reference *r, sb_v3 sun, const sb_ref_point *pts, int n,
@@ -241,10 +337,64 @@ uint64_t sb_reference_visibility(const sb_reference *r, sb_v3 sun, const sb_ref_
 
 uint64_t sb_reference_visibility_light(const sb_reference *r, const double light[4], const sb_ref_point *pts, int n,
                                        unsigned char *vis, int threads) {
+    bool sized = light[3] > 0.5 ? r->lamp_radius > 0 : r->sun_tan > 0;
     job proto = {.r = r, .sun = {(float)light[0], (float)light[1], (float)light[2]}, .point = light[3] > 0.5,
-                 .pts = pts, .vis = vis};
-    run_jobs(&proto, n, threads);
-    return (uint64_t)n;
+                 .pts = pts, .vis = vis, .hard = !sized};
+    return run_jobs(&proto, n, threads);
+}
+
+uint64_t sb_reference_visibility_view(const sb_reference *r, const double light[4], const sb_ref_point *pts,
+                                      const int *pix, int n, int w, int h, unsigned char *vis, int threads) {
+    job proto = {.r = r, .sun = {(float)light[0], (float)light[1], (float)light[2]}, .point = light[3] > 0.5,
+                 .pts = pts, .vis = vis, .hard = true};
+    uint64_t rays = run_jobs(&proto, n, threads);   /* every point's centre ray */
+    bool sized = proto.point ? r->lamp_radius > 0 : r->sun_tan > 0;
+    if (!sized || n == 0) return rays;
+    /* the penumbra from the centre rays' edges: a point whose screen neighbour's centre ray answers otherwise
+       is answered over the light; one found inside a penumbra hands its neighbours on, until none is */
+    int *kof = sb_xmalloc(sizeof(int) * (size_t)w * h);
+    for (size_t i = 0; i < (size_t)w * h; i++) kof[i] = -1;
+    for (int k = 0; k < n; k++) kof[pix[k]] = k;
+    unsigned char *seen = sb_xcalloc((size_t)n, 1);
+    int *batch = sb_xmalloc(sizeof(int) * (size_t)n), *next = sb_xmalloc(sizeof(int) * (size_t)n), nb = 0;
+    for (int k = 0; k < n; k++) {
+        int x = pix[k] % w, y = pix[k] / w;
+        bool edge = false;
+        for (int dy = -1; dy <= 1 && !edge; dy++)
+            for (int dx = -1; dx <= 1 && !edge; dx++) {
+                int xx = x + dx, yy = y + dy;
+                if ((dx || dy) && xx >= 0 && yy >= 0 && xx < w && yy < h && kof[yy * w + xx] >= 0)
+                    edge = vis[kof[yy * w + xx]] != vis[k];
+            }
+        if (edge) seen[k] = 1, batch[nb++] = k;
+    }
+    while (nb > 0) {
+        job soft = proto;
+        soft.hard = false;
+        soft.known = true;
+        soft.idx = batch;
+        rays += run_jobs(&soft, nb, threads);
+        int nn = 0;
+        for (int i = 0; i < nb; i++) {
+            int k = batch[i];
+            if (vis[k] == 0 || vis[k] == 255) continue;   /* full light or umbra: the band ends here */
+            int x = pix[k] % w, y = pix[k] / w;
+            for (int dy = -1; dy <= 1; dy++)
+                for (int dx = -1; dx <= 1; dx++) {
+                    int xx = x + dx, yy = y + dy, q;
+                    if (xx < 0 || yy < 0 || xx >= w || yy >= h || (q = kof[yy * w + xx]) < 0 || seen[q]) continue;
+                    seen[q] = 1;
+                    next[nn++] = q;
+                }
+        }
+        int *tmp = batch;
+        batch = next, next = tmp, nb = nn;
+    }
+    free(kof);
+    free(seen);
+    free(batch);
+    free(next);
+    return rays;
 }
 
 void sb_reference_rays(const sb_reference *r, const float (*from)[3], const float (*to)[3], int n, sb_ref_hit *out,

@@ -12,7 +12,19 @@ typedef struct sb_reference {
     uint8_t *tri;               /* per triangle: SB_REF_* flags (NULL when no triangle needs the filter) */
     double build_ms;
     float eps_scene;            /* a length relative to the scene size, for ray offsets */
+    /* the light's size (sb_reference_set_light_size; 0: a light of no size, one ray a point) */
+    double sun_size_deg, sun_tan;   /* the sun's angular diameter; tan of half of it */
+    float lamp_radius;          /* a point or spot light's radius */
+    int samples;                /* rays over the light at a penumbra point */
 } sb_reference;
+
+/* Gives the light a size: the sun an angular diameter (degrees), point and
+ * spot lights a radius. With a size, a point's visibility is the share of
+ * the light it sees: the centre and 8 points of the rim first; when they all
+ * agree the point is in full light or umbra (those 9 rays), otherwise
+ * `samples` rays toward points of a golden-angle spiral over the light's
+ * disc (equal area each) decide it. Sizes of 0 keep one ray a point. */
+void sb_reference_set_light_size(sb_reference *r, double sun_size_deg, double lamp_radius, int samples);
 
 /* Triangles the rays see as the rasterizer draws them: an open single-sided
  * surface is hit only from the side its front faces (the light's side for a
@@ -38,14 +50,27 @@ typedef struct sb_ref_point {
 float sb_ref_position_eps(const sb_reference *r, const float p[3], float dist);
 
 /* Visibility of the directional light `sun` (unit vector toward it) at each
- * point: 1 lit, 0 shadowed. Runs on `threads` threads; returns the number of
- * rays cast. */
+ * point: 255 lit, 0 shadowed; with a light size (sb_reference_set_light_size)
+ * the lit share of the light in between (never 128, which the reference
+ * images keep for "not evaluated": written 129). Runs on `threads` threads;
+ * returns the number of rays cast. */
 uint64_t sb_reference_visibility(const sb_reference *r, sb_v3 sun, const sb_ref_point *pts, int n,
                                  unsigned char *vis, int threads);
 /* The same toward any light: light[3] 0: xyz toward the sun; 1: xyz a point
  * light's position (origin-relative; rays stop short of it). */
 uint64_t sb_reference_visibility_light(const sb_reference *r, const double light[4], const sb_ref_point *pts, int n,
                                        unsigned char *vis, int threads);
+
+/* The same for a view's points (pix[k]: the pixel of pts[k] in a w x h
+ * frame, as sb_ref_points gives them), with a sized light cheaper: every
+ * point's centre ray first; then only points where the centre rays' answer
+ * changes between screen neighbours, and the neighbours of each point found
+ * inside a penumbra in turn, are answered over the light (its rim, then its
+ * samples), until the penumbra band is closed. A penumbra with no centre-ray
+ * edge in it (an occluder whose hard shadow falls between pixels) is missed.
+ * Without a size: sb_reference_visibility_light. */
+uint64_t sb_reference_visibility_view(const sb_reference *r, const double light[4], const sb_ref_point *pts,
+                                      const int *pix, int n, int w, int h, unsigned char *vis, int threads);
 
 /* The first surface each camera ray from from[i] toward to[i] (origin-relative)
  * meets, seen as the camera pass draws it. */

@@ -108,8 +108,8 @@ static void raycast_frame(void *state, sb_frame *f) {
     sb_eval_view view = {w, h, s->pos, s->aux, sb_frame_eye(f), NULL, f->shade_light};
     int m = sb_ref_points(s->ref, &view, s->pts, s->pix);
     memset(s->vis, 255, (size_t)w * h);
-    sb_reference_visibility_light(s->ref, f->shade_light, s->pts, m, s->hits, s->threads);
-    for (int k = 0; k < m; k++) s->vis[s->pix[k]] = s->hits[k] ? 255 : 0;
+    sb_reference_visibility_view(s->ref, f->shade_light, s->pts, s->pix, m, w, h, s->hits, s->threads);
+    for (int k = 0; k < m; k++) s->vis[s->pix[k]] = s->hits[k];   /* 255 lit, 0 shadowed; a sized light between */
     glBindTexture(GL_TEXTURE_2D, s->tex);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
     glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, w, h, GL_RED, GL_UNSIGNED_BYTE, s->vis);

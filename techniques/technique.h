@@ -71,6 +71,7 @@ typedef struct sb_params {
         double num;         /* INT/FLOAT value, or the enum's choice index (auto: the default) */
         char text[32];      /* canonical text */
         bool automatic;     /* "auto": calibrated per run before it is bound */
+        bool given;         /* written in the spec, not a default */
     } v[SB_MAX_PARAMS];
 } sb_params;
 

@@ -225,7 +225,7 @@ var SB = (function () {
       { name: "status", get: function (r) { return r.status; } },
       { name: "stable", get: function (r) { return r.stable; } },
       num("gpu_ms_median"), num("gpu_ci_pct"), num("final_ms_median"), num("cascade_ms_median"),
-      num("err_rate_mean"), num("draw_calls_mean"), num("shadow_draw_calls_mean"),
+      num("err_rate_mean"), num("flicker_rate_mean"), num("draw_calls_mean"), num("shadow_draw_calls_mean"),
       { name: "warnings / reason", get: function (r) { return (r.reason || "") + (r.warnings || "") + (r.unstable_reason ? " " + r.unstable_reason : ""); } },
     ], rows, {
       rowClass: function (r) { return r.status === "failed" ? "failed" : r.stable === "no" ? "unstable" : r.warnings ? "warned" : ""; },
@@ -243,13 +243,19 @@ var SB = (function () {
       m.appendChild(ps);
     }
     var fs = el("section", { id: "fronts" }, [el("h2", { text: "Time against error, per scene" }),
-      el("p", { text: "Each point a run (median frame time, mean error rate against the exact reference); the line joins the runs no other run beats on both." })]);
+      el("p", { text: "Each point a run (median frame time, mean error rate against the exact reference; beside it, the mean flicker rate of its twins a display frame later); the line joins the runs no other run beats on both." })]);
     var scenes = {};
     rows.forEach(function (r) { if (r.status === "ok" && typeof r.err_rate_mean === "number" && typeof r.gpu_ms_median === "number") (scenes[r.scene] = scenes[r.scene] || []).push(r); });
     Object.keys(scenes).forEach(function (sc) {
+      var label = function (r) { return r.technique + (r.params ? ":" + r.params : ""); };
       front(fs, sc, scenes[sc].map(function (r) {
-        return { technique: r.technique, label: r.technique + (r.params ? ":" + r.params : ""), x: r.gpu_ms_median, y: r.err_rate_mean };
+        return { technique: r.technique, label: label(r), x: r.gpu_ms_median, y: r.err_rate_mean };
       }));
+      /* beside it, flicker: the runs that measured it (a twin a display frame later) */
+      var fl = scenes[sc].filter(function (r) { return typeof r.flicker_rate_mean === "number"; });
+      if (fl.length) front(fs, sc + ": flicker", fl.map(function (r) {
+        return { technique: r.technique, label: label(r), x: r.gpu_ms_median, y: r.flicker_rate_mean };
+      }), { ylabel: "flicker rate" });
     });
     if (!Object.keys(scenes).length) fs.appendChild(el("p", { text: "No run of this night measured its error." }));
     m.appendChild(fs);
@@ -363,7 +369,7 @@ var SB = (function () {
     if (!imgs.length) is.appendChild(el("p", { text: "None: the run was made without --images." }));
     var byFrame = {};
     imgs.forEach(function (n) { var f = n.slice(id.length + 2, id.length + 6); (byFrame[f] = byFrame[f] || []).push(n); });
-    var order = ["color", "vis", "ref", "error", "cascades"];
+    var order = ["color", "vis", "ref", "error", "cascades", "flicker"];
     Object.keys(byFrame).sort().forEach(function (f) {
       var row = el("div", { "class": "imgrow" });
       order.forEach(function (k) {

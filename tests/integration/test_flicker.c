@@ -111,16 +111,38 @@ static void test_same_instant_and_off(void **st) {
     sb_table_free(&on);
 }
 
+/* tune --max-flicker: on the pan, the cheapest setting within the error bound that does not flicker */
+static void test_tune_max_flicker(void **st) {
+    (void)st;
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s tune towers %s 'sm:res=512,1024:stable=off,on' --max-err 0.05 "
+                                "--max-flicker 0.0001 --frames 9 --size 160x90 --quiet --out %s/tune",
+                                test_binary(), test_data("towers-pan.path"), g_tmp), 0);
+    assert_non_null(strstr(g_out, "flicker_rate at most 0.0001"));
+    const char *rec = strstr(g_out, "recommended: ");
+    assert_non_null(rec);
+    char line[256];
+    snprintf(line, sizeof line, "%.*s", (int)strcspn(rec, "\n"), rec);
+    printf("%s\n", line);
+    assert_non_null(strstr(line, "stable=on"));
+    /* without the bound, the same search may take a setting that flickers; with an impossible one, nothing */
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s tune towers %s 'sm:res=512:stable=off' --max-err 0.05 "
+                                "--max-flicker 0.0000001 --frames 9 --size 160x90 --quiet --out %s/tune",
+                                test_binary(), test_data("towers-pan.path"), g_tmp), 1);
+    assert_non_null(strstr(g_out, "nothing met the bound"));
+}
+
 static void test_bad_input(void **st) {
     (void)st;
     expect_cli_fail("--flicker-dt -1", "%s run towers auto sm --flicker-dt -1", test_binary());
     expect_cli_fail("[0, 10]", "%s run towers auto sm --flicker-dt 11", test_binary());
+    expect_cli_fail("--max-flicker 0", "%s tune towers auto sm --max-err 0.1 --max-flicker 0", test_binary());
 }
 
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_pan),
         cmocka_unit_test(test_same_instant_and_off),
+        cmocka_unit_test(test_tune_max_flicker),
         cmocka_unit_test(test_bad_input),
     };
     return cmocka_run_group_tests_name("flicker", tests, setup, teardown);
