@@ -35,7 +35,21 @@ typedef struct {
     char *specs[32];
     int nspecs;
     int line;
+    sb_cli_opts light;          /* the light's size after the specs (--sun-size ...); given[] says which */
 } run_line;
+
+/* The options a run line may carry after its specs: the light's size, which is the run's (a soft-shadow section
+ * beside the hard one in one file); everything else is the file's or the command line's. */
+static const char *const line_options[] = {"--sun-size", "--lamp-radius", "--ref-samples"};
+
+/* The run options of a line's runs: the file's, with the line's light. */
+static sb_run_opts line_opts(const sb_run_opts *file, const run_line *rl) {
+    sb_run_opts o = *file;
+    if (sb_cli_given(&rl->light, "--sun-size")) o.sun_size = rl->light.run.sun_size;
+    if (sb_cli_given(&rl->light, "--lamp-radius")) o.lamp_radius = rl->light.run.lamp_radius;
+    if (sb_cli_given(&rl->light, "--ref-samples")) o.ref_samples = rl->light.run.ref_samples;
+    return o;
+}
 
 static bool line_applies(const run_line *rl, const char *scene) {
     if (!rl->only) return true;
@@ -115,6 +129,29 @@ static bool run_line_of(parse *ps, char **tok, int n) {
         first = 1;
         if (n == 1) ok = sb_fail(ps->err, "%s:%d: '@%s' with no technique spec", ps->file, ps->line, rl.only);
     }
+    int nspec_tok = n;
+    for (int i = first; i < n; i++)
+        if (!strncmp(tok[i], "--", 2)) {
+            nspec_tok = i;
+            break;
+        }
+    if (ok && nspec_tok < n) {   /* the line's light */
+        char where[1100];
+        snprintf(where, sizeof where, "%s:%d", ps->file, ps->line);
+        rl.light.run = ps->b->opts;
+        ok = sb_cli_parse_tokens(&rl.light, tok + nspec_tok, n - nspec_tok, where, ps->err);
+        for (int j = 0; ok && j < sb_option_count; j++) {
+            if (!rl.light.given[j]) continue;
+            bool allowed = false;
+            for (size_t k = 0; k < SB_COUNT(line_options); k++) allowed |= !strcmp(sb_options[j].name, line_options[k]);
+            if (!allowed)
+                ok = sb_fail(ps->err, "%s:%d: %s: after a run line's specs only --sun-size, --lamp-radius and "
+                                      "--ref-samples (the light of its runs); other options go on the defaults line",
+                             ps->file, ps->line, sb_options[j].name);
+        }
+        if (ok && nspec_tok == first) ok = sb_fail(ps->err, "%s:%d: options with no technique spec", ps->file, ps->line);
+    }
+    n = nspec_tok;
     for (int i = first; ok && i < n && rl.nspecs < 32; i++) {
         sb_run_spec *tmp = NULL;
         int nt = 0;
@@ -210,7 +247,11 @@ static void expand_matrix(parse *ps) {
                     br->index = b->nruns++;
                     br->scene = i;
                     br->spec = rs[r];
-                    sb_run_id(sc->scene.content_hash, sc->path.content_hash, &b->opts, &rs[r], br->run_id);
+                    sb_run_opts ro = line_opts(&b->opts, &ps->lines[l]);
+                    br->sun_size = ro.sun_size, br->lamp_radius = ro.lamp_radius, br->ref_samples = ro.ref_samples;
+                    sb_run_spec as_run = rs[r];
+                    sb_spec_light_size(&as_run, ro.sun_size);
+                    sb_run_id(sc->scene.content_hash, sc->path.content_hash, &ro, &as_run, br->run_id);
                     br->cost = run_cost(b, sc, &rs[r]);
                 }
                 free(rs);
@@ -408,20 +449,35 @@ static void run_scenes(sb_batch *b, const bool *selected, const bool *done, int 
         } else {
             fprintf(stderr, "shadowbench: %s\n", err.msg);
         }
-        int n = 0;
-        for (int i = 0; i < b->nruns; i++) {
-            if (b->runs[i].scene != sc || !selected[i] || done[i]) continue;
-            specs[n] = &b->runs[i].spec, index[n++] = b->runs[i].index;
-            if (!open) fail_runs(b, i, s->ctx.renderer, err.msg, sum);
+        /* a group of runs a light: each light's runs together (a soft-shadow section after the hard one),
+           the reference given that light's size before them */
+        bool *taken = sb_xcalloc((size_t)b->nruns, sizeof *taken);
+        for (int first = 0; first < b->nruns; first++) {
+            const sb_batch_run *lead = &b->runs[first];
+            if (lead->scene != sc || !selected[first] || done[first] || taken[first]) continue;
+            int n = 0;
+            for (int i = first; i < b->nruns; i++) {
+                const sb_batch_run *br = &b->runs[i];
+                if (br->scene != sc || !selected[i] || done[i] || taken[i] || br->sun_size != lead->sun_size ||
+                    br->lamp_radius != lead->lamp_radius || br->ref_samples != lead->ref_samples)
+                    continue;
+                taken[i] = true;
+                specs[n] = &b->runs[i].spec, index[n++] = b->runs[i].index;
+                if (!open) fail_runs(b, i, s->ctx.renderer, err.msg, sum);
+            }
+            if (open) {
+                sb_session_set_light_size(s, lead->sun_size, lead->lamp_radius, lead->ref_samples);
+                sb_run_group(s, specs, index, n, dir, sum, k, todo);
+            }
+            k += n;
         }
+        free(taken);
         if (open) {
-            sb_run_group(s, specs, index, n, dir, sum, k, todo);
             sb_session_close_scene(s);
         } else {
             sb_err e;
             if (!sb_summary_flush(sum, &e)) fprintf(stderr, "shadowbench: %s\n", e.msg);
         }
-        k += n;
     }
     free(specs);
     free(index);

@@ -4,7 +4,9 @@
  *   scene NAME FILE [PATH-NAME]     a scene (file or bundled name) and, optionally, its path
  *   path  NAME FILE                 a path (file, bundled name, auto, orbit, FILE.glb#camera=K)
  *   defaults OPTION...              options for every run (--frames 30 --error-every 5 ...)
- *   [@SCENE[,SCENE...]] SPEC...     run lines: glmark2-style specs; comma lists make a grid
+ *   [@SCENE[,SCENE...]] SPEC... [--sun-size DEG] [--lamp-radius M] [--ref-samples N]
+ *                                   run lines: glmark2-style specs; comma lists make a grid;
+ *                                   the options give the line's runs a light with a size
  *
  * A scene runs along the path named in its line, else the path with its own
  * name, else `auto`. Every run line applies to every scene unless it starts
@@ -35,6 +37,8 @@ typedef struct sb_batch_run {
     sb_run_spec spec;
     char run_id[17];
     double cost;                /* estimated work, for balancing shards */
+    double sun_size, lamp_radius;   /* the light of the run (its line's, else the file's) */
+    int ref_samples;
 } sb_batch_run;
 
 typedef struct sb_batch {

@@ -413,6 +413,12 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
         .target_ci = o->target_ci, .scene_triangles = sb_scene_triangles(&s->scene), .load_ms = s->scene.load_ms,
         .calib_ms_before = NAN, .calib_ms_after = NAN, .stable = "", .unstable_reason = "",
     };
+    if (o->sun_size > 0 || o->lamp_radius > 0) {
+        char sun[40] = "", lamp[40] = "";
+        if (o->sun_size > 0) snprintf(sun, sizeof sun, "sun %g deg, ", o->sun_size);
+        if (o->lamp_radius > 0) snprintf(lamp, sizeof lamp, "lamp %g, ", o->lamp_radius);
+        snprintf(r->info.light, sizeof r->info.light, "%s%s%d rays", sun, lamp, o->ref_samples);
+    }
     const char *skip = sb_skip_reason(s, spec->tech, &spec->params);
     if (skip) {
         r->finished = true;

@@ -162,6 +162,13 @@ void sb_session_close(sb_session *s) {
     memset(s, 0, sizeof *s);
 }
 
+void sb_session_set_light_size(sb_session *s, double sun_size, double lamp_radius, int ref_samples) {
+    s->opts.sun_size = sun_size;
+    s->opts.lamp_radius = lamp_radius;
+    s->opts.ref_samples = ref_samples;
+    if (s->ref) sb_reference_set_light_size(s->ref, sun_size, lamp_radius, ref_samples);
+}
+
 const sb_reference *sb_session_reference(sb_session *s, sb_err *err) {
     if (s->ref) return s->ref;
     sb_reference *r = sb_xcalloc(1, sizeof *r);

@@ -55,6 +55,11 @@ typedef struct sb_run_opts {
     uint64_t seed;              /* --seed: shuffle's seed; 0: chosen by sb_run_opts_finish */
 } sb_run_opts;
 
+/* The light's size of the runs that follow (a batch line's): the options and
+ * the reference (when built) take it. */
+struct sb_session;
+void sb_session_set_light_size(struct sb_session *s, double sun_size, double lamp_radius, int ref_samples);
+
 /* The run options are rows of the option table: their defaults, parsing and
  * help are options.h's (sb_run_opts_defaults). */
 /* How the options read a scene file. */

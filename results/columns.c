@@ -216,6 +216,7 @@ static sb_cell r_throttle(const sb_run_row *r, int a) {
 }
 static sb_cell r_warnings(const sb_run_row *r, int a) { (void)a; return text(r->info->warnings); }
 static sb_cell r_auto(const sb_run_row *r, int a) { (void)a; return text(r->info->auto_params); }
+static sb_cell r_light(const sb_run_row *r, int a) { (void)a; return text(r->info->light); }
 static sb_cell r_repeats(const sb_run_row *r, int a) { (void)a; return integer(r->n ? r->info->repeats : 0); }
 static sb_cell r_target_ci(const sb_run_row *r, int a) {
     (void)a;
@@ -295,6 +296,8 @@ static const sb_run_col run_cols[] = {
     RUN("technique", r_text, S_TECHNIQUE, "technique"),
     RUN("params", r_text, S_PARAMS, "every parameter, in table order"),
     RUN("auto_params", r_auto, 0, "the values a run calibrated for its parameters given as auto (bias=auto...)"),
+    RUN("light", r_light, 0, "the reference light's size (--sun-size, --lamp-radius: \"sun 0.53 deg, 64 rays\"); empty: "
+                             "a light of no size, the hard reference"),
     RUN("backend", r_text, S_BACKEND, "egl or osmesa"),
     RUN("renderer", r_text, S_RENDERER, "GL_RENDERER"),
     RUN("timing", r_text, S_TIMING, "queries or sync: the timing mode used"),

@@ -49,6 +49,12 @@ void sb_compare_run_key(const sb_table *t, int r, char *out, size_t len) {
     sorted_params(sb_table_get(t, r, "params"), p, sizeof p);
     snprintf(out, len, "%s|%s|%s|%s", sb_table_get(t, r, "scene"), sb_table_get(t, r, "path"),
              sb_table_get(t, r, "technique"), p);
+    /* a light with a size is another comparison: its runs match their own kind (none: the keys of before) */
+    const char *light = sb_table_get(t, r, "light");   /* "" in a set from before the column */
+    if (*light) {
+        size_t l = strlen(out);
+        snprintf(out + l, len - l, "|%s", light);
+    }
 }
 
 typedef struct {
@@ -159,6 +165,11 @@ int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FIL
         matched++;
         char params[2048];
         sorted_params(sb_table_get(&B, rb, "params"), params, sizeof params);
+        const char *light = sb_table_get(&B, rb, "light");   /* a sized light's runs say so beside their parameters */
+        if (*light) {
+            size_t l = strlen(params);
+            snprintf(params + l, sizeof params - l, " (%s)", light);
+        }
         for (int k = 0; k < nm; k++) {
             metric_value a = metric(&A, ra, metrics[k]), b = metric(&B, rb, metrics[k]);
             if (!a.ok || !b.ok) continue;

@@ -353,6 +353,47 @@ static void test_bad_batch_files(void **st) {
     expect_rejected("scene a plane-box nopath\nnone\n", "bad.bench:1: no path named 'nopath'");
     expect_rejected("scene a /nonexistent.glb\nnone\n", "bad.bench:1: /nonexistent.glb: cannot open");
     expect_rejected("scene a plane-box\n", "no run lines");
+    expect_rejected("scene a plane-box\nsm --frames 3\n", "bad.bench:2: --frames: after a run line's specs only");
+    expect_rejected("scene a plane-box\nsm --sun-size 20\n", "bad.bench:2: --sun-size 20: expected");
+    expect_rejected("scene a plane-box\n--sun-size 2\n", "bad.bench:2: options with no technique spec");
+}
+
+/* A soft-shadow section beside the hard one in one file: the same spec under a sun of no size and of 2 degrees is
+ * two runs, each with its own id, reference and light column; compare matches each with its own kind. */
+static void test_light_lines(void **st) {
+    (void)st;
+    char p[256];
+    snprintf(p, sizeof p, "%s/soft.bench", g_tmp);
+    write_text(p, "scene pb plane-box\n"
+                  "defaults --frames 3 --warmup 0 --size 96x54 --error-every 2 --sun 0,35\n"
+                  "sm:res=512:filter=pcf3 none\n"
+                  "sm:res=512:filter=pcf3,pcss none --sun-size 2 --ref-samples 32\n");
+    assert_int_equal(sh("%s batch %s --out %s/soft --quiet", test_binary(), p, g_tmp), 0);
+    char dir[4096];
+    last_line(dir, sizeof dir);
+    sb_table t;
+    summary_table(dir, &t);
+    assert_int_equal(t.nrows, 5);   /* in matrix order: pcf3, none; pcf3, pcss, none under the sized sun */
+    assert_string_equal(sb_table_get(&t, 0, "light"), "");
+    assert_string_equal(sb_table_get(&t, 1, "light"), "");
+    assert_true(atof(sb_table_get(&t, 0, "penumbra_px_mean")) == 0);
+    for (int r = 2; r < 5; r++) {
+        assert_string_equal(sb_table_get(&t, r, "light"), "sun 2 deg, 32 rays");
+        assert_true(atof(sb_table_get(&t, r, "penumbra_px_mean")) > 0);
+    }
+    /* pcf3 twice (its sun_size, PCSS's light, follows the line's sun too) */
+    assert_non_null(strstr(sb_table_get(&t, 0, "params"), "filter=pcf3:sun_size=0.53"));
+    assert_non_null(strstr(sb_table_get(&t, 2, "params"), "filter=pcf3:sun_size=2"));
+    assert_non_null(strstr(sb_table_get(&t, 3, "params"), "filter=pcss:sun_size=2"));   /* pcss follows the line's sun */
+    /* none twice with the same parameters: told apart by the run id and the light */
+    assert_string_equal(sb_table_get(&t, 1, "params"), sb_table_get(&t, 4, "params"));
+    assert_true(strcmp(sb_table_get(&t, 1, "run_id"), sb_table_get(&t, 4, "run_id")) != 0);
+    sb_table_free(&t);
+    /* each run matched with its own kind: five rows, none against the other light */
+    assert_int_equal(sh("%s compare %s %s --metric err_rate --format csv", test_binary(), dir, dir), 0);
+    int rows = 0;
+    for (const char *q = g_out; (q = strstr(q, ",err_rate,")) != NULL; q++) rows++;
+    assert_int_equal(rows, 5);
 }
 
 int main(void) {
@@ -363,6 +404,7 @@ int main(void) {
         cmocka_unit_test(test_compare_exit_codes),
         cmocka_unit_test(test_compare_real_runs_and_pairs),
         cmocka_unit_test(test_bad_batch_files),
+        cmocka_unit_test(test_light_lines),
         cmocka_unit_test(test_report),
     };
     return cmocka_run_group_tests_name("batch", tests, setup, teardown);
