@@ -362,7 +362,10 @@ static bool finish_run(sb_run *r) {
     if (r->failed) return false;
     if (o->error_every > 0 || o->images > 0) {
         if (!ensure_instance(r)) return false;
-        if (!evaluate(r->s, &r->in, r->seq, r->out_dir, r->run_id, r->recs, &r->err)) {
+        double t0 = sb_now_ms();
+        bool evaluated = evaluate(r->s, &r->in, r->seq, r->out_dir, r->run_id, r->recs, &r->err);
+        r->info.eval_s = (sb_now_ms() - t0) / 1e3;
+        if (!evaluated) {
             r->interrupted = sb_interrupted() != 0;
             return fail_run(r, "%s", r->err.msg);
         }
@@ -411,7 +414,7 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
         .order = sb_order_name(o->order), .seed = o->order == SB_ORDER_SHUFFLE ? o->seed : 0,
         .reason = "", .frames = o->frames, .warmup = o->warmup, .width = o->width, .height = o->height,
         .target_ci = o->target_ci, .scene_triangles = sb_scene_triangles(&s->scene), .load_ms = s->scene.load_ms,
-        .calib_ms_before = NAN, .calib_ms_after = NAN, .stable = "", .unstable_reason = "",
+        .calib_ms_before = NAN, .calib_ms_after = NAN, .eval_s = NAN, .stable = "", .unstable_reason = "",
     };
     if (o->sun_size > 0 || o->lamp_radius > 0) {
         char sun[40] = "", lamp[40] = "";

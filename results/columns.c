@@ -228,6 +228,7 @@ static sb_cell r_gpu_ci(const sb_run_row *r, int a) {
 }
 static sb_cell r_load_ms(const sb_run_row *r, int a) { (void)a; return number(r->info->load_ms); }
 static sb_cell r_wall_s(const sb_run_row *r, int a) { (void)a; return number(r->info->run_wall_s); }
+static sb_cell r_eval_s(const sb_run_row *r, int a) { (void)a; return number(r->info->eval_s); }
 static sb_cell r_harness_share(const sb_run_row *r, int a) {
     (void)a;
     const sb_run_info *in = r->info;
@@ -321,6 +322,8 @@ static const sb_run_col run_cols[] = {
     RUN("scene_triangles", r_int, I_SCENE_TRIS, "triangles in the scene"),
     RUN_METRIC("load_ms", r_load_ms, 0, "ms", "scene load time"),
     RUN_METRIC("run_wall_s", r_wall_s, 0, "s", "wall time of the run"),
+    RUN_METRIC("eval_s", r_eval_s, 0, "s",
+               "wall time of the untimed evaluation pass: its frames, their flicker twins, the reference"),
     RUN_METRIC("harness_share", r_harness_share, 0, "share", "share of the run's wall time outside rendered frames"),
     RUN("throttle_reasons", r_throttle, 0, "clock event (throttle) reasons seen in the measured frames (NVML)"),
     RUN("error_frames", r_error_frames, 0, "frames evaluated against the reference"),
