@@ -120,7 +120,7 @@ typedef struct {
 
 static void idx_table_init(idx_table *t, size_t n) {
     size_t cap = 16;
-    while (cap < 2 * n) cap *= 2;
+    while (cap < n + n / 2) cap *= 2;   /* at most 2/3 full: half the memory of 1/2, fewer pages to fault in */
     t->slot = sb_xmalloc(cap * sizeof(uint32_t));
     memset(t->slot, 0xff, cap * sizeof(uint32_t));
     t->mask = cap - 1;
@@ -141,7 +141,9 @@ static bool prim_closed(const sb_prim_desc *p) {
         const double *q = p->positions + 3 * (size_t)v;
         uint64_t b[3];
         memcpy(b, q, sizeof b);
-        for (uint64_t h = sb_hash_words(b, 3) & w.mask;; h = (h + 1) & w.mask) {
+        /* one mix of the three words multiplied apart (a probe per vertex is the cost here) */
+        uint64_t hb = sb_mix64(b[0] * 0x9e3779b97f4a7c15u ^ b[1] * 0xc2b2ae3d27d4eb4fu ^ b[2] * 0x165667b19e3779f9u);
+        for (uint64_t h = hb & w.mask;; h = (h + 1) & w.mask) {
             uint32_t o = w.slot[h];
             if (o == UINT32_MAX) {
                 w.slot[h] = id[v] = v;
@@ -231,15 +233,20 @@ void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p) {
     d->closed = !p->double_sided && (p->closed_known ? p->closed_known == 2 : prim_closed(p));
     d->material = p->material;
     d->node = p->node;
-    /* its box, while its positions are at hand (chunking gives its pieces their own) */
+    /* its box, while its positions are at hand (chunking gives its pieces their own): over the vertices its
+       triangles use, each once (an index is read three times a vertex or so, a position once) */
     double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-    for (uint32_t i = 0; i < p->index_count; i++) {
-        const double *q = p->positions + 3 * (size_t)p->indices[i];
+    uint8_t *used = sb_xcalloc(p->vertex_count ? p->vertex_count : 1, 1);
+    for (uint32_t i = 0; i < p->index_count; i++) used[p->indices[i]] = 1;
+    for (uint32_t v = 0; v < p->vertex_count; v++) {
+        if (!used[v]) continue;
+        const double *q = p->positions + 3 * (size_t)v;
         for (int k = 0; k < 3; k++) {
             lo[k] = q[k] < lo[k] ? q[k] : lo[k];
             hi[k] = q[k] > hi[k] ? q[k] : hi[k];
         }
     }
+    free(used);
     d->box = (sb_aabb){{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
 }
 
@@ -495,6 +502,7 @@ static inline int64_t round_key(double x) { return x >= 0 ? (int64_t)(x + 0.5) :
 typedef struct {
     uint64_t *slot;
     uint64_t mask;
+    uint32_t last;              /* the group found or made last (consecutive triangles often share it) */
 } group_table;
 
 static void group_table_put(group_table *t, uint64_t h, uint32_t g) {
@@ -512,10 +520,19 @@ static uint64_t key_hash(const int64_t key[4]) {
 /* The group of key in (*g)[0..*ng), added (with triangle t and its area) when new; returns its index. */
 static uint32_t group_of(group_table *tab, plane_group **g, uint32_t *ng, uint32_t *gcap, const int64_t key[4],
                          uint32_t t, double area, uint32_t *next) {
+    if (*ng > 0 && tab->last < *ng && !memcmp((*g)[tab->last].key, key, 4 * sizeof(int64_t))) {
+        plane_group *x = &(*g)[tab->last];   /* the group of the triangle before: a quad's two halves, a box's face */
+        if (next) next[x->tail] = t;
+        x->tail = t;
+        x->area += area;
+        x->count++;
+        return x->index;
+    }
     uint64_t h = key_hash(key);
     for (uint64_t i = h & tab->mask; tab->slot[i]; i = (i + 1) & tab->mask)
         if (tab->slot[i] >> 32 == h >> 32 && !memcmp((*g)[(uint32_t)tab->slot[i] - 1].key, key, 4 * sizeof(int64_t))) {
             plane_group *x = &(*g)[(uint32_t)tab->slot[i] - 1];
+            tab->last = x->index;
             if (next) next[x->tail] = t;
             x->tail = t;
             x->area += area;
@@ -531,6 +548,7 @@ static uint32_t group_of(group_table *tab, plane_group **g, uint32_t *ng, uint32
         for (uint32_t q = 0; q < *ng; q++) group_table_put(tab, key_hash((*g)[q].key), q);
     }
     group_table_put(tab, h, *ng);
+    tab->last = *ng;
     return (*ng)++;
 }
 
@@ -540,9 +558,10 @@ static double tri_plane(const sb_scene *s, uint32_t t, sb_v3 *n, double *d) {
                 *c = sb_vertex(s, s->indices[3 * t + 2]);
     sb_v3 x = sb_v3_cross(sb_v3_make(b[0] - a[0], b[1] - a[1], b[2] - a[2]),
                           sb_v3_make(c[0] - a[0], c[1] - a[1], c[2] - a[2]));
-    double area = 0.5 * sb_v3_len(x);
-    if (!(area > 0)) return 0;
-    *n = sb_v3_norm(x);
+    double len = sb_v3_len(x);
+    if (!(len > 0)) return 0;
+    *n = sb_v3_scale(x, 1.0 / len);   /* one square root a triangle */
+    double area = 0.5 * len;
     *d = -(n->x * a[0] + n->y * a[1] + n->z * a[2]);
     return area;
 }
@@ -558,7 +577,7 @@ void sb_scene_find_planes(sb_scene *s) {
     double *dist = sb_xmalloc(sizeof(double) * ntri), *areas = sb_xmalloc(sizeof(double) * ntri);
     plane_group *ngrp = NULL;
     uint32_t nn = 0, ncap = 0;
-    group_table tab = {sb_xcalloc(1024, sizeof(uint64_t)), 1023};
+    group_table tab = {sb_xcalloc(1024, sizeof(uint64_t)), 1023, 0};
     for (uint32_t t = 0; t < ntri; t++) {
         sb_v3 n;
         double d, area = tri_plane(s, t, &n, &d);
@@ -575,7 +594,7 @@ void sb_scene_find_planes(sb_scene *s) {
     uint32_t *next = sb_xmalloc(sizeof(uint32_t) * ntri);
     plane_group *g = NULL;
     uint32_t ng = 0, gcap = 0;
-    tab = (group_table){sb_xcalloc(1024, sizeof(uint64_t)), 1023};
+    tab = (group_table){sb_xcalloc(1024, sizeof(uint64_t)), 1023, 0};
     for (uint32_t t = 0; t < ntri; t++) {
         next[t] = UINT32_MAX;
         if (normal_of[t] == UINT32_MAX || ngrp[normal_of[t]].area < 0.1 * face) continue;

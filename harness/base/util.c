@@ -274,15 +274,19 @@ static inline uint64_t rotl64(uint64_t x, int r) { return x << r | x >> (64 - r)
  * per multiply. */
 uint64_t sb_hash_bytes(uint64_t h, const void *data, size_t n) {
     const unsigned char *p = data;
-    uint64_t v[4] = {h ^ 0x9e3779b97f4a7c15u, h + 0xc2b2ae3d27d4eb4fu, h ^ 0x165667b19e3779f9u, h - 0x27d4eb2f165667c5u};
+    /* four lanes in registers (the same sums as an array of four, kept out of memory) */
+    uint64_t v0 = h ^ 0x9e3779b97f4a7c15u, v1 = h + 0xc2b2ae3d27d4eb4fu, v2 = h ^ 0x165667b19e3779f9u,
+             v3 = h - 0x27d4eb2f165667c5u;
     size_t i = 0;
-    for (; i + 32 <= n; i += 32)
-        for (int k = 0; k < 4; k++) {
-            uint64_t w;
-            memcpy(&w, p + i + 8 * (size_t)k, 8);
-            v[k] = rotl64(v[k] + w * 0xc2b2ae3d27d4eb4fu, 31) * 0x9e3779b97f4a7c15u;
-        }
-    uint64_t r = sb_mix64(v[0]) ^ rotl64(sb_mix64(v[1]), 17) ^ rotl64(sb_mix64(v[2]), 31) ^ rotl64(sb_mix64(v[3]), 47);
+    for (; i + 32 <= n; i += 32) {
+        uint64_t w[4];
+        memcpy(w, p + i, 32);
+        v0 = rotl64(v0 + w[0] * 0xc2b2ae3d27d4eb4fu, 31) * 0x9e3779b97f4a7c15u;
+        v1 = rotl64(v1 + w[1] * 0xc2b2ae3d27d4eb4fu, 31) * 0x9e3779b97f4a7c15u;
+        v2 = rotl64(v2 + w[2] * 0xc2b2ae3d27d4eb4fu, 31) * 0x9e3779b97f4a7c15u;
+        v3 = rotl64(v3 + w[3] * 0xc2b2ae3d27d4eb4fu, 31) * 0x9e3779b97f4a7c15u;
+    }
+    uint64_t r = sb_mix64(v0) ^ rotl64(sb_mix64(v1), 17) ^ rotl64(sb_mix64(v2), 31) ^ rotl64(sb_mix64(v3), 47);
     for (; i < n; i++) r = (r ^ p[i]) * 1099511628211ull;
     return sb_mix64(r ^ (uint64_t)n);
 }
