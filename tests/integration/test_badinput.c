@@ -15,17 +15,8 @@
 
 #include <sys/stat.h>
 
-static char g_tmp[64];
 
-static int setup(void **st) {
-    (void)st;
-    return tmp_folder(g_tmp, sizeof g_tmp, "sbbad");
-}
-
-static int teardown(void **st) {
-    (void)st;
-    return tmp_remove(g_tmp);
-}
+SB_TEST_SCRATCH("sbbad")
 
 static void test_truncated_glb(void **st) {
     (void)st;

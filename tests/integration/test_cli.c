@@ -18,20 +18,11 @@
 #include "support.h"
 #include "table.h"
 
-static char g_tmp[64];
 static char g_out[16384];
 
 #define sh(...) run_logged(g_out, sizeof g_out, __VA_ARGS__)
 
-static int setup(void **st) {
-    (void)st;
-    return tmp_folder(g_tmp, sizeof g_tmp, "sbcli");
-}
-
-static int teardown(void **st) {
-    (void)st;
-    return tmp_remove(g_tmp);
-}
+SB_TEST_SCRATCH("sbcli")
 
 /* Splits a CSV line without quotes into fields (test data has none in these columns). */
 static int fields(char *line, char **out, int max) {

@@ -16,20 +16,11 @@
 #include "support.h"
 #include "table.h"
 
-static char g_tmp[64];
 static char g_out[16384];
 
 #define sh(...) run_logged(g_out, sizeof g_out, __VA_ARGS__)
 
-static int setup(void **st) {
-    (void)st;
-    return tmp_folder(g_tmp, sizeof g_tmp, "sbfeat");
-}
-
-static int teardown(void **st) {
-    (void)st;
-    return tmp_remove(g_tmp);
-}
+SB_TEST_SCRATCH("sbfeat")
 
 /* The first line of the last command's output: the results folder. */
 static void out_dir(char *dir, size_t len) {

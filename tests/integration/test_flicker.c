@@ -20,17 +20,9 @@
 #define SPECS "sm:stable=off sm:stable=on pssm:stable=off pssm:stable=on sdsm raycast volumes"
 #define COMMON "--frames 9 --error-every 2 --size 320x180 --warmup 0 --quiet"
 
-static char g_tmp[64], g_out[65536];
+static char g_out[65536];
 
-static int setup(void **st) {
-    (void)st;
-    return tmp_folder(g_tmp, sizeof g_tmp, "sbflicker");
-}
-
-static int teardown(void **st) {
-    (void)st;
-    return tmp_remove(g_tmp);
-}
+SB_TEST_SCRATCH("sbflicker")
 
 /* Runs the specs along the pan and loads the summary. */
 static void run_pan(const char *extra, const char *sub, sb_table *t) {

@@ -21,17 +21,9 @@
 #define SUN_AZ 0.0    /* toward +z: the shadow runs along -z, toward the fixed camera */
 #define SUN_EL 35.0
 
-static char g_tmp[64], g_out[65536];
+static char g_out[65536];
 
-static int setup(void **st) {
-    (void)st;
-    return tmp_folder(g_tmp, sizeof g_tmp, "sbsoft");
-}
-
-static int teardown(void **st) {
-    (void)st;
-    return tmp_remove(g_tmp);
-}
+SB_TEST_SCRATCH("sbsoft")
 
 /* plane-box from the fixed camera under the test's sun of `size` degrees; frame 0 with `spec`. */
 static sb_v3 g_origin;   /* the scene's origin: pos is relative to it */

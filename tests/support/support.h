@@ -88,3 +88,15 @@ void copy_bundled(const char *name, const char *dst);
 int tmp_folder(char *dir, size_t len, const char *prefix);
 /* Removes the folder and everything in it; 0 on success. */
 int tmp_remove(const char *dir);
+/* A test file's scratch folder g_tmp: made by its group's setup, removed with
+ * everything in it by its teardown (cmocka_run_group_tests(..., setup, teardown)). */
+#define SB_TEST_SCRATCH(prefix)                                                          \
+    static char g_tmp[64];                                                               \
+    static int setup(void **st) {                                                        \
+        (void)st;                                                                        \
+        return tmp_folder(g_tmp, sizeof g_tmp, prefix);                                  \
+    }                                                                                    \
+    static int teardown(void **st) {                                                     \
+        (void)st;                                                                        \
+        return tmp_remove(g_tmp);                                                        \
+    }

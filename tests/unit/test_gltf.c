@@ -16,17 +16,8 @@
 #include "json.h"
 #include "support.h"
 
-static char g_tmp[64];
 
-static int setup(void **st) {
-    (void)st;
-    return tmp_folder(g_tmp, sizeof g_tmp, "sbgltf");
-}
-
-static int teardown(void **st) {
-    (void)st;
-    return tmp_remove(g_tmp);
-}
+SB_TEST_SCRATCH("sbgltf")
 
 static const char *tmp_file(const char *name) {
     static char buf[4][256];
