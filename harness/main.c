@@ -19,6 +19,7 @@
 #include "table.h"
 #include "tune.h"
 #include "options.h"
+#include "pathcheck.h"
 #include "version.h"
 
 
@@ -126,18 +127,53 @@ static int cmd_path(const cli *c) {
         if (have_scene) sb_scene_free(&scene);
         return bad_file(&err);
     }
-    printf("frame,progress,t,px,py,pz,qx,qy,qz,qw,fov,near,far\n");
     int n = c->o.run.frames;
     double aspect = (double)c->o.run.width / c->o.run.height;
+    /* with a scene: each camera checked against it (pathcheck.h) */
+    sb_path_frame *check = NULL;
+    int flagged = 0;
+    if (have_scene) {
+        sb_reference ref;
+        if (!sb_reference_build(&ref, &scene, &err)) {
+            fprintf(stderr, "shadowbench: %s\n", err.msg);
+            sb_path_free(&p);
+            sb_scene_free(&scene);
+            return SB_EXIT_FAILED;
+        }
+        check = sb_xmalloc(sizeof *check * (size_t)n);
+        flagged = sb_path_check(&ref, &scene, &p, n, aspect, check, c->o.run.threads);
+        sb_reference_free(&ref);
+    }
+    if (flagged && c->o.run.strict_path) {   /* refused: the one-line error, no table */
+        char text[2048];
+        sb_path_check_text(check, n, text, sizeof text);
+        fprintf(stderr, "shadowbench: %s: %s (--strict-path)\n", c->pos[0], text);
+        free(check);
+        sb_path_free(&p);
+        sb_scene_free(&scene);
+        return SB_EXIT_BAD_INPUT;
+    }
+    printf("frame,progress,t,px,py,pz,qx,qy,qz,qw,fov,near,far%s\n", check ? ",verdict,node" : "");
     for (int i = 0; i < n; i++) {
         sb_camera cam = sb_path_camera(&p, i, n, aspect, have_scene ? &scene : NULL);
-        printf("%d,%.6g,%.6g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g,%.6g\n", i, sb_path_progress(i, n),
+        printf("%d,%.6g,%.6g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g,%.6g", i, sb_path_progress(i, n),
                sb_path_progress(i, n) * sb_path_duration(&p), cam.pos.x, cam.pos.y, cam.pos.z, cam.rot.x, cam.rot.y,
                cam.rot.z, cam.rot.w, cam.fov_deg, cam.znear, cam.zfar);
+        if (check) {
+            printf(",%s,", sb_path_verdict_names[check[i].verdict]);
+            if (check[i].node >= 0) printf("%lld", (long long)check[i].node);
+        }
+        printf("\n");
     }
+    if (flagged) {   /* said on stderr too, as a run says it */
+        char text[2048];
+        sb_path_check_text(check, n, text, sizeof text);
+        fprintf(stderr, "shadowbench: %s along %s: %s\n", c->pos[1], c->pos[0], text);
+    }
+    free(check);
     sb_path_free(&p);
     if (have_scene) sb_scene_free(&scene);
-    return 0;
+    return SB_EXIT_OK;
 }
 
 static void command_line(const cli *c, char *out, size_t len) {

@@ -163,6 +163,9 @@ const sb_option sb_options[] = {
      .help = "keep DIR's complete runs and render the rest into it"},
     {.name = "--shard", .kind = SB_OPT_TEXT, .arg = "I/N", .commands = SB_IN(SB_CMD_BATCH), .field = F(shard),
      .help = "render share I of N of the matrix (cost-balanced)"},
+    {.name = "--strict-path", .kind = SB_OPT_FLAG, .commands = RENDER | SB_IN(SB_CMD_PATH), .field = RUN(strict_path),
+     .help = "refuse a path whose cameras stand inside closed geometry, under a surface facing up or nearer a "
+             "surface than the near plane (checked whenever the error is; exit 2)"},
     {.name = "--dry-run", .kind = SB_OPT_FLAG, .commands = SB_IN(SB_CMD_BATCH), .field = F(dry_run),
      .help = "print the matrix (and the shard's share), render nothing"},
     {.name = "--progress", .kind = SB_OPT_FLAG, .def_help = "when stderr is a terminal",

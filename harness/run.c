@@ -376,6 +376,8 @@ static bool finish_run(sb_run *r) {
         !sb_csv_file_commit(&r->cf, &r->err))
         return fail_run(r, "%s", r->err.msg);
     check_shadows_drawn(r);
+    if (r->s->path_note[0])   /* the path check's flagged frames: their figures are the geometry check's doubt */
+        sb_run_warn(&r->info, "the path's cameras: %s", r->s->path_note);
     /* a size for a light the run does not shade is no size at all: said, not ignored in silence */
     double light = -1;
     bool lamp = (r->spec->tech->needs & SB_NEEDS_POINT_LIGHT) ||

@@ -3,6 +3,8 @@
  * bias=auto render with (session.h). */
 #include "session.h"
 
+#include "pathcheck.h"
+
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -39,6 +41,25 @@ static void base_name(const char *path, char *out, size_t len) {
 }
 
 /* ---- sessions ---- */
+
+/* The path check (pathcheck.h): its flagged frames in path_note; refused with --strict-path. */
+static bool check_path(sb_session *s, sb_err *err) {
+    const sb_reference *ref = sb_session_reference(s, err);
+    if (!ref) return false;
+    int n = s->opts.frames;
+    sb_path_frame *f = sb_xmalloc(sizeof *f * (size_t)(n > 0 ? n : 1));
+    double t0 = sb_now_ms();
+    int bad = sb_path_check(ref, &s->scene, &s->path, n, (double)s->opts.width / s->opts.height, f, s->opts.threads);
+    sb_verbose("path check: %d of %d frame(s) flagged in %.1f ms", bad, n, sb_now_ms() - t0);
+    if (bad) sb_path_check_text(f, n, s->path_note, sizeof s->path_note);
+    free(f);
+    if (bad && s->opts.strict_path) {
+        s->files_refused = true;
+        return sb_fail(err, "%s: %s (--strict-path)", s->path.file, s->path_note);
+    }
+    if (bad) sb_log("warning: %s: %s", s->path.file, s->path_note);
+    return true;
+}
 
 bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, const char *path, sb_err *err) {
     /* files first: a broken scene or path is refused before any GL is touched */
@@ -108,6 +129,14 @@ bool sb_session_attach(sb_session *s, const sb_run_opts *o, sb_scene *scene, sb_
         sb_session_close_scene(s);
         return false;
     }
+    /* the path's cameras against the scene, with the reference the evaluation builds anyway (its kept answers
+       are loaded when sb_session_keep_reference names their folder) */
+    if ((o->error_every > 0 || o->strict_path) && !check_path(s, err)) {
+        bool refused = s->files_refused;
+        sb_session_close_scene(s);
+        s->files_refused = refused;
+        return false;
+    }
     return true;
 }
 
@@ -123,6 +152,9 @@ void sb_session_keep_reference(sb_session *s, const char *results_dir) {
     const char *slash = strrchr(results_dir, '/');
     int n = slash ? (int)(slash - results_dir) : 0;
     snprintf(s->ref_store, sizeof s->ref_store, "%.*s%s.reference", n, results_dir, slash ? "/" : "");
+    char file[4200];
+    uint64_t tag;   /* the reference is built already (the path check): its kept answers come in now */
+    if (s->ref_cache && ref_store_file(s, file, sizeof file, &tag)) sb_ref_cache_load(s->ref_cache, file, tag);
 }
 
 void sb_session_close_scene(sb_session *s) {

@@ -47,6 +47,7 @@ typedef struct sb_run_opts {
     double run_timeout_s;       /* a run taking longer fails with a timeout (0: none) */
     double gpu_memory;          /* --gpu-memory: bytes a run may allocate on the GPU (0: what the context says) */
     bool allow_external_uris;   /* glTF buffers and images may be read from outside the scene's folder */
+    bool strict_path;           /* --strict-path: a path whose cameras the check flags is refused (pathcheck.h) */
     sb_blend_policy blend;      /* --blend-casters mask|opaque|none (default mask) */
     bool pose;                  /* --pose T: the scene at time T of its first animation */
     double pose_time;
@@ -82,6 +83,7 @@ typedef struct sb_session {
     struct sb_ref_cache *ref_cache; /* its answers per rasterized frame, shared by the runs of the scene */
     char ref_store[4096];       /* folder keeping those answers across processes ("": none; sb_session_keep_reference) */
     void **tech_data;           /* per technique (registry index): what its load step made for the scene */
+    char path_note[1024];       /* the path check's flagged frames ("" all clear, or not checked: --error-every 0) */
     bool *tech_loaded;
     bool timed;                 /* true while a run's timed frames render (tests assert nothing is read back then) */
     sb_calib calib;             /* the calibration probe */

@@ -14,6 +14,7 @@
 typedef struct ray_ctx {
     struct RTCIntersectContext ctx; /* first: Embree passes this pointer to the filter */
     bool camera;                    /* a camera ray: front faces face the ray's origin; else the ray's end (the light) */
+    bool all_faces;                 /* both faces of a single-sided triangle count (the path check) */
 } ray_ctx;
 
 /* Embree's packet layout (rtcore_ray.h, whose accessors are C++ only):
@@ -41,7 +42,7 @@ static void filter(const struct RTCFilterFunctionNArguments *args) {
         if (!flags) continue;
         const uint32_t *ix = s->indices + 3 * (size_t)prim;
         const float *a = sb_vertex(s, ix[0]), *b = sb_vertex(s, ix[1]), *c = sb_vertex(s, ix[2]);
-        if (flags & SB_REF_SINGLE_SIDED) {
+        if ((flags & SB_REF_SINGLE_SIDED) && !rc->all_faces) {
             float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
             float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
             float d = n[0] * ray_dir(args, 0, i) + n[1] * ray_dir(args, 1, i) + n[2] * ray_dir(args, 2, i);
@@ -155,6 +156,7 @@ typedef struct job {
     int first, count;
     uint64_t rays;              /* cast by this part (occlusion) */
     const int *idx;             /* occlusion: the points to answer (NULL: all) */
+    bool all_faces;             /* first hits: both faces of every triangle */
     bool hard;                  /* the centre ray alone */
     bool known;                 /* vis holds the centre rays' answers */
 } job;
@@ -241,6 +243,7 @@ static void occlusion(job *j) {
     ray_ctx rc;
     rtcInitIntersectContext(&rc.ctx);
     rc.camera = false;
+    rc.all_faces = false;
     uint64_t rays = 0;
     for (int i = j->first; i < j->first + j->count; i++) {
         int k = j->idx ? j->idx[i] : i;
@@ -270,6 +273,7 @@ static void first_hits(job *j) {
     ray_ctx rc;
     rtcInitIntersectContext(&rc.ctx);
     rc.camera = true;
+    rc.all_faces = j->all_faces;
     for (int i = j->first; i < j->first + j->count; i++) {
         const float *o = j->from[i];
         float d[3] = {j->to[i][0] - o[0], j->to[i][1] - o[1], j->to[i][2] - o[2]};
@@ -286,6 +290,7 @@ static void first_hits(job *j) {
         rtcIntersect1((RTCScene)j->r->scene, &rc.ctx, &rh);
         if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
         h->t = rh.ray.tfar;
+        h->prim = rh.hit.primID;
         /* the front face from the triangle's own winding (counter-clockwise, as glTF and GL say) */
         const sb_scene *sc = j->r->src;
         const uint32_t *ix = sc->indices + 3 * (size_t)rh.hit.primID;
@@ -400,5 +405,11 @@ uint64_t sb_reference_visibility_view(const sb_reference *r, const double light[
 void sb_reference_rays(const sb_reference *r, const float (*from)[3], const float (*to)[3], int n, sb_ref_hit *out,
                        int threads) {
     job proto = {.r = r, .from = from, .to = to, .hits = out};
+    run_jobs(&proto, n, threads);
+}
+
+void sb_reference_rays_all_faces(const sb_reference *r, const float (*from)[3], const float (*to)[3], int n,
+                                 sb_ref_hit *out, int threads) {
+    job proto = {.r = r, .from = from, .to = to, .hits = out, .all_faces = true};
     run_jobs(&proto, n, threads);
 }

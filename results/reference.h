@@ -78,6 +78,12 @@ typedef struct sb_ref_hit {
     float t;                    /* distance from from[i] (INFINITY: nothing hit) */
     float n[3];                 /* geometric normal of the hit triangle, facing the ray's origin */
     bool front;                 /* the triangle's front (counter-clockwise) face is the one facing the origin */
+    uint32_t prim;              /* the triangle (index into the scene's triangles) */
 } sb_ref_hit;
 void sb_reference_rays(const sb_reference *r, const float (*from)[3], const float (*to)[3], int n, sb_ref_hit *out,
                        int threads);
+/* The same with both faces of every triangle hit (a single-sided one's back
+ * too, which the camera pass culls): what a camera inside a closed mesh would
+ * meet. */
+void sb_reference_rays_all_faces(const sb_reference *r, const float (*from)[3], const float (*to)[3], int n,
+                                 sb_ref_hit *out, int threads);

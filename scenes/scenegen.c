@@ -124,12 +124,14 @@ static int gen_desert(const char *dir) {
     int rc = sb_glb_write(&s, p);
     snprintf(p, sizeof p, "%s/desert.path", dir);
     rc |= write_text(p,
-                     "# desert: low along a street between blocks, then up to a wide view (50 s)\n"
+                     "# desert: low along a street between blocks, then up to a wide view (50 s); the keys spaced so that\n"
+                     "# the spline neither dips under the terrain nor cuts a corner (shadowbench path desert desert)\n"
                      "fov 60\n"
-                     "look 0    -175 4 -150    -175 4 -100\n"
-                     "look 10   -175 4 -50     -170 4 0\n"
-                     "look 20   -175 5 25      -100 3 25\n"
-                     "look 30   -100 6 25      0 2 25\n"
+                     "look 0    -175 5 -150    -175 5 -100\n"
+                     "look 10   -175 5 -50     -175 5 0\n"
+                     "look 18   -175 6 10      -175 6 60\n"
+                     "look 24   -175 14 30     -120 5 40\n"
+                     "look 32   -150 40 40     -60 3 30\n"
                      "look 40   -40 40 60      50 0 0\n"
                      "look 50   0 120 190      0 0 0\n");
     return rc;
@@ -167,13 +169,13 @@ static int gen_towers(const char *dir) {
     snprintf(p, sizeof p, "%s/towers.path", dir);
     /* streets run along x = -104 + 26k and z = -104 + 26k */
     rc |= write_text(p,
-                     "# towers: down a narrow street between skyscrapers, then up above the roofs (25 s)\n"
+                     "# towers: down a narrow street between skyscrapers, then up it above the roofs (25 s)\n"
                      "fov 60\n"
                      "look 0    0 4 -120    0 4 -60\n"
                      "look 5    0 4 -60     0 5 0\n"
-                     "look 10   0 5 0       10 8 60\n"
-                     "look 14   2 20 40     20 15 80\n"
-                     "look 19   20 80 90    0 20 0\n"
+                     "look 10   0 5 0       0 8 60\n"
+                     "look 14   0 30 50     0 15 90\n"
+                     "look 19   0 170 90    0 20 0\n"
                      "look 25   120 200 200 0 0 0\n");
     return rc;
 }
@@ -234,12 +236,13 @@ static int gen_overhangs(const char *dir) {
     int rc = sb_glb_write(&s, p);
     snprintf(p, sizeof p, "%s/overhangs.path", dir);
     rc |= write_text(p,
-                     "# overhangs: under the slabs and bridges, then out to a far view (25 s)\n"
+                     "# overhangs: under the slabs and bridges, between the cores, then out to a far view (25 s)\n"
                      "fov 60\n"
                      "look 0    -220 3 0       -100 4 0\n"
                      "look 6    -100 3 0       -40 6 20\n"
-                     "look 12   -20 4 20       20 8 60\n"
-                     "look 18   40 30 120      0 10 0\n"
+                     "look 12   -40 4 20       20 8 60\n"
+                     "look 15   -40 10 40      0 10 80\n"
+                     "look 19   -30 70 60      0 10 0\n"
                      "look 25   300 120 400    0 0 0\n");
     return rc;
 }
