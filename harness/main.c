@@ -141,7 +141,10 @@ static int cmd_path(const cli *c) {
             return SB_EXIT_FAILED;
         }
         check = sb_xmalloc(sizeof *check * (size_t)n);
+        double t0 = sb_now_ms();
         flagged = sb_path_check(&ref, &scene, &p, n, aspect, check, c->o.run.threads);
+        sb_verbose("path check: %d frame(s) in %.1f ms (the reference built in %.0f ms)", n, sb_now_ms() - t0,
+                   ref.build_ms);
         sb_reference_free(&ref);
     }
     if (flagged && c->o.run.strict_path) {   /* refused: the one-line error, no table */

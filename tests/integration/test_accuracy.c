@@ -61,12 +61,14 @@ static void test_error_falls_with_resolution(void **st) {
     assert_int_equal(open_towers(), 0);
     const int res[] = {512, 1024, 2048, 4096};
     double err_rate[4], res_err[4];
+    /* frame 5 of 12: rising in the street, where the map's resolution is what limits it (from frame 7 the
+       camera is above the roofs, where even 512 texels a side resolve every pixel's footprint) */
     for (int k = 0; k < 4; k++) {
         char spec[64];
         snprintf(spec, sizeof spec, "sm:res=%d:filter=none", res[k]);
         sb_error_metrics m;
         sb_err err;
-        assert_true(eval_frame(&g_towers, spec, 9, 12, &m, NULL, NULL, &err));
+        assert_true(eval_frame(&g_towers, spec, 5, 12, &m, NULL, NULL, &err));
         err_rate[k] = m.err_rate;
         res_err[k] = m.res_err_mean;
         print_message("%s: err_rate %.5f res_err_mean %.3f texel_px_p95 %.3f (%ld px)\n", spec, m.err_rate,
@@ -95,7 +97,7 @@ static void test_error_falls_with_resolution(void **st) {
     /* the exact technique is (nearly) exact */
     sb_error_metrics m;
     sb_err err;
-    assert_true(eval_frame(&g_towers, "raycast", 9, 12, &m, NULL, NULL, &err));
+    assert_true(eval_frame(&g_towers, "raycast", 5, 12, &m, NULL, NULL, &err));
     print_message("raycast: err_rate %.5f\n", m.err_rate);
     assert_true(m.err_rate < 0.002 && m.err_rate < err_rate[3]);
 }

@@ -32,8 +32,7 @@ static void eval_sized(double size, int samples, const char *spec, sb_error_metr
     sb_session s;
     sb_err err;
     assert_true(pb_open_view(&s, SB_BACKEND_EGL, W, H, "planebox-fixed.path", SUN_AZ, SUN_EL, &err));
-    s.opts.sun_size = size;   /* before the reference is built, on first use */
-    if (samples) s.opts.ref_samples = samples;
+    sb_session_set_light_size(&s, size, 0, samples ? samples : s.opts.ref_samples);   /* the reference too */
     bool ok = eval_frame(&s, spec, 0, 1, m, pos, ref, &err);
     if (!ok) print_error("%s\n", err.msg);
     assert_true(ok);

@@ -139,12 +139,21 @@ static void read_tune(const char *dir, tuned *out) {
 
 /* Bounds whose answer the grid tells apart from the next cheapest setting by
  * more than this machine's timing noise (10 %): where two settings cost the
- * same within noise, "within 5 %" cannot be checked on a shared CPU. */
+ * same within noise, "within 5 %" cannot be checked on a shared CPU. Each
+ * bound sits halfway between its answer's error and the least error of the
+ * settings cheaper than it (at most 30 % above its own): a bound a hair over
+ * the answer's 33-frame error asks a search whose first rung sees 5 frames to
+ * tell 0.01 % apart, and missed (seen: 0.021649 under 0.021651, the answer
+ * dropped at rung 0 for a setting 2.2x its cost). */
 static int pick_bounds(double *bounds, int max) {
     double cand[MAXC];
     int n = 0;
     for (int i = 0; i < g_n; i++) {
-        double b = g_grid[i].err * 1.0001, next;
+        double cheaper_err = INFINITY, next;
+        for (int j = 0; j < g_n; j++)
+            if (g_grid[j].ms < g_grid[i].ms) cheaper_err = fmin(cheaper_err, g_grid[j].err);
+        double b = fmin(0.5 * (g_grid[i].err + cheaper_err), 1.3 * g_grid[i].err);
+        if (!(b >= g_grid[i].err * 1.0001)) b = g_grid[i].err * 1.0001;
         const cfg *best = grid_best(b, &next);
         if (best != &g_grid[i] || next < best->ms * 1.10) continue;
         cand[n++] = b;
