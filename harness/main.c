@@ -88,6 +88,9 @@ static int cmd_info(const cli *c) {
         sb_scene_opts so = sb_run_scene_opts(&c->o.run);
         if (!sb_scene_load(&scene, c->pos[0], &so, &err)) return bad_file(&err);
         sb_scene_info(&scene, stdout);
+        printf("memory: CPU %.1f MiB (the scene's arrays, the reference's BVH not counted), GPU %.1f MiB (its "
+               "buffers; a run adds its render targets and shadow maps)\n",
+               sb_scene_cpu_bytes(&scene) / 1048576.0, sb_gpu_scene_bytes(&scene) / 1048576.0);
         sb_scene_free(&scene);
         return 0;
     }

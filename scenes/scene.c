@@ -647,6 +647,16 @@ void sb_scene_find_planes(sb_scene *s) {
 
 uint64_t sb_scene_triangles(const sb_scene *s) { return s->index_count / 3; }
 
+double sb_scene_cpu_bytes(const sb_scene *s) {
+    double b = (double)s->vertex_count * SB_VERTEX_BYTES + (double)s->index_count * sizeof(uint32_t) +
+               (double)s->draw_count * sizeof(sb_draw) + (double)s->material_count * sizeof(sb_material) +
+               (double)s->texture_count * sizeof(sb_texture) + s->texel_count +
+               (double)s->light_count * sizeof(sb_light) + (double)s->camera_count * sizeof(sb_scene_camera) +
+               (double)s->bvh.node_count * sizeof(sb_bvh_node) + (double)s->draw_count * sizeof(uint32_t);
+    for (uint32_t i = 0; i < s->plane_count; i++) b += (double)s->planes[i].tri_count * sizeof(uint32_t);
+    return b;
+}
+
 const sb_light *sb_scene_point_light(const sb_scene *s, int index, int *count) {
     const sb_light *found = NULL;
     int k = 0;

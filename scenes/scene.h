@@ -164,6 +164,9 @@ void sb_scene_free(sb_scene *s);
 /* What the file held and how it is drawn (shadowbench info SCENE), as lines "key: value". */
 void sb_scene_info(const sb_scene *s, FILE *out);
 uint64_t sb_scene_triangles(const sb_scene *s);
+/* The bytes the loaded scene holds on the CPU: its vertices, indices, draws, materials, alpha texels, planes
+ * and BVH (a mapped scene-cache entry counted as if read). */
+double sb_scene_cpu_bytes(const sb_scene *s);
 /* The index-th point or spot light of the scene in file order (NULL if there
  * is none); *count (may be NULL) gets how many there are. */
 const sb_light *sb_scene_point_light(const sb_scene *s, int index, int *count);

@@ -99,7 +99,20 @@ static GLuint make_tex(GLenum internal, int w, int h) {
 
 /* ---- the alpha test's data ---- */
 
-/* Materials as alpha.glsl's SbMaterial (48 bytes) and the texels as an R8UI buffer texture. */
+/* A material as alpha.glsl's SbMaterial (48 bytes). */
+typedef struct {
+    uint32_t i[4];
+    float f[8];
+} packed_material;
+
+double sb_gpu_scene_bytes(const sb_scene *s) {
+    double b = (double)s->vertex_count * SB_VERTEX_BYTES + (double)s->index_count * sizeof(uint32_t);
+    if (s->alpha_tested_draws > 0)
+        b += (double)s->material_count * sizeof(packed_material) + (s->texel_count ? s->texel_count : 1);
+    return b;
+}
+
+/* Materials as alpha.glsl's SbMaterial and the texels as an R8UI buffer texture. */
 static bool upload_alpha(sb_gpu *g, const sb_scene *s, sb_err *err) {
     /* every program of the session compiles with the common GLSL, and the alpha test when the scene has one */
     const char *prelude[] = {s->alpha_tested_draws > 0 ? "#define SB_ALPHA\n" : "", sb_shader_common_glsl,
@@ -111,15 +124,11 @@ static bool upload_alpha(sb_gpu *g, const sb_scene *s, sb_err *err) {
     if (s->texel_count > (uint32_t)max_texels)
         return sb_fail(err, "%s: the alpha textures hold %u texels, more than this GL's buffer textures (%d)", s->file,
                        s->texel_count, max_texels);
-    typedef struct {
-        uint32_t i[4];
-        float f[8];
-    } packed;
-    packed *m = sb_xcalloc(s->material_count, sizeof *m);
+    packed_material *m = sb_xcalloc(s->material_count, sizeof *m);
     for (uint32_t k = 0; k < s->material_count; k++) {
         const sb_material *sm = &s->materials[k];
         const sb_texture *t = sm->texture >= 0 ? &s->textures[sm->texture] : NULL;
-        m[k] = (packed){{t ? t->offset : 0, t ? t->w : 0, t ? t->h : 0, t ? (t->wrap_s | t->wrap_t << 16) : 0},
+        m[k] = (packed_material){{t ? t->offset : 0, t ? t->w : 0, t ? t->h : 0, t ? (t->wrap_s | t->wrap_t << 16) : 0},
                         {sm->test ? sm->cutoff : 0, sm->alpha, sm->uv[0], sm->uv[1], sm->uv[2], sm->uv[3], sm->uv[4],
                          sm->uv[5]}};
     }

@@ -105,6 +105,9 @@ typedef struct sb_frame {
 
 bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *scene, int width, int height, sb_v3 sun,
                  sb_err *err);
+/* The bytes sb_gpu_init uploads for a scene (its vertex and index buffers; with alpha-tested draws the
+ * materials and texels), without a GL: what `info SCENE` says the scene takes on the GPU. */
+double sb_gpu_scene_bytes(const sb_scene *s);
 void sb_gpu_free(sb_gpu *g);
 /* The final-pass program with the technique's visibility GLSL. */
 bool sb_final_prog_create(sb_final_prog *fp, const sb_gpu *g, const char *label, const char *vis_glsl,
