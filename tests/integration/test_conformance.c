@@ -386,40 +386,8 @@ static void test_auto_path_outside(void **st) {
     }
 }
 
-/* What `info SCENE` says a scene takes on the GPU is what the session's buffers hold, as the GL reports their
- * sizes: a scene without alpha-tested draws (vertex and index buffers) and one with (and its materials and
- * texels). */
-static void test_gpu_bytes_are_the_buffers(void **st) {
-    (void)st;
-    const char *scenes[] = {"plane-box", "conf-alpha-card"};
-    for (size_t i = 0; i < SB_COUNT(scenes); i++) {
-        sb_session s;
-        sb_err err;
-        assert_true(test_open(&s, scenes[i], scenes[i], 64, 36, &err));
-        GLuint bufs[4] = {s.gpu.vbo, s.gpu.ibo, s.gpu.mat_ssbo, s.gpu.texel_buf};
-        double gl = 0;
-        for (int k = 0; k < 4; k++) {
-            if (!bufs[k]) continue;
-            GLint64 size = 0;
-            glBindBuffer(GL_COPY_READ_BUFFER, bufs[k]);
-            glGetBufferParameteri64v(GL_COPY_READ_BUFFER, GL_BUFFER_SIZE, &size);
-            gl += (double)size;
-        }
-        double said = sb_gpu_scene_bytes(&s.scene);
-        print_message("%s: GL buffers %.0f bytes, info says %.0f (CPU %.0f)\n", scenes[i], gl, said,
-                      sb_scene_cpu_bytes(&s.scene));
-        assert_true(gl == said);
-        assert_true(sb_scene_cpu_bytes(&s.scene) >= (double)s.scene.index_count * 4 + s.scene.vertex_count * (double)SB_VERTEX_BYTES);
-        sb_session_close(&s);
-    }
-    char out[8192];
-    assert_int_equal(run_logged(out, sizeof out, "%s info conf-alpha-card", test_binary()), 0);
-    assert_non_null(strstr(out, "memory: CPU "));
-}
-
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_gpu_bytes_are_the_buffers),
         cmocka_unit_test(test_double_sided),
         cmocka_unit_test(test_blend_policies),
         cmocka_unit_test(test_alpha_card),
