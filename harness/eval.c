@@ -123,9 +123,7 @@ bool sb_eval_flicker(sb_session *s, sb_instance *in, int pf, int n, int *seq, sb
     if (light_moved) {
         const sb_reference *ref = sb_session_reference(s, err);
         if (!ref) return false;
-        sb_m4 inv;
-        bool have_inv = sb_m4_invert(f->view_proj, &inv);
-        sb_eval_view view = {b->w, b->h, b->pos, b->aux, look.eye, have_inv ? &inv : NULL, tw.shade_light};
+        sb_eval_view view = {b->w, b->h, b->pos, b->aux, look.eye, NULL, tw.shade_light};   /* no geometry check */
         sb_ref_point *pts = sb_xmalloc(sizeof *pts * np);
         int *pix = sb_xmalloc(sizeof(int) * np);
         unsigned char *hit = sb_xmalloc(np);

@@ -135,6 +135,7 @@ static int cmd_path(const cli *c) {
     /* with a scene: each camera checked against it (pathcheck.h) */
     sb_path_frame *check = NULL;
     int flagged = 0;
+    char text[2048] = "";   /* the flagged frames */
     if (have_scene) {
         sb_reference ref;
         if (!sb_reference_build(&ref, &scene, &err)) {
@@ -149,10 +150,9 @@ static int cmd_path(const cli *c) {
         sb_verbose("path check: %d frame(s) in %.1f ms (the reference built in %.0f ms)", n, sb_now_ms() - t0,
                    ref.build_ms);
         sb_reference_free(&ref);
+        sb_path_check_text(check, n, text, sizeof text);
     }
     if (flagged && c->o.run.strict_path) {   /* refused: the one-line error, no table */
-        char text[2048];
-        sb_path_check_text(check, n, text, sizeof text);
         fprintf(stderr, "shadowbench: %s: %s (--strict-path)\n", c->pos[0], text);
         free(check);
         sb_path_free(&p);
@@ -171,11 +171,7 @@ static int cmd_path(const cli *c) {
         }
         printf("\n");
     }
-    if (flagged) {   /* said on stderr too, as a run says it */
-        char text[2048];
-        sb_path_check_text(check, n, text, sizeof text);
-        fprintf(stderr, "shadowbench: %s along %s: %s\n", c->pos[1], c->pos[0], text);
-    }
+    if (flagged) fprintf(stderr, "shadowbench: %s along %s: %s\n", c->pos[1], c->pos[0], text);   /* as a run says it */
     free(check);
     sb_path_free(&p);
     if (have_scene) sb_scene_free(&scene);

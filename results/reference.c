@@ -191,9 +191,10 @@ static float sample_dir(const job *j, const sb_ref_point *q, const float c[3], c
     return far;
 }
 
-/* One point's answer toward a sized light, its centre ray's answer known (lit) or cast here (lit < 0):
- * the 8 rim points first; agreeing, full light or umbra; else the N spiral points. *rays += what it cast. */
-static unsigned char soft_point(const job *j, ray_ctx *rc, const sb_ref_point *q, int lit, uint64_t *rays) {
+/* One point's answer: its centre ray, known (lit) or cast here (lit < 0); then, toward a sized light unless
+ * `hard`, the 8 rim points (agreeing: full light or umbra) and else the N spiral points. *rays += what it cast. */
+static unsigned char point_answer(const job *j, ray_ctx *rc, const sb_ref_point *q, int lit, bool hard,
+                                  uint64_t *rays) {
     const sb_reference *r = j->r;
     float L[3] = {j->sun[0], j->sun[1], j->sun[2]}, far = INFINITY;
     if (j->point) {
@@ -207,8 +208,7 @@ static unsigned char soft_point(const job *j, ray_ctx *rc, const sb_ref_point *q
         lit = lit_toward(j, rc, q, L, far);
         ++*rays;
     }
-    const bool soft = j->point ? r->lamp_radius > 0 : r->sun_tan > 0;
-    if (!soft) return lit ? 255 : 0;
+    if (hard || !(j->point ? r->lamp_radius > 0 : r->sun_tan > 0)) return lit ? 255 : 0;
     /* the light's disc, perpendicular to the direction toward its centre */
     float t[3], b[3], c[3] = {j->sun[0], j->sun[1], j->sun[2]};
     float up[3] = {fabsf(L[1]) < 0.9f ? 0.0f : 1.0f, fabsf(L[1]) < 0.9f ? 1.0f : 0.0f, 0};
@@ -237,8 +237,8 @@ static unsigned char soft_point(const job *j, ray_ctx *rc, const sb_ref_point *q
     return (unsigned char)v;
 }
 
-/* Items [first, first + count): points idx[i] (or i). hard: the centre ray alone; else soft_point, from the
- * centre answers vis already holds when `known`. */
+/* Items [first, first + count): points idx[i] (or i), each point_answer's (from the centre answers vis already
+ * holds when `known`; the centre ray alone when `hard`). */
 static void occlusion(job *j) {
     ray_ctx rc;
     rtcInitIntersectContext(&rc.ctx);
@@ -248,23 +248,7 @@ static void occlusion(job *j) {
     for (int i = j->first; i < j->first + j->count; i++) {
         int k = j->idx ? j->idx[i] : i;
         const sb_ref_point *q = &j->pts[k];
-        if (j->hard) {
-            float L[3] = {j->sun[0], j->sun[1], j->sun[2]}, far = INFINITY;
-            if (j->point) {
-                float d[3] = {j->sun[0] - q->p[0], j->sun[1] - q->p[1], j->sun[2] - q->p[2]};
-                float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-                if (len <= 0) {
-                    j->vis[k] = 255;
-                    continue;
-                }
-                for (int c = 0; c < 3; c++) L[c] = d[c] / len;
-                far = len - 2 * q->eps;
-            }
-            j->vis[k] = lit_toward(j, &rc, q, L, far) ? 255 : 0;
-            rays++;
-            continue;
-        }
-        j->vis[k] = soft_point(j, &rc, q, j->known ? j->vis[k] >= 128 : -1, &rays);
+        j->vis[k] = point_answer(j, &rc, q, j->known ? j->vis[k] >= 128 : -1, j->hard, &rays);
     }
     j->rays = rays;
 }
@@ -342,9 +326,8 @@ uint64_t sb_reference_visibility(const sb_reference *r, sb_v3 sun, const sb_ref_
 
 uint64_t sb_reference_visibility_light(const sb_reference *r, const double light[4], const sb_ref_point *pts, int n,
                                        unsigned char *vis, int threads) {
-    bool sized = light[3] > 0.5 ? r->lamp_radius > 0 : r->sun_tan > 0;
     job proto = {.r = r, .sun = {(float)light[0], (float)light[1], (float)light[2]}, .point = light[3] > 0.5,
-                 .pts = pts, .vis = vis, .hard = !sized};
+                 .pts = pts, .vis = vis};   /* point_answer: one ray a point toward a light of no size */
     return run_jobs(&proto, n, threads);
 }
 

@@ -28,10 +28,7 @@ SB_TEST_SCRATCH("sbflicker")
 static void run_pan(const char *extra, const char *sub, sb_table *t) {
     assert_int_equal(run_logged(g_out, sizeof g_out, "%s run towers %s " SPECS " " COMMON " %s --out %s/%s",
                                 test_binary(), test_data("towers-pan.path"), extra, g_tmp, sub), 0);
-    char *nl = strrchr(g_out, '\n');
-    if (nl && nl > g_out && nl[1] == 0) *nl = 0;
-    nl = strrchr(g_out, '\n');
-    summary_table(nl ? nl + 1 : g_out, t);
+    summary_table(last_line_of(g_out), t);
     assert_int_equal(t->nrows, 7);
 }
 

@@ -52,11 +52,8 @@ static void test_through_the_box(void **st) {
     assert_int_equal(run_logged(g_out, sizeof g_out, "%s run plane-box %s none sm:res=256 --frames 20 --error-every 5 "
                                 "--warmup 0 --size 64x36 --quiet --out %s/warned", bin,
                                 test_data("planebox-through.path"), g_tmp), 0);
-    char *nl = strrchr(g_out, '\n');
-    if (nl && nl > g_out && nl[1] == 0) *nl = 0;
-    nl = strrchr(g_out, '\n');
     sb_table t;
-    summary_table(nl ? nl + 1 : g_out, &t);
+    summary_table(last_line_of(g_out), &t);
     for (int r = 0; r < t.nrows; r++)
         assert_non_null(strstr(sb_table_get(&t, r, "warnings"),
                                "the path's cameras: frames 8-11: the camera is inside closed geometry"));

@@ -116,11 +116,8 @@ static void test_cli(void **st) {
     assert_int_equal(run_logged(g_out, sizeof g_out, "%s run plane-box %s sm:filter=pcss sm:filter=pcss:sun_size=1 "
                                 "--sun 0,35 --sun-size 2 --frames 1 --warmup 0 --size 160x90 --out %s/cli --quiet",
                                 bin, test_data("planebox-fixed.path"), g_tmp), 0);
-    char *nl = strrchr(g_out, '\n');
-    if (nl && nl > g_out && nl[1] == 0) *nl = 0;
-    nl = strrchr(g_out, '\n');
     sb_table t;
-    summary_table(nl ? nl + 1 : g_out, &t);
+    summary_table(last_line_of(g_out), &t);
     assert_int_equal(t.nrows, 2);
     assert_non_null(strstr(sb_table_get(&t, 0, "params"), "sun_size=2"));
     assert_non_null(strstr(sb_table_get(&t, 1, "params"), "sun_size=1"));
@@ -128,10 +125,7 @@ static void test_cli(void **st) {
     sb_table_free(&t);
     assert_int_equal(run_logged(g_out, sizeof g_out, "%s run plane-box %s sm --lamp-radius 0.5 --frames 1 --warmup 0 "
                                 "--size 96x54 --out %s/lamp --quiet", bin, test_data("planebox-fixed.path"), g_tmp), 0);
-    nl = strrchr(g_out, '\n');
-    if (nl && nl > g_out && nl[1] == 0) *nl = 0;
-    nl = strrchr(g_out, '\n');
-    summary_table(nl ? nl + 1 : g_out, &t);
+    summary_table(last_line_of(g_out), &t);
     assert_non_null(strstr(sb_table_get(&t, 0, "warnings"), "--lamp-radius 0.5: this run shades the sun"));
     sb_table_free(&t);
 }

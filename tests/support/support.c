@@ -271,6 +271,13 @@ static const char *expect_exit_v(int status, const char *needle, const char *fmt
     return out;
 }
 
+const char *last_line_of(char *out) {
+    char *nl = strrchr(out, '\n');
+    if (nl && nl > out && nl[1] == 0) *nl = 0;
+    nl = strrchr(out, '\n');
+    return nl ? nl + 1 : out;
+}
+
 const char *expect_cli_fail(const char *needle, const char *fmt, ...) {
     va_list ap;
     va_start(ap, fmt);

@@ -79,6 +79,9 @@ void summary_table(const char *dir, struct sb_table *t);
 
 /* Runs the printf-formatted command (logged) expecting exit 2 (bad input) and
  * one line of output holding needle; returns that output. */
+/* The last line of a command's output (a results folder, as run and batch print it last), its newline cut:
+ * points into out, which it changes. */
+const char *last_line_of(char *out);
 const char *expect_cli_fail(const char *needle, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 /* The same for another exit status (1: the GL or the machine failed, not the input). */
 const char *expect_cli_exit(int status, const char *needle, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
