@@ -221,6 +221,7 @@ var SB = (function () {
       { name: "path", get: function (r) { return r.path; } },
       { name: "technique", get: function (r) { return r.technique; } },
       { name: "params", get: function (r) { return r.params; }, cell: function (r) { return el("span", { "class": "params", title: r.params, text: own(r).replace(/:/g, ":\u200b") }); } },
+      { name: "light", get: function (r) { return r.light || ""; } },   /* a sized light's runs beside the hard ones */
       { name: "size", get: function (r) { return r.width + "x" + r.height; } },
       { name: "status", get: function (r) { return r.status; } },
       { name: "stable", get: function (r) { return r.stable; } },
