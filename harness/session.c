@@ -233,6 +233,7 @@ static bool scene_data(sb_session *s, const sb_technique *t, void **out, sb_err 
 /* ---- why a run cannot apply ---- */
 
 static const char *scene_skip_reason(sb_session *s, const sb_technique *t) {
+    if (t->needs & SB_NEEDS_PLANE) sb_scene_find_planes(&s->scene);   /* searched on the first need */
     const sb_scene *sc = &s->scene;
     int points = 0, spots = 0;
     for (uint32_t i = 0; i < sc->light_count; i++) {
@@ -288,6 +289,7 @@ bool sb_instance_create(sb_instance *in, sb_session *s, const sb_run_spec *spec,
     in->desc = sb_xcalloc(1, t->desc_size ? t->desc_size : 1);
     sb_params_bind(&in->params, t, in->desc);
     in->rc = (sb_run_ctx){.gpu = &s->gpu, .tech = t, .frames = frames};
+    if (t->needs & SB_NEEDS_PLANE) sb_scene_find_planes(&s->scene);   /* on the first need, not at load */
     bool ok = !t->supported || t->supported(&in->rc, in->desc, err);
     if (ok) ok = scene_data(s, t, &in->rc.scene_data, err);
     if (ok && (t->needs & SB_NEEDS_REFERENCE)) ok = (in->rc.reference = sb_session_reference(s, err)) != NULL;

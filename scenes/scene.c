@@ -458,11 +458,8 @@ bool sb_scene_finish(sb_scene *s, sb_err *err) {
     s->build_pos = NULL;
     double t1 = sb_now_ms();
     sb_scene_build_bvh(s);
-    double t2 = sb_now_ms();
-    sb_scene_find_planes(s);
     s->load_part_ms[SB_LOAD_DRAWS] = t1 - t0;
-    s->load_part_ms[SB_LOAD_BVH] = t2 - t1;
-    s->load_part_ms[SB_LOAD_PLANES] = sb_now_ms() - t2;
+    s->load_part_ms[SB_LOAD_BVH] = sb_now_ms() - t1;
     return true;
 }
 
@@ -476,7 +473,8 @@ void sb_scene_load_parts(const sb_scene *s, char *out, size_t len) {
         return;
     }
     for (int i = 0; i < SB_LOAD_PARTS && n < len; i++)
-        n += (size_t)snprintf(out + n, len - n, "%s%s %.0f", i ? ", " : "", sb_load_part_names[i], s->load_part_ms[i]);
+        if (i != SB_LOAD_PLANES || s->planes_found)   /* the plane search is left to the first need */
+            n += (size_t)snprintf(out + n, len - n, "%s%s %.0f", i ? ", " : "", sb_load_part_names[i], s->load_part_ms[i]);
 }
 
 /* A plane group: its quantised key (normal, distance), its first and last
@@ -566,7 +564,17 @@ static double tri_plane(const sb_scene *s, uint32_t t, sb_v3 *n, double *d) {
     return area;
 }
 
+static void find_planes(sb_scene *s);
+
 void sb_scene_find_planes(sb_scene *s) {
+    if (s->planes_found) return;
+    double t0 = sb_now_ms();
+    s->planes_found = true;
+    find_planes(s);
+    s->load_part_ms[SB_LOAD_PLANES] = sb_now_ms() - t0;
+}
+
+static void find_planes(sb_scene *s) {
     uint32_t ntri = s->index_count / 3;
     sb_v3 ext = sb_v3_sub(s->bounds.hi, s->bounds.lo);
     double face = fmax(ext.x * ext.y, fmax(ext.y * ext.z, ext.x * ext.z)), diag = sb_v3_len(ext);

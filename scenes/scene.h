@@ -85,7 +85,7 @@ typedef struct sb_scene_camera {
     int node;                    /* node that carries it, -1 if none */
 } sb_scene_camera;
 
-/* A large planar receiver found at load (planar projected shadows use them):
+/* A large planar receiver, found when a technique first needs one (planar projected shadows):
  * n·p + d = 0 in origin-relative coordinates, n facing up the light side. */
 #define SB_MAX_PLANES 4
 typedef struct sb_plane {
@@ -105,7 +105,8 @@ typedef struct sb_scene_opts {
 
 /* The parts of a scene's load, timed: reading, checking and parsing the file
  * (tinygltf), flattening the node graph into draws (skins, instances,
- * materials), the draws' chunks and boxes, the culling BVH, the plane search. */
+ * materials), the draws' chunks and boxes, the culling BVH; and the plane search, timed when it runs (on a
+ * technique's first need, or before the scene cache is written: not part of a load that needs no plane). */
 enum { SB_LOAD_PARSE, SB_LOAD_FLATTEN, SB_LOAD_DRAWS, SB_LOAD_BVH, SB_LOAD_PLANES, SB_LOAD_PARTS };
 extern const char *const sb_load_part_names[SB_LOAD_PARTS];
 
@@ -148,6 +149,7 @@ typedef struct sb_scene {
     uint32_t nodes_drawn;        /* node instances with a mesh reached from the scene graph */
     sb_plane planes[SB_MAX_PLANES];
     uint32_t plane_count;
+    bool planes_found;           /* the plane search ran (sb_scene_find_planes): plane_count holds */
     char degenerate[128];        /* why nothing in it can cast or receive a shadow ("" if it can) */
     char unused[512];            /* what the file holds that nothing draws and is left out, or breaks a rule
                                     there ("; "-separated; "" if nothing): info and every run's warnings say it */
@@ -203,7 +205,8 @@ bool sb_material_covers(const sb_scene *s, uint32_t m, float u, float v);
 static inline float *sb_vertex(const sb_scene *s, uint32_t i) { return s->vertices + (size_t)SB_VERTEX_FLOATS * i; }
 void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p);
 /* Finds the large planar receivers (a plane holding at least 10% of the area of
- * the bounds' largest face); called by sb_scene_finish. */
+ * the bounds' largest face) once: later calls return at once. A load does not search
+ * (most techniques need no plane); the technique that needs one and the scene cache ask. */
 void sb_scene_find_planes(sb_scene *s);
 /* Re-bases to the centre, splits big draws into spatial chunks, builds AABBs and the BVH. */
 bool sb_scene_finish(sb_scene *s, sb_err *err);

@@ -116,6 +116,7 @@ static bool read_scene(sb_rbuf *r, sb_scene *s) {
         p->tri_count = c.planes[i].tri_count;
         s->plane_count = i + 1;
     }
+    s->planes_found = true;   /* the writer searched before it wrote */
     if (!r->ok || r->at != r->n || !s->materials || s->index_count % 3) return false;
     for (uint32_t i = 0; i < s->index_count; i++)
         if (s->indices[i] >= s->vertex_count) return false;
@@ -246,6 +247,7 @@ bool sb_scene_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_
     } else {
         if (cache) sb_scene_cache_begin();
         ok = load_file(s, path, opts, err);
+        if (cache && ok) sb_scene_find_planes(s);   /* an entry holds the planes, so a cached load never searches */
         if (cache) sb_scene_cache_put(key, ok ? write_entry : NULL, s);
     }
     if (ok) s->load_ms = sb_now_ms() - t0;

@@ -3,7 +3,7 @@
  *   p' = p - L (n·p + d) / (n·L),
  * and drawn into the stencil only where the plane itself is visible (so
  * overlapping shadow triangles count once and shadows stay on the plane).
- * Receiver planes are found at load: planes holding at least 10% of the
+ * Receiver planes are found when this technique first needs them (SB_NEEDS_PLANE): planes holding at least 10% of the
  * area of the scene bounds' largest face (a scene without one skips the
  * technique). No self-shadowing and no curved receivers: the error metric
  * shows what that costs.

@@ -98,6 +98,9 @@ static void test_closed_and_planes(void **st) {
     const bool closed[6] = {true, false, false, false, true, false};
     for (int i = 0; i < 6; i++) assert_int_equal(s.draws[i].closed, closed[i]);
     assert_true(sb_scene_finish(&s, &err));
+    assert_false(s.planes_found);   /* a load leaves the search to the first need */
+    sb_scene_find_planes(&s);
+    assert_true(s.planes_found);
     assert_int_equal(s.plane_count, 1);   /* the cubes' faces are far below 10% of the largest face */
     const sb_plane *p = &s.planes[0];
     assert_int_equal(p->tri_count, 8);
@@ -134,6 +137,7 @@ static void same_scene(const sb_scene *a, const sb_scene *b) {
     assert_true(a->content_hash == b->content_hash && a->has_sun == b->has_sun && a->light_count == b->light_count);
     assert_memory_equal(&a->origin, &b->origin, sizeof a->origin);
     assert_memory_equal(&a->bounds, &b->bounds, sizeof a->bounds);
+    assert_true(a->planes_found && b->planes_found);   /* an entry is written and read with its planes */
     assert_int_equal(a->plane_count, b->plane_count);
     for (uint32_t i = 0; i < a->plane_count; i++) {
         assert_int_equal(a->planes[i].tri_count, b->planes[i].tri_count);
@@ -234,6 +238,11 @@ static void test_scene_cache(void **st) {
     load_expect(glb, false, &a);
     sb_scene_free(&a);
     load_expect(glb, false, &a);
+    /* without the cache nothing searches for planes until asked; asked, it finds plane-box's ground */
+    assert_false(a.planes_found);
+    sb_scene_find_planes(&a);
+    assert_true(a.plane_count >= 1);
+    assert_true(fabs(a.planes[0].area - 40 * 40) < 1e-6 && a.planes[0].tri_count == 2);   /* the 40 x 40 ground */
     sb_scene_free(&a);
     unsetenv("SB_SCENE_CACHE");
     assert_int_equal(tmp_remove(g_cache), 0);
