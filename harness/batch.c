@@ -412,7 +412,8 @@ static void fail_runs(const sb_batch *b, int i, const char *renderer, const char
     sb_params_canonical(&r->spec.params, params, sizeof params);
     sb_run_info info = {.run_id = r->run_id, .run_index = r->index, .scene = bs->name, .path = bs->path_label,
                         .technique = r->spec.tech->name, .params = params, .backend = sb_backend_name(b->opts.backend),
-                        .renderer = renderer, .timing = sb_timing_name(b->opts.timing), .status = SB_STATUS_FAILED,
+                        .renderer = renderer, .timing = sb_timing_name(b->opts.timing), .submit = sb_submit_name(b->opts.submit),
+                        .status = SB_STATUS_FAILED,
                         .reason = why, .frames = b->opts.frames, .warmup = b->opts.warmup, .width = b->opts.width,
                         .height = b->opts.height};
     sb_summary_add_outcome(sum, &info, r->spec.tech->stages, NULL, NULL, 0);

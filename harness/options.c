@@ -82,6 +82,10 @@ const sb_option sb_options[] = {
      .check = backend_built},
     {.name = "--timing", .kind = SB_OPT_CHOICE, .arg = "auto|queries|sync", .def = "auto", .commands = RENDER_STRESS,
      .field = RUN(timing), .help = "stage timing (auto: sync on software rasterizers)"},
+    {.name = "--submit", .kind = SB_OPT_CHOICE, .arg = "direct|indirect", .def = "direct", .commands = RENDER,
+     .field = RUN(submit),
+     .help = "one GL call per draw, or one glMultiDrawElementsIndirect per pass and layer (draw_calls counts draws, "
+             "api_calls the calls)"},
     {.name = "--ring", .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 16, .def = "3", .commands = RENDER_STRESS,
      .field = RUN(ring), .help = "timer-query ring depth in frames"},
     {.name = "--clocks", .kind = SB_OPT_CHOICE, .arg = "auto|lock|free", .def = "auto", .commands = RENDER_STRESS,

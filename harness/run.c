@@ -30,6 +30,7 @@ void sb_run_id(uint64_t scene_hash, uint64_t path_hash, const sb_run_opts *o, co
         double sun[2] = {o->sun_az, o->sun_el};
         h = sb_fnv1a(h, sun, sizeof sun);
     }
+    if (o->submit != SB_SUBMIT_DIRECT) h = sb_fnv1a(h, "indirect", 9);   /* other timings (direct: the ids of before) */
     if (o->sun_size > 0 || o->lamp_radius > 0) {   /* another reference: another run (none: the ids of before) */
         double size[3] = {o->sun_size, o->lamp_radius, o->ref_samples};
         h = sb_fnv1a(h, size, sizeof size);
@@ -413,7 +414,7 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
         .run_id = r->run_id, .run_index = run_index, .scene = s->scene_name, .path = s->path_name,
         .technique = spec->tech->name, .params = r->params, .backend = sb_backend_name(o->backend),
         .renderer = s->ctx.renderer, .timing = sb_timing_name(s->timing), .clocks = s->clocks_mode, .status = SB_STATUS_OK,
-        .order = sb_order_name(o->order), .seed = o->order == SB_ORDER_SHUFFLE ? o->seed : 0,
+        .order = sb_order_name(o->order), .submit = sb_submit_name(o->submit), .seed = o->order == SB_ORDER_SHUFFLE ? o->seed : 0,
         .reason = "", .frames = o->frames, .warmup = o->warmup, .width = o->width, .height = o->height,
         .target_ci = o->target_ci, .scene_triangles = sb_scene_triangles(&s->scene), .load_ms = s->scene.load_ms,
         .calib_ms_before = NAN, .calib_ms_after = NAN, .eval_s = NAN, .stable = "", .unstable_reason = "",

@@ -32,6 +32,8 @@ const char *sb_order_name(sb_order o) {
     return o == SB_ORDER_INTERLEAVE ? "interleave" : o == SB_ORDER_SHUFFLE ? "shuffle" : "matrix";
 }
 
+const char *sb_submit_name(sb_submit_mode m) { return m == SB_SUBMIT_INDIRECT ? "indirect" : "direct"; }
+
 static void base_name(const char *path, char *out, size_t len) {
     const char *b = strrchr(path, '/');
     b = b ? b + 1 : path;
@@ -117,6 +119,8 @@ bool sb_session_attach(sb_session *s, const sb_run_opts *o, sb_scene *scene, sb_
     s->gpu_upload_ms = sb_now_ms() - t0;
     s->gpu.has_sun = s->scene.has_sun || o->sun_override;
     s->scratch = sb_xcalloc(s->scene.draw_count + 1, sizeof(uint32_t));
+    s->gpu.indirect = o->submit == SB_SUBMIT_INDIRECT;
+    if (s->gpu.indirect) s->cmds = sb_xcalloc(5 * ((size_t)s->scene.draw_count + 1), sizeof(uint32_t));
     s->tech_data = sb_xcalloc((size_t)sb_technique_count(), sizeof *s->tech_data);
     s->tech_loaded = sb_xcalloc((size_t)sb_technique_count(), sizeof *s->tech_loaded);
     s->timing = o->timing;
@@ -180,7 +184,8 @@ void sb_session_close_scene(sb_session *s) {
     sb_ref_cache_free(s->ref_cache);
     s->ref_cache = NULL;
     free(s->scratch);
-    s->scratch = NULL;
+    free(s->cmds);
+    s->scratch = s->cmds = NULL;
     sb_calib_free(&s->calib);
     sb_gpu_free(&s->gpu);
     sb_path_free(&s->path);
@@ -319,6 +324,7 @@ void sb_render_camera(sb_session *s, sb_instance *in, sb_frame *f, const sb_came
     f->seq = seq;
     sb_frame_setup(f, &s->gpu, cam);
     f->scratch = s->scratch;
+    f->cmds = s->cmds;
     f->eval = eval;
     in->tech->frame(in->state, f);
 }

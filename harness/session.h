@@ -23,9 +23,17 @@ typedef enum sb_order {
 } sb_order;
 const char *sb_order_name(sb_order o);
 
+/* How a pass's draws reach the GL (--submit). */
+typedef enum sb_submit_mode {
+    SB_SUBMIT_DIRECT,           /* one glDrawElements* per draw */
+    SB_SUBMIT_INDIRECT,         /* one glMultiDrawElementsIndirect per pass, layer and state */
+} sb_submit_mode;
+const char *sb_submit_name(sb_submit_mode m);
+
 typedef struct sb_run_opts {
     sb_backend backend;         /* default egl */
     sb_timing_mode timing;      /* default auto */
+    sb_submit_mode submit;      /* --submit direct|indirect (default direct) */
     int ring;                   /* query ring frames, default 3 */
     int frames;                 /* default 60 */
     int warmup;                 /* warm-up frames; -1 (the default): auto, until the GPU is warm */
@@ -78,6 +86,7 @@ typedef struct sb_session {
     char scene_name[256], path_name[256];
     char skip[SB_ERR_LEN + 64]; /* the last skip reason */
     uint32_t *scratch;          /* draw_count entries: a frame's culling results */
+    uint32_t *cmds;             /* --submit indirect: a pass's pending commands (5 words a draw) */
     struct sb_reference *ref;   /* the scene's Embree reference, built on first use */
     double gpu_upload_ms;       /* the scene's buffers and targets made on the GPU (sb_gpu_init, finished) */
     struct sb_ref_cache *ref_cache; /* its answers per rasterized frame, shared by the runs of the scene */

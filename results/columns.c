@@ -37,7 +37,7 @@ static double gpu_ms(const sb_stage_times *t) {
 
 /* ---- per-frame columns ---- */
 
-enum { C_DRAWS, C_SHADOW_DRAWS, C_TRIS, C_SHADOW_TRIS, C_RENDERED, C_SKIPPED, C_WARP };
+enum { C_DRAWS, C_SHADOW_DRAWS, C_API, C_SHADOW_API, C_TRIS, C_SHADOW_TRIS, C_RENDERED, C_SKIPPED, C_WARP };
 
 static sb_cell f_frame(const sb_frame_row *r, int a) { (void)a; return integer(r->rec->frame); }
 static sb_cell f_repeat(const sb_frame_row *r, int a) { (void)a; return integer(r->rec->repeat); }
@@ -48,6 +48,8 @@ static sb_cell f_counter(const sb_frame_row *r, int a) {
     switch (a) {
     case C_DRAWS: return integer(k->draw_calls);
     case C_SHADOW_DRAWS: return integer(k->shadow_draw_calls);
+    case C_API: return integer(k->api_calls);
+    case C_SHADOW_API: return integer(k->shadow_api_calls);
     case C_TRIS: return integer((long long)k->triangles);
     case C_SHADOW_TRIS: return integer((long long)k->shadow_triangles);
     }
@@ -100,9 +102,14 @@ static const sb_frame_col frame_cols[] = {
     COL("progress", f_progress, 0, "position along the path in [0, 1]"),
     COL("start_s", f_start_s, 0, "when the frame began, seconds since the process started (the order of runs and repeats)"),
     METRIC("draw_calls", f_counter, C_DRAWS, "count", SB_STAT_MEAN, SB_USE_HISTORY | SB_USE_REPORT,
-           "draw calls submitted in the frame"),
+           "draws submitted in the frame (a mesh range with its instances; each its own GL call with --submit direct)"),
     METRIC("shadow_draw_calls", f_counter, C_SHADOW_DRAWS, "count", SB_STAT_MEAN, ALL_USES,
-           "draw calls of the shadow stages (cascade, volumes)"),
+           "draws of the shadow stages (cascade, volumes)"),
+    METRIC("api_calls", f_counter, C_API, "count", SB_STAT_MEAN, 0,
+           "GL draw calls issued in the frame: draw_calls with --submit direct, one per pass, layer and state with "
+           "indirect"),
+    METRIC("shadow_api_calls", f_counter, C_SHADOW_API, "count", SB_STAT_MEAN, 0,
+           "GL draw calls of the shadow stages"),
     COL("triangles", f_counter, C_TRIS, "triangles submitted (instances counted)"),
     METRIC("shadow_triangles", f_counter, C_SHADOW_TRIS, "count", SB_STAT_MEAN, 0,
            "triangles submitted in the shadow stages"),
@@ -182,14 +189,15 @@ const sb_frame_col *sb_frame_cols(int *count) {
 
 enum {
     S_RUN_ID, S_SCENE, S_PATH, S_TECHNIQUE, S_PARAMS, S_BACKEND, S_RENDERER, S_TIMING, S_STATUS, S_REASON, S_CLOCKS,
-    S_STABLE, S_ORDER
+    S_STABLE, S_ORDER, S_SUBMIT
 };
 enum { I_RUN_INDEX, I_FRAMES, I_WARMUP, I_WIDTH, I_HEIGHT, I_SCENE_TRIS };
 
 static sb_cell r_text(const sb_run_row *r, int a) {
     const sb_run_info *in = r->info;
     const char *v[] = {in->run_id, in->scene, in->path, in->technique, in->params, in->backend, in->renderer,
-                       in->timing, sb_status_names[in->status], in->reason, in->clocks, in->stable, in->order};
+                       in->timing, sb_status_names[in->status], in->reason, in->clocks, in->stable, in->order,
+                       in->submit ? in->submit : ""};
     return text(v[a]);
 }
 static sb_cell r_int(const sb_run_row *r, int a) {
@@ -302,6 +310,7 @@ static const sb_run_col run_cols[] = {
     RUN("backend", r_text, S_BACKEND, "egl or osmesa"),
     RUN("renderer", r_text, S_RENDERER, "GL_RENDERER"),
     RUN("timing", r_text, S_TIMING, "queries or sync: the timing mode used"),
+    RUN("submit", r_text, S_SUBMIT, "direct or indirect: how the passes' draws were issued (--submit)"),
     RUN("clocks", r_text, S_CLOCKS, "the GPU clock during the run: free, or locked at N MHz (--clocks)"),
     RUN("order", r_text, S_ORDER, "matrix, interleave or shuffle: the order of runs and repetitions (--order)"),
     RUN("seed", r_seed, 0, "shuffle's seed (--seed reproduces the order); empty for the other orders"),

@@ -43,6 +43,7 @@ typedef struct sb_run_info {
     sb_status status;
     const char *clocks;         /* "free", "locked at N MHz" */
     const char *order;          /* --order */
+    const char *submit;         /* --submit: "direct", "indirect" */
     uint64_t seed;              /* shuffle's seed (0: none) */
     const char *stable;         /* "yes", "no", "" (not measured) */
     char unstable_reason[512];

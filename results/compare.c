@@ -55,6 +55,11 @@ void sb_compare_run_key(const sb_table *t, int r, char *out, size_t len) {
         size_t l = strlen(out);
         snprintf(out + l, len - l, "|%s", light);
     }
+    /* draws issued indirectly are another series of timings (direct, or a set from before the column: as before) */
+    if (!strcmp(sb_table_get(t, r, "submit"), "indirect")) {
+        size_t l = strlen(out);
+        snprintf(out + l, len - l, "|indirect");
+    }
 }
 
 typedef struct {

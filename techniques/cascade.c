@@ -129,7 +129,6 @@ static bool create_depth_programs(sb_csm *c, sb_err *err) {
             snprintf(vs_defs, sizeof vs_defs, "#extension GL_ARB_shader_viewport_layer_array : require\n%s", defs);
             if (!(p->prog_layered = sb_gpu_link("layered (vertex shader)", vs_defs, st, 2, err))) return false;
         }
-        p->u_mask = p->prog_layered ? glGetUniformLocation(p->prog_layered, "u_mask") : -1;
         p->e_cascade = glGetUniformLocation(p->prog_cascade, "u_exponent");
         p->e_layered = p->prog_layered ? glGetUniformLocation(p->prog_layered, "u_exponent") : -1;
     }
@@ -341,17 +340,19 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
                 glUniform1i(p->u_cascade, k);
                 for (uint32_t d = 0; d < s->draw_count; d++)
                     if ((c->mask[d] & (1u << k)) && sb_draw_variant(g, d) == a) sb_submit(f, d, 1);
+                sb_submit_flush(f);
             }
         } else {
             bool gs = d->layered == SB_LAYERED_GS;
             glUseProgram(p->prog_layered);
             if (p->e_layered >= 0) glUniform1f(p->e_layered, (float)d->exponent);
+            if (a == 0) sb_set_draw_masks(f, c->mask);   /* each draw's cascades, read at its baseInstance */
             for (uint32_t d = 0; d < s->draw_count; d++) {
                 unsigned m = c->mask[d];
                 if (!m || sb_draw_variant(g, d) != a) continue;
-                glUniform1ui(p->u_mask, m);
                 sb_submit(f, d, gs ? 1 : popcount8(m));
             }
+            sb_submit_flush(f);
         }
     }
     glDisable(GL_POLYGON_OFFSET_FILL);

@@ -80,7 +80,7 @@ typedef struct sb_cascade_block {
  * layered (geometry shader or gl_Layer from the vertex shader) when asked. */
 typedef struct sb_csm_pass {
     GLuint prog_cascade, prog_layered;
-    GLint u_cascade, u_mask, e_cascade, e_layered;   /* e_: the ESM exponent (u_exponent) */
+    GLint u_cascade, e_cascade, e_layered;   /* e_: the ESM exponent (u_exponent) */
 } sb_csm_pass;
 
 /* Techniques built on the machinery keep their sb_csm as the first member of

@@ -77,6 +77,7 @@ void sb_lamp_draw(sb_lamp_state *s, sb_frame *f, uint32_t n, int instances,
         set(s, a, arg);
         for (uint32_t i = 0; i < n; i++)
             if (sb_draw_variant(f->gpu, f->scratch[i]) == a) sb_submit(f, f->scratch[i], instances);
+        sb_submit_flush(f);
     }
 }
 

@@ -139,6 +139,7 @@ static void planar_frame(void *state, sb_frame *f) {
         glUniform4f(s->f_plane, (float)pl->n[0], (float)pl->n[1], (float)pl->n[2], (float)pl->d);
         glUniform1f(s->f_eps, s->eps);
         for (uint32_t d = 0; d < sc->draw_count; d++) sb_submit(f, d, 1);
+        sb_submit_flush(f);
     }
     glStencilMask(0xff);
     glEnable(GL_DEPTH_TEST);

@@ -32,7 +32,6 @@ static bool final_variant(sb_final_prog *fp, int i, const sb_gpu *g, const char 
     v->u_view = glGetUniformLocation(v->prog, "u_view");
     v->u_proj = glGetUniformLocation(v->prog, "u_proj");
     v->u_light = glGetUniformLocation(v->prog, "u_shade_light");
-    v->u_color = glGetUniformLocation(v->prog, "u_color");
     v->u_depth_view = glGetUniformLocation(v->prog, "u_depth_view");
     if (i == 0) return true;
     /* the technique's uniforms reach this variant by copy from v[0]: one only it read would keep
@@ -48,7 +47,7 @@ static bool final_variant(sb_final_prog *fp, int i, const sb_gpu *g, const char 
         if (block >= 0 || glGetUniformLocation(fp->v[0].prog, un) >= 0) continue;
         /* the shared pass's own: set on each variant, or bound by the shader (the alpha test's sb_ samplers) */
         bool own = !strncmp(un, "sb_", 3);
-        const char *shared[] = {"u_view", "u_proj", "u_shade_light", "u_color", "u_depth_view"};
+        const char *shared[] = {"u_view", "u_proj", "u_shade_light", "u_depth_view"};
         for (size_t k = 0; k < SB_COUNT(shared); k++) own |= !strcmp(un, shared[k]);
         if (!own)
             return sb_fail(err, "%s: uniform %s is read by the %s variant of the camera pass only: its value would not "
@@ -236,6 +235,24 @@ bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int
     glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, SB_VERTEX_BYTES, (void *)24);
     glEnableVertexAttribArray(3);
     glVertexAttribIPointer(3, 1, GL_UNSIGNED_INT, SB_VERTEX_BYTES, (void *)32);
+    /* per draw, read at the draw's baseInstance: the divisor exceeds any draw's instances (8 cascades, 6 faces),
+       so every instance of a draw reads its own entry */
+    float *colors = sb_xmalloc(sizeof(float) * 4 * (s->draw_count + 1));
+    for (uint32_t d = 0; d < s->draw_count; d++) memcpy(colors + 4 * d, s->draws[d].color, 4 * sizeof(float));
+    glGenBuffers(1, &g->color_buf);
+    glBindBuffer(GL_ARRAY_BUFFER, g->color_buf);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(sizeof(float) * 4 * (s->draw_count + 1)), colors, GL_STATIC_DRAW);
+    free(colors);
+    glEnableVertexAttribArray(4);
+    glVertexAttribPointer(4, 4, GL_FLOAT, GL_FALSE, 16, (void *)0);
+    glVertexAttribDivisor(4, SB_DRAW_DIVISOR);
+    glGenBuffers(1, &g->mask_buf);
+    glBindBuffer(GL_ARRAY_BUFFER, g->mask_buf);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(s->draw_count + 4), NULL, GL_STREAM_DRAW);
+    glEnableVertexAttribArray(5);
+    glVertexAttribIPointer(5, 1, GL_UNSIGNED_BYTE, 1, (void *)0);
+    glVertexAttribDivisor(5, SB_DRAW_DIVISOR);
+    glGenBuffers(1, &g->indirect_buf);
 
     g->color_tex = make_tex(GL_RGBA8, w, h);
     g->vis_tex = make_tex(GL_R8, w, h);
@@ -285,7 +302,9 @@ void sb_gpu_free(sb_gpu *g) {
     GLuint tex[] = {g->color_tex, g->vis_tex, g->depth_tex, g->pos_tex, g->aux_tex};
     for (size_t i = 0; i < SB_COUNT(tex); i++) /* nothing to delete (nor a GL) when the session never opened */
         if (tex[i]) glDeleteTextures(1, &tex[i]);
-    if (g->vbo) glDeleteBuffers(1, &g->vbo);
+    GLuint bufs[] = {g->vbo, g->color_buf, g->mask_buf, g->indirect_buf};
+    for (size_t i = 0; i < SB_COUNT(bufs); i++)
+        if (bufs[i]) glDeleteBuffers(1, &bufs[i]);
     if (g->ibo) glDeleteBuffers(1, &g->ibo);
     if (g->vao) glDeleteVertexArrays(1, &g->vao);
     if (g->mat_ssbo) glDeleteBuffers(1, &g->mat_ssbo);
@@ -301,6 +320,7 @@ void sb_gpu_free(sb_gpu *g) {
 
 void sb_frame_setup(sb_frame *f, const sb_gpu *g, const sb_camera *cam) {
     memset(&f->counters, 0, sizeof f->counters);
+    f->cmd_count = 0;
     f->gpu = g;
     f->cam = *cam;
     sb_v3 eye = sb_v3_sub(cam->pos, g->scene->origin);
@@ -362,24 +382,71 @@ void sb_stage_begin(sb_frame *f, sb_stage s) {
     f->stage = s;
     sb_timer_stage_begin(f->timer, s);
 }
-void sb_stage_end(sb_frame *f, sb_stage s) { sb_timer_stage_end(f->timer, s); }
+void sb_stage_end(sb_frame *f, sb_stage s) {
+    sb_submit_flush(f);
+    sb_timer_stage_end(f->timer, s);
+}
+
+static bool shadow_stage(const sb_frame *f) { return f->stage == SB_STAGE_CASCADE || f->stage == SB_STAGE_VOLUMES; }
+
+/* A draw (what the GPU draws: a mesh range, its instances) and an API call are counted apart: with
+   --submit indirect one call issues a pass's draws. */
+static void count_draws(sb_frame *f, uint64_t triangles, int instances) {
+    uint64_t tris = triangles * (uint64_t)(instances > 1 ? instances : 1);
+    f->counters.draw_calls++;
+    f->counters.stage_draw_calls[f->stage]++;
+    f->counters.triangles += tris;
+    if (shadow_stage(f)) {
+        f->counters.shadow_draw_calls++;
+        f->counters.shadow_triangles += tris;
+    }
+}
+
+static void count_api_call(sb_frame *f) {
+    f->counters.api_calls++;
+    f->counters.shadow_api_calls += shadow_stage(f);
+}
 
 void sb_submit(sb_frame *f, uint32_t d, int instances) {
     const sb_draw *dr = &f->gpu->scene->draws[d];
-    const void *offset = (const void *)((size_t)dr->first_index * sizeof(uint32_t));
-    bool shadow = f->stage == SB_STAGE_CASCADE || f->stage == SB_STAGE_VOLUMES;
-    uint32_t tris = shadow ? shadow_triangles(f->gpu, d, f->shade_light) : dr->index_count / 3;
+    uint32_t tris = shadow_stage(f) ? shadow_triangles(f->gpu, d, f->shade_light) : dr->index_count / 3;
     if (tris == 0) return;
-    if (instances > 1) glDrawElementsInstanced(GL_TRIANGLES, (GLsizei)(3 * tris), GL_UNSIGNED_INT, offset, instances);
-    else glDrawElements(GL_TRIANGLES, (GLsizei)(3 * tris), GL_UNSIGNED_INT, offset);
-    sb_count_draw(f, tris, instances);
+    GLsizei n = instances > 1 ? instances : 1;
+    count_draws(f, tris, instances);
+    if (f->gpu->indirect) {   /* count, instances, first index, base vertex, base instance */
+        uint32_t *c = f->cmds + 5 * (size_t)f->cmd_count++;
+        c[0] = 3 * tris, c[1] = (uint32_t)n, c[2] = dr->first_index, c[3] = 0, c[4] = d;
+        return;
+    }
+    const void *offset = (const void *)((size_t)dr->first_index * sizeof(uint32_t));
+    glDrawElementsInstancedBaseInstance(GL_TRIANGLES, (GLsizei)(3 * tris), GL_UNSIGNED_INT, offset, n, d);
+    count_api_call(f);
+}
+
+void sb_submit_flush(sb_frame *f) {
+    if (!f->cmd_count) return;
+    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, f->gpu->indirect_buf);
+    /* a fresh store each flush: the commands of a draw still in flight are not overwritten (no wait) */
+    glBufferData(GL_DRAW_INDIRECT_BUFFER, (GLsizeiptr)(20 * (size_t)f->cmd_count), f->cmds, GL_STREAM_DRAW);
+    glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_INT, NULL, (GLsizei)f->cmd_count, 0);
+    count_api_call(f);
+    f->cmd_count = 0;
+}
+
+void sb_set_draw_masks(const sb_frame *f, const uint8_t *masks) {
+    const sb_gpu *g = f->gpu;
+    glBindBuffer(GL_ARRAY_BUFFER, g->mask_buf);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(g->scene->draw_count + 4), NULL, GL_STREAM_DRAW);   /* orphaned */
+    glBufferSubData(GL_ARRAY_BUFFER, 0, (GLsizeiptr)g->scene->draw_count, masks);
 }
 
 /* A camera pass's draw: back faces culled unless the material is double-sided
- * (*culling: the GL state, changed only when the next draw needs the other). */
+ * (*culling: the GL state, changed only when the next draw needs the other; the
+ * draws collected before it are issued first). */
 static void camera_submit(sb_frame *f, uint32_t d, bool *culling) {
     bool want = !f->gpu->scene->draws[d].double_sided;
     if (want != *culling) {
+        sb_submit_flush(f);
         if (want) glEnable(GL_CULL_FACE);
         else glDisable(GL_CULL_FACE);
         *culling = want;
@@ -388,14 +455,8 @@ static void camera_submit(sb_frame *f, uint32_t d, bool *culling) {
 }
 
 void sb_count_draw(sb_frame *f, uint64_t triangles, int instances) {
-    uint64_t tris = triangles * (uint64_t)(instances > 1 ? instances : 1);
-    f->counters.draw_calls++;
-    f->counters.stage_draw_calls[f->stage]++;
-    f->counters.triangles += tris;
-    if (f->stage == SB_STAGE_CASCADE || f->stage == SB_STAGE_VOLUMES) {
-        f->counters.shadow_draw_calls++;
-        f->counters.shadow_triangles += tris;
-    }
+    count_draws(f, triangles, instances);
+    count_api_call(f);
 }
 
 void sb_set_camera_uniforms(const sb_frame *f, GLint u_view, GLint u_proj) {
@@ -437,6 +498,7 @@ void sb_zpass(sb_frame *f) {
         sb_set_camera_uniforms(f, g->zpass_u_view[a], g->zpass_u_proj[a]);
         for (uint32_t i = 0; i < n; i++)
             if (sb_draw_variant(g, f->scratch[i]) == a) camera_submit(f, f->scratch[i], &culling);
+        sb_submit_flush(f);
     }
     glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
     glDisable(GL_CULL_FACE);
@@ -510,12 +572,9 @@ static void draw_scene(sb_frame *f, const sb_final_prog *fp, GLenum depth_func, 
         if (v->u_depth_view >= 0) glUniformMatrix4fv(v->u_depth_view, 1, GL_FALSE, depth_view);
         glUniform4f(v->u_light, (float)f->shade_light[0], (float)f->shade_light[1], (float)f->shade_light[2],
                     (float)f->shade_light[3]);
-        for (uint32_t i = 0; i < n; i++) {
-            uint32_t d = f->scratch[i];
-            if (sb_draw_variant(g, d) != a) continue;
-            if (v->u_color >= 0) glUniform4fv(v->u_color, 1, g->scene->draws[d].color);
-            camera_submit(f, d, &culling);
-        }
+        for (uint32_t i = 0; i < n; i++)
+            if (sb_draw_variant(g, f->scratch[i]) == a) camera_submit(f, f->scratch[i], &culling);
+        sb_submit_flush(f);
     }
     glDisable(GL_CULL_FACE);
     glDepthMask(GL_TRUE);

@@ -12,11 +12,14 @@
 struct sb_timer;
 struct sb_reference;
 
+/* The divisor of the per-draw attributes (colour, caster mask): above any draw's instance count. */
+#define SB_DRAW_DIVISOR 64
+
 /* One variant of the camera-pass program, with the shared pass's uniforms in
  * it and the links that bring the technique's uniforms over from `prog`. */
 typedef struct sb_final_variant {
     GLuint prog;
-    GLint u_view, u_proj, u_light, u_color;
+    GLint u_view, u_proj, u_light;
     GLint u_depth_view;     /* evaluation variants: the view the lookup's depth is in */
     sb_gl_links from_timed;
 } sb_final_variant;
@@ -52,6 +55,12 @@ typedef struct sb_gpu {
     GLint zpass_u_view[2], zpass_u_proj[2];
     GLuint mat_ssbo, texel_buf, texel_tex;  /* the alpha test's materials (binding 7) and texels (unit 15) */
     struct sb_facing *facing;           /* single-sided draws' triangles ordered by the light they face (harness-owned) */
+    /* per-draw data the shaders read through instanced attributes fetched at baseInstance = the draw's number
+       (so a multi-draw needs no uniform between draws): colour (location 4, static) and caster mask (5, written
+       by a layered shadow pass: sb_set_draw_masks) */
+    GLuint color_buf, mask_buf;
+    bool indirect;                      /* --submit indirect: a pass's draws are one glMultiDrawElementsIndirect */
+    GLuint indirect_buf;                /* its commands (rewritten at every flush) */
 } sb_gpu;
 
 /* What a technique's create gets: the session (read-only), the run's size,
@@ -96,6 +105,9 @@ typedef struct sb_frame {
                                            position (w 1); the sun unless the technique shades a lamp
                                            (sb_frame_shade_point, before its shadow stage) */
     uint32_t *scratch;                  /* draw_count entries, for culling results */
+    uint32_t *cmds;                     /* --submit indirect: the pass's pending commands, 5 words each (at most
+                                           draw_count: a pass issues each draw once between flushes) */
+    uint32_t cmd_count;
     sb_stage stage;                     /* the stage being recorded (for draw counts) */
     sb_counters counters;
     const sb_look *look;                /* the flicker twin's lookup (NULL: the frame's own camera) */
@@ -147,6 +159,14 @@ void sb_zpass(sb_frame *f);
  * the frame's light (they come first in its range: the index buffer is
  * ordered for the light on first use), as the reference's rays see them. */
 void sb_submit(sb_frame *f, uint32_t draw, int instances);
+/* With --submit indirect, sb_submit collects the draws and this issues them
+ * as one glMultiDrawElementsIndirect (one API call): call it before any state
+ * a draw depends on changes (program, uniforms, framebuffer, culling) and at
+ * the end of a loop of draws; sb_stage_end calls it too. Nothing with direct. */
+void sb_submit_flush(sb_frame *f);
+/* Uploads each draw's caster mask (draw_count bytes) for the layered shadow
+ * shaders (attribute 5, read at the draw's baseInstance). */
+void sb_set_draw_masks(const sb_frame *f, const uint8_t *masks);
 /* Whether `bytes` of `what` (e.g. "shadow maps") fit beside the camera
  * targets in the GPU memory the context has (sb_context_memory_free): false
  * with "WHO: needs 4.0 GiB of shadow maps, ..." in why when they do not. */
@@ -167,7 +187,7 @@ void sb_frame_shade_point(sb_frame *f, sb_v3 pos);
 void sb_final_pass_stencil(sb_frame *f, const sb_final_prog *fp, GLint u_lit, GLuint mask);
 /* Uploads the frame's camera view and projection (float) to the bound program. */
 void sb_set_camera_uniforms(const sb_frame *f, GLint u_view, GLint u_proj);
-/* Counts a draw issued by the technique itself (its own geometry). */
+/* Counts a draw issued by the technique itself (its own geometry): one draw and one API call. */
 void sb_count_draw(sb_frame *f, uint64_t triangles, int instances);
 
 /* Reads the last frame's targets (any pointer may be NULL): depth (float,

@@ -20,8 +20,10 @@ extern const char *const sb_stage_names[SB_STAGE_COUNT];
 
 /* What a frame submitted, counted as it happens (technique-side counters). */
 typedef struct sb_counters {
-    uint32_t draw_calls, shadow_draw_calls;         /* shadow: cascade and volumes stages */
+    uint32_t draw_calls, shadow_draw_calls;         /* draws (a mesh range and its instances); shadow: cascade and
+                                                       volumes stages */
     uint32_t stage_draw_calls[SB_STAGE_COUNT];
+    uint32_t api_calls, shadow_api_calls;           /* GL draw calls issued: with --submit indirect one issues many draws */
     uint64_t triangles, shadow_triangles;           /* triangles x instances submitted */
     int cascades_rendered, cascades_skipped;
     int warp_fallbacks;                             /* warped maps (psm, lispsm, tsm) that used the uniform fit */

@@ -3,11 +3,11 @@
 layout(triangles) in;
 layout(triangle_strip, max_vertices = 24) out;
 in vec3 g_pos[];
-uniform uint u_mask;    // cascades this caster's bounds intersect (CPU culling)
+flat in uint g_mask[];  // cascades this caster's bounds intersect (CPU culling)
 void main() {
     int n = int(sb_info.x);
     for (int c = 0; c < n; c++) {
-        if (((u_mask >> uint(c)) & 1u) == 0u || sb_flags[c].x < 0.5) continue;
+        if (((g_mask[0] >> uint(c)) & 1u) == 0u || sb_flags[c].x < 0.5) continue;
         vec4 p0 = sb_light_vp[c] * vec4(g_pos[0], 1.0);
         vec4 p1 = sb_light_vp[c] * vec4(g_pos[1], 1.0);
         vec4 p2 = sb_light_vp[c] * vec4(g_pos[2], 1.0);

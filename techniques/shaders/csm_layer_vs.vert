@@ -1,12 +1,12 @@
 // csm_layer_vs.vert - layered shadow pass without a geometry shader
 // (ARB_shader_viewport_layer_array): instance k goes to the k-th cascade in the mask.
 layout(location = 0) in vec3 a_pos;
-uniform uint u_mask;
+layout(location = 5) in uint a_mask;   // cascades this caster's bounds intersect: per draw, at its baseInstance
 void main() {
     SB_ALPHA_VS();
     int k = gl_InstanceID, c = 0;
     for (; c < 8; c++) {
-        if (((u_mask >> uint(c)) & 1u) != 0u) {
+        if (((a_mask >> uint(c)) & 1u) != 0u) {
             if (k == 0) break;
             k--;
         }

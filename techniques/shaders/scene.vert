@@ -2,11 +2,13 @@
 // gl_Position is invariant). Positions are relative to the scene origin.
 layout(location = 0) in vec3 a_pos;
 layout(location = 1) in vec3 a_nrm;
+layout(location = 4) in vec4 a_color;   // the draw's colour: per draw, read at its baseInstance (render.c)
 uniform mat4 u_view;
 uniform mat4 u_proj;
 out vec3 v_pos;
 out vec3 v_nrm;
 out float v_view_z;
+flat out vec4 v_color;
 #ifdef SB_EVAL
 // the view the shadow lookup's depth is taken in: u_view, except in the
 // flicker twin's lookup, where the evaluated frame's points are drawn through
@@ -18,6 +20,7 @@ void main() {
     vec4 vp = u_view * vec4(a_pos, 1.0);
     v_pos = a_pos;
     v_nrm = a_nrm;
+    v_color = a_color;
 #ifdef SB_EVAL
     v_view_z = -(u_depth_view * vec4(a_pos, 1.0)).z;
 #else
