@@ -86,6 +86,9 @@ void sb_final_prog_free(sb_final_prog *fp) {
     memset(fp, 0, sizeof *fp);
 }
 
+/* The divisor of the per-draw attributes (colour, caster mask): above any draw's instance count. */
+#define SB_DRAW_DIVISOR 64
+
 static GLuint make_tex(GLenum internal, int w, int h) {
     GLuint t;
     glGenTextures(1, &t);

@@ -12,9 +12,6 @@
 struct sb_timer;
 struct sb_reference;
 
-/* The divisor of the per-draw attributes (colour, caster mask): above any draw's instance count. */
-#define SB_DRAW_DIVISOR 64
-
 /* One variant of the camera-pass program, with the shared pass's uniforms in
  * it and the links that bring the technique's uniforms over from `prog`. */
 typedef struct sb_final_variant {
