@@ -17,6 +17,12 @@ typedef struct ray_ctx {
     bool all_faces;                 /* both faces of a single-sided triangle count (the path check) */
 } ray_ctx;
 
+/* A geometry's filter data: the reference and the scene triangle its primID 0 is. */
+typedef struct sb_ref_geo {
+    const sb_reference *r;
+    uint32_t first;
+} sb_ref_geo;
+
 /* Embree's packet layout (rtcore_ray.h, whose accessors are C++ only):
  * structure-of-arrays of N lanes. */
 static float ray_dir(const struct RTCFilterFunctionNArguments *a, int axis, unsigned i) {
@@ -32,12 +38,14 @@ static unsigned hit_prim(const struct RTCFilterFunctionNArguments *a, unsigned i
 /* Rejects hits the rasterizer would not draw: the back of an open
  * single-sided triangle, the uncovered part of an alpha-tested one. */
 static void filter(const struct RTCFilterFunctionNArguments *args) {
-    const sb_reference *r = args->geometryUserPtr;
+    const sb_ref_geo *geo = args->geometryUserPtr;
+    const sb_reference *r = geo->r;
     const ray_ctx *rc = (const ray_ctx *)args->context;
     const sb_scene *s = r->src;
     for (unsigned i = 0; i < args->N; i++) {
         if (args->valid[i] != -1) continue;
-        uint32_t prim = hit_prim(args, i);
+        /* an instance's ray is in its proto's space: the proto's triangle, which it repeats, answers */
+        uint32_t prim = geo->first + hit_prim(args, i);
         uint8_t flags = r->tri[prim];
         if (!flags) continue;
         const uint32_t *ix = s->indices + 3 * (size_t)prim;
@@ -87,6 +95,70 @@ void sb_reference_set_light_size(sb_reference *r, double sun_size_deg, double la
     r->samples = samples > 0 ? samples : 64;
 }
 
+/* A triangle geometry of the scene's triangles [first, first + count) (their indices shared, not copied). */
+static RTCGeometry tri_geometry(sb_reference *r, RTCDevice dev, const sb_scene *s, uint32_t first, uint32_t count,
+                                sb_ref_geo *geo) {
+    RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
+    /* positions are the first 3 floats of each vertex; what follows them keeps
+       Embree's 16-byte reads of the last vertex inside the buffer */
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, s->vertices, 0, SB_VERTEX_BYTES,
+                               s->vertex_count);
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, s->indices,
+                               (size_t)first * 3 * sizeof(uint32_t), 3 * sizeof(uint32_t), count);
+    if (r->tri) {
+        *geo = (sb_ref_geo){r, first};
+        rtcSetGeometryUserData(g, geo);
+        rtcSetGeometryOccludedFilterFunction(g, filter);
+        rtcSetGeometryIntersectFilterFunction(g, filter);
+    }
+    rtcCommitGeometry(g);
+    return g;
+}
+
+static void commit_scene(RTCScene sc) {
+    rtcSetSceneFlags(sc, RTC_SCENE_FLAG_ROBUST); /* watertight: no ray slips through a shared edge or corner */
+    rtcSetSceneBuildQuality(sc, RTC_BUILD_QUALITY_HIGH);
+    rtcCommitScene(sc);
+}
+
+/* Shared geometry: a draw others repeat becomes a scene of its own, built once, and it and every repeat an
+ * instance of it under the draw's transform (the transform the GPU draws it with); any other draw a triangle
+ * geometry of its own triangles. */
+static void attach_draws(sb_reference *r, RTCDevice dev, RTCScene top, const sb_scene *s) {
+    uint32_t n = s->draw_count;
+    r->geom_first = sb_xcalloc(n + 1, sizeof(uint32_t));
+    r->protos = sb_xcalloc(n + 1, sizeof(void *));
+    r->geo = sb_xcalloc(n + 1, sizeof(sb_ref_geo));
+    uint8_t *repeated = sb_xcalloc(n + 1, 1);
+    for (uint32_t d = 0; d < n; d++) repeated[s->draws[d].proto] |= s->draws[d].proto != d;
+    static const float id[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+    for (uint32_t d = 0; d < n; d++) {
+        const sb_draw *dr = &s->draws[d];
+        uint32_t p = dr->proto, first = dr->first_index / 3;
+        RTCGeometry g;
+        if (!repeated[p]) {
+            g = tri_geometry(r, dev, s, first, dr->index_count / 3, &r->geo[d]);
+        } else {
+            if (!r->protos[p]) {
+                RTCScene ps = rtcNewScene(dev);
+                RTCGeometry pg = tri_geometry(r, dev, s, s->draws[p].first_index / 3, dr->index_count / 3, &r->geo[p]);
+                rtcAttachGeometry(ps, pg);
+                rtcReleaseGeometry(pg);
+                commit_scene(ps);
+                r->protos[p] = ps;
+            }
+            g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_INSTANCE);
+            rtcSetGeometryInstancedScene(g, (RTCScene)r->protos[p]);
+            rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, p == d ? id : dr->xform);
+            rtcCommitGeometry(g);
+        }
+        unsigned gid = rtcAttachGeometry(top, g);
+        rtcReleaseGeometry(g);
+        if (gid < n) r->geom_first[gid] = first;
+    }
+    free(repeated);
+}
+
 bool sb_reference_build(sb_reference *r, const sb_scene *s, sb_err *err) {
     memset(r, 0, sizeof *r);
     double t0 = sb_now_ms();
@@ -95,34 +167,22 @@ bool sb_reference_build(sb_reference *r, const sb_scene *s, sb_err *err) {
     r->src = s;
     r->tri = triangle_flags(s);
     RTCScene scene = rtcNewScene(dev);
-    RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
-    /* positions are the first 3 floats of each vertex; what follows them keeps
-       Embree's 16-byte reads of the last vertex inside the buffer */
-    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, s->vertices, 0, SB_VERTEX_BYTES,
-                               s->vertex_count);
-    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, s->indices, 0, 3 * sizeof(uint32_t),
-                               s->index_count / 3);
-    if (r->tri) {
-        rtcSetGeometryUserData(g, r);
-        rtcSetGeometryOccludedFilterFunction(g, filter);
-        rtcSetGeometryIntersectFilterFunction(g, filter);
+    if (s->instance_draws) {
+        attach_draws(r, dev, scene, s);
+    } else {
+        r->geo = sb_xcalloc(1, sizeof(sb_ref_geo));
+        RTCGeometry g = tri_geometry(r, dev, s, 0, s->index_count / 3, r->geo);
+        rtcAttachGeometry(scene, g);
+        rtcReleaseGeometry(g);
     }
-    rtcCommitGeometry(g);
-    rtcAttachGeometry(scene, g);
-    rtcReleaseGeometry(g);
-    rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST); /* watertight: no ray slips through a shared edge or corner */
-    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
-    rtcCommitScene(scene);
-    enum RTCError e = rtcGetDeviceError(dev);
-    if (e != RTC_ERROR_NONE) {
-        rtcReleaseScene(scene);
-        rtcReleaseDevice(dev);
-        free(r->tri);
-        r->tri = NULL;
-        return sb_fail(err, "embree: building the scene failed (error %d)", (int)e);
-    }
+    commit_scene(scene);
     r->device = dev;
     r->scene = scene;
+    enum RTCError e = rtcGetDeviceError(dev);
+    if (e != RTC_ERROR_NONE) {
+        sb_reference_free(r);
+        return sb_fail(err, "embree: building the scene failed (error %d)", (int)e);
+    }
     sb_v3 ext = sb_v3_sub(s->bounds.hi, s->bounds.lo);
     r->eps_scene = (float)(sb_v3_len(ext) * 1e-6);
     r->build_ms = sb_now_ms() - t0;
@@ -131,6 +191,12 @@ bool sb_reference_build(sb_reference *r, const sb_scene *s, sb_err *err) {
 
 void sb_reference_free(sb_reference *r) {
     if (r->scene) rtcReleaseScene(r->scene);
+    if (r->protos)
+        for (uint32_t d = 0; d < r->src->draw_count; d++)
+            if (r->protos[d]) rtcReleaseScene(r->protos[d]);
+    free(r->protos);
+    free(r->geom_first);
+    free(r->geo);
     if (r->device) rtcReleaseDevice(r->device);
     free(r->tri);
     memset(r, 0, sizeof *r);
@@ -274,10 +340,12 @@ static void first_hits(job *j) {
         rtcIntersect1((RTCScene)j->r->scene, &rc.ctx, &rh);
         if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
         h->t = rh.ray.tfar;
-        h->prim = rh.hit.primID;
+        /* the scene's triangle: a draw's own (world) copy, also where the ray met a repeat of another's */
+        unsigned gid = rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID ? rh.hit.instID[0] : rh.hit.geomID;
+        h->prim = (j->r->geom_first ? j->r->geom_first[gid] : 0) + rh.hit.primID;
         /* the front face from the triangle's own winding (counter-clockwise, as glTF and GL say) */
         const sb_scene *sc = j->r->src;
-        const uint32_t *ix = sc->indices + 3 * (size_t)rh.hit.primID;
+        const uint32_t *ix = sc->indices + 3 * (size_t)h->prim;
         const float *a = sb_vertex(sc, ix[0]), *b = sb_vertex(sc, ix[1]), *c = sb_vertex(sc, ix[2]);
         float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
         float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};

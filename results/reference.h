@@ -10,6 +10,12 @@ typedef struct sb_reference {
     void *device, *scene;       /* RTCDevice, RTCScene */
     const sb_scene *src;        /* the scene (positions, materials) the filter reads */
     uint8_t *tri;               /* per triangle: SB_REF_* flags (NULL when no triangle needs the filter) */
+    /* A scene with shared geometry (sb_draw.proto): one Embree geometry a draw, an instance of its proto's
+       scene (built once) for each draw that repeats one; geom_first[id] is the first scene triangle of the draw
+       behind top-level geometry id (NULL without sharing: one geometry, primID the scene's triangle). */
+    uint32_t *geom_first;
+    void **protos;              /* RTCScene per draw that others repeat (NULL where none) */
+    struct sb_ref_geo *geo;     /* what the filter reads of each geometry */
     double build_ms;
     float eps_scene;            /* a length relative to the scene size, for ray offsets */
     /* the light's size (sb_reference_set_light_size; 0: a light of no size, one ray a point) */

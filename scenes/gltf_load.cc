@@ -318,6 +318,8 @@ struct Decoded {
     PrimData d;
     std::vector<uint32_t> tris;
     int closed_known = 0;   // sb_prim_desc.closed_known
+    uint32_t first_draw = 0;  // 1 + the draw its first placement became (0: none yet, or it cannot be shared)
+    sb_m4 first_inv;          // that placement's world transform, inverted: later ones relative to it
 };
 
 struct Loader {
@@ -621,7 +623,7 @@ struct Loader {
     bool prim(int node, int mesh, int pi, const std::vector<sb_m4> &instances);
     bool triangles(const tinygltf::Primitive &p, const std::string &where, const PrimData &d, std::vector<uint32_t> &tris);
     void emit(const PrimData &d, const std::vector<uint32_t> &tris, const sb_m4 *w, int node, uint32_t mat,
-              bool double_sided, const float color[4], int *closed_known);
+              bool double_sided, const float color[4], int *closed_known, Decoded *shared = nullptr);
     void reserve();
     bool instances(int ni, std::vector<sb_m4> &out);
     bool light(int ni);
@@ -659,9 +661,10 @@ bool Loader::triangles(const tinygltf::Primitive &p, const std::string &where, c
 // Adds the primitive to the scene in world space: under w (NULL: already there, skinned).
 // closed_known: what is known of the primitive's closedness (0: nothing yet), updated after the first instance.
 void Loader::emit(const PrimData &d, const std::vector<uint32_t> &tris_in, const sb_m4 *w, int node, uint32_t mat,
-                  bool double_sided, const float color[4], int *closed_known) {
+                  bool double_sided, const float color[4], int *closed_known, Decoded *shared) {
     size_t nv = d.pos.size() / 3;
     const sb_m4 id = sb_m4_identity();
+    const sb_m4 placed = w ? *w : id;
     if (w && !memcmp(w, &id, sizeof id)) w = nullptr;   // in place already: the vertices as they are, not a copy
     bool collapses = w && det3(*w) == 0;   // a zero scale can weld what was apart: work closedness out again
     const std::vector<uint32_t> *tris = &tris_in;
@@ -697,7 +700,14 @@ void Loader::emit(const PrimData &d, const std::vector<uint32_t> &tris_in, const
     pd.material = mat;
     pd.node = (uint32_t)node;
     pd.closed_known = collapses ? 0 : *closed_known;
+    if (shared && shared->first_draw) {   // another placement of a primitive added before: relative to it
+        sb_m4 rel = sb_m4_mul(placed, shared->first_inv);
+        pd.instance_of = shared->first_draw;
+        memcpy(pd.relative, rel.m, sizeof pd.relative);
+    }
     sb_scene_add_prim(s, &pd);
+    if (shared && !shared->first_draw && !collapses && sb_m4_invert(placed, &shared->first_inv))
+        shared->first_draw = s->draw_count;
     if (!collapses && !*closed_known && !double_sided) *closed_known = s->draws[s->draw_count - 1].closed ? 2 : 1;
 }
 
@@ -783,7 +793,7 @@ bool Loader::prim(int node, int mesh, int pi, const std::vector<sb_m4> &inst) {
         emit(d, tris, nullptr, node, mat, ds, color, &unknown);
         return true;
     }
-    for (const sb_m4 &w : inst) emit(d, tris, &w, node, mat, ds, color, &dec->closed_known);
+    for (const sb_m4 &w : inst) emit(d, tris, &w, node, mat, ds, color, &dec->closed_known, dec.get());
     return true;
 }
 

@@ -2,6 +2,7 @@
 #include "scene.h"
 
 #include <limits.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -193,6 +194,37 @@ static bool prim_closed(const sb_prim_desc *p) {
     return closed;
 }
 
+/* Whether the 4x4 (column-major) is a similarity that keeps the winding: rotation, uniform scale and translation,
+ * within rounding. Only such a transform can share a primitive's GPU copy: its normals turn with it (scaled,
+ * normalized where used) and its front faces stay front faces. */
+static bool similarity(const double *m) {
+    if (fabs(m[3]) + fabs(m[7]) + fabs(m[11]) > 1e-12 || fabs(m[15] - 1) > 1e-12) return false;
+    double g[3][3], tr = 0;
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {
+            g[i][j] = 0;
+            for (int k = 0; k < 3; k++) g[i][j] += m[i * 4 + k] * m[j * 4 + k];   /* columns i and j */
+        }
+    for (int i = 0; i < 3; i++) tr += g[i][i];
+    double s2 = tr / 3;
+    if (!(s2 > 0)) return false;
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            if (fabs(g[i][j] - (i == j ? s2 : 0)) > 1e-6 * s2) return false;
+    double det = m[0] * (m[5] * m[10] - m[9] * m[6]) - m[4] * (m[1] * m[10] - m[9] * m[2]) +
+                 m[8] * (m[1] * m[6] - m[5] * m[2]);
+    return det > 0;
+}
+
+bool sb_xform_translation_only(const float x[12]) {
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++)
+            if (fabsf(x[4 * r + c] - (r == c)) > 1e-6f) return false;
+    return true;
+}
+
+static const float identity_rows[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+
 void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p) {
     uint32_t base = s->vertex_count;
     uint32_t cap = s->build_cap;
@@ -233,6 +265,20 @@ void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p) {
     d->closed = !p->double_sided && (p->closed_known ? p->closed_known == 2 : prim_closed(p));
     d->material = p->material;
     d->node = p->node;
+    d->first_vertex = base;
+    d->vertex_count = p->vertex_count;
+    d->proto = s->draw_count - 1;
+    memcpy(d->xform, identity_rows, sizeof d->xform);
+    const sb_draw *of = p->instance_of && p->instance_of < s->draw_count ? &s->draws[p->instance_of - 1] : NULL;
+    if (of && of->proto == p->instance_of - 1 && of->vertex_count == p->vertex_count &&
+        of->index_count == p->index_count && of->double_sided == d->double_sided && of->closed == d->closed &&
+        of->material == d->material && similarity(p->relative)) {
+        d->proto = p->instance_of - 1;
+        s->build_rel = grow(s->build_rel, &s->build_rel_cap, s->draw_count, 12 * sizeof(double));
+        double *rel = s->build_rel + 12 * (size_t)(s->draw_count - 1);
+        for (int r = 0; r < 3; r++)
+            for (int c = 0; c < 4; c++) rel[4 * r + c] = p->relative[c * 4 + r];
+    }
     /* its box, while its positions are at hand (chunking gives its pieces their own): over the vertices its
        triangles use, each once (an index is read three times a vertex or so, a position once) */
     double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
@@ -376,11 +422,48 @@ static void split_order(uint32_t *idx, double *cen, tri_key *k, uint32_t first, 
     split_order(idx + 3 * (size_t)half, cen + 3 * (size_t)half, k, first + half, n - half, out);
 }
 
+/* An instance's chunks are its proto's: its index run is the proto's reordered run moved to its own vertices,
+ * cut where the proto's was, so chunk c of the one repeats chunk c of the other triangle for triangle. */
+static void chunk_instance(sb_scene *s, uint32_t di, const uint32_t *extra_first, const uint32_t *extra_n) {
+    sb_draw d = s->draws[di];
+    const sb_draw *pd = &s->draws[d.proto];
+    uint32_t p = d.proto, k = 1 + extra_n[p];
+    if (k == 1) return;   /* the proto was not cut: neither is this */
+    uint32_t pfirst = pd->first_index, delta = d.first_vertex - pd->first_vertex;   /* chunk 0 starts the run */
+    for (uint32_t c = 0; c < k; c++) {
+        uint32_t pci = c ? extra_first[p] + c - 1 : p;
+        const sb_draw pc = s->draws[pci];
+        sb_draw nd = d;
+        nd.first_index = d.first_index + (pc.first_index - pfirst);
+        nd.index_count = pc.index_count;
+        for (uint32_t i = 0; i < pc.index_count; i++) s->indices[nd.first_index + i] = s->indices[pc.first_index + i] + delta;
+        nd.box = tri_range_box(s, nd.first_index, nd.index_count);
+        nd.proto = pci;
+        if (c == 0) {
+            s->draws[di] = nd;
+        } else {
+            s->draws = grow(s->draws, &s->draw_cap, s->draw_count + 1, sizeof(sb_draw));
+            s->build_rel = grow(s->build_rel, &s->build_rel_cap, s->draw_count + 1, 12 * sizeof(double));
+            memcpy(s->build_rel + 12 * (size_t)s->draw_count, s->build_rel + 12 * (size_t)di, 12 * sizeof(double));
+            s->draws[s->draw_count++] = nd;
+        }
+    }
+}
+
 static void chunk_draws(sb_scene *s) {
     uint32_t n = s->draw_count;
+    /* the chunks a draw was cut into beyond its first (which keeps its place): extra_n of them from extra_first */
+    uint32_t *extra_first = sb_xcalloc(n ? n : 1, sizeof(uint32_t)), *extra_n = sb_xcalloc(n ? n : 1, sizeof(uint32_t));
     for (uint32_t di = 0; di < n; di++) {
         sb_draw d = s->draws[di];
         uint32_t tris = d.index_count / 3;
+        extra_first[di] = s->draw_count;
+        if (d.proto != di) {
+            uint32_t before = s->draw_count;
+            chunk_instance(s, di, extra_first, extra_n);
+            extra_n[di] = s->draw_count - before;
+            continue;
+        }
         if (tris <= SB_CHUNK_TRIS) continue;
         uint32_t *idx = s->indices + d.first_index;
         double *cen = sb_xmalloc((size_t)tris * 3 * sizeof(double));
@@ -402,12 +485,35 @@ static void chunk_draws(sb_scene *s) {
             if (c == 0) {
                 s->draws[di] = nd;
             } else {
+                nd.proto = s->draw_count;
                 s->draws = grow(s->draws, &s->draw_cap, s->draw_count + 1, sizeof(sb_draw));
                 s->draws[s->draw_count++] = nd;
             }
         }
+        extra_n[di] = leaves.n - 1;
         free(leaves.first);
         free(leaves.count);
+    }
+    free(extra_first);
+    free(extra_n);
+}
+
+/* An instance's transform, origin-relative: q' = A q + (A o + t - o) for q = p - o. */
+static void instance_xforms(sb_scene *s) {
+    double o[3] = {s->origin.x, s->origin.y, s->origin.z};
+    for (uint32_t i = 0; i < s->draw_count; i++) {
+        if (!SB_DRAW_IS_INSTANCE(s, i)) continue;
+        s->instance_draws++;
+        const double *rel = s->build_rel + 12 * (size_t)i;
+        float *x = s->draws[i].xform;
+        for (int r = 0; r < 3; r++) {
+            double t = rel[4 * r + 3] - o[r];
+            for (int c = 0; c < 3; c++) {
+                x[4 * r + c] = (float)rel[4 * r + c];
+                t += rel[4 * r + c] * o[c];
+            }
+            x[4 * r + 3] = (float)t;
+        }
     }
 }
 
@@ -415,6 +521,8 @@ bool sb_scene_finish(sb_scene *s, sb_err *err) {
     if (s->index_count == 0) {
         free(s->build_pos);
         s->build_pos = NULL;
+        free(s->build_rel);
+        s->build_rel = NULL;
         return sb_fail(err, "%s: the scene has no triangles reachable from its scene graph", s->file);
     }
     double t0 = sb_now_ms();
@@ -436,6 +544,9 @@ bool sb_scene_finish(sb_scene *s, sb_err *err) {
         o[1] = (float)(p[1] - s->origin.y);
         o[2] = (float)(p[2] - s->origin.z);
     }
+    instance_xforms(s);
+    free(s->build_rel);
+    s->build_rel = NULL;
     for (uint32_t i = 0; i < s->draw_count; i++) {
         s->draws[i].box.lo = sb_v3_sub(s->draws[i].box.lo, s->origin);
         s->draws[i].box.hi = sb_v3_sub(s->draws[i].box.hi, s->origin);
@@ -688,6 +799,7 @@ void sb_scene_free(sb_scene *s) {
     free_owned(s, s->lights);
     free_owned(s, s->cameras);
     free(s->build_pos);
+    free(s->build_rel);
     free_owned(s, s->materials);
     free_owned(s, s->textures);
     free_owned(s, s->texels);
@@ -722,6 +834,8 @@ void sb_scene_info(const sb_scene *s, FILE *out) {
             f->posed ? "posed at --pose" : "in the nodes' own pose");
     fprintf(out, "instancing (EXT_mesh_gpu_instancing): %u nodes, %u instances (expanded)\n", f->instanced_nodes,
             f->instances);
+    fprintf(out, "shared geometry: %u of %u draws repeat another's triangles under a rotation, uniform scale and "
+            "translation (one copy on the GPU and in the reference's BVH)\n", s->instance_draws, s->draw_count);
     fprintf(out, "Draco-compressed primitives: %u (decoded)\n", f->draco);
     fprintf(out, "vertex-colour alpha on alpha-tested primitives: %u (ignored)\n", f->vertex_alpha_ignored);
     fprintf(out, "degenerate: %s\n", s->degenerate[0] ? s->degenerate : "no");

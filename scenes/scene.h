@@ -25,7 +25,19 @@ typedef struct sb_draw {
                                faces changes nothing a shadow map or a ray from outside it sees */
     uint32_t material;      /* into sb_scene.materials: what the alpha test of its surface is (0: none) */
     uint32_t node;          /* source node index, for messages */
+    uint32_t first_vertex, vertex_count;    /* the vertices of its primitive (every chunk of it names them all) */
+    /* Instancing: a draw that repeats another's triangles under a similarity transform names that draw (`proto`,
+     * whose own proto is itself) and the transform, origin-relative, as three rows of a 3x4 matrix (identity
+     * otherwise). Its own vertices are on the CPU as any draw's (every CPU reader sees world positions); the GPU
+     * buffers and the reference's BVH hold the proto's once and draw or trace it through the transform. */
+    uint32_t proto;
+    float xform[12];
 } sb_draw;
+
+/* Whether draw d repeats another's geometry (sb_draw.proto). */
+#define SB_DRAW_IS_INSTANCE(s, d) ((s)->draws[d].proto != (d))
+/* Whether a transform's rotation part is the identity (within rounding): a tile of the same orientation. */
+bool sb_xform_translation_only(const float x[12]);
 
 /* The alpha test of a surface: a glTF MASK material (or a BLEND one under
  * --blend-casters mask). A point of a triangle is there when
@@ -154,9 +166,13 @@ typedef struct sb_scene {
     char unused[512];            /* what the file holds that nothing draws and is left out, or breaks a rule
                                     there ("; "-separated; "" if nothing): info and every run's warnings say it */
 
+    uint32_t instance_draws;     /* draws that repeat another's geometry (sb_draw.proto) */
+
     /* builder scratch, freed by sb_scene_finish */
     double *build_pos;
     uint32_t build_cap;
+    double *build_rel;           /* 12 a draw as added: an instance's world transform rows (sb_prim_desc.relative) */
+    uint32_t build_rel_cap;
 } sb_scene;
 
 /* "parse 40, flatten 120, ..." (ms) into out, or "from the scene cache" */
@@ -188,6 +204,12 @@ typedef struct sb_prim_desc {
     uint32_t node;
     int closed_known;            /* 0: work out whether it is closed; 1: it is not; 2: it is (an instance of a
                                     primitive already added: the answer does not change with the transform) */
+    /* Another placement of a primitive already added (0: none): 1 + the draw index it was added as, and the
+     * world transform from that placement to this one (4x4 column-major). The same vertices and triangles in
+     * the same order, so the GPU and the rays can keep one copy when the transform is a similarity that keeps
+     * the winding (sb_scene_add_prim decides; otherwise it is a copy like any other). */
+    uint32_t instance_of;
+    double relative[16];
 } sb_prim_desc;
 
 void sb_scene_begin(sb_scene *s);

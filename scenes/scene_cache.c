@@ -14,7 +14,7 @@
 #include "util.h"
 
 /* Bump when what an entry holds changes meaning (the binary's identity covers layouts). */
-#define SB_SCENE_CACHE_VERSION 1u
+#define SB_SCENE_CACHE_VERSION 2u   /* 2: draws carry their instancing (proto, transform, vertex range) */
 static const char magic[8] = {'S', 'B', 'S', 'C', 'E', 'N', 'E', '1'};
 
 bool sb_scene_cache_dir(char *out, size_t len) {

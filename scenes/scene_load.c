@@ -123,8 +123,11 @@ static bool read_scene(sb_rbuf *r, sb_scene *s) {
     for (uint32_t i = 0; i < s->draw_count; i++) {
         const sb_draw *d = &s->draws[i];
         if (d->first_index > s->index_count || d->index_count > s->index_count - d->first_index ||
-            d->material >= s->material_count)
+            d->material >= s->material_count || d->first_vertex > s->vertex_count ||
+            d->vertex_count > s->vertex_count - d->first_vertex || d->proto >= s->draw_count ||
+            s->draws[d->proto].proto != d->proto || s->draws[d->proto].index_count != d->index_count)
             return false;
+        s->instance_draws += d->proto != i;
     }
     for (uint32_t i = 0; i < s->plane_count; i++)
         for (uint32_t k = 0; k < s->planes[i].tri_count; k++)

@@ -107,11 +107,108 @@ typedef struct {
     float f[8];
 } packed_material;
 
+/* ---- the scene's geometry on the GPU: a shared primitive once ---- */
+
+/* Which instances (sb_draw.proto) draw their proto's GPU copy through their transform. A shadow pass draws an
+ * open single-sided draw's light-facing triangles only (sb_facing, ordered per draw): an instance may share
+ * that order when its triangles face the light as its proto's do: always when double-sided or closed (drawn
+ * whole), and for an open one when it is only moved (a translation) and the light is the sun. A lamp lowers
+ * the sharing to the first kind (its direction differs from point to point), planar's receiver pass (which
+ * draws triangles by their scene numbers) to none: sb_gpu_share. */
+enum { SHARE_ALL, SHARE_WHOLE, SHARE_NONE };
+
+struct sb_gpu_geom {
+    int mode;
+    uint32_t *first;            /* per draw: its first index in the GPU's index buffer */
+    uint32_t index_count;       /* the GPU's index buffer */
+    uint32_t *orig;             /* that buffer as uploaded (NULL: the scene's own indices, nothing shared) */
+};
+
+static bool shares(const sb_scene *s, uint32_t d, int mode) {
+    const sb_draw *dr = &s->draws[d];
+    if (dr->proto == d || mode == SHARE_NONE) return false;
+    return dr->double_sided || dr->closed || (mode == SHARE_ALL && sb_xform_translation_only(dr->xform));
+}
+
+/* The vertices kept on the GPU (keep: 1 a vertex, may be NULL) and how many vertices and indices that is. */
+static void gpu_counts(const sb_scene *s, int mode, uint8_t *keep, uint64_t *vertices, uint64_t *indices) {
+    *vertices = 0, *indices = 0;
+    bool own_keep = !keep;
+    if (own_keep) keep = sb_xcalloc(s->vertex_count ? s->vertex_count : 1, 1);
+    for (uint32_t d = 0; d < s->draw_count; d++) {
+        if (shares(s, d, mode)) continue;
+        const sb_draw *dr = &s->draws[d];
+        *indices += dr->index_count;
+        memset(keep + dr->first_vertex, 1, dr->vertex_count);
+    }
+    for (uint32_t v = 0; v < s->vertex_count; v++) *vertices += keep[v];
+    if (own_keep) free(keep);
+}
+
 double sb_gpu_scene_bytes(const sb_scene *s) {
-    double b = (double)s->vertex_count * SB_VERTEX_BYTES + (double)s->index_count * sizeof(uint32_t);
+    uint64_t nv = s->vertex_count, ni = s->index_count;
+    if (s->instance_draws) gpu_counts(s, SHARE_ALL, NULL, &nv, &ni);
+    double b = (double)nv * SB_VERTEX_BYTES + (double)ni * sizeof(uint32_t) + (double)s->draw_count * 48;
     if (s->alpha_tested_draws > 0)
         b += (double)s->material_count * sizeof(packed_material) + (s->texel_count ? s->texel_count : 1);
     return b;
+}
+
+/* (Re)fills the vertex, index and per-draw transform buffers for sharing `mode`. */
+static void upload_geometry(const sb_gpu *g, int mode) {
+    const sb_scene *s = g->scene;
+    struct sb_gpu_geom *gm = g->geom;
+    gm->mode = mode;
+    free(gm->orig);
+    gm->orig = NULL;
+    bool any = false;
+    for (uint32_t d = 0; d < s->draw_count && !any; d++) any = shares(s, d, mode);
+    float *xf = sb_xmalloc(sizeof(float) * 12 * (s->draw_count + 1));
+    static const float id[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+    for (uint32_t d = 0; d <= s->draw_count; d++)
+        memcpy(xf + 12 * (size_t)d, d < s->draw_count && shares(s, d, mode) ? s->draws[d].xform : id, sizeof id);
+    glBindBuffer(GL_ARRAY_BUFFER, g->xform_buf);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(sizeof(float) * 12 * (s->draw_count + 1)), xf, GL_STATIC_DRAW);
+    free(xf);
+    if (!any) {   /* every draw its own vertices: the scene's arrays as they are */
+        for (uint32_t d = 0; d < s->draw_count; d++) gm->first[d] = s->draws[d].first_index;
+        gm->index_count = s->index_count;
+        glBindBuffer(GL_ARRAY_BUFFER, g->vbo);
+        glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)s->vertex_count * SB_VERTEX_BYTES, s->vertices, GL_STATIC_DRAW);
+        glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g->ibo);
+        glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)s->index_count * sizeof(uint32_t), s->indices,
+                     GL_STATIC_DRAW);
+        return;
+    }
+    uint8_t *keep = sb_xcalloc(s->vertex_count ? s->vertex_count : 1, 1);
+    uint64_t nv, ni;
+    gpu_counts(s, mode, keep, &nv, &ni);
+    uint32_t *remap = sb_xmalloc(sizeof(uint32_t) * (s->vertex_count ? s->vertex_count : 1));
+    float *vb = sb_xmalloc(SB_VERTEX_BYTES * (size_t)(nv ? nv : 1));
+    uint32_t k = 0;
+    for (uint32_t v = 0; v < s->vertex_count; v++) {
+        if (!keep[v]) continue;
+        memcpy(vb + (size_t)SB_VERTEX_FLOATS * k, sb_vertex(s, v), SB_VERTEX_BYTES);
+        remap[v] = k++;
+    }
+    free(keep);
+    uint32_t *ib = sb_xmalloc(sizeof(uint32_t) * (size_t)(ni ? ni : 1)), at = 0;
+    for (uint32_t d = 0; d < s->draw_count; d++) {
+        if (shares(s, d, mode)) continue;
+        const sb_draw *dr = &s->draws[d];
+        gm->first[d] = at;
+        for (uint32_t i = 0; i < dr->index_count; i++) ib[at++] = remap[s->indices[dr->first_index + i]];
+    }
+    for (uint32_t d = 0; d < s->draw_count; d++)
+        if (shares(s, d, mode)) gm->first[d] = gm->first[s->draws[d].proto];
+    free(remap);
+    gm->index_count = at;
+    glBindBuffer(GL_ARRAY_BUFFER, g->vbo);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)nv * SB_VERTEX_BYTES, vb, GL_STATIC_DRAW);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g->ibo);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)at * sizeof(uint32_t), ib, GL_STATIC_DRAW);
+    free(vb);
+    gm->orig = ib;
 }
 
 /* Materials as alpha.glsl's SbMaterial and the texels as an R8UI buffer texture. */
@@ -177,23 +274,29 @@ static bool faces_light(const sb_scene *s, const uint32_t *t, const double light
 }
 
 static void arrange_for(const sb_gpu *g, const double light[4]) {
+    if (light[3] > 0.5 && g->geom->mode == SHARE_ALL) sb_gpu_share(g, false);   /* a lamp: see sb_gpu_share */
     sb_facing *fc = g->facing;
     const sb_scene *s = g->scene;
+    const struct sb_gpu_geom *gm = g->geom;
+    const uint32_t *orig = gm->orig ? gm->orig : s->indices;   /* the GPU's numbering, as uploaded */
     uint32_t *rest = sb_xmalloc(sizeof(uint32_t) * 3 * SB_CHUNK_TRIS);
     for (uint32_t d = 0; d < s->draw_count; d++) {
         const sb_draw *dr = &s->draws[d];
         fc->count[d] = dr->index_count / 3;
-        if (dr->double_sided || dr->closed) continue;
-        const uint32_t *src = s->indices + dr->first_index;
-        uint32_t *dst = fc->indices + dr->first_index, n = dr->index_count / 3, front = 0, back = 0;
+        if (dr->double_sided || dr->closed || shares(s, d, gm->mode)) continue;
+        /* which way a triangle faces from the scene's own (world) vertices; what moves is its GPU copy */
+        const uint32_t *flat = s->indices + dr->first_index, *src = orig + gm->first[d];
+        uint32_t *dst = fc->indices + gm->first[d], n = dr->index_count / 3, front = 0, back = 0;
         for (uint32_t t = 0; t < n; t++)
-            memcpy(faces_light(s, src + 3 * t, light) ? dst + 3 * front++ : rest + 3 * back++, src + 3 * t, 12);
+            memcpy(faces_light(s, flat + 3 * t, light) ? dst + 3 * front++ : rest + 3 * back++, src + 3 * t, 12);
         memcpy(dst + 3 * front, rest, 12 * (size_t)back);
         fc->count[d] = front;
     }
+    for (uint32_t d = 0; d < s->draw_count; d++)   /* a shared open draw is only moved: it faces as its proto */
+        if (shares(s, d, gm->mode)) fc->count[d] = fc->count[s->draws[d].proto];
     free(rest);
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g->ibo);
-    glBufferSubData(GL_ELEMENT_ARRAY_BUFFER, 0, (GLsizeiptr)s->index_count * sizeof(uint32_t), fc->indices);
+    glBufferSubData(GL_ELEMENT_ARRAY_BUFFER, 0, (GLsizeiptr)gm->index_count * sizeof(uint32_t), fc->indices);
     memcpy(fc->light, light, sizeof fc->light);
     fc->valid = true;
 }
@@ -206,6 +309,25 @@ static uint32_t shadow_triangles(const sb_gpu *g, uint32_t d, const double light
     return g->facing->count[d];
 }
 
+/* The facing order's buffers for the index buffer as uploaded now. */
+static void facing_reset(const sb_gpu *g) {
+    if (!g->facing) return;
+    const struct sb_gpu_geom *gm = g->geom;
+    free(g->facing->indices);
+    g->facing->indices = sb_xmalloc(sizeof(uint32_t) * (gm->index_count ? gm->index_count : 1));
+    memcpy(g->facing->indices, gm->orig ? gm->orig : g->scene->indices, sizeof(uint32_t) * gm->index_count);
+    g->facing->valid = false;
+}
+
+void sb_gpu_share(const sb_gpu *g, bool planar) {
+    int mode = planar ? SHARE_NONE : SHARE_WHOLE;
+    if (!g->scene->instance_draws || g->geom->mode >= mode) return;
+    upload_geometry(g, mode);
+    facing_reset(g);
+}
+
+uint32_t sb_gpu_first_index(const sb_gpu *g, uint32_t d) { return g->geom->first[d]; }
+
 bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int h, sb_v3 sun, sb_err *err) {
     memset(g, 0, sizeof *g);
     g->scene = s;
@@ -216,20 +338,26 @@ bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int
     glGenVertexArrays(1, &g->vao);
     glBindVertexArray(g->vao);
     glGenBuffers(1, &g->vbo);
-    glBindBuffer(GL_ARRAY_BUFFER, g->vbo);
-    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)s->vertex_count * SB_VERTEX_BYTES, s->vertices, GL_STATIC_DRAW);
     glGenBuffers(1, &g->ibo);
-    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g->ibo);
-    glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)s->index_count * sizeof(uint32_t), s->indices,
-                 GL_STATIC_DRAW);
+    glGenBuffers(1, &g->xform_buf);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g->ibo);   /* the VAO's element buffer */
+    g->geom = sb_xcalloc(1, sizeof *g->geom);
+    g->geom->first = sb_xcalloc(s->draw_count + 1, sizeof(uint32_t));
+    upload_geometry(g, SHARE_ALL);
     bool open_single_sided = false;
     for (uint32_t d = 0; d < s->draw_count; d++) open_single_sided |= !s->draws[d].double_sided && !s->draws[d].closed;
     if (open_single_sided) {
         g->facing = sb_xcalloc(1, sizeof *g->facing);
         g->facing->count = sb_xcalloc(s->draw_count, sizeof(uint32_t));
-        g->facing->indices = sb_xmalloc(sizeof(uint32_t) * (s->index_count ? s->index_count : 1));
-        memcpy(g->facing->indices, s->indices, sizeof(uint32_t) * s->index_count);
+        facing_reset(g);
     }
+    glBindBuffer(GL_ARRAY_BUFFER, g->xform_buf);
+    for (int r = 0; r < 3; r++) {   /* an instance's transform (common.glsl's sb_world): per draw, three rows */
+        glEnableVertexAttribArray(6 + r);
+        glVertexAttribPointer(6 + r, 4, GL_FLOAT, GL_FALSE, 48, (void *)(16 * (size_t)r));
+        glVertexAttribDivisor(6 + r, SB_DRAW_DIVISOR);
+    }
+    glBindBuffer(GL_ARRAY_BUFFER, g->vbo);
     glEnableVertexAttribArray(0);
     glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, SB_VERTEX_BYTES, (void *)0);
     glEnableVertexAttribArray(1);
@@ -305,7 +433,7 @@ void sb_gpu_free(sb_gpu *g) {
     GLuint tex[] = {g->color_tex, g->vis_tex, g->depth_tex, g->pos_tex, g->aux_tex};
     for (size_t i = 0; i < SB_COUNT(tex); i++) /* nothing to delete (nor a GL) when the session never opened */
         if (tex[i]) glDeleteTextures(1, &tex[i]);
-    GLuint bufs[] = {g->vbo, g->color_buf, g->mask_buf, g->indirect_buf};
+    GLuint bufs[] = {g->vbo, g->color_buf, g->mask_buf, g->indirect_buf, g->xform_buf};
     for (size_t i = 0; i < SB_COUNT(bufs); i++)
         if (bufs[i]) glDeleteBuffers(1, &bufs[i]);
     if (g->ibo) glDeleteBuffers(1, &g->ibo);
@@ -317,6 +445,11 @@ void sb_gpu_free(sb_gpu *g) {
         free(g->facing->count);
         free(g->facing->indices);
         free(g->facing);
+    }
+    if (g->geom) {
+        free(g->geom->first);
+        free(g->geom->orig);
+        free(g->geom);
     }
     memset(g, 0, sizeof *g);
 }
@@ -418,10 +551,10 @@ void sb_submit(sb_frame *f, uint32_t d, int instances) {
     count_draws(f, tris, instances);
     if (f->gpu->indirect) {   /* count, instances, first index, base vertex, base instance */
         uint32_t *c = f->cmds + 5 * (size_t)f->cmd_count++;
-        c[0] = 3 * tris, c[1] = (uint32_t)n, c[2] = dr->first_index, c[3] = 0, c[4] = d;
+        c[0] = 3 * tris, c[1] = (uint32_t)n, c[2] = f->gpu->geom->first[d], c[3] = 0, c[4] = d;
         return;
     }
-    const void *offset = (const void *)((size_t)dr->first_index * sizeof(uint32_t));
+    const void *offset = (const void *)((size_t)f->gpu->geom->first[d] * sizeof(uint32_t));
     glDrawElementsInstancedBaseInstance(GL_TRIANGLES, (GLsizei)(3 * tris), GL_UNSIGNED_INT, offset, n, d);
     count_api_call(f);
 }

@@ -52,6 +52,8 @@ typedef struct sb_gpu {
     GLint zpass_u_view[2], zpass_u_proj[2];
     GLuint mat_ssbo, texel_buf, texel_tex;  /* the alpha test's materials (binding 7) and texels (unit 15) */
     struct sb_facing *facing;           /* single-sided draws' triangles ordered by the light they face (harness-owned) */
+    struct sb_gpu_geom *geom;           /* where each draw's triangles lie in vbo/ibo (render.c: a shared primitive once) */
+    GLuint xform_buf;                   /* per draw: its instance transform (locations 6-8, identity unless shared) */
     /* per-draw data the shaders read through instanced attributes fetched at baseInstance = the draw's number
        (so a multi-draw needs no uniform between draws): colour (location 4, static) and caster mask (5, written
        by a layered shadow pass: sb_set_draw_masks) */
@@ -117,6 +119,13 @@ bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *scene, int wi
 /* The bytes sb_gpu_init uploads for a scene (its vertex and index buffers; with alpha-tested draws the
  * materials and texels), without a GL: what `info SCENE` says the scene takes on the GPU. */
 double sb_gpu_scene_bytes(const sb_scene *s);
+/* Instanced draws (sb_draw.proto) draw their proto's GPU copy through their transform: all that can by default.
+ * A technique with a lamp calls this at create (an open draw's light-facing triangles then differ between
+ * copies: only draws drawn whole stay shared), planar with `planar` (it draws triangles by their scene
+ * numbers: none shared). Sharing only goes down in a session; the pictures are the same either way. */
+void sb_gpu_share(const sb_gpu *g, bool planar);
+/* Draw d's first index in the GPU's index buffer. */
+uint32_t sb_gpu_first_index(const sb_gpu *g, uint32_t d);
 void sb_gpu_free(sb_gpu *g);
 /* The final-pass program with the technique's visibility GLSL. */
 bool sb_final_prog_create(sb_final_prog *fp, const sb_gpu *g, const char *label, const char *vis_glsl,

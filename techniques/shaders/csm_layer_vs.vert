@@ -1,8 +1,9 @@
 // csm_layer_vs.vert - layered shadow pass without a geometry shader
 // (ARB_shader_viewport_layer_array): instance k goes to the k-th cascade in the mask.
-layout(location = 0) in vec3 a_pos;
+layout(location = 0) in vec3 a_vertex;   // placed by sb_world (common.glsl): a_pos
 layout(location = 5) in uint a_mask;   // cascades this caster's bounds intersect: per draw, at its baseInstance
 void main() {
+    vec3 a_pos = sb_world(a_vertex);
     SB_ALPHA_VS();
     int k = gl_InstanceID, c = 0;
     for (; c < 8; c++) {

@@ -1,12 +1,13 @@
 // dpsm.vert - dual-paraboloid shadow maps (Brabec et al. 2002): the
 // hemisphere around u_axis (u_side +1) or against it (-1) is projected onto a
 // paraboloid; depth is the distance to the lamp, linear in [near, far].
-layout(location = 0) in vec3 a_pos;
+layout(location = 0) in vec3 a_vertex;   // placed by sb_world (common.glsl): a_pos
 uniform vec3 u_lamp;
 uniform mat3 u_frame;       // world -> lamp frame, +z along the front hemisphere's axis
 uniform float u_side;       // +1 front map, -1 back map
 uniform float u_near, u_far;
 void main() {
+    vec3 a_pos = sb_world(a_vertex);
     SB_ALPHA_VS();
     vec3 v = u_frame * (a_pos - u_lamp);
     v.z *= u_side;

@@ -1,6 +1,6 @@
 // scene.vert - camera pass (and the z-pass, which must produce the same depth:
 // gl_Position is invariant). Positions are relative to the scene origin.
-layout(location = 0) in vec3 a_pos;
+layout(location = 0) in vec3 a_vertex;   // placed by sb_world (common.glsl): a_pos
 layout(location = 1) in vec3 a_nrm;
 layout(location = 4) in vec4 a_color;   // the draw's colour: per draw, read at its baseInstance (render.c)
 uniform mat4 u_view;
@@ -17,9 +17,10 @@ uniform mat4 u_depth_view;
 #endif
 invariant gl_Position;
 void main() {
+    vec3 a_pos = sb_world(a_vertex);
     vec4 vp = u_view * vec4(a_pos, 1.0);
     v_pos = a_pos;
-    v_nrm = a_nrm;
+    v_nrm = sb_world_dir(a_nrm);   // a similarity's scale: final.frag normalizes
     v_color = a_color;
 #ifdef SB_EVAL
     v_view_z = -(u_depth_view * vec4(a_pos, 1.0)).z;

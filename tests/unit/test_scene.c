@@ -317,6 +317,50 @@ static void test_tiled_level(void **st) {
     }
     print_message("tile (0, 0) against the level: largest vertex difference %.3g\n", worst);
     assert_true(worst < 1e-3);
+    /* the eight other tiles repeat tile (0, 0): every draw of theirs names its draw there and the transform that
+     * places it; chunk for chunk the same triangles, on its own vertices. Again with the tiles turned by quarter
+     * turns (--turn). */
+    assert_int_equal(one.instance_draws, 0);
+    assert_int_equal(nine.instance_draws, 8 * one.draw_count);
+    for (uint32_t d = 0; d < nine.draw_count; d++)
+        if (nine.draws[d].proto != d) assert_true(sb_xform_translation_only(nine.draws[d].xform));
+    sb_scene_free(&nine);
+    snprintf(cmd, sizeof cmd, "%s/scripts/tile-gltf %s %s 3 3 --turn > /dev/null", getenv("SB_SOURCE_ROOT"), src,
+             tiled);
+    assert_int_equal(system(cmd), 0);
+    assert_true(sb_scene_load(&nine, tiled, NULL, &err));
+    assert_int_equal(nine.instance_draws, 8 * one.draw_count);
+    double ext = sb_v3_len(e9), off_most = 0;
+    uint32_t turned = 0;
+    for (uint32_t d = 0; d < nine.draw_count; d++) {
+        const sb_draw *dr = &nine.draws[d], *p = &nine.draws[dr->proto];
+        if (dr->proto == d) continue;
+        assert_int_equal(p->proto, dr->proto);
+        assert_int_equal(p->index_count, dr->index_count);
+        assert_int_equal(p->vertex_count, dr->vertex_count);
+        turned += !sb_xform_translation_only(dr->xform);
+        for (uint32_t i = 0; i < dr->index_count; i++) {
+            uint32_t a = nine.indices[p->first_index + i], b = nine.indices[dr->first_index + i];
+            assert_int_equal(a - p->first_vertex, b - dr->first_vertex);
+            const float *q = sb_vertex(&nine, a), *w = sb_vertex(&nine, b), *x = dr->xform;
+            for (int r = 0; r < 3; r++) {
+                double v = x[4 * r] * q[0] + x[4 * r + 1] * q[1] + x[4 * r + 2] * q[2] + x[4 * r + 3];
+                off_most = fmax(off_most, fabs(v - w[r]));
+            }
+        }
+    }
+    print_message("%u shared draws (%u turned): transform against the copy's own vertices, at most %.3g (extent %.0f)\n",
+                  nine.instance_draws, turned, off_most, ext);
+    assert_true(turned >= 6 * one.draw_count);   /* tiles 1, 2, 3, 5, 6, 7 of 0..8 turn */
+    assert_true(off_most < 1e-5 * ext);
+    /* a scale that is not uniform (conf-instanced's instances) is not shared: each is a copy */
+    sb_scene ci;
+    char conf[4096];
+    snprintf(conf, sizeof conf, "%s/conf-instanced.glb", getenv("SB_DATA_DIR"));
+    assert_true(sb_scene_load(&ci, conf, NULL, &err));
+    assert_true(ci.features.instances >= 3);
+    assert_int_equal(ci.instance_draws, 0);
+    sb_scene_free(&ci);
     sb_scene_free(&one);
     sb_scene_free(&nine);
     remove(tiled);

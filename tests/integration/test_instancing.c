@@ -1,0 +1,208 @@
+/* Shared geometry (sb_draw.proto): a level tiled by node instancing is drawn
+ * and traced from one copy of each mesh, each repeat through its transform;
+ * the same level with a mesh of its own per node (tile-gltf --copies) is
+ * drawn and traced from its own vertices. The two must give the same
+ * pictures and figures, frame by frame, up to the rounding of where a copy's
+ * vertices lie (a few pixels of an error rate), while the shared one holds a
+ * fraction of the GPU memory:
+ *  - towers tiled 3 x 3 with the tiles turned (closed meshes: shared even
+ *    when turned), cascades per cascade and layered, SDSM;
+ *  - zdm2 tiled 2 x 1 (open single-sided meshes moved only: their
+ *    light-facing triangles shared with the sun);
+ *  - a lamp between two moved copies of an open wall, one facing it and one
+ *    turned away from it: a lamp's copies face it each their own way, so the
+ *    shared scene must draw the turned-away one as the copies do (no
+ *    shadow), not with its proto's facing. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "glb.h"
+#include "render.h"
+#include "scene_load.h"
+#include "support.h"
+#include "table.h"
+
+static char g_out[65536];
+
+SB_TEST_SCRATCH("sbinstancing")
+
+/* per frame, equal whichever way the level is held */
+static const char *const g_counts[] = {"triangles", "shadow_triangles", "draw_calls", "shadow_draw_calls"};
+static const char *const g_errors[] = {"err_rate", "err_false_shadow", "err_false_lit"};
+
+/* Renders specs on scene; the results folder into dir. */
+static void render(const char *scene, const char *specs, const char *size, const char *tag, char *dir, size_t len) {
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s run %s auto %s --frames 3 --size %s --error-every 1 "
+                                "--warmup 0 --quiet --out %s/%s", test_binary(), scene, specs, size, g_tmp, tag), 0);
+    snprintf(dir, len, "%s", last_line_of(g_out));
+}
+
+static void tile(const char *src, const char *dst, const char *how) {
+    char cmd[8192];
+    snprintf(cmd, sizeof cmd, "%s/scripts/tile-gltf %s %s %s > /dev/null", getenv("SB_SOURCE_ROOT"), src, dst, how);
+    assert_int_equal(system(cmd), 0);
+}
+
+/* The scene's shared draws and GPU bytes. */
+static double gpu_bytes(const char *path, uint32_t *shared) {
+    sb_scene s;
+    sb_err err;
+    assert_true(sb_scene_load(&s, path, NULL, &err));
+    *shared = s.instance_draws;
+    double b = sb_gpu_scene_bytes(&s);
+    sb_scene_free(&s);
+    return b;
+}
+
+/* The two results folders run for run and frame for frame: counts equal within count_tol (relative), error
+ * figures within `pixels` pixels of the w x h picture, no warning, every run ok. */
+static void same_figures(const char *a_dir, const char *b_dir, double count_tol, double pixels, int w, int h) {
+    sb_table A, B;
+    summary_table(a_dir, &A);
+    summary_table(b_dir, &B);
+    assert_int_equal(B.nrows, A.nrows);
+    for (int r = 0; r < A.nrows; r++) {
+        const char *tech = sb_table_get(&A, r, "technique");
+        assert_string_equal(sb_table_get(&A, r, "status"), "ok");
+        assert_string_equal(sb_table_get(&B, r, "status"), "ok");
+        assert_string_equal(sb_table_get(&A, r, "warnings"), "");
+        assert_string_equal(sb_table_get(&B, r, "warnings"), "");
+        assert_string_equal(sb_table_get(&A, r, "params"), sb_table_get(&B, r, "params"));
+        sb_table fa, fb;
+        char path[4096];
+        sb_err err;
+        snprintf(path, sizeof path, "%s/%s.csv", a_dir, sb_table_get(&A, r, "run_id"));
+        assert_true(sb_table_load(&fa, path, &err));
+        snprintf(path, sizeof path, "%s/%s.csv", b_dir, sb_table_get(&B, r, "run_id"));
+        assert_true(sb_table_load(&fb, path, &err));
+        assert_int_equal(fb.nrows, fa.nrows);
+        double worst = 0, shadowed = 0;
+        for (int f = 0; f < fa.nrows; f++) {
+            for (size_t k = 0; k < sizeof g_counts / sizeof *g_counts; k++) {
+                double x = atof(sb_table_get(&fa, f, g_counts[k])), y = atof(sb_table_get(&fb, f, g_counts[k]));
+                if (fabs(x - y) > count_tol * fmax(x, 1)) {
+                    print_message("%s frame %d: %s %g shared, %g copies\n", tech, f, g_counts[k], x, y);
+                    fail();
+                }
+            }
+            for (size_t k = 0; k < sizeof g_errors / sizeof *g_errors; k++) {
+                double x = atof(sb_table_get(&fa, f, g_errors[k])), y = atof(sb_table_get(&fb, f, g_errors[k]));
+                worst = fmax(worst, fabs(x - y) * w * h);
+            }
+            shadowed += atof(sb_table_get(&fa, f, "err_false_shadow"));
+            assert_true(atof(sb_table_get(&fa, f, "geom_mismatch")) == 0);
+            assert_true(atof(sb_table_get(&fb, f, "geom_mismatch")) == 0);
+        }
+        print_message("%-6s %-44.44s: error figures at most %.1f pixels apart (false shadow, shared: %.5f)\n", tech,
+                      sb_table_get(&A, r, "params"), worst, shadowed / fa.nrows);
+        assert_true(worst <= pixels);
+        sb_table_free(&fa);
+        sb_table_free(&fb);
+    }
+    sb_table_free(&A);
+    sb_table_free(&B);
+}
+
+static void test_towers_turned(void **st) {
+    (void)st;
+    char src[4096], shared[4096], copies[4096], a[4096], b[4096];
+    snprintf(src, sizeof src, "%s/towers.glb", g_tmp);
+    snprintf(shared, sizeof shared, "%s/towers-shared.glb", g_tmp);
+    snprintf(copies, sizeof copies, "%s/towers-copies.glb", g_tmp);
+    copy_bundled("towers.glb", src);
+    tile(src, shared, "3 3 --turn");
+    tile(src, copies, "3 3 --turn --copies");
+    uint32_t ns, nc;
+    double bs = gpu_bytes(shared, &ns), bc = gpu_bytes(copies, &nc);
+    print_message("towers 3x3 turned: %u shared draws, GPU %.2f MiB; copies: %u, %.2f MiB\n", ns, bs / 1048576.0, nc,
+                  bc / 1048576.0);
+    assert_true(ns >= 500);
+    assert_int_equal(nc, 0);
+    assert_true(bs < 0.25 * bc);
+    const char *specs = "sm:res=512 pssm:res=512 pssm:res=512:layered=gs sdsm:res=512";
+    render(shared, specs, "320x180", "towers-shared", a, sizeof a);
+    render(copies, specs, "320x180", "towers-copies", b, sizeof b);
+    same_figures(a, b, 0, 4, 320, 180);
+}
+
+static void test_zdm2_open_moved(void **st) {
+    (void)st;
+    char src[4096], shared[4096], copies[4096], a[4096], b[4096];
+    snprintf(src, sizeof src, "%s/sauerbraten_zdm2/zdm2.glb", getenv("SB_SHARED_SCENES"));
+    if (access(src, R_OK) != 0) {
+        print_message("%s not present; skipped\n", src);
+        skip();
+    }
+    snprintf(shared, sizeof shared, "%s/zdm2-shared.glb", g_tmp);
+    snprintf(copies, sizeof copies, "%s/zdm2-copies.glb", g_tmp);
+    tile(src, shared, "2 1");
+    tile(src, copies, "2 1 --copies");
+    uint32_t ns, nc;
+    double bs = gpu_bytes(shared, &ns), bc = gpu_bytes(copies, &nc);
+    print_message("zdm2 2x1: %u shared draws, GPU %.2f MiB; copies: %u, %.2f MiB\n", ns, bs / 1048576.0, nc,
+                  bc / 1048576.0);
+    assert_true(ns >= 16);
+    assert_true(bs < 0.55 * bc);
+    render(shared, "sm:res=1024 pssm:res=1024", "320x180", "zdm2-shared", a, sizeof a);
+    render(copies, "sm:res=1024 pssm:res=1024", "320x180", "zdm2-copies", b, sizeof b);
+    /* a copy chunked on its own may cut its triangles elsewhere, and an edge-on one face the sun either way */
+    same_figures(a, b, 1e-3, 12, 320, 180);
+}
+
+/* A floor, and an open quad facing +x at x = -2 and at x = +2 (one mesh twice, or two meshes), a lamp between. */
+static void write_walls(const char *path, bool shared) {
+    sb_glb_scene s = {0};
+    s.no_sun = true;
+    s.lamps[0] = sb_v3_make(0, 1.2, 0);
+    s.nlamps = 1;
+    sb_glb_mesh *floor = sb_glb_new_mesh(&s, 0);
+    sb_glb_box(floor, -8, -0.2, -4, 8, 0, 4);
+    for (int k = 0; k < (shared ? 1 : 2); k++) {
+        sb_glb_mesh *q = sb_glb_new_mesh(&s, 2);
+        double x = shared ? 0 : (k ? 2 : -2);
+        uint32_t v0 = sb_glb_vert(q, x, 0, -1.5, 1, 0, 0), v1 = sb_glb_vert(q, x, 0, 1.5, 1, 0, 0);
+        uint32_t v2 = sb_glb_vert(q, x, 2.5, 1.5, 1, 0, 0), v3 = sb_glb_vert(q, x, 2.5, -1.5, 1, 0, 0);
+        sb_glb_tri(q, v0, v2, v1);   /* counter-clockwise seen from +x */
+        sb_glb_tri(q, v0, v3, v2);
+        q->no_node = shared;
+    }
+    if (shared) {
+        sb_glb_node(&s, true, "{\"mesh\":1,\"translation\":[-2,0,0]}");
+        sb_glb_node(&s, true, "{\"mesh\":1,\"translation\":[2,0,0]}");
+    }
+    assert_int_equal(sb_glb_write(&s, path), 0);
+}
+
+static void test_lamp_between_copies(void **st) {
+    (void)st;
+    char shared[4096], copies[4096], a[4096], b[4096];
+    snprintf(shared, sizeof shared, "%s/walls-shared.glb", g_tmp);
+    snprintf(copies, sizeof copies, "%s/walls-copies.glb", g_tmp);
+    write_walls(shared, true);
+    write_walls(copies, false);
+    uint32_t ns, nc;
+    gpu_bytes(shared, &ns);
+    gpu_bytes(copies, &nc);
+    assert_int_equal(ns, 1);
+    assert_int_equal(nc, 0);
+    render(shared, "cube dpsm", "320x180", "walls-shared", a, sizeof a);
+    render(copies, "cube dpsm", "320x180", "walls-copies", b, sizeof b);
+    same_figures(a, b, 0, 4, 320, 180);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_towers_turned),
+        cmocka_unit_test(test_zdm2_open_moved),
+        cmocka_unit_test(test_lamp_between_copies),
+    };
+    return cmocka_run_group_tests_name("instancing", tests, setup, teardown);
+}
