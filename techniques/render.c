@@ -148,7 +148,7 @@ static void gpu_counts(const sb_scene *s, int mode, uint8_t *keep, uint64_t *ver
 double sb_gpu_scene_bytes(const sb_scene *s) {
     uint64_t nv = s->vertex_count, ni = s->index_count;
     if (s->instance_draws) gpu_counts(s, SHARE_ALL, NULL, &nv, &ni);
-    double b = (double)nv * SB_VERTEX_BYTES + (double)ni * sizeof(uint32_t) + (double)s->draw_count * 48;
+    double b = (double)nv * SB_VERTEX_BYTES + (double)ni * sizeof(uint32_t) + (double)(s->draw_count + 1) * 48;
     if (s->alpha_tested_draws > 0)
         b += (double)s->material_count * sizeof(packed_material) + (s->texel_count ? s->texel_count : 1);
     return b;

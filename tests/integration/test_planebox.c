@@ -414,7 +414,7 @@ static void test_lamp_passes_skip_alpha_test(void **st) {
 /* (In a GL test of its own, not the loader suite's conformance test, which the sanitizer build runs: Mesa's
  * contexts keep allocations LeakSanitizer reports.) What `info SCENE` says a scene takes on the GPU is what the session's buffers hold, as the GL reports their
  * sizes: a scene without alpha-tested draws (vertex and index buffers) and one with (and its materials and
- * texels). */
+ * texels), and the draws' transforms. */
 static void test_gpu_bytes_are_the_buffers(void **st) {
     (void)st;
     const char *scenes[] = {"plane-box", "conf-alpha-card"};
@@ -422,9 +422,9 @@ static void test_gpu_bytes_are_the_buffers(void **st) {
         sb_session s;
         sb_err err;
         assert_true(test_open(&s, scenes[i], scenes[i], 64, 36, &err));
-        GLuint bufs[4] = {s.gpu.vbo, s.gpu.ibo, s.gpu.mat_ssbo, s.gpu.texel_buf};
+        GLuint bufs[5] = {s.gpu.vbo, s.gpu.ibo, s.gpu.mat_ssbo, s.gpu.texel_buf, s.gpu.xform_buf};
         double gl = 0;
-        for (int k = 0; k < 4; k++) {
+        for (int k = 0; k < 5; k++) {
             if (!bufs[k]) continue;
             GLint64 size = 0;
             glBindBuffer(GL_COPY_READ_BUFFER, bufs[k]);

@@ -31,6 +31,7 @@
 typedef struct cfg {
     char key[1100];             /* technique:canonical params */
     double ms, err;             /* gpu_ms median, err_rate mean over the 33 frames */
+    double err_seen;            /* the larger err_rate mean over the frames of tune's rungs 0 and 1 (5 and 9 of them) */
 } cfg;
 
 static char g_tmp[64], g_out[65536];
@@ -68,6 +69,18 @@ static int setup(void **st) {
         key_of(&t, r, c->key, sizeof c->key);
         c->ms = atof(sb_table_get(&t, r, "gpu_ms_median"));
         c->err = atof(sb_table_get(&t, r, "err_rate_mean"));
+        /* tune's early rungs render path frames i/(n-1) of n = 5 and 9: the grid's frames 8i and 4i */
+        char path[4200];
+        sb_err err;
+        sb_table f;
+        snprintf(path, sizeof path, "%s/%s.csv", dir, sb_table_get(&t, r, "run_id"));
+        if (!sb_table_load(&f, path, &err) || f.nrows != FRAMES) return -1;
+        for (int step = 8; step >= 4; step /= 2) {
+            double sum = 0;
+            for (int k = 0; k < FRAMES; k += step) sum += atof(sb_table_get(&f, k, "err_rate"));
+            c->err_seen = fmax(c->err_seen, sum / (1 + (FRAMES - 1) / step));
+        }
+        sb_table_free(&f);
     }
     sb_table_free(&t);
     printf("grid: %d settings\n", g_n);
@@ -144,7 +157,11 @@ static void read_tune(const char *dir, tuned *out) {
  * settings cheaper than it (at most 30 % above its own): a bound a hair over
  * the answer's 33-frame error asks a search whose first rung sees 5 frames to
  * tell 0.01 % apart, and missed (seen: 0.021649 under 0.021651, the answer
- * dropped at rung 0 for a setting 2.2x its cost). */
+ * dropped at rung 0 for a setting 2.2x its cost). Nor a bound that the
+ * answer's error over the frames of tune's early rungs exceeds: there its
+ * estimate says it misses the bound, and a search that believes it is right
+ * to rank it after those that meet it (seen: an answer 2 % under the bound
+ * over 33 frames, dropped early for a setting 1.57x its cost, in two runs). */
 static int pick_bounds(double *bounds, int max) {
     double cand[MAXC];
     int n = 0;
@@ -155,7 +172,7 @@ static int pick_bounds(double *bounds, int max) {
         double b = fmin(0.5 * (g_grid[i].err + cheaper_err), 1.3 * g_grid[i].err);
         if (!(b >= g_grid[i].err * 1.0001)) b = g_grid[i].err * 1.0001;
         const cfg *best = grid_best(b, &next);
-        if (best != &g_grid[i] || next < best->ms * 1.10) continue;
+        if (best != &g_grid[i] || next < best->ms * 1.10 || best->err_seen > b) continue;
         cand[n++] = b;
     }
     /* low, middle and high of those */
