@@ -116,8 +116,9 @@ typedef struct sb_frame {
 
 bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *scene, int width, int height, sb_v3 sun,
                  sb_err *err);
-/* The bytes sb_gpu_init uploads for a scene (its vertex and index buffers; with alpha-tested draws the
- * materials and texels), without a GL: what `info SCENE` says the scene takes on the GPU. */
+/* The bytes sb_gpu_init uploads for a scene (its vertex and index buffers, a shared primitive once, and the
+ * draws' transforms; with alpha-tested draws the materials and texels), without a GL: what `info SCENE` says
+ * the scene takes on the GPU. A lamp's or planar's run may make copies after all (sb_gpu_share). */
 double sb_gpu_scene_bytes(const sb_scene *s);
 /* Instanced draws (sb_draw.proto) draw their proto's GPU copy through their transform: all that can by default.
  * A technique with a lamp calls this at create (an open draw's light-facing triangles then differ between
