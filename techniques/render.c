@@ -213,10 +213,12 @@ static void upload_geometry(const sb_gpu *g, int mode) {
 
 /* Materials as alpha.glsl's SbMaterial and the texels as an R8UI buffer texture. */
 static bool upload_alpha(sb_gpu *g, const sb_scene *s, sb_err *err) {
-    /* every program of the session compiles with the common GLSL, and the alpha test when the scene has one */
-    const char *prelude[] = {s->alpha_tested_draws > 0 ? "#define SB_ALPHA\n" : "", sb_shader_common_glsl,
+    /* every program of the session compiles with the common GLSL, the alpha test when the scene has one, and
+       the instance transform (common.glsl's sb_world) when it has shared geometry */
+    const char *prelude[] = {s->alpha_tested_draws > 0 ? "#define SB_ALPHA\n" : "",
+                             s->instance_draws > 0 ? "#define SB_SHARED\n" : "", sb_shader_common_glsl,
                              sb_shader_alpha_glsl};
-    sb_gl_set_prelude(prelude, 3);
+    sb_gl_set_prelude(prelude, 4);
     if (!s->alpha_tested_draws) return true;
     GLint max_texels = 0;
     glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);

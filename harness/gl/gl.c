@@ -18,7 +18,7 @@ bool sb_gl_check(const char *where, sb_err *err) {
 }
 
 /* What every program compiles with after its defines (sb_gl_set_prelude). One GL context a process. */
-enum { PRELUDE_MAX = 3 };
+enum { PRELUDE_MAX = 4 };
 static const char *g_prelude[PRELUDE_MAX];
 static int g_prelude_n;
 

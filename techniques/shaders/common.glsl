@@ -14,10 +14,11 @@ float sb_out_cascade = -1.0;
 #else
 #define SB_EVAL_OUT(texel_px, cascade)
 #endif
-#if defined(SB_VERTEX)
+#if defined(SB_VERTEX) && defined(SB_SHARED)
 // A draw's instance transform (render.c): a draw that repeats another's triangles is drawn from that draw's
 // vertices through it (three rows of a 3x4 matrix, per draw at its baseInstance); identity for every other
 // draw, where sb_world(p) is p exactly. Every vertex shader that reads the scene's vertices places them so.
+// Compiled in only for a scene with shared geometry (SB_SHARED): elsewhere both are the identity.
 layout(location = 6) in vec4 sb_a_x0;
 layout(location = 7) in vec4 sb_a_x1;
 layout(location = 8) in vec4 sb_a_x2;
@@ -25,4 +26,7 @@ vec3 sb_world(vec3 p) {
     return vec3(dot(sb_a_x0.xyz, p) + sb_a_x0.w, dot(sb_a_x1.xyz, p) + sb_a_x1.w, dot(sb_a_x2.xyz, p) + sb_a_x2.w);
 }
 vec3 sb_world_dir(vec3 n) { return vec3(dot(sb_a_x0.xyz, n), dot(sb_a_x1.xyz, n), dot(sb_a_x2.xyz, n)); }
+#elif defined(SB_VERTEX)
+vec3 sb_world(vec3 p) { return p; }
+vec3 sb_world_dir(vec3 n) { return n; }
 #endif
