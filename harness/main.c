@@ -286,7 +286,7 @@ static int cmd_tune(const cli *c) {
         if (!sb_technique_find(name)) path = c->pos[1], first_spec = 2;
     }
     sb_tune_cmd cmd = {.scene = c->pos[0], .path = path, .specs = c->pos + first_spec, .nspecs = c->npos - first_spec,
-                       .techniques = c->o.techniques, .max_err = c->o.max_err, .max_flicker = c->o.max_flicker, .budget_ms = c->o.budget_ms,
+                       .techniques = c->o.techniques, .max_err = c->o.max_err, .max_flicker = c->o.max_flicker, .max_mb = c->o.max_mb, .budget_ms = c->o.budget_ms,
                        .time_limit_s = c->o.time_limit_s, .opts = &o, .out = c->o.out, .resume = c->o.resume};
     if (cmd.nspecs && cmd.techniques) return bad("tune: give SPECs or --techniques, not both%s", "");
     return sb_tune_main(&cmd);

@@ -21,7 +21,7 @@ const sb_command_def sb_commands[SB_CMD_COUNT] = {
                         "two results sets, or the runs of one set that differ only in KEY; exit 1 on a regression, "
                         "3 when none but a compared timing is UNSTABLE"},
     [SB_CMD_MERGE] = {"merge", "merge DIR... --out DIR", "merge shard outputs into one results set"},
-    [SB_CMD_TUNE] = {"tune", "tune SCENE [PATH] [SPEC...] --max-err E | --budget-ms B [--max-flicker F] [--techniques LIST] [--time-limit D]",
+    [SB_CMD_TUNE] = {"tune", "tune SCENE [PATH] [SPEC...] --max-err E | --budget-ms B [--max-flicker F] [--max-mb M] [--techniques LIST] [--time-limit D]",
                      "the cheapest settings within an error bound (or the most accurate within a frame-time budget), "
                      "by successive halving"},
     [SB_CMD_STRESS] = {"stress", "stress [CASE|all [SPEC...]]",
@@ -209,6 +209,9 @@ const sb_option sb_options[] = {
     {.name = "--max-flicker", .kind = SB_OPT_NUM, .arg = "F", .max = 1, .open_min = true, .def_help = "none",
      .commands = SB_IN(SB_CMD_TUNE), .field = F(max_flicker),
      .help = "and whose flicker_rate (twins --flicker-dt later) stays within F"},
+    {.name = "--max-mb", .kind = SB_OPT_NUM, .arg = "M", .max = INFINITY, .open_min = true, .def_help = "none",
+     .commands = SB_IN(SB_CMD_TUNE), .field = F(max_mb),
+     .help = "and whose shadow storage (shadow_mb) stays within M MiB: settings over it are not rendered"},
     {.name = "--budget-ms", .kind = SB_OPT_NUM, .arg = "B", .max = INFINITY, .open_min = true,
      .commands = SB_IN(SB_CMD_TUNE), .field = F(budget_ms),
      .help = "the most accurate settings whose frame time stays within B ms"},

@@ -72,7 +72,7 @@ typedef struct sb_cli_opts {
     const char *out, *resume, *shard, *metrics, *pair, *techniques, *history, *since;
     int format; /* --format: an sb_output_format */
     int recent;
-    double noise_floor, threshold, max_err, max_flicker, budget_ms, time_limit_s;
+    double noise_floor, threshold, max_err, max_flicker, max_mb, budget_ms, time_limit_s;
     bool dry_run, quiet, verbose;
 } sb_cli_opts;
 

@@ -417,6 +417,7 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
         .order = sb_order_name(o->order), .submit = sb_submit_name(o->submit), .seed = o->order == SB_ORDER_SHUFFLE ? o->seed : 0,
         .reason = "", .frames = o->frames, .warmup = o->warmup, .width = o->width, .height = o->height,
         .target_ci = o->target_ci, .scene_triangles = sb_scene_triangles(&s->scene), .load_ms = s->scene.load_ms,
+        .shadow_mb = sb_params_shadow_bytes(&spec->params, spec->tech) / 1048576.0,
         .calib_ms_before = NAN, .calib_ms_after = NAN, .eval_s = NAN, .stable = "", .unstable_reason = "",
     };
     if (o->sun_size > 0 || o->lamp_radius > 0) {

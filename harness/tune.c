@@ -177,6 +177,14 @@ static bool make_candidates(tune *t, sb_err *err) {
         t->c[i].rung = -1;
         t->c[i].alive = true;
         short_label(&runs[i], t->c[i].label, sizeof t->c[i].label);
+        /* a memory bound is known from the parameters alone: a setting over it is never rendered */
+        double mb = sb_params_shadow_bytes(&runs[i].params, runs[i].tech) / 1048576.0;
+        if (t->cmd->max_mb > 0 && mb > t->cmd->max_mb) {
+            t->c[i].alive = false;
+            t->c[i].skipped = true;
+            snprintf(t->c[i].reason, sizeof t->c[i].reason, "holds %.4g MiB of shadow storage, over --max-mb %g", mb,
+                     t->cmd->max_mb);
+        }
     }
     free(runs);
     return true;
@@ -582,6 +590,10 @@ static bool write_front(const tune *t, int chosen, bool met, sb_err *err) {
         size_t l = strlen(title);
         snprintf(title + l, sizeof title - l, ", flicker_rate at most %g", t->cmd->max_flicker);
     }
+    if (t->cmd->max_mb > 0) {
+        size_t l = strlen(title);
+        snprintf(title + l, sizeof title - l, ", shadow_mb at most %g", t->cmd->max_mb);
+    }
     snprintf(about, sizeof about, "Each point a candidate at the last rung it reached: the median frame time at the "
              "last rung (the fastest frame at earlier ones) against the mean error rate against the exact reference.");
     sb_site_front f = {.out = t->dir, .title = title, .about = about, .xlabel = "gpu_ms", .ylabel = "err_rate",
@@ -634,6 +646,7 @@ static void print_report(const tune *t, int chosen, bool met) {
     printf("%s along %s, %dx%d, %s %g", t->s.scene_name, t->s.path_name, cmd->opts->width, cmd->opts->height,
            cmd->max_err > 0 ? "err_rate at most" : "gpu_ms at most", bound_of(t));
     if (cmd->max_flicker > 0) printf(", flicker_rate at most %g", cmd->max_flicker);
+    if (cmd->max_mb > 0) printf(", shadow_mb at most %g", cmd->max_mb);
     printf("\n");
     if (chosen >= 0) {
         const cand *c = &t->c[chosen];

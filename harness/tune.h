@@ -24,6 +24,7 @@ typedef struct sb_tune_cmd {
     const char *techniques;             /* --techniques a,b,c (NULL: all but none and raycast) */
     double max_err, budget_ms;          /* exactly one > 0 */
     double max_flicker;                 /* > 0: a setting also keeps its mean flicker_rate within it */
+    double max_mb;                      /* > 0: a setting's shadow storage (shadow_mb) stays within it, MiB */
     double time_limit_s;                /* 0: none */
     const sb_run_opts *opts;            /* frames: the full measurement; seed: the plan's */
     const char *out, *resume;           /* results base folder; or a tune folder to resume */

@@ -235,6 +235,7 @@ static sb_cell r_gpu_ci(const sb_run_row *r, int a) {
     return number(r->n ? sb_columns_gpu_ci_pct(r->times, r->n, r->info->frames) : NAN);
 }
 static sb_cell r_load_ms(const sb_run_row *r, int a) { (void)a; return number(r->info->load_ms); }
+static sb_cell r_shadow_mb(const sb_run_row *r, int a) { (void)a; return number(r->info->shadow_mb); }
 static sb_cell r_wall_s(const sb_run_row *r, int a) { (void)a; return number(r->info->run_wall_s); }
 static sb_cell r_eval_s(const sb_run_row *r, int a) { (void)a; return number(r->info->eval_s); }
 static sb_cell r_harness_share(const sb_run_row *r, int a) {
@@ -330,6 +331,9 @@ static const sb_run_col run_cols[] = {
     RUN_METRIC("gpu_ci_pct", r_gpu_ci, 0, "percent", "95% CI half-width of mean gpu_ms, percent of the mean"),
     RUN("scene_triangles", r_int, I_SCENE_TRIS, "triangles in the scene"),
     RUN_METRIC("load_ms", r_load_ms, 0, "ms", "scene load time"),
+    RUN_METRIC("shadow_mb", r_shadow_mb, 0, "MiB",
+               "shadow storage the run holds resident (maps in their formats, moments and their blur copies, cube "
+               "faces, paraboloids): the figure the GPU-memory check reads; 0 for a technique without maps"),
     RUN_METRIC("run_wall_s", r_wall_s, 0, "s", "wall time of the run"),
     RUN_METRIC("eval_s", r_eval_s, 0, "s",
                "wall time of the untimed evaluation pass: its frames, their flicker twins, the reference"),

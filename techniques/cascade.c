@@ -23,12 +23,21 @@ bool sb_csm_check(const sb_csm_desc *d, const char *name, sb_err *err) {
     return true;
 }
 
-/* Whether the maps (and moments, and their blur copy) fit in the GPU memory the context has. */
-static bool maps_fit(const sb_gpu *g, const sb_csm_desc *d, const char *name, sb_err *why) {
+double sb_csm_bytes(const sb_csm_desc *d) {
     static const int depth_bytes[] = {2, 4, 4};                 /* 16, 24 (stored in 32 bits), 32f */
     static const int moment_channels[] = {0, 2, 1, 4};          /* depth, vsm, esm, msm (create_maps) */
     double texels = (double)d->res * d->res * (d->cascades < 1 ? 1 : d->cascades);
-    double bytes = texels * (depth_bytes[d->depth] + 2.0 * 4 * moment_channels[d->format]);   /* moments and their blur */
+    return texels * (depth_bytes[d->depth] + 2.0 * 4 * moment_channels[d->format]);   /* moments and their blur */
+}
+
+double sb_csm_technique_shadow_bytes(const sb_technique *t, const void *desc) {
+    (void)t;
+    return sb_csm_bytes(desc);
+}
+
+/* Whether the maps (and moments, and their blur copy) fit in the GPU memory the context has. */
+static bool maps_fit(const sb_gpu *g, const sb_csm_desc *d, const char *name, sb_err *why) {
+    double bytes = sb_csm_bytes(d);
     char who[160];
     if (d->cascades > 1) snprintf(who, sizeof who, "%s:res=%d:cascades=%d", name, d->res, d->cascades);
     else snprintf(who, sizeof who, "%s:res=%d", name, d->res);

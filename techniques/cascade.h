@@ -150,6 +150,11 @@ bool sb_csm_technique_create(void *state, const struct sb_run_ctx *rc, const voi
 void sb_csm_technique_frame(void *state, sb_frame *f);
 void sb_csm_technique_destroy(void *state);
 
+/* The shadow maps' bytes (sb_technique.shadow_bytes): res^2 a cascade, in the depth format, and with a moment
+ * format its moments and their blur copy (32-bit float channels). */
+double sb_csm_bytes(const sb_csm_desc *d);
+double sb_csm_technique_shadow_bytes(const sb_technique *t, const void *desc);
+
 /* The state of a row: the machinery, its split scheme and parameter struct. */
 typedef struct sb_csm_state {
     sb_csm csm;
@@ -165,7 +170,8 @@ typedef struct sb_csm_state {
         .desc_size = sizeof(DESC_T), .desc_defaults = DEFAULTS,                                                \
         .stages = SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_FINAL), .needs = SB_NEEDS_SUN,       \
         .state_size = sizeof(sb_csm_state), .check = sb_csm_technique_check,                                   \
-        .supported = sb_csm_technique_supported, .create = sb_csm_technique_create,                            \
+        .supported = sb_csm_technique_supported, .shadow_bytes = sb_csm_technique_shadow_bytes,                \
+        .create = sb_csm_technique_create,                                                                     \
         .frame = sb_csm_technique_frame, .destroy = sb_csm_technique_destroy,                                  \
         .impl = &(const sb_csm_kind){SPLITS},                                                                  \
     }

@@ -3,13 +3,20 @@
 
 #include <string.h>
 
+double sb_lamp_technique_shadow_bytes(const sb_technique *t, const void *desc) {
+    const sb_lamp_kind *k = t->impl;
+    const sb_lamp_desc *d = desc;
+    return (double)d->res * d->res * k->maps * 4;   /* 32F layers */
+}
+
 bool sb_lamp_technique_supported(const sb_run_ctx *rc, const void *desc, sb_err *why) {
     const sb_lamp_kind *k = rc->tech->impl;
     const sb_lamp_desc *d = desc;
     const char *name = rc->tech->name;
     if (!sb_lamp_supported(rc->gpu, d->light, name, why)) return false;
     if (k->layered && !sb_layered_supported(rc->gpu->ctx, d->layered, name, why)) return false;
-    return sb_lamp_maps_fit(rc->gpu, name, d->res, k->maps, k->target == GL_TEXTURE_CUBE_MAP, why);   /* 32F layers */
+    return sb_lamp_maps_fit(rc->gpu, name, d->res, sb_lamp_technique_shadow_bytes(rc->tech, desc),
+                            k->target == GL_TEXTURE_CUBE_MAP, why);
 }
 
 static bool make_targets(sb_lamp_state *s, const char *name, sb_err *err) {

@@ -69,6 +69,7 @@ void sb_lamp_draw(sb_lamp_state *s, sb_frame *f, uint32_t n, int instances,
                   void (*set)(const sb_lamp_state *s, int a, const void *arg), const void *arg);
 
 bool sb_lamp_technique_supported(const sb_run_ctx *rc, const void *desc, sb_err *why);
+double sb_lamp_technique_shadow_bytes(const sb_technique *t, const void *desc);
 bool sb_lamp_technique_create(void *state, const sb_run_ctx *rc, const void *desc, sb_err *err);
 void sb_lamp_technique_frame(void *state, sb_frame *f);
 void sb_lamp_technique_destroy(void *state);
@@ -79,6 +80,7 @@ void sb_lamp_technique_destroy(void *state);
         .name = NAME, .summary = SUMMARY, .params = PARAMS, .param_count = (int)SB_COUNT(PARAMS),                  \
         .desc_size = sizeof(sb_lamp_desc), .stages = SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_FINAL), \
         .needs = SB_NEEDS_POINT_LIGHT, .state_size = sizeof(STATE_T), .supported = sb_lamp_technique_supported,    \
+        .shadow_bytes = sb_lamp_technique_shadow_bytes,                                                            \
         .create = sb_lamp_technique_create, .frame = sb_lamp_technique_frame,                                      \
         .destroy = sb_lamp_technique_destroy, .impl = KIND,                                                         \
     }

@@ -56,6 +56,12 @@ static sb_csm_desc maps_of(const psm_desc *d) {
     return m;
 }
 
+static double psm_shadow_bytes(const sb_technique *t, const void *desc) {
+    (void)t;
+    sb_csm_desc m = maps_of(desc);
+    return sb_csm_bytes(&m);
+}
+
 static bool psm_supported(const sb_run_ctx *rc, const void *desc, sb_err *why) {
     sb_csm_desc m = maps_of(desc);
     return sb_csm_supported(rc->gpu, &m, "psm", why);
@@ -104,6 +110,7 @@ const sb_technique sb_technique_psm = {
     .state_size = sizeof(psm_state),
     .check = psm_check,
     .supported = psm_supported,
+    .shadow_bytes = psm_shadow_bytes,
     .create = psm_create,
     .frame = psm_frame,
     .destroy = sb_csm_technique_destroy,   /* the state starts with its sb_csm */

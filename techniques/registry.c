@@ -4,6 +4,8 @@
 #include <stdio.h>
 #include <string.h>
 
+#include <stdlib.h>
+
 #include "technique.h"
 
 #define SB_TECHNIQUE(name) extern const sb_technique sb_technique_##name;
@@ -107,4 +109,13 @@ void sb_params_bind(const sb_params *p, const sb_technique *t, void *desc) {
             memcpy(field, &v, sizeof v);
         }
     }
+}
+
+double sb_params_shadow_bytes(const sb_params *p, const sb_technique *t) {
+    if (!t->shadow_bytes) return 0;
+    void *desc = sb_xcalloc(1, t->desc_size ? t->desc_size : 1);
+    sb_params_bind(p, t, desc);
+    double b = t->shadow_bytes(t, desc);
+    free(desc);
+    return b;
 }

@@ -498,7 +498,7 @@ bool sb_lamp_supported(const sb_gpu *g, int light, const char *technique, sb_err
     return true;
 }
 
-bool sb_lamp_maps_fit(const sb_gpu *g, const char *technique, int res, int maps, bool cube, sb_err *why) {
+bool sb_lamp_maps_fit(const sb_gpu *g, const char *technique, int res, double bytes, bool cube, sb_err *why) {
     GLint max = 0;
     glGetIntegerv(cube ? GL_MAX_CUBE_MAP_TEXTURE_SIZE : GL_MAX_TEXTURE_SIZE, &max);
     if (max > 0 && res > max)
@@ -506,7 +506,7 @@ bool sb_lamp_maps_fit(const sb_gpu *g, const char *technique, int res, int maps,
                        cube ? "GL_MAX_CUBE_MAP_TEXTURE_SIZE" : "GL_MAX_TEXTURE_SIZE", max, g->ctx->renderer);
     char who[64];
     snprintf(who, sizeof who, "%s:res=%d", technique, res);
-    return sb_gpu_memory_fits(g, (double)res * res * maps * 4, who, "shadow maps", why);
+    return sb_gpu_memory_fits(g, bytes, who, "shadow maps", why);
 }
 
 void sb_frame_shade_point(sb_frame *f, sb_v3 pos) {

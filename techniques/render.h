@@ -180,10 +180,10 @@ void sb_set_draw_masks(const sb_frame *f, const uint8_t *masks);
 bool sb_gpu_memory_fits(const sb_gpu *g, double bytes, const char *who, const char *what, sb_err *why);
 /* A point-light technique's light=K: false with the reason when the scene has no K-th point or spot light. */
 bool sb_lamp_supported(const sb_gpu *g, int light, const char *technique, sb_err *why);
-/* A point-light technique's maps (`maps` square 32-bit depth maps of res²; a
+/* A point-light technique's maps (res² each, `bytes` of them in all: sb_lamp_technique_shadow_bytes; a
  * cube when cube is true): within GL_MAX_CUBE_MAP_TEXTURE_SIZE or
  * GL_MAX_TEXTURE_SIZE and within the GPU memory (sb_gpu_memory_fits). */
-bool sb_lamp_maps_fit(const sb_gpu *g, const char *technique, int res, int maps, bool cube, sb_err *why);
+bool sb_lamp_maps_fit(const sb_gpu *g, const char *technique, int res, double bytes, bool cube, sb_err *why);
 /* Makes the frame lit by a point light at pos: call it before the shadow
  * stage (its draws keep the triangles facing the lamp), and the final pass
  * shades and the evaluation tests that lamp. */

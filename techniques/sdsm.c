@@ -380,6 +380,7 @@ const sb_technique sb_technique_sdsm = {
     .state_size = sizeof(sdsm_state),
     .check = sdsm_check,
     .supported = sdsm_supported,
+    .shadow_bytes = sb_csm_technique_shadow_bytes,   /* its maps; the reduction's buffers are a few KiB */
     .create = sdsm_create,
     .frame = sdsm_frame,
     .collect = sdsm_collect,

@@ -97,6 +97,11 @@ typedef struct sb_technique {
     size_t state_size;
     bool (*check)(const void *desc, sb_err *err);
     bool (*supported)(const struct sb_run_ctx *rc, const void *desc, sb_err *why);
+    /* (optional, no GL) the shadow storage a run of these parameters holds resident, in bytes: maps in their
+       formats, moments and their blur copies, cube faces and paraboloids. One estimate, read by the GPU-memory
+       check (skipped before rendering when it does not fit), the summary's shadow_mb and tune --max-mb;
+       NULL: none (the technique keeps no shadow map) */
+    double (*shadow_bytes)(const struct sb_technique *t, const void *desc);
     bool (*load)(const struct sb_gpu *gpu, void **data, sb_err *err);
     void (*unload)(void *data);
     bool (*create)(void *state, const struct sb_run_ctx *rc, const void *desc, sb_err *err);
@@ -120,3 +125,5 @@ void sb_params_defaults(sb_params *p, const sb_technique *t);
 bool sb_params_find(const sb_params *p, const char *name, double *out);
 /* The technique's parameter struct: its defaults, then every value at its offset. */
 void sb_params_bind(const sb_params *p, const sb_technique *t, void *desc);
+/* The shadow storage these parameters hold (sb_technique.shadow_bytes; 0 when it keeps none), without a GL. */
+double sb_params_shadow_bytes(const sb_params *p, const sb_technique *t);

@@ -136,10 +136,69 @@ static void test_default_metrics_are_the_table_rows(void **st) {
     for (int k = 0; k < 4; k++) assert_string_equal(pair[k], want[k]);
 }
 
+/* The summary's shadow_mb of runs not rendered: the rendering-free estimate (sb_params_shadow_bytes). */
+static void shadow_mb_of(const char *scene, const char *specs, const char *extra, sb_table *t) {
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s run %s auto %s --frames 1 --size 64x36 --error-every 0 "
+                                "--warmup 0 --quiet %s --out %s/mb", test_binary(), scene, specs, extra, g_tmp), 0);
+    char *nl = strrchr(g_out, '\n');
+    if (nl && nl > g_out) *nl = 0;
+    nl = strrchr(g_out, '\n');
+    summary_table(nl ? nl + 1 : g_out, t);
+}
+
+/* shadow_mb is the maps a technique holds, from its parameters: res^2 a map in its depth format (32f: 4 bytes),
+ * with a moment format its moments and their blur copy (vsm: 2 floats twice), six cube faces, two paraboloids;
+ * 0 without maps. The GPU-memory check reads the same figure: a run over --gpu-memory is skipped naming it.
+ * tune --max-mb renders no setting over it. */
+static void test_shadow_mb_is_the_maps(void **st) {
+    (void)st;
+    sb_table t;
+    shadow_mb_of("towers", "none sm:res=1024 pssm:res=2048:cascades=4 pssm:res=1024:cascades=2:format=vsm "
+                 "sm:res=512:depth=16", "", &t);
+    const double want[] = {0, 4, 64, 40, 0.5};
+    assert_int_equal(t.nrows, 5);
+    for (int r = 0; r < t.nrows; r++) {
+        print_message("%s %s: shadow_mb %s\n", sb_table_get(&t, r, "technique"), sb_table_get(&t, r, "params"),
+                      sb_table_get(&t, r, "shadow_mb"));
+        assert_string_equal(sb_table_get(&t, r, "status"), "ok");
+        assert_float_equal(atof(sb_table_get(&t, r, "shadow_mb")), want[r], 1e-9);
+    }
+    sb_table_free(&t);
+    shadow_mb_of("towers-night", "cube:res=512 dpsm:res=512", "", &t);
+    assert_float_equal(atof(sb_table_get(&t, 0, "shadow_mb")), 6, 1e-9);
+    assert_float_equal(atof(sb_table_get(&t, 1, "shadow_mb")), 2, 1e-9);
+    sb_table_free(&t);
+    /* 64 MiB of maps beside 64x36 targets do not fit in 48 MiB: skipped, the figure in its row and its reason */
+    shadow_mb_of("towers", "pssm:res=2048:cascades=4 sm:res=1024", "--gpu-memory 48M", &t);
+    assert_string_equal(sb_table_get(&t, 0, "status"), "skipped");
+    assert_non_null(strstr(sb_table_get(&t, 0, "reason"), "needs 64 MiB of shadow maps"));
+    assert_float_equal(atof(sb_table_get(&t, 0, "shadow_mb")), 64, 1e-9);
+    assert_string_equal(sb_table_get(&t, 1, "status"), "ok");
+    sb_table_free(&t);
+    /* tune --max-mb 5: res=2048 (16 MiB) is never rendered; the choice holds at most 5 */
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s tune towers auto 'sm:res=512,1024,2048' --max-err 1 --max-mb 5 "
+                                "--frames 9 --size 96x54 --quiet --out %s/tune", test_binary(), g_tmp), 0);
+    assert_non_null(strstr(g_out, "shadow_mb at most 5"));
+    assert_non_null(strstr(g_out, "holds 16 MiB of shadow storage, over --max-mb 5"));
+    assert_null(strstr(g_out, "recommended: sm:res=2048"));
+    char *dir = strrchr(g_out, '\n');
+    if (dir && dir[1] == 0) *dir = 0, dir = strrchr(g_out, '\n');   /* the last line: the tune folder */
+    assert_non_null(dir);
+    char path[8400];
+    snprintf(path, sizeof path, "%s/rung-0/summary.csv", dir + 1);
+    sb_table r0;
+    sb_err err;
+    assert_true(sb_table_load(&r0, path, &err));
+    for (int r = 0; r < r0.nrows; r++) assert_true(atof(sb_table_get(&r0, r, "shadow_mb")) <= 5);
+    assert_int_equal(r0.nrows, 2);
+    sb_table_free(&r0);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_every_metric_everywhere),
         cmocka_unit_test(test_default_metrics_are_the_table_rows),
+        cmocka_unit_test(test_shadow_mb_is_the_maps),
     };
     return cmocka_run_group_tests_name("metrics", tests, setup, teardown);
 }
