@@ -37,7 +37,7 @@ static double gpu_ms(const sb_stage_times *t) {
 
 /* ---- per-frame columns ---- */
 
-enum { C_DRAWS, C_SHADOW_DRAWS, C_API, C_SHADOW_API, C_TRIS, C_SHADOW_TRIS, C_RENDERED, C_SKIPPED, C_WARP };
+enum { C_DRAWS, C_SHADOW_DRAWS, C_API, C_SHADOW_API, C_TRIS, C_SHADOW_TRIS, C_RENDERED, C_SKIPPED, C_CACHED, C_WARP };
 
 static sb_cell f_frame(const sb_frame_row *r, int a) { (void)a; return integer(r->rec->frame); }
 static sb_cell f_repeat(const sb_frame_row *r, int a) { (void)a; return integer(r->rec->repeat); }
@@ -54,7 +54,8 @@ static sb_cell f_counter(const sb_frame_row *r, int a) {
     case C_SHADOW_TRIS: return integer((long long)k->shadow_triangles);
     }
     if (!has(r->stages, SB_STAGE_CASCADE)) return empty(); /* no shadow maps: no cascades */
-    return integer(a == C_RENDERED ? k->cascades_rendered : a == C_SKIPPED ? k->cascades_skipped : k->warp_fallbacks);
+    return integer(a == C_RENDERED ? k->cascades_rendered : a == C_SKIPPED ? k->cascades_skipped
+                   : a == C_CACHED ? k->cascades_cached : k->warp_fallbacks);
 }
 
 static sb_cell f_stage_ms(const sb_frame_row *r, int s) {
@@ -117,6 +118,8 @@ static const sb_frame_col frame_cols[] = {
            "shadow maps rendered (empty: no shadow maps)"),
     METRIC("cascades_skipped", f_counter, C_SKIPPED, "count", SB_STAT_MEAN, 0,
            "shadow maps skipped for want of receivers"),
+    METRIC("cascades_cached", f_counter, C_CACHED, "count", SB_STAT_MEAN, 0,
+           "shadow maps kept from an earlier frame, not rendered again (cache=on: the same snapped window and light)"),
     METRIC("warp_fallbacks", f_counter, C_WARP, "count", SB_STAT_MEAN, 0,
            "warped maps that fell back to the uniform fit"),
     STAGE_MS(SB_STAGE_ZPASS, 0, "camera depth pre-pass"),
@@ -304,7 +307,8 @@ static const sb_run_col run_cols[] = {
     RUN("scene", r_text, S_SCENE, "scene name"),
     RUN("path", r_text, S_PATH, "path name"),
     RUN("technique", r_text, S_TECHNIQUE, "technique"),
-    RUN("params", r_text, S_PARAMS, "every parameter, in table order"),
+    RUN("params", r_text, S_PARAMS, "every parameter, in table order (one added after series began, such as "
+                                    "cache, only when not at its default)"),
     RUN("auto_params", r_auto, 0, "the values a run calibrated for its parameters given as auto (bias=auto...)"),
     RUN("light", r_light, 0, "the reference light's size (--sun-size, --lamp-radius: \"sun 0.53 deg, 64 rays\"); empty: "
                              "a light of no size, the hard reference"),

@@ -20,6 +20,9 @@ bool sb_csm_check(const sb_csm_desc *d, const char *name, sb_err *err) {
     if (d->warp && d->stable)
         return sb_fail(err, "%sstable=on cannot be combined with a perspective warp (a warped map follows the camera)",
                        name);
+    if (d->cache && !d->stable)
+        return sb_fail(err, "%scache=on needs stable=on (an unstable fit moves every frame: nothing could be reused)",
+                       name);
     return true;
 }
 
@@ -321,12 +324,28 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
     glDepthMask(GL_TRUE);
-    if (d->format) { /* moments of the far plane: nothing occludes */
-        const float z = 1.0f, e = (float)exp(d->exponent);
-        const float far[4] = {d->format == SB_MAP_ESM ? e : z, z, z, z};
-        glClearBufferfv(GL_COLOR, 0, far);
+    /* cache=on: a layer still holding what this frame's fit would draw (the same light view-projection, bit for
+       bit: the same snapped window and light; the scene's casters do not move) is kept, not drawn again */
+    unsigned todo = 0;
+    int cached = 0;
+    for (int k = 0; k < c->count; k++) {
+        if (!c->active[k]) continue;
+        bool keep = d->cache && c->cached[k] && !memcmp(c->cached_vp[k], c->cpu.light_vp[k], sizeof c->cached_vp[k]);
+        cached += keep;
+        if (keep) continue;
+        todo |= 1u << k;
+        memcpy(c->cached_vp[k], c->cpu.light_vp[k], sizeof c->cached_vp[k]);
+        c->cached[k] = d->cache != 0;
     }
-    glClear(GL_DEPTH_BUFFER_BIT);   /* every layer */
+    const float one = 1.0f, e = (float)exp(d->exponent);
+    const float far[4] = {d->format == SB_MAP_ESM ? e : one, one, one, one};   /* moments of the far plane */
+    for (int k = 0; k < c->count; k++) {   /* every layer, or with the cache those drawn again */
+        if (d->cache && !(todo & (1u << k))) continue;
+        if (d->cache) glBindFramebuffer(GL_FRAMEBUFFER, c->fbo_layer[k]);
+        if (d->format) glClearBufferfv(GL_COLOR, 0, far);
+        glClear(GL_DEPTH_BUFFER_BIT);
+        if (!d->cache) break;   /* fbo_all: one clear is every layer */
+    }
     if (!c->no_clamp) glEnable(GL_DEPTH_CLAMP);   /* casters toward the light stay, at depth 0 */
     if (d->slope != 0) {
         glEnable(GL_POLYGON_OFFSET_FILL);
@@ -335,8 +354,11 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
     glBindVertexArray(g->vao);
     int rendered = 0;
     for (int k = 0; k < c->count; k++) rendered += c->active[k];
-    f->counters.cascades_rendered = rendered;
+    f->counters.cascades_rendered = rendered - cached;
+    f->counters.cascades_cached = cached;
     f->counters.cascades_skipped = c->count - rendered;
+    if (d->cache)
+        for (uint32_t i = 0; i < s->draw_count; i++) c->mask[i] &= (uint8_t)todo;   /* casters of layers drawn again */
     /* opaque casters first, with the variant without the alpha test; then the alpha-tested ones */
     for (int a = 0; a < 2 && c->pass[a].prog_cascade; a++) {
         const sb_csm_pass *p = &c->pass[a];
@@ -344,7 +366,7 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
             glUseProgram(p->prog_cascade);
             if (p->e_cascade >= 0) glUniform1f(p->e_cascade, (float)d->exponent);
             for (int k = 0; k < c->count; k++) {
-                if (!c->active[k]) continue;
+                if (!c->active[k] || !(todo & (1u << k))) continue;
                 glBindFramebuffer(GL_FRAMEBUFFER, c->fbo_layer[k]);
                 glUniform1i(p->u_cascade, k);
                 for (uint32_t d = 0; d < s->draw_count; d++)
@@ -353,6 +375,7 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
             }
         } else {
             bool gs = d->layered == SB_LAYERED_GS;
+            glBindFramebuffer(GL_FRAMEBUFFER, c->fbo_all);
             glUseProgram(p->prog_layered);
             if (p->e_layered >= 0) glUniform1f(p->e_layered, (float)d->exponent);
             if (a == 0) sb_set_draw_masks(f, c->mask);   /* each draw's cascades, read at its baseInstance */
@@ -370,7 +393,7 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
         glUseProgram(c->blur_prog);
         const GLenum fmt = moments_format[d->format].gl;
         for (int k = 0; k < c->count; k++) {
-            if (!c->active[k]) continue;
+            if (!c->active[k] || !(todo & (1u << k))) continue;
             glUniform1i(c->b_layer, k);
             for (int pass = 0; pass < 2; pass++) {
                 glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);

@@ -28,6 +28,7 @@ typedef struct sb_csm_desc {
     double min_angle;           /* LiSPSM: below this view/light angle, no warp (degrees) */
     double focus;               /* TSM: share of the footprint mapped to 80% of the map */
     int perspective;            /* not a parameter: the maps may be perspective without a warp (PSM) */
+    int cache;                  /* cached cascades: one whose snapped window did not change is not rendered again */
 } sb_csm_desc;
 
 /* The defaults of the fields a technique's table may not have. */
@@ -57,7 +58,9 @@ typedef struct sb_csm_desc {
     SB_PARAM_F(sb_csm_desc, blend, 0, 0, 0.5, "blend band between cascades (fraction of a cascade)"),          \
     SB_PARAM_E(sb_csm_desc, layered, off, "off|gs|vs|on",                                                       \
                "per-cascade draws, or one draw per caster routed by a geometry shader / vertex-shader gl_Layer"), \
-    SB_PARAM_E(sb_csm_desc, warp, none, "none|lispsm|tsm", "perspective warp of each cascade (LiSPSM, TSM)")
+    SB_PARAM_E(sb_csm_desc, warp, none, "none|lispsm|tsm", "perspective warp of each cascade (LiSPSM, TSM)"),     \
+    SB_PARAM_E_LATE(sb_csm_desc, cache, off, "off|on",                                                          \
+                    "a cascade whose snapped window, light and casters did not change is not rendered again (stable=on)")
 
 /* Split distances out[0..m] over [n, f]: practical = lambda*log + (1-lambda)*uniform. */
 void sb_split_distances(double lambda, int m, double n, double f, double *out);
@@ -107,9 +110,12 @@ typedef struct sb_csm {
     bool active[SB_MAX_CASCADES];
     uint8_t *mask;                        /* per draw: cascades it is a caster of */
     sb_cascade_block cpu;
+    /* cache=on: what each map layer holds (the light view-projection it was rendered with; valid once rendered) */
+    float cached_vp[SB_MAX_CASCADES][16];
+    bool cached[SB_MAX_CASCADES];
 } sb_csm;
 
-/* Parameter combinations that cannot work (no GL): stable with a warp. */
+/* Parameter combinations that cannot work (no GL): stable with a warp, cache without stable. */
 bool sb_csm_check(const sb_csm_desc *d, const char *name, sb_err *err);
 /* What the context must offer: the resolution, gl_Layer from the vertex shader
  * for layered=vs, and the memory for the maps and moments (sb_gpu_memory_fits). */

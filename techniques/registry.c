@@ -37,8 +37,9 @@ int sb_technique_index(const sb_technique *t) {
 void sb_params_canonical(const sb_params *p, char *out, size_t len) {
     out[0] = 0;
     for (int i = 0; i < p->count; i++) {
+        if (p->v[i].def->late && !strcmp(p->v[i].text, p->v[i].def->def)) continue;
         size_t n = strlen(out);
-        snprintf(out + n, len - n, "%s%s=%s", i ? ":" : "", p->v[i].def->name, p->v[i].text);
+        snprintf(out + n, len - n, "%s%s=%s", n ? ":" : "", p->v[i].def->name, p->v[i].text);
     }
 }
 

@@ -47,19 +47,24 @@ typedef struct sb_param_def {
     size_t offset;          /* in the parameter struct */
     size_t size;            /* of that field: sizeof(int) or sizeof(double) */
     bool can_auto;          /* FLOAT: "auto" is a value (chosen per run by calibration, autobias.h) */
+    bool late;              /* added after series began: left out of the canonical text at its default, so the
+                               run ids, params and series of before stay what they were */
 } sb_param_def;
 
 /* Rows of a parameter table; T is the parameter struct, f its field (and the
  * parameter's name). */
 #define SB_PARAM_I(T, f, def, lo, hi, help) \
-    {#f, SB_PARAM_INT, #def, lo, hi, NULL, help, offsetof(T, f), sizeof(((T *)0)->f), false}
+    {#f, SB_PARAM_INT, #def, lo, hi, NULL, help, offsetof(T, f), sizeof(((T *)0)->f), false, false}
 #define SB_PARAM_F(T, f, def, lo, hi, help) \
-    {#f, SB_PARAM_FLOAT, #def, lo, hi, NULL, help, offsetof(T, f), sizeof(((T *)0)->f), false}
+    {#f, SB_PARAM_FLOAT, #def, lo, hi, NULL, help, offsetof(T, f), sizeof(((T *)0)->f), false, false}
 /* A FLOAT parameter that also takes "auto": the run calibrates it (bias, slope, normal offset). */
 #define SB_PARAM_FA(T, f, def, lo, hi, help) \
-    {#f, SB_PARAM_FLOAT, #def, lo, hi, NULL, help, offsetof(T, f), sizeof(((T *)0)->f), true}
+    {#f, SB_PARAM_FLOAT, #def, lo, hi, NULL, help, offsetof(T, f), sizeof(((T *)0)->f), true, false}
 #define SB_PARAM_E(T, f, def, choices, help) \
-    {#f, SB_PARAM_ENUM, #def, 0, 0, choices, help, offsetof(T, f), sizeof(((T *)0)->f), false}
+    {#f, SB_PARAM_ENUM, #def, 0, 0, choices, help, offsetof(T, f), sizeof(((T *)0)->f), false, false}
+/* An ENUM added after series began (sb_param_def.late): written in the canonical text only when not its default. */
+#define SB_PARAM_E_LATE(T, f, def, choices, help) \
+    {#f, SB_PARAM_ENUM, #def, 0, 0, choices, help, offsetof(T, f), sizeof(((T *)0)->f), false, true}
 
 #define SB_MAX_PARAMS 24
 
@@ -75,7 +80,7 @@ typedef struct sb_params {
     } v[SB_MAX_PARAMS];
 } sb_params;
 
-/* "res=2048:filter=pcf3:..." in table order */
+/* "res=2048:filter=pcf3:..." in table order (a late parameter only when not at its default) */
 void sb_params_canonical(const sb_params *p, char *out, size_t len);
 
 struct sb_gpu;

@@ -26,6 +26,7 @@ typedef struct sb_counters {
     uint32_t api_calls, shadow_api_calls;           /* GL draw calls issued: with --submit indirect one issues many draws */
     uint64_t triangles, shadow_triangles;           /* triangles x instances submitted */
     int cascades_rendered, cascades_skipped;
+    int cascades_cached;            /* cache=on: active cascades kept from an earlier frame, not drawn again */
     int warp_fallbacks;                             /* warped maps (psm, lispsm, tsm) that used the uniform fit */
     int split_count;                                /* cascades whose far split is known this frame */
     double splits[SB_MAX_CASCADES];                 /* view-space far distance of each cascade */
