@@ -295,6 +295,8 @@ bool sb_instance_create(sb_instance *in, sb_session *s, const sb_run_spec *spec,
     sb_params_bind(&in->params, t, in->desc);
     in->rc = (sb_run_ctx){.gpu = &s->gpu, .tech = t, .frames = frames};
     if (t->needs & SB_NEEDS_PLANE) sb_scene_find_planes(&s->scene);   /* on the first need, not at load */
+    /* shared geometry the technique cannot draw shared (render.h): copies uploaded now, not in a timed frame */
+    if (t->needs & (SB_NEEDS_PLANE | SB_NEEDS_POINT_LIGHT)) sb_gpu_share(&s->gpu, t->needs & SB_NEEDS_PLANE);
     bool ok = !t->supported || t->supported(&in->rc, in->desc, err);
     if (ok) ok = scene_data(s, t, &in->rc.scene_data, err);
     if (ok && (t->needs & SB_NEEDS_REFERENCE)) ok = (in->rc.reference = sb_session_reference(s, err)) != NULL;

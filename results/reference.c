@@ -131,7 +131,6 @@ static void attach_draws(sb_reference *r, RTCDevice dev, RTCScene top, const sb_
     r->geo = sb_xcalloc(n + 1, sizeof(sb_ref_geo));
     uint8_t *repeated = sb_xcalloc(n + 1, 1);
     for (uint32_t d = 0; d < n; d++) repeated[s->draws[d].proto] |= s->draws[d].proto != d;
-    static const float id[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
     for (uint32_t d = 0; d < n; d++) {
         const sb_draw *dr = &s->draws[d];
         uint32_t p = dr->proto, first = dr->first_index / 3;
@@ -149,7 +148,7 @@ static void attach_draws(sb_reference *r, RTCDevice dev, RTCScene top, const sb_
             }
             g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_INSTANCE);
             rtcSetGeometryInstancedScene(g, (RTCScene)r->protos[p]);
-            rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, p == d ? id : dr->xform);
+            rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, p == d ? sb_xform_identity : dr->xform);
             rtcCommitGeometry(g);
         }
         unsigned gid = rtcAttachGeometry(top, g);

@@ -223,7 +223,7 @@ bool sb_xform_translation_only(const float x[12]) {
     return true;
 }
 
-static const float identity_rows[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+const float sb_xform_identity[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
 
 void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p) {
     uint32_t base = s->vertex_count;
@@ -268,7 +268,7 @@ void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p) {
     d->first_vertex = base;
     d->vertex_count = p->vertex_count;
     d->proto = s->draw_count - 1;
-    memcpy(d->xform, identity_rows, sizeof d->xform);
+    memcpy(d->xform, sb_xform_identity, sizeof d->xform);
     const sb_draw *of = p->instance_of && p->instance_of < s->draw_count ? &s->draws[p->instance_of - 1] : NULL;
     if (of && of->proto == p->instance_of - 1 && of->vertex_count == p->vertex_count &&
         of->index_count == p->index_count && of->double_sided == d->double_sided && of->closed == d->closed &&

@@ -36,6 +36,8 @@ typedef struct sb_draw {
 
 /* Whether draw d repeats another's geometry (sb_draw.proto). */
 #define SB_DRAW_IS_INSTANCE(s, d) ((s)->draws[d].proto != (d))
+/* The identity as sb_draw.xform's rows. */
+extern const float sb_xform_identity[12];
 /* Whether a transform's rotation part is the identity (within rounding): a tile of the same orientation. */
 bool sb_xform_translation_only(const float x[12]);
 

@@ -337,14 +337,16 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
         memcpy(c->cached_vp[k], c->cpu.light_vp[k], sizeof c->cached_vp[k]);
         c->cached[k] = d->cache != 0;
     }
-    const float one = 1.0f, e = (float)exp(d->exponent);
-    const float far[4] = {d->format == SB_MAP_ESM ? e : one, one, one, one};   /* moments of the far plane */
-    for (int k = 0; k < c->count; k++) {   /* every layer, or with the cache those drawn again */
+    /* cleared: every layer at once (fbo_all), or with the cache each layer drawn again */
+    for (int k = 0; k < (d->cache ? c->count : 1); k++) {
         if (d->cache && !(todo & (1u << k))) continue;
         if (d->cache) glBindFramebuffer(GL_FRAMEBUFFER, c->fbo_layer[k]);
-        if (d->format) glClearBufferfv(GL_COLOR, 0, far);
+        if (d->format) { /* moments of the far plane: nothing occludes */
+            const float z = 1.0f, e = (float)exp(d->exponent);
+            const float far[4] = {d->format == SB_MAP_ESM ? e : z, z, z, z};
+            glClearBufferfv(GL_COLOR, 0, far);
+        }
         glClear(GL_DEPTH_BUFFER_BIT);
-        if (!d->cache) break;   /* fbo_all: one clear is every layer */
     }
     if (!c->no_clamp) glEnable(GL_DEPTH_CLAMP);   /* casters toward the light stay, at depth 0 */
     if (d->slope != 0) {
@@ -366,7 +368,7 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
             glUseProgram(p->prog_cascade);
             if (p->e_cascade >= 0) glUniform1f(p->e_cascade, (float)d->exponent);
             for (int k = 0; k < c->count; k++) {
-                if (!c->active[k] || !(todo & (1u << k))) continue;
+                if (!(todo & (1u << k))) continue;   /* inactive, or kept */
                 glBindFramebuffer(GL_FRAMEBUFFER, c->fbo_layer[k]);
                 glUniform1i(p->u_cascade, k);
                 for (uint32_t d = 0; d < s->draw_count; d++)
@@ -393,7 +395,7 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
         glUseProgram(c->blur_prog);
         const GLenum fmt = moments_format[d->format].gl;
         for (int k = 0; k < c->count; k++) {
-            if (!c->active[k] || !(todo & (1u << k))) continue;
+            if (!(todo & (1u << k))) continue;
             glUniform1i(c->b_layer, k);
             for (int pass = 0; pass < 2; pass++) {
                 glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);

@@ -50,7 +50,6 @@ bool sb_lamp_technique_create(void *state, const sb_run_ctx *rc, const void *des
     const char *name = rc->tech->name;
     s->kind = rc->tech->impl;
     s->d = desc;
-    sb_gpu_share(g, false);   /* copies of an open draw face a lamp each their own way */
     s->layered = s->kind->layered ? sb_layered_resolve(g->ctx, s->d->layered) : 0;
     const sb_light *lamp = sb_scene_point_light(g->scene, s->d->light, NULL);
     s->lamp = lamp->position;

@@ -48,7 +48,6 @@ static bool planar_load(const sb_gpu *g, void **data, sb_err *err) {
     planar_geo *s = sb_xcalloc(1, sizeof *s);
     *data = s;
     const sb_scene *sc = g->scene;
-    sb_gpu_share(g, true);   /* the receivers' triangles are drawn by their scene numbers */
     sb_v3 L = g->sun;
     sb_v3 ext = sb_v3_sub(sc->bounds.hi, sc->bounds.lo);
     s->eps = (float)(sb_v3_len(ext) * 1e-5);

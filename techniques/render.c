@@ -164,9 +164,9 @@ static void upload_geometry(const sb_gpu *g, int mode) {
     bool any = false;
     for (uint32_t d = 0; d < s->draw_count && !any; d++) any = shares(s, d, mode);
     float *xf = sb_xmalloc(sizeof(float) * 12 * (s->draw_count + 1));
-    static const float id[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
     for (uint32_t d = 0; d <= s->draw_count; d++)
-        memcpy(xf + 12 * (size_t)d, d < s->draw_count && shares(s, d, mode) ? s->draws[d].xform : id, sizeof id);
+        memcpy(xf + 12 * (size_t)d, d < s->draw_count && shares(s, d, mode) ? s->draws[d].xform : sb_xform_identity,
+               sizeof sb_xform_identity);
     glBindBuffer(GL_ARRAY_BUFFER, g->xform_buf);
     glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(sizeof(float) * 12 * (s->draw_count + 1)), xf, GL_STATIC_DRAW);
     free(xf);
@@ -327,8 +327,6 @@ void sb_gpu_share(const sb_gpu *g, bool planar) {
     upload_geometry(g, mode);
     facing_reset(g);
 }
-
-uint32_t sb_gpu_first_index(const sb_gpu *g, uint32_t d) { return g->geom->first[d]; }
 
 bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int h, sb_v3 sun, sb_err *err) {
     memset(g, 0, sizeof *g);

@@ -121,12 +121,11 @@ bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *scene, int wi
  * the scene takes on the GPU. A lamp's or planar's run may make copies after all (sb_gpu_share). */
 double sb_gpu_scene_bytes(const sb_scene *s);
 /* Instanced draws (sb_draw.proto) draw their proto's GPU copy through their transform: all that can by default.
- * A technique with a lamp calls this at create (an open draw's light-facing triangles then differ between
- * copies: only draws drawn whole stay shared), planar with `planar` (it draws triangles by their scene
- * numbers: none shared). Sharing only goes down in a session; the pictures are the same either way. */
+ * sb_instance_create lowers it from the technique's needs, outside any timed frame: a lamp's (an open draw's
+ * light-facing triangles then differ between copies: only draws drawn whole stay shared), and with `planar` a
+ * receiver plane's (planar draws triangles by their scene numbers: none shared). Sharing only goes down in a
+ * session; the pictures are the same either way. */
 void sb_gpu_share(const sb_gpu *g, bool planar);
-/* Draw d's first index in the GPU's index buffer. */
-uint32_t sb_gpu_first_index(const sb_gpu *g, uint32_t d);
 void sb_gpu_free(sb_gpu *g);
 /* The final-pass program with the technique's visibility GLSL. */
 bool sb_final_prog_create(sb_final_prog *fp, const sb_gpu *g, const char *label, const char *vis_glsl,

@@ -62,6 +62,26 @@ static double gpu_bytes(const char *path, uint32_t *shared) {
     return b;
 }
 
+/* src tiled `how` into g_tmp/NAME-shared.glb and (--copies) NAME-copies.glb; their shared draws and GPU bytes. */
+typedef struct pair {
+    char shared[4096], copies[4096];
+    uint32_t ns, nc;
+    double bs, bc;
+} pair;
+
+static void tile_pair(const char *src, const char *name, const char *how, pair *p) {
+    char copies_how[256];
+    snprintf(p->shared, sizeof p->shared, "%s/%s-shared.glb", g_tmp, name);
+    snprintf(p->copies, sizeof p->copies, "%s/%s-copies.glb", g_tmp, name);
+    snprintf(copies_how, sizeof copies_how, "%s --copies", how);
+    tile(src, p->shared, how);
+    tile(src, p->copies, copies_how);
+    p->bs = gpu_bytes(p->shared, &p->ns);
+    p->bc = gpu_bytes(p->copies, &p->nc);
+    print_message("%s %s: %u shared draws, GPU %.2f MiB; copies: %u, %.2f MiB\n", name, how, p->ns,
+                  p->bs / 1048576.0, p->nc, p->bc / 1048576.0);
+}
+
 /* The two results folders run for run and frame for frame: counts equal within count_tol (relative), error
  * figures within `pixels` pixels of the w x h picture, no warning, every run ok. */
 static void same_figures(const char *a_dir, const char *b_dir, double count_tol, double pixels, int w, int h) {
@@ -113,46 +133,35 @@ static void same_figures(const char *a_dir, const char *b_dir, double count_tol,
 
 static void test_towers_turned(void **st) {
     (void)st;
-    char src[4096], shared[4096], copies[4096], a[4096], b[4096];
+    char src[4096], a[4096], b[4096];
     snprintf(src, sizeof src, "%s/towers.glb", g_tmp);
-    snprintf(shared, sizeof shared, "%s/towers-shared.glb", g_tmp);
-    snprintf(copies, sizeof copies, "%s/towers-copies.glb", g_tmp);
     copy_bundled("towers.glb", src);
-    tile(src, shared, "3 3 --turn");
-    tile(src, copies, "3 3 --turn --copies");
-    uint32_t ns, nc;
-    double bs = gpu_bytes(shared, &ns), bc = gpu_bytes(copies, &nc);
-    print_message("towers 3x3 turned: %u shared draws, GPU %.2f MiB; copies: %u, %.2f MiB\n", ns, bs / 1048576.0, nc,
-                  bc / 1048576.0);
-    assert_true(ns >= 500);
-    assert_int_equal(nc, 0);
-    assert_true(bs < 0.25 * bc);
+    pair p;
+    tile_pair(src, "towers", "3 3 --turn", &p);
+    assert_true(p.ns >= 500);
+    assert_int_equal(p.nc, 0);
+    assert_true(p.bs < 0.25 * p.bc);
     const char *specs = "sm:res=512 pssm:res=512 pssm:res=512:layered=gs sdsm:res=512";
-    render(shared, specs, "320x180", "towers-shared", a, sizeof a);
-    render(copies, specs, "320x180", "towers-copies", b, sizeof b);
+    render(p.shared, specs, "320x180", "towers-shared", a, sizeof a);
+    render(p.copies, specs, "320x180", "towers-copies", b, sizeof b);
     same_figures(a, b, 0, 4, 320, 180);
 }
 
 static void test_zdm2_open_moved(void **st) {
     (void)st;
-    char src[4096], shared[4096], copies[4096], a[4096], b[4096];
+    char src[4096], a[4096], b[4096];
     snprintf(src, sizeof src, "%s/sauerbraten_zdm2/zdm2.glb", getenv("SB_SHARED_SCENES"));
     if (access(src, R_OK) != 0) {
         print_message("%s not present; skipped\n", src);
         skip();
     }
-    snprintf(shared, sizeof shared, "%s/zdm2-shared.glb", g_tmp);
-    snprintf(copies, sizeof copies, "%s/zdm2-copies.glb", g_tmp);
-    tile(src, shared, "2 1");
-    tile(src, copies, "2 1 --copies");
-    uint32_t ns, nc;
-    double bs = gpu_bytes(shared, &ns), bc = gpu_bytes(copies, &nc);
-    print_message("zdm2 2x1: %u shared draws, GPU %.2f MiB; copies: %u, %.2f MiB\n", ns, bs / 1048576.0, nc,
-                  bc / 1048576.0);
-    assert_true(ns >= 16);
-    assert_true(bs < 0.55 * bc);
-    render(shared, "sm:res=1024 pssm:res=1024", "320x180", "zdm2-shared", a, sizeof a);
-    render(copies, "sm:res=1024 pssm:res=1024", "320x180", "zdm2-copies", b, sizeof b);
+    pair p;
+    tile_pair(src, "zdm2", "2 1", &p);
+    assert_true(p.ns >= 16);
+    assert_int_equal(p.nc, 0);
+    assert_true(p.bs < 0.55 * p.bc);
+    render(p.shared, "sm:res=1024 pssm:res=1024", "320x180", "zdm2-shared", a, sizeof a);
+    render(p.copies, "sm:res=1024 pssm:res=1024", "320x180", "zdm2-copies", b, sizeof b);
     /* a copy chunked on its own may cut its triangles elsewhere, and an edge-on one face the sun either way */
     same_figures(a, b, 1e-3, 12, 320, 180);
 }
