@@ -317,6 +317,22 @@ static void check_shadows_drawn(sb_run *r) {
     sb_run_warn(&r->info, "no shadow-casting triangle was drawn in any frame (nothing in view casts toward the light)");
 }
 
+/* A virtual map whose pool could not hold every page a frame needed drew some pixels from another level than
+ * theirs: said, with the shortfall. */
+static void check_pool(sb_run *r) {
+    int frames = 0, worst = 0, need = 0;
+    for (int i = 0; i < r->done; i++) {
+        const sb_counters *k = &r->recs[i].counters;
+        if (!k->paged || !k->pool_overflow) continue;
+        frames++;
+        if (k->pool_overflow > worst) worst = k->pool_overflow, need = k->pages_needed;
+    }
+    if (frames)
+        sb_run_warn(&r->info, "pool_overflow: the page pool was short of up to %d of %d needed pages in %d of %d frames "
+                    "(their pixels used a coarser or finer level): a larger pool= holds them", worst, need, frames,
+                    r->done);
+}
+
 /* When the evaluation cannot stand behind its figures: rays and rasterizer
  * disagree on the geometry, or the reference itself is not exact enough. */
 static void check_geometry(sb_run *r) {
@@ -377,6 +393,7 @@ static bool finish_run(sb_run *r) {
         !sb_csv_file_commit(&r->cf, &r->err))
         return fail_run(r, "%s", r->err.msg);
     check_shadows_drawn(r);
+    check_pool(r);
     if (r->s->path_note[0])   /* the path check's flagged frames: their figures are the geometry check's doubt */
         sb_run_warn(&r->info, "the path's cameras: %s", r->s->path_note);
     /* a size for a light the run does not shade is no size at all: said, not ignored in silence */

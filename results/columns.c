@@ -38,6 +38,7 @@ static double gpu_ms(const sb_stage_times *t) {
 /* ---- per-frame columns ---- */
 
 enum { C_DRAWS, C_SHADOW_DRAWS, C_API, C_SHADOW_API, C_TRIS, C_SHADOW_TRIS, C_RENDERED, C_SKIPPED, C_CACHED, C_WARP };
+enum { P_NEEDED, P_RENDERED, P_CACHED, P_OVERFLOW };
 
 static sb_cell f_frame(const sb_frame_row *r, int a) { (void)a; return integer(r->rec->frame); }
 static sb_cell f_repeat(const sb_frame_row *r, int a) { (void)a; return integer(r->rec->repeat); }
@@ -56,6 +57,14 @@ static sb_cell f_counter(const sb_frame_row *r, int a) {
     if (!has(r->stages, SB_STAGE_CASCADE)) return empty(); /* no shadow maps: no cascades */
     return integer(a == C_RENDERED ? k->cascades_rendered : a == C_SKIPPED ? k->cascades_skipped
                    : a == C_CACHED ? k->cascades_cached : k->warp_fallbacks);
+}
+
+/* a virtual shadow map's page counter (empty for every other technique) */
+static sb_cell f_pages(const sb_frame_row *r, int a) {
+    const sb_counters *k = &r->rec->counters;
+    if (!k->paged) return empty();
+    return integer(a == P_NEEDED ? k->pages_needed : a == P_RENDERED ? k->pages_rendered
+                   : a == P_CACHED ? k->pages_cached : k->pool_overflow);
 }
 
 static sb_cell f_stage_ms(const sb_frame_row *r, int s) {
@@ -120,6 +129,14 @@ static const sb_frame_col frame_cols[] = {
            "shadow maps skipped for want of receivers"),
     METRIC("cascades_cached", f_counter, C_CACHED, "count", SB_STAT_MEAN, 0,
            "shadow maps kept from an earlier frame, not rendered again (cache=on: the same snapped window and light)"),
+    METRIC("pages_needed", f_pages, P_NEEDED, "count", SB_STAT_MEAN, 0,
+           "virtual: pages the frame's visible pixels need (empty: no virtual map)"),
+    METRIC("pages_rendered", f_pages, P_RENDERED, "count", SB_STAT_MEAN, 0,
+           "virtual: needed pages drawn this frame (not in the pool, or cache=off)"),
+    METRIC("pages_cached", f_pages, P_CACHED, "count", SB_STAT_MEAN, SB_LOWER_WORSE,
+           "virtual: needed pages kept from an earlier frame (the same level, place and light)"),
+    METRIC("pool_overflow", f_pages, P_OVERFLOW, "count", SB_STAT_MEAN | SB_STAT_MAX, 0,
+           "virtual: needed pages the pool had no slot for (their pixels use another level's page)"),
     METRIC("warp_fallbacks", f_counter, C_WARP, "count", SB_STAT_MEAN, 0,
            "warped maps that fell back to the uniform fit"),
     STAGE_MS(SB_STAGE_ZPASS, 0, "camera depth pre-pass"),

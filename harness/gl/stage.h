@@ -1,6 +1,7 @@
 /* stage.h - the stages of a frame that are timed, and what a frame counts as
  * it submits: the vocabulary the timer, the techniques and the results share. */
 #pragma once
+#include <stdbool.h>
 #include <stdint.h>
 
 typedef enum sb_stage {
@@ -27,6 +28,9 @@ typedef struct sb_counters {
     uint64_t triangles, shadow_triangles;           /* triangles x instances submitted */
     int cascades_rendered, cascades_skipped;
     int cascades_cached;            /* cache=on: active cascades kept from an earlier frame, not drawn again */
+    bool paged;                                     /* a virtual shadow map: the page counters below are its */
+    int pages_needed, pages_rendered, pages_cached; /* pages the pixels needed; drawn this frame; kept from before */
+    int pool_overflow;                              /* needed pages the pool had no slot for */
     int warp_fallbacks;                             /* warped maps (psm, lispsm, tsm) that used the uniform fit */
     int split_count;                                /* cascades whose far split is known this frame */
     double splits[SB_MAX_CASCADES];                 /* view-space far distance of each cascade */

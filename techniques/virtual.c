@@ -1,0 +1,555 @@
+/* virtual.c - virtual shadow maps for the sun (the scheme Unreal Engine 5 ships, on GL 4.5 without sparse
+ * textures, as Blender EEVEE's page atlas does).
+ *
+ * The light sees the scene through a clipmap: `levels` virtual maps of res x res texels around the camera,
+ * each level's texel twice the one below it, the coarsest covering the scene twice over. A level is cut into
+ * pages of `page` texels; only pages a visible pixel needs are ever rendered, at the level whose texel matches
+ * the pixel's footprint (times 2^lod). A frame:
+ *
+ *   zpass    the camera's depth (reused by the final pass);
+ *   minmax   marking: a compute pass puts each pixel back in the world and sets the bit of the page it needs
+ *            (virtual_mark.comp); the bits are read back (the frame waits for them: a GPU-driven allocator
+ *            would not, see docs/techniques.md);
+ *   cascade  the pages: a needed page already in the pool (cache=on: the same level, page and light since it
+ *            was drawn) is kept; the others get a slot of the physical pool (`pool` MiB: an atlas of slots, a
+ *            slot being a page with a border of BORDER texels so filter taps stay inside), free slots first,
+ *            then the least recently needed, coarse levels before fine ones; each is drawn with its own
+ *            orthographic view into its slot (one viewport a page), its casters culled to the page over the
+ *            BVH. The page table (slot + 1 for each resident page of every level's window) is uploaded;
+ *   final    the lookup through the table (vis_virtual.glsl).
+ *
+ * Pages are keyed by their absolute place in the level's page grid, so a camera that moves keeps every page it
+ * still needs; a sun that moves invalidates all of them. A pool too small for a frame's pages has the finest
+ * level's pages give way to their parents a level coarser until the rest fit (pool_overflow counts the pages
+ * given up; the run warns): their pixels are looked up in the parent, never in another page's texels. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "lightfit.h"
+#include "shaders.h"
+
+typedef struct virtual_desc {
+    int res, page, pool, levels, filter, cache;
+    double lod, bias, slope, normal;
+} virtual_desc;
+
+enum { FILTER_NONE, FILTER_HW, FILTER_PCF3 };
+enum { BORDER = 2, MAX_LEVELS = 16, MAX_PAGES = 512, MAX_SLOTS = 65535 /* a table entry is 16 bits */ };
+
+static const sb_param_def virtual_params[] = {
+    SB_PARAM_I(virtual_desc, res, 16384, 256, 65536, "texels per side of each clipmap level's virtual map"),
+    SB_PARAM_I(virtual_desc, page, 128, 16, 1024, "texels per side of a page (a power of two dividing res)"),
+    SB_PARAM_I(virtual_desc, pool, 64, 1, 4096, "MiB the pages and their table may hold (32-bit depth)"),
+    SB_PARAM_I(virtual_desc, levels, 16, 1, MAX_LEVELS,
+               "clipmap levels: the coarsest's texel is a pixel's footprint across the scene, each finer one's half"),
+    SB_PARAM_F(virtual_desc, lod, -1.5, -3, 4, "resolution bias: a level's texel is at most 2^lod pixel footprints"),
+    SB_PARAM_FA(virtual_desc, bias, 1, 0, 100, "constant depth bias, in texels of the level"),
+    SB_PARAM_FA(virtual_desc, slope, 0.5, 0, 100, "slope-scaled bias (glPolygonOffset factor)"),
+    SB_PARAM_FA(virtual_desc, normal, 0.25, 0, 100, "normal offset, in texels of the level"),
+    SB_PARAM_E(virtual_desc, filter, hw, "none|hw|pcf3", "shadow filter"),
+    SB_PARAM_E(virtual_desc, cache, on, "off|on", "keep a page across frames while its level, place and light hold"),
+};
+
+/* The pool's layout, from the parameters alone (the GPU-memory check, shadow_mb and create share it). */
+typedef struct pool_layout {
+    int pages;                  /* per side of a level: res / page */
+    int slot;                   /* texels per side of a slot: page + 2 BORDER */
+    int slots, slots_x, rows;   /* slots in all, per atlas row, rows */
+    double table_bytes;         /* the page table (16 bits a page of every level) and the request bits */
+    double bytes;               /* all of it: atlas and table */
+} pool_layout;
+
+static pool_layout layout_of(const virtual_desc *d) {
+    pool_layout p = {.pages = d->res / d->page, .slot = d->page + 2 * BORDER};
+    double entries = (double)d->levels * p.pages * p.pages;
+    p.table_bytes = ceil(entries / 2) * 4 + ceil(entries / 32) * 4;   /* 16-bit entries in uints; request bits */
+    double slot_bytes = 4.0 * p.slot * p.slot;
+    double room = (double)d->pool * 1048576.0 - p.table_bytes;
+    int n = room > 0 ? (int)fmin(floor(room / slot_bytes), MAX_SLOTS) : 0;
+    p.slots_x = n > 0 ? (int)ceil(sqrt((double)n)) : 0;
+    p.rows = n > 0 ? n / p.slots_x : 0;
+    p.slots = p.slots_x * p.rows;
+    p.bytes = p.slots * slot_bytes + p.table_bytes;
+    return p;
+}
+
+static bool virtual_check(const void *desc, sb_err *err) {
+    const virtual_desc *d = desc;
+    if (d->page & (d->page - 1))
+        return sb_fail(err, "page=%d is not a power of two (valid: 16, 32, 64, 128, 256, 512, 1024)", d->page);
+    if (d->res % d->page)
+        return sb_fail(err, "res=%d is not a multiple of page=%d (valid: res = k x %d, up to %d pages a side)", d->res,
+                       d->page, d->page, MAX_PAGES);
+    if (d->res / d->page > MAX_PAGES)
+        return sb_fail(err, "res=%d holds %d pages a side at page=%d: at most %d (valid: res <= %d)", d->res,
+                       d->res / d->page, d->page, MAX_PAGES, MAX_PAGES * d->page);
+    pool_layout p = layout_of(d);
+    if (p.slots < 1)
+        return sb_fail(err, "pool=%d MiB holds no page of %d texels with its table (valid: pool >= %.0f MiB here)",
+                       d->pool, d->page, ceil((p.table_bytes + 4.0 * p.slot * p.slot) / 1048576.0));
+    return true;
+}
+
+static double virtual_shadow_bytes(const sb_technique *t, const void *desc) {
+    (void)t;
+    return layout_of(desc).bytes;
+}
+
+static bool virtual_supported(const sb_run_ctx *rc, const void *desc, sb_err *why) {
+    const virtual_desc *d = desc;
+    pool_layout p = layout_of(d);
+    GLint max_size = 0;
+    glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
+    if (p.slots_x * p.slot > max_size || p.rows * p.slot > max_size)
+        return sb_fail(why, "virtual:pool=%d: an atlas of %dx%d texels exceeds GL_MAX_TEXTURE_SIZE %d of %s", d->pool,
+                       p.slots_x * p.slot, p.rows * p.slot, max_size, rc->gpu->ctx->renderer);
+    char who[96];
+    snprintf(who, sizeof who, "virtual:pool=%d", d->pool);
+    return sb_gpu_memory_fits(rc->gpu, p.bytes, who, "page pool", why);
+}
+
+typedef struct page_key {
+    int level;
+    int64_t x, y;               /* the page's place in its level's grid (absolute: page x covers [x, x+1) pages) */
+    bool stand_in;              /* needed only for a finer page the pool had no room for */
+} page_key;
+
+typedef struct virtual_state {
+    virtual_desc d;
+    pool_layout p;
+    int words;                  /* request bits, in uints */
+    GLuint atlas, fbo, req_buf, table_buf;
+    GLuint depth_prog[2];
+    GLint u_vp[2];
+    GLuint mark_prog;
+    GLint m_depth, m_inv, m_margin;
+    sb_final_prog fp;
+    GLint u_atlas, u_atlas_texel, u_vdepth, u_vrange, u_bias, u_normal, u_light;
+    /* the clipmap: from the scene and the light */
+    sb_v3 sun;                  /* the light the pool's pages were drawn under */
+    sb_m4 lview;
+    double texel0, zn, zf;
+    int64_t origin[MAX_LEVELS][2];  /* this frame: each level's window corner, in pages */
+    /* the pool */
+    page_key *slot_key;         /* level -1: the slot holds nothing valid */
+    int *slot_used;             /* the frame (count) that last needed it */
+    int *hash, hash_cap;        /* slot + 1 by key, open addressing, rebuilt each frame */
+    uint32_t *req;
+    uint16_t *table;
+    page_key *need, *missing;
+    int *free_slots;
+    int frame_no;
+    bool fitted;
+} virtual_state;
+
+/* World size of a pixel per unit of view depth, times 2^lod: the footprint a level's texel is matched to. */
+static double foot_per_depth(const virtual_state *s, const sb_frame *f) {
+    return 2 * tan(f->cam.fov_deg * SB_PI / 360) / f->gpu->height * pow(2.0, s->d.lod);
+}
+
+static uint64_t key_hash(page_key k) {
+    uint64_t h = (uint64_t)k.level * 0x9E3779B97F4A7C15ull ^ (uint64_t)k.x * 0xC2B2AE3D27D4EB4Full ^
+                 (uint64_t)k.y * 0x165667B19E3779F9ull;
+    return h ^ (h >> 29);
+}
+static bool key_eq(page_key a, page_key b) { return a.level == b.level && a.x == b.x && a.y == b.y; }
+
+static void hash_rebuild(virtual_state *s) {
+    memset(s->hash, 0, sizeof(int) * (size_t)s->hash_cap);
+    for (int i = 0; i < s->p.slots; i++) {
+        if (s->slot_key[i].level < 0) continue;
+        uint64_t h = key_hash(s->slot_key[i]) & (uint64_t)(s->hash_cap - 1);
+        while (s->hash[h]) h = (h + 1) & (uint64_t)(s->hash_cap - 1);
+        s->hash[h] = i + 1;
+    }
+}
+
+static int hash_find(const virtual_state *s, page_key k) {
+    for (uint64_t h = key_hash(k) & (uint64_t)(s->hash_cap - 1); s->hash[h]; h = (h + 1) & (uint64_t)(s->hash_cap - 1))
+        if (key_eq(s->slot_key[s->hash[h] - 1], k)) return s->hash[h] - 1;
+    return -1;
+}
+
+static void invalidate(virtual_state *s) {
+    for (int i = 0; i < s->p.slots; i++) s->slot_key[i].level = -1, s->slot_used[i] = -1;
+}
+
+static bool make_programs(virtual_state *s, const sb_gpu *g, sb_err *err) {
+    char defs[256];
+    snprintf(defs, sizeof defs,
+             "#define SB_LEVELS %d\n#define SB_PAGES %d\n#define SB_PAGE %d\n#define SB_SLOT %d\n#define SB_BORDER %d\n"
+             "#define SB_SLOTS_X %d\n#define SB_FILTER %d\n",
+             s->d.levels, s->p.pages, s->d.page, s->p.slot, BORDER, s->p.slots_x, s->d.filter);
+    const char *mark[] = {sb_shader_virtual_common_glsl, sb_shader_virtual_mark_comp};
+    const sb_shader_src ms[] = {{GL_COMPUTE_SHADER, mark, 2}};
+    if (!(s->mark_prog = sb_gpu_link("virtual page marking", defs, ms, 1, err))) return false;
+    s->m_depth = glGetUniformLocation(s->mark_prog, "u_depth");
+    s->m_inv = glGetUniformLocation(s->mark_prog, "u_inv_view_proj");
+    s->m_margin = glGetUniformLocation(s->mark_prog, "u_margin");
+    const char *fs[] = {sb_shader_depth_frag};
+    const char *vs[] = {sb_shader_virtual_depth_vert};
+    const sb_shader_src st[] = {{GL_VERTEX_SHADER, vs, 1}, {GL_FRAGMENT_SHADER, fs, 1}};
+    for (int a = 0; a < (g->scene->alpha_tested_draws ? 2 : 1); a++) {   /* opaque casters, then alpha-tested */
+        if (!(s->depth_prog[a] = sb_gpu_link(a ? "virtual page depth (alpha-tested draws)" : "virtual page depth",
+                                             a ? "" : sb_opaque_define(g), st, 2, err)))
+            return false;
+        s->u_vp[a] = glGetUniformLocation(s->depth_prog[a], "u_vp");
+    }
+    const char *vis[] = {sb_shader_virtual_common_glsl, sb_shader_vis_virtual_glsl};
+    if (!sb_final_prog_create_parts(&s->fp, g, "virtual", vis, 2, defs, err)) return false;
+    const char *names[] = {"u_atlas", "u_atlas_texel", "u_vdepth", "u_vrange", "u_bias", "u_normal", "u_light"};
+    GLint *locs[] = {&s->u_atlas, &s->u_atlas_texel, &s->u_vdepth, &s->u_vrange, &s->u_bias, &s->u_normal, &s->u_light};
+    for (size_t i = 0; i < SB_COUNT(names); i++) *locs[i] = glGetUniformLocation(s->fp.prog, names[i]);
+    return true;
+}
+
+/* The clipmap of this light and camera: depth spans the scene's (every page of every level compares alike);
+ * the coarsest level's texel is the footprint of a pixel as far away as the scene is wide (the farthest a camera
+ * in the scene sees it; its window also covers the scene twice over at least), and each finer level halves it.
+ * Fitted at the first frame (the camera's field of view) and again when the light moves. */
+static void fit_clipmap(virtual_state *s, const sb_frame *f) {
+    const sb_gpu *g = f->gpu;
+    const sb_aabb *b = &g->scene->bounds;
+    s->sun = g->sun;
+    s->lview = sb_light_view(g->sun);
+    sb_v3 lo = {1e300, 1e300, 1e300}, hi = {-1e300, -1e300, -1e300};
+    for (int k = 0; k < 8; k++) {
+        sb_v3 q = sb_m4_point(s->lview, sb_v3_make(k & 1 ? b->hi.x : b->lo.x, k & 2 ? b->hi.y : b->lo.y,
+                                                    k & 4 ? b->hi.z : b->lo.z));
+        lo = sb_v3_min(lo, q);
+        hi = sb_v3_max(hi, q);
+    }
+    double extent = fmax(fmax(hi.x - lo.x, hi.y - lo.y), 1e-6);
+    double far = sb_v3_len(sb_v3_sub(b->hi, b->lo)) * foot_per_depth(s, f);
+    s->texel0 = fmax(2 * extent / s->d.res, far) / pow(2.0, s->d.levels - 1);
+    double pad = 1e-4 * (hi.z - lo.z) + 1e-6;
+    s->zn = -hi.z - pad;   /* light-space z grows toward the light */
+    s->zf = -lo.z + pad;
+    s->fitted = true;
+}
+
+static bool virtual_create(void *state, const sb_run_ctx *rc, const void *desc, sb_err *err) {
+    virtual_state *s = state;
+    const sb_gpu *g = rc->gpu;
+    s->d = *(const virtual_desc *)desc;
+    s->p = layout_of(&s->d);
+    int entries = s->d.levels * s->p.pages * s->p.pages;
+    s->words = (entries + 31) / 32;
+    s->slot_key = sb_xcalloc((size_t)s->p.slots, sizeof *s->slot_key);
+    s->slot_used = sb_xcalloc((size_t)s->p.slots, sizeof *s->slot_used);
+    for (s->hash_cap = 16; s->hash_cap < 2 * s->p.slots; s->hash_cap *= 2) {}
+    s->hash = sb_xcalloc((size_t)s->hash_cap, sizeof *s->hash);
+    s->req = sb_xcalloc((size_t)s->words, sizeof *s->req);
+    s->table = sb_xcalloc((size_t)entries + 1, sizeof *s->table);
+    s->need = sb_xcalloc((size_t)entries, sizeof *s->need);
+    s->missing = sb_xcalloc((size_t)entries, sizeof *s->missing);
+    s->free_slots = sb_xcalloc((size_t)s->p.slots, sizeof *s->free_slots);
+    invalidate(s);
+
+    glGenTextures(1, &s->atlas);
+    glBindTexture(GL_TEXTURE_2D, s->atlas);
+    glTexStorage2D(GL_TEXTURE_2D, 1, GL_DEPTH_COMPONENT32F, s->p.slots_x * s->p.slot, s->p.rows * s->p.slot);
+    GLint filt = s->d.filter == FILTER_HW ? GL_LINEAR : GL_NEAREST;
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, filt);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, filt);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+    glGenFramebuffers(1, &s->fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, s->fbo);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, s->atlas, 0);
+    glDrawBuffer(GL_NONE);
+    glReadBuffer(GL_NONE);
+    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        return sb_fail(err, "virtual:pool=%d: the page atlas's framebuffer is incomplete", s->d.pool);
+    GLuint bufs[2];
+    glGenBuffers(2, bufs);
+    s->req_buf = bufs[0];
+    s->table_buf = bufs[1];
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, s->req_buf);
+    glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)s->words * 4, NULL, GL_DYNAMIC_READ);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, s->table_buf);
+    glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(entries + 1) / 2 * 4, NULL, GL_DYNAMIC_DRAW);
+    return make_programs(s, g, err) && sb_gl_check("virtual", err);
+}
+
+static double level_texel(const virtual_state *s, int l) { return s->texel0 * ldexp(1.0, l); }
+
+/* Each level's window: pages x pages around the camera, its corner on the page grid. */
+static void place_windows(virtual_state *s, const sb_frame *f) {
+    sb_v3 c = sb_m4_point(s->lview, sb_v3_sub(f->cam.pos, f->gpu->scene->origin));
+    for (int l = 0; l < s->d.levels; l++) {
+        double span = s->d.page * level_texel(s, l);
+        s->origin[l][0] = (int64_t)floor(c.x / span) - s->p.pages / 2;
+        s->origin[l][1] = (int64_t)floor(c.y / span) - s->p.pages / 2;
+    }
+}
+
+/* The uniforms marking and lookup share (virtual_common.glsl), on program prog. */
+static void set_clipmap_uniforms(const virtual_state *s, const sb_frame *f, GLuint prog) {
+    float m[16], win[MAX_LEVELS][2];
+    sb_m4_to_float(s->lview, m);
+    glUniformMatrix4fv(glGetUniformLocation(prog, "u_vlight"), 1, GL_FALSE, m);
+    sb_v3 eye = sb_v3_sub(f->cam.pos, f->gpu->scene->origin);
+    glUniform3f(glGetUniformLocation(prog, "u_veye"), (float)eye.x, (float)eye.y, (float)eye.z);
+    glUniform3f(glGetUniformLocation(prog, "u_vfwd"), (float)f->cam.forward.x, (float)f->cam.forward.y,
+                (float)f->cam.forward.z);
+    glUniform1f(glGetUniformLocation(prog, "u_vfoot"), (float)foot_per_depth(s, f));
+    glUniform1f(glGetUniformLocation(prog, "u_vtexel0"), (float)s->texel0);
+    for (int l = 0; l < s->d.levels; l++) {
+        double span = s->d.page * level_texel(s, l);
+        win[l][0] = (float)(s->origin[l][0] * span);
+        win[l][1] = (float)(s->origin[l][1] * span);
+    }
+    glUniform2fv(glGetUniformLocation(prog, "u_vwin"), s->d.levels, &win[0][0]);
+}
+
+/* Marking: the pages the frame's pixels need, read back into s->req. */
+static void mark_pages(virtual_state *s, sb_frame *f) {
+    const sb_gpu *g = f->gpu;
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, s->req_buf);
+    glClearBufferData(GL_SHADER_STORAGE_BUFFER, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, NULL);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, s->req_buf);
+    glUseProgram(s->mark_prog);
+    set_clipmap_uniforms(s, f, s->mark_prog);
+    sb_m4 inv;
+    float m[16];
+    sb_m4_invert(f->view_proj, &inv);
+    sb_m4_to_float(inv, m);
+    glUniformMatrix4fv(s->m_inv, 1, GL_FALSE, m);
+    glUniform1f(s->m_margin, 1.0f);
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D, g->depth_tex);
+    glUniform1i(s->m_depth, 1);
+    glDispatchCompute((GLuint)(g->width + 7) / 8, (GLuint)(g->height + 7) / 8, 1);
+    glActiveTexture(GL_TEXTURE0);
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, (GLsizeiptr)s->words * 4, s->req);
+}
+
+static int64_t half_down(int64_t v) { return v >= 0 ? v / 2 : -((-v + 1) / 2); }
+
+static int by_place(const void *a, const void *b) {
+    const page_key *p = a, *q = b;
+    if (p->level != q->level) return p->level - q->level;
+    if (p->x != q->x) return p->x < q->x ? -1 : 1;
+    if (p->y != q->y) return p->y < q->y ? -1 : 1;
+    return p->stand_in - q->stand_in;   /* a page needed for itself before its stand-in twin */
+}
+
+/* A frame needing more pages than the pool has slots: the finest level's pages give way to their parents (the
+ * page of the next level holding each; the grids nest), level after level, until the rest fit. The pixels of
+ * a page given up look it up one level coarser (vis_virtual.glsl). Returns the pages needed for themselves
+ * that were given up. */
+static int coarsen_to_fit(virtual_state *s, int *needed) {
+    int n = *needed, given_up = 0;
+    while (n > s->p.slots) {
+        int finest = s->d.levels;
+        for (int j = 0; j < n; j++)
+            if (s->need[j].level < finest) finest = s->need[j].level;
+        if (finest >= s->d.levels - 1) break;   /* the coarsest level alone: what fits is drawn (update_pool) */
+        for (int j = 0; j < n; j++) {
+            page_key *k = &s->need[j];
+            if (k->level != finest) continue;
+            given_up += !k->stand_in;
+            *k = (page_key){finest + 1, half_down(k->x), half_down(k->y), true};
+        }
+        qsort(s->need, (size_t)n, sizeof *s->need, by_place);
+        int m = 0;
+        for (int j = 0; j < n; j++)
+            if (!m || !key_eq(s->need[m - 1], s->need[j])) s->need[m++] = s->need[j];
+        n = m;
+    }
+    *needed = n;
+    return given_up;
+}
+
+static int by_level_down(const void *a, const void *b) {   /* coarse levels first: they cover the most */
+    return ((const page_key *)b)->level - ((const page_key *)a)->level;
+}
+
+static const virtual_state *g_sort_state;
+static int by_staleness(const void *a, const void *b) {   /* empty slots first, then the least recently needed */
+    const virtual_state *s = g_sort_state;
+    int ia = *(const int *)a, ib = *(const int *)b;
+    int va = s->slot_key[ia].level >= 0, vb = s->slot_key[ib].level >= 0;
+    if (va != vb) return va - vb;
+    if (s->slot_used[ia] != s->slot_used[ib]) return s->slot_used[ia] < s->slot_used[ib] ? -1 : 1;
+    return ia - ib;
+}
+
+/* Draws page k into slot i: the page's window with its border, its casters culled over the BVH. */
+static void render_page(virtual_state *s, sb_frame *f, page_key k, int i) {
+    const sb_gpu *g = f->gpu;
+    double t = level_texel(s, k.level), pg = s->d.page;
+    double x0 = ((double)k.x * pg - BORDER) * t, x1 = ((double)(k.x + 1) * pg + BORDER) * t;
+    double y0 = ((double)k.y * pg - BORDER) * t, y1 = ((double)(k.y + 1) * pg + BORDER) * t;
+    sb_m4 vp = sb_m4_mul(sb_m4_ortho(x0, x1, y0, y1, s->zn, s->zf), s->lview);
+    double planes[6][4];
+    sb_frustum_planes(vp, planes);
+    int sx = (i % s->p.slots_x) * s->p.slot, sy = (i / s->p.slots_x) * s->p.slot;
+    glViewport(sx, sy, s->p.slot, s->p.slot);
+    glScissor(sx, sy, s->p.slot, s->p.slot);
+    glClear(GL_DEPTH_BUFFER_BIT);
+    uint32_t n = sb_scene_collect(g->scene, (const double(*)[4])planes, 4, f->scratch);   /* x and y: depth spans all */
+    float m[16];
+    sb_m4_to_float(vp, m);
+    for (int a = 0; a < 2 && s->depth_prog[a]; a++) {
+        glUseProgram(s->depth_prog[a]);
+        glUniformMatrix4fv(s->u_vp[a], 1, GL_FALSE, m);
+        for (uint32_t j = 0; j < n; j++)
+            if (sb_draw_variant(g, f->scratch[j]) == a) sb_submit(f, f->scratch[j], 1);
+        sb_submit_flush(f);
+    }
+}
+
+/* Keeps the needed pages the pool holds, gives the others slots and draws them; returns how many were drawn. */
+static int update_pool(virtual_state *s, sb_frame *f, int needed, int *overflow) {
+    int cur = ++s->frame_no, nmiss = 0;
+    hash_rebuild(s);
+    for (int j = 0; j < needed; j++) {
+        int i = hash_find(s, s->need[j]);
+        if (i >= 0) s->slot_used[i] = cur;
+        else s->missing[nmiss++] = s->need[j];
+    }
+    int nfree = 0;
+    for (int i = 0; i < s->p.slots; i++)
+        if (s->slot_used[i] != cur) s->free_slots[nfree++] = i;
+    g_sort_state = s;
+    qsort(s->free_slots, (size_t)nfree, sizeof *s->free_slots, by_staleness);
+    qsort(s->missing, (size_t)nmiss, sizeof *s->missing, by_level_down);
+    int drawn = nmiss < nfree ? nmiss : nfree;
+    *overflow = nmiss - drawn;
+    if (!drawn) return 0;
+    const sb_gpu *g = f->gpu;
+    glBindFramebuffer(GL_FRAMEBUFFER, s->fbo);
+    glEnable(GL_SCISSOR_TEST);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    glEnable(GL_DEPTH_CLAMP);   /* casters toward the light stay, at depth 0 */
+    if (s->d.slope != 0) {
+        glEnable(GL_POLYGON_OFFSET_FILL);
+        glPolygonOffset((float)s->d.slope, 0.0f);
+    }
+    glBindVertexArray(g->vao);
+    for (int j = 0; j < drawn; j++) {
+        int i = s->free_slots[j];
+        s->slot_key[i] = s->missing[j];
+        s->slot_used[i] = cur;
+        render_page(s, f, s->missing[j], i);
+    }
+    glDisable(GL_POLYGON_OFFSET_FILL);
+    glDisable(GL_DEPTH_CLAMP);
+    glDisable(GL_SCISSOR_TEST);
+    return drawn;
+}
+
+/* The page table: slot + 1 for every resident page inside its level's window this frame. */
+static void upload_table(virtual_state *s) {
+    int P = s->p.pages;
+    size_t entries = (size_t)s->d.levels * P * P;
+    memset(s->table, 0, sizeof(uint16_t) * entries);
+    for (int i = 0; i < s->p.slots; i++) {
+        page_key k = s->slot_key[i];
+        if (k.level < 0) continue;
+        int64_t x = k.x - s->origin[k.level][0], y = k.y - s->origin[k.level][1];
+        if (x >= 0 && y >= 0 && x < P && y < P) s->table[((size_t)k.level * P + (size_t)y) * P + (size_t)x] = (uint16_t)(i + 1);
+    }
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, s->table_buf);
+    glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, (GLsizeiptr)(entries + 1) / 2 * 4, s->table);
+}
+
+static void virtual_frame(void *state, sb_frame *f) {
+    virtual_state *s = state;
+    const sb_gpu *g = f->gpu;
+
+    sb_stage_begin(f, SB_STAGE_ZPASS);
+    sb_zpass(f);
+    sb_stage_end(f, SB_STAGE_ZPASS);
+
+    sb_stage_begin(f, SB_STAGE_MINMAX);
+    if (!s->fitted || memcmp(&s->sun, &g->sun, sizeof s->sun)) {   /* a light that moved: every page again */
+        invalidate(s);
+        fit_clipmap(s, f);
+    }
+    if (!s->d.cache) invalidate(s);
+    place_windows(s, f);
+    mark_pages(s, f);
+    int needed = 0, P = s->p.pages;
+    for (int w = 0; w < s->words; w++)
+        for (uint32_t bits = s->req[w]; bits; bits &= bits - 1) {
+            int e = w * 32 + __builtin_ctz(bits), l = e / (P * P), y = e / P % P, x = e % P;
+            s->need[needed++] = (page_key){l, s->origin[l][0] + x, s->origin[l][1] + y, false};
+        }
+    sb_stage_end(f, SB_STAGE_MINMAX);
+
+    sb_stage_begin(f, SB_STAGE_CASCADE);
+    int held = needed, given_up = coarsen_to_fit(s, &held);
+    int left_out = 0, drawn = update_pool(s, f, held, &left_out);
+    upload_table(s);
+    f->counters.paged = true;
+    f->counters.pages_needed = needed;
+    f->counters.pages_rendered = drawn;
+    f->counters.pages_cached = held - drawn - left_out;
+    f->counters.pool_overflow = given_up + left_out;
+    sb_stage_end(f, SB_STAGE_CASCADE);
+
+    sb_stage_begin(f, SB_STAGE_FINAL);
+    glUseProgram(s->fp.prog);
+    set_clipmap_uniforms(s, f, s->fp.prog);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, s->table_buf);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, s->atlas);
+    glUniform1i(s->u_atlas, 0);
+    glUniform2f(s->u_atlas_texel, 1.0f / (float)(s->p.slots_x * s->p.slot), 1.0f / (float)(s->p.rows * s->p.slot));
+    sb_m4 proj = sb_m4_ortho(-1, 1, -1, 1, s->zn, s->zf);   /* the depth every page's view writes */
+    glUniform2f(s->u_vdepth, (float)(0.5 * proj.m[10]), (float)(0.5 * proj.m[14] + 0.5));
+    glUniform1f(s->u_vrange, (float)(s->zf - s->zn));
+    glUniform1f(s->u_bias, (float)s->d.bias);
+    glUniform1f(s->u_normal, (float)s->d.normal);
+    glUniform3f(s->u_light, (float)g->sun.x, (float)g->sun.y, (float)g->sun.z);
+    sb_final_pass(f, &s->fp, true);
+    sb_stage_end(f, SB_STAGE_FINAL);
+}
+
+static void virtual_destroy(void *state) {
+    virtual_state *s = state;
+    sb_final_prog_free(&s->fp);
+    GLuint progs[] = {s->mark_prog, s->depth_prog[0], s->depth_prog[1]};
+    for (size_t i = 0; i < SB_COUNT(progs); i++)
+        if (progs[i]) glDeleteProgram(progs[i]);
+    GLuint bufs[] = {s->req_buf, s->table_buf};
+    for (size_t i = 0; i < SB_COUNT(bufs); i++)
+        if (bufs[i]) glDeleteBuffers(1, &bufs[i]);
+    if (s->fbo) glDeleteFramebuffers(1, &s->fbo);
+    if (s->atlas) glDeleteTextures(1, &s->atlas);
+    free(s->slot_key);
+    free(s->slot_used);
+    free(s->hash);
+    free(s->req);
+    free(s->table);
+    free(s->need);
+    free(s->missing);
+    free(s->free_slots);
+    memset(s, 0, sizeof *s);
+}
+
+const sb_technique sb_technique_virtual = {
+    .name = "virtual",
+    .summary = "virtual shadow maps: a clipmap of page-cached virtual maps, pages drawn where pixels need them",
+    .params = virtual_params,
+    .param_count = (int)SB_COUNT(virtual_params),
+    .desc_size = sizeof(virtual_desc),
+    .stages = SB_STAGE_BIT(SB_STAGE_ZPASS) | SB_STAGE_BIT(SB_STAGE_MINMAX) | SB_STAGE_BIT(SB_STAGE_CASCADE) |
+              SB_STAGE_BIT(SB_STAGE_FINAL),
+    .needs = SB_NEEDS_SUN,
+    .state_size = sizeof(virtual_state),
+    .check = virtual_check,
+    .supported = virtual_supported,
+    .shadow_bytes = virtual_shadow_bytes,
+    .create = virtual_create,
+    .frame = virtual_frame,
+    .destroy = virtual_destroy,
+};
