@@ -39,7 +39,7 @@ enum { BORDER = 2, MAX_LEVELS = 16, MAX_PAGES = 512, MAX_SLOTS = 65535 /* a tabl
 static const sb_param_def virtual_params[] = {
     SB_PARAM_I(virtual_desc, res, 16384, 256, 65536, "texels per side of each clipmap level's virtual map"),
     SB_PARAM_I(virtual_desc, page, 128, 16, 1024, "texels per side of a page (a power of two dividing res)"),
-    SB_PARAM_I(virtual_desc, pool, 64, 1, 4096, "MiB the pages and their table may hold (32-bit depth)"),
+    SB_PARAM_I(virtual_desc, pool, 128, 1, 4096, "MiB the pages and their table may hold (32-bit depth)"),
     SB_PARAM_I(virtual_desc, levels, 16, 1, MAX_LEVELS,
                "clipmap levels: the coarsest's texel is a pixel's footprint across the scene, each finer one's half"),
     SB_PARAM_F(virtual_desc, lod, -1.5, -3, 4, "resolution bias: a level's texel is at most 2^lod pixel footprints"),

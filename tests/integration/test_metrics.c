@@ -156,7 +156,7 @@ static void test_shadow_mb_is_the_maps(void **st) {
     /* virtual: whole slots of (128 + 2 x 2)^2 32-bit texels and the table (16 levels of 128^2 16-bit entries and a
        request bit each: 557,056 bytes) within pool MiB: 64 holds 31 x 30 slots, 16 holds 16 x 14 */
     shadow_mb_of("towers", "none sm:res=1024 pssm:res=2048:cascades=4 pssm:res=1024:cascades=2:format=vsm "
-                 "sm:res=512:depth=16 virtual virtual:pool=16", "", &t);
+                 "sm:res=512:depth=16 virtual:pool=64 virtual:pool=16", "", &t);
     const double want[] = {0, 4, 64, 40, 0.5, (930 * 132 * 132 * 4.0 + 557056) / 1048576,
                            (224 * 132 * 132 * 4.0 + 557056) / 1048576};
     assert_int_equal(t.nrows, 7);
@@ -172,7 +172,7 @@ static void test_shadow_mb_is_the_maps(void **st) {
     assert_float_equal(atof(sb_table_get(&t, 1, "shadow_mb")), 2, 1e-9);
     sb_table_free(&t);
     /* 64 MiB of maps beside 64x36 targets do not fit in 48 MiB: skipped, the figure in its row and its reason */
-    shadow_mb_of("towers", "pssm:res=2048:cascades=4 sm:res=1024 virtual virtual:pool=16", "--gpu-memory 48M", &t);
+    shadow_mb_of("towers", "pssm:res=2048:cascades=4 sm:res=1024 virtual:pool=64 virtual:pool=16", "--gpu-memory 48M", &t);
     assert_string_equal(sb_table_get(&t, 0, "status"), "skipped");
     assert_non_null(strstr(sb_table_get(&t, 0, "reason"), "needs 64 MiB of shadow maps"));
     assert_float_equal(atof(sb_table_get(&t, 0, "shadow_mb")), 64, 1e-9);
