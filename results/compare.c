@@ -236,6 +236,21 @@ static bool agree(const char *a, const char *b, const char *skip) {
     return true;
 }
 
+/* Does a params string have every key=value of `want` ("res=2048:layered=off")? */
+static bool meets(const char *params, const char *want) {
+    char buf[512];
+    snprintf(buf, sizeof buf, "%s", want);
+    char *save = NULL;
+    for (char *t = strtok_r(buf, ":", &save); t; t = strtok_r(NULL, ":", &save)) {
+        char *eq = strchr(t, '=');
+        if (!eq) continue;
+        *eq = 0;
+        char v[256];
+        if (!param_value(params, t, v, sizeof v) || strcmp(v, eq + 1)) return false;
+    }
+    return true;
+}
+
 /* ---- pairs: one table, a row a pair ---- */
 
 enum { PAIR_ITEMS = 64, PAIR_COLS = SB_PAIR_COLS };
@@ -248,10 +263,13 @@ typedef struct {
 
 static int cmp_item(const void *x, const void *y) { return strcmp((const char *)x, (const char *)y); }
 
-static void add_items(pair_row *p, const char *params, const char *skip) {
+/* prefix: each item as "pssm.res=2048", where the two sides' parameters mean different things */
+static void add_items(pair_row *p, const char *params, const char *skip, const char *prefix) {
     char buf[2048];
     snprintf(buf, sizeof buf, "%s", params);
-    for (char *t = strtok(buf, ":"); t && p->nitems < PAIR_ITEMS; t = strtok(NULL, ":")) {
+    for (char *tok = strtok(buf, ":"); tok && p->nitems < PAIR_ITEMS; tok = strtok(NULL, ":")) {
+        char t[96];
+        snprintf(t, sizeof t, "%s%s%s", prefix ? prefix : "", prefix ? "." : "", tok);
         const char *eq = strchr(t, '=');
         size_t kl = eq ? (size_t)(eq - t) : strlen(t);
         if (skip && strlen(skip) == kl && !strncmp(t, skip, kl)) continue;
@@ -322,9 +340,15 @@ static bool is_pair(const sb_table *t, int ra, int rb, const char *key, const ch
     if (strcmp(sb_table_get(t, ra, "scene"), sb_table_get(t, rb, "scene")) ||
         strcmp(sb_table_get(t, ra, "path"), sb_table_get(t, rb, "path")))
         return false;
-    if (!strcmp(key, "technique"))
-        return !strcmp(sb_table_get(t, ra, "technique"), va) && !strcmp(sb_table_get(t, rb, "technique"), vb) &&
-               agree(pa, pb, NULL);
+    if (!strcmp(key, "technique")) {
+        /* techniques whose parameters mean different things (pssm's res is a cascade's, virtual's a page grid's)
+           pair by what each side names: technique=pssm:res=2048:layered=off,virtual:cache=on */
+        const char *qa = strchr(va, ':'), *qb = strchr(vb, ':');
+        size_t la = qa ? (size_t)(qa - va) : strlen(va), lb = qb ? (size_t)(qb - vb) : strlen(vb);
+        const char *ta = sb_table_get(t, ra, "technique"), *tb = sb_table_get(t, rb, "technique");
+        if (strlen(ta) != la || strncmp(ta, va, la) || strlen(tb) != lb || strncmp(tb, vb, lb)) return false;
+        return qa || qb ? meets(pa, qa ? qa + 1 : "") && meets(pb, qb ? qb + 1 : "") : agree(pa, pb, NULL);
+    }
     return !strcmp(sb_table_get(t, ra, "technique"), sb_table_get(t, rb, "technique")) &&
            param_value(pa, key, v, sizeof v) && !strcmp(v, va) && param_value(pb, key, v, sizeof v) &&
            !strcmp(v, vb) && agree(pa, pb, key);
@@ -409,13 +433,18 @@ int sb_compare_pair_table(const sb_table *t, const sb_compare_opts *o, sb_pair_t
             memset(p, 0, sizeof *p);
             p->a = ra;
             p->b = rb;
-            add_items(p, sb_table_get(t, ra, "params"), by_tech ? NULL : key);
-            add_items(p, sb_table_get(t, rb, "params"), by_tech ? NULL : key);
+            bool own = by_tech && (strchr(va, ':') || strchr(vb, ':'));   /* parameters of their own meaning */
+            add_items(p, sb_table_get(t, ra, "params"), by_tech ? NULL : key, own ? sb_table_get(t, ra, "technique") : NULL);
+            add_items(p, sb_table_get(t, rb, "params"), by_tech ? NULL : key, own ? sb_table_get(t, rb, "technique") : NULL);
             qsort(p->items, (size_t)p->nitems, sizeof p->items[0], cmp_item);
         }
     char la[300], lb[300];
     snprintf(la, sizeof la, by_tech ? "%s%s" : "%s=%s", by_tech ? "" : key, va);
     snprintf(lb, sizeof lb, by_tech ? "%s%s" : "%s=%s", by_tech ? "" : key, vb);
+    if (by_tech) { /* a side's qualifiers (pssm:res=2048) are in the caption; its columns are named by technique */
+        la[strcspn(la, ":")] = 0;
+        lb[strcspn(lb, ":")] = 0;
+    }
     pairs_table(t, rows, n, key, la, lb, metrics, nm, tb);
     for (int j = 0; n && j < rows[0].nitems; j++)
         if (shared_item(rows, n, rows[0].items[j])) {

@@ -243,22 +243,40 @@ var SB = (function () {
       });
       m.appendChild(ps);
     }
+    /* a memory budget (shadow_mb, MiB; ?budget=M in the address): the fronts of the runs that hold no more */
+    var budget = el("input", { type: "number", min: "0", step: "any", id: "budget", value: param("budget") || "",
+      placeholder: "any", style: "width:7em" });
+    var plots = el("div", {});
     var fs = el("section", { id: "fronts" }, [el("h2", { text: "Time against error, per scene" }),
-      el("p", { text: "Each point a run (median frame time, mean error rate against the exact reference; beside it, the mean flicker rate of its twins a display frame later); the line joins the runs no other run beats on both." })]);
-    var scenes = {};
-    rows.forEach(function (r) { if (r.status === "ok" && typeof r.err_rate_mean === "number" && typeof r.gpu_ms_median === "number") (scenes[r.scene] = scenes[r.scene] || []).push(r); });
-    Object.keys(scenes).forEach(function (sc) {
-      var label = function (r) { return r.technique + (r.params ? ":" + r.params : ""); };
-      front(fs, sc, scenes[sc].map(function (r) {
-        return { technique: r.technique, label: label(r), x: r.gpu_ms_median, y: r.err_rate_mean };
-      }));
-      /* beside it, flicker: the runs that measured it (a twin a display frame later) */
-      var fl = scenes[sc].filter(function (r) { return typeof r.flicker_rate_mean === "number"; });
-      if (fl.length) front(fs, sc + ": flicker", fl.map(function (r) {
-        return { technique: r.technique, label: label(r), x: r.gpu_ms_median, y: r.flicker_rate_mean };
-      }), { ylabel: "flicker rate" });
-    });
-    if (!Object.keys(scenes).length) fs.appendChild(el("p", { text: "No run of this night measured its error." }));
+      el("p", { text: "Each point a run (median frame time, mean error rate against the exact reference; beside it, the mean flicker rate of its twins a display frame later); the line joins the runs no other run beats on both." }),
+      el("p", {}, [el("label", { "for": "budget", text: "memory budget, MiB of shadow storage (shadow_mb): " }), budget,
+        el("span", { "class": "small", text: " runs that hold more are left out of the fronts; empty: every run" })]),
+      plots]);
+    function drawFronts() {
+      plots.textContent = "";
+      var cap = parseFloat(budget.value), scenes = {}, over = 0;
+      rows.forEach(function (r) {
+        if (r.status !== "ok" || typeof r.err_rate_mean !== "number" || typeof r.gpu_ms_median !== "number") return;
+        if (!isNaN(cap) && typeof r.shadow_mb === "number" && r.shadow_mb > cap) { over++; return; }
+        (scenes[r.scene] = scenes[r.scene] || []).push(r);
+      });
+      if (!isNaN(cap)) plots.appendChild(el("p", { "class": "small", id: "budget-note",
+        text: over + " run(s) over " + cap + " MiB left out" }));
+      Object.keys(scenes).forEach(function (sc) {
+        var label = function (r) { return r.technique + (r.params ? ":" + r.params : "") + (typeof r.shadow_mb === "number" ? " (" + fmt(r.shadow_mb, 3) + " MiB)" : ""); };
+        front(plots, sc, scenes[sc].map(function (r) {
+          return { technique: r.technique, label: label(r), x: r.gpu_ms_median, y: r.err_rate_mean };
+        }));
+        /* beside it, flicker: the runs that measured it (a twin a display frame later) */
+        var fl = scenes[sc].filter(function (r) { return typeof r.flicker_rate_mean === "number"; });
+        if (fl.length) front(plots, sc + ": flicker", fl.map(function (r) {
+          return { technique: r.technique, label: label(r), x: r.gpu_ms_median, y: r.flicker_rate_mean };
+        }), { ylabel: "flicker rate" });
+      });
+      if (!Object.keys(scenes).length) plots.appendChild(el("p", { text: "No run of this night measured its error" + (isNaN(cap) ? "." : " within the budget.") }));
+    }
+    budget.addEventListener("change", drawFronts);
+    drawFronts();
     m.appendChild(fs);
     done();
   }

@@ -238,6 +238,13 @@ def main():
         if kind == "series":
             check("night.html?n=%d" % sixth in dom, "series page: its change links night 6")
         chromium(url, shot=os.path.join(SHOTS, kind + ".png"))
+    # a memory budget on the night's fronts: pssm's four 2048² cascades (64 MiB) are over 20, both sm runs (16) within
+    url = "file://" + os.path.abspath(os.path.join(site, pages["night"] + "&budget=20"))
+    dom, console = chromium(url)
+    fronts = dom[dom.find('id="fronts"'):]
+    check("1 run(s) over 20 MiB left out" in fronts and "pssm:" not in fronts and "sm:" in fronts and not console,
+          "night page, budget 20 MiB: pssm (64 MiB) left out of the fronts, sm (16) drawn")
+    chromium(url, shot=os.path.join(SHOTS, "night-budget.png"))
     print("screenshots in " + SHOTS)
     if failures:
         print("%d check(s) failed" % len(failures))
