@@ -202,11 +202,47 @@ static void test_shadow_mb_is_the_maps(void **st) {
     sb_table_free(&r0);
 }
 
+/* One estimate, two users, for every technique: each run's shadow_mb is the figure its GPU-memory check names when
+ * the maps do not fit (every technique that keeps maps, at its defaults and at a second setting), and a technique
+ * keeping none is never skipped for memory. */
+static void test_memory_check_is_shadow_mb(void **st) {
+    (void)st;
+    const struct {
+        const char *scene, *specs;
+    } sets[] = {
+        {"towers", "none raycast volumes sm sm:res=4096:format=msm pssm pssm:cascades=2:res=1024:depth=16 sdsm lispsm tsm "
+                   "psm psm:cube=on virtual virtual:pool=300"},
+        {"towers-night", "cube cube:res=2048 dpsm dpsm:res=4096"},
+    };
+    int checked = 0;
+    for (size_t k = 0; k < sizeof sets / sizeof *sets; k++) {
+        sb_table t;
+        shadow_mb_of(sets[k].scene, sets[k].specs, "--gpu-memory 1M", &t);
+        for (int r = 0; r < t.nrows; r++) {
+            double mb = atof(sb_table_get(&t, r, "shadow_mb"));
+            const char *status = sb_table_get(&t, r, "status"), *reason = sb_table_get(&t, r, "reason");
+            print_message("%-8s shadow_mb %8.3f  %s %s\n", sb_table_get(&t, r, "technique"), mb, status, reason);
+            if (mb == 0) {
+                assert_null(strstr(reason, "needs"));
+                continue;
+            }
+            char want[64];
+            snprintf(want, sizeof want, "needs %.0f MiB of ", mb);
+            assert_string_equal(status, "skipped");
+            assert_non_null(strstr(reason, want));
+            checked++;
+        }
+        sb_table_free(&t);
+    }
+    assert_int_equal(checked, 15);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_every_metric_everywhere),
         cmocka_unit_test(test_default_metrics_are_the_table_rows),
         cmocka_unit_test(test_shadow_mb_is_the_maps),
+        cmocka_unit_test(test_memory_check_is_shadow_mb),
     };
     return cmocka_run_group_tests_name("metrics", tests, setup, teardown);
 }
