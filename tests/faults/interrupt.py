@@ -157,7 +157,8 @@ def main():
           "stress: SIGINT -> exit %d, %d row(s) kept, temporary scenes left %s" % (rc, len(rows_), sorted(left)))
 
     # a second SIGINT: at once. When the first one's orderly stop is over before the second can be sent (it
-    # came at a frame's end: seen once, status 130 after 0.01 s), there was no second to test: again, later
+    # came at a frame's end: seen once, status 130 after 0.01 s), or ends just as it is sent (status 130 at once),
+    # there was no second to test: again, later; five tries without one test fail the check (dt stays NaN)
     dt = float("nan")
     for attempt in range(5):
         p = subprocess.Popen([BIN, "batch", bench, "--out", os.path.join(WORK, "twice"), "--quiet"],
@@ -173,6 +174,12 @@ def main():
         p.send_signal(signal.SIGINT)
         p.communicate(timeout=60)
         dt = time.time() - t1
+        if p.returncode == 128 + signal.SIGINT and dt < 0.05:
+            # the orderly stop ended between the poll and the second signal (seen once in CI: status 130 at
+            # 0.00 s): the second reached a process already exiting; nothing was tested, again
+            print("note: the first SIGINT's stop ended as the second was sent (status 130 after %.3f s): again" % dt)
+            dt = float("nan")
+            continue
         break
     check(p.returncode == -signal.SIGINT and dt < 2,
           "a second SIGINT ends it at once (%.2f s, status %d)" % (dt, p.returncode))
