@@ -74,7 +74,7 @@ static bool create_maps(sb_csm *c, const char *name, sb_err *err) {
     const sb_csm_desc *d = &c->d;
     static const GLenum depth_formats[] = {GL_DEPTH_COMPONENT16, GL_DEPTH_COMPONENT24, GL_DEPTH_COMPONENT32F};
     bool bilinear = !(d->filter == SB_FILTER_NONE || d->filter == SB_FILTER_PCF3 || d->filter == SB_FILTER_PCF5);
-    c->tex = sb_shadow_texture(GL_TEXTURE_2D_ARRAY, depth_formats[d->depth], d->res, c->count, bilinear);
+    c->tex = sb_shadow_texture(GL_TEXTURE_2D_ARRAY, depth_formats[d->depth], d->res, d->res, c->count, bilinear);
     if (d->format) { /* filtered formats: moments beside the depth the rasterizer tests with */
         GLuint m[2];
         glGenTextures(2, m);

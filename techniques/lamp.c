@@ -21,7 +21,7 @@ bool sb_lamp_technique_supported(const sb_run_ctx *rc, const void *desc, sb_err 
 
 static bool make_targets(sb_lamp_state *s, const char *name, sb_err *err) {
     const sb_lamp_kind *k = s->kind;
-    s->tex = sb_shadow_texture(k->target, GL_DEPTH_COMPONENT32F, s->d->res, k->maps, s->d->filter != 0);
+    s->tex = sb_shadow_texture(k->target, GL_DEPTH_COMPONENT32F, s->d->res, s->d->res, k->maps, s->d->filter != 0);
     glGenFramebuffers(1, &s->fbo_all);
     glBindFramebuffer(GL_FRAMEBUFFER, s->fbo_all);
     glFramebufferTexture(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, s->tex, 0);

@@ -114,6 +114,17 @@ typedef struct page_key {
     bool stand_in;              /* needed only for a finer page the pool had no room for */
 } page_key;
 
+/* The clipmap's uniforms (virtual_common.glsl) in one program: the marking's or the lookup's. */
+typedef struct clip_locs {
+    GLint light, eye, fwd, foot, texel0, win;
+} clip_locs;
+
+static clip_locs clip_locations(GLuint prog) {
+    return (clip_locs){glGetUniformLocation(prog, "u_vlight"), glGetUniformLocation(prog, "u_veye"),
+                       glGetUniformLocation(prog, "u_vfwd"), glGetUniformLocation(prog, "u_vfoot"),
+                       glGetUniformLocation(prog, "u_vtexel0"), glGetUniformLocation(prog, "u_vwin")};
+}
+
 typedef struct virtual_state {
     virtual_desc d;
     pool_layout p;
@@ -123,6 +134,7 @@ typedef struct virtual_state {
     GLint u_vp[2];
     GLuint mark_prog;
     GLint m_depth, m_inv, m_margin;
+    clip_locs mark_clip, final_clip;
     sb_final_prog fp;
     GLint u_atlas, u_atlas_texel, u_vdepth, u_vrange, u_bias, u_normal, u_light;
     /* the clipmap: from the scene and the light */
@@ -186,6 +198,7 @@ static bool make_programs(virtual_state *s, const sb_gpu *g, sb_err *err) {
     s->m_depth = glGetUniformLocation(s->mark_prog, "u_depth");
     s->m_inv = glGetUniformLocation(s->mark_prog, "u_inv_view_proj");
     s->m_margin = glGetUniformLocation(s->mark_prog, "u_margin");
+    s->mark_clip = clip_locations(s->mark_prog);
     const char *fs[] = {sb_shader_depth_frag};
     const char *vs[] = {sb_shader_virtual_depth_vert};
     const sb_shader_src st[] = {{GL_VERTEX_SHADER, vs, 1}, {GL_FRAGMENT_SHADER, fs, 1}};
@@ -200,6 +213,7 @@ static bool make_programs(virtual_state *s, const sb_gpu *g, sb_err *err) {
     const char *names[] = {"u_atlas", "u_atlas_texel", "u_vdepth", "u_vrange", "u_bias", "u_normal", "u_light"};
     GLint *locs[] = {&s->u_atlas, &s->u_atlas_texel, &s->u_vdepth, &s->u_vrange, &s->u_bias, &s->u_normal, &s->u_light};
     for (size_t i = 0; i < SB_COUNT(names); i++) *locs[i] = glGetUniformLocation(s->fp.prog, names[i]);
+    s->final_clip = clip_locations(s->fp.prog);
     return true;
 }
 
@@ -246,16 +260,8 @@ static bool virtual_create(void *state, const sb_run_ctx *rc, const void *desc, 
     s->free_slots = sb_xcalloc((size_t)s->p.slots, sizeof *s->free_slots);
     invalidate(s);
 
-    glGenTextures(1, &s->atlas);
-    glBindTexture(GL_TEXTURE_2D, s->atlas);
-    glTexStorage2D(GL_TEXTURE_2D, 1, GL_DEPTH_COMPONENT32F, s->p.slots_x * s->p.slot, s->p.rows * s->p.slot);
-    GLint filt = s->d.filter == FILTER_HW ? GL_LINEAR : GL_NEAREST;
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, filt);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, filt);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+    s->atlas = sb_shadow_texture(GL_TEXTURE_2D, GL_DEPTH_COMPONENT32F, s->p.slots_x * s->p.slot, s->p.rows * s->p.slot,
+                                 1, s->d.filter == FILTER_HW);
     glGenFramebuffers(1, &s->fbo);
     glBindFramebuffer(GL_FRAMEBUFFER, s->fbo);
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, s->atlas, 0);
@@ -286,23 +292,22 @@ static void place_windows(virtual_state *s, const sb_frame *f) {
     }
 }
 
-/* The uniforms marking and lookup share (virtual_common.glsl), on program prog. */
-static void set_clipmap_uniforms(const virtual_state *s, const sb_frame *f, GLuint prog) {
+/* The uniforms marking and lookup share (virtual_common.glsl), into the bound program whose locations are c. */
+static void set_clipmap_uniforms(const virtual_state *s, const sb_frame *f, const clip_locs *c) {
     float m[16], win[MAX_LEVELS][2];
     sb_m4_to_float(s->lview, m);
-    glUniformMatrix4fv(glGetUniformLocation(prog, "u_vlight"), 1, GL_FALSE, m);
+    glUniformMatrix4fv(c->light, 1, GL_FALSE, m);
     sb_v3 eye = sb_v3_sub(f->cam.pos, f->gpu->scene->origin);
-    glUniform3f(glGetUniformLocation(prog, "u_veye"), (float)eye.x, (float)eye.y, (float)eye.z);
-    glUniform3f(glGetUniformLocation(prog, "u_vfwd"), (float)f->cam.forward.x, (float)f->cam.forward.y,
-                (float)f->cam.forward.z);
-    glUniform1f(glGetUniformLocation(prog, "u_vfoot"), (float)foot_per_depth(s, f));
-    glUniform1f(glGetUniformLocation(prog, "u_vtexel0"), (float)s->texel0);
+    glUniform3f(c->eye, (float)eye.x, (float)eye.y, (float)eye.z);
+    glUniform3f(c->fwd, (float)f->cam.forward.x, (float)f->cam.forward.y, (float)f->cam.forward.z);
+    glUniform1f(c->foot, (float)foot_per_depth(s, f));
+    glUniform1f(c->texel0, (float)s->texel0);
     for (int l = 0; l < s->d.levels; l++) {
         double span = s->d.page * level_texel(s, l);
         win[l][0] = (float)(s->origin[l][0] * span);
         win[l][1] = (float)(s->origin[l][1] * span);
     }
-    glUniform2fv(glGetUniformLocation(prog, "u_vwin"), s->d.levels, &win[0][0]);
+    glUniform2fv(c->win, s->d.levels, &win[0][0]);
 }
 
 /* Marking: the pages the frame's pixels need, read back into s->req. */
@@ -312,7 +317,7 @@ static void mark_pages(virtual_state *s, sb_frame *f) {
     glClearBufferData(GL_SHADER_STORAGE_BUFFER, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, NULL);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, s->req_buf);
     glUseProgram(s->mark_prog);
-    set_clipmap_uniforms(s, f, s->mark_prog);
+    set_clipmap_uniforms(s, f, &s->mark_clip);
     sb_m4 inv;
     float m[16];
     sb_m4_invert(f->view_proj, &inv);
@@ -498,7 +503,7 @@ static void virtual_frame(void *state, sb_frame *f) {
 
     sb_stage_begin(f, SB_STAGE_FINAL);
     glUseProgram(s->fp.prog);
-    set_clipmap_uniforms(s, f, s->fp.prog);
+    set_clipmap_uniforms(s, f, &s->final_clip);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, s->table_buf);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D, s->atlas);

@@ -92,12 +92,12 @@ GLuint sb_gpu_program(const char *label, const char *defines, const char *const 
     return sb_gpu_link(label, defines, st, 2, err);
 }
 
-GLuint sb_shadow_texture(GLenum target, GLenum format, int res, int layers, bool linear) {
+GLuint sb_shadow_texture(GLenum target, GLenum format, int width, int height, int layers, bool linear) {
     GLuint tex;
     glGenTextures(1, &tex);
     glBindTexture(target, tex);
-    if (target == GL_TEXTURE_CUBE_MAP) glTexStorage2D(target, 1, format, res, res);
-    else glTexStorage3D(target, 1, format, res, res, layers);
+    if (target == GL_TEXTURE_2D_ARRAY) glTexStorage3D(target, 1, format, width, height, layers);
+    else glTexStorage2D(target, 1, format, width, height);
     GLint filt = linear ? GL_LINEAR : GL_NEAREST;
     glTexParameteri(target, GL_TEXTURE_MIN_FILTER, filt);
     glTexParameteri(target, GL_TEXTURE_MAG_FILTER, filt);

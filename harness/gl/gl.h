@@ -45,9 +45,9 @@ bool sb_gl_links_make(sb_gl_links *l, GLuint from, GLuint to);
 /* Gives each linked uniform of `to` the value it has in `from`. */
 void sb_gl_links_copy(const sb_gl_links *l, GLuint from, GLuint to);
 
-/* A depth texture with hardware comparison (LEQUAL), clamped to its edge:
- * GL_TEXTURE_2D_ARRAY with `layers` layers, or GL_TEXTURE_CUBE_MAP (layers ignored). */
-GLuint sb_shadow_texture(GLenum target, GLenum format, int res, int layers, bool linear);
+/* A depth texture with hardware comparison (LEQUAL), clamped to its edge: GL_TEXTURE_2D_ARRAY of width x height
+ * with `layers` layers, GL_TEXTURE_CUBE_MAP or GL_TEXTURE_2D (layers ignored). */
+GLuint sb_shadow_texture(GLenum target, GLenum format, int width, int height, int layers, bool linear);
 
 /* Layered shadow rendering (cascades, cube faces): per layer, routed by a
  * geometry shader, by gl_Layer from the vertex shader, or the best available. */

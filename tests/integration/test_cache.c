@@ -20,7 +20,6 @@
 #include "support.h"
 #include "table.h"
 
-static char g_out[65536];
 
 SB_TEST_SCRATCH("sbcache")
 
@@ -28,28 +27,18 @@ static const char *const g_errors[] = {"err_rate", "err_false_shadow", "err_fals
 
 static void render(const char *scene, const char *path, const char *specs, int frames, const char *tag, sb_table *sum,
                    char *dir, size_t len) {
-    assert_int_equal(run_logged(g_out, sizeof g_out, "%s run %s %s %s --frames %d --size 160x90 --error-every 1 "
-                                "--warmup 0 --quiet --out %s/%s", test_binary(), scene, path, specs, frames, g_tmp,
-                                tag), 0);
-    snprintf(dir, len, "%s", last_line_of(g_out));
-    summary_table(dir, sum);
+    char out[4200];
+    snprintf(out, sizeof out, "%s/%s", g_tmp, tag);
+    run_evaluated(scene, path, specs, frames, "160x90", out, sum, dir, len);
 }
 
-static void frames_of(const char *dir, const sb_table *sum, int r, sb_table *t) {
-    char path[4200];
-    sb_err err;
-    snprintf(path, sizeof path, "%s/%s.csv", dir, sb_table_get(sum, r, "run_id"));
-    assert_true(sb_table_load(t, path, &err));
-}
-
-static long cell(const sb_table *t, int r, const char *col) { return atol(sb_table_get(t, r, col)); }
 
 /* Runs 2k (cached) and 2k+1 (the same uncached): equal error figures frame by frame. */
 static void same_shadows(const char *dir, const sb_table *sum, int pairs, bool still) {
     for (int k = 0; k < pairs; k++) {
         sb_table a, b;
-        frames_of(dir, sum, 2 * k, &a);
-        frames_of(dir, sum, 2 * k + 1, &b);
+        frames_table(dir, sum, 2 * k, &a);
+        frames_table(dir, sum, 2 * k + 1, &b);
         const char *pa = sb_table_get(sum, 2 * k, "params"), *pb = sb_table_get(sum, 2 * k + 1, "params");
         assert_non_null(strstr(pa, "cache=on"));
         assert_null(strstr(pb, "cache="));   /* at its default: not in the canonical text */
@@ -61,19 +50,19 @@ static void same_shadows(const char *dir, const sb_table *sum, int pairs, bool s
                                   sb_table_get(&a, f, g_errors[e]), sb_table_get(&b, f, g_errors[e]));
                     fail();
                 }
-            assert_int_equal(cell(&b, f, "cascades_cached"), 0);
-            cached += cell(&a, f, "cascades_cached");
+            assert_int_equal(table_int(&b, f, "cascades_cached"), 0);
+            cached += table_int(&a, f, "cascades_cached");
             /* every active cascade is rendered or kept */
-            assert_int_equal(cell(&a, f, "cascades_rendered") + cell(&a, f, "cascades_cached"),
-                             cell(&b, f, "cascades_rendered"));
+            assert_int_equal(table_int(&a, f, "cascades_rendered") + table_int(&a, f, "cascades_cached"),
+                             table_int(&b, f, "cascades_rendered"));
             if (!still) continue;
             if (f == 0) {
-                assert_true(cell(&a, 0, "cascades_rendered") > 0);
-                assert_int_equal(cell(&a, 0, "cascades_cached"), 0);
+                assert_true(table_int(&a, 0, "cascades_rendered") > 0);
+                assert_int_equal(table_int(&a, 0, "cascades_cached"), 0);
             } else {
-                assert_int_equal(cell(&a, f, "cascades_rendered"), 0);
-                assert_int_equal(cell(&a, f, "cascades_cached"), cell(&a, 0, "cascades_rendered"));
-                assert_int_equal(cell(&a, f, "shadow_draw_calls"), 0);
+                assert_int_equal(table_int(&a, f, "cascades_rendered"), 0);
+                assert_int_equal(table_int(&a, f, "cascades_cached"), table_int(&a, 0, "cascades_rendered"));
+                assert_int_equal(table_int(&a, f, "shadow_draw_calls"), 0);
             }
         }
         print_message("%-70.70s: %ld cascades kept over %d frames\n", pa, cached, a.nrows);

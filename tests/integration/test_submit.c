@@ -34,14 +34,6 @@ static void render(const char *scene, const char *mode, char *dir, size_t len) {
     snprintf(dir, len, "%s", last_line_of(g_out));
 }
 
-static void frames_of(const char *dir, const sb_table *sum, int r, sb_table *t) {
-    char path[4096];
-    sb_err err;
-    snprintf(path, sizeof path, "%s/%s.csv", dir, sb_table_get(sum, r, "run_id"));
-    assert_true(sb_table_load(t, path, &err));
-}
-
-static long cell(const sb_table *t, int r, const char *col) { return atol(sb_table_get(t, r, col)); }
 
 static void test_direct_and_indirect(void **st) {
     (void)st;
@@ -67,8 +59,8 @@ static void test_direct_and_indirect(void **st) {
         const char *params = sb_table_get(&A, r, "params");
         bool per_cascade = strstr(params, "layered=off") != NULL;
         sb_table fa, fb;
-        frames_of(a_dir, &A, r, &fa);
-        frames_of(b_dir, &B, r, &fb);
+        frames_table(a_dir, &A, r, &fa);
+        frames_table(b_dir, &B, r, &fb);
         assert_int_equal(fa.nrows, 4);
         assert_int_equal(fb.nrows, fa.nrows);
         long draws = 0, calls = 0;
@@ -81,15 +73,15 @@ static void test_direct_and_indirect(void **st) {
                 }
             /* direct: a call a draw; indirect: a pass or layer a call (no alpha-tested or double-sided draws
                here, so one program and one culling state a pass) */
-            assert_int_equal(cell(&fa, f, "api_calls"), cell(&fa, f, "draw_calls"));
-            assert_int_equal(cell(&fa, f, "shadow_api_calls"), cell(&fa, f, "shadow_draw_calls"));
+            assert_int_equal(table_int(&fa, f, "api_calls"), table_int(&fa, f, "draw_calls"));
+            assert_int_equal(table_int(&fa, f, "shadow_api_calls"), table_int(&fa, f, "shadow_draw_calls"));
             bool maps = *sb_table_get(&fa, f, "cascades_rendered");
-            long layers = !maps ? 0 : per_cascade ? cell(&fb, f, "cascades_rendered") : 1;
+            long layers = !maps ? 0 : per_cascade ? table_int(&fb, f, "cascades_rendered") : 1;
             long zpass = *sb_table_get(&fb, f, "zpass_ms") ? 1 : 0;
-            assert_true(cell(&fb, f, "shadow_api_calls") <= layers);
-            assert_true(cell(&fb, f, "api_calls") <= zpass + layers + 1);
-            draws += cell(&fb, f, "draw_calls");
-            calls += cell(&fb, f, "api_calls");
+            assert_true(table_int(&fb, f, "shadow_api_calls") <= layers);
+            assert_true(table_int(&fb, f, "api_calls") <= zpass + layers + 1);
+            draws += table_int(&fb, f, "draw_calls");
+            calls += table_int(&fb, f, "api_calls");
         }
         print_message("%-10s %-40.40s: %ld draws in 4 frames, %ld GL calls indirect\n",
                       sb_table_get(&A, r, "technique"), params, draws, calls);

@@ -22,27 +22,16 @@
 #include "support.h"
 #include "table.h"
 
-static char g_out[65536];
 
 SB_TEST_SCRATCH("sbvirtual")
 
 static void render(const char *scene, const char *path, const char *specs, int frames, const char *size,
                    const char *tag, sb_table *sum, char *dir, size_t len) {
-    assert_int_equal(run_logged(g_out, sizeof g_out, "%s run %s %s %s --frames %d --size %s --error-every 1 "
-                                "--warmup 0 --quiet --out %s/%s", test_binary(), scene, path, specs, frames, size, g_tmp,
-                                tag), 0);
-    snprintf(dir, len, "%s", last_line_of(g_out));
-    summary_table(dir, sum);
+    char out[4200];
+    snprintf(out, sizeof out, "%s/%s", g_tmp, tag);
+    run_evaluated(scene, path, specs, frames, size, out, sum, dir, len);
 }
 
-static void frames_of(const char *dir, const sb_table *sum, int r, sb_table *t) {
-    char path[4200];
-    sb_err err;
-    snprintf(path, sizeof path, "%s/%s.csv", dir, sb_table_get(sum, r, "run_id"));
-    assert_true(sb_table_load(t, path, &err));
-}
-
-static long cell(const sb_table *t, int r, const char *col) { return atol(sb_table_get(t, r, col)); }
 static double num(const sb_table *t, int r, const char *col) { return atof(sb_table_get(t, r, col)); }
 
 /* The mean err_rate of two runs on a scene's path: virtual's (pool=64) below pssm 4x2048's, at no more shadow_mb. */
@@ -73,17 +62,17 @@ static void test_still_camera_keeps_its_pages(void **st) {
     char dir[4096];
     render("plane-box", test_data("planebox-fixed.path"), "virtual virtual:cache=off", 4, "320x180", "still", &sum,
            dir, sizeof dir);
-    frames_of(dir, &sum, 0, &a);
-    frames_of(dir, &sum, 1, &b);
-    long need0 = cell(&a, 0, "pages_needed");
+    frames_table(dir, &sum, 0, &a);
+    frames_table(dir, &sum, 1, &b);
+    long need0 = table_int(&a, 0, "pages_needed");
     assert_true(need0 > 0);
-    assert_int_equal(cell(&a, 0, "pages_rendered"), need0);
+    assert_int_equal(table_int(&a, 0, "pages_rendered"), need0);
     for (int f = 1; f < a.nrows; f++) {
-        assert_int_equal(cell(&a, f, "pages_needed"), need0);
-        assert_int_equal(cell(&a, f, "pages_rendered"), 0);
-        assert_int_equal(cell(&a, f, "pages_cached"), need0);
-        assert_int_equal(cell(&a, f, "shadow_draw_calls"), 0);
-        assert_int_equal(cell(&b, f, "pages_rendered"), need0);   /* cache=off draws them all again */
+        assert_int_equal(table_int(&a, f, "pages_needed"), need0);
+        assert_int_equal(table_int(&a, f, "pages_rendered"), 0);
+        assert_int_equal(table_int(&a, f, "pages_cached"), need0);
+        assert_int_equal(table_int(&a, f, "shadow_draw_calls"), 0);
+        assert_int_equal(table_int(&b, f, "pages_rendered"), need0);   /* cache=off draws them all again */
         assert_string_equal(sb_table_get(&a, f, "err_rate"), sb_table_get(&b, f, "err_rate"));
         assert_string_equal(sb_table_get(&a, f, "err_rate"), sb_table_get(&a, 0, "err_rate"));
     }
@@ -99,13 +88,13 @@ static void test_moving_camera_draws_fewer_than_it_needs(void **st) {
     sb_table sum, a;
     char dir[4096];
     render("towers", test_data("towers-pan.path"), "virtual", 8, "320x180", "moving", &sum, dir, sizeof dir);
-    frames_of(dir, &sum, 0, &a);
+    frames_table(dir, &sum, 0, &a);
     long need = 0, drawn = 0, kept = 0;
     for (int f = 1; f < a.nrows; f++) {
-        need += cell(&a, f, "pages_needed");
-        drawn += cell(&a, f, "pages_rendered");
-        kept += cell(&a, f, "pages_cached");
-        assert_int_equal(cell(&a, f, "pages_rendered") + cell(&a, f, "pages_cached"), cell(&a, f, "pages_needed"));
+        need += table_int(&a, f, "pages_needed");
+        drawn += table_int(&a, f, "pages_rendered");
+        kept += table_int(&a, f, "pages_cached");
+        assert_int_equal(table_int(&a, f, "pages_rendered") + table_int(&a, f, "pages_cached"), table_int(&a, f, "pages_needed"));
     }
     print_message("moving camera: frames 1..%d needed %ld pages, drew %ld, kept %ld\n", a.nrows - 1, need, drawn, kept);
     assert_true(drawn < need);
@@ -178,11 +167,11 @@ static void test_small_pool_warns(void **st) {
     const char *w = sb_table_get(&sum, 0, "warnings");
     print_message("pool=1: %s\n", w);
     assert_non_null(strstr(w, "pool_overflow: the page pool was short of"));
-    frames_of(dir, &sum, 0, &a);
+    frames_table(dir, &sum, 0, &a);
     for (int f = 0; f < a.nrows; f++) {
         double e = num(&a, f, "err_rate");
         assert_true(isfinite(e) && e >= 0 && e < 0.5);
-        assert_true(cell(&a, f, "pool_overflow") > 0);
+        assert_true(table_int(&a, f, "pool_overflow") > 0);
     }
     sb_table_free(&a);
     sb_table_free(&sum);

@@ -317,3 +317,21 @@ void summary_table(const char *dir, sb_table *t) {
     sb_err err;
     if (!sb_table_load(t, path, &err)) fail_msg("%s", err.msg);
 }
+
+void run_evaluated(const char *scene, const char *path, const char *specs, int frames, const char *size,
+                   const char *out, sb_table *sum, char *dir, size_t len) {
+    static char log[65536];
+    assert_int_equal(run_logged(log, sizeof log, "%s run %s %s %s --frames %d --size %s --error-every 1 --warmup 0 "
+                                "--quiet --out %s", test_binary(), scene, path, specs, frames, size, out), 0);
+    snprintf(dir, len, "%s", last_line_of(log));
+    summary_table(dir, sum);
+}
+
+void frames_table(const char *dir, const sb_table *sum, int r, sb_table *t) {
+    char path[4200];
+    snprintf(path, sizeof path, "%s/%s.csv", dir, sb_table_get(sum, r, "run_id"));
+    sb_err err;
+    if (!sb_table_load(t, path, &err)) fail_msg("%s", err.msg);
+}
+
+long table_int(const sb_table *t, int r, const char *col) { return atol(sb_table_get(t, r, col)); }

@@ -76,6 +76,14 @@ void expect_scene_refused(const char *path, const char *needle);
 /* Loads DIR/summary.csv (a results folder's runs) into t, asserting it loads. */
 struct sb_table;
 void summary_table(const char *dir, struct sb_table *t);
+/* Renders `run SCENE PATH SPECS --frames N --size SIZE --error-every 1 --warmup 0 --quiet --out OUT` (logged),
+ * every frame evaluated, asserting exit 0; the results folder into dir, its summary into sum. */
+void run_evaluated(const char *scene, const char *path, const char *specs, int frames, const char *size,
+                   const char *out, struct sb_table *sum, char *dir, size_t len);
+/* Loads the per-frame CSV of the summary's row r (DIR/RUN_ID.csv) into t, asserting it loads. */
+void frames_table(const char *dir, const struct sb_table *sum, int r, struct sb_table *t);
+/* A cell of a loaded table as an integer (atol: 0 when empty). */
+long table_int(const struct sb_table *t, int r, const char *col);
 
 /* Runs the printf-formatted command (logged) expecting exit 2 (bad input) and
  * one line of output holding needle; returns that output. */
