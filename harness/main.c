@@ -11,6 +11,7 @@
 #include "scene_load.h"
 #include "batch.h"
 #include "compare.h"
+#include "bisect.h"
 #include "history.h"
 #include "site.h"
 #include "columns.h"
@@ -33,6 +34,8 @@ typedef struct cli {
     int npos;
     int argc;
     char **argv;
+    char **tail;                /* bisect: the words after "--" */
+    int ntail;
 } cli;
 
 /* Bad input: one line, exit 2. */
@@ -438,6 +441,18 @@ static int cmd_history(const cli *c) {
     return rc;
 }
 
+/* ---- bisect ---- */
+
+static int cmd_bisect(const cli *c) {
+    if (c->o.history ? c->npos != 0 : c->npos != 2) return bad_usage(c);
+    sb_bisect_cmd b = {.good = c->o.history ? NULL : c->pos[0], .bad = c->o.history ? NULL : c->pos[1],
+                       .run_argv = c->tail, .run_argc = c->ntail,
+                       .metric = sb_cli_given(&c->o, "--metric") ? c->o.metrics : NULL, .repeat = c->o.pairs,
+                       .threshold_pct = c->o.threshold, .workdir = c->o.workdir, .history = c->o.history,
+                       .series = c->o.series};
+    return sb_bisect_main(&b);
+}
+
 static int cmd_report(const cli *c) {
     if (c->npos > 1 || (c->npos == 1 && c->o.history)) return bad_usage(c);
     char pbuf[4096];
@@ -459,6 +474,7 @@ static int dispatch(const cli *c) {
     case SB_CMD_TUNE: return cmd_tune(c);
     case SB_CMD_STRESS: return cmd_stress(c);
     case SB_CMD_HISTORY: return cmd_history(c);
+    case SB_CMD_BISECT: return cmd_bisect(c);
     case SB_CMD_REPORT: return cmd_report(c);
     case SB_CMD_TECHNIQUES: return c->npos ? bad_usage(c) : cmd_techniques();
     case SB_CMD_COLUMNS: return cmd_columns(c);
@@ -516,7 +532,16 @@ int main(int argc, char **argv) {
     sb_cli_defaults(&c.o, cmd);
     c.o.run.progress = isatty(2);
     sb_err err;
-    if (!sb_cli_parse(&c.o, c.cmd, argc, argv, 2, c.pos, &c.npos, &err)) {
+    int parsed = argc;
+    if (cmd == SB_CMD_BISECT)   /* what follows "--" is the run bisected, passed on as it is */
+        for (int i = 2; i < argc; i++)
+            if (!strcmp(argv[i], "--")) {
+                parsed = i;
+                c.tail = argv + i + 1;
+                c.ntail = argc - i - 1;
+                break;
+            }
+    if (!sb_cli_parse(&c.o, c.cmd, parsed, argv, 2, c.pos, &c.npos, &err)) {
         free(c.pos);
         return bad("%s", err.msg);
     }

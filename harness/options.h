@@ -23,6 +23,7 @@ typedef enum sb_command {
     SB_CMD_TUNE,
     SB_CMD_STRESS,
     SB_CMD_HISTORY,
+    SB_CMD_BISECT,
     SB_CMD_REPORT,
     SB_CMD_TECHNIQUES,
     SB_CMD_COLUMNS,
@@ -69,9 +70,9 @@ typedef struct sb_cli_opts {
                                   field is at offset 0 (0: none) */
     sb_run_opts run; /* the run options: run, batch, tune, stress (and the scene
                         options of info and path) */
-    const char *out, *resume, *shard, *metrics, *pair, *techniques, *history, *since;
+    const char *out, *resume, *shard, *metrics, *pair, *techniques, *history, *since, *series, *workdir;
     int format; /* --format: an sb_output_format */
-    int recent;
+    int recent, pairs;
     double noise_floor, threshold, max_err, max_flicker, max_mb, budget_ms, time_limit_s;
     bool dry_run, quiet, verbose;
 } sb_cli_opts;

@@ -97,7 +97,7 @@ static void same_figures(const char *a_dir, const char *b_dir, double count_tol,
         assert_string_equal(sb_table_get(&B, r, "warnings"), "");
         assert_string_equal(sb_table_get(&A, r, "params"), sb_table_get(&B, r, "params"));
         sb_table fa, fb;
-        char path[4096];
+        char path[8300];
         sb_err err;
         snprintf(path, sizeof path, "%s/%s.csv", a_dir, sb_table_get(&A, r, "run_id"));
         assert_true(sb_table_load(&fa, path, &err));
