@@ -528,3 +528,12 @@ int sb_bisect_main(const sb_bisect_cmd *cmd) {
     free(c);
     return SB_EXIT_OK;
 }
+
+bool sb_git_is_ancestor(const char *ancestor, const char *rev) {
+    char a[128], r[128];
+    snprintf(a, sizeof a, "%s", ancestor);
+    snprintf(r, sizeof r, "%s", rev);
+    char *d = strstr(r, "-dirty");   /* a night built from a changed tree: its commit */
+    if (d) *d = 0;
+    return a[0] && r[0] && git(".", NULL, 0, "merge-base", "--is-ancestor", a, r, NULL);
+}

@@ -17,6 +17,7 @@
  * commits, GOOD not an ancestor of BAD, GOOD or BAD not building, a run that
  * is not one run of one technique). */
 #pragma once
+#include <stdbool.h>
 
 typedef struct sb_bisect_cmd {
     const char *good, *bad;     /* commits (any git revision); the --history form fills them */
@@ -30,3 +31,7 @@ typedef struct sb_bisect_cmd {
 } sb_bisect_cmd;
 
 int sb_bisect_main(const sb_bisect_cmd *cmd);
+
+/* Whether commit `ancestor` is `rev` or an ancestor of it, in the git
+ * repository of the current folder (false when there is none). */
+bool sb_git_is_ancestor(const char *ancestor, const char *rev);

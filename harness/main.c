@@ -413,6 +413,45 @@ static int cmd_history(const cli *c) {
         sb_history_close(h);
         return rc;
     }
+    if (!strcmp(sub, "annotate")) {
+        if (c->npos != 3) return bad_usage(c);
+        sb_history *h = sb_history_open(path, true, &err);
+        if (!h) return bad_file(&err);
+        const char *what = c->pos[1];
+        long long night = sb_history_find_night(h, what, &err);
+        if (night == 0) {
+            /* a commit no night ran (one bisect named): the first night whose commit holds it */
+            sb_history_night *n = NULL;
+            int nn = sb_history_nights(h, &n, &err);
+            for (int i = 0; i < nn && !night; i++)
+                if (n[i].commit[0] && sb_git_is_ancestor(what, n[i].commit)) night = n[i].id;
+            sb_history_nights_free(n, nn);
+        }
+        int rc = SB_EXIT_OK;
+        if (night < 0) rc = bad_file(&err);
+        else if (night == 0)
+            rc = bad("history annotate: '%s' is no night of the history, and no night ran that commit or one after "
+                     "it (`history list` names the nights and their commits)", what);
+        else if (!sb_history_annotate(h, night, what, c->o.series ? c->o.series : "", c->pos[2], c->o.accept, &err))
+            rc = bad_file(&err);
+        else
+            sb_log("night %lld annotated%s%s%s", night, c->o.series ? " for series " : "",
+                   c->o.series ? c->o.series : "", c->o.accept ? ", accepted" : "");
+        sb_history_close(h);
+        return rc;
+    }
+    if (!strcmp(sub, "check")) {
+        if (c->npos != 2) return bad_usage(c);
+        sb_history *h = sb_history_open(path, false, &err);
+        if (!h) return bad_file(&err);
+        sb_history_query q = {.noise_floor_pct = c->o.noise_floor};
+        char mbuf[1024];
+        if (c->o.metrics) q.nmetrics = split_metrics(c->o.metrics, mbuf, sizeof mbuf, q.metrics, 32);
+        int n = sb_history_check(h, c->pos[1], &q, c->o.nights, stdout, &err);
+        sb_history_close(h);
+        if (n < 0) return bad_file(&err);
+        return n > 0 ? SB_EXIT_FAILED : SB_EXIT_OK;
+    }
     if (c->npos != 1 || (strcmp(sub, "list") && strcmp(sub, "regressions"))) return bad_usage(c);
     sb_history *h = sb_history_open(path, false, &err);
     if (!h) return bad_file(&err);
@@ -428,11 +467,15 @@ static int cmd_history(const cli *c) {
         if (n < 0) {
             rc = bad_file(&err);
         } else {
-            int recent = 0, regressions = 0;
-            for (int i = 0; i < n; i++) regressions += ch[i].regression, recent += ch[i].regression && ch[i].recent;
+            int recent = 0, regressions = 0, accepted = 0;
+            for (int i = 0; i < n; i++) {
+                regressions += ch[i].regression;
+                accepted += ch[i].regression && ch[i].accepted;
+                recent += ch[i].regression && ch[i].recent && !ch[i].accepted;
+            }
             sb_history_print_changes(ch, n, c->o.format, stdout);
-            sb_log("%d change(s), %d regression(s), %d starting in the newest %d night(s)", n, regressions, recent,
-                   q.recent ? q.recent : 3);
+            sb_log("%d change(s), %d regression(s) (%d accepted), %d not accepted starting in the newest %d night(s)",
+                   n, regressions, accepted, recent, q.recent ? q.recent : 3);
             rc = recent > 0 ? SB_EXIT_FAILED : SB_EXIT_OK;
         }
         free(ch);
@@ -507,6 +550,7 @@ static void keep_heap_top(void) {
 
 int main(int argc, char **argv) {
     keep_heap_top();
+    sb_session_set_build(SB_BUILD_OPTIONS);
     if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {
         int cmd = argc > 2 ? sb_command_find(argv[2]) : -1;   /* help COMMAND */
         sb_cli_help(argc < 2 ? stderr : stdout, cmd);

@@ -28,9 +28,12 @@ const sb_command_def sb_commands[SB_CMD_COUNT] = {
                        "numerical-stability battery; SPECs replace the battery's techniques"},
     [SB_CMD_HISTORY] = {"history",
                         "history add DIR...\nhistory list\n"
-                        "history regressions [--metric M,...] [--since DATE] [--recent N] [--noise-floor PCT]",
+                        "history regressions [--metric M,...] [--since DATE] [--recent N] [--noise-floor PCT]\n"
+                        "history annotate NIGHT|COMMIT TEXT [--series PATTERN] [--accept]\n"
+                        "history check DIR [--nights N] [--metric M,...] [--noise-floor PCT]",
                         "keep results sets in the history, list its nights, find changes across the nights per "
-                        "series (exit 1 when a regression starts in the newest --recent nights)"},
+                        "series (exit 1 when a regression not accepted starts in the newest --recent nights), "
+                        "annotate a night, check a results set against the nights (exit 1 beyond their band)"},
     [SB_CMD_BISECT] = {"bisect",
                        "bisect GOOD BAD [--metric M] [--repeat K] [--threshold PCT] -- run SCENE PATH SPEC [run options]\n"
                        "bisect --history FILE --series TEXT --metric M [-- run options]",
@@ -197,6 +200,14 @@ const sb_option sb_options[] = {
      .help = "timings: interleaved runs of the candidate and of GOOD a step (as many again when it cannot tell)"},
     {.name = "--series", .kind = SB_OPT_TEXT, .arg = "TEXT", .commands = SB_IN(SB_CMD_BISECT), .field = F(series),
      .help = "with --history: bisect the newest regression of the series whose name holds TEXT"},
+    {.name = "--series", .kind = SB_OPT_TEXT, .arg = "PATTERN", .def_help = "every series",
+     .commands = SB_IN(SB_CMD_HISTORY), .field = F(series),
+     .help = "annotate: the series the note is about (a glob, or text in the series' name)"},
+    {.name = "--accept", .kind = SB_OPT_FLAG, .commands = SB_IN(SB_CMD_HISTORY), .field = F(accept),
+     .help = "annotate: the change starting on that night was meant (listed as accepted; no exit 1)"},
+    {.name = "--nights", .kind = SB_OPT_INT, .arg = "N", .min = 3, .max = 1000, .def = "10",
+     .commands = SB_IN(SB_CMD_HISTORY), .field = F(nights),
+     .help = "check: how many of each series' newest nights make its band"},
     {.name = "--workdir", .kind = SB_OPT_TEXT, .arg = "DIR", .def_help = "shadowbench-bisect in the git directory",
      .commands = SB_IN(SB_CMD_BISECT), .field = F(workdir),
      .help = "the scratch worktree, its build and every binary built (kept for the next bisect)"},

@@ -72,9 +72,9 @@ typedef struct sb_cli_opts {
                         options of info and path) */
     const char *out, *resume, *shard, *metrics, *pair, *techniques, *history, *since, *series, *workdir;
     int format; /* --format: an sb_output_format */
-    int recent, pairs;
+    int recent, pairs, nights;
     double noise_floor, threshold, max_err, max_flicker, max_mb, budget_ms, time_limit_s;
-    bool dry_run, quiet, verbose;
+    bool dry_run, quiet, verbose, accept;
 } sb_cli_opts;
 
 typedef struct sb_option {

@@ -355,6 +355,9 @@ static void cpu_model(char *out, size_t len) {
     fclose(f);
 }
 
+static const char *g_build = "";
+void sb_session_set_build(const char *options) { g_build = options ? options : ""; }
+
 bool sb_session_write_meta(const sb_session *s, const char *dir, const char *command_line, const char *version,
                            const char *commit, const char *extra, sb_err *err) {
     char buf[12288], cpu[256], date[64], host[256] = "unknown", clocks[1024];
@@ -369,10 +372,10 @@ bool sb_session_write_meta(const sb_session *s, const char *dir, const char *com
     sb_clocks_describe(s->clocks, clocks, sizeof clocks);
     const sb_context *ctx = &s->ctx;
     int n = snprintf(buf, sizeof buf,
-                     "command: %s\nversion: %s\ncommit: %s\ndate: %s\nhost: %s\n%s"
+                     "command: %s\nversion: %s\ncommit: %s\nbuild: %s\ndate: %s\nhost: %s\n%s"
                      "backend: %s (%s)\ngl_vendor: %s\ngl_renderer: %s\ngl_version: %s\ncpu: %s\ncores: %ld\n"
                      "kernel: %s %s %s\n%s",
-                     command_line, version, commit, date, host, extra ? extra : "", sb_backend_name(ctx->backend),
+                     command_line, version, commit, g_build, date, host, extra ? extra : "", sb_backend_name(ctx->backend),
                      ctx->device, ctx->vendor, ctx->renderer, ctx->version, cpu, sysconf(_SC_NPROCESSORS_ONLN),
                      u.sysname, u.release, u.machine, clocks);
     char path[4200];

@@ -133,6 +133,8 @@ void sb_session_close(sb_session *s);
  * commit, the time (UTC), the host, the backend and GL strings, the CPU, the
  * kernel and the clocks, then `extra` (lines the caller adds). `shadowbench
  * history add` reads it. */
+/* What the binary was built with (SB_BUILD_OPTIONS), written in every meta as `build:`. */
+void sb_session_set_build(const char *options);
 bool sb_session_write_meta(const sb_session *s, const char *dir, const char *command_line, const char *version,
                            const char *commit, const char *extra, sb_err *err);
 /* The scene's Embree reference (built on the first call); NULL with err on failure. */

@@ -3,6 +3,7 @@
 #include "history.h"
 
 #include <errno.h>
+#include <fnmatch.h>
 #include <math.h>
 #include <sqlite3.h>
 #include <stdlib.h>
@@ -42,7 +43,7 @@ static bool exec(sb_history *h, const char *sql, sb_err *err) {
 
 /* The schema, one step a version: step k takes a file from version k-1 to k.
    Version 1 kept the summary rows; 2 added each run's per-frame CSV and the
-   night's image count. */
+   night's image count; 3 the annotations (`history annotate`). */
 static const char *const migrations[SB_HISTORY_SCHEMA] = {
     "CREATE TABLE nights(id INTEGER PRIMARY KEY, set_key TEXT UNIQUE NOT NULL, dir TEXT, date TEXT, host TEXT,"
     " renderer TEXT, version TEXT, git_commit TEXT, header TEXT, meta TEXT, added TEXT);"
@@ -54,6 +55,8 @@ static const char *const migrations[SB_HISTORY_SCHEMA] = {
     "CREATE INDEX runs_series ON runs(series);",
     "CREATE TABLE frames(run INTEGER PRIMARY KEY, csv TEXT);"
     "ALTER TABLE nights ADD COLUMN images INTEGER NOT NULL DEFAULT 0;",
+    "CREATE TABLE annotations(id INTEGER PRIMARY KEY, night INTEGER NOT NULL REFERENCES nights(id), git_commit TEXT,"
+    " series TEXT NOT NULL DEFAULT '', text TEXT NOT NULL, accept INTEGER NOT NULL DEFAULT 0, added TEXT);",
 };
 
 static bool migrate(sb_history *h, sb_err *err) {
@@ -192,6 +195,28 @@ static int count_images(const char *dir) {
     return 1;
 }
 
+/* A summary row's series (history.h), its size (WxH) and its sorted parameters. */
+static void series_of(const sb_table *t, int r, const char *host, const char *renderer, char *series, size_t len,
+                      char *size, size_t size_len, char *params, size_t params_len) {
+    char key[3072];
+    sb_compare_run_key(t, r, key, sizeof key);
+    snprintf(size, size_len, "%sx%s", sb_table_get(t, r, "width"), sb_table_get(t, r, "height"));
+    /* the key's parameters, sorted (its last field) */
+    const char *kp = key;
+    for (int bars = 0; bars < 3 && (kp = strchr(kp, '|')); bars++) kp++;
+    snprintf(params, params_len, "%s", kp ? kp : "");
+    snprintf(series, len, "%s|%s|%s|%s|%s|%s|%s", host, renderer, sb_table_get(t, r, "scene"),
+             sb_table_get(t, r, "path"), size, sb_table_get(t, r, "technique"), params);
+}
+
+/* The host and renderer a set's series are kept under. */
+static void set_host(const char *meta, const sb_table *t, char *host, size_t hlen, char *renderer, size_t rlen) {
+    meta_field(meta, "host", host, hlen);
+    if (!host[0]) snprintf(host, hlen, "unknown");
+    snprintf(renderer, rlen, "%s", t->nrows ? sb_table_get(t, 0, "renderer") : "");
+    if (!renderer[0]) meta_field(meta, "gl_renderer", renderer, rlen);
+}
+
 bool sb_history_add(sb_history *h, const char *dir, sb_history_added *out, sb_err *err) {
     memset(out, 0, sizeof *out);
     char sum_path[4200];
@@ -213,12 +238,9 @@ bool sb_history_add(sb_history *h, const char *dir, sb_history_added *out, sb_er
         }
     char *meta = read_meta(dir);
     char host[256], renderer[512], version[64], commit[128], date[64];
-    meta_field(meta, "host", host, sizeof host);
-    if (!host[0]) snprintf(host, sizeof host, "unknown");
+    set_host(meta, &t, host, sizeof host, renderer, sizeof renderer);
     meta_field(meta, "version", version, sizeof version);
     meta_field(meta, "commit", commit, sizeof commit);
-    snprintf(renderer, sizeof renderer, "%s", t.nrows ? sb_table_get(&t, 0, "renderer") : "");
-    if (!renderer[0]) meta_field(meta, "gl_renderer", renderer, sizeof renderer);
     set_date(dir, meta, sum_path, date, sizeof date);
     /* a batch (or shard) says how many runs it has: a summary with fewer is a set still running or stopped */
     char runs_field[128];
@@ -284,15 +306,8 @@ bool sb_history_add(sb_history *h, const char *dir, sb_history_added *out, sb_er
         }
         free(hdr);
         for (int r = 0; ok && r < t.nrows; r++) {
-            char key[3072], series[4096], size[64], params[2048];
-            sb_compare_run_key(&t, r, key, sizeof key);
-            snprintf(size, sizeof size, "%sx%s", sb_table_get(&t, r, "width"), sb_table_get(&t, r, "height"));
-            /* the key's parameters, sorted (its last field) */
-            const char *kp = key;
-            for (int bars = 0; bars < 3 && (kp = strchr(kp, '|')); bars++) kp++;
-            snprintf(params, sizeof params, "%s", kp ? kp : "");
-            snprintf(series, sizeof series, "%s|%s|%s|%s|%s|%s|%s", host, renderer, sb_table_get(&t, r, "scene"),
-                     sb_table_get(&t, r, "path"), size, sb_table_get(&t, r, "technique"), params);
+            char series[4096], size[64], params[2048];
+            series_of(&t, r, host, renderer, series, sizeof series, size, sizeof size, params, sizeof params);
             const char *run_id = sb_table_get(&t, r, "run_id");
             sqlite3_reset(ins_run);
             ok = sqlite3_bind_int64(ins_run, 1, out->night) == SQLITE_OK && bind_text(ins_run, 2, run_id) &&
@@ -542,6 +557,33 @@ int sb_history_changes(sb_history *h, const sb_history_query *q, sb_history_chan
     for (int i = 0; i < ns; i++) free(all[i]), free(labels[i]);
     free(all);
     free(labels);
+    /* what is known of each change's night: the machine, and the annotations */
+    sb_history_note *notes = NULL;
+    int nnotes = sb_history_notes(h, &notes, err);
+    if (nnotes < 0) {
+        free(ch);
+        return -1;
+    }
+    for (int c = 0; c < nch; c++)
+        for (int i = 0; i < nnotes; i++) {
+            const sb_history_note *x = &notes[i];
+            if (x->night != ch[c].night_after || !sb_history_note_matches(x, ch[c].series, ch[c].label)) continue;
+            char *to = x->machine ? ch[c].machine : ch[c].note;
+            size_t l = strlen(to);
+            if (x->machine)   /* "the driver changed: a → b" beside a change reads "the driver changed here too: a → b" */
+                for (const char *p = x->text; *p && l + 1 < sizeof ch[c].machine;) {
+                    if (!strncmp(p, " changed: ", 10)) {
+                        snprintf(to + l, sizeof ch[c].machine - l, " changed here too: ");
+                        l = strlen(to), p += 10;
+                    } else {
+                        to[l++] = *p++, to[l] = 0;
+                    }
+                }
+            else
+                snprintf(to + l, sizeof ch[c].note - l, "%s%s%s", l ? "; " : "", x->text, x->accept ? " (accepted)" : "");
+            ch[c].accepted |= x->accept;
+        }
+    free(notes);
     *out = ch;
     return nch;
 }
@@ -608,7 +650,7 @@ char **sb_history_series(sb_history *h, int *n) {
 void sb_history_print_changes(const sb_history_change *c, int n, int format, FILE *out) {
     if (format == SB_OUTPUT_CSV)
         fprintf(out, "series,host,metric,night_before,night_after,date_after,before,after,change_pct,z,p,"
-                     "commit_before,commit_after,verdict\n");
+                     "commit_before,commit_after,verdict,note,machine\n");
     else
         fprintf(out, "%-40s %-14s %-6s %-20s %10s %10s %8s %6s %8s  %-25s %s\n", "series", "metric", "night",
                 "first night after", "before", "after", "change", "z", "p", "commits", "verdict");
@@ -616,7 +658,8 @@ void sb_history_print_changes(const sb_history_change *c, int n, int format, FIL
         series_fields f;
         split_series(c[i].series, &f);
         const char *label = c[i].label, *host = f.f[0];
-        const char *verdict = c[i].regression ? (c[i].recent ? "REGRESSION (recent)" : "regression")
+        const char *verdict = c[i].regression ? (c[i].accepted ? (c[i].recent ? "accepted (recent)" : "accepted")
+                                                               : c[i].recent ? "REGRESSION (recent)" : "regression")
                                               : (c[i].recent ? "improvement (recent)" : "improvement");
         if (format == SB_OUTPUT_CSV) {
             sb_csv row = {0};
@@ -634,6 +677,8 @@ void sb_history_print_changes(const sb_history_change *c, int n, int format, FIL
             sb_csv_str(&row, c[i].commit_before);
             sb_csv_str(&row, c[i].commit_after);
             sb_csv_str(&row, verdict);
+            sb_csv_str(&row, c[i].note);
+            sb_csv_str(&row, c[i].machine);
             sb_csv_end_row(&row);
             fputs(row.buf, out);
             sb_csv_free(&row);
@@ -644,6 +689,8 @@ void sb_history_print_changes(const sb_history_change *c, int n, int format, FIL
             fprintf(out, "%-40s %-14s %-6lld %-20s %10.4g %10.4g %+7.1f%% %6.1f %8.2g  %-25s %s\n", label, c[i].metric,
                     c[i].night_after, c[i].date_after, c[i].before, c[i].after, 100 * c[i].rel, c[i].z, c[i].p,
                     commits, verdict);
+            if (c[i].machine[0]) fprintf(out, "    %s\n", c[i].machine);
+            if (c[i].note[0]) fprintf(out, "    note: %s\n", c[i].note);
         }
     }
 }
@@ -758,4 +805,239 @@ int sb_history_points(sb_history *h, const char *series, const char *metric, sb_
     }
     sqlite3_finalize(st);
     return n;
+}
+
+/* ---- annotations and what changed on the machine ---- */
+
+long long sb_history_find_night(sb_history *h, const char *what, sb_err *err) {
+    sqlite3_stmt *st;
+    char *end;
+    long long id = strtoll(what, &end, 10);
+    if (*what && !*end) {
+        if (sqlite3_prepare_v2(h->db, "SELECT id FROM nights WHERE id = ?", -1, &st, NULL) != SQLITE_OK)
+            return db_fail(h, err, "reading the nights"), -1;
+        sqlite3_bind_int64(st, 1, id);
+        long long got = sqlite3_step(st) == SQLITE_ROW ? sqlite3_column_int64(st, 0) : 0;
+        sqlite3_finalize(st);
+        if (got) return got;
+    }
+    /* a commit: the first night that ran it (its prefix, at least 4 characters) */
+    if (strlen(what) < 4) return 0;
+    if (sqlite3_prepare_v2(h->db, "SELECT id FROM nights WHERE substr(git_commit, 1, length(?1)) = ?1 OR "
+                                  "substr(?1, 1, length(git_commit)) = git_commit AND length(git_commit) >= 7 "
+                                  "ORDER BY date, id LIMIT 1",
+                           -1, &st, NULL) != SQLITE_OK)
+        return db_fail(h, err, "reading the nights"), -1;
+    bind_text(st, 1, what);
+    long long got = sqlite3_step(st) == SQLITE_ROW ? sqlite3_column_int64(st, 0) : 0;
+    sqlite3_finalize(st);
+    return got;
+}
+
+bool sb_history_annotate(sb_history *h, long long night, const char *commit, const char *series, const char *text,
+                         bool accept, sb_err *err) {
+    sqlite3_stmt *st;
+    char added[64];
+    time_t now = time(NULL);
+    struct tm tm;
+    gmtime_r(&now, &tm);
+    strftime(added, sizeof added, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    if (sqlite3_prepare_v2(h->db, "INSERT INTO annotations(night, git_commit, series, text, accept, added) "
+                                  "VALUES (?,?,?,?,?,?)", -1, &st, NULL) != SQLITE_OK)
+        return db_fail(h, err, "adding the annotation");
+    sqlite3_bind_int64(st, 1, night);
+    bind_text(st, 2, commit);
+    bind_text(st, 3, series);
+    bind_text(st, 4, text);
+    sqlite3_bind_int(st, 5, accept);
+    bind_text(st, 6, added);
+    bool ok = sqlite3_step(st) == SQLITE_DONE;
+    sqlite3_finalize(st);
+    return ok || db_fail(h, err, "adding the annotation");
+}
+
+/* The fields of a night's meta that say what machine and build it ran on, and what a change of each is called. */
+static const struct { const char *key, *name; } fingerprint[] = {
+    {"gl_renderer", "the renderer"}, {"gl_version", "the driver"}, {"gpu_driver", "the GPU driver"},
+    {"kernel", "the kernel"},        {"cpu", "the CPU"},           {"cores", "the core count"},
+    {"clocks", "the clocks"},        {"build", "the build"},
+};
+
+/* "a b c d" against "a b x d": "c → x" (the words both share at either end left out). */
+static void word_diff(const char *a, const char *b, char *out, size_t len) {
+    size_t la = strlen(a), lb = strlen(b), pre = 0, suf = 0;
+    for (size_t i = 0; i < la && i < lb && a[i] == b[i]; i++)
+        if (a[i] == ' ') pre = i + 1;
+    for (size_t i = 0; i < la && i < lb && a[la - 1 - i] == b[lb - 1 - i]; i++)
+        if (a[la - 1 - i] == ' ') suf = i + 1;
+    if (pre + suf > la || pre + suf > lb) suf = 0;
+    if (pre + suf > la || pre + suf > lb) pre = 0;
+    snprintf(out, len, "%.*s → %.*s", (int)(la - pre - suf), a + pre, (int)(lb - pre - suf), b + pre);
+}
+
+/* What differs between two nights' metas ("" when nothing). */
+static void machine_change(const char *before, const char *after, char *out, size_t len) {
+    out[0] = 0;
+    for (size_t k = 0; k < SB_COUNT(fingerprint); k++) {
+        char x[512], y[512], d[1100];
+        meta_field(before, fingerprint[k].key, x, sizeof x);
+        meta_field(after, fingerprint[k].key, y, sizeof y);
+        if (!strcmp(x, y) || !x[0] || !y[0]) continue;   /* a field an older shadowbench did not write is no change */
+        word_diff(x, y, d, sizeof d);
+        size_t l = strlen(out);
+        snprintf(out + l, len - l, "%s%s changed: %s", l ? "; " : "", fingerprint[k].name, d);
+    }
+}
+
+int sb_history_notes(sb_history *h, sb_history_note **out, sb_err *err) {
+    *out = NULL;
+    int n = 0;
+    sb_history_night *nights = NULL;
+    int nn = sb_history_nights(h, &nights, err);
+    if (nn < 0) return -1;
+    /* the machine: each night against the one before it on its host */
+    for (int i = 0; i < nn; i++) {
+        int prev = -1;
+        for (int j = i - 1; j >= 0 && prev < 0; j--)
+            if (!strcmp(nights[j].host, nights[i].host)) prev = j;
+        if (prev < 0) continue;
+        char what[2048];
+        machine_change(nights[prev].meta, nights[i].meta, what, sizeof what);
+        if (!what[0]) continue;
+        *out = sb_xrealloc(*out, sizeof **out * (size_t)(n + 1));
+        sb_history_note *x = &(*out)[n++];
+        memset(x, 0, sizeof *x);
+        x->night = nights[i].id;
+        x->machine = true;
+        snprintf(x->date, sizeof x->date, "%s", nights[i].date);
+        snprintf(x->commit, sizeof x->commit, "%s", nights[i].commit);
+        snprintf(x->text, sizeof x->text, "%s", what);
+    }
+    sb_history_nights_free(nights, nn);
+    sqlite3_stmt *st;
+    if (sqlite3_prepare_v2(h->db, "SELECT a.night, n.date, a.git_commit, a.series, a.text, a.accept FROM annotations a "
+                                  "JOIN nights n ON n.id = a.night ORDER BY n.date, a.id", -1, &st, NULL) != SQLITE_OK) {
+        free(*out);
+        *out = NULL;
+        return db_fail(h, err, "reading the annotations"), -1;
+    }
+    while (sqlite3_step(st) == SQLITE_ROW) {
+        *out = sb_xrealloc(*out, sizeof **out * (size_t)(n + 1));
+        sb_history_note *x = &(*out)[n++];
+        memset(x, 0, sizeof *x);
+        x->night = sqlite3_column_int64(st, 0);
+        copy_col(x->date, sizeof x->date, st, 1);
+        copy_col(x->commit, sizeof x->commit, st, 2);
+        copy_col(x->series, sizeof x->series, st, 3);
+        copy_col(x->text, sizeof x->text, st, 4);
+        x->accept = sqlite3_column_int(st, 5) != 0;
+    }
+    sqlite3_finalize(st);
+    return n;
+}
+
+bool sb_history_note_matches(const sb_history_note *note, const char *series, const char *label) {
+    const char *p = note->series;
+    if (!p[0]) return true;
+    return !fnmatch(p, label, 0) || !fnmatch(p, series, 0) || strstr(label, p) || strstr(series, p);
+}
+
+/* ---- a results set against the nights ---- */
+
+static int cmp_dbl(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+int sb_history_check(sb_history *h, const char *dir, const sb_history_query *q, int nights, FILE *out, sb_err *err) {
+    char sum_path[4200];
+    snprintf(sum_path, sizeof sum_path, "%s/summary.csv", dir);
+    sb_table t;
+    if (!sb_table_load(&t, sum_path, err)) return -1;
+    char *meta = read_meta(dir);
+    char host[256], renderer[512];
+    set_host(meta, &t, host, sizeof host, renderer, sizeof renderer);
+    bool soft = strstr(renderer, "llvmpipe") || strstr(renderer, "softpipe") || strstr(renderer, "SwiftShader");
+    double floor_pct = q->noise_floor_pct > 0 ? q->noise_floor_pct : soft ? 5.0 : 1.0;
+    const char *metrics[32];
+    int nm = 0;
+    if (q->nmetrics)
+        for (int i = 0; i < q->nmetrics && nm < 32; i++) metrics[nm++] = q->metrics[i];
+    else
+        nm = sb_columns_default_metrics(SB_USE_HISTORY, metrics, 32);
+    int ns = 0;
+    char **all = sb_history_series(h, &ns), **labels = sb_history_labels(all, ns);
+    int regressions = 0, compared = 0;
+    fprintf(out, "%-44s %-14s %10s %10s %23s %8s %6s  %s\n", "series", "metric", "this set", "nights", "band",
+            "change", "z", "verdict");
+    for (int r = 0; r < t.nrows; r++) {
+        char series[4096], size[64], params[2048];
+        series_of(&t, r, host, renderer, series, sizeof series, size, sizeof size, params, sizeof params);
+        const char *label = NULL;
+        for (int i = 0; i < ns; i++)
+            if (!strcmp(all[i], series)) label = labels[i];
+        if (!label) {
+            fprintf(out, "%s %s %s: no series in the history (a new run): nothing to compare\n",
+                    sb_table_get(&t, r, "scene"), sb_table_get(&t, r, "technique"), size);
+            continue;
+        }
+        if (strcmp(sb_table_get(&t, r, "status"), "ok")) {
+            fprintf(out, "%-44.44s %-14s %s: not compared\n", label, "-", sb_table_get(&t, r, "status"));
+            continue;
+        }
+        for (int mi = 0; mi < nm; mi++) {
+            sb_metric_cols mc;
+            double x;
+            if (!sb_columns_metric(metrics[mi], &mc) || !sb_parse_double(sb_table_get(&t, r, mc.center), &x)) continue;
+            sb_history_point *p = NULL;
+            int np = sb_history_points(h, series, metrics[mi], &p, err);
+            if (np < 0) {
+                free(meta);
+                sb_table_free(&t);
+                return -1;
+            }
+            int from = np > nights ? np - nights : 0, k = np - from;
+            if (k < 3) {
+                fprintf(out, "%-44.44s %-14s %10.4g  %d night(s): too few for a band\n", label, metrics[mi], x, k);
+                free(p);
+                continue;
+            }
+            /* the detector's noise model over the last k nights: a log scale for positive figures, sigma
+               from night-to-night differences floored at the noise floor for timings */
+            if (k > 1024) from = np - (k = 1024);
+            double raw[1024], v[1024], sorted[1024];
+            bool logs = true;   /* as the detector reads them: a log scale when every night's figure is > 0 */
+            for (int i = 0; i < k; i++) raw[i] = p[from + i].value, logs = logs && raw[i] > 0;
+            for (int i = 0; i < k; i++) v[i] = logs ? log(raw[i]) : raw[i];
+            free(p);
+            double sigma = 0;
+            sb_cp_opts o = {.relative = true, .noise_floor = mc.ci[0] ? floor_pct / 100 : 0};
+            sb_changepoints(raw, NULL, k, &o, NULL, 0, &sigma);
+            memcpy(sorted, v, sizeof *v * (size_t)k);
+            qsort(sorted, (size_t)k, sizeof *sorted, cmp_dbl);
+            double med = k % 2 ? sorted[k / 2] : 0.5 * (sorted[k / 2 - 1] + sorted[k / 2]);
+            double xs = logs ? (x > 0 ? log(x) : -INFINITY) : x, half = sqrt(SB_CP_PENALTY) * sigma * sqrt(1 + 1.0 / k);
+            double z = sigma > 0 ? (xs - med) / (sigma * sqrt(1 + 1.0 / k)) : 0;
+            double lo = logs ? exp(med - half) : med - half, hi = logs ? exp(med + half) : med + half;
+            double center = logs ? exp(med) : med;
+            bool outside = fabs(xs - med) > half;
+            bool worse = mc.lower_worse ? xs < med : xs > med;
+            const char *verdict = !outside ? "within" : worse ? "REGRESSION" : "improvement";
+            regressions += outside && worse;
+            compared++;
+            char band[64];
+            snprintf(band, sizeof band, "[%.4g, %.4g]", lo, hi);
+            double rel = center ? x / center - 1 : NAN;
+            fprintf(out, "%-44.44s %-14s %10.4g %10.4g %23s %+7.1f%% %6.1f  %s\n", label, metrics[mi], x, center, band,
+                    100 * rel, z, verdict);
+        }
+    }
+    for (int i = 0; i < ns; i++) free(all[i]), free(labels[i]);
+    free(all);
+    free(labels);
+    free(meta);
+    sb_table_free(&t);
+    sb_log("%s: %d figure(s) compared with up to %d night(s) of their series, %d regression(s) beyond the band", dir,
+           compared, nights, regressions);
+    return regressions;
 }

@@ -13,7 +13,7 @@
 
 #include "util.h"
 
-#define SB_HISTORY_SCHEMA 2
+#define SB_HISTORY_SCHEMA 3
 
 typedef struct sb_history sb_history;
 
@@ -46,6 +46,9 @@ typedef struct sb_history_change {
     double before, after, rel, z, p;
     bool regression;            /* worse (up, or down for a SB_LOWER_WORSE metric) */
     bool recent;                /* starts in one of the newest `recent` nights of its host */
+    bool accepted;              /* an annotation of its night (and series) with --accept says it was meant */
+    char note[1024];            /* the annotations of its night (and series), "; " between */
+    char machine[1024];         /* what changed on the machine that night too ("" nothing) */
 } sb_history_change;
 
 typedef struct sb_history_query {
@@ -95,3 +98,34 @@ typedef struct sb_history_point {
 } sb_history_point;
 /* A series' points of a metric, oldest first; returns how many (free *out), or -1. */
 int sb_history_points(sb_history *h, const char *series, const char *metric, sb_history_point **out, sb_err *err);
+
+/* ---- annotations, and what changed on the machine ---- */
+
+/* NIGHT|COMMIT: a night's id, else the first night that ran a commit starting
+ * with `what` (4 characters or more). 0 when none, -1 on a database error. */
+long long sb_history_find_night(sb_history *h, const char *what, sb_err *err);
+/* Keeps an annotation of night (commit: as the user named it; series: a
+ * pattern, "" for every series). An accepted one says a regression starting
+ * on that night was meant: `regressions` lists it as accepted, exit 0. */
+bool sb_history_annotate(sb_history *h, long long night, const char *commit, const char *series, const char *text,
+                         bool accept, sb_err *err);
+
+typedef struct sb_history_note {
+    long long night;
+    char date[32], commit[64];
+    char series[256];           /* a pattern (fnmatch or a substring of the series or its label); "": every series */
+    char text[2048];
+    bool accept;                /* the change starting on this night was meant */
+    bool machine;               /* automatic: the night's machine or build differs from its host's night before
+                                   (renderer, driver, kernel, CPU, cores, clocks, build options) */
+} sb_history_note;
+/* The machine changes, night by night, then the annotations; returns how many (free *out), or -1. */
+int sb_history_notes(sb_history *h, sb_history_note **out, sb_err *err);
+/* Whether a note is about a series (its full name and its label). */
+bool sb_history_note_matches(const sb_history_note *n, const char *series, const char *label);
+
+/* `history check DIR`: each ok run of the results set in dir against its
+ * series' last `nights` nights with the detector's noise model (the metrics
+ * of q, else the history's defaults). Prints a table; returns how many
+ * figures lie beyond the band on the worse side, or -1. */
+int sb_history_check(sb_history *h, const char *dir, const sb_history_query *q, int nights, FILE *out, sb_err *err);

@@ -180,6 +180,7 @@ static void night_pairs(const sb_table *summary, jbuf *j) {
             jstr(j, keys[k]);
             jput(j, ",");
             jtable(j, pt.ncols, pt.nrows, pair_cell, &pt);
+            jsfield(j, "shared", pt.shared);
             jput(j, "}");
         }
         sb_pair_table_free(&pt);
@@ -283,7 +284,12 @@ static bool write_frames(sb_history *h, const char *site, long long id, sb_err *
     return ok;
 }
 
-static bool write_night(sb_history *h, const char *site, const sb_history_night *n, sb_err *err) {
+static void jnotes(jbuf *j, const sb_history_note *notes, int n, bool (*keep)(const sb_history_note *, const void *),
+                   const void *arg);
+static bool note_of_night(const sb_history_note *n, const void *arg);
+
+static bool write_night(sb_history *h, const char *site, const sb_history_night *n, const sb_history_note *notes,
+                        int nnotes, sb_err *err) {
     /* the summary as it was, for the table and for the pairs */
     char *text = sb_history_night_summary(h, n, err);
     sb_table t;
@@ -304,6 +310,8 @@ static bool write_night(sb_history *h, const char *site, const sb_history_night 
     night_pairs(&t, &j);
     jput(&j, ",\"images\":");
     night_images(site, n->id, n->dir, &j);
+    jput(&j, ",\"notes\":");
+    jnotes(&j, notes, nnotes, note_of_night, &n->id);
     jput(&j, "}");
     sb_table_free(&t);
     free(text);
@@ -334,7 +342,35 @@ static void jchange(jbuf *j, const sb_history_change *c, int sid) {
     jnfield(j, "z", c->z);
     jnfield(j, "p", c->p);
     jput(j, c->regression ? ",\"regression\":true" : ",\"regression\":false");
+    jput(j, c->accepted ? ",\"accepted\":true" : ",\"accepted\":false");
+    jsfield(j, "note", c->note);
+    jsfield(j, "machine", c->machine);
     jput(j, c->recent ? ",\"recent\":true}" : ",\"recent\":false}");
+}
+
+/* The notes (annotations and machine changes) that pass `keep`, as a JSON list. */
+static void jnotes(jbuf *j, const sb_history_note *notes, int n, bool (*keep)(const sb_history_note *, const void *),
+                   const void *arg) {
+    jput(j, "[");
+    int k = 0;
+    for (int i = 0; i < n; i++) {
+        if (keep && !keep(&notes[i], arg)) continue;
+        jput(j, k++ ? ",{\"night\":" : "{\"night\":");
+        jnum(j, (double)notes[i].night);
+        jsfield(j, "date", notes[i].date);
+        jsfield(j, "commit", notes[i].commit);
+        jsfield(j, "series", notes[i].series);
+        jsfield(j, "text", notes[i].text);
+        jput(j, notes[i].accept ? ",\"accept\":true" : ",\"accept\":false");
+        jput(j, notes[i].machine ? ",\"machine\":true}" : ",\"machine\":false}");
+    }
+    jput(j, "]");
+}
+static bool note_of_night(const sb_history_note *n, const void *arg) { return n->night == *(const long long *)arg; }
+typedef struct { const char *series, *label; } series_ref;
+static bool note_of_series(const sb_history_note *n, const void *arg) {
+    const series_ref *r = arg;
+    return sb_history_note_matches(n, r->series, r->label);
 }
 
 static int series_index(char **series, int ns, const char *s) {
@@ -349,7 +385,7 @@ static int series_index(char **series, int ns, const char *s) {
 }
 
 static bool write_series(sb_history *h, const char *site, char **series, char **labels, int ns,
-                         const sb_history_change *ch, int nch, sb_err *err) {
+                         const sb_history_change *ch, int nch, const sb_history_note *notes, int nnotes, sb_err *err) {
     const char *trend_metrics[32];   /* the SB_USE_REPORT metrics of the column table */
     int ntrend = sb_columns_default_metrics(SB_USE_REPORT, trend_metrics, 32);
     bool ok = true;
@@ -358,6 +394,9 @@ static bool write_series(sb_history *h, const char *site, char **series, char **
         jput(&j, "{\"kind\":\"series\"");
         jsfield(&j, "series", series[s]);
         jsfield(&j, "label", labels[s]);
+        jput(&j, ",\"notes\":");
+        series_ref ref = {series[s], labels[s]};
+        jnotes(&j, notes, nnotes, note_of_series, &ref);
         jput(&j, ",\"metrics\":{");
         for (int m = 0; ok && m < ntrend; m++) {
             sb_history_point *pt = NULL;
@@ -409,6 +448,12 @@ static bool write_site(sb_history *h, const sb_site_opts *o, bool single, sb_err
     sb_history_change *ch = NULL;
     int nch = sb_history_changes(h, &q, &ch, err);
     if (nch < 0) return false;
+    sb_history_note *notes = NULL;
+    int nnotes = sb_history_notes(h, &notes, err);
+    if (nnotes < 0) {
+        free(ch);
+        return false;
+    }
     sb_history_night *nights = NULL;
     int nn = sb_history_nights(h, &nights, err);
     int ns = 0;
@@ -432,24 +477,27 @@ static bool write_site(sb_history *h, const sb_site_opts *o, bool single, sb_err
         const int nums[] = {n->runs, n->ok, n->failed, n->unstable, n->warned};
         for (int c = 0; c < 5; c++) jnfield(&j, counts[c], nums[c]);
         jput(&j, "}");
-        ok = write_night(h, o->out, n, err);
+        ok = write_night(h, o->out, n, notes, nnotes, err);
     }
     jput(&j, "],\"changes\":[");
     for (int c = 0; c < nch; c++) {
         jput(&j, c ? "," : "");
         jchange(&j, &ch[c], series_index(series, ns, ch[c].series));
     }
-    jput(&j, "],\"series\":[");
+    jput(&j, "],\"notes\":");
+    jnotes(&j, notes, nnotes, NULL, NULL);
+    jput(&j, ",\"series\":[");
     for (int s = 0; s < ns; s++) jput(&j, s ? "," : ""), jstr(&j, series[s]);
     jput(&j, "],\"labels\":[");
     for (int s = 0; s < ns; s++) jput(&j, s ? "," : ""), jstr(&j, labels[s]);
     jput(&j, "]}");
-    ok = ok && write_data(o->out, "index.js", &j, err) && write_series(h, o->out, series, labels, ns, ch, nch, err);
+    ok = ok && write_data(o->out, "index.js", &j, err) && write_series(h, o->out, series, labels, ns, ch, nch, notes, nnotes, err);
     free(j.buf);
     for (int s = 0; s < ns; s++) free(series[s]), free(labels[s]);
     free(series);
     free(labels);
     free(ch);
+    free(notes);
     if (nn > 0) sb_history_nights_free(nights, nn);
     return ok;
 }

@@ -38,6 +38,14 @@ var SB = (function () {
   }
   function done() {
     mark();
+    /* how tall the one-line tables' rows are, in lines of their text (tests read it) */
+    var most = 0;
+    document.querySelectorAll("table.oneline tbody tr").forEach(function (tr) {
+      var td = tr.querySelector("td");
+      var line = td ? parseFloat(getComputedStyle(td).lineHeight) : 0;
+      if (line > 0) most = Math.max(most, (tr.getBoundingClientRect().height - 8) / line);
+    });
+    document.body.dataset.maxRowLines = most.toFixed(2);
     document.body.dataset.charts = String(charts);
     document.body.dataset.readyMs = String(Math.round(performance.now() - started));
     document.body.dataset.ready = "yes";
@@ -65,7 +73,7 @@ var SB = (function () {
     var wrap = el("div", { "class": "table" });
     var filter = el("input", { type: "search", placeholder: "filter rows (words must all appear)", "class": "filter" });
     var count = el("span", { "class": "count" });
-    var t = el("table", { "class": "sortable" }), thead = el("thead"), tbody = el("tbody");
+    var t = el("table", { "class": "sortable" + (opts.oneline ? " oneline" : "") }), thead = el("thead"), tbody = el("tbody");
     var sortBy = -1, dir = 1;
     var htr = el("tr");
     cols.forEach(function (c, i) {
@@ -102,6 +110,9 @@ var SB = (function () {
           var v = c.cell ? c.cell(r) : fmt(c.get(r));
           var td = el("td", c.num ? { "class": "num" } : {});
           if (v && v.nodeType) td.appendChild(v); else td.textContent = v === null || v === undefined ? "" : v;
+          /* a one-line table cuts long cells: the whole text on hover */
+          var full = c.get(r);
+          if (opts.oneline && full !== null && full !== undefined && String(full).length > 24 && !td.title) td.title = String(full);
           tr.appendChild(td);
         });
         tbody.appendChild(tr);
@@ -115,10 +126,18 @@ var SB = (function () {
     return wrap;
   }
 
-  function chart(parent, data, opts, title) {
-    var box = el("div", { "class": "chart" });
+  /* x ticks at whole numbers only (frames): 1, 2, 5 times a power of ten apart */
+  function wholeTicks(min, max, pixels) {
+    var want = Math.max(2, Math.floor(pixels / 60)), span = Math.max(1, max - min), step = 1;
+    for (var k = 1; span / step > want; k++) step = [1, 2, 5][k % 3] * Math.pow(10, Math.floor(k / 3));
+    var ticks = [];
+    for (var v = Math.ceil(min / step) * step; v <= max; v += step) ticks.push({ v: v, label: String(v) });
+    return ticks;
+  }
+  function chart(parent, data, opts, title, wide) {
+    var box = el("div", { "class": "chart" + (wide ? " wide" : "") });
     var legend = el("div", { "class": "legend" });
-    parent.appendChild(el("div", { "class": "chartbox" }, [title ? el("h4", { text: title }) : null, box, legend]));
+    parent.appendChild(el("div", { "class": "chartbox" + (wide ? " wide" : "") }, [title ? el("h4", { text: title }) : null, box, legend]));
     opts.labelsDiv = legend;
     opts.legend = opts.legend || "always";
     var drawn = false;
@@ -138,8 +157,9 @@ var SB = (function () {
     m.appendChild(el("h1", { text: "Results history" }));
     m.appendChild(el("p", { text: d.nights.length + " night(s), " + d.series.length + " series, from " + d.source }));
     var regs = d.changes.filter(function (c) { return c.regression; });
+    var open = regs.filter(function (c) { return !c.accepted; }).length;
     regs.sort(function (a, b) { return (b.recent - a.recent) || (a.date_after < b.date_after ? 1 : -1); });
-    var rs = el("section", { id: "regressions" }, [el("h2", { text: "Regressions (" + regs.length + ")" })]);
+    var rs = el("section", { id: "regressions" }, [el("h2", { text: "Regressions (" + open + (regs.length > open ? ", and " + (regs.length - open) + " accepted" : "") + ")" })]);
     if (!regs.length) rs.appendChild(el("p", { text: "No regression found in any series." }));
     else rs.appendChild(changesTable(regs));
     m.appendChild(rs);
@@ -149,6 +169,7 @@ var SB = (function () {
       os.appendChild(changesTable(others));
       m.appendChild(os);
     }
+    if (d.notes && d.notes.length) m.appendChild(notesList(d.notes, "Notes: annotations and machine changes (" + d.notes.length + ")"));
     var ns = el("section", { id: "nights" }, [el("h2", { text: "Nights" })]);
     ns.appendChild(table([
       { name: "night", get: function (n) { return n.id; }, cell: function (n) { return el("a", { href: "night.html?n=" + n.id, text: "#" + n.id }); }, num: true },
@@ -172,6 +193,19 @@ var SB = (function () {
     m.appendChild(ss);
     done();
   }
+  /* annotations and machine changes, as a list */
+  function notesList(notes, title) {
+    var box = el("section", { "class": "notes" }, [el("h3", { text: title || "Notes" })]);
+    var ul = el("ul", {});
+    notes.forEach(function (n) {
+      ul.appendChild(el("li", { "class": n.machine ? "machine" : n.accept ? "accepted" : "" }, [
+        el("a", { href: "night.html?n=" + n.night, text: "night #" + n.night }), " " + n.date.slice(0, 10) + ": ",
+        el("span", { text: (n.machine ? "machine: " : n.accept ? "accepted: " : "") + n.text + (n.series ? " (series " + n.series + ")" : "") })]));
+    });
+    box.appendChild(ul);
+    return box;
+  }
+  function changeNote(c) { return [c.accepted ? "accepted" : "", c.note, c.machine].filter(Boolean).join(" · "); }
   function changesTable(list) {
     return table([
       { name: "series", get: function (c) { return c.label; }, cell: function (c) { return el("a", { href: "series.html?s=" + c.sid + "#" + c.metric, text: c.label }); } },
@@ -184,7 +218,8 @@ var SB = (function () {
       { name: "p", get: function (c) { return c.p; }, num: true },
       { name: "commits", get: function (c) { return c.commit_before === c.commit_after ? c.commit_after + " (both)" : c.commit_before + ".." + c.commit_after; } },
       { name: "recent", get: function (c) { return c.recent ? "yes" : ""; } },
-    ], list, { rowClass: function (c) { return c.regression ? (c.recent ? "regression recent" : "regression") : "improvement"; } });
+      { name: "notes", get: changeNote },
+    ], list, { oneline: true, rowClass: function (c) { return c.regression ? (c.accepted ? "accepted" : c.recent ? "regression recent" : "regression") : "improvement"; } });
   }
 
   /* ---- a night ---- */
@@ -198,9 +233,10 @@ var SB = (function () {
     m.appendChild(el("h1", { text: "Night #" + d.id + ": " + d.date }));
     m.appendChild(el("p", { text: d.host + " · " + d.renderer + " · shadowbench " + d.version + " " + d.commit }));
     m.appendChild(el("details", {}, [el("summary", { text: "meta" }), el("pre", { text: d.meta })]));
+    if (d.notes && d.notes.length) m.appendChild(notesList(d.notes, "Notes on this night"));
     var rows = rowsOf(d);
     var s = el("section", { id: "summary" }, [el("h2", { text: "Runs (" + rows.length + ")" }),
-      el("p", { "class": "keyline", html: "<span class='unstable'>unstable timings (stable=no)</span> <span class='warned'>warnings</span> <span class='failed'>failed</span> · click a header to sort" })]);
+      el("p", { "class": "keyline", html: "<span class='unstable'>unstable timings (stable=no)</span> <span class='warned'>warnings</span> <span class='failed'>failed</span> · click a header to sort · long cells are cut: hover for the whole, or open the run" })]);
     var num = function (name) { return { name: name, get: function (r) { return r[name]; }, num: true }; };
     /* the parameters every run of a technique shares are said once, above the table; a row shows the rest */
     var shared = {};
@@ -220,7 +256,7 @@ var SB = (function () {
       { name: "scene", get: function (r) { return r.scene; } },
       { name: "path", get: function (r) { return r.path; } },
       { name: "technique", get: function (r) { return r.technique; } },
-      { name: "params", get: function (r) { return r.params; }, cell: function (r) { return el("span", { "class": "params", title: r.params, text: own(r).replace(/:/g, ":\u200b") }); } },
+      { name: "params", get: function (r) { return r.params; }, cell: function (r) { return el("span", { "class": "params", title: r.params, text: own(r) }); } },
       { name: "light", get: function (r) { return r.light || ""; } },   /* a sized light's runs beside the hard ones */
       { name: "size", get: function (r) { return r.width + "x" + r.height; } },
       { name: "status", get: function (r) { return r.status; } },
@@ -229,6 +265,7 @@ var SB = (function () {
       num("err_rate_mean"), num("flicker_rate_mean"), num("draw_calls_mean"), num("shadow_draw_calls_mean"),
       { name: "warnings / reason", get: function (r) { return (r.reason || "") + (r.warnings || "") + (r.unstable_reason ? " " + r.unstable_reason : ""); } },
     ], rows, {
+      oneline: true,
       rowClass: function (r) { return r.status === "failed" ? "failed" : r.stable === "no" ? "unstable" : r.warnings ? "warned" : ""; },
       tags: function (r) { return (r.stable === "no" ? "unstable" : "") + (r.warnings ? " warned" : ""); }
     }));
@@ -237,9 +274,11 @@ var SB = (function () {
       var ps = el("section", { id: "pairs" }, [el("h2", { text: "Pairs" })]);
       d.pairs.forEach(function (p) {
         ps.appendChild(el("h3", { text: p.key }));
+        if (p.shared) ps.appendChild(el("details", {}, [el("summary", { text: "parameters every pair shares (left out of the rows)" }),
+          el("p", { "class": "small fold", text: p.shared })]));
         ps.appendChild(table(p.columns.map(function (c, i) {
           return { name: c, get: function (r) { return r[i]; }, num: typeof p.rows[0][i] === "number" };
-        }), p.rows, { rowClass: function (r) { var v = r[r.length - 1]; return /regress|worse|UNSTABLE/i.test(String(v)) ? "warned" : ""; } }));
+        }), p.rows, { oneline: true, rowClass: function (r) { var v = r[r.length - 1]; return /regress|worse|UNSTABLE/i.test(String(v)) ? "warned" : ""; } }));
       });
       m.appendChild(ps);
     }
@@ -263,7 +302,7 @@ var SB = (function () {
       if (!isNaN(cap)) plots.appendChild(el("p", { "class": "small", id: "budget-note",
         text: over + " run(s) over " + cap + " MiB left out" }));
       Object.keys(scenes).forEach(function (sc) {
-        var label = function (r) { return r.technique + (r.params ? ":" + r.params : "") + (typeof r.shadow_mb === "number" ? " (" + fmt(r.shadow_mb, 3) + " MiB)" : ""); };
+        var label = function (r) { var p = own(r); return r.technique + (p ? ":" + p : "") + (typeof r.shadow_mb === "number" ? " (" + fmt(r.shadow_mb, 3) + " MiB)" : ""); };
         front(plots, sc, scenes[sc].map(function (r) {
           return { technique: r.technique, label: label(r), x: r.gpu_ms_median, y: r.err_rate_mean };
         }));
@@ -303,9 +342,27 @@ var SB = (function () {
     techs.forEach(function (t) { series[t] = { strokeWidth: 0, drawPoints: true, pointSize: 4 }; });
     series.front = { strokeWidth: 1.5, drawPoints: false, connectSeparatedPoints: true, color: "#888" };
     var chosen = pts.filter(function (p) { return p.chosen; })[0];
-    var opts = { labels: ["time"].concat(techs, ["front"]), series: series, xlabel: o.xlabel || "median frame time (ms)",
-      ylabel: o.ylabel || "error rate", legend: "always", highlightCircleSize: 5,
-      axes: { y: { axisLabelWidth: 70, axisLabelFormatter: function (v) { return fmt(v, 3); } } },
+    /* readable axes: a log scale where the figures span more than 20x (and are all > 0), and the range of the
+       points with a margin, so that no point sits on an edge */
+    var xs = pts.map(function (p) { return p.x; }), ys = pts.map(function (p) { return p.y; });
+    function range(v, log) {
+      var lo = Math.min.apply(null, v), hi = Math.max.apply(null, v);
+      if (log) return [lo / Math.pow(hi / lo, 0.08), hi * Math.pow(hi / lo, 0.08)];
+      var pad = (hi - lo) * 0.08 || Math.abs(hi) * 0.1 || 1;
+      return [lo - pad < 0 && lo >= 0 ? 0 : lo - pad, hi + pad];
+    }
+    function wide(v) { var lo = Math.min.apply(null, v), hi = Math.max.apply(null, v); return lo > 0 && hi / lo > 20; }
+    var logx = !o.fromZero && wide(xs), logy = !o.fromZero && wide(ys);
+    var hover = el("div", { "class": "small hover", text: "hover a point for its run" });
+    var opts = { labels: ["time"].concat(techs, ["front"]), series: series, xlabel: (o.xlabel || "median frame time (ms)") + (logx ? ", log scale" : ""),
+      ylabel: (o.ylabel || "error rate") + (logy ? ", log scale" : ""), legend: "always", highlightCircleSize: 5,
+      dateWindow: range(xs, logx), valueRange: range(ys, logy), logscale: logy,
+      highlightCallback: function (e, x, points, row) {
+        var p = pts[row];
+        if (p) hover.textContent = p.label + ": " + fmt(p.x) + " ms, " + fmt(p.y);
+      },
+      axes: { x: { logscale: logx, axisLabelFormatter: function (v) { return fmt(v, 3); } },
+              y: { axisLabelWidth: 70, axisLabelFormatter: function (v) { return fmt(v, 3); } } },
       underlayCallback: function (ctx, area, g) {
         if (typeof o.bound === "number") {   /* the bound, dashed red across the plot */
           ctx.save();
@@ -335,7 +392,8 @@ var SB = (function () {
       opts.valueRange = [0, Math.max.apply(null, ys.concat([0])) * 1.08 || 1];
     }
     chart(parent, data, opts, title);
-    parent.appendChild(el("p", { "class": "small", text: "front: " + onFront.map(function (p) { return p.label + " " + fmt(p.x) + " ms, " + fmt(p.y); }).join(" · ") }));
+    parent.appendChild(hover);
+    parent.appendChild(el("p", { "class": "small fold", text: "front: " + onFront.map(function (p) { return p.label + " " + fmt(p.x) + " ms, " + fmt(p.y); }).join(" · ") }));
   }
 
   /* ---- tune's search: front.html ---- */
@@ -376,11 +434,11 @@ var SB = (function () {
     else {
       var x = function (f, i) { return i; };
       chart(cs, fr.map(function (f, i) { return [x(f, i)].concat(stages.map(function (s) { return f[at(s)] === null ? 0 : f[at(s)]; })); }),
-        { labels: ["frame"].concat(stages), stackedGraph: true, fillGraph: true, xlabel: "measured frame", ylabel: "ms" }, "Frame time by stage (stacked)");
+        { labels: ["frame"].concat(stages), stackedGraph: true, fillGraph: true, xlabel: "measured frame", ylabel: "ms", axes: { x: { ticker: wholeTicks } } }, "Frame time by stage (stacked)");
       chart(cs, fr.map(function (f, i) { return [i, f[at("draw_calls")], f[at("shadow_draw_calls")]]; }),
-        { labels: ["frame", "draw_calls", "shadow_draw_calls"], xlabel: "measured frame" }, "Draw calls");
+        { labels: ["frame", "draw_calls", "shadow_draw_calls"], xlabel: "measured frame", axes: { x: { ticker: wholeTicks } } }, "Draw calls");
       chart(cs, fr.map(function (f, i) { return [i, f[at("triangles")], f[at("shadow_triangles")]]; }),
-        { labels: ["frame", "triangles", "shadow_triangles"], xlabel: "measured frame" }, "Triangles");
+        { labels: ["frame", "triangles", "shadow_triangles"], xlabel: "measured frame", axes: { x: { ticker: wholeTicks } } }, "Triangles");
     }
     m.appendChild(cs);
     var imgs = night.images.filter(function (n) { return n.indexOf(id + "_f") === 0; });
@@ -412,17 +470,22 @@ var SB = (function () {
     m.innerHTML = "";
     crumbs([el("span", { text: d.label })]);
     m.appendChild(el("h1", { text: d.label }));
-    m.appendChild(el("p", { text: s.host + " · " + s.renderer + " · all parameters: " + (s.params || "none") }));
+    m.appendChild(el("p", { text: s.host + " · " + s.renderer }));
+    m.appendChild(el("details", {}, [el("summary", { text: "all parameters" }), el("p", { "class": "small fold", text: s.params || "none" })]));
+    var notes = (d.notes || []).map(function (n) { return { date: new Date(n.date), n: n }; });
+    if (notes.length) m.appendChild(notesList(d.notes, "Notes on this series (dashed lines on the charts)"));
     Object.keys(d.metrics).forEach(function (name) {
       var mt = d.metrics[name];
       if (!mt.nights.length) return;
       var sec = el("section", { id: name }, [el("h2", { text: name })]);
+      m.appendChild(sec);   /* in the page before the chart is made: a wide chart takes the page's width */
       var hasCi = mt.nights.some(function (n) { return n[3] !== null; });
       var data = mt.nights.map(function (n) {
         var c = n[2], ci = n[3] || 0;
         return [new Date(n[1]), [c - ci, c, c + ci], n[4] ? [null, null, null] : [c, c, c]];
       });
       var cps = mt.changes.map(function (c) { return { date: new Date(c.date_after), c: c }; });
+      var counted = false;
       chart(sec, data, {
         labels: ["night", name, "unstable night"], customBars: true, drawPoints: true, pointSize: 3,
         series: { "unstable night": { strokeWidth: 0, pointSize: 5, color: "#d95f02" } },
@@ -430,16 +493,33 @@ var SB = (function () {
         underlayCallback: function (ctx, area, g) {
           cps.forEach(function (p) {
             var x = g.toDomXCoord(p.date.getTime() - 1);
-            ctx.fillStyle = p.c.regression ? "rgba(200,0,0,0.5)" : "rgba(0,130,0,0.5)";
+            ctx.fillStyle = p.c.regression ? (p.c.accepted ? "rgba(120,120,120,0.5)" : "rgba(200,0,0,0.5)") : "rgba(0,130,0,0.5)";
             ctx.fillRect(x - 1, area.y, 2, area.h);
           });
+          /* the notes: a dashed line on the night, its text at the top (machine changes purple, annotations blue) */
+          notes.forEach(function (p, i) {
+            var x = g.toDomXCoord(p.date.getTime());
+            ctx.save();
+            ctx.strokeStyle = ctx.fillStyle = p.n.machine ? "#7b3294" : "#2166ac";
+            ctx.setLineDash([4, 3]);
+            ctx.beginPath();
+            ctx.moveTo(x, area.y);
+            ctx.lineTo(x, area.y + area.h);
+            ctx.stroke();
+            ctx.font = "11px system-ui, sans-serif";
+            var t = (p.n.accept ? "accepted: " : "") + p.n.text;
+            if (t.length > 60) t = t.slice(0, 59) + "…";
+            var w = ctx.measureText(t).width;
+            ctx.fillText(t, Math.min(x + 3, area.x + area.w - w), area.y + 11 + 12 * (i % 3));
+            ctx.restore();
+          });
+          if (!counted) { counted = true; document.body.dataset.notesDrawn = String(+(document.body.dataset.notesDrawn || 0) + notes.length); }
         }
-      }, null);
+      }, null, true);
       if (mt.changes.length) sec.appendChild(changesTable(mt.changes));
       var list = el("p", { "class": "small" }, ["nights: "]);
       mt.nights.forEach(function (n, i) { if (i) list.appendChild(document.createTextNode(" ")); list.appendChild(el("a", { href: "night.html?n=" + n[0], text: "#" + n[0] })); });
       sec.appendChild(list);
-      m.appendChild(sec);
     });
     done();
   }

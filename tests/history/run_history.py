@@ -153,6 +153,53 @@ def main():
         print("  B: %s %s night %s %s%%" % (r["series"], r["metric"], r["night_after"], r["change_pct"]))
     check(rc == 0 and not rows, "history B (no change): no change found, exit 0 (got %d, %d changes)" % (rc, len(rows)))
 
+    # what changed on the machine: history D is A with night 6 run on another driver (its meta says so)
+    drv = os.path.join(WORK, "a6-driver")
+    shutil.copytree(slow[0], drv)
+    meta = open(os.path.join(drv, "meta")).read()
+    old_ver = re.search(r"(?m)^gl_version: (.*)$", meta).group(1)
+    old_num = re.search(r"[0-9][0-9.]*$", old_ver).group(0)
+    new_ver = old_ver[:-len(old_num)] + "23.0.1"
+    open(os.path.join(drv, "meta"), "w").write(meta.replace("gl_version: " + old_ver, "gl_version: " + new_ver))
+    D = os.path.join(WORK, "d.sqlite")
+    sb("history", "add", *(base + [drv] + slow[1:]), "--history", D)
+    rc, rows, err = regressions(D, "--metric", metrics)
+    hit = [r for r in rows if r["metric"] == "final_ms" and int(r["night_after"]) == sixth]
+    want = "the driver changed here too: %s → 23.0.1" % old_num
+    check(len(hit) == 3 and all(want in r["machine"] for r in hit),
+          "history D: each final_ms regression on night 6 says '%s' (%s)" % (want, [r["machine"] for r in hit]))
+    p = sb("history", "regressions", "--history", D, "--metric", "final_ms", "--noise-floor", NOISE_FLOOR, ok=(1,))
+    check(want in p.stdout, "history D: the text table says it too")
+    # annotations: accepting pssm's change leaves sm's; accepting the night leaves none (exit 0)
+    p = sb("history", "annotate", str(sixth), "pssm slower on purpose", "--series", "pssm", "--accept", "--history", D)
+    rc, rows, err = regressions(D, "--metric", metrics)
+    pssm = [r for r in rows if r["series"].split()[1] == "pssm"]
+    others = [r for r in rows if r["series"].split()[1] != "pssm"]
+    check(rc == 1 and pssm and all(r["verdict"].startswith("accepted") and "on purpose" in r["note"] for r in pssm)
+          and others and all(r["verdict"].startswith("REGRESSION") for r in others),
+          "history D: pssm's accepted, sm's still regressions, exit 1 (got %d)" % rc)
+    sb("history", "annotate", str(sixth), "one llvmpipe thread from here on", "--accept", "--history", D)
+    rc, rows, err = regressions(D, "--metric", metrics)
+    check(rc == 0 and rows and all(r["verdict"].startswith("accepted") for r in rows) and "accepted" in err,
+          "history D: every regression accepted: listed as accepted, exit 0 (got %d: %s)" % (rc, err.strip()))
+    commit = re.search(r"(?m)^commit: (.*)$", open(os.path.join(base[0], "meta")).read()).group(1)
+    p = sb("history", "annotate", commit[:10], "the first night of this commit", "--history", D)
+    check("night %d annotated" % nights[0] in p.stderr, "annotate by commit: its first night (%s)" % p.stderr.strip())
+    p = sb("history", "annotate", "no-such-night", "x", "--history", D, ok=(2,))
+    check(len(p.stderr.strip().splitlines()) == 1 and "no-such-night" in p.stderr, "annotate an unknown night: exit 2, one line")
+    # a branch against the nights: a slowed set beyond B's band (exit 1), an unchanged one within (exit 0)
+    fresh = night("c9")
+    p = sb("history", "check", fresh, "--history", B, "--noise-floor", NOISE_FLOOR, ok=(0, 1))
+    print(p.stdout)
+    check(p.returncode == 0 and "REGRESSION" not in p.stdout and p.stdout.count("within") >= 12,
+          "history check, an unchanged set: every figure within B's band, exit 0 (got %d)" % p.returncode)
+    p = sb("history", "check", slow[2], "--history", B, "--noise-floor", NOISE_FLOOR, ok=(0, 1))
+    print(p.stdout)
+    check(p.returncode == 1 and len(re.findall(r"final_ms .* REGRESSION", p.stdout)) == 3,
+          "history check, a slowed set: final_ms beyond B's band for all three runs, exit 1 (got %d)" % p.returncode)
+    # a note for the report (not accepted): the pssm series' chart draws it
+    sb("history", "annotate", str(sixth), "LP_NUM_THREADS=1 from here", "--series", "pssm", "--history", A)
+
     # schema: an older file is migrated forward, a newer one refused
     old = os.path.join(WORK, "v1.sqlite")
     db = sqlite3.connect(old)
@@ -165,7 +212,7 @@ def main():
     kept = db.execute("SELECT count(*) FROM nights WHERE set_key = 'v1-night'").fetchone()[0]
     frames = db.execute("SELECT count(*) FROM frames").fetchone()[0]
     db.close()
-    check(v == 2 and kept == 1 and frames == 3, "a version 1 history is migrated to 2, its night kept (v%d, %d, %d frames)"
+    check(v == 3 and kept == 1 and frames == 3, "a version 1 history is migrated to 3, its night kept (v%d, %d, %d frames)"
           % (v, kept, frames))
     newer = os.path.join(WORK, "v99.sqlite")
     db = sqlite3.connect(newer)
@@ -237,6 +284,11 @@ def main():
             check(int(a.get("images-loaded", "0")) >= 5, "run page: the evaluated frames' images loaded (%s)" % a.get("images-loaded"))
         if kind == "series":
             check("night.html?n=%d" % sixth in dom, "series page: its change links night 6")
+            check(int(a.get("notes-drawn", "0")) >= 5 and "LP_NUM_THREADS=1 from here" in dom,
+                  "series page: the annotation drawn on its charts (%s) and listed" % a.get("notes-drawn"))
+        if kind == "night":
+            check(0 < float(a.get("max-row-lines", "99")) <= 2.05,
+                  "night page: no table row taller than two lines (%s)" % a.get("max-row-lines"))
         chromium(url, shot=os.path.join(SHOTS, kind + ".png"))
     # a memory budget on the night's fronts: pssm's four 2048² cascades (64 MiB) are over 20, both sm runs (16) within
     url = "file://" + os.path.abspath(os.path.join(site, pages["night"] + "&budget=20"))
@@ -245,6 +297,21 @@ def main():
     check("1 run(s) over 20 MiB left out" in fronts and "pssm:" not in fronts and "sm:" in fronts and not console,
           "night page, budget 20 MiB: pssm (64 MiB) left out of the fronts, sm (16) drawn")
     chromium(url, shot=os.path.join(SHOTS, "night-budget.png"))
+    # layered against per-cascade: the pairs table shows the parameters that differ, not each run's all
+    lay = sb("run", "plane-box", "plane-box", "pssm:layered=off,gs:cascades=2,4", "--frames", "3", "--size", "320x180",
+             "--quiet", "--out", os.path.join(WORK, "layered")).stdout.strip()
+    lsite = os.path.join(WORK, "site-layered")
+    sb("report", lay, "--out", lsite)
+    url = "file://" + os.path.abspath(os.path.join(lsite, "night.html?n=1"))
+    dom, console = chromium(url)
+    a = body_attrs(dom)
+    pairs = dom[dom.find('id="pairs"'):]
+    cells = re.findall(r"<td[^>]*>(.*?)</td>", pairs)
+    params = [re.sub(r"<[^>]+>", "", c) for c in cells if "=" in c]
+    check(a.get("ready") == "yes" and not console and params and all(len(c) <= len("cascades=2") for c in params)
+          and not any("depth=32f" in c for c in cells), "layered pairs: parameter cells only what differs (%s)" % sorted(set(params))[:4])
+    check(0 < float(a.get("max-row-lines", "99")) <= 2.05, "layered night: rows of one line (%s)" % a.get("max-row-lines"))
+    chromium(url, shot=os.path.join(SHOTS, "night-layered.png"))
     print("screenshots in " + SHOTS)
     if failures:
         print("%d check(s) failed" % len(failures))
