@@ -107,6 +107,7 @@ static int bad_input(const char *fmt, ...) __attribute__((format(printf, 1, 2)))
 static int bad_input(const char *fmt, ...) {
     va_list ap;
     va_start(ap, fmt);
+    fflush(stdout);   /* what was printed before it comes first */
     fputs("shadowbench: bisect: ", stderr);
     vfprintf(stderr, fmt, ap);
     fputc('\n', stderr);
