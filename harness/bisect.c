@@ -249,18 +249,6 @@ static void print_pair(const bisect *b, const paired *p) {
            b->mc.unit, p->ci, 100 * p->diff / p->good, p->n);
 }
 
-/* The parts of a history series "host|renderer|scene|path|WxH|technique|params". */
-static int series_part(const char *series, int k, char *out, size_t len) {
-    const char *p = series;
-    for (int i = 0; i < k && p; i++) {
-        p = strchr(p, '|');
-        if (p) p++;
-    }
-    if (!p) return snprintf(out, len, "%s", ""), 0;
-    size_t n = k < 6 ? strcspn(p, "|") : strlen(p);
-    return snprintf(out, len, "%.*s", (int)n, p);
-}
-
 int sb_bisect_main(const sb_bisect_cmd *cmd) {
     bisect B = {.cmd = cmd}, *b = &B;
     b->metric = cmd->metric ? cmd->metric : "gpu_ms";
@@ -274,7 +262,7 @@ int sb_bisect_main(const sb_bisect_cmd *cmd) {
 
     /* the --history form: the newest regression of a series names the commits and the run */
     char good_rev[256], bad_rev[256];
-    static char hist_args[6][2300];
+    static char scene[1024], path[1024], spec[2200], size[64];   /* the --history form's run (b->args point here) */
     if (cmd->history) {
         if (!cmd->series || !cmd->metric) return bad_input("--history needs --series TEXT and --metric M");
         if (cmd->good || cmd->bad) return bad_input("give GOOD BAD or --history, not both");
@@ -300,18 +288,16 @@ int sb_bisect_main(const sb_bisect_cmd *cmd) {
         snprintf(bad_rev, sizeof bad_rev, "%s", pick->commit_after);
         printf("regression: %s %s %+.1f %% on night %lld (%s..%s)\n", pick->label, b->metric, 100 * pick->rel,
                pick->night_after, good_rev, bad_rev);
-        char tech[1100];
-        series_part(pick->series, 2, hist_args[0], sizeof hist_args[0]);
-        series_part(pick->series, 3, hist_args[1], sizeof hist_args[1]);
-        series_part(pick->series, 5, tech, sizeof tech);
-        series_part(pick->series, 6, hist_args[3], sizeof hist_args[3]);
-        snprintf(hist_args[2], sizeof hist_args[2], "%.1100s%s%.1100s", tech, hist_args[3][0] ? ":" : "", hist_args[3]);
-        snprintf(hist_args[4], sizeof hist_args[4], "--size");
-        series_part(pick->series, 4, hist_args[5], sizeof hist_args[5]);
+        char tech[64], params[2048];
+        sb_history_series_field(pick->series, 2, scene, sizeof scene);
+        sb_history_series_field(pick->series, 3, path, sizeof path);
+        sb_history_series_field(pick->series, 4, size, sizeof size);
+        sb_history_series_field(pick->series, 5, tech, sizeof tech);
+        sb_history_series_field(pick->series, 6, params, sizeof params);
+        snprintf(spec, sizeof spec, "%s%s%.2048s", tech, params[0] ? ":" : "", params);
         free(ch);
-        b->args[b->nargs++] = "run";
-        for (int i = 0; i < 6; i++)
-            if (i != 3) b->args[b->nargs++] = hist_args[i];
+        char *run[] = {"run", scene, path, spec, "--size", size};
+        for (size_t i = 0; i < SB_COUNT(run); i++) b->args[b->nargs++] = run[i];
         /* "-dirty" builds are bisected from their commit */
         for (char *r = good_rev; r; r = r == good_rev ? bad_rev : NULL) {
             char *d = strstr(r, "-dirty");
@@ -339,12 +325,12 @@ int sb_bisect_main(const sb_bisect_cmd *cmd) {
     /* the commits: GOOD, then first-parent descendants up to BAD */
     commit good = {0}, badc = {0};
     char buf[1 << 16];
-    char spec[300];
-    snprintf(spec, sizeof spec, "%s^{commit}", good_rev);
-    if (!git(b->repo, good.sha, sizeof good.sha, "rev-parse", "--verify", "--quiet", spec, NULL))
+    char rev[300];
+    snprintf(rev, sizeof rev, "%s^{commit}", good_rev);
+    if (!git(b->repo, good.sha, sizeof good.sha, "rev-parse", "--verify", "--quiet", rev, NULL))
         return bad_input("GOOD '%s' is not a commit of %s", good_rev, b->repo);
-    snprintf(spec, sizeof spec, "%s^{commit}", bad_rev);
-    if (!git(b->repo, badc.sha, sizeof badc.sha, "rev-parse", "--verify", "--quiet", spec, NULL))
+    snprintf(rev, sizeof rev, "%s^{commit}", bad_rev);
+    if (!git(b->repo, badc.sha, sizeof badc.sha, "rev-parse", "--verify", "--quiet", rev, NULL))
         return bad_input("BAD '%s' is not a commit of %s", bad_rev, b->repo);
     if (!strcmp(good.sha, badc.sha)) {
         printf("GOOD and BAD are the same commit (%.12s): they do not differ\n", good.sha);

@@ -12,6 +12,7 @@
 #include <time.h>
 
 #include "changepoint.h"
+#include "stats.h"
 #include "compare.h"
 #include "csv.h"
 #include "columns.h"
@@ -376,16 +377,20 @@ bool sb_history_list(sb_history *h, FILE *out, sb_err *err) {
 
 /* ---- changes ---- */
 
+void sb_history_series_field(const char *series, int k, char *out, size_t len) {
+    const char *p = series;
+    for (int i = 0; i < k && p; i++) {
+        p = strchr(p, '|');
+        if (p) p++;
+    }
+    size_t n = !p ? 0 : k < 6 ? strcspn(p, "|") : strlen(p);
+    snprintf(out, len, "%.*s", (int)n, p ? p : "");
+}
+
 /* "host|renderer|scene|path|WxH|technique|params" split into its seven fields */
 typedef struct { char f[7][1024]; } series_fields;
 static void split_series(const char *series, series_fields *o) {
-    memset(o, 0, sizeof *o);
-    const char *p = series;
-    for (int i = 0; i < 7 && p; i++) {
-        size_t n = i < 6 ? strcspn(p, "|") : strlen(p);
-        snprintf(o->f[i], sizeof o->f[i], "%.*s", (int)(n < 1023 ? n : 1023), p);
-        p = p[n] ? p + n + 1 : NULL;
-    }
+    for (int i = 0; i < 7; i++) sb_history_series_field(series, i, o->f[i], sizeof o->f[i]);
 }
 
 
@@ -394,6 +399,16 @@ typedef struct {
     long long night;
     char date[32], commit[64], host[256];
 } night_info;
+
+/* The least night-to-night timing noise assumed for a renderer, as a fraction: q's floor, else 1 % on a GPU
+ * and 5 % on a software rasterizer, whose times move with everything else on the CPU (the stability tests
+ * widen alike). */
+static double noise_floor(const sb_history_query *q, const char *renderer) {
+    if (q->noise_floor_pct > 0) return q->noise_floor_pct / 100;
+    bool soft = strstr(renderer, "llvmpipe") || strstr(renderer, "softpipe") || strstr(renderer, "SwiftShader") ||
+                strstr(renderer, "lavapipe");
+    return soft ? 0.05 : 0.01;
+}
 
 static int cmp_double(const void *a, const void *b) {
     double x = *(const double *)a, y = *(const double *)b;
@@ -404,10 +419,6 @@ static int cmp_double(const void *a, const void *b) {
 int sb_history_changes(sb_history *h, const sb_history_query *q, sb_history_change **out, sb_err *err) {
     *out = NULL;
     int recent = q->recent > 0 ? q->recent : 3;
-    /* night-to-night timing noise is never assumed below this: 1 % on a GPU, 5 % on a software rasterizer,
-       whose times move with everything else on the CPU (the stability tests widen alike) */
-    double floor_gpu = q->noise_floor_pct > 0 ? q->noise_floor_pct : 1.0;
-    double floor_soft = q->noise_floor_pct > 0 ? q->noise_floor_pct : 5.0;
     /* the nights, oldest first, and each host's newest */
     sqlite3_stmt *st;
     if (sqlite3_prepare_v2(h->db, "SELECT id, date, git_commit, host FROM nights WHERE date >= ? ORDER BY date, id", -1,
@@ -493,10 +504,7 @@ int sb_history_changes(sb_history *h, const sb_history_query *q, sb_history_chan
                         if (typical > 0 && ci[i] > 2 * typical) w[i] *= (2 * typical / ci[i]) * (2 * typical / ci[i]);
                     series_fields sf;
                     split_series(series, &sf);
-                    bool soft = strstr(sf.f[1], "llvmpipe") || strstr(sf.f[1], "softpipe") ||
-                                strstr(sf.f[1], "SwiftShader") || strstr(sf.f[1], "lavapipe");
-                    double floor_pct = soft ? floor_soft : floor_gpu;
-                    sb_cp_opts o = {.relative = true, .noise_floor = mc.ci[0] ? floor_pct / 100 : 0};
+                    sb_cp_opts o = {.relative = true, .noise_floor = mc.ci[0] ? noise_floor(q, sf.f[1]) : 0};
                     sb_cp_change cps[64];
                     int nc = sb_changepoints(x, w, k, &o, cps, 64, NULL);
                     for (int c = 0; c < nc && c < 64; c++) {
@@ -570,17 +578,8 @@ int sb_history_changes(sb_history *h, const sb_history_query *q, sb_history_chan
             if (x->night != ch[c].night_after || !sb_history_note_matches(x, ch[c].series, ch[c].label)) continue;
             char *to = x->machine ? ch[c].machine : ch[c].note;
             size_t l = strlen(to);
-            if (x->machine)   /* "the driver changed: a → b" beside a change reads "the driver changed here too: a → b" */
-                for (const char *p = x->text; *p && l + 1 < sizeof ch[c].machine;) {
-                    if (!strncmp(p, " changed: ", 10)) {
-                        snprintf(to + l, sizeof ch[c].machine - l, " changed here too: ");
-                        l = strlen(to), p += 10;
-                    } else {
-                        to[l++] = *p++, to[l] = 0;
-                    }
-                }
-            else
-                snprintf(to + l, sizeof ch[c].note - l, "%s%s%s", l ? "; " : "", x->text, x->accept ? " (accepted)" : "");
+            snprintf(to + l, sizeof ch[c].note - l, "%s%s%s", l ? "; " : "", x->machine ? x->aside : x->text,
+                     x->accept ? " (accepted)" : "");
             ch[c].accepted |= x->accept;
         }
     free(notes);
@@ -875,8 +874,8 @@ static void word_diff(const char *a, const char *b, char *out, size_t len) {
     snprintf(out, len, "%.*s → %.*s", (int)(la - pre - suf), a + pre, (int)(lb - pre - suf), b + pre);
 }
 
-/* What differs between two nights' metas ("" when nothing). */
-static void machine_change(const char *before, const char *after, char *out, size_t len) {
+/* What differs between two nights' metas ("" when nothing), each field as "the driver<verb>: a → b". */
+static void machine_change(const char *before, const char *after, const char *verb, char *out, size_t len) {
     out[0] = 0;
     for (size_t k = 0; k < SB_COUNT(fingerprint); k++) {
         char x[512], y[512], d[1100];
@@ -885,7 +884,7 @@ static void machine_change(const char *before, const char *after, char *out, siz
         if (!strcmp(x, y) || !x[0] || !y[0]) continue;   /* a field an older shadowbench did not write is no change */
         word_diff(x, y, d, sizeof d);
         size_t l = strlen(out);
-        snprintf(out + l, len - l, "%s%s changed: %s", l ? "; " : "", fingerprint[k].name, d);
+        snprintf(out + l, len - l, "%s%s%s: %s", l ? "; " : "", fingerprint[k].name, verb, d);
     }
 }
 
@@ -902,7 +901,7 @@ int sb_history_notes(sb_history *h, sb_history_note **out, sb_err *err) {
             if (!strcmp(nights[j].host, nights[i].host)) prev = j;
         if (prev < 0) continue;
         char what[2048];
-        machine_change(nights[prev].meta, nights[i].meta, what, sizeof what);
+        machine_change(nights[prev].meta, nights[i].meta, " changed", what, sizeof what);
         if (!what[0]) continue;
         *out = sb_xrealloc(*out, sizeof **out * (size_t)(n + 1));
         sb_history_note *x = &(*out)[n++];
@@ -912,6 +911,7 @@ int sb_history_notes(sb_history *h, sb_history_note **out, sb_err *err) {
         snprintf(x->date, sizeof x->date, "%s", nights[i].date);
         snprintf(x->commit, sizeof x->commit, "%s", nights[i].commit);
         snprintf(x->text, sizeof x->text, "%s", what);
+        machine_change(nights[prev].meta, nights[i].meta, " changed here too", x->aside, sizeof x->aside);
     }
     sb_history_nights_free(nights, nn);
     sqlite3_stmt *st;
@@ -944,11 +944,6 @@ bool sb_history_note_matches(const sb_history_note *note, const char *series, co
 
 /* ---- a results set against the nights ---- */
 
-static int cmp_dbl(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
 int sb_history_check(sb_history *h, const char *dir, const sb_history_query *q, int nights, FILE *out, sb_err *err) {
     char sum_path[4200];
     snprintf(sum_path, sizeof sum_path, "%s/summary.csv", dir);
@@ -957,8 +952,7 @@ int sb_history_check(sb_history *h, const char *dir, const sb_history_query *q, 
     char *meta = read_meta(dir);
     char host[256], renderer[512];
     set_host(meta, &t, host, sizeof host, renderer, sizeof renderer);
-    bool soft = strstr(renderer, "llvmpipe") || strstr(renderer, "softpipe") || strstr(renderer, "SwiftShader");
-    double floor_pct = q->noise_floor_pct > 0 ? q->noise_floor_pct : soft ? 5.0 : 1.0;
+    double floor = noise_floor(q, renderer);
     const char *metrics[32];
     int nm = 0;
     if (q->nmetrics)
@@ -1011,11 +1005,11 @@ int sb_history_check(sb_history *h, const char *dir, const sb_history_query *q, 
             for (int i = 0; i < k; i++) v[i] = logs ? log(raw[i]) : raw[i];
             free(p);
             double sigma = 0;
-            sb_cp_opts o = {.relative = true, .noise_floor = mc.ci[0] ? floor_pct / 100 : 0};
+            sb_cp_opts o = {.relative = true, .noise_floor = mc.ci[0] ? floor : 0};
             sb_changepoints(raw, NULL, k, &o, NULL, 0, &sigma);
             memcpy(sorted, v, sizeof *v * (size_t)k);
-            qsort(sorted, (size_t)k, sizeof *sorted, cmp_dbl);
-            double med = k % 2 ? sorted[k / 2] : 0.5 * (sorted[k / 2 - 1] + sorted[k / 2]);
+            qsort(sorted, (size_t)k, sizeof *sorted, cmp_double);
+            double med = sb_percentile(sorted, k, 0.5);
             double xs = logs ? (x > 0 ? log(x) : -INFINITY) : x, half = sqrt(SB_CP_PENALTY) * sigma * sqrt(1 + 1.0 / k);
             double z = sigma > 0 ? (xs - med) / (sigma * sqrt(1 + 1.0 / k)) : 0;
             double lo = logs ? exp(med - half) : med - half, hi = logs ? exp(med + half) : med + half;

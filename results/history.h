@@ -65,6 +65,8 @@ typedef struct sb_history_query {
 int sb_history_changes(sb_history *h, const sb_history_query *q, sb_history_change **out, sb_err *err);
 /* The history's series, sorted (free each and the array); NULL with *n 0 when there are none. */
 char **sb_history_series(sb_history *h, int *n);
+/* Field k (0 host, 1 renderer, 2 scene, 3 path, 4 WxH, 5 technique, 6 params) of a series. */
+void sb_history_series_field(const char *series, int k, char *out, size_t len);
 /* Short names of series[0..n) (each malloc'd): the parameters every series of
  * the same technique shares are left out, and the host unless there are several. */
 char **sb_history_labels(char *const *series, int n);
@@ -115,6 +117,7 @@ typedef struct sb_history_note {
     char date[32], commit[64];
     char series[256];           /* a pattern (fnmatch or a substring of the series or its label); "": every series */
     char text[2048];
+    char aside[2048];           /* machine: how a change starting that night says it ("the driver changed here too: ...") */
     bool accept;                /* the change starting on this night was meant */
     bool machine;               /* automatic: the night's machine or build differs from its host's night before
                                    (renderer, driver, kernel, CPU, cores, clocks, build options) */

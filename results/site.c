@@ -284,9 +284,30 @@ static bool write_frames(sb_history *h, const char *site, long long id, sb_err *
     return ok;
 }
 
+/* The notes (annotations and machine changes) that pass `keep`, as a JSON list. */
 static void jnotes(jbuf *j, const sb_history_note *notes, int n, bool (*keep)(const sb_history_note *, const void *),
-                   const void *arg);
-static bool note_of_night(const sb_history_note *n, const void *arg);
+                   const void *arg) {
+    jput(j, "[");
+    int k = 0;
+    for (int i = 0; i < n; i++) {
+        if (keep && !keep(&notes[i], arg)) continue;
+        jput(j, k++ ? ",{\"night\":" : "{\"night\":");
+        jnum(j, (double)notes[i].night);
+        jsfield(j, "date", notes[i].date);
+        jsfield(j, "commit", notes[i].commit);
+        jsfield(j, "series", notes[i].series);
+        jsfield(j, "text", notes[i].text);
+        jput(j, notes[i].accept ? ",\"accept\":true" : ",\"accept\":false");
+        jput(j, notes[i].machine ? ",\"machine\":true}" : ",\"machine\":false}");
+    }
+    jput(j, "]");
+}
+static bool note_of_night(const sb_history_note *n, const void *arg) { return n->night == *(const long long *)arg; }
+typedef struct { const char *series, *label; } series_ref;
+static bool note_of_series(const sb_history_note *n, const void *arg) {
+    const series_ref *r = arg;
+    return sb_history_note_matches(n, r->series, r->label);
+}
 
 static bool write_night(sb_history *h, const char *site, const sb_history_night *n, const sb_history_note *notes,
                         int nnotes, sb_err *err) {
@@ -348,30 +369,6 @@ static void jchange(jbuf *j, const sb_history_change *c, int sid) {
     jput(j, c->recent ? ",\"recent\":true}" : ",\"recent\":false}");
 }
 
-/* The notes (annotations and machine changes) that pass `keep`, as a JSON list. */
-static void jnotes(jbuf *j, const sb_history_note *notes, int n, bool (*keep)(const sb_history_note *, const void *),
-                   const void *arg) {
-    jput(j, "[");
-    int k = 0;
-    for (int i = 0; i < n; i++) {
-        if (keep && !keep(&notes[i], arg)) continue;
-        jput(j, k++ ? ",{\"night\":" : "{\"night\":");
-        jnum(j, (double)notes[i].night);
-        jsfield(j, "date", notes[i].date);
-        jsfield(j, "commit", notes[i].commit);
-        jsfield(j, "series", notes[i].series);
-        jsfield(j, "text", notes[i].text);
-        jput(j, notes[i].accept ? ",\"accept\":true" : ",\"accept\":false");
-        jput(j, notes[i].machine ? ",\"machine\":true}" : ",\"machine\":false}");
-    }
-    jput(j, "]");
-}
-static bool note_of_night(const sb_history_note *n, const void *arg) { return n->night == *(const long long *)arg; }
-typedef struct { const char *series, *label; } series_ref;
-static bool note_of_series(const sb_history_note *n, const void *arg) {
-    const series_ref *r = arg;
-    return sb_history_note_matches(n, r->series, r->label);
-}
 
 static int series_index(char **series, int ns, const char *s) {
     int lo = 0, hi = ns - 1;
