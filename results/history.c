@@ -578,8 +578,7 @@ int sb_history_changes(sb_history *h, const sb_history_query *q, sb_history_chan
             if (x->night != ch[c].night_after || !sb_history_note_matches(x, ch[c].series, ch[c].label)) continue;
             char *to = x->machine ? ch[c].machine : ch[c].note;
             size_t l = strlen(to);
-            snprintf(to + l, sizeof ch[c].note - l, "%s%s%s", l ? "; " : "", x->machine ? x->aside : x->text,
-                     x->accept ? " (accepted)" : "");
+            snprintf(to + l, sizeof ch[c].note - l, "%s%s", l ? "; " : "", x->machine ? x->aside : x->text);
             ch[c].accepted |= x->accept;
         }
     free(notes);
