@@ -16,6 +16,7 @@
 
 #include "columns.h"
 #include "history.h"
+#include "options.h"
 #include "stats.h"
 #include "table.h"
 #include "util.h"
@@ -96,8 +97,13 @@ typedef struct bisect {
     sb_metric_cols mc;
     const char *metric;
     bool timing;
+    int repeat;                 /* timings: pairs a step */
+    double threshold;           /* timings: percent */
+    char good_rev[256], bad_rev[256];
     char *args[MAX_ARGS];       /* run SCENE PATH SPEC [options] */
     int nargs;
+    /* the --history form's run, which args point into */
+    char scene[1024], path[1024], spec[2200], size[64];
     int runs;                   /* results folders made, for their names */
     int cand_renders, good_renders, steps;
     int measured;               /* commits measured against GOOD: BAD and the candidates */
@@ -168,11 +174,9 @@ static bool build(bisect *b, commit *c) {
     return true;
 }
 
-static const char *built_note(const commit *c) {
-    static char buf[64];
-    if (c->build_s > 0) snprintf(buf, sizeof buf, "built in %.1f s", c->build_s);
-    else snprintf(buf, sizeof buf, "built before");
-    return buf;
+static void print_built(const commit *c) {
+    if (c->build_s > 0) printf("built in %.1f s", c->build_s);
+    else printf("built before");
 }
 
 /* One run of bin: the metric's figure, or NaN (why says). */
@@ -203,7 +207,7 @@ static double measure(bisect *b, const commit *c, char *why, size_t wlen) {
         snprintf(why, wlen, "no summary (%s; log: %s)", err.msg, log);
     } else {
         if (t.nrows != 1) snprintf(why, wlen, "%d runs in its summary, not 1", t.nrows);
-        else if (strcmp(sb_table_get(&t, 0, "status"), "ok"))
+        else if (sb_status_of(sb_table_get(&t, 0, "status")) != SB_STATUS_OK)
             snprintf(why, wlen, "the run %s: %s", sb_table_get(&t, 0, "status"), sb_table_get(&t, 0, "reason"));
         else if (sb_table_col(&t, b->mc.center) < 0 || !sb_parse_double(sb_table_get(&t, 0, b->mc.center), &v))
             snprintf(why, wlen, "no %s in its summary", b->mc.center), v = NAN;
@@ -249,67 +253,83 @@ static void print_pair(const bisect *b, const paired *p) {
            b->mc.unit, p->ci, 100 * p->diff / p->good, p->n);
 }
 
-int sb_bisect_main(const sb_bisect_cmd *cmd) {
-    bisect B = {.cmd = cmd}, *b = &B;
-    b->metric = cmd->metric ? cmd->metric : "gpu_ms";
+/* ---- the command, in steps; each returns an exit status, or -1 to go on ---- */
+
+/* The metric, the repository and the defaults. */
+static int setup(bisect *b, const sb_bisect_cmd *cmd) {
+    b->cmd = cmd;
+    b->metric = cmd->metric ? cmd->metric : sb_columns_role(SB_ROLE_TIME);
     if (!sb_columns_metric(b->metric, &b->mc))
-        return bad_input("unknown metric '%s' (a summary metric: gpu_ms, final_ms, err_rate, draw_calls...)", b->metric);
+        return bad_input("unknown metric '%s' (a summary metric: `shadowbench columns` lists them)", b->metric);
     b->timing = b->mc.unit && !strcmp(b->mc.unit, "ms");
-    int repeat = cmd->repeat > 0 ? cmd->repeat : 5;
-    double threshold = cmd->threshold_pct > 0 ? cmd->threshold_pct : 5;
+    b->repeat = cmd->repeat > 0 ? cmd->repeat : 5;
+    b->threshold = cmd->threshold_pct > 0 ? cmd->threshold_pct : 5;
     if (!git(".", b->repo, sizeof b->repo, "rev-parse", "--show-toplevel", NULL))
         return bad_input("not in a git repository (run it in the shadowbench checkout to bisect)");
+    return -1;
+}
 
-    /* the --history form: the newest regression of a series names the commits and the run */
-    char good_rev[256], bad_rev[256];
-    static char scene[1024], path[1024], spec[2200], size[64];   /* the --history form's run (b->args point here) */
-    if (cmd->history) {
-        if (!cmd->series || !cmd->metric) return bad_input("--history needs --series TEXT and --metric M");
-        if (cmd->good || cmd->bad) return bad_input("give GOOD BAD or --history, not both");
-        sb_err err;
-        sb_history *h = sb_history_open(cmd->history, false, &err);
-        if (!h) return bad_input("%s", err.msg);
-        sb_history_query q = {.metrics = {b->metric}, .nmetrics = 1};
-        sb_history_change *ch = NULL;
-        int n = sb_history_changes(h, &q, &ch, &err);
-        sb_history_close(h);
-        if (n < 0) return bad_input("%s", err.msg);
-        const sb_history_change *pick = NULL;
-        for (int i = 0; i < n; i++)
-            if (ch[i].regression && (strstr(ch[i].label, cmd->series) || strstr(ch[i].series, cmd->series)) &&
-                (!pick || ch[i].night_after > pick->night_after))
-                pick = &ch[i];
-        if (!pick) {
-            free(ch);
-            return bad_input("%s: no regression of %s in a series matching '%s' (`history regressions` lists them)",
-                             cmd->history, b->metric, cmd->series);
-        }
-        snprintf(good_rev, sizeof good_rev, "%s", pick->commit_before);
-        snprintf(bad_rev, sizeof bad_rev, "%s", pick->commit_after);
-        printf("regression: %s %s %+.1f %% on night %lld (%s..%s)\n", pick->label, b->metric, 100 * pick->rel,
-               pick->night_after, good_rev, bad_rev);
-        char tech[64], params[2048];
-        sb_history_series_field(pick->series, 2, scene, sizeof scene);
-        sb_history_series_field(pick->series, 3, path, sizeof path);
-        sb_history_series_field(pick->series, 4, size, sizeof size);
-        sb_history_series_field(pick->series, 5, tech, sizeof tech);
-        sb_history_series_field(pick->series, 6, params, sizeof params);
-        snprintf(spec, sizeof spec, "%s%s%.2048s", tech, params[0] ? ":" : "", params);
-        free(ch);
-        char *run[] = {"run", scene, path, spec, "--size", size};
-        for (size_t i = 0; i < SB_COUNT(run); i++) b->args[b->nargs++] = run[i];
-        /* "-dirty" builds are bisected from their commit */
-        for (char *r = good_rev; r; r = r == good_rev ? bad_rev : NULL) {
-            char *d = strstr(r, "-dirty");
-            if (d) *d = 0;
-        }
-        if (!strcmp(good_rev, bad_rev))
-            return bad_input("%s: the nights either side of the change ran the same commit (%s): nothing to bisect "
-                             "(did the machine change? `history list`)", cmd->history, good_rev);
-    } else {
+/* The newest regression of a series of the metric in the history. */
+static int pick_regression(bisect *b, sb_history_change *pick) {
+    const sb_bisect_cmd *cmd = b->cmd;
+    sb_err err;
+    sb_history *h = sb_history_open(cmd->history, false, &err);
+    if (!h) return bad_input("%s", err.msg);
+    sb_history_query q = {.metrics = {b->metric}, .nmetrics = 1};
+    sb_history_change *ch = NULL;
+    int n = sb_history_changes(h, &q, &ch, &err), found = -1;
+    sb_history_close(h);
+    if (n < 0) return bad_input("%s", err.msg);
+    for (int i = 0; i < n; i++)
+        if (ch[i].regression && (strstr(ch[i].label, cmd->series) || strstr(ch[i].key, cmd->series)) &&
+            (found < 0 || ch[i].night_after > ch[found].night_after))
+            found = i;
+    if (found >= 0) *pick = ch[found];
+    free(ch);
+    if (found < 0)
+        return bad_input("%s: no regression of %s in a series matching '%s' (`history regressions` lists them)",
+                         cmd->history, b->metric, cmd->series);
+    return -1;
+}
+
+/* The --history form: the regression names the commits and the run. */
+static int from_history(bisect *b) {
+    const sb_bisect_cmd *cmd = b->cmd;
+    if (!cmd->series || !cmd->metric) return bad_input("--history needs --series TEXT and --metric M");
+    if (cmd->good || cmd->bad) return bad_input("give GOOD BAD or --history, not both");
+    sb_history_change pick;
+    int rc = pick_regression(b, &pick);
+    if (rc >= 0) return rc;
+    snprintf(b->good_rev, sizeof b->good_rev, "%s", pick.commit_before);
+    snprintf(b->bad_rev, sizeof b->bad_rev, "%s", pick.commit_after);
+    printf("regression: %s %s %+.1f %% on night %lld (%s..%s)\n", pick.label, b->metric, 100 * pick.rel,
+           pick.night_after, b->good_rev, b->bad_rev);
+    const sb_series *se = &pick.series;
+    snprintf(b->scene, sizeof b->scene, "%s", se->scene);
+    snprintf(b->path, sizeof b->path, "%s", se->path);
+    snprintf(b->size, sizeof b->size, "%s", se->size);
+    snprintf(b->spec, sizeof b->spec, "%s%s%.2048s", se->technique, se->params[0] ? ":" : "", se->params);
+    char *run[] = {"run", b->scene, b->path, b->spec, "--size", b->size};
+    for (size_t i = 0; i < SB_COUNT(run); i++) b->args[b->nargs++] = run[i];
+    if (se->indirect) b->args[b->nargs++] = "--submit", b->args[b->nargs++] = "indirect";
+    /* "-dirty" builds are bisected from their commit */
+    for (char *r = b->good_rev; r; r = r == b->good_rev ? b->bad_rev : NULL) {
+        char *d = strstr(r, "-dirty");
+        if (d) *d = 0;
+    }
+    if (!strcmp(b->good_rev, b->bad_rev))
+        return bad_input("%s: the nights either side of the change ran the same commit (%s): nothing to bisect "
+                         "(did the machine change? `history list`)", cmd->history, b->good_rev);
+    return -1;
+}
+
+/* The run after `--`, checked as `shadowbench run` would take it before anything is built. */
+static int take_run(bisect *b) {
+    const sb_bisect_cmd *cmd = b->cmd;
+    if (!cmd->history) {
         if (!cmd->good || !cmd->bad) return bad_input("usage: shadowbench bisect GOOD BAD -- run SCENE PATH SPEC [options]");
-        snprintf(good_rev, sizeof good_rev, "%s", cmd->good);
-        snprintf(bad_rev, sizeof bad_rev, "%s", cmd->bad);
+        snprintf(b->good_rev, sizeof b->good_rev, "%s", cmd->good);
+        snprintf(b->bad_rev, sizeof b->bad_rev, "%s", cmd->bad);
         if (cmd->run_argc < 1 || strcmp(cmd->run_argv[0], "run"))
             return bad_input("after `--` give the run to measure: run SCENE PATH SPEC [run options]");
     }
@@ -321,17 +341,33 @@ int sb_bisect_main(const sb_bisect_cmd *cmd) {
             return bad_input("--repeat: give it to bisect (before `--`): its runs are paired and interleaved");
         b->args[b->nargs++] = cmd->run_argv[i];
     }
+    /* the run's options and specs, as this shadowbench reads them: a typo is found now, not after a build */
+    sb_cli_opts o;
+    sb_cli_defaults(&o, SB_CMD_RUN);
+    const char **pos = sb_xcalloc((size_t)b->nargs + 1, sizeof *pos);
+    int npos = 0;
+    sb_err err;
+    bool ok = sb_cli_parse(&o, SB_CMD_RUN, b->nargs, b->args, 1, pos, &npos, &err);
+    if (ok && npos < 3) ok = sb_fail(&err, "the run needs SCENE PATH SPEC");
+    sb_run_spec *runs = NULL;
+    int nruns = 0;
+    for (int i = 2; ok && i < npos; i++) ok = sb_spec_expand(pos[i], NULL, &runs, &nruns, &err);
+    if (ok && nruns != 1) ok = sb_fail(&err, "the run has %d runs: bisect measures one run of one technique", nruns);
+    free(runs);
+    free(pos);
+    return ok ? -1 : bad_input("the run after `--`: %s", err.msg);
+}
 
-    /* the commits: GOOD, then first-parent descendants up to BAD */
+/* The commits: GOOD, then first-parent descendants up to BAD, with their subjects. */
+static int list_commits(bisect *b, commit **out, int *count) {
     commit good = {0}, badc = {0};
-    char buf[1 << 16];
     char rev[300];
-    snprintf(rev, sizeof rev, "%s^{commit}", good_rev);
+    snprintf(rev, sizeof rev, "%s^{commit}", b->good_rev);
     if (!git(b->repo, good.sha, sizeof good.sha, "rev-parse", "--verify", "--quiet", rev, NULL))
-        return bad_input("GOOD '%s' is not a commit of %s", good_rev, b->repo);
-    snprintf(rev, sizeof rev, "%s^{commit}", bad_rev);
+        return bad_input("GOOD '%s' is not a commit of %s", b->good_rev, b->repo);
+    snprintf(rev, sizeof rev, "%s^{commit}", b->bad_rev);
     if (!git(b->repo, badc.sha, sizeof badc.sha, "rev-parse", "--verify", "--quiet", rev, NULL))
-        return bad_input("BAD '%s' is not a commit of %s", bad_rev, b->repo);
+        return bad_input("BAD '%s' is not a commit of %s", b->bad_rev, b->repo);
     if (!strcmp(good.sha, badc.sha)) {
         printf("GOOD and BAD are the same commit (%.12s): they do not differ\n", good.sha);
         return SB_EXIT_FAILED;
@@ -340,8 +376,11 @@ int sb_bisect_main(const sb_bisect_cmd *cmd) {
         return bad_input("GOOD %.12s is not an ancestor of BAD %.12s", good.sha, badc.sha);
     char range[120];
     snprintf(range, sizeof range, "%s..%s", good.sha, badc.sha);
-    if (!git(b->repo, buf, sizeof buf, "rev-list", "--first-parent", "--ancestry-path", "--reverse", range, NULL))
+    char *buf = sb_xmalloc(1 << 16);
+    if (!git(b->repo, buf, 1 << 16, "rev-list", "--first-parent", "--ancestry-path", "--reverse", range, NULL)) {
+        free(buf);
         return bad_input("cannot list the commits %s", range);
+    }
     int n = 0, cap = 16;
     commit *c = sb_xcalloc((size_t)cap, sizeof *c);
     c[n++] = good;
@@ -349,16 +388,21 @@ int sb_bisect_main(const sb_bisect_cmd *cmd) {
         if (n == cap) c = sb_xrealloc(c, sizeof *c * (size_t)(cap *= 2)), memset(c + n, 0, sizeof *c * (size_t)(cap - n));
         snprintf(c[n++].sha, sizeof c->sha, "%s", line);
     }
+    free(buf);
     if (strcmp(c[n - 1].sha, badc.sha)) {
         free(c);
         return bad_input("BAD %.12s is not on GOOD's first-parent line", badc.sha);
     }
     for (int i = 0; i < n; i++) git(b->repo, c[i].subject, sizeof c[i].subject, "log", "-1", "--format=%s", c[i].sha, NULL);
-    const int last = n - 1;   /* commits after GOOD */
+    *out = c;
+    *count = n;
+    return -1;
+}
 
-    /* the scratch worktree and the binaries, kept for the next bisect */
+/* The scratch worktree and the folders of binaries, logs and runs, kept for the next bisect. */
+static int make_workdir(bisect *b, const char *good_sha) {
     char common[1900];
-    if (cmd->workdir) snprintf(b->work, sizeof b->work, "%.2000s", cmd->workdir);
+    if (b->cmd->workdir) snprintf(b->work, sizeof b->work, "%.2000s", b->cmd->workdir);
     else {
         if (!git(b->repo, common, sizeof common, "rev-parse", "--git-common-dir", NULL)) return bad_input("no git directory");
         char abs[2000];
@@ -371,135 +415,134 @@ int sb_bisect_main(const sb_bisect_cmd *cmd) {
     const char *subs[] = {"bin", "logs", "runs"};
     for (int i = 0; i < 3; i++) {
         snprintf(sub, sizeof sub, "%.2040s/%s", b->work, subs[i]);
-        if (!sb_mkdir_p(sub, &err)) {
-            free(c);
-            return bad_input("%s", err.msg);
-        }
+        if (!sb_mkdir_p(sub, &err)) return bad_input("%s", err.msg);
     }
     snprintf(b->tree, sizeof b->tree, "%.2040s/tree", b->work);
     char dotgit[2200];
     snprintf(dotgit, sizeof dotgit, "%.2090s/.git", b->tree);
-    if (access(dotgit, F_OK) != 0) {
-        git(b->repo, NULL, 0, "worktree", "prune", NULL);
-        if (!git(b->repo, NULL, 0, "worktree", "add", "--detach", "--force", b->tree, good.sha, NULL)) {
-            free(c);
-            return bad_input("cannot make the scratch worktree %s", b->tree);
-        }
-    }
+    if (access(dotgit, F_OK) == 0) return -1;
+    git(b->repo, NULL, 0, "worktree", "prune", NULL);
+    if (!git(b->repo, NULL, 0, "worktree", "add", "--detach", "--force", b->tree, good_sha, NULL))
+        return bad_input("cannot make the scratch worktree %s", b->tree);
+    return -1;
+}
 
+/* GOOD and BAD built. */
+static int build_ends(bisect *b, commit *c, int last) {
     printf("bisect %s (%s) over %d commit(s) after GOOD %.12s up to BAD %.12s\n", b->metric,
-           b->timing ? "paired timing" : "exact", last, good.sha, badc.sha);
+           b->timing ? "paired timing" : "exact", last, c[0].sha, c[last].sha);
     printf("run:");
     for (int i = 0; i < b->nargs; i++) printf(" %s", b->args[i]);
     printf("\n");
     fflush(stdout);
     for (int e = 0; e <= last; e += last) {
-        if (!build(b, &c[e])) {
-            int rc = bad_input("%s %.12s (%s) does not build: log %s/logs/%.12s.build.log", e ? "BAD" : "GOOD", c[e].sha,
-                               c[e].subject, b->work, c[e].sha);
-            free(c);
-            return rc;
-        }
-        printf("%s %.12s  %s  %s\n", e ? "BAD " : "GOOD", c[e].sha, c[e].subject, built_note(&c[e]));
+        if (!build(b, &c[e]))
+            return bad_input("%s %.12s (%s) does not build: log %s/logs/%.12s.build.log", e ? "BAD" : "GOOD", c[e].sha,
+                             c[e].subject, b->work, c[e].sha);
+        printf("%s %.12s  %s  ", e ? "BAD " : "GOOD", c[e].sha, c[e].subject);
+        print_built(&c[e]);
+        printf("\n");
     }
+    return -1;
+}
 
-    /* GOOD against BAD */
-    char why[8600];
-    double good_v = NAN;
+/* Pairs of x and GOOD until the difference is told from `from` (the middle), up to four times --repeat. */
+static bool pairs_until(bisect *b, const commit *x, const commit *good, double from, paired *p, char *why, size_t wlen) {
     double dc[4 * 100], dg[4 * 100];
-    paired whole = {0};
+    int k = 0;
+    bool ok = pair_runs(b, x, good, b->repeat, dc, dg, &k, why, wlen);
+    if (ok) *p = summarize(dc, dg, k);
+    while (ok && !(fabs(p->diff - from) > p->ci) && k + b->repeat <= 4 * b->repeat) {
+        ok = pair_runs(b, x, good, b->repeat, dc, dg, &k, why, wlen);
+        if (ok) *p = summarize(dc, dg, k);
+    }
+    return ok;
+}
+
+/* BAD against GOOD: a timing must differ beyond the noise and the threshold, an exact figure at all. */
+static int measure_ends(bisect *b, commit *c, int last, paired *whole, double *good_v) {
+    char why[8600];
     if (b->timing) {
-        int k = 0;
-        if (!pair_runs(b, &c[last], &c[0], repeat, dc, dg, &k, why, sizeof why)) {
-            free(c);
+        if (!pairs_until(b, &c[last], &c[0], 0, whole, why, sizeof why))
             return bad_input("GOOD or BAD cannot be measured: %s", why);
-        }
-        whole = summarize(dc, dg, k);
-        /* a difference the pairs cannot yet tell from none: more pairs, up to four times --repeat */
-        while (!(fabs(whole.diff) > whole.ci) && k + repeat <= 4 * repeat) {
-            if (!pair_runs(b, &c[last], &c[0], repeat, dc, dg, &k, why, sizeof why)) {
-                free(c);
-                return bad_input("GOOD or BAD cannot be measured: %s", why);
-            }
-            whole = summarize(dc, dg, k);
-        }
         b->measured++;
         printf("BAD against GOOD: ");
-        print_pair(b, &whole);
+        print_pair(b, whole);
         printf("\n");
-        if (!(fabs(whole.diff) > whole.ci && 100 * fabs(whole.diff) / whole.good >= threshold)) {
+        if (!(fabs(whole->diff) > whole->ci && 100 * fabs(whole->diff) / whole->good >= b->threshold)) {
             printf("GOOD and BAD do not differ beyond the noise: %+.4g %s ± %.2g (%+.1f %%; --threshold %g %%)\n",
-                   whole.diff, b->mc.unit, whole.ci, 100 * whole.diff / whole.good, threshold);
-            free(c);
+                   whole->diff, b->mc.unit, whole->ci, 100 * whole->diff / whole->good, b->threshold);
             return SB_EXIT_FAILED;
         }
-    } else {
-        good_v = measure(b, &c[0], why, sizeof why);
-        double bad_v = isnan(good_v) ? NAN : measure(b, &c[last], why, sizeof why);
-        if (isnan(good_v) || isnan(bad_v)) {
-            free(c);
-            return bad_input("GOOD or BAD cannot be measured: %s", why);
-        }
-        b->good_renders++, b->cand_renders++, b->measured++;
-        printf("BAD against GOOD: %s %.9g against %.9g\n", b->metric, bad_v, good_v);
-        if (good_v == bad_v) {
-            printf("GOOD and BAD do not differ: %s is %.9g on both\n", b->metric, good_v);
-            free(c);
-            return SB_EXIT_FAILED;
-        }
+        return -1;
     }
+    *good_v = measure(b, &c[0], why, sizeof why);
+    double bad_v = isnan(*good_v) ? NAN : measure(b, &c[last], why, sizeof why);
+    if (isnan(*good_v) || isnan(bad_v)) return bad_input("GOOD or BAD cannot be measured: %s", why);
+    b->good_renders++, b->cand_renders++, b->measured++;
+    printf("BAD against GOOD: %s %.9g against %.9g\n", b->metric, bad_v, *good_v);
+    if (*good_v == bad_v) {
+        printf("GOOD and BAD do not differ: %s is %.9g on both\n", b->metric, *good_v);
+        return SB_EXIT_FAILED;
+    }
+    return -1;
+}
 
-    /* the bisection proper: lo is good, hi is bad */
-    int lo = 0, hi = last;
+/* One candidate judged: 1 bad, 0 good, -1 skipped (cannot be built or measured). */
+static int judge(bisect *b, commit *x, const commit *good, const paired *whole, double good_v) {
+    char why[8600];
+    if (!build(b, x)) {
+        printf("  skipped: does not build (log %s/logs/%.12s.build.log)\n", b->work, x->sha);
+        return -1;
+    }
+    printf("  ");
+    print_built(x);
+    printf(": ");
+    bool is_bad;
+    if (b->timing) {
+        paired p;
+        if (!pairs_until(b, x, good, whole->diff / 2, &p, why, sizeof why)) {
+            printf("skipped: cannot be measured (%s)\n", why);
+            return -1;
+        }
+        print_pair(b, &p);
+        is_bad = (p.diff - whole->diff / 2) * (whole->diff > 0 ? 1 : -1) > 0;
+    } else {
+        double v = measure(b, x, why, sizeof why);
+        if (isnan(v)) {
+            printf("skipped: cannot be measured (%s)\n", why);
+            return -1;
+        }
+        b->cand_renders++;
+        printf("%s %.9g against GOOD %.9g", b->metric, v, good_v);
+        is_bad = v != good_v;
+    }
+    b->measured++;
+    printf("  -> %s\n", is_bad ? "bad" : "good");
+    fflush(stdout);
+    return is_bad;
+}
+
+/* The bisection proper: lo is good, hi is bad; the nearest untried commit to the middle next. */
+static void narrow(bisect *b, commit *c, int last, const paired *whole, double good_v, int *lo, int *hi) {
+    *lo = 0, *hi = last;
     for (;;) {
-        int pick = -1, mid = (lo + hi) / 2;
-        for (int i = lo + 1; i < hi; i++)
+        int pick = -1, mid = (*lo + *hi) / 2;
+        for (int i = *lo + 1; i < *hi; i++)
             if (!c[i].skipped && (pick < 0 || abs(i - mid) < abs(pick - mid))) pick = i;
-        if (pick < 0) break;
+        if (pick < 0) return;
         commit *x = &c[pick];
         b->steps++;
-        printf("step %d  %.12s  (%d of %d, %d left)  %s\n", b->steps, x->sha, pick, last, hi - lo - 1, x->subject);
+        printf("step %d  %.12s  (%d of %d, %d left)  %s\n", b->steps, x->sha, pick, last, *hi - *lo - 1, x->subject);
         fflush(stdout);
-        if (!build(b, x)) {
-            x->skipped = true;
-            printf("  skipped: does not build (log %s/logs/%.12s.build.log)\n", b->work, x->sha);
-            continue;
-        }
-        printf("  %s: ", built_note(x));
-        bool is_bad;
-        if (b->timing) {
-            int k = 0;
-            bool ok = pair_runs(b, x, &c[0], repeat, dc, dg, &k, why, sizeof why);
-            paired p = ok ? summarize(dc, dg, k) : (paired){0};
-            /* too near the middle of GOOD and BAD to tell: more pairs, up to four times --repeat */
-            while (ok && fabs(p.diff - whole.diff / 2) < p.ci && k + repeat <= 4 * repeat) {
-                ok = pair_runs(b, x, &c[0], repeat, dc, dg, &k, why, sizeof why);
-                if (ok) p = summarize(dc, dg, k);
-            }
-            if (!ok) {
-                x->skipped = true;
-                printf("skipped: cannot be measured (%s)\n", why);
-                continue;
-            }
-            print_pair(b, &p);
-            is_bad = (p.diff - whole.diff / 2) * (whole.diff > 0 ? 1 : -1) > 0;
-        } else {
-            double v = measure(b, x, why, sizeof why);
-            if (isnan(v)) {
-                x->skipped = true;
-                printf("skipped: cannot be measured (%s)\n", why);
-                continue;
-            }
-            b->cand_renders++;
-            printf("%s %.9g against GOOD %.9g", b->metric, v, good_v);
-            is_bad = v != good_v;
-        }
-        b->measured++;
-        printf("  -> %s\n", is_bad ? "bad" : "good");
-        fflush(stdout);
-        if (is_bad) hi = pick;
-        else lo = pick;
+        int v = judge(b, x, &c[0], whole, good_v);
+        if (v < 0) x->skipped = true;
+        else if (v) *hi = pick;
+        else *lo = pick;
     }
+}
+
+static void print_result(const bisect *b, const commit *c, int last, int lo, int hi) {
     for (int i = 1; i < last; i++)
         if (c[i].skipped) printf("skipped %.12s %s\n", c[i].sha, c[i].subject);
     if (hi - lo > 1) {
@@ -512,8 +555,29 @@ int sb_bisect_main(const sb_bisect_cmd *cmd) {
     while ((1 << (bound - 2)) < last) bound++;
     printf("measured: %d commit(s) against GOOD (BAD and %d candidate(s); ceil(log2 %d) + 2 = %d); runs: %d of theirs, "
            "%d of GOOD's\n", b->measured, b->measured - 1, last, bound, b->cand_renders, b->good_renders);
+}
+
+int sb_bisect_main(const sb_bisect_cmd *cmd) {
+    bisect *b = sb_xcalloc(1, sizeof *b);
+    commit *c = NULL;
+    int n = 0, rc = setup(b, cmd);
+    if (rc < 0 && cmd->history) rc = from_history(b);
+    if (rc < 0) rc = take_run(b);
+    if (rc < 0) rc = list_commits(b, &c, &n);
+    if (rc < 0) rc = make_workdir(b, c[0].sha);
+    if (rc < 0) rc = build_ends(b, c, n - 1);
+    paired whole = {0};
+    double good_v = NAN;
+    if (rc < 0) rc = measure_ends(b, c, n - 1, &whole, &good_v);
+    if (rc < 0) {
+        int lo, hi;
+        narrow(b, c, n - 1, &whole, good_v, &lo, &hi);
+        print_result(b, c, n - 1, lo, hi);
+        rc = SB_EXIT_OK;
+    }
     free(c);
-    return SB_EXIT_OK;
+    free(b);
+    return rc;
 }
 
 bool sb_git_is_ancestor(const char *ancestor, const char *rev) {

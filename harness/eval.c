@@ -65,15 +65,6 @@ bool sb_eval_frame(sb_session *s, sb_instance *in, int pf, int n, int replay, in
     return sb_gl_check("evaluation pass", err);
 }
 
-/* The largest relative change of a split distance between two frames (NaN: no splits). */
-static double split_jitter(const sb_counters *a, const sb_counters *b) {
-    if (a->split_count <= 0 || a->split_count != b->split_count) return NAN;
-    double j = 0;
-    for (int k = 0; k < a->split_count; k++)
-        if (a->splits[k] > 0) j = fmax(j, fabs(b->splits[k] - a->splits[k]) / a->splits[k]);
-    return j;
-}
-
 bool sb_eval_flicker(sb_session *s, sb_instance *in, int pf, int n, int *seq, sb_eval_buf *b, const sb_frame *f,
                      sb_error_metrics *m, sb_err *err) {
     m->flicker_rate = m->flicker_vis = m->ref_flicker = m->split_jitter = NAN;
@@ -113,82 +104,14 @@ bool sb_eval_flicker(sb_session *s, sb_instance *in, int pf, int n, int *seq, sb
     sb_zpass(&tw);
     sb_gpu_readback(&s->gpu, b->twin_depth, NULL, NULL);
     if (!sb_gl_check("the flicker twin", err)) return false;
-    m->split_jitter = split_jitter(&f->counters, &tw.counters);
-    if (!looked) return true;   /* the final pass split by the stencil: its shadows are not a lookup */
-
-    /* the reference at the twin's instant: the same at every point under an unchanged light (the scene
-       does not move); a light that moved is cast again */
-    bool light_moved = memcmp(f->shade_light, tw.shade_light, sizeof f->shade_light) != 0;
-    unsigned char *ref2 = NULL;
-    if (light_moved) {
-        const sb_reference *ref = sb_session_reference(s, err);
-        if (!ref) return false;
-        sb_eval_view view = {b->w, b->h, b->pos, b->aux, look.eye, NULL, tw.shade_light};   /* no geometry check */
-        sb_ref_point *pts = sb_xmalloc(sizeof *pts * np);
-        int *pix = sb_xmalloc(sizeof(int) * np);
-        unsigned char *hit = sb_xmalloc(np);
-        int k = sb_ref_points(ref, &view, pts, pix);
-        sb_reference_visibility_view(ref, tw.shade_light, pts, pix, k, b->w, b->h, hit, s->opts.threads);
-        ref2 = sb_xmalloc(np);
-        memset(ref2, 128, np);
-        for (int i = 0; i < k; i++) ref2[pix[i]] = hit[i];
-        free(pts);
-        free(pix);
-        free(hit);
-    }
-    sb_m4 inv_proj;
-    if (!sb_m4_invert(tw.proj, &inv_proj)) {
-        free(ref2);
-        return true;
-    }
-    if (b->flicker) memset(b->flicker, 0, 3 * np);
-    long seen = 0, steady = 0, flipped = 0, ref_changed = 0;
-    double dvis = 0;
-    for (size_t i = 0; i < np; i++) {
-        if (b->ref[i] == 128) continue;   /* not an evaluated point */
-        const float *p = b->pos + 4 * i;
-        if (memcmp(p, b->twin_pos + 4 * i, 3 * sizeof(float))) continue;   /* the lookup drew another surface here */
-        /* into the twin's view: inside it, and not behind what its depth holds there (1 % of the distance) */
-        const double *vp = tw.view_proj.m;   /* column-major */
-        double c[4];
-        for (int r = 0; r < 4; r++) c[r] = vp[r] * p[0] + vp[4 + r] * p[1] + vp[8 + r] * p[2] + vp[12 + r];
-        if (c[3] <= 0) continue;
-        double x = c[0] / c[3], y = c[1] / c[3];
-        if (fabs(x) >= 1 || fabs(y) >= 1) continue;
-        int px = (int)((x * 0.5 + 0.5) * b->w), py = (int)((y * 0.5 + 0.5) * b->h);
-        float d = b->twin_depth[(size_t)py * b->w + px];
-        if (d >= 1.0f) continue;
-        sb_v3 vz = sb_m4_point(inv_proj, sb_v3_make(0, 0, 2.0 * d - 1.0));   /* the depth's view-space point */
-        if (c[3] > -vz.z * 1.01) continue;
-        seen++;
-        bool ref_flip = ref2 && ref2[i] != 128 && (ref2[i] < 128) != (b->ref[i] < 128);
-        if (ref_flip) {
-            ref_changed++;
-            continue;
-        }
-        steady++;
-        bool a = b->vis[i] < 128, z = b->twin_vis[i] < 128;
-        dvis += fabs((double)b->vis[i] - b->twin_vis[i]) / 255.0;
-        if (a != z) {
-            flipped++;
-            if (b->flicker) {   /* lit -> shadowed red, shadowed -> lit blue */
-                unsigned char *o = b->flicker + 3 * i;
-                if (z) o[0] = 255;
-                else o[2] = 255, o[1] = 80;
-            }
-        } else if (b->flicker) {
-            unsigned char *o = b->flicker + 3 * i;
-            o[0] = o[1] = o[2] = a ? 60 : 160;
-        }
-    }
-    free(ref2);
-    m->flicker_points = seen;
-    if (seen) {
-        m->ref_flicker = (double)ref_changed / seen;
-        m->flicker_rate = steady ? (double)flipped / steady : NAN;
-        m->flicker_vis = steady ? dvis / steady : NAN;
-    }
-    b->flicker_drawn = b->flicker != NULL;
+    const sb_reference *ref = sb_session_reference(s, err);
+    if (!ref) return false;
+    sb_flicker_view v = {.w = b->w, .h = b->h, .vis = b->vis, .ref = b->ref, .pos = b->pos, .aux = b->aux,
+                         .eye = look.eye, .light = f->shade_light, .counters = &f->counters,
+                         .twin_vis = b->twin_vis, .twin_pos = b->twin_pos, .twin_depth = b->twin_depth,
+                         .twin_view_proj = tw.view_proj, .twin_proj = tw.proj, .twin_light = tw.shade_light,
+                         .twin_counters = &tw.counters, .looked_up = looked, .image = b->flicker};
+    b->flicker_drawn = sb_evaluate_flicker(ref, &v, m, s->opts.threads) && b->flicker;
     return true;
 }
 

@@ -3,6 +3,7 @@
  * evaluate through sb_eval_frame, so they measure the same thing. */
 #pragma once
 #include "error.h"
+#include "flicker.h"
 #include "session.h"
 
 /* The read-back targets of an evaluated frame (w * h pixels, rows bottom-up). */

@@ -432,7 +432,7 @@ static int cmd_history(const cli *c) {
         else if (night == 0)
             rc = bad("history annotate: '%s' is no night of the history, and no night ran that commit or one after "
                      "it (`history list` names the nights and their commits)", what);
-        else if (!sb_history_annotate(h, night, what, c->o.series ? c->o.series : "", c->pos[2], c->o.accept, &err))
+        else if (!sb_history_store_annotation(h, night, what, c->o.series ? c->o.series : "", c->pos[2], c->o.accept, &err))
             rc = bad_file(&err);
         else
             sb_log("night %lld annotated%s%s%s", night, c->o.series ? " for series " : "",

@@ -37,34 +37,21 @@ static double gpu_ms(const sb_stage_times *t) {
 
 /* ---- per-frame columns ---- */
 
-enum { C_DRAWS, C_SHADOW_DRAWS, C_API, C_SHADOW_API, C_TRIS, C_SHADOW_TRIS, C_RENDERED, C_SKIPPED, C_CACHED, C_WARP };
-enum { P_NEEDED, P_RENDERED, P_CACHED, P_OVERFLOW };
-
 static sb_cell f_frame(const sb_frame_row *r, int a) { (void)a; return integer(r->rec->frame); }
 static sb_cell f_repeat(const sb_frame_row *r, int a) { (void)a; return integer(r->rec->repeat); }
 static sb_cell f_progress(const sb_frame_row *r, int a) { (void)a; return number(r->rec->progress); }
 
-static sb_cell f_counter(const sb_frame_row *r, int a) {
-    const sb_counters *k = &r->rec->counters;
-    switch (a) {
-    case C_DRAWS: return integer(k->draw_calls);
-    case C_SHADOW_DRAWS: return integer(k->shadow_draw_calls);
-    case C_API: return integer(k->api_calls);
-    case C_SHADOW_API: return integer(k->shadow_api_calls);
-    case C_TRIS: return integer((long long)k->triangles);
-    case C_SHADOW_TRIS: return integer((long long)k->shadow_triangles);
-    }
-    if (!has(r->stages, SB_STAGE_CASCADE)) return empty(); /* no shadow maps: no cascades */
-    return integer(a == C_RENDERED ? k->cascades_rendered : a == C_SKIPPED ? k->cascades_skipped
-                   : a == C_CACHED ? k->cascades_cached : k->warp_fallbacks);
+/* A counter of the frame: arg is its offset in sb_counters. */
+#define COUNTER(r, off, T) (*(const T *)((const char *)&(r)->rec->counters + (off)))
+static sb_cell f_u32(const sb_frame_row *r, int off) { return integer(COUNTER(r, off, uint32_t)); }
+static sb_cell f_u64(const sb_frame_row *r, int off) { return integer((long long)COUNTER(r, off, uint64_t)); }
+/* a shadow-map counter: empty for a technique without maps (no cascade stage) */
+static sb_cell f_maps(const sb_frame_row *r, int off) {
+    return has(r->stages, SB_STAGE_CASCADE) ? integer(COUNTER(r, off, int)) : empty();
 }
-
-/* a virtual shadow map's page counter (empty for every other technique) */
-static sb_cell f_pages(const sb_frame_row *r, int a) {
-    const sb_counters *k = &r->rec->counters;
-    if (!k->paged) return empty();
-    return integer(a == P_NEEDED ? k->pages_needed : a == P_RENDERED ? k->pages_rendered
-                   : a == P_CACHED ? k->pages_cached : k->pool_overflow);
+/* a virtual shadow map's page counter: empty for every other technique */
+static sb_cell f_pages(const sb_frame_row *r, int off) {
+    return r->rec->counters.paged ? integer(COUNTER(r, off, int)) : empty();
 }
 
 static sb_cell f_stage_ms(const sb_frame_row *r, int s) {
@@ -104,6 +91,8 @@ static sb_cell f_error(const sb_frame_row *r, int off) {
 #define ERROR(n, field, u, st, fl, d) METRIC(n, f_error, offsetof(sb_error_metrics, field), u, st, fl, d)
 #define SPLIT(k) COL("split_" #k, f_split, k - 1, "view-space far distance of cascade " #k " this frame")
 #define ALL_USES (SB_USE_COMPARE | SB_USE_HISTORY | SB_USE_REPORT)
+/* a counter of sb_counters: its field, and the getter that reads its type (f_u32, f_u64, f_maps, f_pages) */
+#define COUNT(n, g, field, st, fl, d) METRIC(n, g, offsetof(sb_counters, field), "count", st, fl, d)
 #define ERR_STATS (SB_STAT_MEAN | SB_STAT_P95)
 
 static const sb_frame_col frame_cols[] = {
@@ -111,42 +100,41 @@ static const sb_frame_col frame_cols[] = {
     COL("repeat", f_repeat, 0, "repetition of the path (0-based)"),
     COL("progress", f_progress, 0, "position along the path in [0, 1]"),
     COL("start_s", f_start_s, 0, "when the frame began, seconds since the process started (the order of runs and repeats)"),
-    METRIC("draw_calls", f_counter, C_DRAWS, "count", SB_STAT_MEAN, SB_USE_HISTORY | SB_USE_REPORT,
-           "draws submitted in the frame (a mesh range with its instances; each its own GL call with --submit direct)"),
-    METRIC("shadow_draw_calls", f_counter, C_SHADOW_DRAWS, "count", SB_STAT_MEAN, ALL_USES,
-           "draws of the shadow stages (cascade, volumes)"),
-    METRIC("api_calls", f_counter, C_API, "count", SB_STAT_MEAN, 0,
-           "GL draw calls issued in the frame: draw_calls with --submit direct, one per pass, layer and state with "
-           "indirect"),
-    METRIC("shadow_api_calls", f_counter, C_SHADOW_API, "count", SB_STAT_MEAN, 0,
-           "GL draw calls of the shadow stages"),
-    COL("triangles", f_counter, C_TRIS, "triangles submitted (instances counted)"),
-    METRIC("shadow_triangles", f_counter, C_SHADOW_TRIS, "count", SB_STAT_MEAN, 0,
-           "triangles submitted in the shadow stages"),
-    METRIC("cascades_rendered", f_counter, C_RENDERED, "count", SB_STAT_MEAN, 0,
-           "shadow maps rendered (empty: no shadow maps)"),
-    METRIC("cascades_skipped", f_counter, C_SKIPPED, "count", SB_STAT_MEAN, 0,
-           "shadow maps skipped for want of receivers"),
-    METRIC("cascades_cached", f_counter, C_CACHED, "count", SB_STAT_MEAN, 0,
-           "shadow maps kept from an earlier frame, not rendered again (cache=on: the same snapped window and light)"),
-    METRIC("pages_needed", f_pages, P_NEEDED, "count", SB_STAT_MEAN, 0,
-           "virtual: pages the frame's visible pixels need (empty: no virtual map)"),
-    METRIC("pages_rendered", f_pages, P_RENDERED, "count", SB_STAT_MEAN, 0,
-           "virtual: needed pages drawn this frame (not in the pool, or cache=off)"),
-    METRIC("pages_cached", f_pages, P_CACHED, "count", SB_STAT_MEAN, SB_LOWER_WORSE,
-           "virtual: needed pages kept from an earlier frame (the same level, place and light)"),
-    METRIC("pool_overflow", f_pages, P_OVERFLOW, "count", SB_STAT_MEAN | SB_STAT_MAX, 0,
-           "virtual: needed pages the pool had no slot for (their pixels use another level's page)"),
-    METRIC("warp_fallbacks", f_counter, C_WARP, "count", SB_STAT_MEAN, 0,
-           "warped maps that fell back to the uniform fit"),
+    {.name = "draw_calls", .get = f_u32, .arg = offsetof(sb_counters, draw_calls), .unit = "count",
+     .stats = SB_STAT_MEAN, .flags = SB_USE_HISTORY | SB_USE_REPORT | SB_USE_NIGHT, .chart = "Draw calls",
+     .doc = "draws submitted in the frame (a mesh range with its instances; each its own GL call with --submit direct)"},
+    {.name = "shadow_draw_calls", .get = f_u32, .arg = offsetof(sb_counters, shadow_draw_calls), .unit = "count",
+     .stats = SB_STAT_MEAN, .flags = ALL_USES | SB_USE_NIGHT, .chart = "Draw calls",
+     .doc = "draws of the shadow stages (cascade, volumes)"},
+    COUNT("api_calls", f_u32, api_calls, SB_STAT_MEAN, 0,
+          "GL draw calls issued in the frame: draw_calls with --submit direct, one per pass, layer and state with "
+          "indirect"),
+    COUNT("shadow_api_calls", f_u32, shadow_api_calls, SB_STAT_MEAN, 0, "GL draw calls of the shadow stages"),
+    {.name = "triangles", .get = f_u64, .arg = offsetof(sb_counters, triangles), .chart = "Triangles",
+     .doc = "triangles submitted (instances counted)"},
+    {.name = "shadow_triangles", .get = f_u64, .arg = offsetof(sb_counters, shadow_triangles), .unit = "count",
+     .stats = SB_STAT_MEAN, .chart = "Triangles", .doc = "triangles submitted in the shadow stages"},
+    COUNT("cascades_rendered", f_maps, cascades_rendered, SB_STAT_MEAN, 0, "shadow maps rendered (empty: no shadow maps)"),
+    COUNT("cascades_skipped", f_maps, cascades_skipped, SB_STAT_MEAN, 0, "shadow maps skipped for want of receivers"),
+    COUNT("cascades_cached", f_maps, cascades_cached, SB_STAT_MEAN, 0,
+          "shadow maps kept from an earlier frame, not rendered again (cache=on: the same snapped window and light)"),
+    COUNT("pages_needed", f_pages, pages_needed, SB_STAT_MEAN, 0,
+          "virtual: pages the frame's visible pixels need (empty: no virtual map)"),
+    COUNT("pages_rendered", f_pages, pages_rendered, SB_STAT_MEAN, 0,
+          "virtual: needed pages drawn this frame (not in the pool, or cache=off)"),
+    COUNT("pages_cached", f_pages, pages_cached, SB_STAT_MEAN, SB_LOWER_WORSE,
+          "virtual: needed pages kept from an earlier frame (the same level, place and light)"),
+    COUNT("pool_overflow", f_pages, pool_overflow, SB_STAT_MEAN | SB_STAT_MAX, 0,
+          "virtual: needed pages the pool had no slot for (their pixels use another level's page)"),
+    COUNT("warp_fallbacks", f_maps, warp_fallbacks, SB_STAT_MEAN, 0, "warped maps that fell back to the uniform fit"),
     STAGE_MS(SB_STAGE_ZPASS, 0, "camera depth pre-pass"),
     STAGE_MS(SB_STAGE_MINMAX, 0, "depth reduction"),
-    STAGE_MS(SB_STAGE_CASCADE, ALL_USES, "all shadow-map rendering"),
-    STAGE_MS(SB_STAGE_FINAL, ALL_USES, "camera pass with the shadow lookup"),
+    STAGE_MS(SB_STAGE_CASCADE, ALL_USES | SB_USE_NIGHT, "all shadow-map rendering"),
+    STAGE_MS(SB_STAGE_FINAL, ALL_USES | SB_USE_NIGHT, "camera pass with the shadow lookup"),
     STAGE_MS(SB_STAGE_VOLUMES, 0, "stencil shadow volumes (and planar casters)"),
     STAGE_MS(SB_STAGE_RAYS, 0, "CPU ray casting (raycast)"),
-    METRIC("gpu_ms", f_gpu_ms, 0, "ms", SB_STATS_TIMING | SB_STAT_MIN, ALL_USES | SB_USE_PAIR,
-           "sum of the stage times"),
+    {.name = "gpu_ms", .get = f_gpu_ms, .unit = "ms", .stats = SB_STATS_TIMING | SB_STAT_MIN, .role = SB_ROLE_TIME,
+     .flags = ALL_USES | SB_USE_PAIR | SB_USE_NIGHT, .doc = "sum of the stage times"},
     METRIC("cpu_ms", f_cpu_ms, 0, "ms", SB_STATS_TIMING, 0, "frame wall time not spent waiting for the GPU"),
     METRIC("wall_ms", f_wall_ms, 0, "ms", SB_STATS_TIMING, 0, "frame wall time"),
     METRIC("cpu_wait_ms", f_cpu_wait_ms, 0, "ms", SB_STAT_MEAN, 0,
@@ -161,8 +149,9 @@ static const sb_frame_col frame_cols[] = {
     COL("volumes_draw_calls", f_stage_draws, SB_STAGE_VOLUMES, "draw calls of the volumes stage"),
     SPLIT(1), SPLIT(2), SPLIT(3), SPLIT(4), SPLIT(5), SPLIT(6), SPLIT(7), SPLIT(8),
     COL("eval_pixels", f_eval_pixels, 0, "pixels evaluated against the reference (lit-facing, not sky)"),
-    ERROR("err_rate", err_rate, "share", SB_STAT_MEAN | SB_STAT_P95 | SB_STAT_CI95, ALL_USES | SB_USE_PAIR,
-          "share of evaluated pixels whose shadow state differs from the reference"),
+    {.name = "err_rate", .get = f_error, .arg = offsetof(sb_error_metrics, err_rate), .unit = "share",
+     .stats = SB_STAT_MEAN | SB_STAT_P95 | SB_STAT_CI95, .flags = ALL_USES | SB_USE_PAIR | SB_USE_NIGHT,
+     .role = SB_ROLE_ERROR, .doc = "share of evaluated pixels whose shadow state differs from the reference"},
     ERROR("err_false_shadow", false_shadow, "share", ERR_STATS, 0, "share shadowed by the technique, lit in the reference"),
     ERROR("err_false_lit", false_lit, "share", ERR_STATS, 0, "share lit by the technique, shadowed in the reference"),
     ERROR("vis_mae", vis_mae, "visibility", ERR_STATS, 0, "mean absolute visibility difference"),
@@ -174,9 +163,10 @@ static const sb_frame_col frame_cols[] = {
     ERROR("res_err_p95", res_err_p95, "octaves", ERR_STATS, 0, "95th percentile of the resolution error"),
     ERROR("texel_px_p95", texel_px_p95, "texels/px", ERR_STATS, SB_LOWER_WORSE,
           "95th percentile of shadow texels per pixel"),
-    ERROR("flicker_rate", flicker_rate, "share", ERR_STATS, ALL_USES | SB_USE_PAIR,
-          "share of the evaluated points the twin (--flicker-dt later) also sees whose shadow state flips in its maps "
-          "while the reference does not"),
+    {.name = "flicker_rate", .get = f_error, .arg = offsetof(sb_error_metrics, flicker_rate), .unit = "share",
+     .stats = ERR_STATS, .flags = ALL_USES | SB_USE_PAIR | SB_USE_NIGHT, .role = SB_ROLE_FLICKER,
+     .doc = "share of the evaluated points the twin (--flicker-dt later) also sees whose shadow state flips in its "
+            "maps while the reference does not"},
     ERROR("flicker_vis", flicker_vis, "visibility", ERR_STATS, 0,
           "mean |visibility change| at those points between the frame's maps and the twin's"),
     ERROR("ref_flicker", ref_flicker, "share", ERR_STATS, 0,
@@ -207,32 +197,22 @@ const sb_frame_col *sb_frame_cols(int *count) {
 
 /* ---- per-run columns ---- */
 
-enum {
-    S_RUN_ID, S_SCENE, S_PATH, S_TECHNIQUE, S_PARAMS, S_BACKEND, S_RENDERER, S_TIMING, S_STATUS, S_REASON, S_CLOCKS,
-    S_STABLE, S_ORDER, S_SUBMIT
-};
-enum { I_RUN_INDEX, I_FRAMES, I_WARMUP, I_WIDTH, I_HEIGHT, I_SCENE_TRIS };
-
-static sb_cell r_text(const sb_run_row *r, int a) {
-    const sb_run_info *in = r->info;
-    const char *v[] = {in->run_id, in->scene, in->path, in->technique, in->params, in->backend, in->renderer,
-                       in->timing, sb_status_names[in->status], in->reason, in->clocks, in->stable, in->order,
-                       in->submit ? in->submit : ""};
-    return text(v[a]);
+/* A field of the run's sb_run_info: arg is its offset. */
+#define FIELD(r, off, T) (*(const T *)((const char *)(r)->info + (off)))
+static sb_cell r_str(const sb_run_row *r, int off) {   /* a const char * (NULL: empty text) */
+    const char *v = FIELD(r, off, const char *);
+    return text(v ? v : "");
 }
-static sb_cell r_int(const sb_run_row *r, int a) {
-    const sb_run_info *in = r->info;
-    const long long v[] = {in->run_index, in->frames, in->warmup, in->width, in->height,
-                           (long long)in->scene_triangles};
-    return integer(v[a]);
-}
+static sb_cell r_chars(const sb_run_row *r, int off) { return text((const char *)r->info + off); }   /* a char array */
+static sb_cell r_int(const sb_run_row *r, int off) { return integer(FIELD(r, off, int)); }
+static sb_cell r_u64(const sb_run_row *r, int off) { return integer((long long)FIELD(r, off, uint64_t)); }
+static sb_cell r_num(const sb_run_row *r, int off) { return number(FIELD(r, off, double)); }
+/* a figure of the measured frames: empty for a run that measured none */
+static sb_cell r_measured(const sb_run_row *r, int off) { return number(r->n ? FIELD(r, off, double) : NAN); }
+static sb_cell r_status(const sb_run_row *r, int a) { (void)a; return text(sb_status_names[r->info->status]); }
 static sb_cell r_seed(const sb_run_row *r, int a) {
     (void)a;
     return r->info->seed ? integer((long long)r->info->seed) : empty();
-}
-static sb_cell r_unstable(const sb_run_row *r, int a) { (void)a; return text(r->info->unstable_reason); }
-static sb_cell r_calib(const sb_run_row *r, int a) {
-    return number(r->n ? (a ? r->info->calib_ms_after : r->info->calib_ms_before) : NAN);
 }
 static sb_cell r_throttle(const sb_run_row *r, int a) {
     (void)a;
@@ -242,9 +222,6 @@ static sb_cell r_throttle(const sb_run_row *r, int a) {
     sb_throttle_names(bits, names, sizeof names);
     return text(names);
 }
-static sb_cell r_warnings(const sb_run_row *r, int a) { (void)a; return text(r->info->warnings); }
-static sb_cell r_auto(const sb_run_row *r, int a) { (void)a; return text(r->info->auto_params); }
-static sb_cell r_light(const sb_run_row *r, int a) { (void)a; return text(r->info->light); }
 static sb_cell r_repeats(const sb_run_row *r, int a) { (void)a; return integer(r->n ? r->info->repeats : 0); }
 static sb_cell r_target_ci(const sb_run_row *r, int a) {
     (void)a;
@@ -254,10 +231,6 @@ static sb_cell r_gpu_ci(const sb_run_row *r, int a) {
     (void)a;
     return number(r->n ? sb_columns_gpu_ci_pct(r->times, r->n, r->info->frames) : NAN);
 }
-static sb_cell r_load_ms(const sb_run_row *r, int a) { (void)a; return number(r->info->load_ms); }
-static sb_cell r_shadow_mb(const sb_run_row *r, int a) { (void)a; return number(r->info->shadow_mb); }
-static sb_cell r_wall_s(const sb_run_row *r, int a) { (void)a; return number(r->info->run_wall_s); }
-static sb_cell r_eval_s(const sb_run_row *r, int a) { (void)a; return number(r->info->eval_s); }
 static sb_cell r_harness_share(const sb_run_row *r, int a) {
     (void)a;
     const sb_run_info *in = r->info;
@@ -315,49 +288,53 @@ static sb_cell r_ref(const sb_run_row *r, int a) {
 
 #define RUN(n, g, a, d) {.name = n, .get = g, .arg = a, .doc = d}
 #define RUN_METRIC(n, g, a, u, d) {.name = n, .get = g, .arg = a, .unit = u, .doc = d}
+/* a field of sb_run_info, read by the getter of its type (r_str, r_chars, r_int, r_u64, r_num, r_measured) */
+#define INFO(n, g, field, d) RUN(n, g, offsetof(sb_run_info, field), d)
+#define INFO_METRIC(n, g, field, u, d) RUN_METRIC(n, g, offsetof(sb_run_info, field), u, d)
 /* Where the series stand: one for each frame column with stats, in frame-table order. */
 #define SB_RUN_SERIES {.name = NULL}
 
 static const sb_run_col run_cols[] = {
-    RUN("run_id", r_text, S_RUN_ID, "hash of scene and path contents, technique, parameters, frames, size, backend"),
-    RUN("run_index", r_int, I_RUN_INDEX, "position in the expanded matrix"),
-    RUN("scene", r_text, S_SCENE, "scene name"),
-    RUN("path", r_text, S_PATH, "path name"),
-    RUN("technique", r_text, S_TECHNIQUE, "technique"),
-    RUN("params", r_text, S_PARAMS, "every parameter, in table order (one added after series began, such as "
-                                    "cache, only when not at its default)"),
-    RUN("auto_params", r_auto, 0, "the values a run calibrated for its parameters given as auto (bias=auto...)"),
-    RUN("light", r_light, 0, "the reference light's size (--sun-size, --lamp-radius: \"sun 0.53 deg, 64 rays\"); empty: "
-                             "a light of no size, the hard reference"),
-    RUN("backend", r_text, S_BACKEND, "egl or osmesa"),
-    RUN("renderer", r_text, S_RENDERER, "GL_RENDERER"),
-    RUN("timing", r_text, S_TIMING, "queries or sync: the timing mode used"),
-    RUN("submit", r_text, S_SUBMIT, "direct or indirect: how the passes' draws were issued (--submit)"),
-    RUN("clocks", r_text, S_CLOCKS, "the GPU clock during the run: free, or locked at N MHz (--clocks)"),
-    RUN("order", r_text, S_ORDER, "matrix, interleave or shuffle: the order of runs and repetitions (--order)"),
+    INFO("run_id", r_str, run_id, "hash of scene and path contents, technique, parameters, frames, size, backend"),
+    INFO("run_index", r_int, run_index, "position in the expanded matrix"),
+    INFO("scene", r_str, scene, "scene name"),
+    INFO("path", r_str, path, "path name"),
+    INFO("technique", r_str, technique, "technique"),
+    INFO("params", r_str, params, "every parameter, in table order (one added after series began, such as "
+                                  "cache, only when not at its default)"),
+    INFO("auto_params", r_chars, auto_params, "the values a run calibrated for its parameters given as auto (bias=auto...)"),
+    INFO("light", r_chars, light, "the reference light's size (--sun-size, --lamp-radius: \"sun 0.53 deg, 64 rays\"); "
+                                  "empty: a light of no size, the hard reference"),
+    INFO("backend", r_str, backend, "egl or osmesa"),
+    INFO("renderer", r_str, renderer, "GL_RENDERER"),
+    INFO("timing", r_str, timing, "queries or sync: the timing mode used"),
+    INFO("submit", r_str, submit, "direct or indirect: how the passes' draws were issued (--submit)"),
+    INFO("clocks", r_str, clocks, "the GPU clock during the run: free, or locked at N MHz (--clocks)"),
+    INFO("order", r_str, order, "matrix, interleave or shuffle: the order of runs and repetitions (--order)"),
     RUN("seed", r_seed, 0, "shuffle's seed (--seed reproduces the order); empty for the other orders"),
-    RUN("frames", r_int, I_FRAMES, "frames sampled along the path"),
-    RUN("warmup", r_int, I_WARMUP, "warm-up frames, excluded"),
-    RUN("width", r_int, I_WIDTH, "render width"),
-    RUN("height", r_int, I_HEIGHT, "render height"),
-    RUN("status", r_text, S_STATUS, "ok, skipped, interrupted (SIGINT/SIGTERM; --resume redoes it) or failed"),
-    RUN("reason", r_text, S_REASON, "why a run failed or was skipped"),
-    RUN("stable", r_text, S_STABLE, "yes, or no when the timings cannot be trusted (unstable_reason says why)"),
-    RUN("unstable_reason", r_unstable, 0, "why stable is no: the calibration probe moved, or the frames drifted"),
-    RUN_METRIC("calib_ms_before", r_calib, 0, "ms", "the calibration probe just before the timed frames"),
-    RUN_METRIC("calib_ms_after", r_calib, 1, "ms", "the calibration probe just after them"),
-    RUN("warnings", r_warnings, 0, "what the tool cannot stand behind in this run, \"; \"-separated"),
+    INFO("frames", r_int, frames, "frames sampled along the path"),
+    INFO("warmup", r_int, warmup, "warm-up frames, excluded"),
+    INFO("width", r_int, width, "render width"),
+    INFO("height", r_int, height, "render height"),
+    RUN("status", r_status, 0, "ok, skipped, interrupted (SIGINT/SIGTERM; --resume redoes it) or failed"),
+    INFO("reason", r_str, reason, "why a run failed or was skipped"),
+    INFO("stable", r_str, stable, "yes, or no when the timings cannot be trusted (unstable_reason says why)"),
+    INFO("unstable_reason", r_chars, unstable_reason, "why stable is no: the calibration probe moved, or the frames drifted"),
+    INFO_METRIC("calib_ms_before", r_measured, calib_ms_before, "ms", "the calibration probe just before the timed frames"),
+    INFO_METRIC("calib_ms_after", r_measured, calib_ms_after, "ms", "the calibration probe just after them"),
+    INFO("warnings", r_chars, warnings, "what the tool cannot stand behind in this run, \"; \"-separated"),
     RUN("repeats", r_repeats, 0, "repetitions of the path measured"),
     RUN("target_ci_pct", r_target_ci, 0, "--target-ci"),
-    RUN_METRIC("gpu_ci_pct", r_gpu_ci, 0, "percent", "95% CI half-width of mean gpu_ms, percent of the mean"),
-    RUN("scene_triangles", r_int, I_SCENE_TRIS, "triangles in the scene"),
-    RUN_METRIC("load_ms", r_load_ms, 0, "ms", "scene load time"),
-    RUN_METRIC("shadow_mb", r_shadow_mb, 0, "MiB",
-               "shadow storage the run holds resident (maps in their formats, moments and their blur copies, cube "
-               "faces, paraboloids): the figure the GPU-memory check reads; 0 for a technique without maps"),
-    RUN_METRIC("run_wall_s", r_wall_s, 0, "s", "wall time of the run"),
-    RUN_METRIC("eval_s", r_eval_s, 0, "s",
-               "wall time of the untimed evaluation pass: its frames, their flicker twins, the reference"),
+    {.name = "gpu_ci_pct", .get = r_gpu_ci, .unit = "percent", .flags = SB_USE_NIGHT,
+     .doc = "95% CI half-width of mean gpu_ms, percent of the mean"},
+    INFO("scene_triangles", r_u64, scene_triangles, "triangles in the scene"),
+    INFO_METRIC("load_ms", r_num, load_ms, "ms", "scene load time"),
+    {.name = "shadow_mb", .get = r_num, .arg = offsetof(sb_run_info, shadow_mb), .unit = "MiB", .role = SB_ROLE_MEMORY,
+     .doc = "shadow storage the run holds resident (maps in their formats, moments and their blur copies, cube "
+            "faces, paraboloids): the figure the GPU-memory check reads; 0 for a technique without maps"},
+    INFO_METRIC("run_wall_s", r_num, run_wall_s, "s", "wall time of the run"),
+    INFO_METRIC("eval_s", r_num, eval_s, "s",
+                "wall time of the untimed evaluation pass: its frames, their flicker twins, the reference"),
     RUN_METRIC("harness_share", r_harness_share, 0, "share", "share of the run's wall time outside rendered frames"),
     RUN("throttle_reasons", r_throttle, 0, "clock event (throttle) reasons seen in the measured frames (NVML)"),
     RUN("error_frames", r_error_frames, 0, "frames evaluated against the reference"),
@@ -389,7 +366,7 @@ const sb_run_col *sb_run_cols(int *count) {
                 const sb_frame_col *fc = &fcols[f];
                 if (fc->stats)
                     cols[n++] = (sb_run_col){.name = fc->name, .stats = fc->stats, .flags = fc->flags,
-                                             .doc = fc->doc, .unit = fc->unit};
+                                             .doc = fc->doc, .unit = fc->unit, .role = fc->role};
             }
         }
     *count = n;
@@ -485,7 +462,8 @@ static void stats_text(unsigned stats, const char *sep, char *out, size_t len) {
 /* "compare|history|report" (sep "|"): the commands that use a metric by default */
 static void uses_text(unsigned flags, const char *sep, char *out, size_t len) {
     static const struct { unsigned bit; const char *name; } uses[] = {
-        {SB_USE_COMPARE, "compare"}, {SB_USE_PAIR, "pair"}, {SB_USE_HISTORY, "history"}, {SB_USE_REPORT, "report"}};
+        {SB_USE_COMPARE, "compare"}, {SB_USE_PAIR, "pair"}, {SB_USE_HISTORY, "history"}, {SB_USE_REPORT, "report"},
+        {SB_USE_NIGHT, "night"}};
     out[0] = 0;
     for (size_t i = 0; i < SB_COUNT(uses); i++)
         if (flags & uses[i].bit) {
@@ -554,7 +532,7 @@ void sb_columns_markdown(FILE *out) {
                  "unit) can be named by `compare --metric` and `history regressions --metric`; *worse* says "
                  "which way it regresses, *default for* which commands use it when no `--metric` is given "
                  "(`pair`: `compare --pair` and the report's pair tables; `report`: the report's trend "
-                 "charts).\n\n| column | statistics | unit | worse | default for | meaning |\n"
+                 "charts; `night`: the report's night table).\n\n| column | statistics | unit | worse | default for | meaning |\n"
                  "|---|---|---|---|---|---|\n");
     int n;
     const sb_run_col *cols = sb_run_cols(&n);
@@ -614,6 +592,44 @@ int sb_columns_metrics(const char **out, int max) {
     const sb_run_col *cols = sb_run_cols(&ncols);
     for (int k = 0; k < ncols && n < max; k++)
         if (cols[k].stats || cols[k].unit) out[n++] = cols[k].name;
+    return n;
+}
+
+const char *sb_columns_role(sb_col_role role) {
+    int nf;
+    const sb_frame_col *f = sb_frame_cols(&nf);
+    for (int k = 0; k < nf; k++)
+        if (f[k].role == role) return f[k].name;
+    for (size_t k = 0; k < SB_COUNT(run_cols); k++)
+        if (run_cols[k].name && run_cols[k].role == role) return run_cols[k].name;
+    return "";
+}
+
+void sb_columns_role_stat(sb_col_role role, unsigned stat, char *out, size_t len) {
+    int nf;
+    const sb_frame_col *f = sb_frame_cols(&nf);
+    for (int k = 0; k < nf; k++)
+        if (f[k].role == role) {
+            int b = 0;
+            while (b < SB_STAT_COUNT && !(stat & (1u << b))) b++;
+            stat_name(out, len, f[k].name, b < SB_STAT_COUNT ? b : 0);
+            return;
+        }
+    snprintf(out, len, "%s", sb_columns_role(role));
+}
+
+int sb_columns_night(const char **out, int max) {
+    static char names[64][96];
+    int n = 0, ncols;
+    const sb_run_col *cols = sb_run_cols(&ncols);
+    for (int k = 0; k < ncols && n < max && n < 64; k++) {
+        if (!(cols[k].flags & SB_USE_NIGHT)) continue;
+        sb_metric_cols mc;
+        if (!sb_columns_metric(cols[k].name, &mc)) continue;
+        snprintf(names[n], sizeof names[n], "%s", mc.center);
+        out[n] = names[n];
+        n++;
+    }
     return n;
 }
 

@@ -106,9 +106,22 @@ enum {
     SB_USE_COMPARE = 1u << 1,       /* compare BASE NEW */
     SB_USE_PAIR = 1u << 2,          /* compare --pair, the report's pair tables */
     SB_USE_HISTORY = 1u << 3,       /* history regressions */
-    SB_USE_REPORT = 1u << 4,        /* the report's trend charts and its night table */
+    SB_USE_REPORT = 1u << 4,        /* the report's trend charts */
     SB_LOWER_WORSE = 1u << 5,       /* a metric that gets worse as it falls (default: as it rises) */
+    SB_USE_NIGHT = 1u << 6,         /* the report's night table (a series: its centre statistic) */
 };
+
+/* What a column stands for, where a consumer needs one figure of a kind
+ * (tune's time and error, the report's fronts and memory budget): the one
+ * column of the table with that role. */
+typedef enum sb_col_role {
+    SB_ROLE_NONE,
+    SB_ROLE_TIME,               /* the frame time (gpu_ms) */
+    SB_ROLE_ERROR,              /* the shadow error against the reference (err_rate) */
+    SB_ROLE_FLICKER,            /* the flicker of the twins (flicker_rate) */
+    SB_ROLE_MEMORY,             /* the shadow storage a run holds (shadow_mb) */
+    SB_ROLE_COUNT
+} sb_col_role;
 
 /* A per-frame column. With stats, it is also a metric of the summary: the
  * series `<name>_<stat>` for each statistic (one row declares both). */
@@ -120,6 +133,8 @@ typedef struct sb_frame_col {
     const char *doc;
     unsigned stats;             /* the summary's statistics of it (SB_STAT_* bits; 0: not in the summary) */
     const char *unit;           /* "ms", "share", "count", ... (NULL: not a number) */
+    sb_col_role role;
+    const char *chart;          /* the report's run page draws it in the chart of this title (NULL: none) */
 } sb_frame_col;
 
 /* A per-run column of the summary. The series rows (get NULL, stats set) are
@@ -133,6 +148,7 @@ typedef struct sb_run_col {
     unsigned flags;
     const char *doc;
     const char *unit;           /* a scalar that is a metric: its unit (NULL: not a metric) */
+    sb_col_role role;
 } sb_run_col;
 
 /* The per-frame columns in order (the stage times named from sb_stage_names; a table made once, in static storage). */
@@ -166,6 +182,13 @@ bool sb_columns_metric(const char *name, sb_metric_cols *out);
 int sb_columns_default_metrics(unsigned use, const char **out, int max);
 /* Every metric (a series, or a scalar with a unit), in table order; returns how many (<= max). */
 int sb_columns_metrics(const char **out, int max);
+/* The column with a role: its name ("gpu_ms"; a frame column's, or a run column's). */
+const char *sb_columns_role(sb_col_role role);
+/* A statistic of the role's series ("gpu_ms_median" for SB_STAT_MEDIAN); a run column: its name. */
+void sb_columns_role_stat(sb_col_role role, unsigned stat, char *out, size_t len);
+/* The summary columns the report's night table shows (SB_USE_NIGHT: a series' centre statistic, or the
+ * scalar), in table order; returns how many (<= max); names in static storage. */
+int sb_columns_night(const char **out, int max);
 
 /* Relative half-width (percent) of the 95% confidence interval of the mean
  * gpu_ms. With two or more complete repetitions of the path (per_repeat frames

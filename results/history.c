@@ -1,144 +1,74 @@
-/* history.c - the results history in SQLite (history.h). */
+/* history.c - what the nights of the history mean (history.h): series, a
+ * results set added as a night, the changes found in each series, the notes
+ * about a night, and a set checked against the nights' band. Every read and
+ * write of the file is history_store.h's. */
 #define _XOPEN_SOURCE 700 /* realpath */
 #include "history.h"
 
-#include <errno.h>
 #include <fnmatch.h>
 #include <math.h>
-#include <sqlite3.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <time.h>
 
 #include "changepoint.h"
-#include "stats.h"
-#include "compare.h"
-#include "csv.h"
 #include "columns.h"
-#include "table.h"
+#include "compare.h"
+#include "context.h"
+#include "csv.h"
+#include "resultset.h"
+#include "stats.h"
 
-struct sb_history {
-    sqlite3 *db;
-    char path[4096];
-};
+/* ---- series ---- */
 
-const char *sb_history_default_path(const char *default_out, char *buf, size_t len) {
-    const char *env = getenv("SB_HISTORY");
-    if (env && *env) snprintf(buf, len, "%s", env);
-    else snprintf(buf, len, "%s/history.sqlite", default_out);
-    return buf;
+void sb_series_key(const sb_series *s, char *out, size_t len) {
+    snprintf(out, len, "%s|%s|%s|%s|%s|%s|%s%s%s%s", s->host, s->renderer, s->scene, s->path, s->size, s->technique,
+             s->params, s->light[0] ? "|" : "", s->light, s->indirect ? "|indirect" : "");
 }
 
-static bool db_fail(sb_history *h, sb_err *err, const char *what) {
-    return sb_fail(err, "%s: %s: %s", h->path, what, sqlite3_errmsg(h->db));
+/* Field k of a '|'-separated text into out; returns where the next field starts (NULL: none). */
+static const char *next_field(const char *p, char *out, size_t len) {
+    size_t n = strcspn(p, "|");
+    snprintf(out, len, "%.*s", (int)n, p);
+    return p[n] ? p + n + 1 : NULL;
 }
 
-static bool exec(sb_history *h, const char *sql, sb_err *err) {
-    char *msg = NULL;
-    if (sqlite3_exec(h->db, sql, NULL, NULL, &msg) == SQLITE_OK) return true;
-    sb_fail(err, "%s: %s", h->path, msg ? msg : sqlite3_errmsg(h->db));
-    sqlite3_free(msg);
-    return false;
+void sb_series_parse(const char *key, sb_series *s) {
+    memset(s, 0, sizeof *s);
+    char *fields[] = {s->host, s->renderer, s->scene, s->path, s->size, s->technique, s->params};
+    size_t sizes[] = {sizeof s->host, sizeof s->renderer, sizeof s->scene, sizeof s->path, sizeof s->size,
+                      sizeof s->technique, sizeof s->params};
+    const char *p = key;
+    for (size_t k = 0; k < SB_COUNT(fields) && p; k++) p = next_field(p, fields[k], sizes[k]);
+    while (p) {   /* what follows the parameters: a sized light, the submission */
+        char extra[sizeof s->light];
+        p = next_field(p, extra, sizeof extra);
+        if (!strcmp(extra, "indirect")) s->indirect = true;
+        else snprintf(s->light, sizeof s->light, "%s", extra);
+    }
 }
 
-/* The schema, one step a version: step k takes a file from version k-1 to k.
-   Version 1 kept the summary rows; 2 added each run's per-frame CSV and the
-   night's image count; 3 the annotations (`history annotate`). */
-static const char *const migrations[SB_HISTORY_SCHEMA] = {
-    "CREATE TABLE nights(id INTEGER PRIMARY KEY, set_key TEXT UNIQUE NOT NULL, dir TEXT, date TEXT, host TEXT,"
-    " renderer TEXT, version TEXT, git_commit TEXT, header TEXT, meta TEXT, added TEXT);"
-    "CREATE TABLE runs(id INTEGER PRIMARY KEY, night INTEGER NOT NULL REFERENCES nights(id), run_id TEXT,"
-    " run_index INTEGER, series TEXT, scene TEXT, path TEXT, technique TEXT, params TEXT, size TEXT, status TEXT,"
-    " reason TEXT, stable TEXT, warnings TEXT, line TEXT);"
-    "CREATE TABLE metrics(run INTEGER NOT NULL, name TEXT NOT NULL, value REAL, PRIMARY KEY(run, name)) WITHOUT ROWID;"
-    "CREATE INDEX runs_night ON runs(night);"
-    "CREATE INDEX runs_series ON runs(series);",
-    "CREATE TABLE frames(run INTEGER PRIMARY KEY, csv TEXT);"
-    "ALTER TABLE nights ADD COLUMN images INTEGER NOT NULL DEFAULT 0;",
-    "CREATE TABLE annotations(id INTEGER PRIMARY KEY, night INTEGER NOT NULL REFERENCES nights(id), git_commit TEXT,"
-    " series TEXT NOT NULL DEFAULT '', text TEXT NOT NULL, accept INTEGER NOT NULL DEFAULT 0, added TEXT);",
-};
-
-static bool migrate(sb_history *h, sb_err *err) {
-    sqlite3_stmt *st;
-    if (sqlite3_prepare_v2(h->db, "PRAGMA user_version", -1, &st, NULL) != SQLITE_OK)
-        return db_fail(h, err, "reading the schema version");
-    int v = sqlite3_step(st) == SQLITE_ROW ? sqlite3_column_int(st, 0) : 0;
-    sqlite3_finalize(st);
-    if (v > SB_HISTORY_SCHEMA)
-        return sb_fail(err, "%s: history schema version %d, newer than this shadowbench's %d: use a newer shadowbench",
-                       h->path, v, SB_HISTORY_SCHEMA);
-    for (; v < SB_HISTORY_SCHEMA; v++) {
-        char sql[256];
-        snprintf(sql, sizeof sql, "PRAGMA user_version = %d", v + 1);
-        if (!exec(h, "BEGIN IMMEDIATE", err)) return false;
-        if (!exec(h, migrations[v], err) || !exec(h, sql, err)) {
-            sqlite3_exec(h->db, "ROLLBACK", NULL, NULL, NULL);
-            return false;
-        }
-        if (!exec(h, "COMMIT", err)) return false;
-    }
-    return true;
+void sb_series_of_row(const sb_table *t, int r, const char *host, const char *renderer, sb_series *s) {
+    char key[3072];
+    sb_compare_run_key(t, r, key, sizeof key);   /* scene|path|technique|params[|light][|indirect] */
+    char rest[4096];
+    snprintf(rest, sizeof rest, "%s|%s|%s|%s|%sx%s|", host, renderer, sb_table_get(t, r, "scene"),
+             sb_table_get(t, r, "path"), sb_table_get(t, r, "width"), sb_table_get(t, r, "height"));
+    /* the key's technique and what follows it */
+    const char *kp = key;
+    for (int bars = 0; bars < 2 && (kp = strchr(kp, '|')); bars++) kp++;
+    size_t l = strlen(rest);
+    snprintf(rest + l, sizeof rest - l, "%s", kp ? kp : "");
+    sb_series_parse(rest, s);
 }
 
-sb_history *sb_history_open(const char *path, bool write, sb_err *err) {
-    sb_history *h = sb_xcalloc(1, sizeof *h);
-    snprintf(h->path, sizeof h->path, "%s", path);
-    struct stat st;
-    if (!write && stat(path, &st) != 0) {
-        sb_fail(err, "%s: no history here (%s); `shadowbench history add DIR` makes one", path, strerror(errno));
-        free(h);
-        return NULL;
-    }
-    if (write) {
-        char dir[4096];
-        snprintf(dir, sizeof dir, "%s", path);
-        char *slash = strrchr(dir, '/');
-        if (slash && slash != dir) {
-            *slash = 0;
-            if (!sb_mkdir_p(dir, err)) {
-                free(h);
-                return NULL;
-            }
-        }
-    }
-    int flags = write ? SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE : SQLITE_OPEN_READONLY;
-    if (sqlite3_open_v2(path, &h->db, flags, NULL) != SQLITE_OK) {
-        db_fail(h, err, "cannot open");
-        sb_history_close(h);
-        return NULL;
-    }
-    sqlite3_busy_timeout(h->db, 10000);
-    /* a file that is not a database fails on its first read */
-    if (!exec(h, "SELECT count(*) FROM sqlite_master", err) || (write && !migrate(h, err))) {
-        sb_history_close(h);
-        return NULL;
-    }
-    if (!write) {
-        sqlite3_stmt *q;
-        int v = 0;
-        if (sqlite3_prepare_v2(h->db, "PRAGMA user_version", -1, &q, NULL) == SQLITE_OK) {
-            if (sqlite3_step(q) == SQLITE_ROW) v = sqlite3_column_int(q, 0);
-            sqlite3_finalize(q);
-        }
-        if (v != SB_HISTORY_SCHEMA) {
-            sb_fail(err, "%s: history schema version %d, this shadowbench reads %d (%s)", path, v, SB_HISTORY_SCHEMA,
-                    v < SB_HISTORY_SCHEMA ? "`shadowbench history add` migrates it" : "use a newer shadowbench");
-            sb_history_close(h);
-            return NULL;
-        }
-    }
-    return h;
+/* The parameters with what follows them in the key (the text a label's items come from). */
+static void params_text(const sb_series *s, char *out, size_t len) {
+    snprintf(out, len, "%s%s%s%s", s->params, s->light[0] ? "|" : "", s->light, s->indirect ? "|indirect" : "");
 }
 
-void sb_history_close(sb_history *h) {
-    if (!h) return;
-    if (h->db) sqlite3_close(h->db);
-    free(h);
-}
-
-/* ---- adding a results set ---- */
+/* ---- a results set as a night ---- */
 
 /* The set's meta (a merged set: its first shard's), as text, and one field of it. */
 static char *read_meta(const char *dir) {
@@ -184,30 +114,11 @@ static void set_date(const char *dir, const char *meta, const char *summary, cha
     strftime(out, len, "%Y-%m-%dT%H:%M:%SZ", &tm);
 }
 
-static bool bind_text(sqlite3_stmt *st, int i, const char *s) {
-    return sqlite3_bind_text(st, i, s ? s : "", -1, SQLITE_TRANSIENT) == SQLITE_OK;
-}
-
 static int count_images(const char *dir) {
     char path[4200];
     snprintf(path, sizeof path, "%s/images", dir);
     struct stat st;
-    if (stat(path, &st) != 0 || !S_ISDIR(st.st_mode)) return 0;
-    return 1;
-}
-
-/* A summary row's series (history.h), its size (WxH) and its sorted parameters. */
-static void series_of(const sb_table *t, int r, const char *host, const char *renderer, char *series, size_t len,
-                      char *size, size_t size_len, char *params, size_t params_len) {
-    char key[3072];
-    sb_compare_run_key(t, r, key, sizeof key);
-    snprintf(size, size_len, "%sx%s", sb_table_get(t, r, "width"), sb_table_get(t, r, "height"));
-    /* the key's parameters, sorted (its last field) */
-    const char *kp = key;
-    for (int bars = 0; bars < 3 && (kp = strchr(kp, '|')); bars++) kp++;
-    snprintf(params, params_len, "%s", kp ? kp : "");
-    snprintf(series, len, "%s|%s|%s|%s|%s|%s|%s", host, renderer, sb_table_get(t, r, "scene"),
-             sb_table_get(t, r, "path"), size, sb_table_get(t, r, "technique"), params);
+    return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
 }
 
 /* The host and renderer a set's series are kept under. */
@@ -218,147 +129,119 @@ static void set_host(const char *meta, const sb_table *t, char *host, size_t hle
     if (!renderer[0]) meta_field(meta, "gl_renderer", renderer, rlen);
 }
 
-bool sb_history_add(sb_history *h, const char *dir, sb_history_added *out, sb_err *err) {
-    memset(out, 0, sizeof *out);
+/* A results set read for the history: its summary (text and table), its meta and what the night is filed under. */
+typedef struct set_in {
+    const char *dir;
     char sum_path[4200];
-    snprintf(sum_path, sizeof sum_path, "%s/summary.csv", dir);
-    size_t sum_len = 0;
-    char *sum_text = sb_read_file(sum_path, &sum_len, err);
-    if (!sum_text) return false;
+    char *sum_text, *meta;
+    size_t sum_len;
     sb_table t;
-    if (!sb_table_parse(&t, sum_path, sum_text, err)) {
-        free(sum_text);
-        return false;
-    }
+    char host[256], renderer[512], version[64], commit[128], date[64], set_key[32], absdir[4096];
+} set_in;
+
+static void set_free(set_in *s) {
+    sb_table_free(&s->t);
+    free(s->sum_text);
+    free(s->meta);
+}
+
+/* Reads and checks the set: whole (resultset.h), a shadowbench summary, as many runs as its meta names. */
+static bool set_read(set_in *s, const char *dir, sb_err *err) {
+    memset(s, 0, sizeof *s);
+    s->dir = dir;
+    if (!sb_resultset_verify(dir, err)) return false;
+    snprintf(s->sum_path, sizeof s->sum_path, "%s/summary.csv", dir);
+    s->sum_text = sb_read_file(s->sum_path, &s->sum_len, err);
+    if (!s->sum_text || !sb_table_parse(&s->t, s->sum_path, s->sum_text, err)) return false;
     const char *need[] = {"run_id", "scene", "path", "technique", "params", "status", "width", "height"};
     for (size_t i = 0; i < SB_COUNT(need); i++)
-        if (sb_table_col(&t, need[i]) < 0) {
-            sb_table_free(&t);
-            free(sum_text);
-            return sb_fail(err, "%s: not a shadowbench summary (no '%s' column)", sum_path, need[i]);
-        }
-    char *meta = read_meta(dir);
-    char host[256], renderer[512], version[64], commit[128], date[64];
-    set_host(meta, &t, host, sizeof host, renderer, sizeof renderer);
-    meta_field(meta, "version", version, sizeof version);
-    meta_field(meta, "commit", commit, sizeof commit);
-    set_date(dir, meta, sum_path, date, sizeof date);
+        if (sb_table_col(&s->t, need[i]) < 0)
+            return sb_fail(err, "%s: not a shadowbench summary (no '%s' column)", s->sum_path, need[i]);
+    s->meta = read_meta(dir);
+    set_host(s->meta, &s->t, s->host, sizeof s->host, s->renderer, sizeof s->renderer);
+    meta_field(s->meta, "version", s->version, sizeof s->version);
+    meta_field(s->meta, "commit", s->commit, sizeof s->commit);
+    set_date(dir, s->meta, s->sum_path, s->date, sizeof s->date);
     /* a batch (or shard) says how many runs it has: a summary with fewer is a set still running or stopped */
     char runs_field[128];
-    meta_field(meta, "runs", runs_field, sizeof runs_field);
     int want = 0;
-    if (runs_field[0] && sscanf(runs_field, "%d", &want) == 1 && t.nrows < want) {
-        sb_fail(err, "%s: %d of the %d runs its meta names are in summary.csv: the set is incomplete (still running, "
-                     "or stopped: `batch --resume` it first)", dir, t.nrows, want);
-        sb_table_free(&t);
-        free(sum_text);
-        free(meta);
-        return false;
-    }
+    meta_field(s->meta, "runs", runs_field, sizeof runs_field);
+    if (runs_field[0] && sscanf(runs_field, "%d", &want) == 1 && s->t.nrows < want)
+        return sb_fail(err, "%s: %d of the %d runs its meta names are in summary.csv: the set is incomplete (still "
+                            "running, or stopped: `batch --resume` it first)", dir, s->t.nrows, want);
     /* the set is its summary's bytes on its host: the same set added twice is found */
-    uint64_t key = sb_fnv1a(sb_fnv1a(1469598103934665603ull, sum_text, sum_len), host, strlen(host));
-    char set_key[32];
-    snprintf(set_key, sizeof set_key, "%016llx", (unsigned long long)key);
-    char absdir[4096];
-    if (!realpath(dir, absdir)) snprintf(absdir, sizeof absdir, "%s", dir);
-    char added[64];
-    time_t now = time(NULL);
-    struct tm tm;
-    gmtime_r(&now, &tm);
-    strftime(added, sizeof added, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    uint64_t key = sb_fnv1a(sb_fnv1a(SB_FNV_SEED, s->sum_text, s->sum_len), s->host, strlen(s->host));
+    snprintf(s->set_key, sizeof s->set_key, "%016llx", (unsigned long long)key);
+    if (!realpath(dir, s->absdir)) snprintf(s->absdir, sizeof s->absdir, "%s", dir);
+    return true;
+}
 
-    bool ok = exec(h, "BEGIN IMMEDIATE", err);
-    sqlite3_stmt *q = NULL, *ins_night = NULL, *ins_run = NULL, *ins_metric = NULL, *ins_frames = NULL;
-    if (ok) {
-        ok = sqlite3_prepare_v2(h->db, "SELECT id FROM nights WHERE set_key = ?", -1, &q, NULL) == SQLITE_OK &&
-             bind_text(q, 1, set_key);
-        if (!ok) db_fail(h, err, "looking the set up");
-        else if (sqlite3_step(q) == SQLITE_ROW) {
-            out->existed = true;
-            out->night = sqlite3_column_int64(q, 0);
-        }
+/* One summary row as the store keeps it: its series, its numeric cells and its per-frame CSV. */
+static bool store_run(sb_history *h, long long night, const set_in *s, int r, sb_history_added *out, sb_err *err) {
+    const sb_table *t = &s->t;
+    sb_series se;
+    sb_series_of_row(t, r, s->host, s->renderer, &se);
+    char key[4096], params[2048];
+    sb_series_key(&se, key, sizeof key);
+    params_text(&se, params, sizeof params);
+    const char **names = sb_xmalloc(sizeof *names * (size_t)(t->cols ? t->cols : 1));
+    double *values = sb_xmalloc(sizeof *values * (size_t)(t->cols ? t->cols : 1));
+    int nm = 0;
+    for (int c = 0; c < t->cols; c++)
+        if (*t->rows[r][c] && sb_parse_double(t->rows[r][c], &values[nm])) names[nm++] = t->header[c];
+    const char *run_id = sb_table_get(t, r, "run_id");
+    char fpath[4200];
+    snprintf(fpath, sizeof fpath, "%s/%s.csv", s->dir, run_id);
+    char *frames = *run_id ? sb_read_file(fpath, NULL, NULL) : NULL;
+    sb_history_run_in in = {.run_id = run_id, .series = key, .scene = sb_table_get(t, r, "scene"),
+                            .path = sb_table_get(t, r, "path"), .technique = sb_table_get(t, r, "technique"),
+                            .params = params, .size = se.size, .status = sb_table_get(t, r, "status"),
+                            .reason = sb_table_get(t, r, "reason"), .stable = sb_table_get(t, r, "stable"),
+                            .warnings = sb_table_get(t, r, "warnings"), .line = t->lines[r],
+                            .run_index = atoi(sb_table_get(t, r, "run_index")), .nmetrics = nm,
+                            .metric_names = names, .metric_values = values, .frames_csv = frames};
+    bool ok = sb_history_insert_run(h, night, &in, err);
+    out->runs += ok;
+    out->frames_files += ok && frames;
+    free(frames);
+    free(names);
+    free(values);
+    return ok;
+}
+
+static bool store_set(sb_history *h, const set_in *s, sb_history_added *out, sb_err *err) {
+    size_t hdr_len = strcspn(s->sum_text, "\r\n");
+    char *hdr = sb_xmalloc(hdr_len + 1), added[64];
+    memcpy(hdr, s->sum_text, hdr_len);
+    hdr[hdr_len] = 0;
+    sb_utc_now(added, sizeof added);
+    sb_history_night_in n = {.set_key = s->set_key, .dir = s->absdir, .date = s->date, .host = s->host,
+                             .renderer = s->renderer, .version = s->version, .commit = s->commit, .header = hdr,
+                             .meta = s->meta, .added = added, .images = count_images(s->dir)};
+    bool ok = sb_history_begin(h, err);
+    long long id = ok ? sb_history_insert_night(h, &n, err) : -1;
+    ok = ok && id > 0;
+    out->night = id;
+    for (int r = 0; ok && r < s->t.nrows; r++) ok = store_run(h, id, s, r, out, err);
+    free(hdr);
+    if (ok) return sb_history_commit(h, err);
+    sb_history_rollback(h);
+    return false;
+}
+
+bool sb_history_add(sb_history *h, const char *dir, sb_history_added *out, sb_err *err) {
+    memset(out, 0, sizeof *out);
+    set_in s;
+    bool ok = set_read(&s, dir, err);
+    long long existing = ok ? sb_history_night_of_set(h, s.set_key, err) : -1;
+    ok = ok && existing >= 0;
+    if (ok && existing > 0) {
+        out->existed = true;
+        out->night = existing;
+    } else if (ok) {
+        ok = store_set(h, &s, out, err);
     }
-    if (ok && !out->existed) {
-        ok = sqlite3_prepare_v2(h->db,
-                                "INSERT INTO nights(set_key, dir, date, host, renderer, version, git_commit, header, meta,"
-                                " added, images) VALUES (?,?,?,?,?,?,?,?,?,?,?)",
-                                -1, &ins_night, NULL) == SQLITE_OK &&
-             sqlite3_prepare_v2(h->db,
-                                "INSERT INTO runs(night, run_id, run_index, series, scene, path, technique, params, size,"
-                                " status, reason, stable, warnings, line) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?)",
-                                -1, &ins_run, NULL) == SQLITE_OK &&
-             sqlite3_prepare_v2(h->db, "INSERT INTO metrics(run, name, value) VALUES (?,?,?)", -1, &ins_metric,
-                                NULL) == SQLITE_OK &&
-             sqlite3_prepare_v2(h->db, "INSERT INTO frames(run, csv) VALUES (?,?)", -1, &ins_frames, NULL) == SQLITE_OK;
-        if (!ok) db_fail(h, err, "preparing the insert");
-        size_t hdr_len = strcspn(sum_text, "\r\n");
-        char *hdr = sb_xmalloc(hdr_len + 1);
-        memcpy(hdr, sum_text, hdr_len);
-        hdr[hdr_len] = 0;
-        if (ok) {
-            ok = bind_text(ins_night, 1, set_key) && bind_text(ins_night, 2, absdir) && bind_text(ins_night, 3, date) &&
-                 bind_text(ins_night, 4, host) && bind_text(ins_night, 5, renderer) &&
-                 bind_text(ins_night, 6, version) && bind_text(ins_night, 7, commit) && bind_text(ins_night, 8, hdr) &&
-                 bind_text(ins_night, 9, meta) && bind_text(ins_night, 10, added) &&
-                 sqlite3_bind_int(ins_night, 11, count_images(dir)) == SQLITE_OK &&
-                 sqlite3_step(ins_night) == SQLITE_DONE;
-            if (!ok) db_fail(h, err, "adding the night");
-            out->night = sqlite3_last_insert_rowid(h->db);
-        }
-        free(hdr);
-        for (int r = 0; ok && r < t.nrows; r++) {
-            char series[4096], size[64], params[2048];
-            series_of(&t, r, host, renderer, series, sizeof series, size, sizeof size, params, sizeof params);
-            const char *run_id = sb_table_get(&t, r, "run_id");
-            sqlite3_reset(ins_run);
-            ok = sqlite3_bind_int64(ins_run, 1, out->night) == SQLITE_OK && bind_text(ins_run, 2, run_id) &&
-                 sqlite3_bind_int(ins_run, 3, atoi(sb_table_get(&t, r, "run_index"))) == SQLITE_OK &&
-                 bind_text(ins_run, 4, series) && bind_text(ins_run, 5, sb_table_get(&t, r, "scene")) &&
-                 bind_text(ins_run, 6, sb_table_get(&t, r, "path")) &&
-                 bind_text(ins_run, 7, sb_table_get(&t, r, "technique")) && bind_text(ins_run, 8, params) &&
-                 bind_text(ins_run, 9, size) && bind_text(ins_run, 10, sb_table_get(&t, r, "status")) &&
-                 bind_text(ins_run, 11, sb_table_get(&t, r, "reason")) &&
-                 bind_text(ins_run, 12, sb_table_get(&t, r, "stable")) &&
-                 bind_text(ins_run, 13, sb_table_get(&t, r, "warnings")) && bind_text(ins_run, 14, t.lines[r]) &&
-                 sqlite3_step(ins_run) == SQLITE_DONE;
-            if (!ok) {
-                db_fail(h, err, "adding a run");
-                break;
-            }
-            long long rid = sqlite3_last_insert_rowid(h->db);
-            out->runs++;
-            for (int c = 0; ok && c < t.cols; c++) {
-                double v;
-                const char *cell = t.rows[r][c];
-                if (!*cell || !sb_parse_double(cell, &v)) continue;
-                sqlite3_reset(ins_metric);
-                ok = sqlite3_bind_int64(ins_metric, 1, rid) == SQLITE_OK && bind_text(ins_metric, 2, t.header[c]) &&
-                     sqlite3_bind_double(ins_metric, 3, v) == SQLITE_OK && sqlite3_step(ins_metric) == SQLITE_DONE;
-                if (!ok) db_fail(h, err, "adding a metric");
-            }
-            char fpath[4200];
-            snprintf(fpath, sizeof fpath, "%s/%s.csv", dir, run_id);
-            char *frames = *run_id ? sb_read_file(fpath, NULL, NULL) : NULL;
-            if (ok && frames) {
-                sqlite3_reset(ins_frames);
-                ok = sqlite3_bind_int64(ins_frames, 1, rid) == SQLITE_OK && bind_text(ins_frames, 2, frames) &&
-                     sqlite3_step(ins_frames) == SQLITE_DONE;
-                if (!ok) db_fail(h, err, "adding a run's frames");
-                out->frames_files++;
-            }
-            free(frames);
-        }
-    }
-    sqlite3_finalize(q);
-    sqlite3_finalize(ins_night);
-    sqlite3_finalize(ins_run);
-    sqlite3_finalize(ins_metric);
-    sqlite3_finalize(ins_frames);
-    if (ok) ok = exec(h, "COMMIT", err);
-    if (!ok) sqlite3_exec(h->db, "ROLLBACK", NULL, NULL, NULL);
-    sb_table_free(&t);
-    free(sum_text);
-    free(meta);
+    set_free(&s);
     return ok;
 }
 
@@ -377,37 +260,12 @@ bool sb_history_list(sb_history *h, FILE *out, sb_err *err) {
 
 /* ---- changes ---- */
 
-void sb_history_series_field(const char *series, int k, char *out, size_t len) {
-    const char *p = series;
-    for (int i = 0; i < k && p; i++) {
-        p = strchr(p, '|');
-        if (p) p++;
-    }
-    size_t n = !p ? 0 : k < 6 ? strcspn(p, "|") : strlen(p);
-    snprintf(out, len, "%.*s", (int)n, p ? p : "");
-}
-
-/* "host|renderer|scene|path|WxH|technique|params" split into its seven fields */
-typedef struct { char f[7][1024]; } series_fields;
-static void split_series(const char *series, series_fields *o) {
-    for (int i = 0; i < 7; i++) sb_history_series_field(series, i, o->f[i], sizeof o->f[i]);
-}
-
-
-
-typedef struct {
-    long long night;
-    char date[32], commit[64], host[256];
-} night_info;
-
 /* The least night-to-night timing noise assumed for a renderer, as a fraction: q's floor, else 1 % on a GPU
  * and 5 % on a software rasterizer, whose times move with everything else on the CPU (the stability tests
  * widen alike). */
 static double noise_floor(const sb_history_query *q, const char *renderer) {
     if (q->noise_floor_pct > 0) return q->noise_floor_pct / 100;
-    bool soft = strstr(renderer, "llvmpipe") || strstr(renderer, "softpipe") || strstr(renderer, "SwiftShader") ||
-                strstr(renderer, "lavapipe");
-    return soft ? 0.05 : 0.01;
+    return sb_renderer_is_software(renderer) ? 0.05 : 0.01;
 }
 
 static int cmp_double(const void *a, const void *b) {
@@ -415,175 +273,188 @@ static int cmp_double(const void *a, const void *b) {
     return (x > y) - (x < y);
 }
 
-
-int sb_history_changes(sb_history *h, const sb_history_query *q, sb_history_change **out, sb_err *err) {
-    *out = NULL;
-    int recent = q->recent > 0 ? q->recent : 3;
-    /* the nights, oldest first, and each host's newest */
-    sqlite3_stmt *st;
-    if (sqlite3_prepare_v2(h->db, "SELECT id, date, git_commit, host FROM nights WHERE date >= ? ORDER BY date, id", -1,
-                           &st, NULL) != SQLITE_OK)
-        return db_fail(h, err, "reading the nights"), -1;
-    bind_text(st, 1, q->since ? q->since : "");
-    night_info *nights = NULL;
-    int nn = 0, cap = 0;
-    while (sqlite3_step(st) == SQLITE_ROW) {
-        if (nn == cap) nights = sb_xrealloc(nights, sizeof *nights * (size_t)(cap = cap ? cap * 2 : 64));
-        night_info *ni = &nights[nn++];
-        ni->night = sqlite3_column_int64(st, 0);
-        snprintf(ni->date, sizeof ni->date, "%s", (const char *)sqlite3_column_text(st, 1));
-        snprintf(ni->commit, sizeof ni->commit, "%s", (const char *)sqlite3_column_text(st, 2));
-        snprintf(ni->host, sizeof ni->host, "%s", (const char *)sqlite3_column_text(st, 3));
-    }
-    sqlite3_finalize(st);
-    /* a night's rank among its host's nights counted from the newest (0: newest) */
-    int *rank = sb_xcalloc((size_t)nn + 1, sizeof *rank);
-    for (int i = 0; i < nn; i++)
-        for (int j = i + 1; j < nn; j++)
-            if (!strcmp(nights[i].host, nights[j].host)) rank[i]++;
-
-    const char *metrics[32];
+/* The metrics a query asks for (its own, else the history's defaults), each checked against the column table. */
+static int query_metrics(const sb_history_query *q, const char **out, sb_err *err) {
     int nm = 0;
     if (q->nmetrics)
-        for (int i = 0; i < q->nmetrics && nm < 32; i++) metrics[nm++] = q->metrics[i];
+        for (int i = 0; i < q->nmetrics && nm < 32; i++) out[nm++] = q->metrics[i];
     else
-        nm = sb_columns_default_metrics(SB_USE_HISTORY, metrics, 32);
+        nm = sb_columns_default_metrics(SB_USE_HISTORY, out, 32);
     for (int i = 0; i < nm; i++) {
         sb_metric_cols mc;
-        if (!sb_columns_metric(metrics[i], &mc)) {
-            free(nights);
-            free(rank);
-            sb_fail(err, "unknown metric '%s' (summary columns give e.g. gpu_ms, final_ms, draw_calls, err_rate)",
-                    metrics[i]);
-            return -1;
-        }
-    }
-    sb_history_change *ch = NULL;
-    int nch = 0, chcap = 0;
-    int maxn = nn > 0 ? nn : 1;
-    double *x = sb_xmalloc(sizeof *x * (size_t)maxn), *w = sb_xmalloc(sizeof *w * (size_t)maxn),
-           *ci = sb_xmalloc(sizeof *ci * (size_t)maxn), *tmp = sb_xmalloc(sizeof *tmp * (size_t)maxn);
-    int *at_night = sb_xmalloc(sizeof *at_night * (size_t)maxn);
-    bool ok = true;
-    for (int mi = 0; ok && mi < nm; mi++) {
-        sb_metric_cols mc;
-        sb_columns_metric(metrics[mi], &mc);
-        ok = sqlite3_prepare_v2(h->db,
-                                "SELECT r.series, r.night, r.stable, c.value, i.value FROM runs r "
-                                "JOIN nights n ON n.id = r.night "
-                                "JOIN metrics c ON c.run = r.id AND c.name = ?1 "
-                                "LEFT JOIN metrics i ON i.run = r.id AND i.name = ?2 "
-                                "WHERE r.status = 'ok' AND n.date >= ?3 ORDER BY r.series, n.date, n.id",
-                                -1, &st, NULL) == SQLITE_OK;
-        if (!ok) {
-            db_fail(h, err, "reading a metric");
-            break;
-        }
-        bind_text(st, 1, mc.center);
-        bind_text(st, 2, mc.ci[0] ? mc.ci : "-");
-        bind_text(st, 3, q->since ? q->since : "");
-        char series[1024] = "";
-        int k = 0;
-        bool more = true;
-        while (more) {
-            more = sqlite3_step(st) == SQLITE_ROW;
-            const char *s = more ? (const char *)sqlite3_column_text(st, 0) : "";
-            if (!more || strcmp(s, series)) {
-                /* the series so far is complete: find its changes */
-                if (k >= 2 * SB_CP_MIN_SEG) {
-                    /* a night whose own CI is more than twice the series' usual counts less */
-                    int nci = 0;
-                    for (int i = 0; i < k; i++)
-                        if (ci[i] > 0) tmp[nci++] = ci[i];
-                    double typical = 0;
-                    if (nci) {
-                        qsort(tmp, (size_t)nci, sizeof *tmp, cmp_double);
-                        typical = tmp[nci / 2];
-                    }
-                    for (int i = 0; i < k; i++)
-                        if (typical > 0 && ci[i] > 2 * typical) w[i] *= (2 * typical / ci[i]) * (2 * typical / ci[i]);
-                    series_fields sf;
-                    split_series(series, &sf);
-                    sb_cp_opts o = {.relative = true, .noise_floor = mc.ci[0] ? noise_floor(q, sf.f[1]) : 0};
-                    sb_cp_change cps[64];
-                    int nc = sb_changepoints(x, w, k, &o, cps, 64, NULL);
-                    for (int c = 0; c < nc && c < 64; c++) {
-                        if (nch == chcap) ch = sb_xrealloc(ch, sizeof *ch * (size_t)(chcap = chcap ? 2 * chcap : 16));
-                        sb_history_change *o2 = &ch[nch++];
-                        memset(o2, 0, sizeof *o2);
-                        snprintf(o2->series, sizeof o2->series, "%s", series);
-                        snprintf(o2->metric, sizeof o2->metric, "%s", metrics[mi]);
-                        const night_info *a = &nights[at_night[cps[c].at - 1]], *b = &nights[at_night[cps[c].at]];
-                        o2->night_before = a->night;
-                        o2->night_after = b->night;
-                        snprintf(o2->date_after, sizeof o2->date_after, "%s", b->date);
-                        snprintf(o2->commit_before, sizeof o2->commit_before, "%s", a->commit);
-                        snprintf(o2->commit_after, sizeof o2->commit_after, "%s", b->commit);
-                        o2->before = cps[c].before;
-                        o2->after = cps[c].after;
-                        o2->rel = cps[c].rel;
-                        o2->z = cps[c].z;
-                        o2->p = cps[c].p;
-                        o2->regression = mc.lower_worse ? cps[c].after < cps[c].before : cps[c].after > cps[c].before;
-                        o2->recent = rank[at_night[cps[c].at]] < recent;
-                    }
-                }
-                if (!more) break;
-                snprintf(series, sizeof series, "%s", s);
-                k = 0;
+        if (!sb_columns_metric(out[i], &mc)) {
+            const char *examples[4];
+            int ne = sb_columns_default_metrics(SB_USE_HISTORY, examples, 4);
+            char list[256] = "";
+            for (int k = 0; k < ne; k++) {
+                size_t l = strlen(list);
+                snprintf(list + l, sizeof list - l, "%s%s", k ? ", " : "", examples[k]);
             }
-            long long night = sqlite3_column_int64(st, 1);
-            int ni = 0;
-            while (ni < nn && nights[ni].night != night) ni++;
-            if (ni == nn) continue;
-            if (k > 0 && at_night[k - 1] == ni) k--;   /* one figure a night: the later run */
-            at_night[k] = ni;
-            x[k] = sqlite3_column_double(st, 3);
-            ci[k] = sqlite3_column_type(st, 4) == SQLITE_NULL ? 0 : sqlite3_column_double(st, 4) / fabs(x[k] ? x[k] : 1);
-            const char *stable = (const char *)sqlite3_column_text(st, 2);
-            w[k] = stable && !strcmp(stable, "no") ? 0.25 : 1.0;
-            k++;
+            return sb_fail(err, "unknown metric '%s' (a summary metric, e.g. %s; shadowbench columns lists them)",
+                           out[i], list), -1;
         }
-        sqlite3_finalize(st);
     }
-    free(x);
-    free(w);
-    free(ci);
-    free(tmp);
-    free(at_night);
-    free(nights);
-    free(rank);
-    if (!ok) {
-        free(ch);
-        return -1;
+    return nm;
+}
+
+/* What the detector walks: the nights (their rank among their host's from the newest) and one series' figures. */
+typedef struct walk {
+    const sb_history_query *q;
+    const char *metric;
+    sb_metric_cols mc;
+    sb_history_night *nights;
+    int nn, *rank, recent;
+    char key[4096];
+    double *x, *w, *ci, *tmp;
+    int *at_night, k;
+    sb_history_change *ch;
+    int nch, chcap;
+} walk;
+
+static void add_change(walk *wk, const sb_cp_change *cp) {
+    if (wk->nch == wk->chcap) wk->ch = sb_xrealloc(wk->ch, sizeof *wk->ch * (size_t)(wk->chcap = wk->chcap ? 2 * wk->chcap : 16));
+    sb_history_change *o = &wk->ch[wk->nch++];
+    memset(o, 0, sizeof *o);
+    snprintf(o->key, sizeof o->key, "%s", wk->key);
+    sb_series_parse(wk->key, &o->series);
+    snprintf(o->metric, sizeof o->metric, "%s", wk->metric);
+    const sb_history_night *a = &wk->nights[wk->at_night[cp->at - 1]], *b = &wk->nights[wk->at_night[cp->at]];
+    o->night_before = a->id;
+    o->night_after = b->id;
+    snprintf(o->date_after, sizeof o->date_after, "%s", b->date);
+    snprintf(o->commit_before, sizeof o->commit_before, "%s", a->commit);
+    snprintf(o->commit_after, sizeof o->commit_after, "%s", b->commit);
+    o->before = cp->before;
+    o->after = cp->after;
+    o->rel = cp->rel;
+    o->z = cp->z;
+    o->p = cp->p;
+    o->regression = wk->mc.lower_worse ? cp->after < cp->before : cp->after > cp->before;
+    o->recent = wk->rank[wk->at_night[cp->at]] < wk->recent;
+}
+
+/* The series walked so far is complete: its changes. A night whose own CI is more than twice the series' usual
+ * counts less. */
+static void detect(walk *wk) {
+    if (wk->k < 2 * SB_CP_MIN_SEG) return;
+    int nci = 0;
+    for (int i = 0; i < wk->k; i++)
+        if (wk->ci[i] > 0) wk->tmp[nci++] = wk->ci[i];
+    double typical = 0;
+    if (nci) {
+        qsort(wk->tmp, (size_t)nci, sizeof *wk->tmp, cmp_double);
+        typical = wk->tmp[nci / 2];
     }
+    for (int i = 0; i < wk->k; i++)
+        if (typical > 0 && wk->ci[i] > 2 * typical) wk->w[i] *= (2 * typical / wk->ci[i]) * (2 * typical / wk->ci[i]);
+    sb_series s;
+    sb_series_parse(wk->key, &s);
+    sb_cp_opts o = {.relative = true, .noise_floor = wk->mc.ci[0] ? noise_floor(wk->q, s.renderer) : 0};
+    sb_cp_change cps[64];
+    int nc = sb_changepoints(wk->x, wk->w, wk->k, &o, cps, 64, NULL);
+    for (int c = 0; c < nc && c < 64; c++) add_change(wk, &cps[c]);
+}
+
+static void take_figure(const char *key, const sb_history_point *p, void *arg) {
+    walk *wk = arg;
+    if (strcmp(key, wk->key)) {
+        detect(wk);
+        snprintf(wk->key, sizeof wk->key, "%s", key);
+        wk->k = 0;
+    }
+    int ni = 0;
+    while (ni < wk->nn && wk->nights[ni].id != p->night) ni++;
+    if (ni == wk->nn) return;
+    int k = wk->k;
+    if (k > 0 && wk->at_night[k - 1] == ni) k--;   /* one figure a night: the later run */
+    wk->at_night[k] = ni;
+    wk->x[k] = p->value;
+    wk->ci[k] = isnan(p->ci) ? 0 : p->ci / fabs(p->value ? p->value : 1);
+    wk->w[k] = p->stable ? 1.0 : 0.25;
+    wk->k = k + 1;
+}
+
+/* The nights from q->since on, and each one's rank among its host's nights counted from the newest. */
+static bool walk_nights(sb_history *h, walk *wk, sb_err *err) {
+    sb_history_night *all = NULL;
+    int na = sb_history_nights(h, &all, err);
+    if (na < 0) return false;
+    wk->nights = all;
+    wk->nn = 0;
+    for (int i = 0; i < na; i++)   /* the dates compare as SQLite's did (byte order) */
+        if (!wk->q->since || strcmp(all[i].date, wk->q->since) >= 0) {
+            sb_history_night tmp = all[wk->nn];
+            all[wk->nn++] = all[i];
+            all[i] = tmp;
+        }
+    for (int i = wk->nn; i < na; i++) free(all[i].header), free(all[i].meta), all[i].header = all[i].meta = NULL;
+    wk->rank = sb_xcalloc((size_t)wk->nn + 1, sizeof *wk->rank);
+    for (int i = 0; i < wk->nn; i++)
+        for (int j = i + 1; j < wk->nn; j++)
+            if (!strcmp(all[i].host, all[j].host)) wk->rank[i]++;
+    size_t m = (size_t)(wk->nn > 0 ? wk->nn : 1);
+    wk->x = sb_xmalloc(sizeof *wk->x * m), wk->w = sb_xmalloc(sizeof *wk->w * m);
+    wk->ci = sb_xmalloc(sizeof *wk->ci * m), wk->tmp = sb_xmalloc(sizeof *wk->tmp * m);
+    wk->at_night = sb_xmalloc(sizeof *wk->at_night * m);
+    return true;
+}
+
+static void walk_free(walk *wk) {
+    for (int i = 0; i < wk->nn; i++) free(wk->nights[i].header), free(wk->nights[i].meta);
+    free(wk->nights);
+    free(wk->rank);
+    free(wk->x), free(wk->w), free(wk->ci), free(wk->tmp), free(wk->at_night);
+}
+
+/* Each change's label (as the report names its series) and what is known of its night (machine, annotations). */
+static bool describe_changes(sb_history *h, sb_history_change *ch, int nch, sb_err *err) {
     int ns = 0;
-    char **all = sb_history_series(h, &ns), **labels = sb_history_labels(all, ns);
+    char **all = sb_history_series_keys(h, &ns), **labels = sb_history_labels(all, ns);
     for (int c = 0; c < nch; c++)
         for (int i = 0; i < ns; i++)
-            if (!strcmp(all[i], ch[c].series)) snprintf(ch[c].label, sizeof ch[c].label, "%s", labels[i]);
+            if (!strcmp(all[i], ch[c].key)) snprintf(ch[c].label, sizeof ch[c].label, "%s", labels[i]);
     for (int i = 0; i < ns; i++) free(all[i]), free(labels[i]);
     free(all);
     free(labels);
-    /* what is known of each change's night: the machine, and the annotations */
     sb_history_note *notes = NULL;
     int nnotes = sb_history_notes(h, &notes, err);
-    if (nnotes < 0) {
-        free(ch);
-        return -1;
-    }
+    if (nnotes < 0) return false;
     for (int c = 0; c < nch; c++)
         for (int i = 0; i < nnotes; i++) {
             const sb_history_note *x = &notes[i];
-            if (x->night != ch[c].night_after || !sb_history_note_matches(x, ch[c].series, ch[c].label)) continue;
+            if (x->night != ch[c].night_after || !sb_history_note_matches(x, ch[c].key, ch[c].label)) continue;
             char *to = x->machine ? ch[c].machine : ch[c].note;
             size_t l = strlen(to);
             snprintf(to + l, sizeof ch[c].note - l, "%s%s", l ? "; " : "", x->machine ? x->aside : x->text);
             ch[c].accepted |= x->accept;
         }
     free(notes);
-    *out = ch;
-    return nch;
+    return true;
+}
+
+int sb_history_changes(sb_history *h, const sb_history_query *q, sb_history_change **out, sb_err *err) {
+    *out = NULL;
+    const char *metrics[32];
+    int nm = query_metrics(q, metrics, err);
+    if (nm < 0) return -1;
+    walk wk = {.q = q, .recent = q->recent > 0 ? q->recent : 3};
+    if (!walk_nights(h, &wk, err)) return -1;
+    bool ok = true;
+    for (int mi = 0; ok && mi < nm; mi++) {
+        wk.metric = metrics[mi];
+        sb_columns_metric(metrics[mi], &wk.mc);
+        wk.key[0] = 0;
+        wk.k = 0;
+        ok = sb_history_each_figure(h, wk.mc.center, wk.mc.ci, q->since, take_figure, &wk, err);
+        if (ok) detect(&wk);
+    }
+    walk_free(&wk);
+    if (!ok || !describe_changes(h, wk.ch, wk.nch, err)) {
+        free(wk.ch);
+        return -1;
+    }
+    *out = wk.ch;
+    return wk.nch;
 }
 
 /* Whether ":item:" is in ":params:" */
@@ -597,52 +468,85 @@ static bool has_item(const char *params, const char *item, size_t len) {
     return false;
 }
 
-char **sb_history_labels(char *const *series, int n) {
+/* The items of a series' parameters that not every series of its technique shares (":a=1:b=2"). */
+static void own_items(const sb_series *f, const char (*ptext)[2048], int n, int i, char *kept, size_t len) {
+    kept[0] = 0;
+    for (const char *p = ptext[i]; *p;) {
+        size_t l = strcspn(p, ":");
+        bool shared = true;   /* by every series of this technique */
+        for (int j = 0; j < n && shared; j++)
+            if (j != i && !strcmp(f[j].technique, f[i].technique) && !has_item(ptext[j], p, l)) shared = false;
+        if (!shared) {
+            size_t k = strlen(kept);
+            snprintf(kept + k, len - k, ":%.*s", (int)l, p);
+        }
+        p += l;
+        if (*p) p++;
+    }
+}
+
+char **sb_history_labels(char *const *keys, int n) {
     char **out = sb_xcalloc((size_t)(n ? n : 1), sizeof *out);
-    series_fields *f = sb_xmalloc(sizeof *f * (size_t)(n ? n : 1));
+    sb_series *f = sb_xmalloc(sizeof *f * (size_t)(n ? n : 1));
+    char(*ptext)[2048] = sb_xmalloc(sizeof *ptext * (size_t)(n ? n : 1));
     bool hosts = false;
     for (int i = 0; i < n; i++) {
-        split_series(series[i], &f[i]);
-        if (i && strcmp(f[i].f[0], f[0].f[0])) hosts = true;
+        sb_series_parse(keys[i], &f[i]);
+        params_text(&f[i], ptext[i], sizeof ptext[i]);
+        if (i && strcmp(f[i].host, f[0].host)) hosts = true;
     }
     for (int i = 0; i < n; i++) {
-        char kept[1024] = "";
-        for (const char *p = f[i].f[6]; *p;) {
-            size_t len = strcspn(p, ":");
-            bool shared = true;   /* by every series of this technique */
-            for (int j = 0; j < n && shared; j++)
-                if (j != i && !strcmp(f[j].f[5], f[i].f[5]) && !has_item(f[j].f[6], p, len)) shared = false;
-            if (!shared) {
-                size_t l = strlen(kept);
-                snprintf(kept + l, sizeof kept - l, ":%.*s", (int)len, p);
-            }
-            p += len;
-            if (*p) p++;
-        }
-        char buf[4096], where[2100];
-        if (!strcmp(f[i].f[2], f[i].f[3])) snprintf(where, sizeof where, "%s", f[i].f[2]);
-        else snprintf(where, sizeof where, "%s/%s", f[i].f[2], f[i].f[3]);
-        snprintf(buf, sizeof buf, "%s %s%s %s%s%s", where, f[i].f[5], kept, f[i].f[4], hosts ? " @" : "",
-                 hosts ? f[i].f[0] : "");
+        char kept[1024], buf[4096], where[2100];
+        own_items(f, (const char(*)[2048])ptext, n, i, kept, sizeof kept);
+        if (!strcmp(f[i].scene, f[i].path)) snprintf(where, sizeof where, "%s", f[i].scene);
+        else snprintf(where, sizeof where, "%s/%s", f[i].scene, f[i].path);
+        snprintf(buf, sizeof buf, "%s %s%s %s%s%s", where, f[i].technique, kept, f[i].size, hosts ? " @" : "",
+                 hosts ? f[i].host : "");
         out[i] = sb_strdup(buf);
     }
     free(f);
+    free(ptext);
     return out;
 }
 
-char **sb_history_series(sb_history *h, int *n) {
-    *n = 0;
-    char **out = NULL;
-    sqlite3_stmt *st;
-    if (sqlite3_prepare_v2(h->db, "SELECT DISTINCT series FROM runs ORDER BY series", -1, &st, NULL) != SQLITE_OK)
-        return NULL;
-    while (sqlite3_step(st) == SQLITE_ROW) {
-        out = sb_xrealloc(out, sizeof *out * (size_t)(*n + 1));
-        const char *s = (const char *)sqlite3_column_text(st, 0);
-        out[(*n)++] = sb_strdup(s ? s : "");
-    }
-    sqlite3_finalize(st);
-    return out;
+static const char *verdict_of(const sb_history_change *c) {
+    if (c->regression)
+        return c->accepted ? (c->recent ? "accepted (recent)" : "accepted")
+                           : c->recent ? "REGRESSION (recent)" : "regression";
+    return c->recent ? "improvement (recent)" : "improvement";
+}
+
+static void print_change_csv(const sb_history_change *c, FILE *out) {
+    sb_csv row = {0};
+    sb_csv_str(&row, c->label);
+    sb_csv_str(&row, c->series.host);
+    sb_csv_str(&row, c->metric);
+    sb_csv_int(&row, c->night_before);
+    sb_csv_int(&row, c->night_after);
+    sb_csv_str(&row, c->date_after);
+    sb_csv_num(&row, c->before);
+    sb_csv_num(&row, c->after);
+    sb_csv_num(&row, 100 * c->rel);
+    sb_csv_num(&row, c->z);
+    sb_csv_num(&row, c->p);
+    sb_csv_str(&row, c->commit_before);
+    sb_csv_str(&row, c->commit_after);
+    sb_csv_str(&row, verdict_of(c));
+    sb_csv_str(&row, c->note);
+    sb_csv_str(&row, c->machine);
+    sb_csv_end_row(&row);
+    fputs(row.buf, out);
+    sb_csv_free(&row);
+}
+
+static void print_change_text(const sb_history_change *c, FILE *out) {
+    char commits[160];
+    if (!strcmp(c->commit_before, c->commit_after)) snprintf(commits, sizeof commits, "%.60s (both)", c->commit_after);
+    else snprintf(commits, sizeof commits, "%.60s..%.60s", c->commit_before, c->commit_after);
+    fprintf(out, "%-40s %-14s %-6lld %-20s %10.4g %10.4g %+7.1f%% %6.1f %8.2g  %-25s %s\n", c->label, c->metric,
+            c->night_after, c->date_after, c->before, c->after, 100 * c->rel, c->z, c->p, commits, verdict_of(c));
+    if (c->machine[0]) fprintf(out, "    %s\n", c->machine);
+    if (c->note[0]) fprintf(out, "    note: %s\n", c->note);
 }
 
 void sb_history_print_changes(const sb_history_change *c, int n, int format, FILE *out) {
@@ -653,206 +557,19 @@ void sb_history_print_changes(const sb_history_change *c, int n, int format, FIL
         fprintf(out, "%-40s %-14s %-6s %-20s %10s %10s %8s %6s %8s  %-25s %s\n", "series", "metric", "night",
                 "first night after", "before", "after", "change", "z", "p", "commits", "verdict");
     for (int i = 0; i < n; i++) {
-        series_fields f;
-        split_series(c[i].series, &f);
-        const char *label = c[i].label, *host = f.f[0];
-        const char *verdict = c[i].regression ? (c[i].accepted ? (c[i].recent ? "accepted (recent)" : "accepted")
-                                                               : c[i].recent ? "REGRESSION (recent)" : "regression")
-                                              : (c[i].recent ? "improvement (recent)" : "improvement");
-        if (format == SB_OUTPUT_CSV) {
-            sb_csv row = {0};
-            sb_csv_str(&row, label);
-            sb_csv_str(&row, host);
-            sb_csv_str(&row, c[i].metric);
-            sb_csv_int(&row, c[i].night_before);
-            sb_csv_int(&row, c[i].night_after);
-            sb_csv_str(&row, c[i].date_after);
-            sb_csv_num(&row, c[i].before);
-            sb_csv_num(&row, c[i].after);
-            sb_csv_num(&row, 100 * c[i].rel);
-            sb_csv_num(&row, c[i].z);
-            sb_csv_num(&row, c[i].p);
-            sb_csv_str(&row, c[i].commit_before);
-            sb_csv_str(&row, c[i].commit_after);
-            sb_csv_str(&row, verdict);
-            sb_csv_str(&row, c[i].note);
-            sb_csv_str(&row, c[i].machine);
-            sb_csv_end_row(&row);
-            fputs(row.buf, out);
-            sb_csv_free(&row);
-        } else {
-            char commits[160];
-            if (!strcmp(c[i].commit_before, c[i].commit_after)) snprintf(commits, sizeof commits, "%.60s (both)", c[i].commit_after);
-            else snprintf(commits, sizeof commits, "%.60s..%.60s", c[i].commit_before, c[i].commit_after);
-            fprintf(out, "%-40s %-14s %-6lld %-20s %10.4g %10.4g %+7.1f%% %6.1f %8.2g  %-25s %s\n", label, c[i].metric,
-                    c[i].night_after, c[i].date_after, c[i].before, c[i].after, 100 * c[i].rel, c[i].z, c[i].p,
-                    commits, verdict);
-            if (c[i].machine[0]) fprintf(out, "    %s\n", c[i].machine);
-            if (c[i].note[0]) fprintf(out, "    note: %s\n", c[i].note);
-        }
+        if (format == SB_OUTPUT_CSV) print_change_csv(&c[i], out);
+        else print_change_text(&c[i], out);
     }
 }
 
-/* ---- what the report asks ---- */
-
-static void copy_col(char *dst, size_t len, sqlite3_stmt *st, int i) {
-    const char *s = (const char *)sqlite3_column_text(st, i);
-    snprintf(dst, len, "%s", s ? s : "");
-}
-
-int sb_history_nights(sb_history *h, sb_history_night **out, sb_err *err) {
-    *out = NULL;
-    sqlite3_stmt *st;
-    if (sqlite3_prepare_v2(h->db,
-                           "SELECT n.id, n.date, n.host, n.git_commit, n.renderer, n.version, n.header, n.meta, n.dir, "
-                           "count(r.id), sum(r.status = 'ok'), sum(r.status = 'failed'), sum(r.stable = 'no'), "
-                           "sum(r.warnings != '') FROM nights n LEFT JOIN runs r ON r.night = n.id GROUP BY n.id "
-                           "ORDER BY n.date, n.id",
-                           -1, &st, NULL) != SQLITE_OK)
-        return db_fail(h, err, "reading the nights"), -1;
-    int n = 0;
-    while (sqlite3_step(st) == SQLITE_ROW) {
-        *out = sb_xrealloc(*out, sizeof **out * (size_t)(n + 1));
-        sb_history_night *x = &(*out)[n++];
-        memset(x, 0, sizeof *x);
-        x->id = sqlite3_column_int64(st, 0);
-        copy_col(x->date, sizeof x->date, st, 1);
-        copy_col(x->host, sizeof x->host, st, 2);
-        copy_col(x->commit, sizeof x->commit, st, 3);
-        copy_col(x->renderer, sizeof x->renderer, st, 4);
-        copy_col(x->version, sizeof x->version, st, 5);
-        const char *header = (const char *)sqlite3_column_text(st, 6), *meta = (const char *)sqlite3_column_text(st, 7);
-        x->header = sb_strdup(header ? header : "");
-        x->meta = sb_strdup(meta ? meta : "");
-        copy_col(x->dir, sizeof x->dir, st, 8);
-        int *counts[] = {&x->runs, &x->ok, &x->failed, &x->unstable, &x->warned};
-        for (int c = 0; c < 5; c++) *counts[c] = sqlite3_column_int(st, 9 + c);
-    }
-    sqlite3_finalize(st);
-    return n;
-}
-
-void sb_history_nights_free(sb_history_night *n, int count) {
-    for (int i = 0; i < count; i++) free(n[i].header), free(n[i].meta);
-    free(n);
-}
-
-char *sb_history_night_summary(sb_history *h, const sb_history_night *night, sb_err *err) {
-    sqlite3_stmt *st;
-    if (sqlite3_prepare_v2(h->db, "SELECT line FROM runs WHERE night = ? ORDER BY run_index, id", -1, &st, NULL) !=
-        SQLITE_OK)
-        return db_fail(h, err, "reading a night's runs"), NULL;
-    sqlite3_bind_int64(st, 1, night->id);
-    size_t len = strlen(night->header), cap = len + 2;
-    char *text = sb_xmalloc(cap);
-    memcpy(text, night->header, len);
-    text[len++] = '\n';
-    while (sqlite3_step(st) == SQLITE_ROW) {
-        const char *line = (const char *)sqlite3_column_text(st, 0);
-        size_t n = line ? strlen(line) : 0;
-        if (len + n + 2 > cap) text = sb_xrealloc(text, cap = (len + n + 2) * 2);
-        memcpy(text + len, line ? line : "", n);
-        len += n;
-        text[len++] = '\n';
-    }
-    text[len] = 0;
-    sqlite3_finalize(st);
-    return text;
-}
-
-bool sb_history_night_frames(sb_history *h, long long night, void (*fn)(const char *run_id, const char *csv, void *arg),
-                             void *arg, sb_err *err) {
-    sqlite3_stmt *st;
-    if (sqlite3_prepare_v2(h->db, "SELECT r.run_id, f.csv FROM frames f JOIN runs r ON r.id = f.run WHERE r.night = ?",
-                           -1, &st, NULL) != SQLITE_OK)
-        return db_fail(h, err, "reading a night's frames");
-    sqlite3_bind_int64(st, 1, night);
-    while (sqlite3_step(st) == SQLITE_ROW) {
-        const char *id = (const char *)sqlite3_column_text(st, 0), *csv = (const char *)sqlite3_column_text(st, 1);
-        fn(id ? id : "", csv ? csv : "", arg);
-    }
-    sqlite3_finalize(st);
-    return true;
-}
-
-int sb_history_points(sb_history *h, const char *series, const char *metric, sb_history_point **out, sb_err *err) {
+int sb_history_points(sb_history *h, const char *series_key, const char *metric, sb_history_point **out, sb_err *err) {
     *out = NULL;
     sb_metric_cols mc;
     if (!sb_columns_metric(metric, &mc)) return sb_fail(err, "unknown metric '%s'", metric), -1;
-    sqlite3_stmt *st;
-    if (sqlite3_prepare_v2(h->db,
-                           "SELECT r.night, n.date, r.stable, c.value, i.value, n.git_commit FROM runs r JOIN nights n "
-                           "ON n.id = r.night JOIN metrics c ON c.run = r.id AND c.name = ?2 LEFT JOIN metrics i ON "
-                           "i.run = r.id AND i.name = ?3 WHERE r.series = ?1 AND r.status = 'ok' ORDER BY n.date, n.id",
-                           -1, &st, NULL) != SQLITE_OK)
-        return db_fail(h, err, "reading a series"), -1;
-    bind_text(st, 1, series);
-    bind_text(st, 2, mc.center);
-    bind_text(st, 3, mc.ci[0] ? mc.ci : "-");
-    int n = 0;
-    while (sqlite3_step(st) == SQLITE_ROW) {
-        *out = sb_xrealloc(*out, sizeof **out * (size_t)(n + 1));
-        sb_history_point *p = &(*out)[n++];
-        p->night = sqlite3_column_int64(st, 0);
-        copy_col(p->date, sizeof p->date, st, 1);
-        const char *stable = (const char *)sqlite3_column_text(st, 2);
-        p->stable = !stable || strcmp(stable, "no");
-        p->value = sqlite3_column_double(st, 3);
-        p->ci = sqlite3_column_type(st, 4) == SQLITE_NULL ? NAN : sqlite3_column_double(st, 4);
-        copy_col(p->commit, sizeof p->commit, st, 5);
-    }
-    sqlite3_finalize(st);
-    return n;
+    return sb_history_points_of(h, series_key, mc.center, mc.ci, out, err);
 }
 
 /* ---- annotations and what changed on the machine ---- */
-
-long long sb_history_find_night(sb_history *h, const char *what, sb_err *err) {
-    sqlite3_stmt *st;
-    char *end;
-    long long id = strtoll(what, &end, 10);
-    if (*what && !*end) {
-        if (sqlite3_prepare_v2(h->db, "SELECT id FROM nights WHERE id = ?", -1, &st, NULL) != SQLITE_OK)
-            return db_fail(h, err, "reading the nights"), -1;
-        sqlite3_bind_int64(st, 1, id);
-        long long got = sqlite3_step(st) == SQLITE_ROW ? sqlite3_column_int64(st, 0) : 0;
-        sqlite3_finalize(st);
-        if (got) return got;
-    }
-    /* a commit: the first night that ran it (its prefix, at least 4 characters) */
-    if (strlen(what) < 4) return 0;
-    if (sqlite3_prepare_v2(h->db, "SELECT id FROM nights WHERE substr(git_commit, 1, length(?1)) = ?1 OR "
-                                  "substr(?1, 1, length(git_commit)) = git_commit AND length(git_commit) >= 7 "
-                                  "ORDER BY date, id LIMIT 1",
-                           -1, &st, NULL) != SQLITE_OK)
-        return db_fail(h, err, "reading the nights"), -1;
-    bind_text(st, 1, what);
-    long long got = sqlite3_step(st) == SQLITE_ROW ? sqlite3_column_int64(st, 0) : 0;
-    sqlite3_finalize(st);
-    return got;
-}
-
-bool sb_history_annotate(sb_history *h, long long night, const char *commit, const char *series, const char *text,
-                         bool accept, sb_err *err) {
-    sqlite3_stmt *st;
-    char added[64];
-    time_t now = time(NULL);
-    struct tm tm;
-    gmtime_r(&now, &tm);
-    strftime(added, sizeof added, "%Y-%m-%dT%H:%M:%SZ", &tm);
-    if (sqlite3_prepare_v2(h->db, "INSERT INTO annotations(night, git_commit, series, text, accept, added) "
-                                  "VALUES (?,?,?,?,?,?)", -1, &st, NULL) != SQLITE_OK)
-        return db_fail(h, err, "adding the annotation");
-    sqlite3_bind_int64(st, 1, night);
-    bind_text(st, 2, commit);
-    bind_text(st, 3, series);
-    bind_text(st, 4, text);
-    sqlite3_bind_int(st, 5, accept);
-    bind_text(st, 6, added);
-    bool ok = sqlite3_step(st) == SQLITE_DONE;
-    sqlite3_finalize(st);
-    return ok || db_fail(h, err, "adding the annotation");
-}
 
 /* The fields of a night's meta that say what machine and build it ran on, and what a change of each is called. */
 static const struct { const char *key, *name; } fingerprint[] = {
@@ -887,6 +604,13 @@ static void machine_change(const char *before, const char *after, const char *ve
     }
 }
 
+static sb_history_note *push_note(sb_history_note **out, int *n) {
+    *out = sb_xrealloc(*out, sizeof **out * (size_t)(*n + 1));
+    sb_history_note *x = &(*out)[(*n)++];
+    memset(x, 0, sizeof *x);
+    return x;
+}
+
 int sb_history_notes(sb_history *h, sb_history_note **out, sb_err *err) {
     *out = NULL;
     int n = 0;
@@ -898,13 +622,10 @@ int sb_history_notes(sb_history *h, sb_history_note **out, sb_err *err) {
         int prev = -1;
         for (int j = i - 1; j >= 0 && prev < 0; j--)
             if (!strcmp(nights[j].host, nights[i].host)) prev = j;
-        if (prev < 0) continue;
-        char what[2048];
-        machine_change(nights[prev].meta, nights[i].meta, " changed", what, sizeof what);
+        char what[2048] = "";
+        if (prev >= 0) machine_change(nights[prev].meta, nights[i].meta, " changed", what, sizeof what);
         if (!what[0]) continue;
-        *out = sb_xrealloc(*out, sizeof **out * (size_t)(n + 1));
-        sb_history_note *x = &(*out)[n++];
-        memset(x, 0, sizeof *x);
+        sb_history_note *x = push_note(out, &n);
         x->night = nights[i].id;
         x->machine = true;
         snprintf(x->date, sizeof x->date, "%s", nights[i].date);
@@ -913,123 +634,125 @@ int sb_history_notes(sb_history *h, sb_history_note **out, sb_err *err) {
         machine_change(nights[prev].meta, nights[i].meta, " changed here too", x->aside, sizeof x->aside);
     }
     sb_history_nights_free(nights, nn);
-    sqlite3_stmt *st;
-    if (sqlite3_prepare_v2(h->db, "SELECT a.night, n.date, a.git_commit, a.series, a.text, a.accept FROM annotations a "
-                                  "JOIN nights n ON n.id = a.night ORDER BY n.date, a.id", -1, &st, NULL) != SQLITE_OK) {
+    sb_history_annotation *a = NULL;
+    int na = sb_history_annotations(h, &a, err);
+    if (na < 0) {
         free(*out);
         *out = NULL;
-        return db_fail(h, err, "reading the annotations"), -1;
+        return -1;
     }
-    while (sqlite3_step(st) == SQLITE_ROW) {
-        *out = sb_xrealloc(*out, sizeof **out * (size_t)(n + 1));
-        sb_history_note *x = &(*out)[n++];
-        memset(x, 0, sizeof *x);
-        x->night = sqlite3_column_int64(st, 0);
-        copy_col(x->date, sizeof x->date, st, 1);
-        copy_col(x->commit, sizeof x->commit, st, 2);
-        copy_col(x->series, sizeof x->series, st, 3);
-        copy_col(x->text, sizeof x->text, st, 4);
-        x->accept = sqlite3_column_int(st, 5) != 0;
+    for (int i = 0; i < na; i++) {
+        sb_history_note *x = push_note(out, &n);
+        x->night = a[i].night;
+        x->accept = a[i].accept;
+        snprintf(x->date, sizeof x->date, "%s", a[i].date);
+        snprintf(x->commit, sizeof x->commit, "%s", a[i].commit);
+        snprintf(x->series, sizeof x->series, "%s", a[i].series);
+        snprintf(x->text, sizeof x->text, "%s", a[i].text);
     }
-    sqlite3_finalize(st);
+    free(a);
     return n;
 }
 
-bool sb_history_note_matches(const sb_history_note *note, const char *series, const char *label) {
+bool sb_history_note_matches(const sb_history_note *note, const char *key, const char *label) {
     const char *p = note->series;
     if (!p[0]) return true;
-    return !fnmatch(p, label, 0) || !fnmatch(p, series, 0) || strstr(label, p) || strstr(series, p);
+    return !fnmatch(p, label, 0) || !fnmatch(p, key, 0) || strstr(label, p) || strstr(key, p);
 }
 
 /* ---- a results set against the nights ---- */
 
+typedef struct band {
+    double center, lo, hi, z, rel;
+    bool outside, worse;
+} band;
+
+/* The detector's noise model over a series' last k nights: a log scale for positive figures, sigma from
+ * night-to-night differences floored at the noise floor for timings; the band is median ± sqrt(penalty) sigma. */
+static band band_of(const sb_history_point *p, int k, double x, const sb_metric_cols *mc, double floor) {
+    double *raw = sb_xmalloc(sizeof *raw * (size_t)k), *v = sb_xmalloc(sizeof *v * (size_t)k);
+    bool logs = true;   /* as the detector reads them: a log scale when every night's figure is > 0 */
+    for (int i = 0; i < k; i++) raw[i] = p[i].value, logs = logs && raw[i] > 0;
+    for (int i = 0; i < k; i++) v[i] = logs ? log(raw[i]) : raw[i];
+    double sigma = 0;
+    sb_cp_opts o = {.relative = true, .noise_floor = mc->ci[0] ? floor : 0};
+    sb_changepoints(raw, NULL, k, &o, NULL, 0, &sigma);
+    qsort(v, (size_t)k, sizeof *v, cmp_double);
+    double med = sb_percentile(v, k, 0.5);
+    double xs = logs ? (x > 0 ? log(x) : -INFINITY) : x, half = sqrt(SB_CP_PENALTY) * sigma * sqrt(1 + 1.0 / k);
+    band b = {.z = sigma > 0 ? (xs - med) / (sigma * sqrt(1 + 1.0 / k)) : 0,
+              .lo = logs ? exp(med - half) : med - half, .hi = logs ? exp(med + half) : med + half,
+              .center = logs ? exp(med) : med, .outside = fabs(xs - med) > half,
+              .worse = mc->lower_worse ? xs < med : xs > med};
+    b.rel = b.center ? x / b.center - 1 : NAN;
+    free(raw);
+    free(v);
+    return b;
+}
+
+/* One figure of one run against its series' newest nights: printed; 1 when beyond the band on the worse side,
+ * 0 within or better, -1 not compared, -2 on a database error. */
+static int check_figure(sb_history *h, const char *key, const char *label, const char *metric, double x, int nights,
+                        double floor, FILE *out, sb_err *err) {
+    sb_metric_cols mc;
+    sb_columns_metric(metric, &mc);
+    sb_history_point *p = NULL;
+    int np = sb_history_points_of(h, key, mc.center, mc.ci, &p, err);
+    if (np < 0) return -2;
+    int from = np > nights ? np - nights : 0, k = np - from;
+    if (k < 3) {
+        fprintf(out, "%-44.44s %-14s %10.4g  %d night(s): too few for a band\n", label, metric, x, k);
+        free(p);
+        return -1;
+    }
+    band b = band_of(p + from, k, x, &mc, floor);
+    free(p);
+    char range[64];
+    snprintf(range, sizeof range, "[%.4g, %.4g]", b.lo, b.hi);
+    fprintf(out, "%-44.44s %-14s %10.4g %10.4g %23s %+7.1f%% %6.1f  %s\n", label, metric, x, b.center, range,
+            100 * b.rel, b.z, !b.outside ? "within" : b.worse ? "REGRESSION" : "improvement");
+    return b.outside && b.worse;
+}
+
 int sb_history_check(sb_history *h, const char *dir, const sb_history_query *q, int nights, FILE *out, sb_err *err) {
-    char sum_path[4200];
-    snprintf(sum_path, sizeof sum_path, "%s/summary.csv", dir);
-    sb_table t;
-    if (!sb_table_load(&t, sum_path, err)) return -1;
-    char *meta = read_meta(dir);
-    char host[256], renderer[512];
-    set_host(meta, &t, host, sizeof host, renderer, sizeof renderer);
-    double floor = noise_floor(q, renderer);
+    set_in s;
     const char *metrics[32];
-    int nm = 0;
-    if (q->nmetrics)
-        for (int i = 0; i < q->nmetrics && nm < 32; i++) metrics[nm++] = q->metrics[i];
-    else
-        nm = sb_columns_default_metrics(SB_USE_HISTORY, metrics, 32);
-    int ns = 0;
-    char **all = sb_history_series(h, &ns), **labels = sb_history_labels(all, ns);
-    int regressions = 0, compared = 0;
+    int nm = query_metrics(q, metrics, err);
+    if (nm < 0 || !set_read(&s, dir, err)) return nm < 0 ? -1 : (set_free(&s), -1);
+    double floor = noise_floor(q, s.renderer);
+    int ns = 0, regressions = 0, compared = 0, rc = 0;
+    char **all = sb_history_series_keys(h, &ns), **labels = sb_history_labels(all, ns);
     fprintf(out, "%-44s %-14s %10s %10s %23s %8s %6s  %s\n", "series", "metric", "this set", "nights", "band",
             "change", "z", "verdict");
-    for (int r = 0; r < t.nrows; r++) {
-        char series[4096], size[64], params[2048];
-        series_of(&t, r, host, renderer, series, sizeof series, size, sizeof size, params, sizeof params);
+    for (int r = 0; rc >= 0 && r < s.t.nrows; r++) {
+        sb_series se;
+        char key[4096];
+        sb_series_of_row(&s.t, r, s.host, s.renderer, &se);
+        sb_series_key(&se, key, sizeof key);
         const char *label = NULL;
         for (int i = 0; i < ns; i++)
-            if (!strcmp(all[i], series)) label = labels[i];
-        if (!label) {
-            fprintf(out, "%s %s %s: no series in the history (a new run): nothing to compare\n",
-                    sb_table_get(&t, r, "scene"), sb_table_get(&t, r, "technique"), size);
-            continue;
-        }
-        if (strcmp(sb_table_get(&t, r, "status"), "ok")) {
-            fprintf(out, "%-44.44s %-14s %s: not compared\n", label, "-", sb_table_get(&t, r, "status"));
-            continue;
-        }
-        for (int mi = 0; mi < nm; mi++) {
+            if (!strcmp(all[i], key)) label = labels[i];
+        sb_status st = sb_status_of(sb_table_get(&s.t, r, "status"));
+        if (!label)
+            fprintf(out, "%s %s %s: no series in the history (a new run): nothing to compare\n", se.scene,
+                    se.technique, se.size);
+        else if (st != SB_STATUS_OK)
+            fprintf(out, "%-44.44s %-14s %s: not compared\n", label, "-", sb_status_names[st]);
+        for (int mi = 0; label && st == SB_STATUS_OK && rc >= 0 && mi < nm; mi++) {
             sb_metric_cols mc;
             double x;
-            if (!sb_columns_metric(metrics[mi], &mc) || !sb_parse_double(sb_table_get(&t, r, mc.center), &x)) continue;
-            sb_history_point *p = NULL;
-            int np = sb_history_points(h, series, metrics[mi], &p, err);
-            if (np < 0) {
-                free(meta);
-                sb_table_free(&t);
-                return -1;
-            }
-            int from = np > nights ? np - nights : 0, k = np - from;
-            if (k < 3) {
-                fprintf(out, "%-44.44s %-14s %10.4g  %d night(s): too few for a band\n", label, metrics[mi], x, k);
-                free(p);
-                continue;
-            }
-            /* the detector's noise model over the last k nights: a log scale for positive figures, sigma
-               from night-to-night differences floored at the noise floor for timings */
-            if (k > 1024) from = np - (k = 1024);
-            double raw[1024], v[1024], sorted[1024];
-            bool logs = true;   /* as the detector reads them: a log scale when every night's figure is > 0 */
-            for (int i = 0; i < k; i++) raw[i] = p[from + i].value, logs = logs && raw[i] > 0;
-            for (int i = 0; i < k; i++) v[i] = logs ? log(raw[i]) : raw[i];
-            free(p);
-            double sigma = 0;
-            sb_cp_opts o = {.relative = true, .noise_floor = mc.ci[0] ? floor : 0};
-            sb_changepoints(raw, NULL, k, &o, NULL, 0, &sigma);
-            memcpy(sorted, v, sizeof *v * (size_t)k);
-            qsort(sorted, (size_t)k, sizeof *sorted, cmp_double);
-            double med = sb_percentile(sorted, k, 0.5);
-            double xs = logs ? (x > 0 ? log(x) : -INFINITY) : x, half = sqrt(SB_CP_PENALTY) * sigma * sqrt(1 + 1.0 / k);
-            double z = sigma > 0 ? (xs - med) / (sigma * sqrt(1 + 1.0 / k)) : 0;
-            double lo = logs ? exp(med - half) : med - half, hi = logs ? exp(med + half) : med + half;
-            double center = logs ? exp(med) : med;
-            bool outside = fabs(xs - med) > half;
-            bool worse = mc.lower_worse ? xs < med : xs > med;
-            const char *verdict = !outside ? "within" : worse ? "REGRESSION" : "improvement";
-            regressions += outside && worse;
-            compared++;
-            char band[64];
-            snprintf(band, sizeof band, "[%.4g, %.4g]", lo, hi);
-            double rel = center ? x / center - 1 : NAN;
-            fprintf(out, "%-44.44s %-14s %10.4g %10.4g %23s %+7.1f%% %6.1f  %s\n", label, metrics[mi], x, center, band,
-                    100 * rel, z, verdict);
+            if (!sb_columns_metric(metrics[mi], &mc) || !sb_parse_double(sb_table_get(&s.t, r, mc.center), &x)) continue;
+            rc = check_figure(h, key, label, metrics[mi], x, nights, floor, out, err);
+            regressions += rc > 0;
+            compared += rc >= 0;
+            rc = rc == -2 ? -1 : 0;
         }
     }
     for (int i = 0; i < ns; i++) free(all[i]), free(labels[i]);
     free(all);
     free(labels);
-    free(meta);
-    sb_table_free(&t);
+    set_free(&s);
+    if (rc < 0) return -1;
     sb_log("%s: %d figure(s) compared with up to %d night(s) of their series, %d regression(s) beyond the band", dir,
            compared, nights, regressions);
     return regressions;

@@ -261,10 +261,9 @@ var SB = (function () {
       { name: "size", get: function (r) { return r.width + "x" + r.height; } },
       { name: "status", get: function (r) { return r.status; } },
       { name: "stable", get: function (r) { return r.stable; } },
-      num("gpu_ms_median"), num("gpu_ci_pct"), num("final_ms_median"), num("cascade_ms_median"),
-      num("err_rate_mean"), num("flicker_rate_mean"), num("draw_calls_mean"), num("shadow_draw_calls_mean"),
+    ].concat(d.night_columns.map(num), [   /* the column table's night columns (SB_USE_NIGHT) */
       { name: "warnings / reason", get: function (r) { return (r.reason || "") + (r.warnings || "") + (r.unstable_reason ? " " + r.unstable_reason : ""); } },
-    ], rows, {
+    ]), rows, {
       oneline: true,
       rowClass: function (r) { return r.status === "failed" ? "failed" : r.stable === "no" ? "unstable" : r.warnings ? "warned" : ""; },
       tags: function (r) { return (r.stable === "no" ? "unstable" : "") + (r.warnings ? " warned" : ""); }
@@ -282,34 +281,36 @@ var SB = (function () {
       });
       m.appendChild(ps);
     }
-    /* a memory budget (shadow_mb, MiB; ?budget=M in the address): the fronts of the runs that hold no more */
+    /* the columns of each role (the column table's): time and error, flicker, the memory the budget limits */
+    var T = d.roles.time, E = d.roles.error, F = d.roles.flicker, M = d.roles.memory;
+    /* a memory budget (MiB; ?budget=M in the address): the fronts of the runs that hold no more */
     var budget = el("input", { type: "number", min: "0", step: "any", id: "budget", value: param("budget") || "",
       placeholder: "any", style: "width:7em" });
     var plots = el("div", {});
     var fs = el("section", { id: "fronts" }, [el("h2", { text: "Time against error, per scene" }),
       el("p", { text: "Each point a run (median frame time, mean error rate against the exact reference; beside it, the mean flicker rate of its twins a display frame later); the line joins the runs no other run beats on both." }),
-      el("p", {}, [el("label", { "for": "budget", text: "memory budget, MiB of shadow storage (shadow_mb): " }), budget,
+      el("p", {}, [el("label", { "for": "budget", text: "memory budget, MiB of shadow storage (" + M + "): " }), budget,
         el("span", { "class": "small", text: " runs that hold more are left out of the fronts; empty: every run" })]),
       plots]);
     function drawFronts() {
       plots.textContent = "";
       var cap = parseFloat(budget.value), scenes = {}, over = 0;
       rows.forEach(function (r) {
-        if (r.status !== "ok" || typeof r.err_rate_mean !== "number" || typeof r.gpu_ms_median !== "number") return;
-        if (!isNaN(cap) && typeof r.shadow_mb === "number" && r.shadow_mb > cap) { over++; return; }
+        if (r.status !== "ok" || typeof r[E] !== "number" || typeof r[T] !== "number") return;
+        if (!isNaN(cap) && typeof r[M] === "number" && r[M] > cap) { over++; return; }
         (scenes[r.scene] = scenes[r.scene] || []).push(r);
       });
       if (!isNaN(cap)) plots.appendChild(el("p", { "class": "small", id: "budget-note",
         text: over + " run(s) over " + cap + " MiB left out" }));
       Object.keys(scenes).forEach(function (sc) {
-        var label = function (r) { var p = own(r); return r.technique + (p ? ":" + p : "") + (typeof r.shadow_mb === "number" ? " (" + fmt(r.shadow_mb, 3) + " MiB)" : ""); };
+        var label = function (r) { var p = own(r); return r.technique + (p ? ":" + p : "") + (typeof r[M] === "number" ? " (" + fmt(r[M], 3) + " MiB)" : ""); };
         front(plots, sc, scenes[sc].map(function (r) {
-          return { technique: r.technique, label: label(r), x: r.gpu_ms_median, y: r.err_rate_mean };
+          return { technique: r.technique, label: label(r), x: r[T], y: r[E] };
         }));
         /* beside it, flicker: the runs that measured it (a twin a display frame later) */
-        var fl = scenes[sc].filter(function (r) { return typeof r.flicker_rate_mean === "number"; });
+        var fl = scenes[sc].filter(function (r) { return typeof r[F] === "number"; });
         if (fl.length) front(plots, sc + ": flicker", fl.map(function (r) {
-          return { technique: r.technique, label: label(r), x: r.gpu_ms_median, y: r.flicker_rate_mean };
+          return { technique: r.technique, label: label(r), x: r[T], y: r[F] };
         }), { ylabel: "flicker rate" });
       });
       if (!Object.keys(scenes).length) plots.appendChild(el("p", { text: "No run of this night measured its error" + (isNaN(cap) ? "." : " within the budget.") }));
@@ -435,10 +436,10 @@ var SB = (function () {
       var x = function (f, i) { return i; };
       chart(cs, fr.map(function (f, i) { return [x(f, i)].concat(stages.map(function (s) { return f[at(s)] === null ? 0 : f[at(s)]; })); }),
         { labels: ["frame"].concat(stages), stackedGraph: true, fillGraph: true, xlabel: "measured frame", ylabel: "ms", axes: { x: { ticker: wholeTicks } } }, "Frame time by stage (stacked)");
-      chart(cs, fr.map(function (f, i) { return [i, f[at("draw_calls")], f[at("shadow_draw_calls")]]; }),
-        { labels: ["frame", "draw_calls", "shadow_draw_calls"], xlabel: "measured frame", axes: { x: { ticker: wholeTicks } } }, "Draw calls");
-      chart(cs, fr.map(function (f, i) { return [i, f[at("triangles")], f[at("shadow_triangles")]]; }),
-        { labels: ["frame", "triangles", "shadow_triangles"], xlabel: "measured frame", axes: { x: { ticker: wholeTicks } } }, "Triangles");
+      frames.charts.forEach(function (ch) {   /* the column table's charted columns (sb_frame_col.chart) */
+        chart(cs, fr.map(function (f, i) { return [i].concat(ch.columns.map(function (n) { return f[at(n)]; })); }),
+          { labels: ["frame"].concat(ch.columns), xlabel: "measured frame", axes: { x: { ticker: wholeTicks } } }, ch.title);
+      });
     }
     m.appendChild(cs);
     var imgs = night.images.filter(function (n) { return n.indexOf(id + "_f") === 0; });

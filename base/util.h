@@ -103,6 +103,8 @@ static inline uint64_t sb_hash_words(const uint64_t *w, int n) {
 
 double sb_now_ms(void);          /* CLOCK_MONOTONIC in milliseconds */
 double sb_process_start_ms(void);   /* sb_now_ms() when the process started */
+/* The time now in UTC as "YYYY-MM-DDTHH:MM:SSZ". */
+void sb_utc_now(char *out, size_t len);
 
 /* Allocation that cannot return NULL: out of memory prints one line
  * ("shadowbench: out of memory (N bytes)") and exits with status 1. */

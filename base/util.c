@@ -324,6 +324,13 @@ bool sb_parse_int(const char *s, long *out) {
     return true;
 }
 
+void sb_utc_now(char *out, size_t len) {
+    time_t now = time(NULL);
+    struct tm tm;
+    gmtime_r(&now, &tm);
+    strftime(out, len, "%Y-%m-%dT%H:%M:%SZ", &tm);
+}
+
 bool sb_make_stamped_dir(const char *base, char *out, size_t len, sb_err *err) {
     time_t now = time(NULL);
     struct tm tm;

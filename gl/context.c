@@ -31,6 +31,13 @@ static bool gl_has_ext(const char *name) {
     return false;
 }
 
+bool sb_renderer_is_software(const char *renderer) {
+    static const char *const names[] = {"llvmpipe", "softpipe", "swrast", "Software", "SwiftShader", "lavapipe"};
+    for (size_t i = 0; i < SB_COUNT(names); i++)
+        if (strstr(renderer, names[i])) return true;
+    return false;
+}
+
 static bool finish_gl(sb_context *c, GLADloadfunc load, sb_err *err) {
     int ver = gladLoadGL(load);
     if (!ver) return sb_fail(err, "%s: could not load GL functions", sb_backend_name(c->backend));
@@ -39,8 +46,7 @@ static bool finish_gl(sb_context *c, GLADloadfunc load, sb_err *err) {
     snprintf(c->vendor, sizeof c->vendor, "%s", (const char *)glGetString(GL_VENDOR));
     snprintf(c->renderer, sizeof c->renderer, "%s", (const char *)glGetString(GL_RENDERER));
     snprintf(c->version, sizeof c->version, "%s", (const char *)glGetString(GL_VERSION));
-    c->software = strstr(c->renderer, "llvmpipe") || strstr(c->renderer, "softpipe") ||
-                  strstr(c->renderer, "swrast") || strstr(c->renderer, "Software");
+    c->software = sb_renderer_is_software(c->renderer);
     if (c->gl_major * 10 + c->gl_minor < 43)
         return sb_fail(err, "%s: GL %d.%d core (%s); shadowbench needs GL 4.3 core", sb_backend_name(c->backend),
                        c->gl_major, c->gl_minor, c->renderer);

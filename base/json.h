@@ -59,3 +59,35 @@ bool sb_json_u64(const sb_json *v, uint64_t *out);
 /* Is the number negative (its literal starts with '-' and it is not zero)? */
 bool sb_json_negative(const sb_json *v);
 const char *sb_json_type_name(sb_json_type t);
+
+/* ---- writing ----
+ * The one JSON writer (the report's data files): values into a growable
+ * buffer, commas placed by the writer from the nesting it keeps. Strings are
+ * escaped, and '<' as \u003c, so the text is safe inside a <script>; a
+ * number that is not finite is written null. */
+#define SB_JW_MAX_DEPTH 64
+typedef struct sb_jw {
+    char *buf;              /* NUL-terminated; free with sb_jw_free */
+    size_t len, cap;
+    int depth;
+    bool fresh[SB_JW_MAX_DEPTH];   /* nothing written yet in the container at that depth */
+    bool after_key;
+} sb_jw;
+
+void sb_jw_free(sb_jw *w);
+/* Text as it is (no comma placed): a wrapper around the document. */
+void sb_jw_raw(sb_jw *w, const char *text);
+void sb_jw_obj(sb_jw *w);
+void sb_jw_end_obj(sb_jw *w);
+void sb_jw_arr(sb_jw *w);
+void sb_jw_end_arr(sb_jw *w);
+/* A member's name; its value is what is written next. */
+void sb_jw_key(sb_jw *w, const char *key);
+void sb_jw_str(sb_jw *w, const char *s);    /* NULL: "" */
+void sb_jw_num(sb_jw *w, double v);         /* %.6g */
+void sb_jw_bool(sb_jw *w, bool b);
+void sb_jw_null(sb_jw *w);
+/* "key": value in one call. */
+void sb_jw_kstr(sb_jw *w, const char *key, const char *s);
+void sb_jw_knum(sb_jw *w, const char *key, double v);
+void sb_jw_kbool(sb_jw *w, const char *key, bool b);

@@ -7,6 +7,11 @@
 
 typedef enum sb_backend { SB_BACKEND_EGL, SB_BACKEND_OSMESA } sb_backend;
 
+/* Whether a GL_RENDERER string names a rasterizer that runs on the CPU
+ * (llvmpipe, softpipe, swrast, SwiftShader, lavapipe): the one list the
+ * context and the history's noise floor share. */
+bool sb_renderer_is_software(const char *renderer);
+
 typedef struct sb_context {
     sb_backend backend;
     void *egl_display, *egl_context;

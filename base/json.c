@@ -4,6 +4,7 @@
 #include "json.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -381,3 +382,99 @@ const char *sb_json_type_name(sb_json_type t) {
     static const char *const names[] = {"null", "a boolean", "a number", "a string", "an array", "an object"};
     return (unsigned)t < SB_COUNT(names) ? names[t] : "?";
 }
+
+/* ---- writing ---- */
+
+void sb_jw_free(sb_jw *w) {
+    free(w->buf);
+    memset(w, 0, sizeof *w);
+}
+
+static void jw_put(sb_jw *w, const char *s, size_t n) {
+    if (w->len + n + 1 > w->cap) {
+        w->cap = (w->len + n + 1) * 2;
+        w->buf = sb_xrealloc(w->buf, w->cap);
+    }
+    memcpy(w->buf + w->len, s, n);
+    w->len += n;
+    w->buf[w->len] = 0;
+}
+
+void sb_jw_raw(sb_jw *w, const char *text) { jw_put(w, text, strlen(text)); }
+
+/* Before a value or a key: the comma its container needs. */
+static void jw_sep(sb_jw *w) {
+    if (w->after_key) {
+        w->after_key = false;
+        return;
+    }
+    int d = (w->depth > SB_JW_MAX_DEPTH ? SB_JW_MAX_DEPTH : w->depth) - 1;
+    if (d < 0) return;
+    if (!w->fresh[d]) jw_put(w, ",", 1);
+    w->fresh[d] = false;
+}
+
+static void jw_open(sb_jw *w, char c) {
+    jw_sep(w);
+    jw_put(w, &c, 1);
+    if (w->depth < SB_JW_MAX_DEPTH) w->fresh[w->depth] = true;   /* deeper: commas as in the deepest */
+    w->depth++;
+}
+
+static void jw_close(sb_jw *w, char c) {
+    if (w->depth > 0) w->depth--;
+    jw_put(w, &c, 1);
+}
+
+void sb_jw_obj(sb_jw *w) { jw_open(w, '{'); }
+void sb_jw_end_obj(sb_jw *w) { jw_close(w, '}'); }
+void sb_jw_arr(sb_jw *w) { jw_open(w, '['); }
+void sb_jw_end_arr(sb_jw *w) { jw_close(w, ']'); }
+
+static void jw_string(sb_jw *w, const char *s) {
+    jw_put(w, "\"", 1);
+    for (const unsigned char *p = (const unsigned char *)(s ? s : ""); *p; p++) {
+        char e[8];
+        if (*p == '"' || *p == '\\') e[0] = '\\', e[1] = (char)*p, e[2] = 0;
+        else if (*p == '\n') strcpy(e, "\\n");
+        else if (*p == '<') strcpy(e, "\\u003c");   /* never "</script>" inside a script */
+        else if (*p < 0x20) snprintf(e, sizeof e, "\\u%04x", *p);
+        else e[0] = (char)*p, e[1] = 0;
+        jw_put(w, e, strlen(e));
+    }
+    jw_put(w, "\"", 1);
+}
+
+void sb_jw_key(sb_jw *w, const char *key) {
+    jw_sep(w);
+    jw_string(w, key);
+    jw_put(w, ":", 1);
+    w->after_key = true;
+}
+
+void sb_jw_str(sb_jw *w, const char *s) {
+    jw_sep(w);
+    jw_string(w, s);
+}
+
+void sb_jw_num(sb_jw *w, double v) {
+    char b[40];
+    if (!isfinite(v)) snprintf(b, sizeof b, "null");
+    else snprintf(b, sizeof b, "%.6g", v);
+    jw_sep(w);
+    jw_put(w, b, strlen(b));
+}
+
+void sb_jw_bool(sb_jw *w, bool b) {
+    jw_sep(w);
+    sb_jw_raw(w, b ? "true" : "false");
+}
+
+void sb_jw_null(sb_jw *w) {
+    jw_sep(w);
+    sb_jw_raw(w, "null");
+}
+
+void sb_jw_kstr(sb_jw *w, const char *key, const char *s) { sb_jw_key(w, key), sb_jw_str(w, s); }
+void sb_jw_knum(sb_jw *w, const char *key, double v) { sb_jw_key(w, key), sb_jw_num(w, v); }
+void sb_jw_kbool(sb_jw *w, const char *key, bool b) { sb_jw_key(w, key), sb_jw_bool(w, b); }
