@@ -555,3 +555,14 @@ out:
     free(done);
     return rc;
 }
+
+bool sb_grid_confirm(int n, const sb_cli_opts *o, sb_err *err) {
+    if (n <= SB_GRID_CONFIRM || o->yes) return true;
+    const sb_run_opts *r = &o->run;
+    double frames = (double)n * r->repeat * (r->frames + (r->warmup > 0 ? r->warmup : 5));
+    /* 50 ms a 1280x720 frame of a small scene on a 2-core llvmpipe, in proportion to the pixels (a GPU: a tenth or
+       less), the evaluation's frames and rays not counted */
+    double s = frames * 0.05 * ((double)r->width * r->height / (1280.0 * 720.0));
+    return sb_fail(err, "%d runs (more than %d), %.0f frames: about %.1f h on llvmpipe (50 ms a 1280x720 frame); "
+                        "give --yes to start them, or --dry-run to list them", n, SB_GRID_CONFIRM, frames, s / 3600);
+}

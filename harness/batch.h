@@ -84,3 +84,9 @@ typedef struct sb_batch_cmd {
  * folder on stdout. Returns the exit status: 0, 1 (a run failed, or a results
  * folder could not be made) or 2 (bad input). */
 int sb_batch_main(const sb_batch_cmd *cmd);
+
+/* A matrix of more runs than this prints their count and an estimate of its
+ * time and does not start, unless --yes (run, batch; --dry-run lists it). */
+#define SB_GRID_CONFIRM 2000
+/* false with the count, the frames and the estimate in err when n runs need --yes (o: the command line's). */
+bool sb_grid_confirm(int n, const sb_cli_opts *o, sb_err *err);

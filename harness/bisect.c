@@ -343,11 +343,11 @@ static int take_run(bisect *b) {
     }
     /* the run's options and specs, as this shadowbench reads them: a typo is found now, not after a build */
     sb_cli_opts o;
-    sb_cli_defaults(&o, SB_CMD_RUN);
+    sb_cli_defaults(&o, cmd->run_cmd);
     const char **pos = sb_xcalloc((size_t)b->nargs + 1, sizeof *pos);
     int npos = 0;
     sb_err err;
-    bool ok = sb_cli_parse(&o, SB_CMD_RUN, b->nargs, b->args, 1, pos, &npos, &err);
+    bool ok = sb_cli_parse(&o, cmd->run_cmd, b->nargs, b->args, 1, pos, &npos, &err);
     if (ok && npos < 3) ok = sb_fail(&err, "the run needs SCENE PATH SPEC");
     sb_run_spec *runs = NULL;
     int nruns = 0;

@@ -19,10 +19,13 @@
 #pragma once
 #include <stdbool.h>
 
+#include "options.h"
+
 typedef struct sb_bisect_cmd {
     const char *good, *bad;     /* commits (any git revision); the --history form fills them */
     char **run_argv;            /* after "--": run SCENE PATH SPEC [run options] (the --history form: options only) */
     int run_argc;
+    const sb_command_def *run_cmd;   /* the run command's row: its options are checked before anything is built */
     const char *metric;         /* NULL: gpu_ms */
     int repeat;                 /* timings: paired runs a step (0: 5) */
     double threshold_pct;       /* timings: the least change that counts (0: 5) */

@@ -1,5 +1,5 @@
-/* options.c - the commands and the option table; one parser for both
- * (options.h). */
+/* options.c - the option table and the one parser, help writer and run
+ * identity that read it (options.h). */
 #include "options.h"
 
 #include <math.h>
@@ -10,55 +10,6 @@
 
 #include "compare.h"
 #include "image.h"
-
-const sb_command_def sb_commands[SB_CMD_COUNT] = {
-    [SB_CMD_RUN] = {"run", "run SCENE PATH SPEC... [--resume DIR]",
-                    "render each technique spec along the path, write CSV (--resume: keep DIR's complete runs)"},
-    [SB_CMD_BATCH] = {"batch", "batch FILE [--shard I/N] [--resume DIR] [--dry-run]", "run a matrix from a batch file"},
-    [SB_CMD_COMPARE] = {"compare",
-                        "compare BASE NEW [--metric M,...] [--threshold PCT] [--format text|csv|markdown]\n"
-                        "compare RESULTS --pair KEY=A,B",
-                        "two results sets, or the runs of one set that differ only in KEY; exit 1 on a regression, "
-                        "3 when none but a compared timing is UNSTABLE"},
-    [SB_CMD_MERGE] = {"merge", "merge DIR... --out DIR", "merge shard outputs into one results set"},
-    [SB_CMD_TUNE] = {"tune", "tune SCENE [PATH] [SPEC...] --max-err E | --budget-ms B [--max-flicker F] [--max-mb M] [--techniques LIST] [--time-limit D]",
-                     "the cheapest settings within an error bound (or the most accurate within a frame-time budget), "
-                     "by successive halving"},
-    [SB_CMD_STRESS] = {"stress", "stress [CASE|all [SPEC...]]",
-                       "numerical-stability battery; SPECs replace the battery's techniques"},
-    [SB_CMD_HISTORY] = {"history",
-                        "history add DIR...\nhistory list\n"
-                        "history regressions [--metric M,...] [--since DATE] [--recent N] [--noise-floor PCT]\n"
-                        "history annotate NIGHT|COMMIT TEXT [--series PATTERN] [--accept]\n"
-                        "history check DIR [--nights N] [--metric M,...] [--noise-floor PCT]",
-                        "keep results sets in the history, list its nights, find changes across the nights per "
-                        "series (exit 1 when a regression not accepted starts in the newest --recent nights), "
-                        "annotate a night, check a results set against the nights (exit 1 beyond their band)"},
-    [SB_CMD_BISECT] = {"bisect",
-                       "bisect GOOD BAD [--metric M] [--repeat K] [--threshold PCT] -- run SCENE PATH SPEC [run options]\n"
-                       "bisect --history FILE --series TEXT --metric M [-- run options]",
-                       "the first commit that changes a run's metric: built in a scratch worktree, measured against "
-                       "GOOD (timings paired and interleaved); exit 1 when GOOD and BAD do not differ"},
-    [SB_CMD_REPORT] = {"report", "report [DIR | --history FILE] [--out SITE]", "a static site to open in a browser"},
-    [SB_CMD_TECHNIQUES] = {"techniques", "techniques", "list techniques and their parameters"},
-    [SB_CMD_COLUMNS] = {"columns", "columns [--format csv|markdown]", "the CSV columns (per frame and per run)"},
-    [SB_CMD_INFO] = {"info", "info [SCENE]", "backends, GL renderer and features; or what a scene holds"},
-    [SB_CMD_PATH] = {"path", "path PATH [SCENE] [--frames N]", "print the sampled cameras as CSV"},
-};
-
-int sb_command_find(const char *name) {
-    for (int c = 0; c < SB_CMD_COUNT; c++)
-        if (!strcmp(sb_commands[c].name, name)) return c;
-    return -1;
-}
-
-/* Who takes what: the run options go to the commands that render (and, marked
- * SB_IN_FILE, to a batch file's defaults line). */
-#define RUN_BATCH (SB_IN(SB_CMD_RUN) | SB_IN(SB_CMD_BATCH) | SB_IN_FILE)
-#define RENDER (RUN_BATCH | SB_IN(SB_CMD_TUNE))
-#define RENDER_STRESS (RENDER | SB_IN(SB_CMD_STRESS))
-#define READS_SCENES (RENDER | SB_IN(SB_CMD_INFO) | SB_IN(SB_CMD_PATH))
-#define EVERY ((1u << SB_CMD_COUNT) - 1)
 
 /* --images needs the image writer, which a build may leave out. */
 static bool images_built(const char *v, const sb_cli_opts *o, sb_err *err) {
@@ -75,6 +26,16 @@ static bool backend_built(const char *v, const sb_cli_opts *o, sb_err *err) {
     return true;
 }
 
+/* Who takes what: a row names the kinds of command that take it (SB_CMDF_*, the commands' own flags) and
+ * any other command by name; a run option (RUN_OPT) is also taken by a batch file's defaults line. */
+#define RUN_OPT .run_option = true
+#define HISTORY_ALL (SB_IN(SB_CMD_HISTORY_ADD) | SB_IN(SB_CMD_HISTORY_LIST) | SB_IN(SB_CMD_HISTORY_REGRESSIONS) | \
+                     SB_IN(SB_CMD_HISTORY_ANNOTATE) | SB_IN(SB_CMD_HISTORY_CHECK))
+
+/* A command's own default of a row: OWN_DEFAULTS(OWN(SB_CMD_TUNE, "33"), ...). */
+#define OWN(c, d) {.cmd = (c), .def = (d)}
+#define OWN_DEFAULTS(...) (const sb_cmd_default[]){__VA_ARGS__, {.def = NULL}}
+
 #define F(f) offsetof(sb_cli_opts, f)
 #define RUN(f) offsetof(sb_cli_opts, run.f)
 
@@ -85,82 +46,88 @@ static const int columns_formats[] = {SB_OUTPUT_CSV, SB_OUTPUT_MARKDOWN};
 
 const sb_option sb_options[] = {
     /* the context and timing */
-    {.name = "--backend", .kind = SB_OPT_CHOICE, .arg = "egl|osmesa", .def = "egl",
-     .commands = RENDER_STRESS | SB_IN(SB_CMD_INFO), .field = RUN(backend), .help = "GL context",
-     .check = backend_built},
-    {.name = "--timing", .kind = SB_OPT_CHOICE, .arg = "auto|queries|sync", .def = "auto", .commands = RENDER_STRESS,
-     .field = RUN(timing), .help = "stage timing (auto: sync on software rasterizers)"},
-    {.name = "--submit", .kind = SB_OPT_CHOICE, .arg = "direct|indirect", .def = "direct", .commands = RENDER,
-     .field = RUN(submit),
+    {.name = "--backend", .kind = SB_OPT_CHOICE, .arg = "egl|osmesa", .def = "egl", .with = SB_CMDF_CONTEXT,
+     .commands = SB_IN(SB_CMD_INFO), RUN_OPT, .identity = SB_ID_DIM, .id_slot = 3, .field = RUN(backend),
+     .help = "GL context", .check = backend_built},
+    {.name = "--timing", .kind = SB_OPT_CHOICE, .arg = "auto|queries|sync", .def = "auto", .with = SB_CMDF_CONTEXT,
+     RUN_OPT, .field = RUN(timing), .help = "stage timing (auto: sync on software rasterizers)"},
+    {.name = "--submit", .kind = SB_OPT_CHOICE, .arg = "direct|indirect", .def = "direct", .with = SB_CMDF_MEASURE,
+     RUN_OPT, .identity = SB_ID_NAMED, .field = RUN(submit),
      .help = "one GL call per draw, or one glMultiDrawElementsIndirect per pass and layer (draw_calls counts draws, "
              "api_calls the calls)"},
-    {.name = "--ring", .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 16, .def = "3", .commands = RENDER_STRESS,
+    {.name = "--ring", .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 16, .def = "3", .with = SB_CMDF_CONTEXT, RUN_OPT,
      .field = RUN(ring), .help = "timer-query ring depth in frames"},
-    {.name = "--clocks", .kind = SB_OPT_CHOICE, .arg = "auto|lock|free", .def = "auto", .commands = RENDER_STRESS,
+    {.name = "--clocks", .kind = SB_OPT_CHOICE, .arg = "auto|lock|free", .def = "auto", .with = SB_CMDF_CONTEXT, RUN_OPT,
      .field = RUN(clocks), .help = "lock the GPU clock for the invocation (NVML; auto: when permitted)"},
     {.name = "--gpu-memory", .kind = SB_OPT_BYTES, .arg = "SIZE", .min = 1, .max = 1e15,
      .def_help = "what the GL reports free, or on a software rasterizer the system memory available",
-     .commands = RENDER_STRESS, .field = RUN(gpu_memory), .help = "GPU memory a run may allocate, e.g. 8G or 512M"},
+     .with = SB_CMDF_CONTEXT, RUN_OPT, .field = RUN(gpu_memory), .help = "GPU memory a run may allocate, e.g. 8G or 512M"},
     /* what is rendered */
     {.name = "--frames", .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 1000000, .def = "60",
-     .def_help = "60; tune 33, stress 3", .commands = RENDER_STRESS | SB_IN(SB_CMD_PATH), .field = RUN(frames),
-     .help = "frames sampled along the path"},
+     .cmd_defs = OWN_DEFAULTS(OWN(SB_CMD_TUNE, "33"), OWN(SB_CMD_STRESS, "3")),
+     .with = SB_CMDF_CONTEXT, .commands = SB_IN(SB_CMD_PATH), RUN_OPT, .identity = SB_ID_DIM, .id_slot = 0,
+     .field = RUN(frames), .help = "frames sampled along the path"},
     {.name = "--warmup", .kind = SB_OPT_INT, .arg = "auto|N", .max = 10000, .can_auto = true, .def = "auto",
-     .def_help = "auto: until the GPU's times and clocks settle; tune 1", .commands = RENDER, .field = RUN(warmup),
-     .help = "warm-up frames, excluded"},
+     .def_help = "auto: until the GPU's times and clocks settle",
+     .cmd_defs = OWN_DEFAULTS(OWN(SB_CMD_TUNE, "1"), OWN(SB_CMD_STRESS, "0")),
+     .with = SB_CMDF_MEASURE, RUN_OPT, .field = RUN(warmup), .help = "warm-up frames, excluded"},
     {.name = "--size", .kind = SB_OPT_SIZE, .arg = "WxH", .min = 1, .max = 16384, .def = "1280x720",
-     .def_help = "1280x720; stress 320x180", .commands = RENDER_STRESS | SB_IN(SB_CMD_PATH), .field = RUN(width),
+     .cmd_defs = OWN_DEFAULTS(OWN(SB_CMD_STRESS, "320x180")), .with = SB_CMDF_CONTEXT,
+     .commands = SB_IN(SB_CMD_PATH), RUN_OPT, .identity = SB_ID_DIM, .id_slot = 1, .field = RUN(width),
      .field2 = RUN(height), .help = "render size"},
     {.name = "--sun", .kind = SB_OPT_ANGLES, .arg = "AZ,EL", .min = -90, .max = 90,
-     .def_help = "the scene's first directional light, else 135,40", .commands = RENDER, .field = RUN(sun_az),
-     .field2 = RUN(sun_el), .given_field = RUN(sun_override), .help = "sun azimuth and elevation in degrees"},
-    {.name = "--error-every", .kind = SB_OPT_INT, .arg = "K", .max = 1000000, .def = "10", .def_help = "10; tune 1",
-     .commands = RENDER, .field = RUN(error_every),
+     .def_help = "the scene's first directional light, else 135,40", .with = SB_CMDF_MEASURE, RUN_OPT,
+     .identity = SB_ID_GIVEN, .field = RUN(sun_az), .field2 = RUN(sun_el), .given_field = RUN(sun_override),
+     .help = "sun azimuth and elevation in degrees"},
+    {.name = "--error-every", .kind = SB_OPT_INT, .arg = "K", .max = 1000000, .def = "10",
+     .cmd_defs = OWN_DEFAULTS(OWN(SB_CMD_TUNE, "1")), .with = SB_CMDF_MEASURE, RUN_OPT,
+     .field = RUN(error_every),
      .help = "shadow error against the exact ray-cast reference on every K-th frame (0 off), untimed"},
     {.name = "--sun-size", .kind = SB_OPT_NUM, .arg = "DEG", .max = 10, .def = "0", .def_help = "0, a sun of no size",
-     .commands = RENDER, .field = RUN(sun_size),
+     .with = SB_CMDF_MEASURE, RUN_OPT, .identity = SB_ID_LIGHT, .field = RUN(sun_size),
      .help = "the sun's angular diameter: the reference casts rays over its disc (soft shadows; the real sun: 0.53)"},
     {.name = "--lamp-radius", .kind = SB_OPT_NUM, .arg = "M", .max = INFINITY, .def = "0", .def_help = "0, no size",
-     .commands = RENDER, .field = RUN(lamp_radius),
+     .with = SB_CMDF_MEASURE, RUN_OPT, .identity = SB_ID_LIGHT, .field = RUN(lamp_radius),
      .help = "point and spot lights' radius in scene units: the reference casts rays over it"},
-    {.name = "--ref-samples", .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 4096, .def = "64", .commands = RENDER,
-     .field = RUN(ref_samples), .help = "rays over a sized light at a penumbra point (centre and rim decide the rest)"},
+    {.name = "--ref-samples", .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 4096, .def = "64",
+     .with = SB_CMDF_MEASURE, RUN_OPT, .identity = SB_ID_LIGHT, .field = RUN(ref_samples),
+     .help = "rays over a sized light at a penumbra point (centre and rim decide the rest)"},
     {.name = "--flicker-dt", .kind = SB_OPT_NUM, .arg = "S", .max = 10, .def = "0.0166667",
-     .def_help = "1/60 s, one display frame at 60 Hz; tune 0", .commands = RENDER, .field = RUN(flicker_dt),
+     .def_help = "1/60 s, one display frame at 60 Hz",
+     .cmd_defs = OWN_DEFAULTS({.cmd = SB_CMD_TUNE, .def = "0", .help = "0; 1/60 s when --max-flicker bounds the flicker"}),
+     .with = SB_CMDF_MEASURE, RUN_OPT, .field = RUN(flicker_dt),
      .help = "path time from an evaluated frame to its twin, whose shadow maps look the frame's points up again "
              "(flicker_rate; 0 off)"},
-    {.name = "--images", .kind = SB_OPT_INT, .arg = "K", .max = 1000000, .def = "0", .commands = RENDER,
-     .field = RUN(images),
-     .help = "images of every K-th frame: colour, visibility, reference, error, cascades (0 none)",
+    {.name = "--images", .kind = SB_OPT_INT, .arg = "K", .max = 1000000, .def = "0", .with = SB_CMDF_MEASURE, RUN_OPT,
+     .field = RUN(images), .help = "images of every K-th frame: colour, visibility, reference, error, cascades (0 none)",
      .check = images_built},
-    {.name = "--repeat", .kind = SB_OPT_INT, .arg = "K", .min = 1, .max = 1000, .def = "1", .commands = RENDER,
-     .field = RUN(repeat), .help = "run the path K times"},
+    {.name = "--repeat", .kind = SB_OPT_INT, .arg = "K", .min = 1, .max = 1000, .def = "1", .with = SB_CMDF_MEASURE,
+     RUN_OPT, .field = RUN(repeat), .help = "run the path K times"},
     {.name = "--target-ci", .kind = SB_OPT_NUM, .arg = "PCT", .max = 100, .open_min = true, .def_help = "off",
-     .commands = RENDER, .field = RUN(target_ci),
+     .with = SB_CMDF_MEASURE, RUN_OPT, .field = RUN(target_ci),
      .help = "repeat the path until the 95% CI of mean gpu_ms is within PCT% of it"},
-    {.name = "--max-repeat", .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 1000, .def = "10", .commands = RENDER,
-     .field = RUN(max_repeat), .help = "at most N repetitions for --target-ci"},
+    {.name = "--max-repeat", .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 1000, .def = "10",
+     .with = SB_CMDF_MEASURE, RUN_OPT, .field = RUN(max_repeat), .help = "at most N repetitions for --target-ci"},
     {.name = "--order", .kind = SB_OPT_CHOICE, .arg = "matrix|interleave|shuffle", .def = "matrix",
-     .commands = RUN_BATCH, .field = RUN(order),
-     .help = "order of a scene's runs and repetitions (interleave: A1 B1 A2 B2 ...; tune always shuffles)"},
+     .cmd_defs = OWN_DEFAULTS(OWN(SB_CMD_TUNE, "shuffle")), .with = SB_CMDF_MATRIX, RUN_OPT,
+     .field = RUN(order), .help = "order of a scene's runs and repetitions (interleave: A1 B1 A2 B2 ...)"},
     {.name = "--seed", .kind = SB_OPT_SEED, .arg = "N", .min = 1, .max = 1.8e19,
-     .def_help = "chosen, in the summary's seed column; tune 1", .commands = RENDER, .field = RUN(seed),
-     .help = "shuffle's seed"},
+     .def_help = "chosen, in the summary's seed column", .cmd_defs = OWN_DEFAULTS(OWN(SB_CMD_TUNE, "1")),
+     .with = SB_CMDF_MEASURE, RUN_OPT, .field = RUN(seed), .help = "shuffle's seed"},
     {.name = "--threads", .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 1024, .def_help = "all cores",
-     .commands = RENDER_STRESS, .field = RUN(threads), .help = "reference ray-casting threads"},
+     .with = SB_CMDF_CONTEXT, RUN_OPT, .field = RUN(threads), .help = "reference ray-casting threads"},
     {.name = "--overlap", .kind = SB_OPT_CHOICE, .arg = "auto|on|off", .values = overlap_values, .def = "auto",
-     .def_help = "auto: on on a GPU, off on a CPU rasterizer", .commands = RENDER, .field = RUN(overlap),
+     .def_help = "auto: on on a GPU, off on a CPU rasterizer", .with = SB_CMDF_MEASURE, RUN_OPT, .field = RUN(overlap),
      .help = "cast the reference of evaluated frames in the background while timed frames render"},
     {.name = "--run-timeout", .kind = SB_OPT_NUM, .arg = "S", .max = INFINITY, .def = "0", .def_help = "none",
-     .commands = RENDER, .field = RUN(run_timeout_s), .help = "a run taking longer is recorded as failed"},
+     .with = SB_CMDF_MEASURE, RUN_OPT, .field = RUN(run_timeout_s), .help = "a run taking longer is recorded as failed"},
     /* how scene files are read */
-    {.name = "--allow-external-uris", .kind = SB_OPT_FLAG, .commands = READS_SCENES, .field = RUN(allow_external_uris),
-     .help = "let glTF buffers and images be read from outside the scene's folder"},
-    {.name = "--blend-casters", .kind = SB_OPT_CHOICE, .arg = "mask|opaque|none", .def = "mask",
-     .commands = READS_SCENES, .field = RUN(blend),
-     .help = "glTF BLEND materials: alpha-tested at 0.5, opaque, or left out"},
+    {.name = "--allow-external-uris", .kind = SB_OPT_FLAG, .with = SB_CMDF_SCENES, RUN_OPT,
+     .field = RUN(allow_external_uris), .help = "let glTF buffers and images be read from outside the scene's folder"},
+    {.name = "--blend-casters", .kind = SB_OPT_CHOICE, .arg = "mask|opaque|none", .def = "mask", .with = SB_CMDF_SCENES,
+     RUN_OPT, .field = RUN(blend), .help = "glTF BLEND materials: alpha-tested at 0.5, opaque, or left out"},
     {.name = "--pose", .kind = SB_OPT_NUM, .arg = "T", .min = -INFINITY, .max = INFINITY, .def_help = "the rest pose",
-     .commands = READS_SCENES, .field = RUN(pose_time), .given_field = RUN(pose),
+     .with = SB_CMDF_SCENES, RUN_OPT, .field = RUN(pose_time), .given_field = RUN(pose),
      .help = "nodes and skins at time T (seconds) of the file's first animation"},
     /* where results go, and what is said */
     {.name = "--out", .kind = SB_OPT_TEXT, .arg = "DIR", .def = "out",
@@ -175,61 +142,67 @@ const sb_option sb_options[] = {
      .help = "keep DIR's complete runs and render the rest into it"},
     {.name = "--shard", .kind = SB_OPT_TEXT, .arg = "I/N", .commands = SB_IN(SB_CMD_BATCH), .field = F(shard),
      .help = "render share I of N of the matrix (cost-balanced)"},
-    {.name = "--strict-path", .kind = SB_OPT_FLAG, .commands = RENDER | SB_IN(SB_CMD_PATH), .field = RUN(strict_path),
+    {.name = "--strict-path", .kind = SB_OPT_FLAG, .with = SB_CMDF_MEASURE, .commands = SB_IN(SB_CMD_PATH), RUN_OPT,
+     .field = RUN(strict_path),
      .help = "refuse a path whose cameras stand inside closed geometry, under a surface facing up or nearer a "
              "surface than the near plane (checked whenever the error is; exit 2)"},
     {.name = "--dry-run", .kind = SB_OPT_FLAG, .commands = SB_IN(SB_CMD_BATCH), .field = F(dry_run),
      .help = "print the matrix (and the shard's share), render nothing"},
-    {.name = "--progress", .kind = SB_OPT_FLAG, .def_help = "when stderr is a terminal",
-     .commands = SB_IN(SB_CMD_RUN) | SB_IN(SB_CMD_BATCH) | SB_IN(SB_CMD_TUNE) | SB_IN(SB_CMD_STRESS),
+    {.name = "--yes", .kind = SB_OPT_FLAG, .with = SB_CMDF_MATRIX, .field = F(yes),
+     .help = "start a matrix of more runs than SB_GRID_CONFIRM without asking for this (it prints their count and "
+             "estimated time, then exits 2)"},
+    {.name = "--progress", .kind = SB_OPT_FLAG, .def_help = "when stderr is a terminal", .with = SB_CMDF_CONTEXT,
      .field = RUN(progress), .help = "progress line on stderr"},
-    {.name = "--quiet", .kind = SB_OPT_FLAG, .commands = EVERY, .field = F(quiet), .help = "no notices on stderr"},
-    {.name = "--verbose", .kind = SB_OPT_FLAG, .commands = EVERY, .field = F(verbose),
+    {.name = "--quiet", .kind = SB_OPT_FLAG, .with = SB_CMDF_ANY, .field = F(quiet), .help = "no notices on stderr"},
+    {.name = "--verbose", .kind = SB_OPT_FLAG, .with = SB_CMDF_ANY, .field = F(verbose), .excludes = "--quiet",
      .help = "also the notes a user cannot act on (e.g. a software rasterizer has no clock)"},
     /* compare */
     {.name = "--metric", .kind = SB_OPT_TEXT, .arg = "M,...",
      .def_help = "the metrics marked for it (shadowbench columns)",
-     .commands = SB_IN(SB_CMD_COMPARE) | SB_IN(SB_CMD_HISTORY), .field = F(metrics), .help = "the metrics compared"},
+     .commands = SB_IN(SB_CMD_COMPARE) | SB_IN(SB_CMD_HISTORY_REGRESSIONS) | SB_IN(SB_CMD_HISTORY_CHECK),
+     .field = F(metrics), .help = "the metrics compared"},
     {.name = "--threshold", .kind = SB_OPT_NUM, .arg = "PCT", .max = INFINITY, .def = "5",
      .commands = SB_IN(SB_CMD_COMPARE) | SB_IN(SB_CMD_BISECT), .field = F(threshold),
      .help = "a change smaller than PCT% is no regression (bisect: a timing change smaller than it is none)"},
-    {.name = "--metric", .kind = SB_OPT_TEXT, .arg = "M", .def = "gpu_ms", .commands = SB_IN(SB_CMD_BISECT),
-     .field = F(metrics), .help = "the metric bisected: a timing (ms) by paired runs, any other exactly"},
+    {.name = "--metric", .kind = SB_OPT_TEXT, .arg = "M", .def_help = "the frame time (gpu_ms)",
+     .commands = SB_IN(SB_CMD_BISECT), .field = F(metrics),
+     .help = "the metric bisected: a timing (ms) by paired runs, any other exactly"},
     {.name = "--repeat", .kind = SB_OPT_INT, .arg = "K", .min = 2, .max = 100, .def = "5",
      .commands = SB_IN(SB_CMD_BISECT), .field = F(pairs),
      .help = "timings: interleaved runs of the candidate and of GOOD a step (as many again when it cannot tell)"},
     {.name = "--series", .kind = SB_OPT_TEXT, .arg = "TEXT", .commands = SB_IN(SB_CMD_BISECT), .field = F(series),
      .help = "with --history: bisect the newest regression of the series whose name holds TEXT"},
     {.name = "--series", .kind = SB_OPT_TEXT, .arg = "PATTERN", .def_help = "every series",
-     .commands = SB_IN(SB_CMD_HISTORY), .field = F(series),
-     .help = "annotate: the series the note is about (a glob, or text in the series' name)"},
-    {.name = "--accept", .kind = SB_OPT_FLAG, .commands = SB_IN(SB_CMD_HISTORY), .field = F(accept),
-     .help = "annotate: the change starting on that night was meant (listed as accepted; no exit 1)"},
+     .commands = SB_IN(SB_CMD_HISTORY_ANNOTATE), .field = F(series),
+     .help = "the series the note is about (a glob, or text in the series' name)"},
+    {.name = "--accept", .kind = SB_OPT_FLAG, .commands = SB_IN(SB_CMD_HISTORY_ANNOTATE), .field = F(accept),
+     .help = "the change starting on that night was meant (listed as accepted; no exit 1)"},
     {.name = "--nights", .kind = SB_OPT_INT, .arg = "N", .min = 3, .max = 1000, .def = "10",
-     .commands = SB_IN(SB_CMD_HISTORY), .field = F(nights),
-     .help = "check: how many of each series' newest nights make its band"},
+     .commands = SB_IN(SB_CMD_HISTORY_CHECK), .field = F(nights),
+     .help = "how many of each series' newest nights make its band"},
     {.name = "--workdir", .kind = SB_OPT_TEXT, .arg = "DIR", .def_help = "shadowbench-bisect in the git directory",
      .commands = SB_IN(SB_CMD_BISECT), .field = F(workdir),
      .help = "the scratch worktree, its build and every binary built (kept for the next bisect)"},
     {.name = "--format", .kind = SB_OPT_CHOICE, .arg = "text|csv|markdown", .values = compare_formats, .def = "text",
      .commands = SB_IN(SB_CMD_COMPARE), .field = F(format), .help = "how the table is written"},
     {.name = "--format", .kind = SB_OPT_CHOICE, .arg = "text|csv", .values = history_formats, .def = "text",
-     .commands = SB_IN(SB_CMD_HISTORY), .field = F(format), .help = "how the changes are written"},
+     .commands = SB_IN(SB_CMD_HISTORY_REGRESSIONS), .field = F(format), .help = "how the changes are written"},
     {.name = "--format", .kind = SB_OPT_CHOICE, .arg = "csv|markdown", .values = columns_formats, .def = "csv",
      .commands = SB_IN(SB_CMD_COLUMNS), .field = F(format), .help = "how the columns are written"},
     {.name = "--pair", .kind = SB_OPT_TEXT, .arg = "KEY=A,B", .commands = SB_IN(SB_CMD_COMPARE), .field = F(pair),
      .help = "the runs of one set that differ only in KEY (technique=pssm,sdsm, layered=off,gs)"},
     /* history and report */
     {.name = "--history", .kind = SB_OPT_TEXT, .arg = "FILE", .def_help = "$SB_HISTORY, else out/history.sqlite",
-     .commands = SB_IN(SB_CMD_HISTORY) | SB_IN(SB_CMD_REPORT) | SB_IN(SB_CMD_BISECT), .field = F(history),
+     .commands = HISTORY_ALL | SB_IN(SB_CMD_REPORT) | SB_IN(SB_CMD_BISECT), .field = F(history),
      .help = "the results history"},
-    {.name = "--since", .kind = SB_OPT_TEXT, .arg = "DATE", .commands = SB_IN(SB_CMD_HISTORY), .field = F(since),
-     .help = "regressions: only the nights from DATE on"},
+    {.name = "--since", .kind = SB_OPT_TEXT, .arg = "DATE", .commands = SB_IN(SB_CMD_HISTORY_REGRESSIONS),
+     .field = F(since), .help = "only the nights from DATE on"},
     {.name = "--recent", .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 10000, .def = "3",
-     .commands = SB_IN(SB_CMD_HISTORY) | SB_IN(SB_CMD_REPORT), .field = F(recent),
+     .commands = SB_IN(SB_CMD_HISTORY_REGRESSIONS) | SB_IN(SB_CMD_REPORT), .field = F(recent),
      .help = "a regression starting in the newest N nights is recent (exit 1, the report's index)"},
     {.name = "--noise-floor", .kind = SB_OPT_NUM, .arg = "PCT", .max = 100, .open_min = true,
-     .def_help = "1, 5 on a software rasterizer", .commands = SB_IN(SB_CMD_HISTORY), .field = F(noise_floor),
+     .def_help = "1, 5 on a software rasterizer",
+     .commands = SB_IN(SB_CMD_HISTORY_REGRESSIONS) | SB_IN(SB_CMD_HISTORY_CHECK), .field = F(noise_floor),
      .help = "the least night-to-night timing noise assumed"},
     /* tune */
     {.name = "--max-err", .kind = SB_OPT_NUM, .arg = "E", .max = 1, .open_min = true, .commands = SB_IN(SB_CMD_TUNE),
@@ -252,14 +225,22 @@ const int sb_option_count = (int)SB_COUNT(sb_options);
 
 _Static_assert(SB_COUNT(sb_options) <= SB_OPTION_MAX, "raise SB_OPTION_MAX");
 
-/* The row of `name` taken where `mask` says (SB_IN bits, SB_IN_FILE), or NULL. */
-static const sb_option *find_row(const char *name, unsigned mask) {
+bool sb_option_taken(const sb_option *opt, const sb_command_def *cmd) {
+    return (opt->commands & SB_IN(cmd->id)) || (opt->with & cmd->flags);
+}
+
+const sb_option *sb_option_find(const char *name, const sb_command_def *cmd) {
     for (int i = 0; i < sb_option_count; i++)
-        if (!strcmp(sb_options[i].name, name) && (sb_options[i].commands & mask)) return &sb_options[i];
+        if (!strcmp(sb_options[i].name, name) && (!cmd || sb_option_taken(&sb_options[i], cmd))) return &sb_options[i];
     return NULL;
 }
 
-const sb_option *sb_option_find(const char *name, int cmd) { return find_row(name, cmd < 0 ? ~0u : SB_IN(cmd)); }
+/* The run option of `name` (a batch file's defaults line), or NULL. */
+static const sb_option *run_option(const char *name) {
+    for (int i = 0; i < sb_option_count; i++)
+        if (sb_options[i].run_option && !strcmp(sb_options[i].name, name)) return &sb_options[i];
+    return NULL;
+}
 
 static void *at(sb_cli_opts *o, size_t field) { return (char *)o + field; }
 
@@ -405,14 +386,21 @@ static bool set_value(sb_cli_opts *o, const sb_option *opt, const char *v, sb_er
     return true;
 }
 
-void sb_cli_defaults(sb_cli_opts *o, int cmd) {
+const char *sb_option_default(const sb_option *opt, const sb_command_def *cmd) {
+    for (const sb_cmd_default *d = opt->cmd_defs; cmd && d && d->def; d++)
+        if (d->cmd == cmd->id) return d->def;
+    return opt->def;
+}
+
+void sb_cli_defaults(sb_cli_opts *o, const sb_command_def *cmd) {
     memset(o, 0, sizeof *o);
     for (int i = 0; i < sb_option_count; i++) {
         const sb_option *opt = &sb_options[i];
-        if (!opt->def || !(opt->commands & (SB_IN_FILE | (cmd >= 0 ? SB_IN(cmd) : 0)))) continue;
+        const char *def = sb_option_default(opt, cmd);
+        if (!def || !(opt->run_option || (cmd && sb_option_taken(opt, cmd)))) continue;
         sb_err e;
         bool was = opt->given_field && *(bool *)at(o, opt->given_field);
-        if (!set_value(o, opt, opt->def, &e))
+        if (!set_value(o, opt, def, &e))
             abort(); /* a row whose default is out of its own range: the unit test
                         says which */
         if (opt->given_field) *(bool *)at(o, opt->given_field) = was;
@@ -423,7 +411,7 @@ void sb_cli_defaults(sb_cli_opts *o, int cmd) {
 
 void sb_run_opts_defaults(sb_run_opts *o) {
     sb_cli_opts c;
-    sb_cli_defaults(&c, -1);
+    sb_cli_defaults(&c, NULL);
     *o = c.run;
 }
 
@@ -440,8 +428,16 @@ static bool take(sb_cli_opts *o, const sb_option *opt, const char *v, bool *used
     return true;
 }
 
-bool sb_cli_parse(sb_cli_opts *o, sb_command cmd, int argc, char **argv, int first, const char **pos, int *npos,
-                  sb_err *err) {
+/* Options that cannot be given together (a row's `excludes`). */
+static bool check_exclusions(const sb_cli_opts *o, sb_err *err) {
+    for (int i = 0; i < sb_option_count; i++)
+        if (o->given[i] && sb_options[i].excludes && sb_cli_given(o, sb_options[i].excludes))
+            return sb_fail(err, "%s and %s: give one of them", sb_options[i].excludes, sb_options[i].name);
+    return true;
+}
+
+bool sb_cli_parse(sb_cli_opts *o, const sb_command_def *cmd, int argc, char **argv, int first, const char **pos,
+                  int *npos, sb_err *err) {
     *npos = 0;
     for (int i = first; i < argc; i++) {
         const char *a = argv[i];
@@ -449,29 +445,36 @@ bool sb_cli_parse(sb_cli_opts *o, sb_command cmd, int argc, char **argv, int fir
             pos[(*npos)++] = a;
             continue;
         }
-        const sb_option *opt = sb_option_find(a, (int)cmd);
+        char name[64];   /* --name=value: the value after '=' */
+        const char *eq = strchr(a, '=');
+        snprintf(name, sizeof name, "%.*s", (int)(eq && eq - a < (long)sizeof name ? eq - a : (long)strlen(a)), a);
+        const sb_option *opt = sb_option_find(name, cmd);
         if (!opt) {
-            if (sb_option_find(a, -1))
-                return sb_fail(err, "%s: %s is not an option of %s (see shadowbench %s --help)", sb_commands[cmd].name,
-                               a, sb_commands[cmd].name, sb_commands[cmd].name);
-            return sb_fail(err, "%s: unknown option %s (see shadowbench %s --help)", sb_commands[cmd].name, a,
-                           sb_commands[cmd].name);
+            if (sb_option_find(name, NULL))
+                return sb_fail(err, "%s: %s is not an option of %s (see shadowbench %s --help)", cmd->name, name,
+                               cmd->name, cmd->name);
+            return sb_fail(err, "%s: unknown option %s (see shadowbench %s --help)", cmd->name, name, cmd->name);
         }
+        if (eq && opt->kind == SB_OPT_FLAG) return sb_fail(err, "%s takes no value (%s)", name, a);
         bool used;
-        if (!take(o, opt, i + 1 < argc ? argv[i + 1] : NULL, &used, err)) return false;
-        i += used;
+        if (!take(o, opt, eq ? eq + 1 : i + 1 < argc ? argv[i + 1] : NULL, &used, err)) return false;
+        i += used && !eq;
     }
-    return true;
+    return check_exclusions(o, err);
 }
 
 bool sb_cli_parse_tokens(sb_cli_opts *o, char **tok, int n, const char *where, sb_err *err) {
     for (int i = 0; i < n; i++) {
-        const sb_option *opt = find_row(tok[i], SB_IN_FILE);
-        if (!opt) return sb_fail(err, "%s: '%s' is not a run option", where, tok[i]);
+        char name[64];
+        const char *eq = strchr(tok[i], '=');
+        snprintf(name, sizeof name, "%.*s", (int)(eq && eq - tok[i] < 64 ? eq - tok[i] : (long)strlen(tok[i])), tok[i]);
+        const sb_option *opt = run_option(name);
+        if (!opt) return sb_fail(err, "%s: '%s' is not a run option", where, name);
         bool used;
         sb_err e;
-        if (!take(o, opt, i + 1 < n ? tok[i + 1] : NULL, &used, &e)) return sb_fail(err, "%s: %s", where, e.msg);
-        i += used;
+        if (!take(o, opt, eq ? eq + 1 : i + 1 < n ? tok[i + 1] : NULL, &used, &e))
+            return sb_fail(err, "%s: %s", where, e.msg);
+        i += used && !eq;
     }
     return true;
 }
@@ -499,7 +502,7 @@ void sb_cli_copy_given(sb_run_opts *to, const sb_cli_opts *from) {
     dst.run = *to;
     for (int i = 0; i < sb_option_count; i++) {
         const sb_option *opt = &sb_options[i];
-        if (!from->given[i] || !(opt->commands & SB_IN_FILE)) continue; /* the run options */
+        if (!from->given[i] || !opt->run_option) continue; /* the run options */
         size_t fields[] = {opt->field, opt->field2, opt->given_field};
         for (int k = 0; k < 3; k++)
             if (fields[k])
@@ -535,12 +538,27 @@ static void labelled(FILE *f, const char *label, const char *text) {
     }
 }
 
+void sb_option_default_text(const sb_option *opt, const sb_command_def *table, const sb_command_def *cmd, char *out,
+                            size_t len) {
+    const char *own = NULL;
+    for (const sb_cmd_default *d = opt->cmd_defs; cmd && d && d->def; d++)
+        if (d->cmd == cmd->id) own = d->help ? d->help : d->def;
+    snprintf(out, len, "%s", own ? own : opt->def_help ? opt->def_help : opt->def ? opt->def : "");
+    if (cmd || !table) return;
+    for (const sb_cmd_default *d = opt->cmd_defs; d && d->def; d++) {   /* the general help: each command's own */
+        if (!sb_option_taken(opt, &table[d->cmd])) continue;
+        size_t l = strlen(out);
+        snprintf(out + l, len - l, "; %s %s", table[d->cmd].name, d->help ? d->help : d->def);
+    }
+}
+
 /* "  --frames N   frames sampled along the path (default 60)" */
-static void option_line(FILE *f, const sb_option *opt, const char *extra) {
-    char syn[64], text[512];
+static void option_line(FILE *f, const sb_option *opt, const sb_command_def *table, const sb_command_def *cmd,
+                        const char *extra) {
+    char syn[64], text[640], def[256];
     sb_option_synopsis(opt, syn, sizeof syn);
-    const char *def = opt->def_help ? opt->def_help : opt->def;
-    snprintf(text, sizeof text, "%s%s%s%s%s", opt->help, def ? " (default " : "", def ? def : "", def ? ")" : "",
+    sb_option_default_text(opt, table, cmd, def, sizeof def);
+    snprintf(text, sizeof text, "%s%s%s%s%s", opt->help, def[0] ? " (default " : "", def, def[0] ? ")" : "",
              extra ? extra : "");
     labelled(f, syn, text);
 }
@@ -561,41 +579,127 @@ static const char *const operands = "SCENE: a .gltf/.glb file or a bundled scene
                                     "SPEC:  technique[:param=value[,value...]]...  e.g. "
                                     "sm:res=1024,2048:filter=pcf3 (lists make a grid)\n";
 
-void sb_cli_help(FILE *f, int cmd) {
-    if (cmd >= 0) {
-        const sb_command_def *c = &sb_commands[cmd];
-        fprintf(f, "usage:\n");
-        usage_lines(f, c);
-        fprintf(f, "\n%s\n\noptions:\n", c->summary);
-        for (int i = 0; i < sb_option_count; i++)
-            if (sb_options[i].commands & SB_IN(cmd)) option_line(f, &sb_options[i], NULL);
-        return;
-    }
-    fprintf(f, "usage:\n");
+/* ", run, batch, tune": the commands of the table that take a row ("" when every command does). */
+static void takers(const sb_option *opt, const sb_command_def *table, char *out, size_t len) {
+    out[0] = 0;
+    if (opt->with & SB_CMDF_ANY) return;
     for (int c = 0; c < SB_CMD_COUNT; c++)
-        usage_lines(f, &sb_commands[c]);
-    fprintf(f,
-            "\n%s\noptions (shadowbench COMMAND --help: the options of one "
-            "command):\n",
-            operands);
-    for (int i = 0; i < sb_option_count; i++) {
-        const sb_option *opt = &sb_options[i];
-        char cmds[160] = "";
-        for (int c = 0; c < SB_CMD_COUNT && opt->commands != EVERY; c++)
-            if (opt->commands & SB_IN(c)) {
-                size_t l = strlen(cmds);
-                snprintf(cmds + l, sizeof cmds - l, "%s%s", l ? ", " : "; ", sb_commands[c].name);
-            }
-        option_line(f, opt, cmds);
-    }
-    fprintf(f, "\nenvironment:\n"
-               "  SB_HISTORY=FILE        the history file (default out/history.sqlite)\n"
-               "  SB_SCENE_CACHE=DIR|off where scenes read before are kept, flattened (default\n"
-               "                         $XDG_CACHE_HOME or ~/.cache, shadowbench/scenes)\n");
+        if (sb_option_taken(opt, &table[c])) {
+            size_t l = strlen(out);
+            snprintf(out + l, len - l, "%s%s", l ? ", " : "; ", table[c].name);
+        }
+}
+
+static void exit_statuses(FILE *f) {
     fprintf(f, "\nexit status (every command):\n");
     for (int i = 0; i < sb_exit_status_count; i++) {
         char label[32];
         snprintf(label, sizeof label, "%-4d %s", sb_exit_statuses[i].code, sb_exit_statuses[i].name);
         labelled(f, label, sb_exit_statuses[i].meaning);
     }
+}
+
+void sb_cli_help(FILE *f, const sb_command_def *table, const sb_command_def *cmd) {
+    if (cmd) {
+        fprintf(f, "usage:\n");
+        usage_lines(f, cmd);
+        fprintf(f, "\n%s\n\noptions:\n", cmd->summary);
+        for (int i = 0; i < sb_option_count; i++)
+            if (sb_option_taken(&sb_options[i], cmd)) option_line(f, &sb_options[i], table, cmd, NULL);
+        return;
+    }
+    fprintf(f, "usage:\n");
+    for (int c = 0; c < SB_CMD_COUNT; c++) usage_lines(f, &table[c]);
+    fprintf(f, "\n%s\noptions (shadowbench COMMAND --help: the options of one command):\n", operands);
+    for (int i = 0; i < sb_option_count; i++) {
+        char cmds[300];
+        takers(&sb_options[i], table, cmds, sizeof cmds);
+        option_line(f, &sb_options[i], table, NULL, cmds);
+    }
+    fprintf(f, "\nenvironment:\n"
+               "  SB_HISTORY=FILE        the history file (default out/history.sqlite)\n"
+               "  SB_SCENE_CACHE=DIR|off where scenes read before are kept, flattened (default\n"
+               "                         $XDG_CACHE_HOME or ~/.cache, shadowbench/scenes)\n");
+    exit_statuses(f);
+}
+
+/* ---- a run's identity ---- */
+
+/* A run option's value in a run's options (its row's field is an offset in sb_cli_opts). */
+static const void *run_field(const sb_run_opts *o, size_t field) {
+    return (const char *)o + (field - offsetof(sb_cli_opts, run));
+}
+
+static double as_double(const sb_option *opt, const sb_run_opts *o, size_t field) {
+    const void *p = run_field(o, field);
+    switch (opt->kind) {
+    case SB_OPT_INT:
+    case SB_OPT_CHOICE:
+    case SB_OPT_SIZE: return *(const int *)p;
+    case SB_OPT_SEED: return (double)*(const uint64_t *)p;
+    case SB_OPT_FLAG: return *(const bool *)p;
+    default: return *(const double *)p;
+    }
+}
+
+/* A CHOICE row's name for the value it holds ("indirect"). */
+static void choice_name(const sb_option *opt, int value, char *out, size_t len) {
+    out[0] = 0;
+    const char *c = opt->arg;
+    for (int k = 0; *c; k++) {
+        size_t w = strcspn(c, "|");
+        if ((opt->values ? opt->values[k] : k) == value) snprintf(out, len, "%.*s", (int)w, c);
+        c += w + (c[w] == '|');
+    }
+}
+
+/* The hash's blocks, in order: the dimensions, what was given, what is not its default, the light. Each block as
+ * the ids of before each row joined it hashed it, so that every earlier run id holds. */
+static uint64_t identity_blocks(uint64_t h, const sb_run_opts *o) {
+    int dims[8] = {0}, ndims = 0;
+    double light[8];
+    int nlight = 0;
+    bool light_on = false;
+    for (int i = 0; i < sb_option_count; i++) {
+        const sb_option *opt = &sb_options[i];
+        if (opt->identity == SB_ID_DIM) {
+            dims[opt->id_slot] = *(const int *)run_field(o, opt->field);
+            if (opt->field2) dims[opt->id_slot + 1] = *(const int *)run_field(o, opt->field2);
+            ndims = ndims > opt->id_slot + 1 + (opt->field2 != 0) ? ndims : opt->id_slot + 1 + (opt->field2 != 0);
+        } else if (opt->identity == SB_ID_LIGHT && nlight < 8) {
+            light[nlight] = as_double(opt, o, opt->field);
+            light_on |= opt->def && !strcmp(opt->def, "0") && light[nlight] != 0;
+            nlight++;
+        }
+    }
+    h = sb_fnv1a(h, dims, sizeof *dims * (size_t)ndims);
+    for (int i = 0; i < sb_option_count; i++) {
+        const sb_option *opt = &sb_options[i];
+        if (opt->identity == SB_ID_GIVEN && *(const bool *)run_field(o, opt->given_field)) {
+            double v[2] = {as_double(opt, o, opt->field), opt->field2 ? as_double(opt, o, opt->field2) : 0};
+            h = sb_fnv1a(h, v, sizeof *v * (opt->field2 ? 2 : 1));
+        }
+    }
+    for (int i = 0; i < sb_option_count; i++) {
+        const sb_option *opt = &sb_options[i];
+        char name[64], def[64];
+        if (opt->identity != SB_ID_NAMED) continue;
+        choice_name(opt, *(const int *)run_field(o, opt->field), name, sizeof name);
+        snprintf(def, sizeof def, "%s", opt->def ? opt->def : "");
+        if (strcmp(name, def)) h = sb_fnv1a(h, name, strlen(name) + 1);
+    }
+    if (light_on) h = sb_fnv1a(h, light, sizeof *light * (size_t)nlight);
+    return h;
+}
+
+void sb_run_id(uint64_t scene_hash, uint64_t path_hash, const sb_run_opts *o, const sb_run_spec *spec, char out[17]) {
+    char params[1024];
+    sb_params_canonical(&spec->params, params, sizeof params);
+    uint64_t h = SB_FNV_SEED;
+    h = sb_fnv1a(h, &scene_hash, sizeof scene_hash);
+    h = sb_fnv1a(h, &path_hash, sizeof path_hash);
+    h = sb_fnv1a(h, spec->tech->name, strlen(spec->tech->name) + 1);
+    h = sb_fnv1a(h, params, strlen(params) + 1);
+    h = identity_blocks(h, o);
+    snprintf(out, 17, "%016llx", (unsigned long long)h);
 }

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "autobias.h"
+#include "options.h"
 #include "eval.h"
 #include "image.h"
 #include "reference.h"
@@ -15,28 +16,6 @@
 #include "stats.h"
 
 /* ---- run ids ---- */
-
-void sb_run_id(uint64_t scene_hash, uint64_t path_hash, const sb_run_opts *o, const sb_run_spec *spec, char out[17]) {
-    char params[1024];
-    sb_params_canonical(&spec->params, params, sizeof params);
-    uint64_t h = SB_FNV_SEED;
-    h = sb_fnv1a(h, &scene_hash, sizeof scene_hash);
-    h = sb_fnv1a(h, &path_hash, sizeof path_hash);
-    h = sb_fnv1a(h, spec->tech->name, strlen(spec->tech->name) + 1);
-    h = sb_fnv1a(h, params, strlen(params) + 1);
-    int dims[4] = {o->frames, o->width, o->height, (int)o->backend};
-    h = sb_fnv1a(h, dims, sizeof dims);
-    if (o->sun_override) {
-        double sun[2] = {o->sun_az, o->sun_el};
-        h = sb_fnv1a(h, sun, sizeof sun);
-    }
-    if (o->submit != SB_SUBMIT_DIRECT) h = sb_fnv1a(h, "indirect", 9);   /* other timings (direct: the ids of before) */
-    if (o->sun_size > 0 || o->lamp_radius > 0) {   /* another reference: another run (none: the ids of before) */
-        double size[3] = {o->sun_size, o->lamp_radius, o->ref_samples};
-        h = sb_fnv1a(h, size, sizeof size);
-    }
-    snprintf(out, 17, "%016llx", (unsigned long long)h);
-}
 
 void sb_session_run_id(const sb_session *s, const sb_run_spec *spec, char out[17]) {
     sb_run_spec as_run = *spec;   /* the id of the run sb_run_begin makes of it */

@@ -33,8 +33,5 @@ int sb_run_group(sb_session *s, const sb_run_spec *const *specs, const int *run_
  * (even with --quiet); returns the command's exit status: 128 + the signal
  * when interrupted, 1 when a run failed, else 0. */
 int sb_summary_conclude(const sb_summary *sum, const char *dir, const char *resume_command);
-/* run_id: hash of scene and path contents, technique, canonical parameters,
- * frames, size, backend (and --sun when given). */
-void sb_run_id(uint64_t scene_hash, uint64_t path_hash, const sb_run_opts *o, const sb_run_spec *spec, char out[17]);
 /* The run id of a spec in this session. */
 void sb_session_run_id(const sb_session *s, const sb_run_spec *spec, char out[17]);

@@ -11,6 +11,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "commands.h"
 #include "support.h"
 
 #include <sys/stat.h>
@@ -125,7 +126,7 @@ static void test_every_command_exit_2(void **st) {
         expect_cli_fail(want, "%s %s %s", b, cmd, foreign);
         for (int i = 0; i < sb_option_count; i++) { /* the first ranged option the command takes */
             const sb_option *o = &sb_options[i];
-            if (!(o->commands & SB_IN(c)) || (o->kind != SB_OPT_INT && o->kind != SB_OPT_NUM) || isinf(o->max)) continue;
+            if (!sb_option_taken(o, &sb_commands[c]) || (o->kind != SB_OPT_INT && o->kind != SB_OPT_NUM) || isinf(o->max)) continue;
             char v[64], head[128];
             snprintf(v, sizeof v, "%.15g", o->max * 2 + 1);
             snprintf(head, sizeof head, "%s %s: expected", o->name, v);

@@ -13,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "commands.h"
 #include "compare.h"
 #include "support.h"
 
@@ -48,22 +49,27 @@ static const char *bad_value(const sb_option *o, char *buf, size_t len) {
     }
 }
 
+#define CMD(c) (&sb_commands[c])
+
 static bool parse(sb_command cmd, const char *name, const char *value, sb_cli_opts *o, sb_err *err) {
     char *argv[] = {"shadowbench", (char *)sb_commands[cmd].name, (char *)name, (char *)value, NULL};
     const char *pos[5];
     int npos;
-    sb_cli_defaults(o, cmd);
-    return sb_cli_parse(o, cmd, value ? 4 : 3, argv, 2, pos, &npos, err) && npos == 0;
+    sb_cli_defaults(o, CMD(cmd));
+    return sb_cli_parse(o, CMD(cmd), value ? 4 : 3, argv, 2, pos, &npos, err) && npos == 0;
 }
+
+/* Every command takes an option through its own row: the test's view of "takes". */
+static bool takes(const sb_option *opt, int c) { return sb_option_taken(opt, CMD(c)); }
 
 static void test_every_option_by_command(void **st) {
     (void)st;
     int checks = 0;
     for (int i = 0; i < sb_option_count; i++) {
         const sb_option *opt = &sb_options[i];
-        assert_true(opt->commands != 0);
+        assert_true(opt->commands != 0 || opt->with != 0);
         for (int c = 0; c < SB_CMD_COUNT; c++) {
-            const sb_option *row = sb_option_find(opt->name, c);
+            const sb_option *row = sb_option_find(opt->name, CMD(c));
             char buf[64];
             const char *v = good_value(row ? row : opt, buf, sizeof buf);
             sb_cli_opts o;
@@ -95,7 +101,7 @@ static void test_out_of_range_names_the_range(void **st) {
         const char *v = bad_value(opt, buf, sizeof buf);
         if (!v) continue;
         int cmd = 0;
-        while (!(opt->commands & SB_IN(cmd))) cmd++;
+        while (!takes(opt, cmd)) cmd++;
         sb_cli_opts o;
         sb_err err;
         assert_false(parse((sb_command)cmd, opt->name, v, &o, &err));
@@ -115,7 +121,7 @@ static void test_defaults_parse(void **st) {
     (void)st;
     for (int c = 0; c < SB_CMD_COUNT; c++) {
         sb_cli_opts o;
-        sb_cli_defaults(&o, c);   /* aborts on a row whose default is out of its own range */
+        sb_cli_defaults(&o, CMD(c));   /* aborts on a row whose default is out of its own range */
         for (int i = 0; i < sb_option_count; i++) assert_false(o.given[i]);
     }
     sb_run_opts r;
@@ -129,13 +135,29 @@ static void test_defaults_parse(void **st) {
     assert_true(r.threads >= 1);
     /* the per-command rows of one field keep their own defaults */
     sb_cli_opts o;
-    sb_cli_defaults(&o, SB_CMD_COLUMNS);
+    sb_cli_defaults(&o, CMD(SB_CMD_COLUMNS));
     assert_int_equal(o.format, SB_OUTPUT_CSV);
-    sb_cli_defaults(&o, SB_CMD_COMPARE);
+    sb_cli_defaults(&o, CMD(SB_CMD_COMPARE));
     assert_int_equal(o.format, SB_OUTPUT_TEXT);
     assert_string_equal(o.out ? o.out : "", "");
-    sb_cli_defaults(&o, SB_CMD_REPORT);
+    sb_cli_defaults(&o, CMD(SB_CMD_REPORT));
     assert_string_equal(o.out, "out/report");
+    /* a command's own defaults, from the rows (tune: 33 frames, one warm-up frame, every frame's error, no flicker
+       twins, seed 1, shuffled; stress: 3 frames at 320x180, no warm-up) */
+    sb_cli_defaults(&o, CMD(SB_CMD_TUNE));
+    assert_int_equal(o.run.frames, 33);
+    assert_int_equal(o.run.warmup, 1);
+    assert_int_equal(o.run.error_every, 1);
+    assert_true(o.run.flicker_dt == 0);
+    assert_true(o.run.seed == 1);
+    assert_int_equal(o.run.order, SB_ORDER_SHUFFLE);
+    sb_cli_defaults(&o, CMD(SB_CMD_STRESS));
+    assert_int_equal(o.run.frames, 3);
+    assert_int_equal(o.run.width, 320);
+    assert_int_equal(o.run.height, 180);
+    assert_int_equal(o.run.warmup, 0);
+    sb_cli_defaults(&o, CMD(SB_CMD_RUN));
+    assert_int_equal(o.run.frames, 60);
 }
 
 static void test_values_reach_their_fields(void **st) {
@@ -156,7 +178,7 @@ static void test_values_reach_their_fields(void **st) {
     assert_true(o.run.gpu_memory == 512.0 * 1048576);
     assert_true(parse(SB_CMD_TUNE, "--time-limit", "1.5h", &o, &err));
     assert_true(o.time_limit_s == 5400);
-    assert_true(parse(SB_CMD_HISTORY, "--format", "csv", &o, &err));
+    assert_true(parse(SB_CMD_HISTORY_REGRESSIONS, "--format", "csv", &o, &err));
     assert_int_equal(o.format, SB_OUTPUT_CSV);
     assert_true(parse(SB_CMD_RUN, "--pose", "-2.5", &o, &err));
     assert_true(o.run.pose && o.run.pose_time == -2.5);
@@ -164,8 +186,75 @@ static void test_values_reach_their_fields(void **st) {
     assert_false(parse(SB_CMD_RUN, "--frames", NULL, &o, &err));
     assert_non_null(strstr(err.msg, "--frames needs a value"));
     /* a format of another command is not this one's */
-    assert_false(parse(SB_CMD_HISTORY, "--format", "markdown", &o, &err));
+    assert_false(parse(SB_CMD_HISTORY_REGRESSIONS, "--format", "markdown", &o, &err));
     assert_non_null(strstr(err.msg, "expected text or csv"));
+    /* --name=value is --name value */
+    assert_true(parse(SB_CMD_RUN, "--size=640x360", NULL, &o, &err));
+    assert_int_equal(o.run.width, 640);
+    assert_true(sb_cli_given(&o, "--size"));
+    assert_false(parse(SB_CMD_RUN, "--frames=", NULL, &o, &err));
+    assert_false(parse(SB_CMD_RUN, "--quiet=yes", NULL, &o, &err));
+    assert_non_null(strstr(err.msg, "--quiet takes no value"));
+    /* options that contradict each other are refused, naming both */
+    assert_false(parse(SB_CMD_RUN, "--quiet", "--verbose", &o, &err));
+    assert_non_null(strstr(err.msg, "--quiet and --verbose"));
+}
+
+/* The run id as it was hashed before the identity was a column of the option table (run.c until then): the ids
+ * of every series must hold. */
+static void legacy_run_id(uint64_t scene_hash, uint64_t path_hash, const sb_run_opts *o, const sb_run_spec *spec,
+                          char out[17]) {
+    char params[1024];
+    sb_params_canonical(&spec->params, params, sizeof params);
+    uint64_t h = SB_FNV_SEED;
+    h = sb_fnv1a(h, &scene_hash, sizeof scene_hash);
+    h = sb_fnv1a(h, &path_hash, sizeof path_hash);
+    h = sb_fnv1a(h, spec->tech->name, strlen(spec->tech->name) + 1);
+    h = sb_fnv1a(h, params, strlen(params) + 1);
+    int dims[4] = {o->frames, o->width, o->height, (int)o->backend};
+    h = sb_fnv1a(h, dims, sizeof dims);
+    if (o->sun_override) {
+        double sun[2] = {o->sun_az, o->sun_el};
+        h = sb_fnv1a(h, sun, sizeof sun);
+    }
+    if (o->submit != SB_SUBMIT_DIRECT) h = sb_fnv1a(h, "indirect", 9);
+    if (o->sun_size > 0 || o->lamp_radius > 0) {
+        double size[3] = {o->sun_size, o->lamp_radius, o->ref_samples};
+        h = sb_fnv1a(h, size, sizeof size);
+    }
+    snprintf(out, 17, "%016llx", (unsigned long long)h);
+}
+
+/* A run's identity is the rows marked for it: another value of one of them is another run, any other option is
+ * the same run; and every id is the one the hash gave before the identity was a column of the table. */
+static void test_run_identity(void **st) {
+    (void)st;
+    sb_run_spec spec = {.tech = sb_technique_find("sm")};
+    sb_params_defaults(&spec.params, spec.tech);
+    sb_run_opts o;
+    sb_run_opts_defaults(&o);
+    char base[17], id[17], legacy[17];
+    sb_run_id(1, 2, &o, &spec, base);
+    legacy_run_id(1, 2, &o, &spec, legacy);
+    assert_string_equal(base, legacy);
+    struct { const char *name, *value; bool identity; } cases[] = {
+        {"--frames", "61", true},      {"--size", "640x360", true},   {"--backend", "osmesa", true},
+        {"--sun", "10,20", true},      {"--submit", "indirect", true}, {"--sun-size", "0.5", true},
+        {"--lamp-radius", "0.1", true}, {"--ref-samples", "32", false}, {"--ring", "2", false},
+        {"--error-every", "3", false}, {"--threads", "1", false},      {"--warmup", "4", false},
+    };
+    for (size_t i = 0; i < SB_COUNT(cases); i++) {
+        sb_cli_opts c;
+        sb_err err;
+        char *tok[] = {(char *)cases[i].name, (char *)cases[i].value};
+        sb_cli_defaults(&c, NULL);
+        assert_true(sb_cli_parse_tokens(&c, tok, 2, "id", &err));
+        sb_run_id(1, 2, &c.run, &spec, id);
+        legacy_run_id(1, 2, &c.run, &spec, legacy);
+        if ((strcmp(id, base) != 0) != cases[i].identity) print_error("%s %s\n", cases[i].name, cases[i].value);
+        assert_true((strcmp(id, base) != 0) == cases[i].identity);
+        assert_string_equal(id, legacy);
+    }
 }
 
 static void test_batch_defaults_line(void **st) {
@@ -174,13 +263,13 @@ static void test_batch_defaults_line(void **st) {
         const sb_option *opt = &sb_options[i];
         bool run_option = false;
         for (int k = 0; k < sb_option_count; k++)
-            run_option |= !strcmp(sb_options[k].name, opt->name) && (sb_options[k].commands & SB_IN_FILE);
+            run_option |= !strcmp(sb_options[k].name, opt->name) && sb_options[k].run_option;
         if (!run_option) {
             /* not a run option: the defaults line refuses it */
             char *tok[] = {(char *)opt->name, "1"};
             sb_cli_opts o;
             sb_err err;
-            sb_cli_defaults(&o, -1);
+            sb_cli_defaults(&o, NULL);
             assert_false(sb_cli_parse_tokens(&o, tok, 2, "n.bench:3", &err));
             assert_non_null(strstr(err.msg, "n.bench:3: '"));
             assert_non_null(strstr(err.msg, "is not a run option"));
@@ -189,7 +278,7 @@ static void test_batch_defaults_line(void **st) {
     /* the command line's run options beat the file's, field by field */
     sb_cli_opts file, cli;
     sb_err err;
-    sb_cli_defaults(&file, -1);
+    sb_cli_defaults(&file, NULL);
     char *tok[] = {"--frames", "30", "--size", "96x54", "--sun", "10,20"};
     assert_true(sb_cli_parse_tokens(&file, tok, 6, "n.bench:2", &err));
     assert_true(parse(SB_CMD_BATCH, "--size", "64x32", &cli, &err));
@@ -223,17 +312,17 @@ static void test_help_and_docs_name_every_option(void **st) {
         char *help = NULL;
         size_t len = 0;
         FILE *f = open_memstream(&help, &len);
-        sb_cli_help(f, c);
+        sb_cli_help(f, sb_commands, CMD(c));
         fclose(f);
         for (int i = 0; i < sb_option_count; i++) {
             const sb_option *opt = &sb_options[i];
             char syn[64];
             sb_option_synopsis(opt, syn, sizeof syn);
-            bool takes = opt->commands & SB_IN(c);
-            if (takes != (strstr(help, syn) != NULL) && !(!takes && sb_option_find(opt->name, c)))
-                print_error("shadowbench %s --help %s %s\n", sb_commands[c].name, takes ? "lacks" : "lists", syn);
-            if (takes) assert_non_null(strstr(help, syn));
-            else if (!sb_option_find(opt->name, c)) assert_null(strstr(help, opt->name));
+            bool t = takes(opt, c);
+            if (t != (strstr(help, syn) != NULL) && !(!t && sb_option_find(opt->name, CMD(c))))
+                print_error("shadowbench %s --help %s %s\n", sb_commands[c].name, t ? "lacks" : "lists", syn);
+            if (t) assert_non_null(strstr(help, syn));
+            else if (!sb_option_find(opt->name, CMD(c))) assert_null(strstr(help, opt->name));
         }
         free(help);
     }
@@ -266,6 +355,7 @@ int main(void) {
         cmocka_unit_test(test_every_option_by_command),  cmocka_unit_test(test_out_of_range_names_the_range),
         cmocka_unit_test(test_defaults_parse),           cmocka_unit_test(test_values_reach_their_fields),
         cmocka_unit_test(test_batch_defaults_line),      cmocka_unit_test(test_help_and_docs_name_every_option),
+        cmocka_unit_test(test_run_identity),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,0 +1,24 @@
+/* run_opts.c - the run options' names and what is worked out from them (run_opts.h). */
+#include "run_opts.h"
+
+#include <time.h>
+#include <unistd.h>
+
+sb_scene_opts sb_run_scene_opts(const sb_run_opts *o) {
+    return (sb_scene_opts){.allow_external_uris = o->allow_external_uris, .blend = o->blend, .pose = o->pose,
+                           .pose_time = o->pose_time};
+}
+
+void sb_run_opts_finish(sb_run_opts *o) {
+    if (o->order != SB_ORDER_SHUFFLE || o->seed) return;
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    uint64_t x = (uint64_t)ts.tv_sec * 1000000007u ^ (uint64_t)ts.tv_nsec ^ (uint64_t)getpid() << 32;
+    o->seed = (x % 1000000000u) + 1; /* short enough to type back with --seed */
+}
+
+const char *sb_order_name(sb_order o) {
+    return o == SB_ORDER_INTERLEAVE ? "interleave" : o == SB_ORDER_SHUFFLE ? "shuffle" : "matrix";
+}
+
+const char *sb_submit_name(sb_submit_mode m) { return m == SB_SUBMIT_INDIRECT ? "indirect" : "direct"; }
