@@ -35,7 +35,8 @@ typedef struct {
 /* Renders the calibration frames with params p and scores them. */
 static bool score(sb_session *s, const sb_run_spec *spec, const sb_params *p, const int *frames, int nf,
                   calib_score *out, sb_err *err) {
-    sb_run_spec rs = {spec->tech, *p};
+    sb_run_spec rs = {.tech = spec->tech, .params = *p};
+    sb_spec_bind(&rs);
     sb_instance in;
     if (!sb_instance_create(&in, s, &rs, nf, err)) return false;   /* frames: what it keeps per frame (sdsm's splits) */
     int replay = sb_instance_history(&in);
@@ -169,6 +170,7 @@ bool sb_autobias_choose(sb_session *s, const sb_run_spec *spec, sb_run_spec *out
                 }
     }
     params_at(&x, x.rungs[best], &out->params);
+    sb_spec_bind(out);
     size_t n = 0;
     for (int a = 0; a < x.na; a++) {
         if (n < len)
@@ -177,7 +179,7 @@ bool sb_autobias_choose(sb_session *s, const sb_run_spec *spec, sb_run_spec *out
     }
     if (tried) *tried = x.tried;
     sb_log("%s: auto offsets %s: %d candidates on %d frame(s); false shadow %.5f (limit %.5f, least %.5f), "
-           "err_rate %.5f", spec->tech->name, chosen, x.tried, x.nf, x.sc[best].false_shadow, limit, least,
-           x.sc[best].err_rate);
+           "%s %.5f", spec->tech->name, chosen, x.tried, x.nf, x.sc[best].false_shadow, limit, least,
+           sb_columns_role(SB_ROLE_ERROR), x.sc[best].err_rate);
     return true;
 }

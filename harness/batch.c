@@ -2,6 +2,8 @@
 #include "scene_load.h"
 #include "batch.h"
 
+#include "resultset.h"
+
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -60,16 +62,16 @@ static bool line_applies(const run_line *rl, const char *scene) {
     return false;
 }
 
-/* A rough cost model: frames x (geometry per pass x passes + shadow-map fill). */
+/* A rough cost model: frames x (geometry per pass x passes + shadow-map fill + the pixels' work), from the
+ * parameters' roles (a map's resolution, how many maps) and the technique's pixel cost. */
 static double run_cost(const sb_batch *b, const sb_batch_scene *sc, const sb_run_spec *spec) {
     double tris = (double)sb_scene_triangles(&sc->scene);
-    double cascades, res;
-    bool maps = sb_params_find(&spec->params, "res", &res);
-    if (!sb_params_find(&spec->params, "cascades", &cascades)) cascades = maps ? 1 : 0;
-    if (!maps) res = 0;
+    double maps, res;
+    bool has_maps = sb_params_role(&spec->params, SB_PARAM_RES, &res);
+    if (!sb_params_role(&spec->params, SB_PARAM_MAPS, &maps)) maps = has_maps ? 1 : 0;
+    if (!has_maps) res = 0;
     double pixels = (double)b->opts.width * b->opts.height;
-    double per_frame = tris * (1 + cascades) + cascades * res * res * 0.25 + pixels;
-    if (!strcmp(spec->tech->name, "raycast")) per_frame += pixels * 20;
+    double per_frame = tris * (1 + maps) + maps * res * res * 0.25 + pixels * (1 + spec->tech->pixel_cost);
     return per_frame * (b->opts.frames + b->opts.warmup) * (b->opts.error_every > 0 ? 1.2 : 1.0);
 }
 
@@ -489,9 +491,9 @@ int sb_batch_main(const sb_batch_cmd *cmd) {
     sb_batch b;
     if (!sb_batch_load(&b, cmd->file, cmd->base, cmd->cli, &err)) {
         fprintf(stderr, "shadowbench: %s\n", err.msg);
-        return 2;
+        return SB_EXIT_BAD_INPUT;
     }
-    int rc = 0, nsel = 0;
+    int rc = SB_EXIT_OK, nsel = 0;
     bool *selected = sb_xmalloc((size_t)(b.nruns ? b.nruns : 1)), *done = sb_xcalloc((size_t)(b.nruns ? b.nruns : 1), 1);
     memset(selected, 1, (size_t)(b.nruns ? b.nruns : 1));
     if (cmd->shard) {
@@ -499,12 +501,17 @@ int sb_batch_main(const sb_batch_cmd *cmd) {
         char extra;
         if (sscanf(cmd->shard, "%d/%d%c", &si, &sn, &extra) != 2 || sn < 1 || si < 1 || si > sn) {
             fprintf(stderr, "shadowbench: --shard %s: expected I/N with 1 <= I <= N\n", cmd->shard);
-            rc = 2;
+            rc = SB_EXIT_BAD_INPUT;
             goto out;
         }
         sb_batch_shard(&b, si, sn, selected);
     }
     for (int i = 0; i < b.nruns; i++) nsel += selected[i];
+    if (!cmd->dry_run && !sb_grid_confirm(nsel, cmd->cli, &err)) {
+        fprintf(stderr, "shadowbench: %s: %s\n", cmd->file, err.msg);
+        rc = SB_EXIT_BAD_INPUT;
+        goto out;
+    }
     if (cmd->dry_run) {
         print_dry_run(&b, selected, nsel, cmd->shard != NULL);
         goto out;
@@ -512,16 +519,17 @@ int sb_batch_main(const sb_batch_cmd *cmd) {
     char dir[4096], sum_path[4200];
     if (!results_dir(cmd, &b, dir, sizeof dir, &err)) {
         fprintf(stderr, "shadowbench: %s\n", err.msg);
-        rc = cmd->resume ? 2 : 1;
+        rc = cmd->resume ? SB_EXIT_BAD_INPUT : SB_EXIT_WRITE;   /* --out was writable when the command began */
         goto out;
     }
+    if (cmd->resume) sb_resultset_unseal(dir);   /* the set changes now; sealed again when it ends */
     sb_session s;
     memset(&s, 0, sizeof s);
     if (!sb_context_create(&s.ctx, b.opts.backend, &err) || !sb_session_clocks(&s, &b.opts, &err)) {
         fprintf(stderr, "shadowbench: %s\n", err.msg);
         sb_clocks_close(s.clocks);
         sb_context_destroy(&s.ctx);
-        rc = 1;
+        rc = SB_EXIT_FAILED;
         goto out;
     }
     if (!write_meta(cmd, dir, &s, &b, nsel, &err) || !sb_columns_write(dir, &err))
@@ -536,6 +544,7 @@ int sb_batch_main(const sb_batch_cmd *cmd) {
     if (!sb_summary_flush(&sum, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
     double t0 = sb_now_ms();
     run_scenes(&b, selected, done, todo, dir, &s, &sum);
+    if (!sb_summary_flush(&sum, &err) || !sb_resultset_seal(dir, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
     double wall_s = (sb_now_ms() - t0) / 1e3;
     printf("%s\n", dir);
     /* how much of the batch the GPU spent on what is measured: the rest is the harness's */

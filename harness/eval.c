@@ -130,8 +130,8 @@ bool sb_eval_background(sb_session *s, sb_err *err) {
         return true;
     }
     /* every technique rasterizes a frame's positions and normals the same: draw them once, without shadows */
-    sb_run_spec spec = {.tech = sb_technique_find("none")};
-    sb_params_defaults(&spec.params, spec.tech);
+    sb_run_spec spec;
+    sb_spec_defaults(&spec, sb_technique_with(SB_TRAIT_NO_SHADOWS));
     sb_instance in;
     if (!sb_instance_create(&in, s, &spec, 1, err)) return false;
     sb_eval_buf b;

@@ -413,7 +413,7 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
         .order = sb_order_name(o->order), .submit = sb_submit_name(o->submit), .seed = o->order == SB_ORDER_SHUFFLE ? o->seed : 0,
         .reason = "", .frames = o->frames, .warmup = o->warmup, .width = o->width, .height = o->height,
         .target_ci = o->target_ci, .scene_triangles = sb_scene_triangles(&s->scene), .load_ms = s->scene.load_ms,
-        .shadow_mb = sb_params_shadow_bytes(&spec->params, spec->tech) / 1048576.0,
+        .shadow_mb = sb_spec_shadow_bytes(spec) / 1048576.0,
         .calib_ms_before = NAN, .calib_ms_after = NAN, .eval_s = NAN, .stable = "", .unstable_reason = "",
     };
     if (o->sun_size > 0 || o->lamp_radius > 0) {
@@ -422,7 +422,7 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
         if (o->lamp_radius > 0) snprintf(lamp, sizeof lamp, "lamp %g, ", o->lamp_radius);
         snprintf(r->info.light, sizeof r->info.light, "%s%s%d rays", sun, lamp, o->ref_samples);
     }
-    const char *skip = sb_skip_reason(s, spec->tech, &spec->params);
+    const char *skip = sb_skip_reason(s, spec->tech, spec);
     if (skip) {
         r->finished = true;
         r->info.status = SB_STATUS_SKIPPED;
@@ -515,7 +515,7 @@ static void run_rounds(sb_session *s, sb_run **runs, int n, int first, int total
 static void start_background(sb_session *s, const sb_run_spec *const *specs, int n) {
     bool wanted = false;
     for (int k = 0; k < n && !wanted; k++)
-        wanted = !(specs[k]->tech->needs & SB_NEEDS_POINT_LIGHT) && !sb_skip_reason(s, specs[k]->tech, &specs[k]->params);
+        wanted = !(specs[k]->tech->needs & SB_NEEDS_POINT_LIGHT) && !sb_skip_reason(s, specs[k]->tech, specs[k]);
     sb_err err;
     if (wanted && !sb_eval_background(s, &err))
         sb_log("the reference is not cast in the background: %s", err.msg); /* the evaluation says it again */
@@ -540,7 +540,7 @@ int sb_summary_conclude(const sb_summary *sum, const char *dir, const char *resu
     /* said even with --quiet: the user asked for the stop and needs the way back */
     fprintf(stderr, "shadowbench: interrupted: the completed runs' rows are in %s/summary.csv; the rest: %s --resume %s\n",
             dir, resume_command, dir);
-    return 128 + sb_interrupted();
+    return SB_EXIT_SIGNAL + sb_interrupted();
 }
 
 int sb_run_group(sb_session *s, const sb_run_spec *const *specs, const int *run_index, int n, const char *out_dir,

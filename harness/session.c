@@ -242,20 +242,19 @@ static const char *scene_skip_reason(sb_session *s, const sb_technique *t) {
     return NULL;
 }
 
-const char *sb_skip_reason(sb_session *s, const sb_technique *t, const sb_params *p) {
+const char *sb_skip_reason(sb_session *s, const sb_technique *t, const sb_run_spec *spec) {
     const char *why = scene_skip_reason(s, t);
     if (why || !t->supported) return why;
-    sb_params defaults;
-    if (!p) {
-        sb_params_defaults(&defaults, t);
-        p = &defaults;
+    sb_run_spec *defaults = NULL;
+    if (!spec) {
+        defaults = sb_xmalloc(sizeof *defaults);
+        sb_spec_defaults(defaults, t);
+        spec = defaults;
     }
-    void *desc = sb_xcalloc(1, t->desc_size ? t->desc_size : 1);
-    sb_params_bind(p, t, desc);
     sb_run_ctx rc = {.gpu = &s->gpu, .tech = t};
     sb_err e;
-    bool ok = t->supported(&rc, desc, &e);
-    free(desc);
+    bool ok = t->supported(&rc, spec->desc, &e);
+    free(defaults);
     if (ok) return NULL;
     snprintf(s->skip, sizeof s->skip, "%s", e.msg);
     return s->skip;
@@ -271,9 +270,9 @@ bool sb_instance_create(sb_instance *in, sb_session *s, const sb_run_spec *spec,
             return sb_fail(err, "%s:%s=auto: only run, batch and tune calibrate auto values", t->name,
                            spec->params.v[i].def->name);
     in->tech = t;
-    in->params = spec->params;
-    in->desc = sb_xcalloc(1, t->desc_size ? t->desc_size : 1);
-    sb_params_bind(&in->params, t, in->desc);
+    in->spec = sb_xmalloc(sizeof *in->spec);
+    *in->spec = *spec;
+    in->desc = in->spec->desc;
     in->rc = (sb_run_ctx){.gpu = &s->gpu, .tech = t, .frames = frames};
     if (t->needs & SB_NEEDS_PLANE) sb_scene_find_planes(&s->scene);   /* on the first need, not at load */
     /* shared geometry the technique cannot draw shared (render.h): copies uploaded now, not in a timed frame */
@@ -297,7 +296,8 @@ int sb_instance_history(const sb_instance *in) { return in->tech->history ? in->
 void sb_instance_destroy(sb_instance *in) {
     if (in->state) in->tech->destroy(in->state);
     free(in->state);
-    free(in->desc);
+    free(in->spec);
+    in->spec = NULL;
     in->state = in->desc = NULL;
 }
 

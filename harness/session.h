@@ -89,8 +89,8 @@ const struct sb_reference *sb_session_reference(sb_session *s, sb_err *err);
 /* A live technique instance: its parameters as values and as the bound struct. */
 typedef struct sb_instance {
     const sb_technique *tech;
-    sb_params params;
-    void *desc;                 /* the parameter struct (sb_params_bind) */
+    sb_run_spec *spec;          /* the spec it was made from (its own copy) */
+    void *desc;                 /* the parameter struct: spec->desc, bound with the spec */
     void *state;
     sb_run_ctx rc;
 } sb_instance;
@@ -108,4 +108,4 @@ void sb_render_camera(sb_session *s, sb_instance *in, sb_frame *f, const sb_came
                       struct sb_timer *timer, bool eval);
 /* Why a technique (with parameters p; NULL: its defaults) cannot run on this
  * scene and context, or NULL. The text lives in the session. */
-const char *sb_skip_reason(sb_session *s, const sb_technique *t, const sb_params *p);
+const char *sb_skip_reason(sb_session *s, const sb_technique *t, const sb_run_spec *spec);

@@ -29,18 +29,33 @@ static void list_techniques(char *out, size_t len) {
     }
 }
 
+void sb_spec_bind(sb_run_spec *rs) {
+    if (rs->tech->desc_size > SB_DESC_MAX) {   /* a technique's struct outgrew the spec: say it, never overrun */
+        fprintf(stderr, "shadowbench: %s's parameter struct is %zu bytes, more than SB_DESC_MAX (%d): raise it\n",
+                rs->tech->name, rs->tech->desc_size, SB_DESC_MAX);
+        abort();
+    }
+    sb_params_bind(&rs->params, rs->tech, rs->desc);
+}
+
+void sb_spec_defaults(sb_run_spec *rs, const sb_technique *t) {
+    rs->tech = t;
+    sb_params_defaults(&rs->params, t);
+    sb_spec_bind(rs);
+}
+
+double sb_spec_shadow_bytes(const sb_run_spec *rs) {
+    return rs->tech->shadow_bytes ? rs->tech->shadow_bytes(rs->tech, rs->desc) : 0;
+}
+
 /* A combination the technique cannot run (stable with a warp, ...): refused
  * with the combination named, before anything renders. */
-static bool check_combination(const sb_technique *t, const sb_params *p, const char *pre, sb_err *err) {
-    void *desc = sb_xcalloc(1, t->desc_size ? t->desc_size : 1);
-    sb_params_bind(p, t, desc);
+static bool check_combination(const sb_run_spec *rs, const char *pre, sb_err *err) {
     sb_err e;
-    bool ok = t->check(desc, &e);
-    free(desc);
-    if (ok) return true;
+    if (rs->tech->check(rs->desc, &e)) return true;
     char canon[1024];
-    sb_params_canonical(p, canon, sizeof canon);
-    return sb_fail(err, "%s%s:%s: %s", pre, t->name, canon, e.msg);
+    sb_params_canonical(&rs->params, canon, sizeof canon);
+    return sb_fail(err, "%s%s:%s: %s", pre, rs->tech->name, canon, e.msg);
 }
 
 bool sb_spec_expand(const char *spec, const char *where, sb_run_spec **runs, int *count, sb_err *err) {
@@ -80,7 +95,9 @@ bool sb_spec_expand(const char *spec, const char *where, sb_run_spec **runs, int
         ax->nvalues = 0;
         char *vsave = NULL;
         for (char *v = strtok_r(eq + 1, ",", &vsave); v; v = strtok_r(NULL, ",", &vsave)) {
-            if (ax->nvalues == MAX_VALUES) return sb_fail(err, "%s%s: too many values for '%s'", pre, t->name, opt);
+            if (ax->nvalues == MAX_VALUES)
+                return sb_fail(err, "%s%s: too many values for '%s' (at most %d a parameter; give another spec for "
+                                    "more)", pre, t->name, opt, MAX_VALUES);
             sb_params probe;
             sb_err e;
             if (!sb_param_set(&probe, 0, &t->params[pi], v, t->name, &e)) return sb_fail(err, "%s%s", pre, e.msg);
@@ -88,10 +105,12 @@ bool sb_spec_expand(const char *spec, const char *where, sb_run_spec **runs, int
         }
         if (!ax->nvalues) return sb_fail(err, "%s%s: no value for '%s'", pre, t->name, opt);
     }
-    int total = 1;
+    long total = 1;
     for (int a = 0; a < naxes; a++) total *= axes[a].nvalues;
+    if (total > SB_SPEC_MAX_RUNS)
+        return sb_fail(err, "%s%s: the grid is %ld runs, more than %d a spec", pre, t->name, total, SB_SPEC_MAX_RUNS);
     *runs = sb_xrealloc(*runs, (size_t)(*count + total) * sizeof **runs);
-    for (int r = 0; r < total; r++) {
+    for (int r = 0; r < (int)total; r++) {
         sb_run_spec *rs = &(*runs)[*count + r];
         rs->tech = t;
         sb_params_defaults(&rs->params, t);
@@ -103,9 +122,10 @@ bool sb_spec_expand(const char *spec, const char *where, sb_run_spec **runs, int
             sb_param_set(&rs->params, axes[a].param, &t->params[axes[a].param], axes[a].values[k], t->name, err);
             rs->params.v[axes[a].param].given = true;
         }
-        if (t->check && !check_combination(t, &rs->params, pre, err)) return false;
+        sb_spec_bind(rs);
+        if (t->check && !check_combination(rs, pre, err)) return false;
     }
-    *count += total;
+    *count += (int)total;
     return true;
 }
 
@@ -113,10 +133,11 @@ void sb_spec_light_size(sb_run_spec *rs, double sun_size_deg) {
     if (sun_size_deg <= 0) return;
     for (int i = 0; i < rs->params.count; i++) {
         const sb_param_def *d = rs->params.v[i].def;
-        if (strcmp(d->name, "sun_size") || rs->params.v[i].given) continue;
+        if (d->role != SB_PARAM_SUN_SIZE || rs->params.v[i].given) continue;
         char v[32];
         snprintf(v, sizeof v, "%g", sun_size_deg);
         sb_err e;
         sb_param_set(&rs->params, i, d, v, rs->tech->name, &e);   /* in its range: --sun-size's is sun_size's */
     }
+    sb_spec_bind(rs);
 }

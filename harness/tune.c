@@ -28,6 +28,7 @@
 #include <stdarg.h>
 
 #include "batch.h"
+#include "resultset.h"
 #include "site.h"
 #include "table.h"
 
@@ -40,17 +41,6 @@ static void __attribute__((format(printf, 2, 3))) line(sb_csv *c, const char *fm
     va_end(ap);
     sb_csv_line(c, buf);
 }
-
-/* The axes tune searches by default, for every technique that has the
- * parameter (enum values a technique lacks are left out). */
-static const struct {
-    const char *param, *values;
-} tune_axes[] = {
-    {"res", "512,1024,2048"},
-    {"cascades", "2,3,4"},
-    {"lambda", "0.5,0.75"},
-    {"filter", "none,hw,pcf3"},
-};
 
 #define RUNGS 3
 
@@ -68,8 +58,28 @@ typedef struct cand {
     bool front, chosen;
 } cand;
 
+/* The summary columns tune reads and the names it prints, from the column table's roles (columns.h). */
+typedef struct tune_cols {
+    char time_min[96], time_median[96], time_ci[96], err_mean[96], err_ci[96], flicker_mean[96];
+    const char *time, *err, *flicker, *memory;
+} tune_cols;
+
+static void tune_cols_init(tune_cols *c) {
+    sb_columns_role_stat(SB_ROLE_TIME, SB_STAT_MIN, c->time_min, sizeof c->time_min);
+    sb_columns_role_stat(SB_ROLE_TIME, SB_STAT_MEDIAN, c->time_median, sizeof c->time_median);
+    sb_columns_role_stat(SB_ROLE_TIME, SB_STAT_CI95, c->time_ci, sizeof c->time_ci);
+    sb_columns_role_stat(SB_ROLE_ERROR, SB_STAT_MEAN, c->err_mean, sizeof c->err_mean);
+    sb_columns_role_stat(SB_ROLE_ERROR, SB_STAT_CI95, c->err_ci, sizeof c->err_ci);
+    sb_columns_role_stat(SB_ROLE_FLICKER, SB_STAT_MEAN, c->flicker_mean, sizeof c->flicker_mean);
+    c->time = sb_columns_role(SB_ROLE_TIME);
+    c->err = sb_columns_role(SB_ROLE_ERROR);
+    c->flicker = sb_columns_role(SB_ROLE_FLICKER);
+    c->memory = sb_columns_role(SB_ROLE_MEMORY);
+}
+
 typedef struct tune {
     const sb_tune_cmd *cmd;
+    tune_cols col;
     sb_session s;
     cand *c;
     int n;
@@ -98,16 +108,14 @@ static void short_label(const sb_run_spec *r, char *out, size_t len) {
     }
 }
 
-/* "pssm:res=512,1024,2048:cascades=2,3,4:..." from tune's axes. */
+/* "pssm:res=512,1024,2048:cascades=2,3,4:..." from the values each parameter row says tune searches (those the
+ * row's range or choices refuse left out). */
 static void default_grid(const sb_technique *t, char *out, size_t len) {
     snprintf(out, len, "%s", t->name);
-    for (size_t a = 0; a < SB_COUNT(tune_axes); a++) {
-        int pi = -1;
-        for (int i = 0; i < t->param_count; i++)
-            if (!strcmp(t->params[i].name, tune_axes[a].param)) pi = i;
-        if (pi < 0) continue;
+    for (int pi = 0; pi < t->param_count; pi++) {
+        if (!t->params[pi].tune) continue;
         char vals[256], list[256] = "";
-        snprintf(vals, sizeof vals, "%s", tune_axes[a].values);
+        snprintf(vals, sizeof vals, "%s", t->params[pi].tune);
         for (char *save = NULL, *v = strtok_r(vals, ",", &save); v; v = strtok_r(NULL, ",", &save)) {
             sb_params probe;
             sb_err e;
@@ -117,7 +125,7 @@ static void default_grid(const sb_technique *t, char *out, size_t len) {
         }
         if (!list[0]) continue;
         size_t l = strlen(out);
-        snprintf(out + l, len - l, ":%s=%s", tune_axes[a].param, list);
+        snprintf(out + l, len - l, ":%s=%s", t->params[pi].name, list);
     }
 }
 
@@ -156,7 +164,7 @@ static bool make_candidates(tune *t, sb_err *err) {
         for (int i = 0; i < sb_technique_count(); i++) {
             const sb_technique *tq = sb_technique_at(i);
             bool want = cmd->techniques ? in_list(cmd->techniques, tq->name)
-                                        : strcmp(tq->name, "none") && strcmp(tq->name, "raycast");
+                                        : !(tq->traits & (SB_TRAIT_NO_SHADOWS | SB_TRAIT_EXACT));
             if (!want) continue;
             char spec[1024];
             default_grid(tq, spec, sizeof spec);
@@ -178,7 +186,7 @@ static bool make_candidates(tune *t, sb_err *err) {
         t->c[i].alive = true;
         short_label(&runs[i], t->c[i].label, sizeof t->c[i].label);
         /* a memory bound is known from the parameters alone: a setting over it is never rendered */
-        double mb = sb_params_shadow_bytes(&runs[i].params, runs[i].tech) / 1048576.0;
+        double mb = sb_spec_shadow_bytes(&runs[i]) / 1048576.0;
         if (t->cmd->max_mb > 0 && mb > t->cmd->max_mb) {
             t->c[i].alive = false;
             t->c[i].skipped = true;
@@ -213,6 +221,15 @@ static double constraint_of(const tune *t, const cand *c) { return t->cmd->max_e
 static double objective_of(const tune *t, const cand *c) { return t->cmd->max_err > 0 ? c->time_ms : c->err; }
 static double bound_of(const tune *t) { return t->cmd->max_err > 0 ? t->cmd->max_err : t->cmd->budget_ms; }
 
+/* The bounds, each named by its column: err_rate at most 0.05, flicker_rate at most 0.01, shadow_mb at most 64. */
+static void bounds_text(const tune *t, char *out, size_t len) {
+    const sb_tune_cmd *cmd = t->cmd;
+    snprintf(out, len, "%s at most %g", cmd->max_err > 0 ? t->col.err : t->col.time, bound_of(t));
+    size_t l = strlen(out);
+    if (cmd->max_flicker > 0) l += (size_t)snprintf(out + l, len - l, ", %s at most %g", t->col.flicker, cmd->max_flicker);
+    if (cmd->max_mb > 0 && l < len) snprintf(out + l, len - l, ", %s at most %g", t->col.memory, cmd->max_mb);
+}
+
 /* The flicker bound, with a slack (a share of it): met when there is none, or the candidate's flicker_rate is
  * within it (a technique that measures no flicker cannot be vouched for). */
 static bool flicker_ok(const tune *t, const cand *c, double slack) {
@@ -240,12 +257,12 @@ static void read_rung(tune *t, int rung, const char *sum_path) {
             double v;
             /* early rungs: the fastest frame, which a slow spell on a shared machine does not lower (all
                candidates render the same cameras); the last rung: the median, the figure tune reports */
-            const char *time_col = rung < t->nrungs - 1 ? "gpu_ms_min" : "gpu_ms_median";
+            const char *time_col = rung < t->nrungs - 1 ? t->col.time_min : t->col.time_median;
             c->time_ms = sb_parse_double(sb_table_get(&tb, r, time_col), &v) ? v : NAN;
-            c->time_ci = sb_parse_double(sb_table_get(&tb, r, "gpu_ms_ci95"), &v) ? v : NAN;
-            c->err = sb_parse_double(sb_table_get(&tb, r, "err_rate_mean"), &v) ? v : NAN;
-            c->err_ci = sb_parse_double(sb_table_get(&tb, r, "err_rate_ci95"), &v) ? v : NAN;
-            c->flicker = sb_parse_double(sb_table_get(&tb, r, "flicker_rate_mean"), &v) ? v : NAN;
+            c->time_ci = sb_parse_double(sb_table_get(&tb, r, t->col.time_ci), &v) ? v : NAN;
+            c->err = sb_parse_double(sb_table_get(&tb, r, t->col.err_mean), &v) ? v : NAN;
+            c->err_ci = sb_parse_double(sb_table_get(&tb, r, t->col.err_ci), &v) ? v : NAN;
+            c->flicker = sb_parse_double(sb_table_get(&tb, r, t->col.flicker_mean), &v) ? v : NAN;
             long fr = 0, wu = 0, rep = 1;
             sb_parse_int(sb_table_get(&tb, r, "frames"), &fr);
             sb_parse_int(sb_table_get(&tb, r, "warmup"), &wu);
@@ -292,6 +309,7 @@ static bool run_rung(tune *t, int rung) {
     }
     sb_summary sum;
     sb_summary_open(&sum, sum_path);
+    if (t->cmd->resume) sb_resultset_unseal(dir);   /* the rung changes now; sealed again when it ends */
     int kept = t->cmd->resume ? sb_summary_keep_complete(&sum, dir, ids, t->n, done) : 0;
     t->kept += kept;
     /* the rung's order over all its candidates, then those already done left out: a resumed search
@@ -335,7 +353,7 @@ static bool run_rung(tune *t, int rung) {
         sb_run_one(s, &c->spec, dir, &sum, order[k], k, todo);
         if (!sb_summary_flush(&sum, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
     }
-    if (!sb_summary_flush(&sum, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
+    if (!sb_summary_flush(&sum, &err) || !sb_resultset_seal(dir, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
     sb_summary_free(&sum);
     read_rung(t, rung, sum_path);
     free(ids);
@@ -359,7 +377,7 @@ static void warm_session(tune *t) {
     sb_session *s = &t->s;
     int first = -1;
     for (int i = 0; i < t->n && first < 0; i++)
-        if (t->c[i].alive && !sb_skip_reason(s, t->c[i].spec.tech, &t->c[i].spec.params)) first = i;
+        if (t->c[i].alive && !sb_skip_reason(s, t->c[i].spec.tech, &t->c[i].spec)) first = i;
     if (first < 0) return;
     char dir[4200], sum_path[4300];
     snprintf(dir, sizeof dir, "%s/warm-up", t->dir);
@@ -533,8 +551,9 @@ static int cmp_time(const void *a, const void *b) {
 
 static bool write_csv(const tune *t, sb_err *err) {
     sb_csv csv = {0};
-    static const char *const head[] = {"candidate", "technique", "spec", "rung", "frames", "status", "reason",
-                                       "gpu_ms_median", "gpu_ms_ci95", "err_rate_mean", "err_rate_ci95", "flicker_rate_mean", "front",
+    const char *const head[] = {"candidate", "technique", "spec", "rung", "frames", "status", "reason",
+                                t->col.time_median, t->col.time_ci, t->col.err_mean, t->col.err_ci,
+                                t->col.flicker_mean, "front",
                                        "recommended", "run_id"};
     for (size_t k = 0; k < SB_COUNT(head); k++) sb_csv_str(&csv, head[k]);
     sb_csv_end_row(&csv);
@@ -582,21 +601,13 @@ static bool write_front(const tune *t, int chosen, bool met, sb_err *err) {
         p[n++] = (sb_site_point){.technique = c->spec.tech->name, .label = c->label, .x = c->time_ms, .y = c->err,
                                  .frames = c->frames, .front = c->front, .chosen = i == chosen};
     }
-    char title[1024], about[1024];
-    snprintf(title, sizeof title, "tune %s along %s, %dx%d: %s %g", t->s.scene_name, t->s.path_name,
-             t->cmd->opts->width, t->cmd->opts->height, t->cmd->max_err > 0 ? "err_rate at most" : "gpu_ms at most",
-             bound_of(t));
-    if (t->cmd->max_flicker > 0) {
-        size_t l = strlen(title);
-        snprintf(title + l, sizeof title - l, ", flicker_rate at most %g", t->cmd->max_flicker);
-    }
-    if (t->cmd->max_mb > 0) {
-        size_t l = strlen(title);
-        snprintf(title + l, sizeof title - l, ", shadow_mb at most %g", t->cmd->max_mb);
-    }
+    char title[2048], about[1024], bounds[512];
+    bounds_text(t, bounds, sizeof bounds);
+    snprintf(title, sizeof title, "tune %s along %s, %dx%d: %s", t->s.scene_name, t->s.path_name,
+             t->cmd->opts->width, t->cmd->opts->height, bounds);
     snprintf(about, sizeof about, "Each point a candidate at the last rung it reached: the median frame time at the "
              "last rung (the fastest frame at earlier ones) against the mean error rate against the exact reference.");
-    sb_site_front f = {.out = t->dir, .title = title, .about = about, .xlabel = "gpu_ms", .ylabel = "err_rate",
+    sb_site_front f = {.out = t->dir, .title = title, .about = about, .xlabel = t->col.time, .ylabel = t->col.err,
                        .bound = bound_of(t), .bound_on_x = t->cmd->max_err <= 0,
                        .chosen_is = met ? "the recommended setting" : "the closest (nothing met the bound)",
                        .points = p, .n = n};
@@ -643,17 +654,15 @@ static void print_report(const tune *t, int chosen, bool met) {
         if (t->c[i].front) v[nv++] = &t->c[i];
     }
     qsort(v, (size_t)nv, sizeof *v, cmp_time);
-    printf("%s along %s, %dx%d, %s %g", t->s.scene_name, t->s.path_name, cmd->opts->width, cmd->opts->height,
-           cmd->max_err > 0 ? "err_rate at most" : "gpu_ms at most", bound_of(t));
-    if (cmd->max_flicker > 0) printf(", flicker_rate at most %g", cmd->max_flicker);
-    if (cmd->max_mb > 0) printf(", shadow_mb at most %g", cmd->max_mb);
-    printf("\n");
+    char bounds[512];
+    bounds_text(t, bounds, sizeof bounds);
+    printf("%s along %s, %dx%d, %s\n", t->s.scene_name, t->s.path_name, cmd->opts->width, cmd->opts->height, bounds);
     if (chosen >= 0) {
         const cand *c = &t->c[chosen];
-        printf("%s: %s\n  gpu_ms median %.3g (95%% CI of the mean +-%.2g), err_rate %.4g (+-%.2g), %d frames\n",
-               met ? "recommended" : "nothing met the bound; closest", c->label, c->time_ms, c->time_ci, c->err,
-               c->err_ci, c->frames);
-        if (cmd->max_flicker > 0) printf("  flicker_rate %.4g\n", c->flicker);
+        printf("%s: %s\n  %s median %.3g (95%% CI of the mean +-%.2g), %s %.4g (+-%.2g), %d frames\n",
+               met ? "recommended" : "nothing met the bound; closest", c->label, t->col.time, c->time_ms, c->time_ci,
+               t->col.err, c->err, c->err_ci, c->frames);
+        if (cmd->max_flicker > 0) printf("  %s %.4g\n", t->col.flicker, c->flicker);
     } else {
         printf("no candidate could be measured\n");
     }
@@ -662,7 +671,7 @@ static void print_report(const tune *t, int chosen, bool met) {
         printf("  (%s ended the search after rung %d: figures from fewer frames)\n",
                sb_interrupted() ? sb_interrupt_name() : "the time limit", t->last_rung);
     printf("\nPareto front (time against error; frames: how many frames the figures are from):\n");
-    printf("  %-52s %10s %9s %10s %9s %6s\n", "setting", "gpu_ms", "+-ci95", "err_rate", "+-ci95", "frames");
+    printf("  %-52s %10s %9s %10s %9s %6s\n", "setting", t->col.time, "+-ci95", t->col.err, "+-ci95", "frames");
     for (int k = 0; k < nv; k++)
         printf("%c %-52s %10.3g %9.2g %10.4g %9.2g %6d\n", v[k]->chosen ? '*' : ' ',
                v[k]->label, v[k]->time_ms, v[k]->time_ci, v[k]->err, v[k]->err_ci, v[k]->frames);
@@ -686,6 +695,7 @@ int sb_tune_main(const sb_tune_cmd *cmd) {
     tune t;
     memset(&t, 0, sizeof t);
     t.cmd = cmd;
+    tune_cols_init(&t.col);
     t.t0 = sb_now_ms();
     t.last_rung = -1;
     sb_err err;
@@ -696,16 +706,11 @@ int sb_tune_main(const sb_tune_cmd *cmd) {
     if (cmd->opts->error_every <= 0) {
         fprintf(stderr, "shadowbench: tune needs the error: --error-every must be at least 1\n");
         free(t.c);
-        return 2;
+        return SB_EXIT_BAD_INPUT;
     }
     plan_frames(&t);
     t.warmup = cmd->opts->warmup < 0 ? 1 : cmd->opts->warmup;
     t.final_reps = 1;
-    if (cmd->resume && access(cmd->resume, W_OK) != 0) {
-        fprintf(stderr, "shadowbench: --resume %s: no such results folder\n", cmd->resume);
-        free(t.c);
-        return 2;
-    }
     if (!sb_session_open(&t.s, cmd->opts, cmd->scene, cmd->path ? cmd->path : "auto", &err)) {
         fprintf(stderr, "shadowbench: %s\n", err.msg);
         int rc = t.s.files_refused ? SB_EXIT_BAD_INPUT : SB_EXIT_FAILED;
@@ -769,7 +774,7 @@ int sb_tune_main(const sb_tune_cmd *cmd) {
     if (sb_interrupted()) {   /* said even with --quiet: the folder is half a search */
         fprintf(stderr, "shadowbench: interrupted: the runs measured so far are in %s; the rest: the same command "
                         "with --resume %s\n", t.dir, t.dir);
-        return 128 + sb_interrupted();
+        return SB_EXIT_SIGNAL + sb_interrupted();
     }
-    return ok && met ? 0 : 1;
+    return ok && met ? SB_EXIT_OK : SB_EXIT_FAILED;
 }

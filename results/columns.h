@@ -182,9 +182,9 @@ bool sb_columns_metric(const char *name, sb_metric_cols *out);
 int sb_columns_default_metrics(unsigned use, const char **out, int max);
 /* Every metric (a series, or a scalar with a unit), in table order; returns how many (<= max). */
 int sb_columns_metrics(const char **out, int max);
-/* The column with a role: its name ("gpu_ms"; a frame column's, or a run column's). */
+/* The column with a role: its name (gpu_ms: a frame column's, or a run column's). */
 const char *sb_columns_role(sb_col_role role);
-/* A statistic of the role's series ("gpu_ms_median" for SB_STAT_MEDIAN); a run column: its name. */
+/* A statistic of the role's series (gpu_ms_median for SB_STAT_MEDIAN); a run column: its name. */
 void sb_columns_role_stat(sb_col_role role, unsigned stat, char *out, size_t len);
 /* The summary columns the report's night table shows (SB_USE_NIGHT: a series' centre statistic, or the
  * scalar), in table order; returns how many (<= max); names in static storage. */

@@ -38,13 +38,14 @@ typedef struct sb_csm_desc {
  * fields, so a technique's parameter struct must start with its
  * `sb_csm_desc csm` (offset 0). */
 #define SB_SHADOWMAP_PARAMS                                                                                    \
-    SB_PARAM_I(sb_csm_desc, res, 2048, 64, 16384, "shadow map resolution (texels per side, per cascade)"),     \
+    SB_PARAM_I(sb_csm_desc, res, 2048, 64, 16384, "shadow map resolution (texels per side, per cascade)",            \
+               .tune = "512,1024,2048", .role = SB_PARAM_RES),     \
     SB_PARAM_E(sb_csm_desc, depth, 32f, "16|24|32f", "shadow map depth format"),                               \
     SB_PARAM_FA(sb_csm_desc, bias, 1, 0, 100, "constant depth bias, in shadow texels of world size"),          \
     SB_PARAM_FA(sb_csm_desc, slope, 0.5, 0, 100, "slope-scaled bias (glPolygonOffset factor; 4x it for warped maps)"), \
     SB_PARAM_FA(sb_csm_desc, normal, 0.25, 0, 100, "normal offset, in shadow texels"),                          \
-    SB_PARAM_E(sb_csm_desc, filter, hw, "none|hw|pcf3|pcf5|poisson16|pcss", "shadow filter"),                   \
-    SB_PARAM_F(sb_csm_desc, sun_size, 0.53, 0, 10, "pcss: angular diameter of the sun, degrees"),             \
+    SB_PARAM_E(sb_csm_desc, filter, hw, "none|hw|pcf3|pcf5|poisson16|pcss", "shadow filter", .tune = "none,hw,pcf3"),                   \
+    SB_PARAM_F(sb_csm_desc, sun_size, 0.53, 0, 10, "pcss: angular diameter of the sun, degrees", .role = SB_PARAM_SUN_SIZE), \
     SB_PARAM_E(sb_csm_desc, stable, off, "off|on", "sphere fit and texel snapping: no shimmer when moving"),    \
     SB_PARAM_E(sb_csm_desc, format, depth, "depth|vsm|esm|msm", "what the map stores: depth, or filterable moments"), \
     SB_PARAM_I(sb_csm_desc, blur, 2, 0, 16, "vsm/esm/msm: Gaussian blur radius of the moments, texels"),        \
@@ -53,7 +54,7 @@ typedef struct sb_csm_desc {
 
 /* Parameters of the cascaded techniques (pssm, sdsm). */
 #define SB_CASCADE_PARAMS                                                                                      \
-    SB_PARAM_I(sb_csm_desc, cascades, 4, 1, 8, "number of cascades"),                                           \
+    SB_PARAM_I(sb_csm_desc, cascades, 4, 1, 8, "number of cascades", .tune = "2,3,4", .role = SB_PARAM_MAPS),                                           \
     SB_PARAM_E(sb_csm_desc, select, interval, "interval|map", "cascade selection: by view depth or by map"),    \
     SB_PARAM_F(sb_csm_desc, blend, 0, 0, 0.5, "blend band between cascades (fraction of a cascade)"),          \
     SB_PARAM_E(sb_csm_desc, layered, off, "off|gs|vs|on",                                                       \
@@ -169,8 +170,8 @@ typedef struct sb_csm_state {
 } sb_csm_state;
 
 /* A cascade technique: name, summary, parameter table, parameter struct
- * type, its defaults, and the split scheme. */
-#define SB_CSM_TECHNIQUE(NAME, SUMMARY, PARAMS, DESC_T, DEFAULTS, SPLITS)                                      \
+ * type, its defaults, and the split scheme; then more of its fields (.stress = ...). */
+#define SB_CSM_TECHNIQUE(NAME, SUMMARY, PARAMS, DESC_T, DEFAULTS, SPLITS, ...)                                 \
     {                                                                                                          \
         .name = NAME, .summary = SUMMARY, .params = PARAMS, .param_count = (int)SB_COUNT(PARAMS),              \
         .desc_size = sizeof(DESC_T), .desc_defaults = DEFAULTS,                                                \
@@ -179,5 +180,5 @@ typedef struct sb_csm_state {
         .supported = sb_csm_technique_supported, .shadow_bytes = sb_csm_technique_shadow_bytes,                \
         .create = sb_csm_technique_create,                                                                     \
         .frame = sb_csm_technique_frame, .destroy = sb_csm_technique_destroy,                                  \
-        .impl = &(const sb_csm_kind){SPLITS},                                                                  \
+        .impl = &(const sb_csm_kind){SPLITS}, __VA_ARGS__                                                      \
     }

@@ -10,7 +10,7 @@
 
 static const sb_param_def dpsm_params[] = {
     SB_LAMP_PARAMS("resolution of each paraboloid map"),
-    SB_PARAM_E(sb_lamp_desc, filter, hw, "none|hw", "shadow filter"),
+    SB_PARAM_E(sb_lamp_desc, filter, hw, "none|hw", "shadow filter", .tune = "none,hw,pcf3"),
 };
 
 /* The lamp's frame: x = +X, y = +Z, z = -Y (the front hemisphere looks down), as a column-major mat3 whose

@@ -17,7 +17,7 @@ typedef struct sb_lamp_desc {
 
 /* The rows every lamp technique has; it adds filter (and layered). */
 #define SB_LAMP_PARAMS(RES_HELP)                                                                                    \
-    SB_PARAM_I(sb_lamp_desc, res, 1024, 64, 8192, RES_HELP),                                                       \
+    SB_PARAM_I(sb_lamp_desc, res, 1024, 64, 8192, RES_HELP, .tune = "512,1024,2048", .role = SB_PARAM_RES), \
         SB_PARAM_I(sb_lamp_desc, light, 0, 0, 15, "which point or spot light of the scene (in file order)"),       \
         SB_PARAM_FA(sb_lamp_desc, bias, 1.5, 0, 100, "constant bias, in texels at the point's distance"),          \
         SB_PARAM_FA(sb_lamp_desc, slope, 2, 0, 100, "slope-scaled bias (glPolygonOffset factor)"),                 \

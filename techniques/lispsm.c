@@ -19,4 +19,4 @@ static const lispsm_desc lispsm_defaults = {.csm = {SB_CSM_DESC_DEFAULTS, .warp 
 
 const sb_technique sb_technique_lispsm =
     SB_CSM_TECHNIQUE("lispsm", "light space perspective shadow map over the view (Wimmer et al. 2004)", lispsm_params,
-                     lispsm_desc, &lispsm_defaults, sb_csm_view_splits);
+                     lispsm_desc, &lispsm_defaults, sb_csm_view_splits, .stress = "");

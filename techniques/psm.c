@@ -100,6 +100,7 @@ static void psm_frame(void *state, sb_frame *f) {
 
 const sb_technique sb_technique_psm = {
     .name = "psm",
+    .stress = ";cube=on",   /* the stability battery's settings */
     .summary = "perspective shadow map in post-projective space, Novosibirsk fixes (Stamminger & Drettakis 2002)",
     .params = psm_params,
     .param_count = (int)SB_COUNT(psm_params),

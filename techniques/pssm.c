@@ -13,7 +13,8 @@ typedef struct pssm_desc {
 static const sb_param_def pssm_params[] = {
     SB_SHADOWMAP_PARAMS,
     SB_CASCADE_PARAMS,
-    SB_PARAM_F(pssm_desc, lambda, 0.5, 0, 1, "split scheme: 0 uniform, 1 logarithmic, between: practical"),
+    SB_PARAM_F(pssm_desc, lambda, 0.5, 0, 1, "split scheme: 0 uniform, 1 logarithmic, between: practical",
+               .tune = "0.5,0.75"),
 };
 static const pssm_desc pssm_defaults = {.csm = {SB_CSM_DESC_DEFAULTS}};
 
@@ -23,4 +24,5 @@ static void pssm_splits(const void *desc, const sb_frame *f, int count, double *
 }
 
 const sb_technique sb_technique_pssm = SB_CSM_TECHNIQUE("pssm", "parallel-split / cascaded shadow maps (Zhang et al. 2006)",
-                                                        pssm_params, pssm_desc, &pssm_defaults, pssm_splits);
+                                                        pssm_params, pssm_desc, &pssm_defaults, pssm_splits,
+                                                        .stress = ";stable=on;format=msm");

@@ -97,6 +97,21 @@ bool sb_params_find(const sb_params *p, const char *name, double *out) {
     return false;
 }
 
+bool sb_params_role(const sb_params *p, sb_param_role role, double *out) {
+    for (int i = 0; i < p->count; i++)
+        if (p->v[i].def->role == role) {
+            *out = p->v[i].num;
+            return true;
+        }
+    return false;
+}
+
+const sb_technique *sb_technique_with(unsigned trait) {
+    for (int i = 0; i < sb_technique_count(); i++)
+        if (sb_technique_at(i)->traits & trait) return sb_technique_at(i);
+    return NULL;
+}
+
 void sb_params_bind(const sb_params *p, const sb_technique *t, void *desc) {
     if (t->desc_defaults) memcpy(desc, t->desc_defaults, t->desc_size);
     else memset(desc, 0, t->desc_size);
@@ -112,11 +127,4 @@ void sb_params_bind(const sb_params *p, const sb_technique *t, void *desc) {
     }
 }
 
-double sb_params_shadow_bytes(const sb_params *p, const sb_technique *t) {
-    if (!t->shadow_bytes) return 0;
-    void *desc = sb_xcalloc(1, t->desc_size ? t->desc_size : 1);
-    sb_params_bind(p, t, desc);
-    double b = t->shadow_bytes(t, desc);
-    free(desc);
-    return b;
-}
+

@@ -370,6 +370,7 @@ static int sdsm_history(const void *desc) {
 
 const sb_technique sb_technique_sdsm = {
     .name = "sdsm",
+    .stress = ";splits=cpu:latency=0",   /* the stability battery's settings */
     .summary = "sample distribution shadow maps (Lauritzen, Salvi & Lefohn 2011)",
     .params = sdsm_params,
     .param_count = (int)SB_COUNT(sdsm_params),

@@ -13,4 +13,5 @@ static const sb_param_def sm_params[] = {SB_SHADOWMAP_PARAMS};
 static const sm_desc sm_defaults = {.csm = {SB_CSM_DESC_DEFAULTS}};
 
 const sb_technique sb_technique_sm = SB_CSM_TECHNIQUE("sm", "one shadow map fitted to the view frustum (Williams 1978)",
-                                                      sm_params, sm_desc, &sm_defaults, sb_csm_view_splits);
+                                                      sm_params, sm_desc, &sm_defaults, sb_csm_view_splits,
+                                                      .stress = "");

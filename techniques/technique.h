@@ -35,6 +35,20 @@ enum {
 
 typedef enum sb_param_kind { SB_PARAM_INT, SB_PARAM_FLOAT, SB_PARAM_ENUM } sb_param_kind;
 
+/* What a parameter is to the shared machinery that reasons about cost without rendering (batch's cost model). */
+typedef enum sb_param_role {
+    SB_PARAM_PLAIN,
+    SB_PARAM_RES,           /* texels per side of each shadow map */
+    SB_PARAM_MAPS,          /* shadow maps (cascades) rendered a frame */
+    SB_PARAM_SUN_SIZE,      /* the sun's angular diameter a soft filter assumes: follows --sun-size unless given */
+} sb_param_role;
+
+/* What a technique is to the commands that choose among techniques. */
+enum {
+    SB_TRAIT_NO_SHADOWS = 1u << 0,  /* draws no shadow at all (none): the baseline; tune and the error bounds skip it */
+    SB_TRAIT_EXACT = 1u << 1,       /* the exact reference itself (raycast): nothing to tune; held to a tighter bound */
+};
+
 /* One parameter: INT and ENUM values (the choice's index) go to an int field
  * at `offset` of the technique's parameter struct, FLOAT to a double. */
 typedef struct sb_param_def {
@@ -49,22 +63,28 @@ typedef struct sb_param_def {
     bool can_auto;          /* FLOAT: "auto" is a value (chosen per run by calibration, autobias.h) */
     bool late;              /* added after series began: left out of the canonical text at its default, so the
                                run ids, params and series of before stay what they were */
+    const char *tune;       /* the values `tune` searches by default ("512,1024,2048"; those a technique's range or
+                               choices refuse are left out); NULL: tune keeps the default */
+    sb_param_role role;
 } sb_param_def;
 
 /* Rows of a parameter table; T is the parameter struct, f its field (and the
- * parameter's name). */
-#define SB_PARAM_I(T, f, def, lo, hi, help) \
-    {#f, SB_PARAM_INT, #def, lo, hi, NULL, help, offsetof(T, f), sizeof(((T *)0)->f), false, false}
-#define SB_PARAM_F(T, f, def, lo, hi, help) \
-    {#f, SB_PARAM_FLOAT, #def, lo, hi, NULL, help, offsetof(T, f), sizeof(((T *)0)->f), false, false}
+ * parameter's name). What follows the help are more of the row's fields
+ * (.tune = "...", .role = ...). */
+#define SB_PARAM_ROW_(T, f, k, d, lo, hi, ch, h) \
+    .name = #f, .kind = k, .def = #d, .min = lo, .max = hi, .choices = ch, .help = h, .offset = offsetof(T, f), \
+    .size = sizeof(((T *)0)->f)
+#define SB_PARAM_I(T, f, def, lo, hi, help, ...) {SB_PARAM_ROW_(T, f, SB_PARAM_INT, def, lo, hi, NULL, help), __VA_ARGS__}
+#define SB_PARAM_F(T, f, def, lo, hi, help, ...) \
+    {SB_PARAM_ROW_(T, f, SB_PARAM_FLOAT, def, lo, hi, NULL, help), __VA_ARGS__}
 /* A FLOAT parameter that also takes "auto": the run calibrates it (bias, slope, normal offset). */
-#define SB_PARAM_FA(T, f, def, lo, hi, help) \
-    {#f, SB_PARAM_FLOAT, #def, lo, hi, NULL, help, offsetof(T, f), sizeof(((T *)0)->f), true, false}
-#define SB_PARAM_E(T, f, def, choices, help) \
-    {#f, SB_PARAM_ENUM, #def, 0, 0, choices, help, offsetof(T, f), sizeof(((T *)0)->f), false, false}
+#define SB_PARAM_FA(T, f, def, lo, hi, help, ...) \
+    {SB_PARAM_ROW_(T, f, SB_PARAM_FLOAT, def, lo, hi, NULL, help), .can_auto = true, __VA_ARGS__}
+#define SB_PARAM_E(T, f, def, choices, help, ...) \
+    {SB_PARAM_ROW_(T, f, SB_PARAM_ENUM, def, 0, 0, choices, help), __VA_ARGS__}
 /* An ENUM added after series began (sb_param_def.late): written in the canonical text only when not its default. */
-#define SB_PARAM_E_LATE(T, f, def, choices, help) \
-    {#f, SB_PARAM_ENUM, #def, 0, 0, choices, help, offsetof(T, f), sizeof(((T *)0)->f), false, true}
+#define SB_PARAM_E_LATE(T, f, def, choices, help, ...) \
+    {SB_PARAM_ROW_(T, f, SB_PARAM_ENUM, def, 0, 0, choices, help), .late = true, __VA_ARGS__}
 
 #define SB_MAX_PARAMS 24
 
@@ -96,6 +116,13 @@ typedef struct sb_technique {
     const void *desc_defaults;      /* copied into it before the parameters (NULL: zeros) */
     unsigned stages;                /* SB_STAGE_BIT()s it reports */
     unsigned needs;                 /* SB_NEEDS_* */
+    unsigned traits;                /* SB_TRAIT_* */
+    /* the cost model (batch's shards): a pixel's work beyond the final pass's, in units of one (raycast: a CPU ray
+       a pixel, 20) */
+    double pixel_cost;
+    /* the settings the numerical-stability battery runs (stress): ";"-separated parameter texts, "" for the
+       defaults ("" + ";stable=on": the defaults, then stable=on); NULL: not in the battery */
+    const char *stress;
     /* how many earlier frames a frame with these parameters depends on (the
        evaluation pass renders them again before an evaluated frame); NULL: none */
     int (*history)(const void *desc);
@@ -126,9 +153,12 @@ int sb_technique_index(const sb_technique *t);
 bool sb_param_set(sb_params *p, int index, const sb_param_def *def, const char *value, const char *tech,
                   sb_err *err);
 void sb_params_defaults(sb_params *p, const sb_technique *t);
-/* The value of a parameter by name (the cost model, tests); false if the technique has none. */
+/* The value of a parameter by name (tests); false if the technique has none. */
 bool sb_params_find(const sb_params *p, const char *name, double *out);
+/* The value of the parameter with a role; false if the technique has none. */
+bool sb_params_role(const sb_params *p, sb_param_role role, double *out);
+/* The first technique with a trait, or NULL. */
+const sb_technique *sb_technique_with(unsigned trait);
 /* The technique's parameter struct: its defaults, then every value at its offset. */
 void sb_params_bind(const sb_params *p, const sb_technique *t, void *desc);
-/* The shadow storage these parameters hold (sb_technique.shadow_bytes; 0 when it keeps none), without a GL. */
-double sb_params_shadow_bytes(const sb_params *p, const sb_technique *t);
+

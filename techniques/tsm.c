@@ -18,4 +18,5 @@ static const sb_param_def tsm_params[] = {
 static const tsm_desc tsm_defaults = {.csm = {SB_CSM_DESC_DEFAULTS, .warp = SB_WARP_TSM}};
 
 const sb_technique sb_technique_tsm = SB_CSM_TECHNIQUE("tsm", "trapezoidal shadow map over the view (Martin & Tan 2004)",
-                                                       tsm_params, tsm_desc, &tsm_defaults, sb_csm_view_splits);
+                                                       tsm_params, tsm_desc, &tsm_defaults, sb_csm_view_splits,
+                                                       .stress = "");

@@ -37,7 +37,8 @@ enum { FILTER_NONE, FILTER_HW, FILTER_PCF3 };
 enum { BORDER = 2, MAX_LEVELS = 16, MAX_PAGES = 512, MAX_SLOTS = 65535 /* a table entry is 16 bits */ };
 
 static const sb_param_def virtual_params[] = {
-    SB_PARAM_I(virtual_desc, res, 16384, 256, 65536, "texels per side of each clipmap level's virtual map"),
+    SB_PARAM_I(virtual_desc, res, 16384, 256, 65536, "texels per side of each clipmap level's virtual map",
+               .tune = "512,1024,2048", .role = SB_PARAM_RES),
     SB_PARAM_I(virtual_desc, page, 128, 16, 1024, "texels per side of a page (a power of two dividing res)"),
     SB_PARAM_I(virtual_desc, pool, 128, 1, 4096, "MiB the pages and their table may hold (32-bit depth)"),
     SB_PARAM_I(virtual_desc, levels, 16, 1, MAX_LEVELS,
@@ -46,7 +47,7 @@ static const sb_param_def virtual_params[] = {
     SB_PARAM_FA(virtual_desc, bias, 1, 0, 100, "constant depth bias, in texels of the level"),
     SB_PARAM_FA(virtual_desc, slope, 0.5, 0, 100, "slope-scaled bias (glPolygonOffset factor)"),
     SB_PARAM_FA(virtual_desc, normal, 0.25, 0, 100, "normal offset, in texels of the level"),
-    SB_PARAM_E(virtual_desc, filter, hw, "none|hw|pcf3", "shadow filter"),
+    SB_PARAM_E(virtual_desc, filter, hw, "none|hw|pcf3", "shadow filter", .tune = "none,hw,pcf3"),
     SB_PARAM_E(virtual_desc, cache, on, "off|on", "keep a page across frames while its level, place and light hold"),
 };
 

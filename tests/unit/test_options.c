@@ -229,8 +229,8 @@ static void legacy_run_id(uint64_t scene_hash, uint64_t path_hash, const sb_run_
  * the same run; and every id is the one the hash gave before the identity was a column of the table. */
 static void test_run_identity(void **st) {
     (void)st;
-    sb_run_spec spec = {.tech = sb_technique_find("sm")};
-    sb_params_defaults(&spec.params, spec.tech);
+    sb_run_spec spec;
+    sb_spec_defaults(&spec, sb_technique_find("sm"));
     sb_run_opts o;
     sb_run_opts_defaults(&o);
     char base[17], id[17], legacy[17];
