@@ -367,17 +367,23 @@ __attribute__((constructor)) static void note_start(void) { g_start_ms = sb_now_
 double sb_process_start_ms(void) { return g_start_ms; }
 
 const sb_exit_status sb_exit_statuses[] = {
-    {SB_EXIT_OK, "ok", "every run succeeded or was skipped with a reason; compare and history regressions: no regression"},
+    {SB_EXIT_OK, "ok",
+     "every run succeeded or was skipped with a reason; compare, history regressions and history check: no "
+     "regression; bisect: the first bad commit found"},
     {SB_EXIT_FAILED, "failed",
      "a run failed (recorded in the summary; the others still ran); compare: a regression; history regressions: a "
-     "regression starts in the newest --recent nights"},
+     "regression not accepted starts in the newest --recent nights; history check: a figure beyond the nights' band; "
+     "bisect: GOOD and BAD do not differ beyond the noise"},
     {SB_EXIT_BAD_INPUT, "bad-input",
-     "bad input of any kind: an unknown, misplaced or out-of-range option, a missing or invalid scene, path, batch, "
-     "results or history file (history add: the others are still added); nothing was rendered"},
+     "bad input of any kind, before anything renders: an unknown, misplaced, contradictory or out-of-range option; a "
+     "missing, unreadable, damaged or invalid scene, path, batch, results set or history file; an --out or --resume "
+     "folder that cannot be written (history add: the other sets are still added)"},
     {SB_EXIT_UNSTABLE, "unstable", "compare: no regression, but a compared timing is UNSTABLE (a run marked stable=no)"},
     {SB_EXIT_WRITE, "not-written",
-     "a result file could not be written whole (a full disk, a failed fsync, close or rename; named on stderr)"},
-    {SB_EXIT_SIGNAL + 2, "interrupted", "SIGINT stopped it in order (completed runs kept; --resume DIR goes on)"},
+     "a result file could not be written whole once writing had begun (a full disk, a failed fsync, close or rename; "
+     "named on stderr); batch --resume into the same folder completes the set"},
+    {SB_EXIT_SIGNAL + 2, "interrupted",
+     "SIGINT stopped it in order (completed runs kept; --resume DIR goes on; a second signal ends it at once)"},
     {SB_EXIT_SIGNAL + 15, "terminated", "SIGTERM stopped it in order, as SIGINT"},
 };
 const int sb_exit_status_count = (int)SB_COUNT(sb_exit_statuses);

@@ -99,6 +99,10 @@ static int split_metrics(const char *list, char *buf, size_t len, const char **o
 
 static int cmd_techniques(const sb_cli *c) {
     if (c->npos) return bad_usage(c);
+    if (c->o.format == SB_DOC_MARKDOWN) {
+        sb_techniques_markdown(stdout);
+        return SB_EXIT_OK;
+    }
     for (int i = 0; i < sb_technique_count(); i++) {
         const sb_technique *t = sb_technique_at(i);
         printf("%s - %s\n  stages:", t->name, t->summary);
@@ -571,6 +575,22 @@ static int cmd_report(const sb_cli *c) {
     return SB_EXIT_OK;
 }
 
+/* `help [COMMAND]`: --help's text, or the command line's reference as markdown or roff. */
+static int cmd_help(const sb_cli *c) {
+    int w = 0;
+    const sb_command_def *cmd = NULL;
+    if (c->npos) {
+        char *words[3] = {"shadowbench", (char *)c->pos[0], c->npos > 1 ? (char *)c->pos[1] : NULL};
+        cmd = sb_command_find(c->npos > 1 ? 3 : 2, words, &w);
+        if (!cmd || w != c->npos) return bad("help: no command '%s' (see shadowbench --help)", c->pos[0]);
+    }
+    if (c->o.format == SB_DOC_TEXT) sb_cli_help(stdout, sb_commands, cmd);
+    else if (cmd) return bad("help %s: --format markdown and man write the whole reference; leave the command out",
+                             cmd->name);
+    else sb_cli_doc(stdout, sb_commands, (sb_doc_format)c->o.format);
+    return SB_EXIT_OK;
+}
+
 /* ---- the table ---- */
 
 #define MEASURING (SB_CMDF_ANY | SB_CMDF_CONTEXT | SB_CMDF_MEASURE | SB_CMDF_SCENES | SB_CMDF_INTERRUPT | SB_CMDF_RESULTS)
@@ -618,14 +638,17 @@ const sb_command_def sb_commands[SB_CMD_COUNT] = {
      SB_CMDF_ANY | SB_CMDF_TAIL, cmd_bisect},
     {SB_CMD_REPORT, "report", "report [DIR | --history FILE] [--out SITE]", "a static site to open in a browser",
      SB_CMDF_ANY, cmd_report},
-    {SB_CMD_TECHNIQUES, "techniques", "techniques", "list techniques and their parameters", SB_CMDF_ANY,
-     cmd_techniques},
+    {SB_CMD_TECHNIQUES, "techniques", "techniques [--format text|markdown]", "list techniques and their parameters",
+     SB_CMDF_ANY, cmd_techniques},
     {SB_CMD_COLUMNS, "columns", "columns [--format csv|markdown]", "the CSV columns (per frame and per run)",
      SB_CMDF_ANY, cmd_columns},
     {SB_CMD_INFO, "info", "info [SCENE]", "backends, GL renderer and features; or what a scene holds",
      SB_CMDF_ANY | SB_CMDF_SCENES, cmd_info},
     {SB_CMD_PATH, "path", "path PATH [SCENE] [--frames N]", "print the sampled cameras as CSV",
      SB_CMDF_ANY | SB_CMDF_SCENES, cmd_path},
+    {SB_CMD_HELP, "help", "help [COMMAND] [--format text|markdown|man]",
+     "every command and option (COMMAND: its options), or the reference docs/cli.md and the man page hold",
+     SB_CMDF_ANY, cmd_help},
 };
 
 const sb_command_def *sb_command_find(int argc, char **argv, int *words) {
@@ -668,10 +691,8 @@ static int split_tail(sb_cli *c, int argc, char **argv, int first) {
 }
 
 int sb_command_main(int argc, char **argv, const char *version, const char *commit) {
-    if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {
-        int w = 0;
-        const sb_command_def *cmd = argc > 2 ? sb_command_find(argc - 1, argv + 1, &w) : NULL;   /* help COMMAND */
-        sb_cli_help(argc < 2 ? stderr : stdout, sb_commands, cmd);
+    if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
+        sb_cli_help(argc < 2 ? stderr : stdout, sb_commands, NULL);
         return argc < 2 ? SB_EXIT_BAD_INPUT : SB_EXIT_OK;
     }
     if (!strcmp(argv[1], "--version")) {

@@ -43,6 +43,7 @@ static const int overlap_values[] = {-1, 1, 0};
 static const int compare_formats[] = {SB_OUTPUT_TEXT, SB_OUTPUT_CSV, SB_OUTPUT_MARKDOWN};
 static const int history_formats[] = {SB_OUTPUT_TEXT, SB_OUTPUT_CSV};
 static const int columns_formats[] = {SB_OUTPUT_CSV, SB_OUTPUT_MARKDOWN};
+static const int doc_formats[] = {SB_DOC_TEXT, SB_DOC_MARKDOWN, SB_DOC_MAN};
 
 const sb_option sb_options[] = {
     /* the context and timing */
@@ -189,6 +190,12 @@ const sb_option sb_options[] = {
      .commands = SB_IN(SB_CMD_HISTORY_REGRESSIONS), .field = F(format), .help = "how the changes are written"},
     {.name = "--format", .kind = SB_OPT_CHOICE, .arg = "csv|markdown", .values = columns_formats, .def = "csv",
      .commands = SB_IN(SB_CMD_COLUMNS), .field = F(format), .help = "how the columns are written"},
+    {.name = "--format", .kind = SB_OPT_CHOICE, .arg = "text|markdown", .values = doc_formats, .def = "text",
+     .commands = SB_IN(SB_CMD_TECHNIQUES), .field = F(format),
+     .help = "how they are written (markdown: docs/techniques.md's parameter tables)"},
+    {.name = "--format", .kind = SB_OPT_CHOICE, .arg = "text|markdown|man", .values = doc_formats, .def = "text",
+     .commands = SB_IN(SB_CMD_HELP), .field = F(format),
+     .help = "--help's text, or the reference of docs/cli.md (markdown) or of the man page (man)"},
     {.name = "--pair", .kind = SB_OPT_TEXT, .arg = "KEY=A,B", .commands = SB_IN(SB_CMD_COMPARE), .field = F(pair),
      .help = "the runs of one set that differ only in KEY (technique=pssm,sdsm, layered=off,gs)"},
     /* history and report */
@@ -702,4 +709,87 @@ void sb_run_id(uint64_t scene_hash, uint64_t path_hash, const sb_run_opts *o, co
     h = sb_fnv1a(h, params, strlen(params) + 1);
     h = identity_blocks(h, o);
     snprintf(out, 17, "%016llx", (unsigned long long)h);
+}
+
+/* ---- the reference documents: docs/cli.md's and the man page's generated parts ---- */
+
+/* Text as a markdown table cell ('|' escaped) or as roff ('-' as \-, '\' as \e, a leading '.' or '\'' guarded). */
+static void doc_text(FILE *f, const char *text, sb_doc_format fmt) {
+    if (fmt == SB_DOC_MAN && (text[0] == '.' || text[0] == '\'')) fputs("\\&", f);
+    for (const char *p = text; *p; p++) {
+        if (fmt == SB_DOC_MARKDOWN && *p == '|') fputs("\\|", f);
+        else if (fmt == SB_DOC_MAN && *p == '-') fputs("\\-", f);
+        else if (fmt == SB_DOC_MAN && *p == '\\') fputs("\\e", f);
+        else fputc(*p, f);
+    }
+}
+
+static void doc_synopsis(FILE *f, const sb_command_def *table, sb_doc_format fmt) {
+    fputs(fmt == SB_DOC_MAN ? ".SH SYNOPSIS\n.nf\n" : "### Commands\n\n```\n", f);
+    for (int c = 0; c < SB_CMD_COUNT; c++)
+        for (const char *u = table[c].usage; *u;) {
+            size_t w = strcspn(u, "\n");
+            char line[512];
+            snprintf(line, sizeof line, "shadowbench %.*s", (int)w, u);
+            if (fmt == SB_DOC_MAN) doc_text(f, line, fmt);
+            else fputs(line, f);
+            fputc('\n', f);
+            u += w + (u[w] == '\n');
+        }
+    fputs(fmt == SB_DOC_MAN ? ".fi\n" : "```\n\n| command | what it does |\n|---|---|\n", f);
+    for (int c = 0; c < SB_CMD_COUNT && fmt == SB_DOC_MARKDOWN; c++) {
+        fprintf(f, "| `%s` | ", table[c].name);
+        doc_text(f, table[c].summary, fmt);
+        fputs(" |\n", f);
+    }
+}
+
+static void doc_options(FILE *f, const sb_command_def *table, sb_doc_format fmt) {
+    fputs(fmt == SB_DOC_MAN ? ".SH OPTIONS\n" : "\n### Options\n\n| option | commands | default | meaning |\n|---|---|---|---|\n", f);
+    for (int i = 0; i < sb_option_count; i++) {
+        const sb_option *opt = &sb_options[i];
+        char syn[64], cmds[300], def[256];
+        sb_option_synopsis(opt, syn, sizeof syn);
+        takers(opt, table, cmds, sizeof cmds);
+        sb_option_default_text(opt, table, NULL, def, sizeof def);
+        const char *who = cmds[0] ? cmds + 2 : "every command";   /* takers() starts with "; " */
+        if (fmt == SB_DOC_MARKDOWN) {
+            fprintf(f, "| `");
+            doc_text(f, syn, fmt);
+            fprintf(f, "` | %s | ", who);
+            doc_text(f, def, fmt);
+            fputs(" | ", f);
+            doc_text(f, opt->help, fmt);
+            fputs(" |\n", f);
+            continue;
+        }
+        fputs(".TP\n\\fB", f);
+        doc_text(f, opt->name, fmt);
+        fputs("\\fR", f);
+        if (opt->arg) fputs(" \\fI", f), doc_text(f, opt->arg, fmt), fputs("\\fR", f);
+        fputc('\n', f);
+        doc_text(f, opt->help, fmt);
+        fputs(def[0] ? " (default " : "", f);
+        doc_text(f, def, fmt);
+        fprintf(f, "%s; %s.\n", def[0] ? ")" : "", who);
+    }
+}
+
+static void doc_exit(FILE *f, sb_doc_format fmt) {
+    fputs(fmt == SB_DOC_MAN ? ".SH EXIT STATUS\nThe same for every command:\n"
+                            : "\n### Exit status\n\nThe same for every command:\n\n| status | name | meaning |\n|---|---|---|\n",
+          f);
+    for (int i = 0; i < sb_exit_status_count; i++) {
+        const sb_exit_status *e = &sb_exit_statuses[i];
+        if (fmt == SB_DOC_MAN) fprintf(f, ".TP\n.B %d\n%s: ", e->code, e->name);
+        else fprintf(f, "| %d | %s | ", e->code, e->name);
+        doc_text(f, e->meaning, fmt);
+        fputs(fmt == SB_DOC_MAN ? "\n" : " |\n", f);
+    }
+}
+
+void sb_cli_doc(FILE *f, const sb_command_def *table, sb_doc_format fmt) {
+    doc_synopsis(f, table, fmt);
+    doc_options(f, table, fmt);
+    doc_exit(f, fmt);
 }

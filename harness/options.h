@@ -40,6 +40,7 @@ typedef enum sb_command {
     SB_CMD_COLUMNS,
     SB_CMD_INFO,
     SB_CMD_PATH,
+    SB_CMD_HELP,
     SB_CMD_COUNT
 } sb_command;
 
@@ -183,6 +184,14 @@ void sb_option_synopsis(const sb_option *opt, char *out, size_t len);
  * "60; tune 33, stress 3"); "" when none. */
 void sb_option_default_text(const sb_option *opt, const sb_command_def *table, const sb_command_def *cmd, char *out,
                             size_t len);
+
+/* The command line's reference, from the same tables as every --help: the
+ * synopsis of every command, every option (its commands, defaults and help)
+ * and the exit statuses; docs/cli.md's and the man page's generated parts
+ * (`shadowbench help --format markdown|man`, scripts/gen-docs), which the
+ * options test holds to these tables. */
+typedef enum sb_doc_format { SB_DOC_TEXT, SB_DOC_MARKDOWN, SB_DOC_MAN } sb_doc_format;
+void sb_cli_doc(FILE *f, const sb_command_def *table, sb_doc_format fmt);
 
 /* run_id: a hash of the scene's and the path's contents, the technique and
  * its canonical parameters, and the run options that are part of a run's

@@ -128,3 +128,34 @@ void sb_params_bind(const sb_params *p, const sb_technique *t, void *desc) {
 }
 
 
+
+/* A markdown cell: '|' escaped. */
+static void md(FILE *out, const char *text) {
+    for (const char *p = text; *p; p++) {
+        if (*p == '|') fputc('\\', out);
+        fputc(*p, out);
+    }
+}
+
+void sb_techniques_markdown(FILE *out) {
+    for (int i = 0; i < sb_technique_count(); i++) {
+        const sb_technique *t = sb_technique_at(i);
+        fprintf(out, "%s#### `%s`\n\n", i ? "\n" : "", t->name);
+        md(out, t->summary);
+        fputs(t->param_count ? "\n\n| parameter | values | default | tune searches | meaning |\n|---|---|---|---|---|\n"
+                             : "\n\nNo parameters.\n",
+              out);
+        for (int k = 0; k < t->param_count; k++) {
+            const sb_param_def *p = &t->params[k];
+            char values[160];
+            if (p->kind == SB_PARAM_ENUM) snprintf(values, sizeof values, "%s", p->choices);
+            else snprintf(values, sizeof values, "%s %g..%g%s", p->kind == SB_PARAM_INT ? "int" : "float", p->min,
+                          p->max, p->can_auto ? " or auto" : "");
+            fprintf(out, "| `%s` | ", p->name);
+            md(out, values);
+            fprintf(out, " | %s | %s | ", p->def, p->tune ? p->tune : "");
+            md(out, p->help);
+            fputs(" |\n", out);
+        }
+    }
+}

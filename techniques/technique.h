@@ -20,6 +20,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "stage.h"
 #include "util.h"
@@ -157,6 +158,9 @@ void sb_params_defaults(sb_params *p, const sb_technique *t);
 bool sb_params_find(const sb_params *p, const char *name, double *out);
 /* The value of the parameter with a role; false if the technique has none. */
 bool sb_params_role(const sb_params *p, sb_param_role role, double *out);
+/* Every technique's parameters as markdown tables (`shadowbench techniques --format markdown`: the generated part
+ * of docs/techniques.md, which a test holds to the tables). */
+void sb_techniques_markdown(FILE *out);
 /* The first technique with a trait, or NULL. */
 const sb_technique *sb_technique_with(unsigned trait);
 /* The technique's parameter struct: its defaults, then every value at its offset. */

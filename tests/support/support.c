@@ -335,3 +335,39 @@ void frames_table(const char *dir, const sb_table *sum, int r, sb_table *t) {
 }
 
 long table_int(const sb_table *t, int r, const char *col) { return atol(sb_table_get(t, r, col)); }
+
+void assert_generated(const char *doc, const char *begin, const char *end, void (*write)(FILE *f)) {
+    char path[4096];
+    const char *root = getenv("SB_SOURCE_ROOT");
+    snprintf(path, sizeof path, "%s/%s", root ? root : ".", doc);
+    sb_err err;
+    char *text = sb_read_file(path, NULL, &err);
+    assert_non_null(text);
+    char *sec = strstr(text, begin);
+    if (!sec) print_error("%s has no marker '%s'\n", doc, begin);
+    assert_non_null(sec);
+    sec = strchr(sec, '\n');
+    assert_non_null(sec);
+    sec++;
+    if (end) {
+        char *stop = strstr(sec, end);
+        if (!stop) print_error("%s has no end marker '%s'\n", doc, end);
+        assert_non_null(stop);
+        *stop = 0;
+    }
+    char *gen = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&gen, &len);
+    assert_non_null(f);
+    write(f);
+    fclose(f);
+    if (strcmp(sec, gen)) {
+        size_t i = 0;
+        while (sec[i] && sec[i] == gen[i]) i++;
+        print_error("%s differs from its table at byte %zu of its generated part (run scripts/gen-docs): \"%.60s\" "
+                    "against \"%.60s\"\n", doc, i, sec + i, gen + i);
+    }
+    assert_string_equal(sec, gen);
+    free(gen);
+    free(text);
+}

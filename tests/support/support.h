@@ -96,6 +96,10 @@ const char *expect_cli_exit(int status, const char *needle, const char *fmt, ...
 /* Copies the bundled scene file `name` (from SB_DATA_DIR) to dst. */
 void copy_bundled(const char *name, const char *dst);
 /* A fresh folder /tmp/<prefix>XXXXXX into dir (len >= 64); 0 on success (a cmocka group setup's result). */
+/* A generated part of a document in the source tree (docs/...): the text after the line holding `begin` (up to
+ * the line holding `end`; NULL: the end of the file) must equal what `write` prints; a failure says where they
+ * part and to run scripts/gen-docs. */
+void assert_generated(const char *doc, const char *begin, const char *end, void (*write)(FILE *f));
 int tmp_folder(char *dir, size_t len, const char *prefix);
 /* Removes the folder and everything in it; 0 on success. */
 int tmp_remove(const char *dir);
