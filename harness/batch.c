@@ -40,16 +40,12 @@ typedef struct {
     sb_cli_opts light;          /* the light's size after the specs (--sun-size ...); given[] says which */
 } run_line;
 
-/* The options a run line may carry after its specs: the light's size, which is the run's (a soft-shadow section
- * beside the hard one in one file); everything else is the file's or the command line's. */
-static const char *const line_options[] = {"--sun-size", "--lamp-radius", "--ref-samples"};
-
-/* The run options of a line's runs: the file's, with the line's light. */
+/* The run options of a line's runs: the file's, with the line options (the option rows marked line_option: the
+ * light's size, a soft-shadow section beside the hard one in one file) the line gave; everything else is the
+ * file's or the command line's. */
 static sb_run_opts line_opts(const sb_run_opts *file, const run_line *rl) {
     sb_run_opts o = *file;
-    if (sb_cli_given(&rl->light, "--sun-size")) o.sun_size = rl->light.run.sun_size;
-    if (sb_cli_given(&rl->light, "--lamp-radius")) o.lamp_radius = rl->light.run.lamp_radius;
-    if (sb_cli_given(&rl->light, "--ref-samples")) o.ref_samples = rl->light.run.ref_samples;
+    sb_cli_copy_line_options(&o, &rl->light);
     return o;
 }
 
@@ -143,13 +139,11 @@ static bool run_line_of(parse *ps, char **tok, int n) {
         rl.light.run = ps->b->opts;
         ok = sb_cli_parse_tokens(&rl.light, tok + nspec_tok, n - nspec_tok, where, ps->err);
         for (int j = 0; ok && j < sb_option_count; j++) {
-            if (!rl.light.given[j]) continue;
-            bool allowed = false;
-            for (size_t k = 0; k < SB_COUNT(line_options); k++) allowed |= !strcmp(sb_options[j].name, line_options[k]);
-            if (!allowed)
-                ok = sb_fail(ps->err, "%s:%d: %s: after a run line's specs only --sun-size, --lamp-radius and "
-                                      "--ref-samples (the light of its runs); other options go on the defaults line",
-                             ps->file, ps->line, sb_options[j].name);
+            if (!rl.light.given[j] || sb_options[j].line_option) continue;
+            char allowed[256];
+            sb_line_options_text(allowed, sizeof allowed);
+            ok = sb_fail(ps->err, "%s:%d: %s: after a run line's specs only %s (the light of its runs); other options "
+                                  "go on the defaults line", ps->file, ps->line, sb_options[j].name, allowed);
         }
         if (ok && nspec_tok == first) ok = sb_fail(ps->err, "%s:%d: options with no technique spec", ps->file, ps->line);
     }

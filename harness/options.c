@@ -85,13 +85,13 @@ const sb_option sb_options[] = {
      .field = RUN(error_every),
      .help = "shadow error against the exact ray-cast reference on every K-th frame (0 off), untimed"},
     {.name = "--sun-size", .kind = SB_OPT_NUM, .arg = "DEG", .max = 10, .def = "0", .def_help = "0, a sun of no size",
-     .with = SB_CMDF_MEASURE, RUN_OPT, .identity = SB_ID_LIGHT, .field = RUN(sun_size),
+     .with = SB_CMDF_MEASURE, RUN_OPT, .line_option = true, .identity = SB_ID_LIGHT, .field = RUN(sun_size),
      .help = "the sun's angular diameter: the reference casts rays over its disc (soft shadows; the real sun: 0.53)"},
     {.name = "--lamp-radius", .kind = SB_OPT_NUM, .arg = "M", .max = INFINITY, .def = "0", .def_help = "0, no size",
-     .with = SB_CMDF_MEASURE, RUN_OPT, .identity = SB_ID_LIGHT, .field = RUN(lamp_radius),
+     .with = SB_CMDF_MEASURE, RUN_OPT, .line_option = true, .identity = SB_ID_LIGHT, .field = RUN(lamp_radius),
      .help = "point and spot lights' radius in scene units: the reference casts rays over it"},
     {.name = "--ref-samples", .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 4096, .def = "64",
-     .with = SB_CMDF_MEASURE, RUN_OPT, .identity = SB_ID_LIGHT, .field = RUN(ref_samples),
+     .with = SB_CMDF_MEASURE, RUN_OPT, .line_option = true, .identity = SB_ID_LIGHT, .field = RUN(ref_samples),
      .help = "rays over a sized light at a penumbra point (centre and rim decide the rest)"},
     {.name = "--flicker-dt", .kind = SB_OPT_NUM, .arg = "S", .max = 10, .def = "0.0166667",
      .def_help = "1/60 s, one display frame at 60 Hz",
@@ -504,12 +504,12 @@ static size_t kind_size(sb_opt_kind k) {
     }
 }
 
-void sb_cli_copy_given(sb_run_opts *to, const sb_cli_opts *from) {
+static void copy_given(sb_run_opts *to, const sb_cli_opts *from, bool lines_only) {
     sb_cli_opts dst;
     dst.run = *to;
     for (int i = 0; i < sb_option_count; i++) {
         const sb_option *opt = &sb_options[i];
-        if (!from->given[i] || !opt->run_option) continue; /* the run options */
+        if (!from->given[i] || !opt->run_option || (lines_only && !opt->line_option)) continue; /* the run options */
         size_t fields[] = {opt->field, opt->field2, opt->given_field};
         for (int k = 0; k < 3; k++)
             if (fields[k])
@@ -517,6 +517,21 @@ void sb_cli_copy_given(sb_run_opts *to, const sb_cli_opts *from) {
                        k == 2 ? sizeof(bool) : kind_size(opt->kind));
     }
     *to = dst.run;
+}
+
+void sb_cli_copy_given(sb_run_opts *to, const sb_cli_opts *from) { copy_given(to, from, false); }
+void sb_cli_copy_line_options(sb_run_opts *to, const sb_cli_opts *from) { copy_given(to, from, true); }
+
+void sb_line_options_text(char *out, size_t len) {
+    out[0] = 0;
+    int n = 0, k = 0;
+    for (int i = 0; i < sb_option_count; i++) n += sb_options[i].line_option;
+    for (int i = 0; i < sb_option_count; i++) {
+        if (!sb_options[i].line_option) continue;
+        size_t l = strlen(out);
+        snprintf(out + l, len - l, "%s%s", k == 0 ? "" : k == n - 1 ? " and " : ", ", sb_options[i].name);
+        k++;
+    }
 }
 
 void sb_option_synopsis(const sb_option *opt, char *out, size_t len) {

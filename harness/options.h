@@ -133,6 +133,7 @@ typedef struct sb_option {
     unsigned with;   /* SB_CMDF_*: every command with one of these flags takes it */
     unsigned commands; /* and these (SB_IN(...) bits) */
     bool run_option; /* a run option: a batch file's `defaults` line takes it */
+    bool line_option; /* and a batch run line after its specs (a section of the file with its own value) */
     sb_identity identity; /* how it enters a run's identity */
     int id_slot; /* SB_ID_DIM: its place in the dimensions block */
     size_t field, field2; /* offsets in sb_cli_opts (field2: SIZE's height,
@@ -170,6 +171,10 @@ bool sb_cli_given(const sb_cli_opts *o, const char *name);
 /* Copies the run options given in `from` over `to` (the command line beating a
  * batch file's defaults). */
 void sb_cli_copy_given(sb_run_opts *to, const sb_cli_opts *from);
+/* The same for the line options alone (a batch run line's over the file's). */
+void sb_cli_copy_line_options(sb_run_opts *to, const sb_cli_opts *from);
+/* "--sun-size, --lamp-radius and --ref-samples": the options a batch run line may carry. */
+void sb_line_options_text(char *out, size_t len);
 /* The row of `name` that `cmd` takes (cmd NULL: any row of that name), or NULL. */
 const sb_option *sb_option_find(const char *name, const sb_command_def *cmd);
 

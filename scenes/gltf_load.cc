@@ -1015,7 +1015,8 @@ bool read_buffers(const sb_json *root, Source &src, const char *file, Document &
         if (uri) {
             if (!read_uri(src, file, where, uri->text, own, err)) return false;
             if (own.size() < len)
-                return sb_fail(err, "%s: %s/byteLength: %zu bytes, but its uri holds %zu", file, where.c_str(), len,
+                return sb_fail(err, "%s: %s/byteLength: %zu bytes, but its uri (%.200s) holds %zu: cut short?", file,
+                               where.c_str(), len, strncmp(uri->text, "data:", 5) ? uri->text : "a data: URI",
                                own.size());
             doc.bufs.emplace_back(own.data(), len);
         } else if (i == 0 && src.bin) {

@@ -14,7 +14,8 @@
 #include "util.h"
 
 /* Bump when what an entry holds changes meaning (the binary's identity covers layouts). */
-#define SB_SCENE_CACHE_VERSION 2u   /* 2: draws carry their instancing (proto, transform, vertex range) */
+#define SB_SCENE_CACHE_VERSION 3u   /* 2: draws carry their instancing (proto, transform, vertex range); 3: the
+                                       dependencies relative to the scene's folder, the folder in the key */
 static const char magic[8] = {'S', 'B', 'S', 'C', 'E', 'N', 'E', '1'};
 
 bool sb_scene_cache_dir(char *out, size_t len) {
@@ -39,6 +40,7 @@ typedef struct {
 static dep *g_deps;
 static uint32_t g_dep_count;
 static bool g_recording;
+static char g_scene_dir[4096];   /* the folder of the scene being loaded (a real path) */
 
 static void deps_clear(void) {
     for (uint32_t i = 0; i < g_dep_count; i++) free(g_deps[i].path);
@@ -47,24 +49,33 @@ static void deps_clear(void) {
     g_dep_count = 0;
 }
 
+/* A dependency as the entry keeps it: relative to the scene's folder when inside it, else as it is. */
+static const char *relative_to(const char *dir, const char *path) {
+    size_t n = strlen(dir);
+    if (n && !strncmp(path, dir, n) && path[n] == '/') return path + n + 1;
+    return path;
+}
+
 void sb_scene_cache_note_file(const char *path, uint64_t hash) {
     if (!g_recording) return;
     g_deps = sb_xrealloc(g_deps, (g_dep_count + 1) * sizeof *g_deps);
-    g_deps[g_dep_count++] = (dep){sb_strdup(path), hash};
+    g_deps[g_dep_count++] = (dep){sb_strdup(relative_to(g_scene_dir, path)), hash};
 }
 
-void sb_scene_cache_begin(void) {
+void sb_scene_cache_begin(const char *scene_dir) {
     deps_clear();
+    snprintf(g_scene_dir, sizeof g_scene_dir, "%s", scene_dir);
     g_recording = true;
     sb_log_capture(true);
 }
 
 /* ---- the key and the entry's name ---- */
 
-uint64_t sb_scene_cache_key(const void *opts, size_t opts_len, const void *bytes, size_t size) {
+uint64_t sb_scene_cache_key(const char *scene_dir, const void *opts, size_t opts_len, const void *bytes, size_t size) {
     uint64_t h = sb_hash_bytes(SB_FNV_SEED, bytes, size);
     uint32_t v = SB_SCENE_CACHE_VERSION;
     h = sb_fnv1a(h, &v, sizeof v);
+    h = sb_fnv1a(h, scene_dir, strlen(scene_dir) + 1);
     h = sb_fnv1a(h, opts, opts_len);
     uint64_t id = sb_binary_identity();
     return sb_fnv1a(h, &id, sizeof id);
@@ -84,7 +95,28 @@ typedef struct {
     uint64_t key, payload_hash, payload_size;
 } header;
 
-bool sb_scene_cache_get(uint64_t key, sb_scene_cache_read read, void *user) {
+/* Whether every dependency the entry lists hashes as it did, found from the scene's folder. */
+static bool deps_hold(sb_rbuf *r, const char *scene_dir) {
+    uint32_t nd = sb_rbuf_take_u32(r);
+    for (uint32_t i = 0; r->ok && i < nd; i++) {
+        uint32_t len = sb_rbuf_take_u32(r);
+        const char *p = sb_rbuf_take(r, len);
+        const uint64_t *hp = sb_rbuf_take(r, sizeof(uint64_t));
+        if (!p || !hp || len == 0 || len >= 2048) return r->ok = false;
+        char dp[4096 + 2048];
+        if (p[0] == '/') snprintf(dp, sizeof dp, "%.*s", (int)len, p);
+        else snprintf(dp, sizeof dp, "%s/%.*s", scene_dir, (int)len, p);
+        size_t dn = 0;
+        unsigned char *dd = sb_map_file(dp, &dn, false);
+        uint64_t want;
+        memcpy(&want, hp, sizeof want);
+        r->ok = dd && sb_hash_bytes(SB_FNV_SEED, dd, dn) == want;
+        sb_unmap_file(dd, dn);
+    }
+    return r->ok;
+}
+
+bool sb_scene_cache_get(uint64_t key, const char *scene_dir, sb_scene_cache_read read, void *user) {
     char ep[4096];
     if (!entry_path(key, ep, sizeof ep)) return false;
     size_t n = 0;
@@ -96,26 +128,8 @@ bool sb_scene_cache_get(uint64_t key, sb_scene_cache_read read, void *user) {
     ok = ok && !memcmp(h.magic, magic, sizeof magic) && h.key == key && h.payload_size == n - sizeof h &&
          sb_hash_bytes(SB_FNV_SEED, data + sizeof h, n - sizeof h) == h.payload_hash;
     sb_rbuf r = {data + (ok ? sizeof h : 0), ok ? n - sizeof h : 0, 0, ok, sizeof h};
-    /* the other files the load read must be as they were */
-    uint32_t nd = sb_rbuf_take_u32(&r);
-    for (uint32_t i = 0; r.ok && i < nd; i++) {
-        uint32_t len = sb_rbuf_take_u32(&r);
-        const char *p = sb_rbuf_take(&r, len);
-        const uint64_t *hp = sb_rbuf_take(&r, sizeof(uint64_t));
-        if (!p || !hp || len == 0 || len >= 4096) {
-            r.ok = false;
-            break;
-        }
-        char dp[4096];
-        memcpy(dp, p, len);
-        dp[len] = 0;
-        size_t dn = 0;
-        unsigned char *dd = sb_map_file(dp, &dn, false);
-        uint64_t want;
-        memcpy(&want, hp, sizeof want);
-        r.ok = dd && sb_hash_bytes(SB_FNV_SEED, dd, dn) == want;
-        sb_unmap_file(dd, dn);
-    }
+    /* the other files the load read must be as they were, found from this scene's folder */
+    deps_hold(&r, scene_dir);
     uint32_t log_len = sb_rbuf_take_u32(&r);
     const char *log = sb_rbuf_take(&r, log_len);
     if (!r.ok) {

@@ -1,6 +1,7 @@
 /* scene_load.c - a scene file (or a bundled name) made into a scene: through
  * the scene cache when the file was read before, else through the glTF loader
  * and sb_scene_finish, writing the cache's entry. */
+#define _XOPEN_SOURCE 700 /* realpath */
 #include "scene_load.h"
 
 #include <limits.h>
@@ -144,7 +145,7 @@ static bool read_scene(sb_rbuf *r, sb_scene *s) {
 /* ---- the scene cache's entries ---- */
 
 /* The options that change what a load makes, as canonical bytes. */
-static uint64_t cache_key(const sb_scene_opts *opts, const void *bytes, size_t size) {
+static uint64_t cache_key(const char *scene_dir, const sb_scene_opts *opts, const void *bytes, size_t size) {
     sb_scene_opts o;
     memset(&o, 0, sizeof o);
     if (opts) o = *opts;
@@ -157,7 +158,7 @@ static uint64_t cache_key(const sb_scene_opts *opts, const void *bytes, size_t s
     k.flags[1] = (int)o.blend;
     k.flags[2] = o.pose;
     k.pose_time = o.pose_time;
-    return sb_scene_cache_key(&k, sizeof k, bytes, size);
+    return sb_scene_cache_key(scene_dir, &k, sizeof k, bytes, size);
 }
 
 static void write_entry(sb_wbuf *b, const void *user) { write_scene(b, user); }
@@ -233,22 +234,37 @@ static bool load_file(sb_scene *s, const char *path, const sb_scene_opts *opts, 
     return true;
 }
 
+/* The real path of the folder a file stands in; false when it cannot be found (then no cache). */
+static bool real_folder(const char *path, char *out, size_t len) {
+    char dir[PATH_MAX], real[PATH_MAX];
+    snprintf(dir, sizeof dir, "%s", path);
+    char *slash = strrchr(dir, '/');
+    if (!slash) snprintf(dir, sizeof dir, ".");
+    else if (slash == dir) dir[1] = 0;
+    else *slash = 0;
+    if (!realpath(dir, real) || strlen(real) >= len) return false;
+    memcpy(out, real, strlen(real) + 1);
+    return true;
+}
+
 bool sb_scene_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_err *err) {
     char resolved[PATH_MAX], dir[PATH_MAX];
     if (sb_resolve_bundled(path, ".glb", resolved, sizeof resolved)) path = resolved;
     double t0 = sb_now_ms();
     /* the cache is found by the file's bytes; a file that cannot be read gets its message from the load */
     size_t size = 0;
-    void *bytes = sb_scene_cache_dir(dir, sizeof dir) ? sb_map_file(path, &size, false) : NULL;
-    bool cache = bytes != NULL;
-    uint64_t key = cache ? cache_key(opts, bytes, size) : 0;
+    char scene_dir[PATH_MAX];
+    bool cache = sb_scene_cache_dir(dir, sizeof dir) && real_folder(path, scene_dir, sizeof scene_dir);
+    void *bytes = cache ? sb_map_file(path, &size, false) : NULL;
+    cache = bytes != NULL;
+    uint64_t key = cache ? cache_key(scene_dir, opts, bytes, size) : 0;
     sb_unmap_file(bytes, size);
     bool ok;
     cached_load cl = {s, path, opts};
-    if (cache && sb_scene_cache_get(key, read_entry, &cl)) {
+    if (cache && sb_scene_cache_get(key, scene_dir, read_entry, &cl)) {
         ok = true;
     } else {
-        if (cache) sb_scene_cache_begin();
+        if (cache) sb_scene_cache_begin(scene_dir);
         ok = load_file(s, path, opts, err);
         if (cache && ok) sb_scene_find_planes(s);   /* an entry holds the planes, so a cached load never searches */
         if (cache) sb_scene_cache_put(key, ok ? write_entry : NULL, s);

@@ -8,6 +8,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "json.h"
@@ -233,7 +234,30 @@ static void test_scene_cache(void **st) {
     assert_true(a.content_hash != b.content_hash);
     assert_memory_not_equal(a.vertices, b.vertices, (size_t)a.vertex_count * SB_VERTEX_BYTES);
     sb_scene_free(&a);
+    /* the same .gltf copied into another folder: never the first folder's entry, whatever lies beside it. Beside
+       a different .bin: that .bin's geometry; beside none, or a cut one: refused as a load without the cache is */
+    char other[160], ogltf[200], obin[200];
+    snprintf(other, sizeof other, "%s/other", g_cache);
+    assert_int_equal(mkdir(other, 0755), 0);
+    snprintf(ogltf, sizeof ogltf, "%s/tri.gltf", other);
+    snprintf(obin, sizeof obin, "%s/tri.bin", other);
+    copy_file(gltf, ogltf);
+    pos[3] = 5;   /* another vertex than the first folder's */
+    assert_true(sb_write_file_atomic(obin, pos, 44, &err));
+    load_expect(ogltf, false, &a);
+    assert_memory_not_equal(a.vertices, b.vertices, (size_t)a.vertex_count * SB_VERTEX_BYTES);
+    assert_true(a.content_hash != b.content_hash);
+    sb_scene_free(&a);
+    load_expect(ogltf, true, &a);   /* its own entry, found again */
+    sb_scene_free(&a);
+    load_expect(gltf, true, &a);    /* and the first folder's, still its own */
+    same_scene(&a, &b);
+    sb_scene_free(&a);
     sb_scene_free(&b);
+    assert_true(sb_write_file_atomic(obin, pos, 22, &err));   /* cut in half */
+    expect_scene_refused(ogltf, "tri.bin");
+    assert_int_equal(unlink(obin), 0);                         /* missing */
+    expect_scene_refused(ogltf, "tri.bin");
     setenv("SB_SCENE_CACHE", "off", 1);
     load_expect(glb, false, &a);
     sb_scene_free(&a);
