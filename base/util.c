@@ -77,6 +77,11 @@ void sb_log_capture(bool on) {
 const char *sb_log_captured(void) { return g_capture ? g_capture : ""; }
 
 char *sb_read_file(const char *path, size_t *size, sb_err *err) {
+    struct stat st;
+    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {   /* a folder opens, then reads as 2^63 bytes */
+        sb_fail(err, "%s: %s, not a file", path, S_ISDIR(st.st_mode) ? "a folder" : "a device or special file");
+        return NULL;
+    }
     FILE *f = fopen(path, "rb");
     if (!f) {
         sb_fail(err, "%s: cannot open: %s", path, strerror(errno));

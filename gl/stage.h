@@ -31,6 +31,8 @@ typedef struct sb_counters {
     bool paged;                                     /* a virtual shadow map: the page counters below are its */
     int pages_needed, pages_rendered, pages_cached; /* pages the pixels needed; drawn this frame; kept from before */
     int pool_overflow;                              /* needed pages the pool had no slot for */
+    int pages_stand_in;                             /* coarser pages drawn or kept in place of those (in rendered,
+                                                       cached): rendered + cached - stand_in + overflow = needed */
     int warp_fallbacks;                             /* warped maps (psm, lispsm, tsm) that used the uniform fit */
     int split_count;                                /* cascades whose far split is known this frame */
     double splits[SB_MAX_CASCADES];                 /* view-space far distance of each cascade */

@@ -308,7 +308,7 @@ static void check_pool(sb_run *r) {
     }
     if (frames)
         sb_run_warn(&r->info, "pool_overflow: the page pool was short of up to %d of %d needed pages in %d of %d frames "
-                    "(their pixels used a coarser or finer level): a larger pool= holds them", worst, need, frames,
+                    "(their pixels used the page one level coarser): a larger pool= holds them", worst, need, frames,
                     r->done);
 }
 

@@ -125,7 +125,10 @@ static const sb_frame_col frame_cols[] = {
     COUNT("pages_cached", f_pages, pages_cached, SB_STAT_MEAN, SB_LOWER_WORSE,
           "virtual: needed pages kept from an earlier frame (the same level, place and light)"),
     COUNT("pool_overflow", f_pages, pool_overflow, SB_STAT_MEAN | SB_STAT_MAX, 0,
-          "virtual: needed pages the pool had no slot for (their pixels use another level's page)"),
+          "virtual: needed pages the pool had no slot for, given up (their pixels use the page one level coarser)"),
+    COUNT("pages_stand_in", f_pages, pages_stand_in, SB_STAT_MEAN, 0,
+          "virtual: coarser pages drawn or kept in place of pages given up (counted in pages_rendered and "
+          "pages_cached: rendered + cached - stand_in + pool_overflow = needed)"),
     COUNT("warp_fallbacks", f_maps, warp_fallbacks, SB_STAT_MEAN, 0, "warped maps that fell back to the uniform fit"),
     STAGE_MS(SB_STAGE_ZPASS, 0, "camera depth pre-pass"),
     STAGE_MS(SB_STAGE_MINMAX, 0, "depth reduction"),

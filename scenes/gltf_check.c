@@ -274,7 +274,34 @@ bool sb_uri_resolve(const char *base_dir, const char *uri, bool allow_external, 
     return sb_file_confined(base_dir, decoded, allow_external, out, outlen, err);
 }
 
-static bool check_uri(ck *c, const sb_json *obj, const char *path, bool *has) {
+/* Whether path, relative to the folder root (or absolute), stays inside root once its "." and ".." are taken
+ * as written (no link followed); where: the path it names. */
+static bool lexically_inside(const char *root, const char *path, char where[PATH_MAX]) {
+    char joined[2 * PATH_MAX + 2];
+    if (path[0] == '/') snprintf(joined, sizeof joined, "%s", path);
+    else snprintf(joined, sizeof joined, "%s/%s", root, path);
+    size_t n = 0;   /* the normalised path in where */
+    where[0] = 0;
+    for (char *save = NULL, *part = strtok_r(joined, "/", &save); part; part = strtok_r(NULL, "/", &save)) {
+        if (!strcmp(part, ".")) continue;
+        if (!strcmp(part, "..")) {
+            while (n > 0 && where[n - 1] != '/') n--;
+            if (n > 0) n--;
+            where[n] = 0;
+            continue;
+        }
+        n += (size_t)snprintf(where + n, PATH_MAX - n, "/%s", part);
+        if (n >= PATH_MAX) return false;
+    }
+    if (!where[0]) snprintf(where, PATH_MAX, "/");
+    size_t rl = strlen(root);
+    return !strncmp(where, root, rl) && (where[rl] == '/' || where[rl] == 0 || (rl == 1 && root[0] == '/'));
+}
+
+/* A uri: a data: URI must be base64; a path must be one (valid escapes, no scheme) and, when `open` (a buffer),
+ * name a file inside the scene's folder. An image's file is opened, and confined, only when an alpha test reads
+ * it (gltf_load.cc): a texture nothing reads never refuses a file. */
+static bool check_uri(ck *c, const sb_json *obj, const char *path, bool open, bool *has) {
     const sb_json *v;
     *has = false;
     if (!field(c, obj, path, "uri", SB_JSON_STRING, false, &v)) return false;
@@ -282,6 +309,19 @@ static bool check_uri(ck *c, const sb_json *obj, const char *path, bool *has) {
     *has = true;
     if (!strncmp(v->text, "data:", 5)) {
         if (!strstr(v->text, ";base64,")) return fail(c, at(path, "uri").s, "a data: URI must be base64");
+        return true;
+    }
+    char decoded[PATH_MAX];
+    if (!open) {
+        if (!sb_uri_decode(v->text, decoded, sizeof decoded))
+            return fail(c, at(path, "uri").s, "\"%s\" is not a valid URI (bad %%-escape)", v->text);
+        if (strstr(decoded, "://"))
+            return fail(c, at(path, "uri").s, "\"%s\": only data: URIs and paths relative to the scene's folder are read",
+                        v->text);
+        char where[PATH_MAX], root[PATH_MAX];   /* confined by its text: a file not opened is not resolved */
+        if (!c->d->allow_external_uris && realpath(c->d->base_dir, root) && !lexically_inside(root, decoded, where))
+            return fail(c, at(path, "uri").s, "\"%s\" resolves to %s, outside the scene's folder %s "
+                        "(--allow-external-uris reads it)", v->text, where, root);
         return true;
     }
     char resolved[PATH_MAX];
@@ -310,7 +350,7 @@ static bool check_buffers(ck *c) {
         jpath p = at_i("/buffers", i);
         if (!get_uint(c, b, p.s, "byteLength", true, 0, 1, UINT64_MAX, &c->buf_len[i])) return false;
         bool has_uri;
-        if (!check_uri(c, b, p.s, &has_uri)) return false;
+        if (!check_uri(c, b, p.s, true, &has_uri)) return false;
         if (!has_uri && (!c->d->glb || i != 0)) {
             /* no bytes anywhere: refused if a bufferView reads it, else left out */
             for (uint64_t v = 0; v < c->n[K_VIEW]; v++) {
@@ -744,7 +784,7 @@ static bool check_textures_images(ck *c) {
         jpath p = at_i("/images", i);
         int64_t view;
         bool has_uri;
-        if (!check_uri(c, im, p.s, &has_uri)) return false;
+        if (!check_uri(c, im, p.s, false, &has_uri)) return false;
         if (!get_index(c, im, p.s, "bufferView", false, K_VIEW, &view)) return false;
         if (has_uri && view >= 0) return fail(c, p.s, "has both a uri and a bufferView");
     }

@@ -40,6 +40,8 @@ namespace {
 // are decoded afterwards (shadows need no other texture).
 struct ImageStore {
     std::map<int, std::vector<unsigned char>> bytes;
+    std::map<int, std::string> unread;   // an image an alpha test needs that could not be read: why
+    std::string first_cause;             // the first alpha texture that cannot be used: where and why
 };
 
 // What the model's buffers are: each buffer's bytes, in the file as it is
@@ -424,19 +426,30 @@ struct Loader {
         return r;
     }
 
-    // The alpha of texture ti as a scene texture; -1 when its image cannot be decoded here.
+    // An alpha texture that cannot be used: the first one's cause is said at load.
+    int32_t cannot(const std::string &why) {
+        if (images->first_cause.empty()) images->first_cause = why;
+        return -1;
+    }
+
+    // The alpha of texture ti as a scene texture; -1 when its image cannot be read or decoded here.
     int32_t decode_texture(int ti) {
         const tinygltf::Model &m = *c.m;
         if (ti < 0 || ti >= (int)m.textures.size()) return -1;
         const tinygltf::Texture &t = m.textures[ti];
         auto bytes = images->bytes.find(t.source);
-        if (t.source < 0 || bytes == images->bytes.end()) return -1;
+        std::string where = "/images/" + std::to_string(t.source);
+        if (t.source < 0 || bytes == images->bytes.end()) {
+            auto why = images->unread.find(t.source);
+            return cannot(why != images->unread.end() ? why->second : where + ": no bytes (no uri, no bufferView)");
+        }
         tinygltf::Image img;
         std::string e, w;
         if (!tinygltf::LoadImageData(&img, t.source, &e, &w, 0, 0, bytes->second.data(), (int)bytes->second.size(),
                                      nullptr) ||
             img.width <= 0 || img.height <= 0 || img.component <= 0)
-            return -1;
+            return cannot(where + ": its bytes do not decode as PNG, JPEG, BMP, TGA or GIF (another format, or a "
+                                  "damaged file)");
         size_t n = (size_t)img.width * img.height, bpc = img.bits == 16 ? 2 : 1;
         if (img.image.size() < n * img.component * bpc) return -1;
         std::vector<uint8_t> alpha(n, 255);
@@ -1028,17 +1041,40 @@ bool read_buffers(const sb_json *root, Source &src, const char *file, Document &
     return true;
 }
 
-// Every image's encoded bytes (decoded later, only for the alpha tests that read them).
+// The images an alpha test reads: the base-colour texture's of every MASK material, and of every BLEND material
+// alpha-tested under --blend-casters mask. No other image is ever opened.
+std::vector<bool> alpha_images(const tinygltf::Model &m, const sb_scene_opts *opts) {
+    std::vector<bool> need(m.images.size(), false);
+    for (const tinygltf::Material &mat : m.materials) {
+        bool tested = mat.alphaMode == "MASK" || (mat.alphaMode == "BLEND" && opts->blend == SB_BLEND_MASK);
+        int ti = mat.pbrMetallicRoughness.baseColorTexture.index;
+        if (!tested || ti < 0 || ti >= (int)m.textures.size()) continue;
+        int src = m.textures[ti].source;
+        if (src >= 0 && src < (int)need.size()) need[src] = true;
+    }
+    return need;
+}
+
+// The encoded bytes of every image an alpha test reads (decoded later). One that cannot be read is kept with its
+// reason, as one that cannot be decoded is: the load goes on, and says why (log_features).
 bool read_images(const sb_json *root, Source &src, const char *file, const tinygltf::Model &m, const Document &doc,
-                 ImageStore *images, sb_err *err) {
+                 const sb_scene_opts *opts, ImageStore *images) {
     const sb_json *is = member(root, "images");
+    std::vector<bool> need = alpha_images(m, opts);
     for (uint32_t i = 0; is && i < is->count; i++) {
+        if (i >= need.size() || !need[i]) continue;
         const sb_json *img = &is->items[i];
         std::string where = "/images/" + std::to_string(i);
         std::vector<unsigned char> bytes;
         const sb_json *uri = member(img, "uri");
         if (uri) {
-            if (!read_uri(src, file, where, uri->text, bytes, err)) return false;
+            sb_err e;
+            if (!read_uri(src, file, where, uri->text, bytes, &e)) {
+                const char *why = strstr(e.msg, "/uri: ");
+                images->unread[(int)i] = where + " (" + std::string(uri->text).substr(0, 200) + "): " +
+                                         (why ? why + 6 : e.msg);
+                continue;
+            }
         } else {
             int v = int_of(img, "bufferView", -1);
             if (v < 0 || v >= (int)m.bufferViews.size()) continue;
@@ -1069,7 +1105,7 @@ std::map<std::string, int> attributes_of(const sb_json *o) {
 
 // The checked document into tinygltf's model (buffers and images read as it goes).
 bool build_model(const sb_json *root, Source &src, const char *file, tinygltf::Model &m, Document &doc,
-                 ImageStore *images, sb_err *err) {
+                 const sb_scene_opts *opts, ImageStore *images, sb_err *err) {
     if (!read_buffers(root, src, file, doc, err)) return false;
     each(root, "bufferViews", [&](const sb_json *o) {
         tinygltf::BufferView v;
@@ -1216,7 +1252,7 @@ bool build_model(const sb_json *root, Source &src, const char *file, tinygltf::M
         m.scenes.push_back(std::move(sc));
     });
     m.defaultScene = int_of(root, "scene", -1);
-    return read_images(root, src, file, m, doc, images, err);
+    return read_images(root, src, file, m, doc, opts, images);
 }
 
 // Reads the file once, parses it once and checks that document (gltf_check.h), then fills tinygltf's model from
@@ -1247,23 +1283,26 @@ bool load_model(const char *path, const sb_scene_opts *opts, tinygltf::Model &mo
     base_dir = slash == std::string::npos ? std::string(".") : slash == 0 ? std::string("/") : base_dir.substr(0, slash);
     sb_json_doc doc;
     if (!sb_json_parse(&doc, path, json, json_len, err)) return false;
+    sb_scene_opts no_opts;
+    memset(&no_opts, 0, sizeof no_opts);
     sb_gltf_check_desc cd = {path, base_dir.c_str(), glb, bin ? bin_len : 0, opts && opts->allow_external_uris,
                              unused, unused_len};
     Source src{base_dir, cd.allow_external_uris, bin, bin_len, sb_hash_bytes(SB_FNV_SEED, bytes, size)};
     bool ok = sb_gltf_check(doc.root, &cd, err) &&
               (camera < 0 || sb_gltf_check_camera(doc.root, &cd, (uint64_t)camera, err)) &&
-              build_model(doc.root, src, path, model, docm, images, err);
+              build_model(doc.root, src, path, model, docm, opts ? opts : &no_opts, images, err);
     sb_json_free(&doc);
     if (ok) *hash = src.hash;
     return ok;
 }
 
 // What the file held that is not drawn as its author made it, said once at load.
-void log_features(const char *path, const sb_scene *s, const tinygltf::Model &m) {
+void log_features(const char *path, const sb_scene *s, const tinygltf::Model &m, const ImageStore &images) {
     const sb_scene_features &f = s->features;
     if (f.undecodable_alpha)
-        sb_log("%s: %u alpha texture(s) cannot be decoded here (a format other than PNG, JPEG, BMP, TGA or GIF): "
-               "those materials are alpha-tested with their base colour factor alone", path, f.undecodable_alpha);
+        sb_log("%s: %u alpha texture(s) cannot be used (%s%s): those materials are alpha-tested with their base colour "
+               "factor alone", path, f.undecodable_alpha, images.first_cause.c_str(),
+               f.undecodable_alpha > 1 ? "; the first" : "");
     if (f.vertex_alpha_ignored)
         sb_log("%s: %u alpha-tested primitive(s) have vertex colours with alpha, which the alpha test leaves out", path,
                f.vertex_alpha_ignored);
@@ -1326,7 +1365,7 @@ extern "C" bool sb_gltf_load(sb_scene *s, const char *path, const sb_scene_opts 
         if (!L.emit_nodes()) return false;
         s->features.textures_skipped = (uint32_t)model.images.size() - s->features.textures_decoded;
         s->content_hash = hash;
-        log_features(path, s, model);
+        log_features(path, s, model, images);
         s->load_part_ms[SB_LOAD_FLATTEN] = sb_now_ms() - t1;
         return true;
     } catch (const std::exception &ex) {

@@ -410,8 +410,14 @@ static void render_page(virtual_state *s, sb_frame *f, page_key k, int i) {
     }
 }
 
-/* Keeps the needed pages the pool holds, gives the others slots and draws them; returns how many were drawn. */
-static int update_pool(virtual_state *s, sb_frame *f, int needed, int *overflow) {
+/* What became of a frame's pages: drawn, kept from before, left out for want of a slot; of the drawn and the kept,
+ * the stand-ins (a coarser page held in place of pages given up). */
+typedef struct pool_tally {
+    int drawn, left_out, left_out_own, stand_ins;
+} pool_tally;
+
+/* Keeps the needed pages the pool holds, gives the others slots and draws them. */
+static void update_pool(virtual_state *s, sb_frame *f, int needed, pool_tally *t) {
     int cur = ++s->frame_no, nmiss = 0;
     hash_rebuild(s);
     for (int j = 0; j < needed; j++) {
@@ -426,8 +432,13 @@ static int update_pool(virtual_state *s, sb_frame *f, int needed, int *overflow)
     qsort(s->free_slots, (size_t)nfree, sizeof *s->free_slots, by_staleness);
     qsort(s->missing, (size_t)nmiss, sizeof *s->missing, by_level_down);
     int drawn = nmiss < nfree ? nmiss : nfree;
-    *overflow = nmiss - drawn;
-    if (!drawn) return 0;
+    *t = (pool_tally){.drawn = drawn, .left_out = nmiss - drawn};
+    for (int j = 0; j < needed; j++) t->stand_ins += s->need[j].stand_in;
+    for (int j = drawn; j < nmiss; j++) {   /* left out: the coarsest first were drawn, these last */
+        t->left_out_own += !s->missing[j].stand_in;
+        t->stand_ins -= s->missing[j].stand_in;
+    }
+    if (!drawn) return;
     const sb_gpu *g = f->gpu;
     glBindFramebuffer(GL_FRAMEBUFFER, s->fbo);
     glEnable(GL_SCISSOR_TEST);
@@ -449,7 +460,6 @@ static int update_pool(virtual_state *s, sb_frame *f, int needed, int *overflow)
     glDisable(GL_POLYGON_OFFSET_FILL);
     glDisable(GL_DEPTH_CLAMP);
     glDisable(GL_SCISSOR_TEST);
-    return drawn;
 }
 
 /* The page table: slot + 1 for every resident page inside its level's window this frame. */
@@ -493,13 +503,17 @@ static void virtual_frame(void *state, sb_frame *f) {
 
     sb_stage_begin(f, SB_STAGE_CASCADE);
     int held = needed, given_up = coarsen_to_fit(s, &held);
-    int left_out = 0, drawn = update_pool(s, f, held, &left_out);
+    pool_tally t = {0};
+    update_pool(s, f, held, &t);
     upload_table(s);
+    /* a partition of the pages needed: drawn or kept for themselves, or given up (pool_overflow); the stand-ins
+       drawn or kept in their place are counted apart, inside pages_rendered and pages_cached */
     f->counters.paged = true;
     f->counters.pages_needed = needed;
-    f->counters.pages_rendered = drawn;
-    f->counters.pages_cached = held - drawn - left_out;
-    f->counters.pool_overflow = given_up + left_out;
+    f->counters.pages_rendered = t.drawn;
+    f->counters.pages_cached = held - t.drawn - t.left_out;
+    f->counters.pages_stand_in = t.stand_ins;
+    f->counters.pool_overflow = given_up + t.left_out_own;
     sb_stage_end(f, SB_STAGE_CASCADE);
 
     sb_stage_begin(f, SB_STAGE_FINAL);

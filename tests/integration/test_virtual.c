@@ -167,11 +167,21 @@ static void test_small_pool_warns(void **st) {
     const char *w = sb_table_get(&sum, 0, "warnings");
     print_message("pool=1: %s\n", w);
     assert_non_null(strstr(w, "pool_overflow: the page pool was short of"));
+    assert_non_null(strstr(w, "used the page one level coarser"));   /* what happened, as docs/techniques.md says */
     frames_table(dir, &sum, 0, &a);
     for (int f = 0; f < a.nrows; f++) {
         double e = num(&a, f, "err_rate");
         assert_true(isfinite(e) && e >= 0 && e < 0.5);
         assert_true(table_int(&a, f, "pool_overflow") > 0);
+        /* the counters partition the pages needed: each drawn or kept for itself, or given up; the stand-ins
+           drawn or kept in their place are apart */
+        long needed = table_int(&a, f, "pages_needed"), rendered = table_int(&a, f, "pages_rendered"),
+             cached = table_int(&a, f, "pages_cached"), stand = table_int(&a, f, "pages_stand_in"),
+             over = table_int(&a, f, "pool_overflow");
+        print_message("frame %d: needed %ld = rendered %ld + cached %ld - stand-ins %ld + overflow %ld\n", f, needed,
+                      rendered, cached, stand, over);
+        assert_true(stand > 0);
+        assert_int_equal(rendered + cached - stand + over, needed);
     }
     sb_table_free(&a);
     sb_table_free(&sum);
