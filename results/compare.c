@@ -11,13 +11,20 @@
 
 #include "csv.h"
 #include "columns.h"
+#include "resultset.h"
 #include "table.h"
 
+/* A results set's summary (the set's folder, or its summary.csv), the set verified whole first (resultset.h). */
 static bool load_summary(sb_table *t, const char *where, sb_err *err) {
     struct stat st;
-    char path[4200];
-    if (stat(where, &st) == 0 && S_ISDIR(st.st_mode)) snprintf(path, sizeof path, "%s/summary.csv", where);
+    char path[4200], dir[4200];
+    bool is_dir = stat(where, &st) == 0 && S_ISDIR(st.st_mode);
+    if (is_dir) snprintf(path, sizeof path, "%s/summary.csv", where);
     else snprintf(path, sizeof path, "%s", where);
+    snprintf(dir, sizeof dir, "%s", is_dir ? where : path);
+    char *slash = strrchr(dir, '/');
+    if (!is_dir && slash && !strcmp(slash + 1, "summary.csv")) *slash = 0;
+    if ((is_dir || (slash && !slash[0])) && !sb_resultset_verify(dir, err)) return false;
     if (!sb_table_load(t, path, err)) return false;
     const char *need[] = {"run_id", "scene", "path", "technique", "params", "status"};
     for (size_t i = 0; i < SB_COUNT(need); i++)
@@ -592,7 +599,8 @@ bool sb_merge(const char *const *dirs, int n, const char *out_dir, sb_err *err) 
         }
         char path[4200];
         snprintf(path, sizeof path, "%s/summary.csv", out_dir);
-        ok = sb_write_file_atomic(path, text, (size_t)(p - text), err) && sb_columns_write(out_dir, err);
+        ok = sb_write_file_atomic(path, text, (size_t)(p - text), err) && sb_columns_write(out_dir, err) &&
+             sb_resultset_seal(out_dir, err);
         free(text);
     }
     for (int i = 0; i < n; i++) sb_table_free(&t[i]);
