@@ -108,6 +108,40 @@ GLuint sb_shadow_texture(GLenum target, GLenum format, int width, int height, in
     return tex;
 }
 
+int sb_gl_texel_bytes(GLenum format) {
+    switch (format) {
+    case GL_DEPTH_COMPONENT16: return 2;
+    case GL_RG32F: return 8;
+    case GL_RGBA32F: return 16;
+    default: return 4;   /* DEPTH_COMPONENT24 (padded to 32 bits), DEPTH_COMPONENT32F, R32F */
+    }
+}
+
+/* One try: a texture array of these layers, made and deleted; false on GL_OUT_OF_MEMORY. */
+static bool allocates(GLenum format, int width, int height, int layers) {
+    sb_gl_drain_errors();
+    GLuint tex;
+    glGenTextures(1, &tex);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, tex);
+    glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, format, width, height, layers);
+    bool ok = glGetError() == GL_NO_ERROR;
+    glDeleteTextures(1, &tex);
+    sb_gl_drain_errors();
+    return ok;
+}
+
+bool sb_gl_allocates(GLenum format, int width, int height, int layers, int *layers_fit) {
+    if (allocates(format, width, height, layers)) return true;
+    int lo = 0, hi = layers;   /* lo allocates (0: none tried), hi does not */
+    while (hi - lo > 1) {
+        int mid = (lo + hi) / 2;
+        if (allocates(format, width, height, mid)) lo = mid;
+        else hi = mid;
+    }
+    *layers_fit = lo;
+    return false;
+}
+
 int sb_layered_resolve(const sb_context *ctx, int layered) {
     if (layered == SB_LAYERED_ON) return ctx->has_vs_layer ? SB_LAYERED_VS : SB_LAYERED_GS;
     return layered;

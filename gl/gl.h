@@ -45,6 +45,14 @@ bool sb_gl_links_make(sb_gl_links *l, GLuint from, GLuint to);
 /* Gives each linked uniform of `to` the value it has in `from`. */
 void sb_gl_links_copy(const sb_gl_links *l, GLuint from, GLuint to);
 
+/* Whether the GL allocates a texture array of these dimensions and format:
+ * one is made with glTexStorage3D, checked for GL_OUT_OF_MEMORY, and deleted
+ * (a renderer's total memory is the GPU-memory check's; this is its limit on
+ * one texture, which llvmpipe, for one, puts at 2 GiB). When it does not,
+ * *layers_fit says how many layers of that size it did allocate. */
+bool sb_gl_allocates(GLenum format, int width, int height, int layers, int *layers_fit);
+/* Bytes a texel of a sized internal format takes (the depth and colour formats the shadow maps use; 4 else). */
+int sb_gl_texel_bytes(GLenum format);
 /* A depth texture with hardware comparison (LEQUAL), clamped to its edge: GL_TEXTURE_2D_ARRAY of width x height
  * with `layers` layers, GL_TEXTURE_CUBE_MAP or GL_TEXTURE_2D (layers ignored). */
 GLuint sb_shadow_texture(GLenum target, GLenum format, int width, int height, int layers, bool linear);

@@ -47,6 +47,30 @@ static bool maps_fit(const sb_gpu *g, const sb_csm_desc *d, const char *name, sb
     return sb_gpu_memory_fits(g, bytes, who, "shadow maps", why);
 }
 
+/* A moments map's texel format, for GL and for the blur's image (by
+ * SB_MAP_*): as many 32-bit float channels as the format stores
+ * (moments.frag): esm one, vsm two, msm four. A channel more would be memory
+ * traffic in every clear, draw, blur pass and lookup. */
+static const struct {
+    GLenum gl;
+    const char *glsl;
+} moments_format[] = {{0, ""}, {GL_RG32F, "rg32f"}, {GL_R32F, "r32f"}, {GL_RGBA32F, "rgba32f"}};
+
+/* One texture of the maps the GL would not allocate, found before anything renders: a skip naming its size and
+ * what the GL did allocate. Only textures past 1 GiB are tried (no renderer here refuses less). */
+static bool texture_allocates(const sb_gpu *g, GLenum format, const char *what, const sb_csm_desc *d, const char *name,
+                              sb_err *why) {
+    double bytes = (double)d->res * d->res * d->cascades * sb_gl_texel_bytes(format);
+    int fit = 0;
+    if (bytes <= 1073741824.0 || sb_gl_allocates(format, d->res, d->res, d->cascades, &fit)) return true;
+    return sb_fail(why, "%s:res=%d:cascades=%d: the GL (%s) does not allocate one %s texture of %dx%dx%d (%.1f GiB); "
+                        "it allocates %d layer(s) of that size (%.1f GiB) in one texture: fewer cascades or a lower res "
+                        "fit", name, d->res, d->cascades, g->ctx->renderer, what, d->res, d->res, d->cascades,
+                   bytes / 1073741824.0, fit, bytes / d->cascades * fit / 1073741824.0);
+}
+
+static const GLenum csm_depth_formats[] = {GL_DEPTH_COMPONENT16, GL_DEPTH_COMPONENT24, GL_DEPTH_COMPONENT32F};
+
 bool sb_csm_supported(const sb_gpu *g, const sb_csm_desc *d, const char *name, sb_err *why) {
     const sb_context *ctx = g->ctx;
     if (!sb_layered_supported(ctx, d->layered, name, why)) return false;
@@ -57,22 +81,14 @@ bool sb_csm_supported(const sb_gpu *g, const sb_csm_desc *d, const char *name, s
                                           ctx->renderer);
     if (d->cascades > max_layers)
         return sb_fail(why, "%s: %d maps exceed GL_MAX_ARRAY_TEXTURE_LAYERS %d", name, d->cascades, max_layers);
-    return maps_fit(g, d, name, why);
+    return maps_fit(g, d, name, why) && texture_allocates(g, csm_depth_formats[d->depth], "depth", d, name, why) &&
+           (!d->format || texture_allocates(g, moments_format[d->format].gl, "moments", d, name, why));
 }
-
-/* A moments map's texel format, for GL and for the blur's image (by
- * SB_MAP_*): as many 32-bit float channels as the format stores
- * (moments.frag): esm one, vsm two, msm four. A channel more would be memory
- * traffic in every clear, draw, blur pass and lookup. */
-static const struct {
-    GLenum gl;
-    const char *glsl;
-} moments_format[] = {{0, ""}, {GL_RG32F, "rg32f"}, {GL_R32F, "r32f"}, {GL_RGBA32F, "rgba32f"}};
 
 /* The array depth map (and moments), one framebuffer for all layers and one a layer. */
 static bool create_maps(sb_csm *c, const char *name, sb_err *err) {
     const sb_csm_desc *d = &c->d;
-    static const GLenum depth_formats[] = {GL_DEPTH_COMPONENT16, GL_DEPTH_COMPONENT24, GL_DEPTH_COMPONENT32F};
+    const GLenum *depth_formats = csm_depth_formats;
     bool bilinear = !(d->filter == SB_FILTER_NONE || d->filter == SB_FILTER_PCF3 || d->filter == SB_FILTER_PCF5);
     c->tex = sb_shadow_texture(GL_TEXTURE_2D_ARRAY, depth_formats[d->depth], d->res, d->res, c->count, bilinear);
     if (d->format) { /* filtered formats: moments beside the depth the rasterizer tests with */

@@ -247,10 +247,30 @@ static void test_same_name_two_folders(void **st) {
     sb_table_free(&t);
 }
 
+/* A shadow map the GL will not allocate in one texture (llvmpipe: 2 GiB) is skipped before anything renders,
+ * naming its size and what the GL did allocate; where it allocates (a large GPU), the run is ok. Never a failed
+ * run with an incomplete framebuffer. */
+static void test_map_the_gl_refuses(void **st) {
+    (void)st;
+    assert_int_equal(sh("%s run plane-box plane-box pssm:res=16384 --frames 1 --warmup 0 --size 64x36 --error-every 0 "
+                        "--gpu-memory 64G --quiet --out %s/big", test_binary(), g_tmp), 0);
+    sb_table t;
+    summary_table(last_line_of(g_out), &t);
+    const char *status = sb_table_get(&t, 0, "status"), *reason = sb_table_get(&t, 0, "reason");
+    print_message("%s: %s\n", status, reason);
+    if (strcmp(status, "ok")) {
+        assert_string_equal(status, "skipped");
+        assert_non_null(strstr(reason, "does not allocate one depth texture of 16384x16384x4 (4.0 GiB)"));
+        assert_non_null(strstr(reason, "layer(s) of that size"));
+    }
+    sb_table_free(&t);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_damaged_sets_refused), cmocka_unit_test(test_bad_input_one_line),
         cmocka_unit_test(test_equals_spelling),      cmocka_unit_test(test_same_name_two_folders),
+        cmocka_unit_test(test_map_the_gl_refuses),
     };
     return cmocka_run_group_tests_name("trust", tests, setup, teardown);
 }
