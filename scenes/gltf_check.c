@@ -38,6 +38,7 @@ typedef struct view_info {
 typedef struct acc_info {
     bool has_view;
     uint64_t view, off, count, csize, ncomp, elem, stride;
+    uint64_t tail;              /* bytes the last element needs: a matrix's last column without its padding */
     int ctype;
 } acc_info;
 
@@ -51,6 +52,8 @@ typedef struct ck {
     acc_info *accs;
     int64_t *parent;
     bool quantization;          /* KHR_mesh_quantization is used */
+    uint8_t *used[K_COUNT];     /* accessors, bufferViews, buffers, lights something drawn or animated reads
+                                   (mark_used); a part nobody reads is held leniently: left out, said */
     uint32_t rotations_normalised;
     jpath first_rotation;
     double first_rotation_len;
@@ -343,6 +346,86 @@ static bool check_asset(ck *c, const sb_json *root) {
     return true;
 }
 
+/* ---- what is read: parts nothing reads never refuse a file ---- */
+
+/* Marks index v (a JSON number) of kind k used, when it is one. */
+static void mark(uint8_t *used, uint64_t n, const sb_json *v) {
+    uint64_t i;
+    if (used && v && v->type == SB_JSON_NUMBER && sb_json_u64(v, &i) && i < n) used[i] = 1;
+}
+
+/* Every member value of an object (a primitive's attributes, a morph target) marked. */
+static void mark_values(uint8_t *used, uint64_t n, const sb_json *obj) {
+    for (uint32_t k = 0; obj && obj->type == SB_JSON_OBJECT && k < obj->count; k++) mark(used, n, &obj->items[k]);
+}
+
+/* A member of a member of an object, or NULL. */
+static const sb_json *get2(const sb_json *o, const char *a, const char *b) {
+    const sb_json *x = o && o->type == SB_JSON_OBJECT ? sb_json_get(o, a) : NULL;
+    return x && x->type == SB_JSON_OBJECT ? sb_json_get(x, b) : NULL;
+}
+
+static void mark_meshes(ck *c, uint8_t *acc, uint8_t *view) {
+    for (uint64_t m = 0; m < c->n[K_MESH]; m++) {
+        const sb_json *prims = sb_json_get(&c->arr[K_MESH]->items[m], "primitives");
+        for (uint32_t k = 0; prims && prims->type == SB_JSON_ARRAY && k < prims->count; k++) {
+            const sb_json *p = &prims->items[k], *targets = p->type == SB_JSON_OBJECT ? sb_json_get(p, "targets") : NULL;
+            if (p->type != SB_JSON_OBJECT) continue;
+            mark_values(acc, c->n[K_ACCESSOR], sb_json_get(p, "attributes"));
+            mark(acc, c->n[K_ACCESSOR], sb_json_get(p, "indices"));
+            for (uint32_t t = 0; targets && targets->type == SB_JSON_ARRAY && t < targets->count; t++)
+                mark_values(acc, c->n[K_ACCESSOR], &targets->items[t]);
+            const sb_json *draco = get2(p, "extensions", "KHR_draco_mesh_compression");
+            mark(view, c->n[K_VIEW], draco && draco->type == SB_JSON_OBJECT ? sb_json_get(draco, "bufferView") : NULL);
+        }
+    }
+}
+
+/* What something drawn or animated reads: the accessors of primitives (attributes, indices, morph targets),
+ * skins and animation samplers; the bufferViews of those (sparse ones too), of images and of Draco; the
+ * buffers of those views; the lights nodes name. */
+static void mark_used(ck *c) {
+    for (int k = 0; k < K_COUNT; k++) c->used[k] = sb_xcalloc(c->n[k] + 1, 1);
+    uint8_t *acc = c->used[K_ACCESSOR], *view = c->used[K_VIEW];
+    mark_meshes(c, acc, view);
+    for (uint64_t i = 0; i < c->n[K_SKIN]; i++) mark(acc, c->n[K_ACCESSOR], sb_json_get(&c->arr[K_SKIN]->items[i], "inverseBindMatrices"));
+    for (uint64_t i = 0; i < c->n[K_ANIMATION]; i++) {
+        const sb_json *ss = sb_json_get(&c->arr[K_ANIMATION]->items[i], "samplers");
+        for (uint32_t k = 0; ss && ss->type == SB_JSON_ARRAY && k < ss->count; k++)
+            if (ss->items[k].type == SB_JSON_OBJECT) {
+                mark(acc, c->n[K_ACCESSOR], sb_json_get(&ss->items[k], "input"));
+                mark(acc, c->n[K_ACCESSOR], sb_json_get(&ss->items[k], "output"));
+            }
+    }
+    for (uint64_t i = 0; i < c->n[K_ACCESSOR]; i++) {
+        if (!acc[i]) continue;
+        const sb_json *a = &c->arr[K_ACCESSOR]->items[i];
+        mark(view, c->n[K_VIEW], sb_json_get(a, "bufferView"));
+        const sb_json *sp = sb_json_get(a, "sparse");
+        if (sp && sp->type == SB_JSON_OBJECT) {
+            mark(view, c->n[K_VIEW], get2(sp, "indices", "bufferView"));
+            mark(view, c->n[K_VIEW], get2(sp, "values", "bufferView"));
+        }
+    }
+    for (uint64_t i = 0; i < c->n[K_IMAGE]; i++) mark(view, c->n[K_VIEW], sb_json_get(&c->arr[K_IMAGE]->items[i], "bufferView"));
+    for (uint64_t i = 0; i < c->n[K_VIEW]; i++)
+        if (view[i]) mark(c->used[K_BUFFER], c->n[K_BUFFER], sb_json_get(&c->arr[K_VIEW]->items[i], "buffer"));
+    for (uint64_t i = 0; i < c->n[K_NODE]; i++) {
+        const sb_json *lp = get2(&c->arr[K_NODE]->items[i], "extensions", "KHR_lights_punctual");
+        mark(c->used[K_LIGHT], c->n[K_LIGHT], lp && lp->type == SB_JSON_OBJECT ? sb_json_get(lp, "light") : NULL);
+    }
+}
+
+/* A part that failed its check: refused when something reads it; else left out, with what is wrong said. */
+static bool lenient(ck *c, int kind, uint64_t i, bool ok) {
+    if (ok || c->used[kind][i]) return ok;
+    const char *msg = c->err->msg, *file = c->d->file;
+    size_t fl = strlen(file);
+    if (!strncmp(msg, file, fl) && !strncmp(msg + fl, ": ", 2)) msg += fl + 2;   /* the file is said once */
+    if (c->d->unused) sb_gltf_note(c->d->unused, c->d->unused_len, "%s (nothing reads this %s)", msg, kind_name[kind]);
+    return true;
+}
+
 static bool check_buffers(ck *c) {
     c->buf_len = sb_xcalloc(c->n[K_BUFFER] + 1, sizeof(uint64_t));
     for (uint64_t i = 0; i < c->n[K_BUFFER]; i++) {
@@ -350,13 +433,13 @@ static bool check_buffers(ck *c) {
         jpath p = at_i("/buffers", i);
         if (!get_uint(c, b, p.s, "byteLength", true, 0, 1, UINT64_MAX, &c->buf_len[i])) return false;
         bool has_uri;
-        if (!check_uri(c, b, p.s, true, &has_uri)) return false;
+        if (!lenient(c, K_BUFFER, i, check_uri(c, b, p.s, true, &has_uri))) return false;
         if (!has_uri && (!c->d->glb || i != 0)) {
-            /* no bytes anywhere: refused if a bufferView reads it, else left out */
+            /* no bytes anywhere: refused if a bufferView something reads reads it, else left out */
             for (uint64_t v = 0; v < c->n[K_VIEW]; v++) {
                 uint64_t bi;
                 const sb_json *bv = sb_json_get(&c->arr[K_VIEW]->items[v], "buffer");
-                if (bv && sb_json_u64(bv, &bi) && bi == i)
+                if (bv && sb_json_u64(bv, &bi) && bi == i && c->used[K_VIEW][v])
                     return fail(c, p.s, "no uri (only the first buffer of a .glb may omit it), and bufferView %llu reads it",
                                 (unsigned long long)v);
             }
@@ -372,9 +455,17 @@ static bool check_buffers(ck *c) {
     return true;
 }
 
+static bool check_view(ck *c, uint64_t i);
+
 static bool check_views(ck *c) {
     c->views = sb_xcalloc(c->n[K_VIEW] + 1, sizeof(view_info));
-    for (uint64_t i = 0; i < c->n[K_VIEW]; i++) {
+    for (uint64_t i = 0; i < c->n[K_VIEW]; i++)
+        if (!lenient(c, K_VIEW, i, check_view(c, i))) return false;
+    return true;
+}
+
+static bool check_view(ck *c, uint64_t i) {
+    {
         const sb_json *v = &c->arr[K_VIEW]->items[i];
         view_info *vi = &c->views[i];
         jpath p = at_i("/bufferViews", i);
@@ -403,21 +494,25 @@ static uint64_t component_size(uint64_t ctype) {
     }
 }
 
-/* Bytes of one element; matrix columns start on 4-byte boundaries. */
-static uint64_t element_size(const char *type, uint64_t csize, uint64_t *ncomp) {
+/* Bytes of one element; matrix columns start on 4-byte boundaries (glTF 2.0, 3.6.2.4), so a matrix of 1- or
+ * 2-byte components is padded after each column: *tail is what the last element needs, its last column
+ * unpadded (a MAT3 of bytes: 12 bytes an element, 11 for the last). */
+static uint64_t element_size(const char *type, uint64_t csize, uint64_t *ncomp, uint64_t *tail) {
     static const struct { const char *name; uint64_t n, cols; } types[] = {
         {"SCALAR", 1, 0}, {"VEC2", 2, 0}, {"VEC3", 3, 0}, {"VEC4", 4, 0}, {"MAT2", 4, 2}, {"MAT3", 9, 3}, {"MAT4", 16, 4}};
     for (size_t k = 0; k < SB_COUNT(types); k++) {
         if (strcmp(type, types[k].name)) continue;
         *ncomp = types[k].n;
-        if (!types[k].cols) return types[k].n * csize;
-        uint64_t col = (types[k].cols * csize + 3) / 4 * 4;
+        if (!types[k].cols) return *tail = types[k].n * csize;
+        uint64_t rows = types[k].cols * csize, col = (rows + 3) / 4 * 4;
+        *tail = (types[k].cols - 1) * col + rows;
         return types[k].cols * col;
     }
-    return 0;
+    return *tail = 0;
 }
 
-/* A range of `count` elements of `elem` bytes every `stride` bytes from `off` in bufferView `view`. */
+/* A range of `count` elements every `stride` bytes from `off` in bufferView `view`, the last of which needs
+ * `elem` bytes. */
 static bool check_range(ck *c, const char *path, uint64_t view, uint64_t off, uint64_t count, uint64_t elem,
                         uint64_t stride, uint64_t csize) {
     const view_info *v = &c->views[view];
@@ -459,12 +554,20 @@ static bool check_sparse(ck *c, const sb_json *sparse, const char *path, const a
     if (!check_range(c, pi.s, (uint64_t)iv, ioff, count, isize, isize, isize)) return false;
     if (!get_index(c, val, pv.s, "bufferView", true, K_VIEW, &vv)) return false;
     if (!get_uint(c, val, pv.s, "byteOffset", false, 0, 0, INT32_MAX, &voff)) return false;
-    return check_range(c, pv.s, (uint64_t)vv, voff, count, a->elem, a->elem, a->csize);
+    return check_range(c, pv.s, (uint64_t)vv, voff, count, a->tail, a->elem, a->csize);
 }
+
+static bool check_accessor(ck *c, uint64_t i);
 
 static bool check_accessors(ck *c) {
     c->accs = sb_xcalloc(c->n[K_ACCESSOR] + 1, sizeof(acc_info));
-    for (uint64_t i = 0; i < c->n[K_ACCESSOR]; i++) {
+    for (uint64_t i = 0; i < c->n[K_ACCESSOR]; i++)
+        if (!lenient(c, K_ACCESSOR, i, check_accessor(c, i))) return false;
+    return true;
+}
+
+static bool check_accessor(ck *c, uint64_t i) {
+    {
         const sb_json *a = &c->arr[K_ACCESSOR]->items[i];
         acc_info *ai = &c->accs[i];
         jpath p = at_i("/accessors", i);
@@ -483,7 +586,7 @@ static bool check_accessors(ck *c) {
             return fail(c, at(p.s, "componentType").s, "%llu is not a glTF component type (5120, 5121, 5122, 5123, 5125, 5126)",
                         (unsigned long long)ctype);
         ai->ctype = (int)ctype;
-        ai->elem = element_size(type, ai->csize, &ai->ncomp);
+        ai->elem = element_size(type, ai->csize, &ai->ncomp, &ai->tail);
         ai->has_view = view >= 0;
         if (ai->has_view) {
             ai->view = (uint64_t)view;
@@ -492,7 +595,7 @@ static bool check_accessors(ck *c) {
                 return fail(c, p.s, "byteStride %llu of bufferView %lld is smaller than its %llu-byte %s elements",
                             (unsigned long long)st, (long long)view, (unsigned long long)ai->elem, type);
             ai->stride = st ? st : ai->elem;
-            if (!check_range(c, p.s, ai->view, ai->off, ai->count, ai->elem, ai->stride, ai->csize)) return false;
+            if (!check_range(c, p.s, ai->view, ai->off, ai->count, ai->tail, ai->stride, ai->csize)) return false;
         } else {
             if (ai->off) return fail(c, at(p.s, "byteOffset").s, "given without a bufferView");
             uint64_t bytes; /* zeros (and sparse values) only: bound what may be allocated */
@@ -681,8 +784,16 @@ static bool check_scenes(ck *c, const sb_json *root) {
     return get_index(c, root, "", "scene", false, K_SCENE, &sc);
 }
 
+static bool check_light(ck *c, uint64_t i);
+
 static bool check_lights(ck *c) {
-    for (uint64_t i = 0; i < c->n[K_LIGHT]; i++) {
+    for (uint64_t i = 0; i < c->n[K_LIGHT]; i++)
+        if (!lenient(c, K_LIGHT, i, check_light(c, i))) return false;
+    return true;
+}
+
+static bool check_light(ck *c, uint64_t i) {
+    {
         const sb_json *l = &c->arr[K_LIGHT]->items[i], *spot;
         jpath p = at_i("/extensions/KHR_lights_punctual/lights", i);
         const char *type;
@@ -839,11 +950,14 @@ static bool check_animations(ck *c) {
             if (!field(c, ch, pc.s, "target", SB_JSON_OBJECT, true, &target)) return false;
             jpath pt = at(pc.s, "target");
             if (!get_index(c, target, pt.s, "node", false, K_NODE, &node)) return false;
-            const sb_json *ext = sb_json_get(target, "extensions");
-            if (ext && sb_json_get(ext, "KHR_animation_pointer")) { /* animates what we do not: left out, said */
-                if (!get_choice(c, target, pt.s, "path", true, "pointer", &path)) return false;
+            const sb_json *ext = sb_json_get(target, "extensions"), *tp = sb_json_get(target, "path");
+            bool pointer = ext && sb_json_get(ext, "KHR_animation_pointer");
+            if (pointer || (tp && tp->type == SB_JSON_STRING && !strcmp(tp->text, "pointer"))) {
+                /* animates what we do not (with KHR_animation_pointer declared or not): left out, said */
+                if (pointer && !get_choice(c, target, pt.s, "path", true, "pointer", &path)) return false;
                 if (c->d->unused)
-                    sb_gltf_note(c->d->unused, c->d->unused_len, "%s: KHR_animation_pointer is not applied", pc.s);
+                    sb_gltf_note(c->d->unused, c->d->unused_len, "%s: %s is not applied", pc.s,
+                                 pointer ? "KHR_animation_pointer" : "a \"pointer\" channel");
                 continue;
             }
             if (!get_choice(c, target, pt.s, "path", true, "translation|rotation|scale|weights", &path)) return false;
@@ -1016,10 +1130,22 @@ bool sb_gltf_check_camera(const sb_json *root, const sb_gltf_check_desc *d, uint
     return ok;
 }
 
+uint8_t *sb_gltf_used_buffers(const sb_json *root) {
+    sb_gltf_check_desc d = {.file = ""};
+    sb_err err;
+    ck c = {.d = &d, .err = &err};
+    if (root->type != SB_JSON_OBJECT || !collect_arrays(&c, root)) return NULL;
+    mark_used(&c);
+    for (int k = 0; k < K_COUNT; k++)
+        if (k != K_BUFFER) free(c.used[k]);
+    return c.used[K_BUFFER];
+}
+
 bool sb_gltf_check(const sb_json *root, const sb_gltf_check_desc *d, sb_err *err) {
     ck c = {.d = d, .err = err};
     if (root->type != SB_JSON_OBJECT) return fail(&c, "/", "the document is %s, not an object", sb_json_type_name(root->type));
-    bool ok = check_asset(&c, root) && check_required(&c, root) && collect_arrays(&c, root) && check_buffers(&c) && check_views(&c) &&
+    bool ok = check_asset(&c, root) && check_required(&c, root) && collect_arrays(&c, root) && (mark_used(&c), true) &&
+              check_buffers(&c) && check_views(&c) &&
               check_accessors(&c) && check_meshes(&c) && check_nodes(&c) && check_scenes(&c, root) && check_lights(&c) &&
               check_cameras(&c) && check_materials(&c) && check_textures_images(&c) && check_skins(&c) &&
               check_node_mesh_rules(&c) && check_skin_joints_in_scene(&c) && check_animations(&c);
@@ -1030,6 +1156,7 @@ bool sb_gltf_check(const sb_json *root, const sb_gltf_check_desc *d, sb_err *err
     free(c.views);
     free(c.accs);
     free(c.parent);
+    for (int k = 0; k < K_COUNT; k++) free(c.used[k]);
     return ok;
 }
 

@@ -28,13 +28,18 @@ typedef struct sb_gltf_check_desc {
     bool allow_external_uris;   /* URIs may leave base_dir (still regular files only) */
     /* Parts nothing draws are held leniently: what is wrong with them, or that they are left out, is added here
        ("; "-separated, NULL: not kept) instead of refusing the file. Lenient: cameras (checked strictly when a path
-       uses one: sb_gltf_check_camera), KHR_animation_pointer channels (not applied), a buffer with no uri that no
-       bufferView reads. */
+       uses one: sb_gltf_check_camera), "pointer" animation channels (not applied), and every buffer, bufferView,
+       accessor and light that nothing drawn or animated reads (a primitive, skin, animation sampler, image or node
+       reads it): left out, with what is wrong with it said. */
     char *unused;
     size_t unused_len;
 } sb_gltf_check_desc;
 
 bool sb_gltf_check(const sb_json *root, const sb_gltf_check_desc *d, sb_err *err);
+/* Which buffers something drawn or animated reads (a bufferView of a primitive's, a skin's, an animation's or an
+ * image's accessor): 1 a buffer (malloc'd; NULL when the document has no arrays to read). A buffer nothing reads
+ * is never opened. */
+uint8_t *sb_gltf_used_buffers(const sb_json *root);
 /* Camera k held strictly (a path uses it): false with the file and the JSON path. */
 bool sb_gltf_check_camera(const sb_json *root, const sb_gltf_check_desc *d, uint64_t k, sb_err *err);
 /* Adds a note to a "; "-separated list (dropped when it would not fit whole). */

@@ -1019,13 +1019,19 @@ bool read_uri(Source &src, const char *file, const std::string &where, const cha
 bool read_buffers(const sb_json *root, Source &src, const char *file, Document &doc, sb_err *err) {
     const sb_json *bs = member(root, "buffers");
     doc.owned.resize(bs ? bs->count : 0);
+    uint8_t *used_bits = sb_gltf_used_buffers(root);
+    std::vector<uint8_t> used(bs ? bs->count : 0, 0);
+    if (used_bits) std::copy(used_bits, used_bits + used.size(), used.begin());
+    free(used_bits);
     for (uint32_t i = 0; bs && i < bs->count; i++) {
         const sb_json *b = &bs->items[i];
         std::string where = "/buffers/" + std::to_string(i);
         size_t len = size_of(b, "byteLength");
         const sb_json *uri = member(b, "uri");
         std::vector<unsigned char> &own = doc.owned[i];
-        if (uri) {
+        if (!used[i]) {
+            doc.bufs.emplace_back(nullptr, 0);   // nothing reads it: never opened
+        } else if (uri) {
             if (!read_uri(src, file, where, uri->text, own, err)) return false;
             if (own.size() < len)
                 return sb_fail(err, "%s: %s/byteLength: %zu bytes, but its uri (%.200s) holds %zu: cut short?", file,

@@ -443,6 +443,32 @@ static void loads_with_note(const char *file, const char *needle) {
     sb_scene_free(&s);
 }
 
+/* Appends an object to one of the document's top-level arrays (after its last element). */
+static void append_to(const char *f, const char *array, const char *object) {
+    sb_err err;
+    char *doc = sb_read_file(f, NULL, &err);
+    assert_non_null(doc);
+    char key[64];
+    snprintf(key, sizeof key, "\"%s\":[", array);
+    char *at = strstr(doc, key);
+    assert_non_null(at);
+    int depth = 0;
+    char *close = at + strlen(key) - 1;
+    for (; *close; close++) {
+        depth += *close == '[' || *close == '{';
+        depth -= *close == ']' || *close == '}';
+        if (depth == 0) break;
+    }
+    FILE *g = fopen(f, "w");
+    assert_non_null(g);
+    fprintf(g, "%.*s,%s%s", (int)(close - doc), doc, object, close);
+    fclose(g);
+    free(doc);
+}
+static void add_accessor(const char *f, const char *obj) { append_to(f, "accessors", obj); }
+static void add_view(const char *f, const char *obj) { append_to(f, "bufferViews", obj); }
+static void add_buffer(const char *f, const char *obj) { append_to(f, "buffers", obj); }
+
 /* Adds a second buffer of 8 bytes with no uri to a file gltf_tri_write wrote. */
 static void add_buffer_without_uri(const char *f) {
     sb_err err;
@@ -481,10 +507,63 @@ static void test_unused_parts_lenient(void **st) {
     f = tmp_file("pointer.gltf");
     assert_true(gltf_tri_write(f, &(gltf_tri){.root_more = anim}));
     loads_with_note(f, "/animations/0/channels/0: KHR_animation_pointer is not applied");
-    refused("pointer-bare.gltf",
+    /* a "pointer" channel without the extension declared (the Khronos validator's valid files have one): left out,
+       said, as with it; any other unknown path is refused */
+    f = tmp_file("pointer-bare.gltf");
+    assert_true(gltf_tri_write(f, &(gltf_tri){.root_more = ",\"animations\":[{\"samplers\":[{\"input\":1,\"output\":0}],"
+                                                           "\"channels\":[{\"sampler\":0,\"target\":{\"path\":\"pointer\"}}]}]"}));
+    loads_with_note(f, "/animations/0/channels/0: a \"pointer\" channel is not applied");
+    refused("path-typo.gltf",
             &(gltf_tri){.root_more = ",\"animations\":[{\"samplers\":[{\"input\":1,\"output\":0}],\"channels\":"
-                                     "[{\"sampler\":0,\"target\":{\"path\":\"pointer\"}}]}]"},
-            "/animations/0/channels/0/target/path: \"pointer\" is not one of translation|rotation|scale|weights");
+                                     "[{\"sampler\":0,\"target\":{\"path\":\"rotaton\"}}]}]"},
+            "/animations/0/channels/0/target/path: \"rotaton\" is not one of translation|rotation|scale|weights");
+    /* parts nothing draws or animates never refuse a file (the Khronos validator's valid files): an accessor of an
+       unknown type, a buffer without uri read only by a view nothing reads, a data: URI that is not base64 on a buffer
+       nothing reads, a light of an unknown type no node uses; the same parts read by what is drawn are refused */
+    f = tmp_file("acc-unknown.gltf");
+    assert_true(gltf_tri_write(f, &(gltf_tri){.root_more = ""}));
+    add_accessor(f, "{\"bufferView\":0,\"componentType\":5126,\"count\":1,\"type\":\"VEC5\"}");
+    loads_with_note(f, "/accessors/2/type: \"VEC5\" is not one of SCALAR|VEC2|VEC3|VEC4|MAT2|MAT3|MAT4 (nothing reads this accessor)");
+    refused("acc-unknown-read.gltf", &(gltf_tri){.acc1 = "\"bufferView\":1,\"componentType\":5123,\"count\":3,\"type\":\"VEC5\""},
+            "/accessors/1/type: \"VEC5\" is not one of");
+    f = tmp_file("nouri-unused-view.gltf");
+    assert_true(gltf_tri_write(f, &(gltf_tri){0}));
+    add_buffer_without_uri(f);
+    add_view(f, "{\"buffer\":1,\"byteLength\":8}");
+    loads_with_note(f, "/buffers/1: a buffer with no uri that nothing reads");
+    f = tmp_file("data-unused.gltf");
+    assert_true(gltf_tri_write(f, &(gltf_tri){0}));
+    add_buffer(f, "{\"byteLength\":4,\"uri\":\"data:application/octet-stream,abcd\"}");
+    loads_with_note(f, "/buffers/1/uri: a data: URI must be base64 (nothing reads this buffer)");
+    refused("data-read.gltf", &(gltf_tri){.uri = "data:application/octet-stream,abcd"}, "a data: URI must be base64");
+    /* a matrix of 1-byte components pads each column to 4 bytes but the last: 3 MAT3s of bytes fit in
+       12 + 12 + 11 = 35 bytes, not 36 (glTF 2.0, 3.6.2.4; the validator's accessor lengths say the same) */
+    for (int len = 35; len >= 34; len--) {
+        f = tmp_file(len == 35 ? "mat3-fits.gltf" : "mat3-short.gltf");
+        assert_true(gltf_tri_write(f, &(gltf_tri){.prim = "\"attributes\":{\"POSITION\":0,\"_M\":2},\"indices\":1"}));
+        char view[80];
+        snprintf(view, sizeof view, "{\"buffer\":0,\"byteOffset\":0,\"byteLength\":%d}", len);
+        add_view(f, view);
+        add_accessor(f, "{\"bufferView\":2,\"componentType\":5121,\"count\":3,\"type\":\"MAT3\"}");
+        if (len == 35) {
+            sb_scene s;
+            bool ok = sb_scene_load(&s, f, NULL, &err);
+            if (!ok) print_error("%s\n", err.msg);
+            assert_true(ok);
+            sb_scene_free(&s);
+        } else {
+            expect_scene_refused(f, "/accessors/2: byteOffset 0 + 35 bytes (count 3, stride 12) run past the end of "
+                                    "bufferView 2 (34 bytes)");
+        }
+    }
+    static const char light[] = ",\"extensionsUsed\":[\"KHR_lights_punctual\"],\"extensions\":{\"KHR_lights_punctual\":"
+                                "{\"lights\":[{\"type\":\"area\"}]}}";
+    f = tmp_file("light-unused.gltf");
+    assert_true(gltf_tri_write(f, &(gltf_tri){.root_more = light}));
+    loads_with_note(f, "(nothing reads this light)");
+    refused("light-used.gltf",
+            &(gltf_tri){.root_more = light, .node0 = "\"mesh\":0,\"extensions\":{\"KHR_lights_punctual\":{\"light\":0}}"},
+            "/extensions/KHR_lights_punctual/lights/0/type: \"area\" is not one of directional|point|spot");
     /* a buffer with no uri that no bufferView reads: left out; one that a bufferView reads: refused */
     f = tmp_file("nouri.gltf");
     assert_true(gltf_tri_write(f, &(gltf_tri){0}));
