@@ -5,6 +5,7 @@
 
 #include "pathcheck.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -262,6 +263,27 @@ const char *sb_skip_reason(sb_session *s, const sb_technique *t, const sb_run_sp
 
 /* ---- instances and frames ---- */
 
+/* The run's shadow range (sb_run_ctx): over the path's frames, the nearest near plane and the farthest far plane,
+ * the far end clamped to the farthest corner of the scene's box from any of the cameras. */
+static void shadow_range(const sb_session *s, double *near, double *far) {
+    const sb_scene *sc = &s->scene;
+    int n = s->opts.frames > 0 ? s->opts.frames : 1;
+    double aspect = (double)s->opts.width / s->opts.height, zn = INFINITY, zf = 0, reach = 0;
+    for (int i = 0; i < n; i++) {
+        sb_camera cam = sb_path_camera(&s->path, i, n, aspect, sc);
+        zn = fmin(zn, cam.znear);
+        zf = fmax(zf, cam.zfar);
+        sb_v3 eye = sb_v3_sub(cam.pos, sc->origin);
+        for (int k = 0; k < 8; k++) {
+            sb_v3 q = sb_v3_make(k & 1 ? sc->bounds.hi.x : sc->bounds.lo.x, k & 2 ? sc->bounds.hi.y : sc->bounds.lo.y,
+                                 k & 4 ? sc->bounds.hi.z : sc->bounds.lo.z);
+            reach = fmax(reach, sb_v3_len(sb_v3_sub(q, eye)));
+        }
+    }
+    *near = isfinite(zn) ? zn : 0;
+    *far = reach > *near ? fmin(zf, reach) : zf;
+}
+
 bool sb_instance_create(sb_instance *in, sb_session *s, const sb_run_spec *spec, int frames, sb_err *err) {
     const sb_technique *t = spec->tech;
     memset(in, 0, sizeof *in);
@@ -274,6 +296,7 @@ bool sb_instance_create(sb_instance *in, sb_session *s, const sb_run_spec *spec,
     *in->spec = *spec;
     in->desc = in->spec->desc;
     in->rc = (sb_run_ctx){.gpu = &s->gpu, .tech = t, .frames = frames};
+    shadow_range(s, &in->rc.shadow_near, &in->rc.shadow_far);
     if (t->needs & SB_NEEDS_PLANE) sb_scene_find_planes(&s->scene);   /* on the first need, not at load */
     /* shared geometry the technique cannot draw shared (render.h): copies uploaded now, not in a timed frame */
     if (t->needs & (SB_NEEDS_PLANE | SB_NEEDS_POINT_LIGHT)) sb_gpu_share(&s->gpu, t->needs & SB_NEEDS_PLANE);

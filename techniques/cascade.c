@@ -233,7 +233,7 @@ void sb_csm_fit_slice(const sb_csm *c, const sb_frame *f, double zn, double zf, 
        the scene must not spread a (stable, sphere-fitted) map over empty space */
     sb_v3 eye = sb_v3_sub(f->cam.pos, s->origin);
     double dmin = 1e300, dmax = -1e300;
-    for (int k = 0; k < 8; k++) {
+    for (int k = 0; k < 8 && !c->d.stable; k++) {   /* stable: the slice as the fixed range cuts it, whole */
         sb_v3 q = sb_v3_make(k & 1 ? s->bounds.hi.x : s->bounds.lo.x, k & 2 ? s->bounds.hi.y : s->bounds.lo.y,
                              k & 4 ? s->bounds.hi.z : s->bounds.lo.z);
         double d = sb_v3_dot(sb_v3_sub(q, eye), f->cam.forward);
@@ -469,11 +469,18 @@ void sb_csm_final(sb_csm *c, sb_frame *f, bool reuse_depth) {
 
 /* ---- cascade techniques as rows ---- */
 
-void sb_csm_view_splits(const void *desc, const sb_frame *f, int count, double *out) {
+void sb_csm_view_splits(const void *desc, const sb_frame *f, int count, double near, double far, double *out) {
     (void)desc;
     (void)count;
-    out[0] = f->cam.znear;
-    out[1] = f->cam.zfar;
+    (void)f;
+    out[0] = near;
+    out[1] = far;
+}
+
+void sb_csm_range(const sb_csm *c, const sb_frame *f, double *near, double *far) {
+    bool fixed = c->d.stable && c->range_far > c->range_near && c->range_near > 0;
+    *near = fixed ? c->range_near : f->cam.znear;
+    *far = fixed ? c->range_far : f->cam.zfar;
 }
 
 bool sb_csm_technique_check(const void *desc, sb_err *err) { return sb_csm_check(desc, "", err); }
@@ -486,13 +493,18 @@ bool sb_csm_technique_create(void *state, const sb_run_ctx *rc, const void *desc
     sb_csm_state *st = state;
     st->kind = rc->tech->impl;
     st->desc = desc;
-    return sb_csm_create(&st->csm, rc->gpu, desc, rc->tech->name, err);
+    if (!sb_csm_create(&st->csm, rc->gpu, desc, rc->tech->name, err)) return false;
+    const sb_csm_desc *d = desc;
+    st->csm.range_near = rc->shadow_near;
+    st->csm.range_far = d->distance > 0 ? d->distance : rc->shadow_far;
+    return true;
 }
 
 void sb_csm_technique_frame(void *state, sb_frame *f) {
     sb_csm_state *st = state;
-    double splits[SB_MAX_CASCADES + 1];
-    st->kind->splits(st->desc, f, st->csm.count, splits);
+    double splits[SB_MAX_CASCADES + 1], zn, zf;
+    sb_csm_range(&st->csm, f, &zn, &zf);
+    st->kind->splits(st->desc, f, st->csm.count, zn, zf, splits);
     sb_csm_fit(&st->csm, f, splits);
     sb_csm_draw(&st->csm, f);
 }

@@ -29,6 +29,7 @@ typedef struct sb_csm_desc {
     double focus;               /* TSM: share of the footprint mapped to 80% of the map */
     int perspective;            /* not a parameter: the maps may be perspective without a warp (PSM) */
     int cache;                  /* cached cascades: one whose snapped window did not change is not rendered again */
+    double distance;            /* stable=on: the shadow range's far end (0: the run's, sb_run_ctx.shadow_far) */
 } sb_csm_desc;
 
 /* The defaults of the fields a technique's table may not have. */
@@ -50,7 +51,10 @@ typedef struct sb_csm_desc {
     SB_PARAM_E(sb_csm_desc, format, depth, "depth|vsm|esm|msm", "what the map stores: depth, or filterable moments"), \
     SB_PARAM_I(sb_csm_desc, blur, 2, 0, 16, "vsm/esm/msm: Gaussian blur radius of the moments, texels"),        \
     SB_PARAM_F(sb_csm_desc, bleed, 0.2, 0, 0.95, "vsm/msm: light-bleeding reduction"),                          \
-    SB_PARAM_F(sb_csm_desc, exponent, 80, 1, 85, "esm: exponent c of exp(c z)")
+    SB_PARAM_F(sb_csm_desc, exponent, 80, 1, 85, "esm: exponent c of exp(c z)"),                                \
+    SB_PARAM_F(sb_csm_desc, distance, 0, 0, 1e9,                                                                \
+               "stable=on: the shadow range's far end, world units (0: the path's farthest far plane, clamped to "  \
+               "the scene), fixed for the run", .late = true)
 
 /* Parameters of the cascaded techniques (pssm, sdsm). */
 #define SB_CASCADE_PARAMS                                                                                      \
@@ -114,6 +118,10 @@ typedef struct sb_csm {
     /* cache=on: what each map layer holds (the light view-projection it was rendered with; valid once rendered) */
     float cached_vp[SB_MAX_CASCADES][16];
     bool cached[SB_MAX_CASCADES];
+    /* stable=on: the shadow range split and fitted every frame, fixed for the run (the run's nearest near plane
+       and its shadow distance), so no frame's near or far, nor where the scene cuts its view, moves a split, a
+       sphere or its snapped grid */
+    double range_near, range_far;
 } sb_csm;
 
 /* Parameter combinations that cannot work (no GL): stable with a warp, cache without stable. */
@@ -144,13 +152,16 @@ void sb_csm_draw(sb_csm *c, sb_frame *f);
 
 /* ---- cascade techniques as rows ---- */
 
-/* A row's split scheme: view depths out[0..count] for the frame. */
+/* A row's split scheme: view depths out[0..count] over [near, far] (the frame's view; stable=on: the run's
+ * shadow range). */
 typedef struct sb_csm_kind {
-    void (*splits)(const void *desc, const sb_frame *f, int count, double *out);
+    void (*splits)(const void *desc, const sb_frame *f, int count, double near, double far, double *out);
 } sb_csm_kind;
 
-/* The splits of one map over the whole view: [near, far]. */
-void sb_csm_view_splits(const void *desc, const sb_frame *f, int count, double *out);
+/* The splits of one map over the whole range: [near, far]. */
+void sb_csm_view_splits(const void *desc, const sb_frame *f, int count, double near, double far, double *out);
+/* The range a frame's cascades split: the run's fixed shadow range with stable=on, else the frame's view. */
+void sb_csm_range(const sb_csm *c, const sb_frame *f, double *near, double *far);
 bool sb_csm_technique_check(const void *desc, sb_err *err);
 bool sb_csm_technique_supported(const struct sb_run_ctx *rc, const void *desc, sb_err *why);
 bool sb_csm_technique_create(void *state, const struct sb_run_ctx *rc, const void *desc, sb_err *err);

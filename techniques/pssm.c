@@ -18,9 +18,10 @@ static const sb_param_def pssm_params[] = {
 };
 static const pssm_desc pssm_defaults = {.csm = {SB_CSM_DESC_DEFAULTS}};
 
-static void pssm_splits(const void *desc, const sb_frame *f, int count, double *out) {
+static void pssm_splits(const void *desc, const sb_frame *f, int count, double near, double far, double *out) {
     const pssm_desc *d = desc;
-    sb_split_distances(d->lambda, count, f->cam.znear, f->cam.zfar, out);
+    (void)f;
+    sb_split_distances(d->lambda, count, near, far, out);
 }
 
 const sb_technique sb_technique_pssm = SB_CSM_TECHNIQUE("pssm", "parallel-split / cascaded shadow maps (Zhang et al. 2006)",

@@ -70,6 +70,9 @@ typedef struct sb_run_ctx {
     int frames;                         /* frames the run will render, warm-up and repeats included */
     void *scene_data;                   /* what the technique's load step made for this scene (or NULL) */
     const struct sb_reference *reference;   /* the Embree reference, for SB_NEEDS_REFERENCE (else NULL) */
+    /* the run's shadow range, the same every frame (engines' shadow distance): the path's nearest near plane
+       and its farthest far plane, clamped to the farthest the scene reaches from any of its cameras */
+    double shadow_near, shadow_far;
 } sb_run_ctx;
 
 /* The flicker twin's lookup (eval.c): the camera pass of a frame with one
