@@ -480,6 +480,50 @@ static void run_scenes(sb_batch *b, const bool *selected, const bool *done, int 
     free(index);
 }
 
+/* A scene's file and path read again (a session took the first load over and freed it with the scene). */
+static bool reload_scene(const sb_batch *b, sb_batch_scene *bs, sb_err *err) {
+    sb_scene_opts so = sb_run_scene_opts(&b->opts);
+    if (!sb_scene_load(&bs->scene, bs->file, &so, err)) return false;
+    if (sb_path_load(&bs->path, bs->path_file, &bs->scene, err)) return true;
+    sb_scene_free(&bs->scene);
+    return false;
+}
+
+/* The runs that ended unstable, run again at the batch's end (--rerun-unstable N), scene by scene, each with its
+ * line's light; up to N attempts more. */
+static void rerun_unstable(sb_batch *b, const bool *selected, const char *dir, sb_session *s, sb_summary *sum) {
+    for (int attempt = 2; attempt <= 1 + b->opts.rerun_unstable && !sb_interrupted(); attempt++) {
+        char **ids = NULL;
+        int nu = sb_summary_unstable(sum, &ids), again = 0;
+        for (int sc = 0; sc < b->nscenes && !sb_interrupted(); sc++) {
+            sb_batch_scene *bs = &b->scenes[sc];
+            bool open = false;
+            sb_err err;
+            for (int i = 0; i < b->nruns && !sb_interrupted(); i++) {
+                const sb_batch_run *br = &b->runs[i];
+                bool wanted = false;
+                for (int u = 0; u < nu && !wanted; u++) wanted = br->scene == sc && selected[i] && !strcmp(ids[u], br->run_id);
+                if (!wanted) continue;
+                if (!open && !(open = reload_scene(b, bs, &err) && sb_session_attach(s, &b->opts, &bs->scene, &bs->path, &err))) {
+                    fprintf(stderr, "shadowbench: %s: cannot run again: %s\n", bs->name, err.msg);
+                    break;
+                }
+                snprintf(s->scene_name, sizeof s->scene_name, "%s", bs->name);
+                snprintf(s->path_name, sizeof s->path_name, "%s", bs->path_label);
+                sb_session_keep_reference(s, dir);
+                sb_session_set_light_size(s, br->sun_size, br->lamp_radius, br->ref_samples);
+                const sb_run_spec *spec = &br->spec;
+                sb_run_again(s, &spec, &br->index, 1, dir, sum, attempt);
+                again++;
+            }
+            if (open) sb_session_close_scene(s);
+        }
+        for (int u = 0; u < nu; u++) free(ids[u]);
+        free(ids);
+        if (!again) break;
+    }
+}
+
 int sb_batch_main(const sb_batch_cmd *cmd) {
     sb_err err;
     sb_batch b;
@@ -538,6 +582,7 @@ int sb_batch_main(const sb_batch_cmd *cmd) {
     if (!sb_summary_flush(&sum, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
     double t0 = sb_now_ms();
     run_scenes(&b, selected, done, todo, dir, &s, &sum);
+    rerun_unstable(&b, selected, dir, &s, &sum);
     if (!sb_summary_flush(&sum, &err) || !sb_resultset_seal(dir, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
     double wall_s = (sb_now_ms() - t0) / 1e3;
     printf("%s\n", dir);

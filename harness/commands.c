@@ -299,6 +299,20 @@ static int run_into(const sb_cli *c, sb_session *s, const char *dir, const sb_ru
     int *index = sb_xmalloc(sizeof *index * (size_t)(nruns ? nruns : 1));
     int todo = runs_to_do(c, s, &sum, dir, runs, nruns, specs, index);
     sb_run_group(s, specs, index, todo, dir, &sum, 0, todo);
+    for (int attempt = 2; attempt <= 1 + s->opts.rerun_unstable && !sb_interrupted(); attempt++) {
+        char **ids = NULL;   /* the runs flagged unstable, run again while the session is open */
+        int nu = sb_summary_unstable(&sum, &ids), m = 0;
+        for (int i = 0; i < nruns; i++) {
+            char id[17];
+            sb_session_run_id(s, &runs[i], id);
+            for (int u = 0; u < nu; u++)
+                if (!strcmp(ids[u], id)) specs[m] = &runs[i], index[m++] = i;
+        }
+        for (int u = 0; u < nu; u++) free(ids[u]);
+        free(ids);
+        if (!m) break;
+        sb_run_again(s, specs, index, m, dir, &sum, attempt);
+    }
     sb_err err;
     if (!sb_summary_flush(&sum, &err) || !sb_resultset_seal(dir, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
     free(specs);

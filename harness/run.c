@@ -407,7 +407,8 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
     snprintf(r->csv_path, sizeof r->csv_path, "%s/%s.csv", out_dir, r->run_id);
     snprintf(r->out_dir, sizeof r->out_dir, "%s", out_dir);
     r->info = (sb_run_info){
-        .run_id = r->run_id, .run_index = run_index, .scene = s->scene_name, .path = s->path_name,
+        .run_id = r->run_id, .run_index = run_index, .attempt = s->attempt > 1 ? s->attempt : 1,
+        .scene = s->scene_name, .path = s->path_name,
         .technique = spec->tech->name, .params = r->params, .backend = sb_backend_name(o->backend),
         .renderer = s->ctx.renderer, .timing = sb_timing_name(s->timing), .clocks = s->clocks_mode, .status = SB_STATUS_OK,
         .order = sb_order_name(o->order), .submit = sb_submit_name(o->submit), .seed = o->order == SB_ORDER_SHUFFLE ? o->seed : 0,
@@ -533,9 +534,12 @@ static void stop_background(sb_session *s) {
 int sb_summary_conclude(const sb_summary *sum, const char *dir, const char *resume_command) {
     char stopped[32] = "";
     if (sum->interrupted) snprintf(stopped, sizeof stopped, ", %d interrupted", sum->interrupted);
-    sb_log("%d run(s): %d ok (%d unstable), %d failed, %d skipped%s; results in %s", sum->count,
+    char rerun[96] = "";
+    if (sum->rerun)
+        snprintf(rerun, sizeof rerun, "; %d unstable run(s) run again, %d recovered", sum->rerun, sum->recovered);
+    sb_log("%d run(s): %d ok (%d unstable), %d failed, %d skipped%s%s; results in %s", sum->count,
            sum->count - sum->failed - sum->skipped - sum->interrupted, sum->unstable, sum->failed, sum->skipped, stopped,
-           dir);
+           rerun, dir);
     if (!sb_interrupted()) return sum->failed ? 1 : 0;
     /* said even with --quiet: the user asked for the stop and needs the way back */
     fprintf(stderr, "shadowbench: interrupted: the completed runs' rows are in %s/summary.csv; the rest: %s --resume %s\n",
@@ -570,4 +574,24 @@ int sb_run_group(sb_session *s, const sb_run_spec *const *specs, const int *run_
     free(runs);
     free(at);
     return failed;
+}
+
+void sb_run_again(sb_session *s, const sb_run_spec *const *specs, const int *run_index, int n, const char *out_dir,
+                  sb_summary *sum, int attempt) {
+    char (*ids)[17] = sb_xmalloc(sizeof *ids * (size_t)(n ? n : 1));
+    for (int k = 0; k < n; k++) {
+        sb_session_run_id(s, specs[k], ids[k]);
+        char from[4400], to[4400];
+        snprintf(from, sizeof from, "%s/%s.csv", out_dir, ids[k]);
+        snprintf(to, sizeof to, "%s/%s.attempt-%d.csv", out_dir, ids[k], attempt - 1);
+        if (rename(from, to) != 0) sb_log("%s: cannot keep the earlier attempt's frames as %s", from, to);
+        sb_summary_drop(sum, ids[k]);
+    }
+    sb_log("%d unstable run(s) run again (attempt %d)", n, attempt);
+    s->attempt = attempt;
+    sb_run_group(s, specs, run_index, n, out_dir, sum, 0, n);
+    s->attempt = 0;
+    if (attempt == 2) sum->rerun += n;
+    for (int k = 0; k < n; k++) sum->recovered += sb_summary_stable(sum, ids[k]);
+    free(ids);
 }

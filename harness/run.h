@@ -28,6 +28,12 @@ bool sb_run_one(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_
  * `total`. Returns the number of runs that failed. */
 int sb_run_group(sb_session *s, const sb_run_spec *const *specs, const int *run_index, int n, const char *out_dir,
                  sb_summary *sum, int first, int total);
+/* Runs again runs that ended unstable (--rerun-unstable): each one's frames so far kept as
+ * DIR/<run_id>.attempt-K.csv (K: the attempt before), its row taken out of the summary, and the run begun anew
+ * as attempt `attempt` (2 and on), its figures those of the summary now. The summary counts the runs run again
+ * (at attempt 2) and those stable now (recovered). */
+void sb_run_again(sb_session *s, const sb_run_spec *const *specs, const int *run_index, int n, const char *out_dir,
+                  sb_summary *sum, int attempt);
 /* Says what a run or batch command's summary holds (counts and folder) and,
  * after a SIGINT/SIGTERM, where the completed rows are and how to resume
  * (even with --quiet); returns the command's exit status: 128 + the signal

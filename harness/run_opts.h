@@ -58,6 +58,7 @@ typedef struct sb_run_opts {
     sb_clocks_mode clocks;      /* --clocks auto|lock|free (default auto) */
     sb_order order;             /* --order matrix|interleave|shuffle (default matrix) */
     uint64_t seed;              /* --seed: shuffle's seed; 0: chosen by sb_run_opts_finish */
+    int rerun_unstable;         /* --rerun-unstable N: runs flagged unstable run again at the end, up to N times */
 } sb_run_opts;
 
 /* How the options read a scene file. */

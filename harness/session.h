@@ -45,6 +45,7 @@ typedef struct sb_session {
     sb_clocks *clocks;          /* the GPU's clock state (kept with the context) */
     char clocks_mode[64];       /* what the summary's clocks column says */
     bool files_refused;         /* sb_session_open failed on the scene or path file (bad input), not on the GL */
+    int attempt;                /* the attempt the runs begun now are (0, 1: the first; --rerun-unstable) */
 } sb_session;
 
 /* Above these shares a run's warnings say its error figures cannot be trusted

@@ -9,6 +9,7 @@
 
 #include "clocks.h"
 #include "stats.h"
+#include "table.h"
 
 const char *const sb_stat_names[SB_STAT_COUNT] = {"mean", "median", "p95", "p99", "std", "ci95", "min", "max"};
 
@@ -213,6 +214,7 @@ static sb_cell r_num(const sb_run_row *r, int off) { return number(FIELD(r, off,
 /* a figure of the measured frames: empty for a run that measured none */
 static sb_cell r_measured(const sb_run_row *r, int off) { return number(r->n ? FIELD(r, off, double) : NAN); }
 static sb_cell r_status(const sb_run_row *r, int a) { (void)a; return text(sb_status_names[r->info->status]); }
+static sb_cell r_attempt(const sb_run_row *r, int a) { (void)a; return integer(r->info->attempt > 1 ? r->info->attempt : 1); }
 static sb_cell r_seed(const sb_run_row *r, int a) {
     (void)a;
     return r->info->seed ? integer((long long)r->info->seed) : empty();
@@ -325,6 +327,9 @@ static const sb_run_col run_cols[] = {
     INFO("unstable_reason", r_chars, unstable_reason, "why stable is no: the calibration probe moved, or the frames drifted"),
     INFO_METRIC("calib_ms_before", r_measured, calib_ms_before, "ms", "the calibration probe just before the timed frames"),
     INFO_METRIC("calib_ms_after", r_measured, calib_ms_after, "ms", "the calibration probe just after them"),
+    RUN("attempt", r_attempt, 0, "which attempt of the run these figures are: 1, or 2 and on for a run flagged unstable "
+                                 "and run again at the end (--rerun-unstable; the earlier attempts' frames in "
+                                 "<run_id>.attempt-K.csv)"),
     INFO("warnings", r_chars, warnings, "what the tool cannot stand behind in this run, \"; \"-separated"),
     RUN("repeats", r_repeats, 0, "repetitions of the path measured"),
     RUN("target_ci_pct", r_target_ci, 0, "--target-ci"),
@@ -729,6 +734,61 @@ void sb_summary_add_outcome(sb_summary *sum, const sb_run_info *info, unsigned s
 void sb_summary_add_line(sb_summary *sum, const char *line, sb_status status) {
     sb_csv_line(&sum->rows, line);
     count_status(sum, status);
+}
+
+/* The rows as a table (the buffer holds the header and every row). */
+static bool rows_table(const sb_summary *sum, sb_table *t) {
+    sb_err e;
+    return sb_table_parse(t, "summary", sum->rows.buf ? sum->rows.buf : "", &e);
+}
+
+int sb_summary_unstable(const sb_summary *sum, char ***ids) {
+    sb_table t;
+    int n = 0;
+    *ids = NULL;
+    if (!rows_table(sum, &t)) return 0;
+    for (int r = 0; r < t.nrows; r++)
+        if (sb_status_of(sb_table_get(&t, r, "status")) == SB_STATUS_OK && !strcmp(sb_table_get(&t, r, "stable"), "no")) {
+            *ids = sb_xrealloc(*ids, sizeof **ids * (size_t)(n + 1));
+            (*ids)[n++] = sb_strdup(sb_table_get(&t, r, "run_id"));
+        }
+    sb_table_free(&t);
+    return n;
+}
+
+bool sb_summary_stable(const sb_summary *sum, const char *run_id) {
+    sb_table t;
+    bool stable = false;
+    if (!rows_table(sum, &t)) return false;
+    for (int r = 0; r < t.nrows; r++)
+        if (!strcmp(sb_table_get(&t, r, "run_id"), run_id)) stable = !strcmp(sb_table_get(&t, r, "stable"), "yes");
+    sb_table_free(&t);
+    return stable;
+}
+
+bool sb_summary_drop(sb_summary *sum, const char *run_id) {
+    sb_table t;
+    if (!rows_table(sum, &t)) return false;
+    sb_csv rows = {0};
+    sb_columns_summary_header(&rows);
+    bool dropped = false;
+    for (int r = 0; r < t.nrows; r++) {
+        if (!dropped && !strcmp(sb_table_get(&t, r, "run_id"), run_id)) {
+            sb_status st = sb_status_of(sb_table_get(&t, r, "status"));
+            sum->count--;
+            sum->failed -= st == SB_STATUS_FAILED;
+            sum->interrupted -= st == SB_STATUS_INTERRUPTED;
+            sum->skipped -= st == SB_STATUS_SKIPPED;
+            sum->unstable -= !strcmp(sb_table_get(&t, r, "stable"), "no");
+            dropped = true;
+            continue;
+        }
+        sb_csv_line(&rows, t.lines[r]);
+    }
+    sb_table_free(&t);
+    sb_csv_free(&sum->rows);
+    sum->rows = rows;
+    return dropped;
 }
 
 bool sb_summary_flush(sb_summary *sum, sb_err *err) {

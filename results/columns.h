@@ -49,6 +49,7 @@ typedef struct sb_run_info {
     char unstable_reason[512];
     double calib_ms_before, calib_ms_after;
     int run_index;              /* position in the expanded matrix */
+    int attempt;                /* which attempt of the run the figures are (1; 2 and on: run again, unstable) */
     int frames, warmup, width, height, repeats;
     double target_ci;           /* percent, 0: none */
     uint64_t scene_triangles;
@@ -203,6 +204,7 @@ typedef struct sb_summary {
     char *path;
     sb_csv rows;
     int count, failed, skipped, unstable, interrupted;
+    int rerun, recovered;       /* runs run again for being unstable; of them, stable at a later attempt */
     double timed_gpu_ms;        /* the measured frames' GPU time, summed over the runs added */
     uint64_t ref_rays;          /* reference rays the runs cast */
     int ref_reused;             /* evaluated frames whose reference was reused */
@@ -220,6 +222,12 @@ void sb_summary_add_calib(sb_summary *sum, double calib_ms);
 /* A row kept as it was from an earlier summary (resume), counted by its status. */
 void sb_summary_add_line(sb_summary *sum, const char *line, sb_status status);
 bool sb_summary_flush(sb_summary *sum, sb_err *err);
+/* The runs of the summary that ended ok but unstable (their ids, malloc'd each; free the array too). */
+int sb_summary_unstable(const sb_summary *sum, char ***ids);
+/* Takes a run's row out (it runs again); its counts with it. False when there is none. */
+bool sb_summary_drop(sb_summary *sum, const char *run_id);
+/* Whether the run's row says stable=yes. */
+bool sb_summary_stable(const sb_summary *sum, const char *run_id);
 void sb_summary_free(sb_summary *sum);
 /* Writes DIR/columns.csv (sb_columns_csv): a results set describes its own columns. */
 bool sb_columns_write(const char *dir, sb_err *err);

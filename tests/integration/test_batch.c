@@ -9,8 +9,10 @@
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
+#include <glob.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "support.h"
@@ -396,6 +398,87 @@ static void test_light_lines(void **st) {
     assert_int_equal(rows, 5);
 }
 
+/* Busy loops on every core from when a per-frame CSV being written under `start` (a glob) passes `bytes` (a run
+ * halfway through its frames) until the file `stop` holds `lines` lines (that run's row written). */
+static pid_t hog_between(const char *start, long bytes, const char *stop, int lines) {
+    pid_t pid = fork();
+    if (pid != 0) return pid;
+    setpgid(0, 0);
+    const struct timespec tick = {0, 2000000};
+    for (bool go = false; !go; nanosleep(&tick, NULL)) {
+        glob_t g;
+        if (glob(start, 0, NULL, &g) == 0) {
+            struct stat sb;
+            for (size_t i = 0; i < g.gl_pathc && !go; i++) go = stat(g.gl_pathv[i], &sb) == 0 && sb.st_size > bytes;
+            globfree(&g);
+        }
+    }
+    long n = sysconf(_SC_NPROCESSORS_ONLN);
+    for (long i = 1; i < n; i++)
+        if (fork() == 0) break;
+    volatile unsigned long x = 0;
+    for (long spin = 0;; spin++) {
+        x++;
+        if (spin % 20000000 == 0) {   /* now and then: has the run's row been written? */
+            glob_t g;
+            int have = 0;
+            if (glob(stop, 0, NULL, &g) == 0) {
+                FILE *f = fopen(g.gl_pathv[0], "r");
+                for (int c; f && (c = fgetc(f)) != EOF;) have += c == '\n';
+                if (f) fclose(f);
+                globfree(&g);
+            }
+            if (have >= lines) _exit(0);
+        }
+    }
+}
+
+/* A night on a busy machine still decides: a run disturbed by a load (every core busy from its middle on) is
+ * flagged unstable, run again at the batch's end (--rerun-unstable) once the load is gone, and recovered: its
+ * row the stable attempt's (attempt 2), the first attempt's frames kept beside it, the closing line counting it. */
+static void test_unstable_run_again(void **st) {
+    (void)st;
+    char bench[300], start[400], stop[400];
+    snprintf(bench, sizeof bench, "%s/busy.bench", g_tmp);
+    write_text(bench, "scene towers towers\npath towers towers\n"
+                      "defaults --frames 16 --repeat 2 --size 320x180 --error-every 0 --rerun-unstable 2\n"
+                      "sm:res=1024\npssm:res=512:cascades=2\n");
+    snprintf(start, sizeof start, "%s/busy/busy/*/????????????????.csv.tmp", g_tmp);
+    snprintf(stop, sizeof stop, "%s/busy/busy/*/summary.csv", g_tmp);
+    pid_t hog = hog_between(start, 2000, stop, 2);
+    int rc = sh("%s batch %s --out %s/busy", test_binary(), bench, g_tmp);
+    kill(-hog, SIGKILL);
+    waitpid(hog, NULL, 0);
+    assert_int_equal(rc, 0);
+    char dir[4096];
+    snprintf(dir, sizeof dir, "%s", last_line_of(g_out));
+    print_message("%s\n", g_out);
+    sb_table t;
+    summary_table(dir, &t);
+    assert_int_equal(t.nrows, 2);
+    int again = 0;
+    for (int r = 0; r < t.nrows; r++) {
+        const char *id = sb_table_get(&t, r, "run_id"), *attempt = sb_table_get(&t, r, "attempt");
+        print_message("%s: attempt %s, stable %s %s\n", sb_table_get(&t, r, "technique"), attempt,
+                      sb_table_get(&t, r, "stable"), sb_table_get(&t, r, "unstable_reason"));
+        if (atoi(attempt) < 2) continue;
+        again++;
+        char first[4300];
+        snprintf(first, sizeof first, "%s/%s.attempt-1.csv", dir, id);
+        assert_int_equal(access(first, R_OK), 0);   /* the disturbed attempt's frames kept */
+    }
+    assert_true(again >= 1);                         /* the disturbed run ran again */
+    assert_non_null(strstr(g_out, "unstable run(s) run again"));
+    assert_non_null(strstr(g_out, "recovered"));
+    /* recovered: every row stable now, and the closing line says so */
+    for (int r = 0; r < t.nrows; r++) assert_string_equal(sb_table_get(&t, r, "stable"), "yes");
+    char want[64];
+    snprintf(want, sizeof want, "%d unstable run(s) run again, %d recovered", again, again);
+    assert_non_null(strstr(g_out, want));
+    assert_int_equal(sh("%s history add %s --history %s/busy.sqlite --quiet", test_binary(), dir, g_tmp), 0);
+    sb_table_free(&t);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_dry_run_and_full_batch),
@@ -405,6 +488,7 @@ int main(void) {
         cmocka_unit_test(test_compare_real_runs_and_pairs),
         cmocka_unit_test(test_bad_batch_files),
         cmocka_unit_test(test_light_lines),
+        cmocka_unit_test(test_unstable_run_again),
         cmocka_unit_test(test_report),
     };
     return cmocka_run_group_tests_name("batch", tests, setup, teardown);
