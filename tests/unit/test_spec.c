@@ -53,7 +53,7 @@ static void expect_error(const char *spec, const char *needle) {
 static void test_errors(void **st) {
     (void)st;
     expect_error("nosuch:res=1", "unknown technique 'nosuch'");
-    expect_error("sm:rez=1024", "unknown parameter 'rez' (valid: res, depth, bias, slope, normal, filter, sun_size, stable, format, blur, bleed, exponent)");
+    expect_error("sm:rez=1024", "unknown parameter 'rez' (valid: res, depth, bias, slope, normal, filter, sun_size, stable, format, blur, bleed, exponent, distance)");
     expect_error("sm:res=100000", "out of range");
     expect_error("sm:res=10.5", "expected an integer");
     expect_error("sm:filter=gauss", "expected one of none|hw|pcf3|pcf5|poisson16|pcss");
