@@ -500,16 +500,17 @@ static int cmd_history_annotate(const sb_cli *c) {
     const char *what = c->pos[0];
     sb_err err;
     long long night = night_of(h, what, &err);
-    int rc = SB_EXIT_OK;
+    int rc = SB_EXIT_OK, added = 0;
     if (night < 0) rc = bad_file(&err);
     else if (night == 0)
         rc = bad("history annotate: '%s' is no night of the history, and no night ran that commit or one after "
                  "it (`history list` names the nights and their commits)", what);
-    else if (!sb_history_store_annotation(h, night, what, c->o.series ? c->o.series : "", c->pos[1], c->o.accept, &err))
+    else if ((added = sb_history_store_annotation(h, night, what, c->o.series ? c->o.series : "", c->pos[1],
+                                                  c->o.accept, &err)) < 0)
         rc = bad_file(&err);
     else
-        sb_log("night %lld annotated%s%s%s", night, c->o.series ? " for series " : "", c->o.series ? c->o.series : "",
-               c->o.accept ? ", accepted" : "");
+        sb_log("night %lld %s%s%s%s", night, added ? "annotated" : "already had this note",
+               c->o.series ? " for series " : "", c->o.series ? c->o.series : "", c->o.accept ? ", accepted" : "");
     sb_history_close(h);
     return rc;
 }

@@ -1,21 +1,25 @@
 /* tune.c - `shadowbench tune`: successive halving over techniques and their
  * settings, for the cheapest setting that meets an error bound (or the most
- * accurate one within a frame-time budget).
+ * accurate one within a frame-time budget), and how sure the answer is.
  *
  * Rungs: every candidate renders a few frames of the path (rung 0), the
- * promising ones more (rung 1), the finalists all N (rung 2). The frames of a
- * rung are frames of the next (path frames i/(n-1): n = (N-1)/8+1, (N-1)/4+1,
- * N), so the reference rays of a camera are cast once. How many go on is set
- * so that all the rungs together render at most a quarter of the frames the
- * full grid would (warm-up frames and the session's warm-up run counted). A candidate goes on when it may
- * meet the bound (its estimate within a margin that narrows with the rung),
- * cheapest first; the best one that clearly meets it always goes on, so a
- * noisy estimate cannot leave the final rung without a safe choice. Each rung
- * is a results set of its own (rung-K/summary.csv and per-frame CSVs); tune
- * reads its decisions back from those files, which is what makes --resume
- * take up exactly where a search stopped. The plan (the candidates, their
- * order in each rung, the frames) follows from the command line and --seed;
- * only measured times can change what is chosen. */
+ * promising ones more (rung 1), the finalists all N, five times, the passes
+ * interleaved (the last rung). The frames of a rung are frames of the next
+ * (path frames i/(n-1): n = (N-1)/8+1, (N-1)/4+1, N), so the reference rays
+ * of a camera are cast once. How many go on is planned so that the rungs
+ * before the last render at most a quarter of the frames the full grid would
+ * (warm-up frames and the session's warm-up run counted), and at least the two
+ * leaders reach the last. A candidate goes on when it may meet the bound (its
+ * estimate within a margin that narrows with the rung), cheapest first; the
+ * best one that clearly meets it always goes on, and those within the noise
+ * of the cut (paired with the last one kept, frame by frame) go on as well.
+ * The answer is the best finalist meeting the bound against the next best,
+ * paired pass by pass: how many times cheaper with its 95 % CI, or a tie
+ * broken on memory. Each rung is a results set of its own (rung-K/summary.csv
+ * and per-frame CSVs); tune reads its decisions back from those files, which
+ * is what makes --resume take up exactly where a search stopped. The plan
+ * (the candidates, their order in each rung, the frames) follows from the
+ * command line and --seed; only measured figures can change what is chosen. */
 #define _XOPEN_SOURCE 700 /* realpath */
 #include "tune.h"
 
@@ -30,6 +34,7 @@
 #include "batch.h"
 #include "resultset.h"
 #include "site.h"
+#include "stats.h"
 #include "table.h"
 
 /* A formatted line into a text buffer. */
@@ -47,7 +52,7 @@ static void __attribute__((format(printf, 2, 3))) line(sb_csv *c, const char *fm
 typedef struct cand {
     sb_run_spec spec;
     char label[512];            /* technique[:param=value...]: the parameters that differ from the defaults */
-    char run_id[RUNGS][17];
+    char run_id[RUNGS + 1][17];   /* each rung's, and the confirmation's (rung RUNGS at most) */
     int rung;                   /* highest rung measured, -1: none */
     bool alive;                 /* still in the race */
     bool skipped, failed;
@@ -56,7 +61,28 @@ typedef struct cand {
     double flicker;             /* flicker_rate mean there (NaN: not measured) */
     int frames;                 /* timed frames of that measurement */
     bool front, chosen;
+    double ratio, ratio_lo, ratio_hi;   /* a finalist: its objective over the chosen one's, paired, and its 95% CI */
 } cand;
+
+/* b's objective over a's, paired: per pass (each pass's median frame time) where the rung has interleaved
+ * passes, else per frame (the same camera); the ratio of the means and its 95% CI from the paired differences. */
+typedef struct pairing {
+    double ratio, lo, hi;
+    int n;                      /* pairs */
+    bool by_pass;
+} pairing;
+
+/* The answer: the chosen one against the next best that also meets the bound (other), or a tie. */
+typedef struct verdict {
+    int chosen, other;          /* -1: none */
+    int missed;                 /* the runner-up the confirmation measured in full, which missed the bound (-1) */
+    bool met, tie;
+    pairing p;                  /* other against chosen */
+    char picked_on[160];        /* a tie: what decided it */
+} verdict;
+
+#define FINAL_PASSES 5          /* interleaved passes of the path each finalist renders */
+#define TIE_SHARE 0.05          /* settings whose paired ratio's CI reaches within 5 % of 1 tie */
 
 /* The summary columns tune reads and the names it prints, from the column table's roles (columns.h). */
 typedef struct tune_cols {
@@ -83,7 +109,7 @@ typedef struct tune {
     sb_session s;
     cand *c;
     int n;
-    int rung_frames[RUNGS], nrungs;
+    int rung_frames[RUNGS + 1], nrungs;   /* [nrungs]: the confirmation's */
     int warmup;                 /* warm-up frames per run, for the frame count (auto: as measured) */
     long frames_rendered;       /* warm-up and timed frames of the runs this search used (resumed ones included) */
     char dir[4096];
@@ -93,6 +119,8 @@ typedef struct tune {
     int kept;                   /* runs kept from the resumed folder */
     int warm_frames;            /* frames of the session's warm-up run */
     int final_reps;             /* passes of the path each finalist renders, interleaved */
+    int planned;                /* finalists the frame budget plans for (the noise may add some) */
+    long final_frames;          /* frames of the last rung (its passes) */
 } tune;
 
 /* ---- the candidates ---- */
@@ -269,6 +297,7 @@ static void read_rung(tune *t, int rung, const char *sum_path) {
             if (!sb_parse_int(sb_table_get(&tb, r, "repeats"), &rep)) rep = 1;
             c->frames = (int)fr;
             if (!c->skipped) t->frames_rendered += rep * (fr + wu);
+            if (!c->skipped && rung >= t->nrungs - 1) t->final_frames += rep * (fr + wu);
             if (measured_at(c, rung) && rung > t->last_rung) t->last_rung = rung;
             if (c->skipped || c->failed || isnan(c->time_ms) || isnan(c->err)) c->alive = false;
             if (!c->skipped && !c->failed && (isnan(c->time_ms) || isnan(c->err)))
@@ -276,6 +305,84 @@ static void read_rung(tune *t, int rung, const char *sum_path) {
         }
     }
     sb_table_free(&tb);
+}
+
+/* ---- paired comparisons ---- */
+
+/* A candidate's frames at a rung, as its per-frame file has them: the column's value and the pass of each. */
+typedef struct frame_vals {
+    double *v;
+    int *pass, n, passes;
+} frame_vals;
+
+static frame_vals load_frames(const tune *t, int rung, const cand *c, const char *col) {
+    frame_vals f = {0};
+    char path[4400];
+    snprintf(path, sizeof path, "%s/rung-%d/%s.csv", t->dir, rung, c->run_id[rung]);
+    sb_table tb;
+    sb_err err;
+    if (!sb_table_load(&tb, path, &err)) return f;
+    f.v = sb_xmalloc(sizeof *f.v * (size_t)(tb.nrows + 1));
+    f.pass = sb_xmalloc(sizeof *f.pass * (size_t)(tb.nrows + 1));
+    for (int r = 0; r < tb.nrows; r++) {
+        long p = 0;
+        if (!sb_parse_double(sb_table_get(&tb, r, col), &f.v[f.n])) f.v[f.n] = NAN;
+        sb_parse_int(sb_table_get(&tb, r, "repeat"), &p);
+        f.pass[f.n++] = (int)p;
+        if (p + 1 > f.passes) f.passes = (int)p + 1;
+    }
+    sb_table_free(&tb);
+    return f;
+}
+
+static void free_frames(frame_vals *f) {
+    free(f->v);
+    free(f->pass);
+}
+
+/* The median of the frames of one pass (NaN: none). */
+static double pass_median(const frame_vals *f, int pass) {
+    double *v = sb_xmalloc(sizeof *v * (size_t)(f->n + 1));
+    int m = 0;
+    for (int i = 0; i < f->n; i++)
+        if (f->pass[i] == pass && !isnan(f->v[i])) v[m++] = f->v[i];
+    double med = m ? sb_percentile_select(v, m, 0.5) : NAN;
+    free(v);
+    return med;
+}
+
+/* b's objective over a's at the rung (see pairing). The frame time is paired by pass where the rung has several
+ * (a slow spell hits both of a pair alike: they ran side by side), else by frame; the error by frame of the
+ * first pass (it does not change between passes: the same cameras, the same maps). */
+static pairing compare(const tune *t, int rung, const cand *a, const cand *b) {
+    const bool time = t->cmd->max_err > 0;
+    frame_vals fa = load_frames(t, rung, a, time ? t->col.time : t->col.err);
+    frame_vals fb = load_frames(t, rung, b, time ? t->col.time : t->col.err);
+    pairing p = {.ratio = NAN, .lo = -INFINITY, .hi = INFINITY, .by_pass = time && fa.passes > 1 && fb.passes > 1};
+    int cap = (fa.n < fb.n ? fa.n : fb.n) + 1;
+    double *x = sb_xmalloc(sizeof *x * (size_t)cap), *d = sb_xmalloc(sizeof *d * (size_t)cap);
+    if (p.by_pass) {
+        for (int k = 0; k < fa.passes && k < fb.passes; k++) {
+            double u = pass_median(&fa, k), w = pass_median(&fb, k);
+            if (!isnan(u) && !isnan(w)) x[p.n] = u, d[p.n++] = w - u;
+        }
+    } else {
+        for (int i = 0; i < fa.n && i < fb.n; i++)   /* the same frame of the same pass: the same camera */
+            if (fa.pass[i] == 0 && fb.pass[i] == 0 && !isnan(fa.v[i]) && !isnan(fb.v[i]))
+                x[p.n] = fa.v[i], d[p.n++] = fb.v[i] - fa.v[i];
+    }
+    if (p.n >= 1) {
+        sb_stats sx = sb_stats_compute(x, p.n), sd = sb_stats_compute(d, p.n);
+        if (sx.mean > 0) {
+            p.ratio = 1 + sd.mean / sx.mean;
+            if (p.n >= 2) p.lo = fmax(0, 1 + (sd.mean - sd.ci95) / sx.mean), p.hi = 1 + (sd.mean + sd.ci95) / sx.mean;
+        }
+    }
+    free(x);
+    free(d);
+    free_frames(&fa);
+    free_frames(&fb);
+    return p;
 }
 
 /* The search stops where it is: its time limit is spent, or a SIGINT or
@@ -328,7 +435,7 @@ static bool run_rung(tune *t, int rung) {
     sb_log("rung %d: %d candidate(s) on %d frame(s) of the path%s", rung, todo + kept, s->opts.frames,
            kept ? " (some kept from the resumed folder)" : "");
     bool in_time = true;
-    const bool passes = rung == t->nrungs - 1 && t->final_reps > 1;
+    const bool passes = rung >= t->nrungs - 1 && t->final_reps > 1;
     if (passes && todo) {   /* the finalists: their passes interleaved, so a slow spell hits each alike */
         if (out_of_time(t)) {
             in_time = false;
@@ -337,7 +444,7 @@ static bool run_rung(tune *t, int rung) {
             for (int k = 0; k < todo; k++) specs[k] = &t->c[order[k]].spec;
             sb_run_opts keep = s->opts;
             s->opts.repeat = t->final_reps;
-            s->opts.order = SB_ORDER_INTERLEAVE;
+            s->opts.order = SB_ORDER_SHUFFLE;   /* each pass in an order of its own (from the seed): no one always first */
             sb_run_group(s, specs, order, todo, dir, &sum, 0, todo);
             s->opts = keep;
             free(specs);
@@ -413,6 +520,25 @@ static bool dominates(const cand *a, const cand *b, double eps) {
     return a->time_ms * (1 + eps) <= b->time_ms && a->err * (1 + eps) <= b->err;
 }
 
+/* The cut's noise: a hopeful candidate left out whose paired figures at the rung may be as good as those of the
+ * last one kept (its ratio's 95 % CI reaches 1) goes on as well, at most `extra` of them, nearest first: a few
+ * frames cannot tell them apart, and dropping either would be a coin's toss. */
+static void within_noise(tune *t, int rung, const rank *rk, int m, int keep, int extra) {
+    int cut = -1;
+    for (int k = 0; k < keep && k < m; k++)
+        if (rk[k].group != INT_MAX) cut = rk[k].i;
+    for (int k = keep, added = 0; cut >= 0 && k < m && added < extra; k++) {
+        cand *c = &t->c[rk[k].i];
+        if (rk[k].group == INT_MAX || c->alive) continue;
+        pairing p = compare(t, rung, &t->c[cut], c);
+        if (!(p.lo <= 1)) continue;
+        c->alive = true;
+        added++;
+        sb_log("tune: %s goes on within the noise of the cut (%.3g of %s's, 95%% CI %.3g-%.3g over %d frame(s))",
+               c->label, p.ratio, t->c[cut].label, p.lo, p.hi, p.n);
+    }
+}
+
 /* Who goes on from `rung`. Those that may meet the bound (within the margin,
  * which the few frames of an early rung need) go first, by Pareto layer of
  * (time, error) among them and then by objective: a candidate that another
@@ -424,7 +550,7 @@ static bool dominates(const cand *a, const cand *b, double eps) {
  * the others, by how close they come. `keep` of them, and always the best
  * that clearly meets the bound, or if none does the one closest to meeting
  * it (it takes the last place). */
-static void promote(tune *t, int rung, int keep, double margin) {
+static void promote(tune *t, int rung, int keep, int extra, double margin) {
     const double b = bound_of(t);
     rank *rk = sb_xmalloc(sizeof *rk * (size_t)t->n);
     bool *within = sb_xcalloc((size_t)t->n, sizeof *within);
@@ -471,31 +597,34 @@ static void promote(tune *t, int rung, int keep, double margin) {
         t->c[rk[keep - 1].i].alive = false;
         t->c[best_clear].alive = true;
     }
+    within_noise(t, rung, rk, m, keep, extra);
     free(rk);
 }
 
-/* How many go on from rung 0 (k1) and to the last rung (k2), and how many
- * passes each finalist renders there (interleaved, A B C A B C), so that the
- * whole search renders at most a quarter of the grid's frames. Measured on
- * llvmpipe (towers at 320x180, 30 settings, 33 frames): two settings 14 %
- * apart came out in either order from single 33-frame runs (the noise of one
- * run on a shared CPU is about 10 %), and the median of 9 frames ranked two
- * techniques whose time depends differently on the camera no better than 3
- * frames did; a setting left out of the final costs more than a noisy final.
- * So the budget goes to the finalists first: two interleaved passes for 6 of
- * them where that fits, else one pass for as many as fit; rung 1 runs only
- * with what is left, for at least twice as many as go on. */
+/* How many go on from rung 0 (k1) and to the last rung (k2). The last rung
+ * renders each finalist FINAL_PASSES times, the passes interleaved in an
+ * order of their own each, so that the leaders are compared pass by pass
+ * (paired, as bisect times two commits): on this shared 2-core machine one
+ * run's median moves by 10 % and more with the load of the moment, and two
+ * settings 14 % apart came out in either order from single 33-frame runs
+ * (towers at 320x180), while the load of a moment hits both runs of a pass
+ * alike. The plan keeps the search within a quarter of the frames the grid
+ * would render (warm-up frames and the warm-up run counted): as many
+ * finalists as fit, at least the two leaders (so a small grid's search
+ * renders more than a quarter: it says so) and at most 8; rung 1 runs only
+ * with what is left, for at least twice as many as go on. Those within the
+ * noise of a cut go on beyond the plan (within_noise), at most doubling it. */
 static void plan_keep(tune *t, int runnable, int *k1, int *k2) {
     const int w = t->warmup, N = t->cmd->opts->frames;
     const long budget = (long)runnable * (N + w) / 4 - t->warm_frames;
     const long r0 = (long)runnable * (t->rung_frames[0] + rung_warmup(t, 0));
     const long left = budget - r0, pass = N + w;
-    long f2 = left / (2 * pass);
-    t->final_reps = f2 >= 6 && runnable > 6 ? 2 : 1;
-    long f = t->final_reps == 2 ? (f2 > 6 ? 6 : f2) : left / pass;
+    t->final_reps = FINAL_PASSES;
+    long f = left / (t->final_reps * pass);
+    if (f > 8) f = 8;
+    if (f < 2) f = 2;
     if (f > runnable) f = runnable;
-    if (f < 1) f = 1;
-    *k2 = (int)f;
+    *k2 = t->planned = (int)f;
     *k1 = 0;
     if (t->nrungs < 3) return;
     long rest = left - f * pass * t->final_reps, k = rest > 0 ? rest / (t->rung_frames[1] + w) : 0;
@@ -530,6 +659,112 @@ static int closest(const tune *t, int rung) {
 
 static bool usable(const cand *c) { return c->rung >= 0 && !c->skipped && !c->failed && !isnan(c->err) && !isnan(c->time_ms); }
 
+/* The bound's name as the command line gives it: --max-err 0.015. */
+static void bound_flag(const tune *t, char *out, size_t len) {
+    snprintf(out, len, "%s %g", t->cmd->max_err > 0 ? "--max-err" : "--budget-ms", bound_of(t));
+}
+
+/* Of two tied settings, the one that holds less shadow storage, then the one with the better figure on the
+ * other count (the error when the time is minimised, the time when the error is); says which decided. */
+static int tiebreak(const tune *t, int a, int b, char *on, size_t len) {
+    const cand *x = &t->c[a], *y = &t->c[b];
+    double mx = sb_spec_shadow_bytes(&x->spec) / 1048576.0, my = sb_spec_shadow_bytes(&y->spec) / 1048576.0;
+    if (mx != my) {
+        snprintf(on, len, "%s %.4g MiB against %.4g", t->col.memory, fmin(mx, my), fmax(mx, my));
+        return mx < my ? a : b;
+    }
+    double vx = constraint_of(t, x), vy = constraint_of(t, y);
+    const char *col = t->cmd->max_err > 0 ? t->col.err : t->col.time;
+    snprintf(on, len, "%s %.4g against %.4g (the same %s)", col, fmin(vx, vy), fmax(vx, vy), t->col.memory);
+    return vx <= vy ? a : b;
+}
+
+/* The answer at the rung: the best that meets the bound, against the next best that meets it, paired (where
+ * the pairs clearly say the other way round, the pairs win). Where their ratio's 95 % CI reaches 1 (for the
+ * frame time: within TIE_SHARE of it) the two tie, and the tie is broken on memory, then on the other count;
+ * nothing meeting the bound: the closest. */
+static verdict decide(tune *t, int rung) {
+    verdict v = {.chosen = choose(t, rung), .other = -1, .missed = -1};
+    v.met = v.chosen >= 0;
+    if (!v.met) {
+        v.chosen = closest(t, rung);
+        return v;
+    }
+    const double b = bound_of(t);
+    for (int i = 0; i < t->n; i++) {   /* the runner-up: the next best that meets the bound */
+        const cand *c = &t->c[i];
+        if (i == v.chosen || !measured_at(c, rung) || isnan(c->err) || isnan(c->time_ms) || constraint_of(t, c) > b ||
+            !flicker_ok(t, c, 0))
+            continue;
+        if (v.other < 0 || objective_of(t, c) < objective_of(t, &t->c[v.other])) v.other = i;
+    }
+    if (v.other < 0) return v;
+    /* the frame time is noisy, so a ratio within TIE_SHARE of 1 is no difference; the error of a frame is exact, and
+       its CI only says how the cameras of the path differ */
+    const double share = t->cmd->max_err > 0 ? TIE_SHARE : 0;
+    v.p = compare(t, rung, &t->c[v.chosen], &t->c[v.other]);
+    if (v.p.hi < 1 - share) {   /* the pairs say the other is clearly better: they outrank the pooled figure */
+        int o = v.other;
+        v.other = v.chosen, v.chosen = o;
+        v.p = compare(t, rung, &t->c[v.chosen], &t->c[v.other]);
+    }
+    v.tie = !(v.p.lo > 1 + share);
+    if (v.tie) {
+        int pick = tiebreak(t, v.chosen, v.other, v.picked_on, sizeof v.picked_on);
+        if (pick != v.chosen) {   /* the figures from the one picked */
+            v.other = v.chosen, v.chosen = pick;
+            v.p = compare(t, rung, &t->c[v.chosen], &t->c[v.other]);
+        }
+    }
+    return v;
+}
+
+/* The runner-up for a verdict the last rung cannot give (only the chosen one there meets the bound): the best
+ * of the others whose figures at an earlier rung meet it. -1: none. */
+static int runner_up(const tune *t, int chosen) {
+    int best = -1;
+    for (int i = 0; i < t->n; i++) {
+        const cand *c = &t->c[i];
+        if (i == chosen || !usable(c) || c->rung >= t->nrungs - 1 || constraint_of(t, c) > bound_of(t) ||
+            !flicker_ok(t, c, 0))
+            continue;
+        if (best < 0 || objective_of(t, c) < objective_of(t, &t->c[best])) best = i;
+    }
+    return best;
+}
+
+/* The confirmation: where the last rung has only the chosen one within the bound, it and the runner-up render
+ * side by side, FINAL_PASSES interleaved passes (rung-K, K the last rung + 1), and the verdict is theirs: how
+ * much cheaper, or that the runner-up missed the bound measured in full. False: the time ran out or a signal came. */
+static bool confirm(tune *t, verdict *v, int *rung) {
+    int r = runner_up(t, v->chosen);
+    if (r < 0) return true;
+    for (int i = 0; i < t->n; i++) t->c[i].alive = i == v->chosen || i == r;
+    const int k = t->nrungs;
+    t->rung_frames[k] = t->cmd->opts->frames;
+    t->final_reps = FINAL_PASSES;
+    sb_log("tune: only %s meets the bound at the last rung: measuring it beside the runner-up, %s", t->c[v->chosen].label,
+           t->c[r].label);
+    bool in_time = run_rung(t, k);
+    if (!measured_at(&t->c[v->chosen], k) || !measured_at(&t->c[r], k)) return in_time;
+    *rung = k;
+    *v = decide(t, k);
+    if (v->met && v->other < 0 && v->chosen != r) v->missed = r;
+    return in_time;
+}
+
+/* Each candidate measured at the rung: its objective over the chosen one's, paired (tune.csv). */
+static void ratios_to(tune *t, int rung, int chosen) {
+    for (int i = 0; i < t->n; i++) {
+        cand *c = &t->c[i];
+        c->ratio = c->ratio_lo = c->ratio_hi = NAN;
+        if (chosen < 0 || !measured_at(c, rung)) continue;
+        pairing p = i == chosen ? (pairing){.ratio = 1, .lo = 1, .hi = 1} : compare(t, rung, &t->c[chosen], c);
+        c->ratio = p.ratio, c->ratio_lo = p.lo, c->ratio_hi = p.hi;
+    }
+}
+
+
 /* Pareto front of (time, err) over every candidate's best-known figures. */
 static void mark_front(tune *t) {
     for (int i = 0; i < t->n; i++) {
@@ -553,8 +788,8 @@ static bool write_csv(const tune *t, sb_err *err) {
     sb_csv csv = {0};
     const char *const head[] = {"candidate", "technique", "spec", "rung", "frames", "status", "reason",
                                 t->col.time_median, t->col.time_ci, t->col.err_mean, t->col.err_ci,
-                                t->col.flicker_mean, "front",
-                                       "recommended", "run_id"};
+                                t->col.flicker_mean, "front", "recommended", "ratio_to_recommended",
+                                "ratio_ci_low", "ratio_ci_high", "run_id"};
     for (size_t k = 0; k < SB_COUNT(head); k++) sb_csv_str(&csv, head[k]);
     sb_csv_end_row(&csv);
     for (int i = 0; i < t->n; i++) {
@@ -576,6 +811,9 @@ static bool write_csv(const tune *t, sb_err *err) {
         sb_csv_num(&csv, c->flicker);
         sb_csv_str(&csv, c->front ? "yes" : "no");
         sb_csv_str(&csv, c->chosen ? "yes" : "no");
+        sb_csv_num(&csv, c->ratio);
+        sb_csv_num(&csv, isfinite(c->ratio_lo) ? c->ratio_lo : NAN);
+        sb_csv_num(&csv, isfinite(c->ratio_hi) ? c->ratio_hi : NAN);
         sb_csv_str(&csv, c->rung >= 0 ? c->run_id[c->rung] : "");
         sb_csv_end_row(&csv);
     }
@@ -623,7 +861,10 @@ static void batch_name(const char *what, char *out, size_t len) {
     else snprintf(out, len, "%s", what);
 }
 
-static bool write_bench(const tune *t, int chosen, sb_err *err) {
+static void verdict_text(const tune *t, const verdict *v, char *out, size_t len);
+
+static bool write_bench(const tune *t, const verdict *v, sb_err *err) {
+    const int chosen = v->met ? v->chosen : -1;
     const sb_tune_cmd *cmd = t->cmd;
     const sb_run_opts *o = cmd->opts;
     char scene[4096], path[4096];
@@ -636,6 +877,9 @@ static bool write_bench(const tune *t, int chosen, sb_err *err) {
     line(&b, "scene %s %s tuned", t->s.scene_name, scene);
     line(&b, "defaults --frames %d --size %dx%d --error-every %d", o->frames, o->width, o->height,
                o->error_every > 0 ? o->error_every : 10);
+    char say[1600];
+    verdict_text(t, v, say, sizeof say);
+    if (chosen >= 0) line(&b, "# %s: %s", t->c[chosen].label, say);
     if (chosen >= 0) line(&b, "@%s %s", t->s.scene_name, t->c[chosen].label);
     else line(&b, "# nothing met the bound");
     char file[4200];
@@ -645,23 +889,59 @@ static bool write_bench(const tune *t, int chosen, sb_err *err) {
     return ok;
 }
 
-static void print_report(const tune *t, int chosen, bool met) {
+/* The verdict in one line: how much better the choice is than the next best within the bound, with its
+ * confidence, or that the two tie and what decided. */
+static void verdict_text(const tune *t, const verdict *v, char *out, size_t len) {
+    char flag[64];
+    bound_flag(t, flag, sizeof flag);
+    const bool time = t->cmd->max_err > 0;
+    if (v->chosen < 0 || !v->met) {
+        snprintf(out, len, "nothing met %s", flag);
+        return;
+    }
+    if (v->other < 0 && v->missed >= 0) {
+        const cand *m = &t->c[v->missed];
+        snprintf(out, len, "the only setting within %s: the next one, %s, missed it measured in full (%s %.4g)", flag,
+                 m->label, time ? t->col.err : t->col.time, constraint_of(t, m));
+        return;
+    }
+    if (v->other < 0) {
+        snprintf(out, len, "the only setting measured within %s", flag);
+        return;
+    }
+    char how[96];
+    snprintf(how, sizeof how, "95 %% CI %.3g-%.3g, %d paired %s", v->p.lo, v->p.hi, v->p.n,
+             v->p.by_pass ? "passes" : "frames");
+    const char *other = t->c[v->other].label;
+    if (!v->tie)
+        snprintf(out, len, "%.3gx %s than %s (%s), both within %s", v->p.ratio, time ? "cheaper" : "less error",
+                 other, how, flag);
+    else
+        snprintf(out, len, "ties with %s within the noise (its %s %.3gx of this one's, %s), both within %s; "
+                 "picked on %s", other, time ? t->col.time : t->col.err, v->p.ratio, how, flag, v->picked_on);
+}
+
+static void print_report(const tune *t, const verdict *v) {
     const sb_tune_cmd *cmd = t->cmd;
-    const cand **v = sb_xmalloc(sizeof *v * (size_t)t->n);
+    const int chosen = v->chosen;
+    const bool met = v->met;
+    const cand **vv = sb_xmalloc(sizeof *vv * (size_t)t->n);
     int nv = 0, skipped = 0, failed = 0;
     for (int i = 0; i < t->n; i++) {
         skipped += t->c[i].skipped, failed += t->c[i].failed;
-        if (t->c[i].front) v[nv++] = &t->c[i];
+        if (t->c[i].front) vv[nv++] = &t->c[i];
     }
-    qsort(v, (size_t)nv, sizeof *v, cmp_time);
+    qsort(vv, (size_t)nv, sizeof *vv, cmp_time);
     char bounds[512];
     bounds_text(t, bounds, sizeof bounds);
     printf("%s along %s, %dx%d, %s\n", t->s.scene_name, t->s.path_name, cmd->opts->width, cmd->opts->height, bounds);
     if (chosen >= 0) {
         const cand *c = &t->c[chosen];
-        printf("%s: %s\n  %s median %.3g (95%% CI of the mean +-%.2g), %s %.4g (+-%.2g), %d frames\n",
-               met ? "recommended" : "nothing met the bound; closest", c->label, t->col.time, c->time_ms, c->time_ci,
-               t->col.err, c->err, c->err_ci, c->frames);
+        char say[1600];
+        verdict_text(t, v, say, sizeof say);
+        printf("%s: %s\n  %s\n  %s median %.3g (95%% CI of the mean +-%.2g), %s %.4g (+-%.2g), %d frames x %d pass(es)\n",
+               met ? "recommended" : "nothing met the bound; closest", c->label, say, t->col.time, c->time_ms,
+               c->time_ci, t->col.err, c->err, c->err_ci, c->frames, c->rung >= t->nrungs - 1 ? t->final_reps : 1);
         if (cmd->max_flicker > 0) printf("  %s %.4g\n", t->col.flicker, c->flicker);
     } else {
         printf("no candidate could be measured\n");
@@ -673,18 +953,26 @@ static void print_report(const tune *t, int chosen, bool met) {
     printf("\nPareto front (time against error; frames: how many frames the figures are from):\n");
     printf("  %-52s %10s %9s %10s %9s %6s\n", "setting", t->col.time, "+-ci95", t->col.err, "+-ci95", "frames");
     for (int k = 0; k < nv; k++)
-        printf("%c %-52s %10.3g %9.2g %10.4g %9.2g %6d\n", v[k]->chosen ? '*' : ' ',
-               v[k]->label, v[k]->time_ms, v[k]->time_ci, v[k]->err, v[k]->err_ci, v[k]->frames);
+        printf("%c %-52s %10.3g %9.2g %10.4g %9.2g %6d\n", vv[k]->chosen ? '*' : ' ',
+               vv[k]->label, vv[k]->time_ms, vv[k]->time_ci, vv[k]->err, vv[k]->err_ci, vv[k]->frames);
     long grid = 0;
     for (int i = 0; i < t->n; i++)
         if (!t->c[i].skipped && t->c[i].rung >= 0) grid += cmd->opts->frames + t->warmup;
-    printf("\n%d candidate(s) (%d skipped here, %d failed); frames rendered %ld of the full grid's %ld (%.0f%%)\n",
-           t->n, skipped, failed, t->frames_rendered, grid, grid ? 100.0 * t->frames_rendered / grid : 0);
+    int finalists = 0;
+    for (int i = 0; i < t->n; i++) finalists += t->c[i].rung >= t->nrungs - 1 && !t->c[i].skipped;
+    const long search = t->frames_rendered - t->final_frames;
+    printf("\n%d candidate(s) (%d skipped here, %d failed); frames rendered %ld of the full grid's %ld (%.0f%%): "
+           "the search %ld (%.0f%%), the finalists' passes %ld (%d finalist(s) x %d interleaved pass(es))\n",
+           t->n, skipped, failed, t->frames_rendered, grid, grid ? 100.0 * t->frames_rendered / grid : 0, search,
+           grid ? 100.0 * search / grid : 0, t->final_frames, finalists, t->final_reps);
+    if (grid && t->frames_rendered * 4 > grid && finalists <= 2 && !t->out_of_time)
+        printf("  (over a quarter of the grid: a grid this small leaves no room for the two leaders' %d passes)\n",
+               t->final_reps);
     for (int i = 0, shown = 0; i < t->n && shown < 5; i++)
         if (t->c[i].skipped) printf("  skipped %s: %s\n", t->c[i].label, t->c[i].reason), shown++;
     if (chosen >= 0 && met) printf("\nbatch line (pin it in a nightly):\n  @%s %s\n", t->s.scene_name, t->c[chosen].label);
     printf("\nfront.html (open it in a browser), tune.csv and tune.bench in\n%s\n", t->dir);
-    free(v);
+    free(vv);
 }
 
 int sb_tune_main(const sb_tune_cmd *cmd) {
@@ -710,7 +998,7 @@ int sb_tune_main(const sb_tune_cmd *cmd) {
     }
     plan_frames(&t);
     t.warmup = cmd->opts->warmup < 0 ? 1 : cmd->opts->warmup;
-    t.final_reps = 1;
+    t.final_reps = t.nrungs == 1 ? FINAL_PASSES : 1;   /* one rung: it is the last */
     if (!sb_session_open(&t.s, cmd->opts, cmd->scene, cmd->path ? cmd->path : "auto", &err)) {
         fprintf(stderr, "shadowbench: %s\n", err.msg);
         int rc = t.s.files_refused ? SB_EXIT_BAD_INPUT : SB_EXIT_FAILED;
@@ -750,25 +1038,27 @@ int sb_tune_main(const sb_tune_cmd *cmd) {
             sb_log("tune: %d of %d can run here; %d go on to rung 1, %d to the last rung (%d pass(es) each)",
                    runnable, t.n, k1, k2, t.final_reps);
             if (k1 > 0) {
-                promote(&t, 0, k1, 0.5);
+                promote(&t, 0, k1, k1 / 2, 0.5);
             } else {   /* straight to the last rung */
-                promote(&t, 0, k2, 0.5);
+                promote(&t, 0, k2, k2, 0.5);
                 r = t.nrungs - 2;
             }
         } else {
-            promote(&t, r, k2, 0.2);
+            promote(&t, r, k2, k2, 0.2);
         }
     }
     t.out_of_time = !in_time;
     int rung = t.out_of_time ? t.last_rung : final_rung;
-    int chosen = rung >= 0 ? choose(&t, rung) : -1;
-    bool met = chosen >= 0;
-    if (!met && rung >= 0) chosen = closest(&t, rung);
+    verdict v = rung >= 0 ? decide(&t, rung) : (verdict){.chosen = -1, .other = -1, .missed = -1};
+    if (!t.out_of_time && v.met && v.other < 0 && !confirm(&t, &v, &rung)) t.out_of_time = true;
+    int chosen = v.chosen;
+    bool met = v.met;
     if (chosen >= 0) t.c[chosen].chosen = true;
+    ratios_to(&t, rung, chosen);
     mark_front(&t);
-    bool ok = write_csv(&t, &err) && write_front(&t, chosen, met, &err) && write_bench(&t, met ? chosen : -1, &err);
+    bool ok = write_csv(&t, &err) && write_front(&t, chosen, met, &err) && write_bench(&t, &v, &err);
     if (!ok) fprintf(stderr, "shadowbench: %s\n", err.msg);
-    print_report(&t, chosen, met);
+    print_report(&t, &v);
     sb_session_close(&t.s);
     free(t.c);
     if (sb_interrupted()) {   /* said even with --quiet: the folder is half a search */

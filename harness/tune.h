@@ -11,9 +11,12 @@
  * default every technique but `none` and `raycast`) over tune's axes (res,
  * cascades, lambda, filter: see tune.c). The search is successive halving:
  * every candidate measured on a few frames of the path, the promising ones on
- * more, the finalists on all of them, so that the frames rendered stay within
- * a quarter of the grid's; the reference is cast once per camera and shared
- * (the frames of a short rung are frames of the long ones). */
+ * more, the finalists on all of them in five interleaved passes, so that the
+ * search stays within a quarter of the grid's frames besides the leaders'
+ * passes; the reference is cast once per camera and shared (the frames of a
+ * short rung are frames of the long ones). The answer says how much better the
+ * choice is than the next best within the bound, with its 95 % CI from the
+ * paired passes, or that the two tie within the noise and what broke the tie. */
 #pragma once
 #include "run.h"
 

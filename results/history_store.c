@@ -426,8 +426,27 @@ long long sb_history_find_night(sb_history *h, const char *what, sb_err *err) {
 
 /* ---- annotations ---- */
 
-bool sb_history_store_annotation(sb_history *h, long long night, const char *commit, const char *series,
-                                 const char *text, bool accept, sb_err *err) {
+/* The same note on the same night (its series, text and --accept alike) is kept once: a script that puts its
+   notes on every night it runs adds each once. */
+static int annotation_exists(sb_history *h, long long night, const char *series, const char *text, bool accept,
+                             sb_err *err) {
+    const char *texts[] = {series, text};
+    sqlite3_stmt *st = prepare_texts(h, "SELECT count(*) FROM annotations WHERE series = ? AND text = ? AND night = ? "
+                                        "AND accept = ?", texts, 2, err);
+    if (!st) return -1;
+    int n = -1;
+    if (sqlite3_bind_int64(st, 3, night) == SQLITE_OK && sqlite3_bind_int(st, 4, accept) == SQLITE_OK &&
+        sqlite3_step(st) == SQLITE_ROW)
+        n = sqlite3_column_int(st, 0);
+    sqlite3_finalize(st);
+    if (n < 0) db_fail(h, err, "reading the annotations");
+    return n;
+}
+
+int sb_history_store_annotation(sb_history *h, long long night, const char *commit, const char *series,
+                                const char *text, bool accept, sb_err *err) {
+    int had = annotation_exists(h, night, series, text, accept, err);
+    if (had != 0) return had > 0 ? 0 : -1;
     char added[64];
     sb_utc_now(added, sizeof added);
     const char *texts[] = {commit, series, text, added};
@@ -439,7 +458,7 @@ bool sb_history_store_annotation(sb_history *h, long long night, const char *com
     bool ok = sqlite3_bind_int64(st, 5, night) == SQLITE_OK && sqlite3_bind_int(st, 6, accept) == SQLITE_OK &&
               sqlite3_step(st) == SQLITE_DONE;
     sqlite3_finalize(st);
-    return ok || db_fail(h, err, "adding the annotation");
+    return ok ? 1 : (db_fail(h, err, "adding the annotation"), -1);
 }
 
 int sb_history_annotations(sb_history *h, sb_history_annotation **out, sb_err *err) {

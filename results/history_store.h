@@ -103,7 +103,8 @@ typedef struct sb_history_annotation {
     char date[32], commit[64], series[256], text[2048];
     bool accept;
 } sb_history_annotation;
-bool sb_history_store_annotation(sb_history *h, long long night, const char *commit, const char *series,
-                                 const char *text, bool accept, sb_err *err);
+/* Adds a note to a night: 1 added, 0 the night already had the same note (series, text, accept), -1 *err. */
+int sb_history_store_annotation(sb_history *h, long long night, const char *commit, const char *series,
+                                const char *text, bool accept, sb_err *err);
 /* Every annotation, by night date; returns how many (free *out), or -1. */
 int sb_history_annotations(sb_history *h, sb_history_annotation **out, sb_err *err);

@@ -186,6 +186,13 @@ def main():
     commit = re.search(r"(?m)^commit: (.*)$", open(os.path.join(base[0], "meta")).read()).group(1)
     p = sb("history", "annotate", commit[:10], "the first night of this commit", "--history", D)
     check("night %d annotated" % nights[0] in p.stderr, "annotate by commit: its first night (%s)" % p.stderr.strip())
+    # the same note again (scripts/bench puts scripts/nightly.notes on every night it runs): kept once
+    p = sb("history", "annotate", commit[:10], "the first night of this commit", "--history", D)
+    db = sqlite3.connect(D)
+    same = db.execute("SELECT count(*) FROM annotations WHERE text = 'the first night of this commit'").fetchone()[0]
+    db.close()
+    check(same == 1 and "already had this note" in p.stderr, "the same note twice: kept once, said (%d, %s)" %
+          (same, p.stderr.strip()))
     p = sb("history", "annotate", "no-such-night", "x", "--history", D, ok=(2,))
     check(len(p.stderr.strip().splitlines()) == 1 and "no-such-night" in p.stderr, "annotate an unknown night: exit 2, one line")
     # a branch against the nights: a slowed set beyond B's band (exit 1), an unchanged one within (exit 0)

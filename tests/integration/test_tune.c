@@ -1,11 +1,13 @@
-/* `shadowbench tune` against the grid it stands in for: the test runs the
- * small grid in full (every setting on all 33 frames of the path), works out
- * the cheapest setting meeting a few error bounds, and checks that tune
- * recommends a setting that meets the bound, costs at most 1.5x that one's
- * frame time (in the grid, or timed again side by side where they differ; within 5 % is
- * printed, not asserted: see README, Tuning) and renders at most a quarter of
- * the grid's frames. Also: the plan follows the seed, a search stopped by its
- * time limit resumes where it stopped, --budget-ms, and bad input. */
+/* `shadowbench tune` against what its candidates measure side by side: the
+ * test times a handful of settings whose costs differ clearly (towers at
+ * 320x180, 17 frames, three interleaved passes each) and asserts that tune
+ * recommends the cheapest one meeting an error bound, every time (no miss
+ * allowed), and says how sure it is ("1.4x cheaper than ... (95 % CI ...)");
+ * that two settings of the same cost are reported as a tie and the tie is
+ * broken on the error; the most accurate within a --budget-ms; the search's
+ * frames within a quarter of the grid's besides the leaders' paired passes;
+ * that the plan follows the seed and a search stopped by its time limit
+ * resumes where it stopped; and bad input. */
 #define _DEFAULT_SOURCE
 #include <setjmp.h>
 #include <stdarg.h>
@@ -19,20 +21,19 @@
 #include "support.h"
 #include "table.h"
 
-/* 43 settings: enough that a quarter of the grid's frames leaves room for interleaved finals */
-#define SPECS "'sm:res=256,512,1024,2048:filter=none,pcf3' 'pssm:res=256,512,1024:cascades=2,3,4:filter=none,pcf3' " \
-              "'pssm:res=256,512,1024:cascades=2,3,4:filter=none:lambda=0.75' 'lispsm:res=256,512,1024,2048:filter=none' " \
-              "'tsm:res=256,512,1024,2048:filter=none'"
-#define NGRID 43
-#define FRAMES 33
-#define COMMON "--frames 33 --size 320x180 --quiet"
-#define MAXC 64
+/* settings whose frame times differ by 1.5x and more on llvmpipe where a cheaper one is more accurate (sm 512
+   about 4 ms, sm 1024 6.5, pssm 4 cascades 9, sm 2048 ...) and whose errors differ too (each res halves sm's) */
+#define SPECS "'sm:res=256,512,1024,2048' 'pssm:res=512'"
+#define NGRID 5
+#define FRAMES 17
+#define PASSES 5                /* the last rung's interleaved passes (tune.c, FINAL_PASSES) */
+#define COMMON "--frames 17 --size 320x180 --quiet"
+#define MAXC 16
 
 typedef struct cfg {
     char key[1100];             /* technique:canonical params */
-    double ms, err;             /* gpu_ms median, err_rate mean over the 33 frames */
-    double err_seen;            /* the larger err_rate mean over the frames of tune's rungs 0 and 1 (5 and 9 of them) */
-    double ms_seen;             /* the fastest gpu_ms of the frames of tune's rung 0 (its early-rung figure) */
+    char label[256];            /* as tune names it: the parameters that differ from the defaults */
+    double ms, err;             /* gpu_ms median over three interleaved passes, err_rate mean */
 } cfg;
 
 static char g_tmp[64], g_out[65536];
@@ -54,11 +55,26 @@ static void key_of(const sb_table *t, int r, char *out, size_t len) {
     snprintf(out, len, "%s:%s", sb_table_get(t, r, "technique"), sb_table_get(t, r, "params"));
 }
 
+/* tune's label of a grid row: the technique and the parameters of SPECS that differ from the defaults */
+static void label_of(const char *tech, const char *params, char *out, size_t len) {
+    snprintf(out, len, "%s", tech);
+    const char *res = strstr(params, "res="), *cas = strstr(params, "cascades=");
+    if (res && strncmp(res, "res=2048:", 9)) {
+        size_t l = strlen(out);
+        snprintf(out + l, len - l, ":%.*s", (int)strcspn(res, ":"), res);
+    }
+    if (cas && strncmp(cas, "cascades=4", 10)) {
+        size_t l = strlen(out);
+        snprintf(out + l, len - l, ":%.*s", (int)strcspn(cas, ":"), cas);
+    }
+}
+
 static int setup(void **st) {
     (void)st;
     if (tmp_folder(g_tmp, sizeof g_tmp, "sbtune")) return -1;
-    /* the grid in full: one warm-up frame a run and the error of every frame, as tune measures */
-    if (sh("%s run towers auto " SPECS " " COMMON " --warmup 1 --error-every 1 --out %s/grid", test_binary(), g_tmp))
+    /* every setting, three passes interleaved, the error of every frame */
+    if (sh("%s run towers auto " SPECS " " COMMON " --warmup 1 --error-every 1 --repeat 3 --order interleave --out %s/grid",
+           test_binary(), g_tmp))
         return -1;
     char dir[4096];
     last_line(dir, sizeof dir);
@@ -68,25 +84,12 @@ static int setup(void **st) {
         if (strcmp(sb_table_get(&t, r, "status"), "ok")) continue;
         cfg *c = &g_grid[g_n++];
         key_of(&t, r, c->key, sizeof c->key);
+        label_of(sb_table_get(&t, r, "technique"), sb_table_get(&t, r, "params"), c->label, sizeof c->label);
         c->ms = atof(sb_table_get(&t, r, "gpu_ms_median"));
         c->err = atof(sb_table_get(&t, r, "err_rate_mean"));
-        /* tune's early rungs render path frames i/(n-1) of n = 5 and 9: the grid's frames 8i and 4i */
-        char path[4200];
-        sb_err err;
-        sb_table f;
-        snprintf(path, sizeof path, "%s/%s.csv", dir, sb_table_get(&t, r, "run_id"));
-        if (!sb_table_load(&f, path, &err) || f.nrows != FRAMES) return -1;
-        c->ms_seen = INFINITY;
-        for (int k = 0; k < FRAMES; k += 8) c->ms_seen = fmin(c->ms_seen, atof(sb_table_get(&f, k, "gpu_ms")));
-        for (int step = 8; step >= 4; step /= 2) {
-            double sum = 0;
-            for (int k = 0; k < FRAMES; k += step) sum += atof(sb_table_get(&f, k, "err_rate"));
-            c->err_seen = fmax(c->err_seen, sum / (1 + (FRAMES - 1) / step));
-        }
-        sb_table_free(&f);
+        printf("grid: %-28s %6.3g ms  err %.5g\n", c->label, c->ms, c->err);
     }
     sb_table_free(&t);
-    printf("grid: %d settings\n", g_n);
     return g_n == NGRID ? 0 : -1;
 }
 
@@ -95,13 +98,79 @@ static int teardown(void **st) {
     return tmp_remove(g_tmp);
 }
 
-static const cfg *grid_find(const char *key) {
+/* What a tune folder recommends, the verdict it printed, its ratios, and the frames its rungs rendered. */
+typedef struct tuned {
+    char label[256];            /* the recommended setting, as tune names it */
+    char dir[4096];
+    char verdict[2048];         /* the line under "recommended:" */
+    long search, last;          /* frames of the warm-up run and the rungs before the last; of the last rung */
+    int finalists, runnable;
+    char other[256];            /* the setting the verdict compares it with ("" : none) */
+    double other_lo;            /* that one's ratio_ci_low in tune.csv (NAN: none) */
+} tuned;
+
+static void read_tune(const char *dir, tuned *out) {
+    memset(out, 0, sizeof *out);
+    out->other_lo = NAN;
+    snprintf(out->dir, sizeof out->dir, "%s", dir);
+    const char *rec = strstr(g_out, "recommended: ");
+    if (rec) {
+        sscanf(rec, "recommended: %255s", out->label);
+        const char *nl = strchr(rec, '\n');
+        if (nl) snprintf(out->verdict, sizeof out->verdict, "%.*s", (int)strcspn(nl + 3, "\n"), nl + 3);
+    }
+    const char *than = strstr(out->verdict, " than "), *with = strstr(out->verdict, "ties with ");
+    if (than) sscanf(than + 6, "%255s", out->other);
+    else if (with) sscanf(with + 10, "%255s", out->other);
+    char path[4200];
+    snprintf(path, sizeof path, "%s/tune.csv", dir);
+    sb_table tc;
+    sb_err err;
+    if (!sb_table_load(&tc, path, &err)) fail_msg("%s", err.msg);
+    for (int r = 0; r < tc.nrows; r++) {
+        out->runnable += strcmp(sb_table_get(&tc, r, "status"), "skipped") != 0;
+        if (!strcmp(sb_table_get(&tc, r, "recommended"), "yes")) {
+            assert_string_equal(sb_table_get(&tc, r, "spec"), out->label);
+            assert_string_equal(sb_table_get(&tc, r, "ratio_to_recommended"), "1");
+        } else if (out->other[0] && !strcmp(sb_table_get(&tc, r, "spec"), out->other)) {
+            out->other_lo = atof(sb_table_get(&tc, r, "ratio_ci_low"));
+        }
+    }
+    sb_table_free(&tc);
+    const char *ci = strstr(out->verdict, "95 % CI ");
+    double lo = NAN;
+    if (out->other[0]) {   /* the verdict's interval is tune.csv's */
+        assert_non_null(ci);
+        assert_int_equal(sscanf(ci + 8, "%lf", &lo), 1);
+        assert_true(fabs(lo - out->other_lo) <= 0.005 * fabs(out->other_lo) + 1e-9);
+    }
+    for (int rung = -1; rung < 3; rung++) {   /* -1: the session's warm-up run */
+        if (rung < 0) snprintf(path, sizeof path, "%s/warm-up/summary.csv", dir);
+        else snprintf(path, sizeof path, "%s/rung-%d/summary.csv", dir, rung);
+        sb_table t;
+        if (!sb_table_load(&t, path, &err)) continue;
+        for (int r = 0; r < t.nrows; r++) {
+            if (!strcmp(sb_table_get(&t, r, "status"), "skipped")) continue;
+            long reps = atol(sb_table_get(&t, r, "repeats")), frames = atol(sb_table_get(&t, r, "frames"));
+            long f = (reps ? reps : 1) * (frames + atol(sb_table_get(&t, r, "warmup")));
+            if (rung >= 0 && frames == FRAMES) {
+                out->last += f, out->finalists++;
+                assert_int_equal(reps, PASSES);   /* every finalist renders every pass */
+            } else {
+                out->search += f;
+            }
+        }
+        sb_table_free(&t);
+    }
+}
+
+static const cfg *grid_find(const char *label) {
     for (int i = 0; i < g_n; i++)
-        if (!strcmp(g_grid[i].key, key)) return &g_grid[i];
+        if (!strcmp(g_grid[i].label, label)) return &g_grid[i];
     return NULL;
 }
 
-/* The cheapest setting of the grid meeting the bound, and the time of the next cheapest. */
+/* The cheapest setting meeting the bound (NULL: none), and the time of the next cheapest that meets it. */
 static const cfg *grid_best(double bound, double *next_ms) {
     const cfg *best = NULL;
     *next_ms = INFINITY;
@@ -117,173 +186,69 @@ static const cfg *grid_best(double bound, double *next_ms) {
     return best;
 }
 
-/* What a tune folder recommends (its key), and the frames it rendered and the settings it could run. */
-typedef struct tuned {
-    char key[1100];
-    char dir[4096];             /* tune's folder (rung-K/summary.csv) */
-    long frames;
-    int runnable;
-} tuned;
-
-static void read_tune(const char *dir, tuned *out) {
-    memset(out, 0, sizeof *out);
-    snprintf(out->dir, sizeof out->dir, "%s", dir);
-    char path[4200];
-    snprintf(path, sizeof path, "%s/tune.csv", dir);
-    sb_table tc;
-    sb_err err;
-    if (!sb_table_load(&tc, path, &err)) fail_msg("%s", err.msg);
-    char id[32] = "";
-    for (int r = 0; r < tc.nrows; r++) {
-        if (!strcmp(sb_table_get(&tc, r, "recommended"), "yes")) snprintf(id, sizeof id, "%s", sb_table_get(&tc, r, "run_id"));
-        out->runnable += strcmp(sb_table_get(&tc, r, "status"), "skipped") != 0;
-    }
-    sb_table_free(&tc);
-    /* the frames every rung rendered, from the rungs' own summaries (warm-up included) */
-    for (int rung = -1; rung < 3; rung++) {   /* -1: the session's warm-up run */
-        if (rung < 0) snprintf(path, sizeof path, "%s/warm-up/summary.csv", dir);
-        else snprintf(path, sizeof path, "%s/rung-%d/summary.csv", dir, rung);
-        sb_table t;
-        if (!sb_table_load(&t, path, &err)) continue;
-        for (int r = 0; r < t.nrows; r++) {
-            if (!strcmp(sb_table_get(&t, r, "status"), "skipped")) continue;
-            long reps = atol(sb_table_get(&t, r, "repeats"));
-            out->frames += (reps ? reps : 1) * (atol(sb_table_get(&t, r, "frames")) + atol(sb_table_get(&t, r, "warmup")));
-            if (id[0] && !strcmp(sb_table_get(&t, r, "run_id"), id)) key_of(&t, r, out->key, sizeof out->key);
-        }
-        sb_table_free(&t);
-    }
-}
-
-/* Bounds whose answer the grid tells apart from the next cheapest setting by
- * more than this machine's timing noise (10 %): where two settings cost the
- * same within noise, "within 5 %" cannot be checked on a shared CPU. Each
- * bound sits halfway between its answer's error and the least error of the
- * settings cheaper than it (at most 30 % above its own): a bound a hair over
- * the answer's 33-frame error asks a search whose first rung sees 5 frames to
- * tell 0.01 % apart, and missed (seen: 0.021649 under 0.021651, the answer
- * dropped at rung 0 for a setting 2.2x its cost). Nor a bound that the
- * answer's error over the frames of tune's early rungs exceeds: there its
- * estimate says it misses the bound, and a search that believes it is right
- * to rank it after those that meet it (seen: an answer 2 % under the bound
- * over 33 frames, dropped early for a setting 1.57x its cost, in two runs). */
+/* Bounds with different answers: for each setting, halfway between its error and the least error of the
+ * settings cheaper than it, where it is then the cheapest that meets the bound by 1.3x and more (settings
+ * whose costs differ clearly: the answer is not a matter of the noise). */
 static int pick_bounds(double *bounds, int max) {
-    double cand[MAXC];
     int n = 0;
-    for (int i = 0; i < g_n; i++) {
+    for (int i = 0; i < g_n && n < max; i++) {
         double cheaper_err = INFINITY, next;
         for (int j = 0; j < g_n; j++)
             if (g_grid[j].ms < g_grid[i].ms) cheaper_err = fmin(cheaper_err, g_grid[j].err);
-        double b = fmin(0.5 * (g_grid[i].err + cheaper_err), 1.3 * g_grid[i].err);
-        if (!(b >= g_grid[i].err * 1.0001)) b = g_grid[i].err * 1.0001;
-        const cfg *best = grid_best(b, &next);
-        if (best != &g_grid[i] || next < best->ms * 1.10 || best->err_seen > b) continue;
-        cand[n++] = b;
+        if (cheaper_err <= g_grid[i].err * 1.2) continue;   /* a cheaper one is as accurate: no bound for it */
+        double b = isinf(cheaper_err) ? g_grid[i].err * 1.5 : 0.5 * (g_grid[i].err + cheaper_err);
+        if (grid_best(b, &next) == &g_grid[i] && next >= g_grid[i].ms * 1.3) bounds[n++] = b;
     }
-    /* low, middle and high of those */
-    for (int i = 1; i < n; i++)
-        for (int j = i; j > 0 && cand[j] < cand[j - 1]; j--) {
-            double x = cand[j];
-            cand[j] = cand[j - 1], cand[j - 1] = x;
-        }
-    int k = 0;
-    if (n > 0) bounds[k++] = cand[0];
-    if (n > 2 && k < max) bounds[k++] = cand[n / 2];
-    if (n > 1 && k < max) bounds[k++] = cand[n - 1];
-    return k;
+    return n;
 }
 
-/* tune over the grid's settings with a bound (--max-err or --budget-ms), expecting a recommendation:
- * the grid's figures for it. */
-static const cfg *tune_grid(const char *option, double bound, const char *sub, tuned *t) {
-    assert_int_equal(sh("%s tune towers auto " SPECS " " COMMON " %s %.9g --seed 7 --out %s/%s", test_binary(), option,
+/* tune over the grid's settings with a bound, expecting a recommendation. */
+static void tune_grid(const char *specs, const char *option, double bound, const char *sub, tuned *t) {
+    assert_int_equal(sh("%s tune towers auto %s " COMMON " %s %.9g --seed 7 --out %s/%s", test_binary(), specs, option,
                         bound, g_tmp, sub), 0);
     char dir[4096];
     last_line(dir, sizeof dir);
     read_tune(dir, t);
-    const cfg *got = grid_find(t->key);
-    assert_non_null(got);
-    return got;
+    printf("%s %.5g: %s\n  %s\n", option, bound, t->label, t->verdict);
 }
 
-/* Times two settings again in one run, their repetitions interleaved (A B A B A B). */
-static void remeasure(const char *a, const char *b, double *a_ms, double *b_ms) {
-    assert_int_equal(sh("%s run towers auto '%s' '%s' " COMMON " --warmup 1 --error-every 0 --repeat 3 --order interleave "
-                        "--out %s/again", test_binary(), a, b, g_tmp), 0);
-    char dir[4096];
-    last_line(dir, sizeof dir);
-    sb_table t;
-    summary_table(dir, &t);
-    assert_int_equal(t.nrows, 2);
-    for (int r = 0; r < t.nrows; r++) {
-        char key[1100];
-        key_of(&t, r, key, sizeof key);
-        double ms = atof(sb_table_get(&t, r, "gpu_ms_median"));
-        if (!strcmp(key, a)) *a_ms = ms;
-        if (!strcmp(key, b)) *b_ms = ms;
-    }
-    sb_table_free(&t);
-}
-
-/* Prints tune's rung-0 figures (gpu_ms_min, err_rate_mean) of settings a and b; whether a beats b on both. */
-static bool rung0_beats(const tuned *t, const char *a, const char *b) {
-    char path[4200];
-    snprintf(path, sizeof path, "%s/rung-0", t->dir);
-    sb_table r0;
-    summary_table(path, &r0);
-    double ta = NAN, tb = NAN, ea = NAN, eb = NAN;
-    for (int r = 0; r < r0.nrows; r++) {
-        char key[1100];
-        key_of(&r0, r, key, sizeof key);
-        double ms = atof(sb_table_get(&r0, r, "gpu_ms_min")), err = atof(sb_table_get(&r0, r, "err_rate_mean"));
-        if (!strcmp(key, a)) ta = ms, ea = err;
-        if (!strcmp(key, b)) tb = ms, eb = err;
-    }
-    sb_table_free(&r0);
-    printf("  rung 0: pick %.3g ms, err %.5g; grid's answer %.3g ms, err %.5g\n", ta, ea, tb, eb);
-    return ta <= tb && ea <= eb;
-}
-
-static void test_max_err_matches_the_grid(void **st) {
+static void test_the_cheapest_that_meets_the_bound(void **st) {
     (void)st;
-    double bounds[3];
-    int nb = pick_bounds(bounds, 3);
-    printf("%d bound(s) the grid tells apart\n", nb);
+    double bounds[NGRID];
+    int nb = pick_bounds(bounds, NGRID);
+    printf("%d bound(s) with an answer clear of the noise\n", nb);
     assert_true(nb >= 2);
-    int missed = 0;
     for (int b = 0; b < nb; b++) {
         double next;
         const cfg *best = grid_best(bounds[b], &next);
         tuned t;
-        const cfg *got = tune_grid("--max-err", bounds[b], "tune", &t);
-        long grid_frames = (long)t.runnable * (FRAMES + 1);
-        printf("bound %.5g: grid's cheapest %s (%.3g ms, err %.5g; next %.3g ms); tune: %s (grid: %.3g ms, err %.5g); "
-               "frames %ld of %ld\n", bounds[b], best->key, best->ms, best->err, next, got->key, got->ms, got->err,
-               t.frames, grid_frames);
-        assert_true(got->err <= bounds[b]);
-        double got_ms = got->ms, best_ms = best->ms;
-        if (got != best) {   /* one grid run is noisy here: time the two again, side by side, and judge on that */
-            remeasure(got->key, best->key, &got_ms, &best_ms);
-            printf("  timed again, interleaved: %.3g ms against %.3g ms\n", got_ms, best_ms);
+        tune_grid(SPECS, "--max-err", bounds[b], "tune", &t);
+        printf("  the grid's cheapest: %s (%.3g ms, next %.3g ms)\n", best->label, best->ms, next);
+        assert_string_equal(t.label, best->label);   /* every time: the costs differ by 1.3x and more */
+        assert_true(grid_find(t.label)->err <= bounds[b]);
+        if (isinf(next)) {   /* nothing else meets it */
+            assert_non_null(strstr(t.verdict, "the only setting measured within --max-err"));
+        } else {             /* how much cheaper, and how sure: the runner-up's paired ratio clear of a tie */
+            assert_non_null(strstr(t.verdict, "x cheaper than "));
+            assert_true(grid_find(t.other)->err <= bounds[b]);   /* the runner-up within the bound too */
+            assert_non_null(strstr(t.verdict, "(95 % CI "));
+            assert_non_null(strstr(t.verdict, "paired passes), both within --max-err"));
+            assert_true(t.other_lo > 1.05);
         }
-        /* the issue asks for 5 %; on this shared 2-core machine a 5-frame estimate varies by 30 % and more and
-           tune missed 5 % in about one bound of four (README, Tuning), so 5 % is reported, not asserted:
-           what fails here is a search that does not find the cheap end of the front at all */
-        printf("  within 5 %%: %s (%.3f)\n", got_ms <= best_ms * 1.05 ? "yes" : "no", got_ms / best_ms);
-        /* either measurement may be the noisy one (seen: 1.23x in the grid, 1.53x timed again): a search
-           that missed the cheap end is 1.5x off in both */
-        /* a search that missed the cheap end is 1.5x off in both; on this shared 2-core machine tune's
-           few-frame early rungs missed it at one bound of two or three in some runs (seen: 1.51x and 2.04x, the
-           answer not beaten at rung 0), so one miss is reported and two fail */
-        if (fmin(got_ms / best_ms, got->ms / best->ms) > 1.5) {
-            missed++;
-            rung0_beats(&t, got->key, best->key);
-            printf("  MISSED the cheap end (%d so far)\n", missed);
-        }
-        assert_true(missed <= 1);
-        assert_true(t.frames * 4 <= grid_frames);
         assert_int_equal(t.runnable, g_n);
     }
+}
+
+static void test_a_tie_is_a_tie(void **st) {
+    (void)st;
+    /* the bias moves no cost: the two render the same triangles into the same maps; their errors differ */
+    tuned t;
+    tune_grid("'sm:res=512:bias=1,2'", "--max-err", 0.05, "tie", &t);
+    assert_non_null(strstr(t.verdict, "ties with sm:res=512:bias=2 within the noise"));
+    assert_non_null(strstr(t.verdict, "picked on err_rate"));
+    assert_string_equal(t.label, "sm:res=512");   /* the lower error (bias 1: 0.0115 against 0.0119) */
+    assert_string_equal(t.other, "sm:res=512:bias=2");
+    assert_true(t.other_lo <= 1.05);
 }
 
 /* The run ids of a rung in the order their rows were written. */
@@ -298,24 +263,36 @@ static int rung_ids(const char *dir, int rung, char ids[][17], int max) {
     return n;
 }
 
+/* 12 settings: rung 0 and the warm-up run within a quarter of the grid's frames */
+#define SEEDSPECS "'sm:res=256,512,1024,2048:filter=none,hw,pcf3'"
+#define NSEED 12
+
 static void test_time_limit_resume_and_seed(void **st) {
     (void)st;
-    double next;
-    double bound = g_grid[0].err * 1.0001;
-    (void)grid_best(bound, &next);
+    const double bound = 0.02;
     /* the whole search, and one stopped after about a second, then resumed */
-    assert_int_equal(sh("%s tune towers auto " SPECS " " COMMON " --max-err %.9g --seed 11 --out %s/seed", test_binary(),
+    assert_int_equal(sh("%s tune towers auto " SEEDSPECS " " COMMON " --max-err %.9g --seed 11 --out %s/seed", test_binary(),
                         bound, g_tmp), 0);
     char whole[4096], cut[4096];
     last_line(whole, sizeof whole);
-    sh("%s tune towers auto " SPECS " " COMMON " --max-err %.9g --seed 11 --time-limit 1s --out %s/cut", test_binary(),
+    /* the frames: the search (the warm-up run, rung 0) within a quarter of the grid's, the last rung the finalists'
+       passes, at least the two leaders */
+    tuned tw;
+    read_tune(whole, &tw);
+    printf("whole search: %ld frame(s) before the last rung, %ld in it (%d finalists); the grid %d\n", tw.search,
+           tw.last, tw.finalists, NSEED * (FRAMES + 1));
+    assert_int_equal(tw.runnable, NSEED);
+    assert_true(tw.search * 4 <= NSEED * (FRAMES + 1));
+    assert_true(tw.finalists >= 2);
+    assert_int_equal(tw.last, (long)tw.finalists * PASSES * (FRAMES + 1));
+    sh("%s tune towers auto " SEEDSPECS " " COMMON " --max-err %.9g --seed 11 --time-limit 1s --out %s/cut", test_binary(),
        bound, g_tmp);
     assert_non_null(strstr(g_out, "time limit"));
     last_line(cut, sizeof cut);
-    char a[MAXC][17], b[MAXC][17], c[MAXC][17];
-    int nb = rung_ids(cut, 0, b, MAXC);
-    printf("the cut search measured %d of %d at rung 0\n", nb, g_n);
-    assert_true(nb >= 1 && nb < g_n);
+    char a[NSEED + 1][17], b[NSEED + 1][17], c[NSEED + 1][17];
+    int nb = rung_ids(cut, 0, b, NSEED + 1);
+    printf("the cut search measured %d of %d at rung 0\n", nb, NSEED);
+    assert_true(nb >= 1 && nb < NSEED);
     /* what the cut search had measured, as it was */
     char before[4200], after[4200];
     snprintf(before, sizeof before, "%s/rung-0/summary.csv", cut);
@@ -323,7 +300,7 @@ static void test_time_limit_resume_and_seed(void **st) {
     size_t len0 = 0;
     char *text0 = sb_read_file(before, &len0, &err);
     assert_non_null(text0);
-    assert_int_equal(sh("%s tune towers auto " SPECS " " COMMON " --max-err %.9g --seed 11 --resume %s", test_binary(),
+    assert_int_equal(sh("%s tune towers auto " SEEDSPECS " " COMMON " --max-err %.9g --seed 11 --resume %s", test_binary(),
                         bound, cut), 0);
     assert_non_null(strstr(g_out, "kept from the resumed folder"));
     snprintf(after, sizeof after, "%s/rung-0/summary.csv", cut);
@@ -341,16 +318,16 @@ static void test_time_limit_resume_and_seed(void **st) {
     free(text0);
     free(text1);
     /* the seed fixes the plan: the resumed search ran rung 0 in the whole search's order */
-    int na = rung_ids(whole, 0, a, MAXC), nc = rung_ids(cut, 0, c, MAXC);
-    assert_int_equal(na, g_n);
-    assert_int_equal(nc, g_n);
+    int na = rung_ids(whole, 0, a, NSEED + 1), nc = rung_ids(cut, 0, c, NSEED + 1);
+    assert_int_equal(na, NSEED);
+    assert_int_equal(nc, NSEED);
     for (int i = 0; i < na; i++) assert_string_equal(a[i], c[i]);
     /* another seed, another order */
-    assert_int_equal(sh("%s tune towers auto " SPECS " " COMMON " --max-err %.9g --seed 12 --time-limit 1s --out %s/seed2",
+    assert_int_equal(sh("%s tune towers auto " SEEDSPECS " " COMMON " --max-err %.9g --seed 12 --time-limit 1s --out %s/seed2",
                         test_binary(), bound, g_tmp) >= 0, 1);
     char other[4096];
     last_line(other, sizeof other);
-    int no = rung_ids(other, 0, b, MAXC), same = 0;
+    int no = rung_ids(other, 0, b, NSEED + 1), same = 0;
     for (int i = 0; i < no; i++) same += !strcmp(a[i], b[i]);
     printf("seed 12: %d of the first %d in seed 11's order\n", same, no);
     assert_true(no < 3 || same < no);
@@ -362,10 +339,15 @@ static void test_budget(void **st) {
     double slowest = 0, least_err = INFINITY;
     for (int i = 0; i < g_n; i++) slowest = fmax(slowest, g_grid[i].ms), least_err = fmin(least_err, g_grid[i].err);
     tuned t;
-    const cfg *got = tune_grid("--budget-ms", slowest * 3, "budget", &t);
+    tune_grid(SPECS, "--budget-ms", slowest * 3, "budget", &t);
+    const cfg *got = grid_find(t.label);
+    assert_non_null(got);
     char dir[4096];
     printf("budget %.3g ms: %s, err %.5g (least in the grid %.5g)\n", slowest * 3, got->key, got->err, least_err);
     assert_true(got->err <= least_err * 1.000001);
+    /* the errors of the cameras are exact: the next most accurate (1.7x the error here) is clearly behind */
+    assert_non_null(strstr(t.verdict, "x less error than "));
+    assert_non_null(strstr(t.verdict, "paired frames), both within --budget-ms"));
     /* a budget nothing meets: said, exit 1, and no batch line to pin */
     assert_int_equal(sh("%s tune towers auto sm:res=256,512 " COMMON " --budget-ms 0.001 --out %s/budget", test_binary(),
                         g_tmp), 1);
@@ -419,7 +401,8 @@ static void test_bad_input(void **st) {
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_bad_input),
-        cmocka_unit_test(test_max_err_matches_the_grid),
+        cmocka_unit_test(test_the_cheapest_that_meets_the_bound),
+        cmocka_unit_test(test_a_tie_is_a_tie),
         cmocka_unit_test(test_time_limit_resume_and_seed),
         cmocka_unit_test(test_budget),
     };

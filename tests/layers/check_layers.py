@@ -24,7 +24,7 @@ import tempfile
 LAYERS = ["base", "gl", "scenes", "paths", "reference", "techniques", "results", "report", "harness"]
 # Top-level folders that hold C sources and are no layer: the tests and the
 # build's helpers, which may include any layer.
-NOT_LAYERS = {"tests", "scripts", "docs", "build", "build-fuzz", "build-release", "out", ".git"}
+NOT_LAYERS = {"tests", "scripts", "docs", "out", ".git"}   # and every build folder (build, build-*: .gitignore's)
 # Headers generated at build time, and the layer they belong to.
 GENERATED = {
     "glad_gl.h": "gl", "khrplatform.h": "gl",
@@ -50,7 +50,7 @@ def stray_folders(root):
     """Top-level folders holding C sources that are neither a layer nor listed as no layer."""
     out = []
     for top in sorted(os.listdir(root)):
-        if top in LAYERS or top in NOT_LAYERS or top.startswith(".") or not os.path.isdir(os.path.join(root, top)):
+        if top in LAYERS or top in NOT_LAYERS or top.startswith((".", "build")) or not os.path.isdir(os.path.join(root, top)):
             continue
         for dirpath, _, names in os.walk(os.path.join(root, top)):
             if any(n.endswith(SOURCE_EXT) for n in names):
