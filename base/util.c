@@ -1,6 +1,8 @@
 #define _DEFAULT_SOURCE /* MAP_POPULATE */
 #include "util.h"
 
+#include <pthread.h>
+
 #include <signal.h>
 
 #include <errno.h>
@@ -307,6 +309,22 @@ char *sb_strdup(const char *s) {
     char *d = malloc(n);
     memcpy(d, s, n);
     return d;
+}
+
+const char *sb_intern(const char *s) {
+    static char **pool;
+    static size_t n;
+    static pthread_mutex_t lock = PTHREAD_MUTEX_INITIALIZER;
+    pthread_mutex_lock(&lock);
+    const char *found = NULL;
+    for (size_t i = 0; i < n && !found; i++)
+        if (!strcmp(pool[i], s)) found = pool[i];
+    if (!found) {
+        pool = sb_xrealloc(pool, (n + 1) * sizeof *pool);
+        found = pool[n++] = sb_strdup(s);
+    }
+    pthread_mutex_unlock(&lock);
+    return found;
 }
 
 bool sb_parse_double(const char *s, double *out) {

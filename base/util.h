@@ -112,6 +112,9 @@ void *sb_xmalloc(size_t n);
 void *sb_xcalloc(size_t count, size_t size);
 void *sb_xrealloc(void *p, size_t n);
 char *sb_strdup(const char *s);
+/* A copy of s that lives as long as the process, the same pointer for equal strings (an option's text read
+ * from a line that is freed afterwards). */
+const char *sb_intern(const char *s);
 /* strtod/strtol wrappers that accept only a whole, finite number. */
 bool sb_parse_double(const char *s, double *out);
 bool sb_parse_int(const char *s, long *out);

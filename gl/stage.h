@@ -34,6 +34,10 @@ typedef struct sb_counters {
     int pages_stand_in;                             /* coarser pages drawn or kept in place of those (in rendered,
                                                        cached): rendered + cached - stand_in + overflow = needed */
     int warp_fallbacks;                             /* warped maps (psm, lispsm, tsm) that used the uniform fit */
+    bool moving;                                    /* the scene's clips play: the motion counters below hold */
+    int casters_moved;                              /* draws whose box changed since the technique's last frame */
+    int cascades_invalidated;                       /* cache=on: kept maps drawn again for a moved caster */
+    int pages_invalidated;                          /* virtual cache=on: kept pages dropped for a moved caster */
     int split_count;                                /* cascades whose far split is known this frame */
     double splits[SB_MAX_CASCADES];                 /* view-space far distance of each cascade */
 } sb_counters;

@@ -1,6 +1,8 @@
 /* commands.c - every command's handler and the commands' table (commands.h). */
 #include "commands.h"
 
+#include "motion.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
@@ -144,6 +146,7 @@ static int scene_info(const sb_cli *c) {
     sb_scene_opts so = sb_run_scene_opts(&c->o.run);
     if (!sb_scene_load(&scene, c->pos[0], &so, &err)) return bad_file(&err);
     sb_scene_info(&scene, stdout);
+    sb_motion_info(&scene, stdout);
     printf("memory: CPU %.1f MiB (the scene's arrays, the reference's BVH not counted), GPU %.1f MiB (its "
            "buffers; a run adds its render targets and shadow maps)\n",
            sb_scene_cpu_bytes(&scene) / 1048576.0, sb_gpu_scene_bytes(&scene) / 1048576.0);

@@ -39,6 +39,7 @@ static void render_targets(sb_session *s, sb_instance *in, int pf, int n, int re
     for (int k = replay; k >= 0; k--) {
         if (pf - k < 0) continue;
         memset(f, 0, sizeof *f);
+        f->anim_ms = sb_session_pose(s, sb_session_frame_time(s, pf - k, n));
         sb_timer_frame_begin(&timer, 0);
         sb_camera cam = sb_path_camera(&s->path, pf - k, n, (double)s->opts.width / s->opts.height, &s->scene);
         f->index = pf - k;
@@ -54,14 +55,47 @@ static void render_targets(sb_session *s, sb_instance *in, int pf, int n, int re
                            f->shade_light};
 }
 
+/* Whether the instance keeps maps or pages across frames while the scene moves: what the stale check is for. */
+static bool caches_in_motion(const sb_session *s, const sb_instance *in) {
+    double on;
+    return sb_scene_moves(&s->scene) && sb_params_role(&in->spec->params, SB_PARAM_CACHE, &on) && on != 0;
+}
+
+/* The stale check: the frame drawn again with the technique's caches bypassed (everything drawn fresh, and what
+ * it kept forgotten, so nothing of this draw is kept); the share of evaluated pixels whose visibility differs
+ * from the cached frame's. */
+static double stale_share(sb_session *s, sb_instance *in, int *seq, const sb_eval_buf *b, const sb_frame *f) {
+    sb_frame g;
+    memset(&g, 0, sizeof g);
+    g.index = f->index;
+    g.progress = f->progress;
+    g.bypass_cache = true;
+    sb_timer timer;
+    sb_timer_init(&timer, SB_TIMING_SYNC, 1, 1);
+    sb_timer_frame_begin(&timer, 0);
+    sb_render_camera(s, in, &g, &f->cam, (*seq)++, &timer, true);
+    sb_timer_free(&timer);
+    unsigned char *fresh = sb_xmalloc((size_t)b->w * b->h);
+    sb_gpu_readback(&s->gpu, NULL, fresh, NULL);
+    long n = 0, differ = 0;
+    for (size_t i = 0; i < (size_t)b->w * b->h; i++) {
+        if (b->ref[i] == 128) continue;   /* not evaluated (sky, facing away) */
+        n++;
+        differ += fresh[i] != b->vis[i];
+    }
+    free(fresh);
+    return n ? (double)differ / n : NAN;
+}
+
 bool sb_eval_frame(sb_session *s, sb_instance *in, int pf, int n, int replay, int *seq, sb_eval_buf *b, sb_frame *f,
                    sb_error_metrics *m, sb_err *err) {
-    const sb_reference *ref = sb_session_reference(s, err);
-    if (!ref) return false;
     sb_m4 inv;
     sb_eval_view view;
     render_targets(s, in, pf, n, replay, seq, b, f, true, &inv, &view);
+    const sb_reference *ref = sb_session_reference(s, err);   /* refit to the frame's pose */
+    if (!ref) return false;
     sb_evaluate_frame(ref, s->ref_cache, &view, b->vis, b->ref, m, s->opts.threads);
+    m->stale_px = caches_in_motion(s, in) ? stale_share(s, in, seq, b, f) : NAN;
     return sb_gl_check("evaluation pass", err);
 }
 
@@ -82,6 +116,7 @@ bool sb_eval_flicker(sb_session *s, sb_instance *in, int pf, int n, int *seq, sb
     /* the twin: the next frame the display would show, its camera pass drawn from the frame's camera */
     const sb_path *path = &s->path;
     double t = sb_path_progress(pf, n) * sb_path_duration(path);
+    sb_session_pose(s, t + dt);   /* the scene a display frame later too: a moving caster's shadow moves */
     sb_camera cam = sb_path_camera_at(path, t + dt, (double)s->opts.width / s->opts.height, &s->scene);
     sb_look look = {.view = f->view, .proj = f->proj, .eye = sb_v3_sub(f->cam.pos, s->scene.origin)};
     memcpy(look.frustum, f->frustum, sizeof look.frustum);
@@ -110,7 +145,8 @@ bool sb_eval_flicker(sb_session *s, sb_instance *in, int pf, int n, int *seq, sb
                          .eye = look.eye, .light = f->shade_light, .counters = &f->counters,
                          .twin_vis = b->twin_vis, .twin_pos = b->twin_pos, .twin_depth = b->twin_depth,
                          .twin_view_proj = tw.view_proj, .twin_proj = tw.proj, .twin_light = tw.shade_light,
-                         .twin_counters = &tw.counters, .looked_up = looked, .image = b->flicker};
+                         .twin_counters = &tw.counters, .looked_up = looked, .image = b->flicker,
+                         .scene_moved = sb_scene_moves(&s->scene)};
     b->flicker_drawn = sb_evaluate_flicker(ref, &v, m, s->opts.threads) && b->flicker;
     return true;
 }
@@ -118,8 +154,9 @@ bool sb_eval_flicker(sb_session *s, sb_instance *in, int pf, int n, int *seq, sb
 bool sb_eval_background(sb_session *s, sb_err *err) {
     const sb_run_opts *o = &s->opts;
     /* auto: not on a CPU rasterizer, which leaves the background no idle core during timed frames and draws
-       the extra frames on the CPU too (measured: a net loss there; README, Error) */
-    bool on = o->overlap < 0 ? !s->ctx.software : o->overlap > 0;
+       the extra frames on the CPU too (measured: a net loss there; README, Error); never where the scene
+       moves (the background would need the scene posed at its frames' times while the runs pose it at theirs) */
+    bool on = (o->overlap < 0 ? !s->ctx.software : o->overlap > 0) && !sb_scene_moves(&s->scene);
     if (!on || o->error_every <= 0) return true;
     const sb_reference *ref = sb_session_reference(s, err);
     if (!ref) return false;

@@ -45,6 +45,15 @@ static const int history_formats[] = {SB_OUTPUT_TEXT, SB_OUTPUT_CSV};
 static const int columns_formats[] = {SB_OUTPUT_CSV, SB_OUTPUT_MARKDOWN};
 static const int doc_formats[] = {SB_DOC_TEXT, SB_DOC_MARKDOWN, SB_DOC_MAN};
 
+/* --anim: all, none, or clip names (which the file must have: said when it loads) without empty ones. */
+static bool check_anim(const char *v, const sb_cli_opts *o, sb_err *err) {
+    (void)o;
+    size_t n = strlen(v);
+    if (!n || v[0] == ',' || v[n - 1] == ',' || strstr(v, ",,") || n >= sizeof(((sb_scene_opts *)0)->anim_clips))
+        return sb_fail(err, "--anim %s: expected all, none, or clip names separated by commas (at most 255 characters)", v);
+    return true;
+}
+
 const sb_option sb_options[] = {
     /* the context and timing */
     {.name = "--backend", .kind = SB_OPT_CHOICE, .arg = "egl|osmesa", .def = "egl", .with = SB_CMDF_CONTEXT,
@@ -133,7 +142,13 @@ const sb_option sb_options[] = {
      RUN_OPT, .field = RUN(blend), .help = "glTF BLEND materials: alpha-tested at 0.5, opaque, or left out"},
     {.name = "--pose", .kind = SB_OPT_NUM, .arg = "T", .min = -INFINITY, .max = INFINITY, .def_help = "the rest pose",
      .with = SB_CMDF_SCENES, RUN_OPT, .field = RUN(pose_time), .given_field = RUN(pose),
-     .help = "nodes and skins at time T (seconds) of the file's first animation"},
+     .help = "nodes and skins at time T (seconds) of the file's first animation, frozen (no clip plays)"},
+    {.name = "--anim", .kind = SB_OPT_TEXT, .arg = "all|none|NAME[,NAME]", .def = "all", .with = SB_CMDF_SCENES, RUN_OPT,
+     .field = RUN(anim), .check = check_anim,
+     .help = "which of a file's animation clips play on the path's clock (each loops; with all, a node follows the "
+             "first clip that animates it; none: the scene as today, frozen)"},
+    {.name = "--anim-speed", .kind = SB_OPT_NUM, .arg = "X", .min = 0, .open_min = true, .max = 1e6, .def = "1",
+     .with = SB_CMDF_SCENES, RUN_OPT, .field = RUN(anim_speed), .help = "clip seconds a second of the path's clock"},
     /* where results go, and what is said */
     {.name = "--out", .kind = SB_OPT_TEXT, .arg = "DIR", .def = "out",
      .commands = SB_IN(SB_CMD_RUN) | SB_IN(SB_CMD_BATCH) | SB_IN(SB_CMD_TUNE), .field = F(out),
@@ -371,7 +386,7 @@ static bool set_value(sb_cli_opts *o, const sb_option *opt, const char *v, sb_er
         }
         return bad_value(opt, v, err);
     }
-    case SB_OPT_TEXT: *(const char **)at(o, opt->field) = v; break;
+    case SB_OPT_TEXT: *(const char **)at(o, opt->field) = sb_intern(v); break;   /* outlives a batch file's line */
     case SB_OPT_SIZE: {
         int w, h;
         if (sscanf(v, "%dx%d%c", &w, &h, &extra) != 2 || !in_range(opt, w) || !in_range(opt, h))
@@ -599,7 +614,7 @@ static void usage_lines(FILE *f, const sb_command_def *c) {
 
 static const char *const operands = "SCENE: a .gltf/.glb file or a bundled scene (plane-box, desert, towers, "
                                     "overhangs, plane-box-lamp,\n"
-                                    "       towers-night, conf-*)\n"
+                                    "       towers-night, movers, conf-*)\n"
                                     "PATH:  a .path file, a bundled path (same names), auto, orbit, or "
                                     "FILE.glb#camera=K\n"
                                     "SPEC:  technique[:param=value[,value...]]...  e.g. "

@@ -96,7 +96,7 @@ typedef enum sb_identity {
 } sb_identity;
 
 /* Every option's parsed value, and which were given. */
-#define SB_OPTION_MAX 64
+#define SB_OPTION_MAX 80
 typedef struct sb_cli_opts {
     bool given[SB_OPTION_MAX]; /* by row of sb_options; first, so that no row's
                                   field is at offset 0 (0: none) */

@@ -36,6 +36,11 @@ static const sb_draw *draw_of(const sb_scene *s, const draw_start *ds, uint32_t 
 
 int sb_path_check(const sb_reference *r, const sb_scene *s, const sb_path *p, int n, double aspect, sb_path_frame *out,
                   int threads) {
+    return sb_path_check_frames(r, s, p, 0, n, n, aspect, out, threads);
+}
+
+int sb_path_check_frames(const sb_reference *r, const sb_scene *s, const sb_path *p, int first, int n, int of,
+                         double aspect, sb_path_frame *out, int threads) {
     draw_start *ds = sb_xmalloc(sizeof *ds * (s->draw_count ? s->draw_count : 1));
     for (uint32_t d = 0; d < s->draw_count; d++) ds[d] = (draw_start){s->draws[d].first_index / 3, d};
     qsort(ds, s->draw_count, sizeof *ds, by_first);
@@ -45,7 +50,7 @@ int sb_path_check(const sb_reference *r, const sb_scene *s, const sb_path *p, in
     sb_v3 ext = sb_v3_sub(s->bounds.hi, s->bounds.lo);
     double far = 4 * sb_v3_len(ext) + 1;
     for (int f = 0; f < n; f++) {
-        sb_camera c = sb_path_camera(p, f, n, aspect, s);
+        sb_camera c = sb_path_camera(p, first + f, of, aspect, s);
         sb_v3 eye = sb_v3_sub(c.pos, s->origin);
         sb_v3 dirs[RAYS];
         for (int k = 0; k < SPHERE; k++) {   /* a Fibonacci sphere */

@@ -33,6 +33,10 @@ typedef struct sb_path_frame {
     int64_t node;               /* the node of the surface that decided it (-1: none) */
 } sb_path_frame;
 
+/* Checks frames first..first+n-1 of a path of `of` frames into out[n] (a scene that moves: one frame at a time,
+ * the scene posed at its time); how many are not clear. */
+int sb_path_check_frames(const sb_reference *r, const sb_scene *s, const sb_path *p, int first, int n, int of,
+                         double aspect, sb_path_frame *out, int threads);
 /* Checks frames 0..n-1 of the path (aspect: the render's) into out[n]; how many are not clear. */
 int sb_path_check(const sb_reference *r, const sb_scene *s, const sb_path *p, int n, double aspect, sb_path_frame *out,
                   int threads);

@@ -204,6 +204,7 @@ static void record_frame(sb_run *r, int i, int pf, const sb_frame *f, double wal
     rec->counters = f->counters;
     rec->wall_ms = wall_ms;
     rec->cpu_ms = wall_ms - r->timer.wait_ms;
+    rec->anim_ms = f->anim_ms;
     sb_clock_sample cs;
     sb_clocks_sample(r->s->clocks, &cs);
     rec->gpu_clock_mhz = cs.gfx_mhz;

@@ -1,12 +1,18 @@
 /* run_opts.c - the run options' names and what is worked out from them (run_opts.h). */
 #include "run_opts.h"
 
+#include <stdio.h>
+#include <string.h>
 #include <time.h>
 #include <unistd.h>
 
 sb_scene_opts sb_run_scene_opts(const sb_run_opts *o) {
-    return (sb_scene_opts){.allow_external_uris = o->allow_external_uris, .blend = o->blend, .pose = o->pose,
-                           .pose_time = o->pose_time};
+    sb_scene_opts so = {.allow_external_uris = o->allow_external_uris, .blend = o->blend, .pose = o->pose,
+                        .pose_time = o->pose_time, .anim_speed = o->anim_speed > 0 ? o->anim_speed : 1};
+    if (o->anim && !strcmp(o->anim, "none")) so.anim = SB_ANIM_NONE;
+    else if (o->anim && strcmp(o->anim, "all")) so.anim = SB_ANIM_LIST;
+    if (so.anim == SB_ANIM_LIST) snprintf(so.anim_clips, sizeof so.anim_clips, "%s", o->anim);
+    return so;
 }
 
 void sb_run_opts_finish(sb_run_opts *o) {

@@ -55,6 +55,8 @@ typedef struct sb_run_opts {
     sb_blend_policy blend;      /* --blend-casters mask|opaque|none (default mask) */
     bool pose;                  /* --pose T: the scene at time T of its first animation */
     double pose_time;
+    const char *anim;           /* --anim all|none|NAME[,NAME] (NULL: all) */
+    double anim_speed;          /* --anim-speed: clip seconds a second of the path's clock (default 1) */
     sb_clocks_mode clocks;      /* --clocks auto|lock|free (default auto) */
     sb_order order;             /* --order matrix|interleave|shuffle (default matrix) */
     uint64_t seed;              /* --seed: shuffle's seed; 0: chosen by sb_run_opts_finish */

@@ -3,6 +3,8 @@
  * bias=auto render with (session.h). */
 #include "session.h"
 
+#include "motion.h"
+
 #include "pathcheck.h"
 
 #include <math.h>
@@ -32,8 +34,20 @@ static bool check_path(sb_session *s, sb_err *err) {
     if (!ref) return false;
     int n = s->opts.frames;
     sb_path_frame *f = sb_xmalloc(sizeof *f * (size_t)(n > 0 ? n : 1));
-    double t0 = sb_now_ms();
-    int bad = sb_path_check(ref, &s->scene, &s->path, n, (double)s->opts.width / s->opts.height, f, s->opts.threads);
+    double t0 = sb_now_ms(), aspect = (double)s->opts.width / s->opts.height;
+    int bad = 0;
+    if (!sb_scene_moves(&s->scene)) {
+        bad = sb_path_check(ref, &s->scene, &s->path, n, aspect, f, s->opts.threads);
+    } else {   /* each camera against the scene as it is at that frame's time */
+        for (int i = 0; i < n; i++) {
+            sb_session_pose(s, sb_session_frame_time(s, i, n));
+            if (!(ref = sb_session_reference(s, err))) {
+                free(f);
+                return false;
+            }
+            bad += sb_path_check_frames(ref, &s->scene, &s->path, i, 1, n, aspect, f + i, s->opts.threads);
+        }
+    }
     sb_verbose("path check: %d of %d frame(s) flagged in %.1f ms", bad, n, sb_now_ms() - t0);
     if (bad) sb_path_check_text(f, n, s->path_note, sizeof s->path_note);
     free(f);
@@ -189,7 +203,10 @@ void sb_session_set_light_size(sb_session *s, double sun_size, double lamp_radiu
 }
 
 const sb_reference *sb_session_reference(sb_session *s, sb_err *err) {
-    if (s->ref) return s->ref;
+    if (s->ref) {
+        sb_reference_update(s->ref);   /* the pose the scene holds now (nothing for a still scene) */
+        return s->ref;
+    }
     sb_reference *r = sb_xcalloc(1, sizeof *r);
     if (!sb_reference_build(r, &s->scene, err)) {
         free(r);
@@ -319,9 +336,48 @@ int sb_instance_history(const sb_instance *in) { return in->tech->history ? in->
 void sb_instance_destroy(sb_instance *in) {
     if (in->state) in->tech->destroy(in->state);
     free(in->state);
+    free(in->seen);
+    free(in->moved);
+    free(in->moved_from);
+    in->seen = NULL, in->moved = NULL, in->moved_from = NULL;
     free(in->spec);
     in->spec = NULL;
     in->state = in->desc = NULL;
+}
+
+double sb_session_frame_time(const sb_session *s, int i, int n) {
+    return sb_path_progress(i, n) * sb_path_duration(&s->path);
+}
+
+double sb_session_pose(sb_session *s, double t) {
+    if (!sb_scene_moves(&s->scene)) return NAN;
+    double t0 = sb_now_ms(), speed = s->scene.opts.anim_speed > 0 ? s->scene.opts.anim_speed : 1;
+    if (sb_scene_pose(&s->scene, t * speed)) sb_gpu_update_motion(&s->gpu);
+    return sb_now_ms() - t0;
+}
+
+/* What moved since the instance's previous frame: the draws whose box changed, with their boxes then. */
+static void motion_since(const sb_session *s, sb_instance *in, sb_frame *f) {
+    const sb_scene *sc = &s->scene;
+    f->counters.moving = true;
+    if (!in->seen) {   /* its first frame: nothing it holds can be stale */
+        in->seen = sb_xmalloc(sizeof *in->seen * (sc->draw_count + 1));
+        in->moved = sb_xmalloc(sizeof *in->moved * (sc->draw_count + 1));
+        in->moved_from = sb_xmalloc(sizeof *in->moved_from * (sc->draw_count + 1));
+        for (uint32_t d = 0; d < sc->draw_count; d++) in->seen[d] = sc->draws[d].box;
+        in->seen_serial = sc->pose_serial;
+    }
+    uint32_t n = 0;
+    if (in->seen_serial != sc->pose_serial)
+        for (uint32_t d = 0; d < sc->draw_count; d++) {
+            if (sc->draws[d].motion == SB_DRAW_STILL || !memcmp(&in->seen[d], &sc->draws[d].box, sizeof in->seen[d]))
+                continue;
+            in->moved[n] = d, in->moved_from[n++] = in->seen[d];
+            in->seen[d] = sc->draws[d].box;
+        }
+    in->seen_serial = sc->pose_serial;
+    f->moved = in->moved, f->moved_from = in->moved_from, f->moved_count = n;
+    f->counters.casters_moved = (int)n;
 }
 
 void sb_render_camera(sb_session *s, sb_instance *in, sb_frame *f, const sb_camera *cam, int seq, sb_timer *timer,
@@ -332,10 +388,15 @@ void sb_render_camera(sb_session *s, sb_instance *in, sb_frame *f, const sb_came
     f->scratch = s->scratch;
     f->cmds = s->cmds;
     f->eval = eval;
+    if (sb_scene_moves(&s->scene)) {
+        motion_since(s, in, f);
+        if ((in->tech->needs & SB_NEEDS_REFERENCE) && s->ref) sb_reference_update(s->ref);   /* raycast's rays */
+    }
     in->tech->frame(in->state, f);
 }
 
 void sb_render_frame(sb_session *s, sb_instance *in, sb_frame *f, int i, int n, int seq, sb_timer *timer) {
+    f->anim_ms = sb_session_pose(s, sb_session_frame_time(s, i, n));
     sb_camera cam = sb_path_camera(&s->path, i, n, (double)s->opts.width / s->opts.height, &s->scene);
     f->index = i;
     f->progress = sb_path_progress(i, n);

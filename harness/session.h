@@ -84,8 +84,14 @@ void sb_session_close(sb_session *s);
 void sb_session_set_build(const char *options);
 bool sb_session_write_meta(const sb_session *s, const char *dir, const char *command_line, const char *version,
                            const char *commit, const char *extra, sb_err *err);
-/* The scene's Embree reference (built on the first call); NULL with err on failure. */
+/* The scene's Embree reference (built on the first call; refit to the pose the scene holds); NULL with err on
+ * failure. */
 const struct sb_reference *sb_session_reference(sb_session *s, sb_err *err);
+/* Path seconds of frame i of n: the clock the scene's clips play on. */
+double sb_session_frame_time(const sb_session *s, int i, int n);
+/* Poses the scene at path time t (its clips at t x --anim-speed) and sends the moving vertices to the GPU; the
+ * milliseconds it took (NaN for a scene where nothing moves). */
+double sb_session_pose(sb_session *s, double t);
 
 /* A live technique instance: its parameters as values and as the bound struct. */
 typedef struct sb_instance {
@@ -94,6 +100,10 @@ typedef struct sb_instance {
     void *desc;                 /* the parameter struct: spec->desc, bound with the spec */
     void *state;
     sb_run_ctx rc;
+    /* a moving scene: the draws' boxes as its previous frame saw them, and what moved since (sb_frame.moved) */
+    sb_aabb *seen, *moved_from;
+    uint32_t *moved;
+    uint64_t seen_serial;
 } sb_instance;
 
 /* Creates the technique for `frames` frames (warm-up and repeats included);

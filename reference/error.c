@@ -68,6 +68,7 @@ static void compare(const sb_eval_view *v, const unsigned char *vis, const unsig
     }
     out->penumbra_err = pen ? pen_err / pen : NAN;
     out->res_err_mean = out->res_err_p95 = out->texel_px_p95 = NAN;
+    out->stale_px = NAN;   /* eval.c measures it where a cache and motion meet */
     if (nres > 0) {
         double sum = 0;
         for (int k = 0; k < nres; k++) sum += res_err[k];
@@ -316,6 +317,7 @@ void sb_ref_cache_free(sb_ref_cache *c) {
 /* Two independent 64-bit hashes of what determines the reference's answers. */
 static void view_key(const sb_reference *r, const sb_eval_view *v, uint64_t key[2]) {
     uint64_t h1 = 0x9e3779b97f4a7c15ULL ^ (uint64_t)v->w << 32 ^ (uint64_t)v->h, h2 = sb_mix64(h1 + 1);
+    if (r && r->pose_key) h1 ^= r->pose_key, h2 = sb_mix64(h2 ^ h1);   /* a moving scene: the pose decides too */
     if (r && (r->sun_size_deg > 0 || r->lamp_radius > 0)) {   /* the light's size and samples decide the answers too */
         double size[3] = {r->sun_size_deg, r->lamp_radius, r->samples};
         uint64_t w[3];

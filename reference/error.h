@@ -37,6 +37,10 @@ typedef struct sb_error_metrics {
      * shadows are not a lookup). */
     double flicker_rate, flicker_vis, ref_flicker, split_jitter;
     long flicker_points;                /* the points they are over */
+    /* A cached technique in a moving scene (eval.c): the share of evaluated pixels whose visibility differs
+     * from the same technique's with its caches bypassed on the same frame (0 is the only right answer; NaN:
+     * not measured, nothing cached or nothing moves). */
+    double stale_px;
     uint64_t rays;                     /* reference rays cast for this frame (0: the answers were reused) */
     double ray_ms;                     /* time in the reference for this frame (casting, or finding the answers) */
     bool reused;                       /* the reference's answers came from the cache */

@@ -13,10 +13,10 @@ double sb_split_jitter(const sb_counters *a, const sb_counters *b) {
     return j;
 }
 
-/* The reference at the twin's light, for the frame's points (128: not evaluated); NULL when the light did not
- * move (the scene does not: every answer stands). */
+/* The reference at the twin's light and pose, for the frame's points (128: not evaluated); NULL when neither the
+ * light nor the scene moved (every answer stands). */
 static unsigned char *recast(const sb_reference *r, const sb_flicker_view *v, int threads) {
-    if (!memcmp(v->light, v->twin_light, 4 * sizeof *v->light)) return NULL;
+    if (!v->scene_moved && !memcmp(v->light, v->twin_light, 4 * sizeof *v->light)) return NULL;
     const size_t np = (size_t)v->w * v->h;
     sb_eval_view view = {v->w, v->h, v->pos, v->aux, v->eye, NULL, v->twin_light};   /* no geometry check */
     sb_ref_point *pts = sb_xmalloc(sizeof *pts * np);

@@ -29,6 +29,7 @@ typedef struct sb_flicker_view {
     const double *twin_light;
     const sb_counters *twin_counters;
     bool looked_up;                    /* the twin's final pass was a lookup (not split by a stencil) */
+    bool scene_moved;           /* the twin's scene is posed otherwise (its clips play): the reference is cast again */
     unsigned char *image;              /* optional, 3 bytes a pixel: the points that flipped (lit -> shadowed red,
                                           shadowed -> lit blue), grey where steady, black where not compared */
 } sb_flicker_view;

@@ -97,8 +97,9 @@ void sb_reference_set_light_size(sb_reference *r, double sun_size_deg, double la
 
 /* A triangle geometry of the scene's triangles [first, first + count) (their indices shared, not copied). */
 static RTCGeometry tri_geometry(sb_reference *r, RTCDevice dev, const sb_scene *s, uint32_t first, uint32_t count,
-                                sb_ref_geo *geo) {
+                                sb_ref_geo *geo, bool moving) {
     RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
+    if (moving) rtcSetGeometryBuildQuality(g, RTC_BUILD_QUALITY_REFIT);   /* its vertices move: refit, not rebuild */
     /* positions are the first 3 floats of each vertex; what follows them keeps
        Embree's 16-byte reads of the last vertex inside the buffer */
     rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, s->vertices, 0, SB_VERTEX_BYTES,
@@ -115,10 +116,20 @@ static RTCGeometry tri_geometry(sb_reference *r, RTCDevice dev, const sb_scene *
     return g;
 }
 
-static void commit_scene(RTCScene sc) {
-    rtcSetSceneFlags(sc, RTC_SCENE_FLAG_ROBUST); /* watertight: no ray slips through a shared edge or corner */
-    rtcSetSceneBuildQuality(sc, RTC_BUILD_QUALITY_HIGH);
+static void commit_scene(RTCScene sc, bool dynamic) {
+    /* watertight: no ray slips through a shared edge or corner; a top level whose geometry moves is committed
+       again every pose: built for that */
+    rtcSetSceneFlags(sc, RTC_SCENE_FLAG_ROBUST | (dynamic ? RTC_SCENE_FLAG_DYNAMIC : 0));
+    rtcSetSceneBuildQuality(sc, dynamic ? RTC_BUILD_QUALITY_LOW : RTC_BUILD_QUALITY_HIGH);
     rtcCommitScene(sc);
+}
+
+/* The key of the pose the scene holds (0: a still scene, whose kept answers keep their keys). */
+static uint64_t pose_key(const sb_scene *s) {
+    if (!sb_scene_moves(s) || isnan(s->pose_time)) return 0;
+    uint64_t t;
+    memcpy(&t, &s->pose_time, sizeof t);
+    return sb_mix64(t ^ 0x6a09e667f3bcc909ULL);
 }
 
 /* Shared geometry: a draw others repeat becomes a scene of its own, built once, and it and every repeat an
@@ -136,14 +147,15 @@ static void attach_draws(sb_reference *r, RTCDevice dev, RTCScene top, const sb_
         uint32_t p = dr->proto, first = dr->first_index / 3;
         RTCGeometry g;
         if (!repeated[p]) {
-            g = tri_geometry(r, dev, s, first, dr->index_count / 3, &r->geo[d]);
+            g = tri_geometry(r, dev, s, first, dr->index_count / 3, &r->geo[d], dr->motion != SB_DRAW_STILL);
         } else {
             if (!r->protos[p]) {
                 RTCScene ps = rtcNewScene(dev);
-                RTCGeometry pg = tri_geometry(r, dev, s, s->draws[p].first_index / 3, dr->index_count / 3, &r->geo[p]);
+                RTCGeometry pg = tri_geometry(r, dev, s, s->draws[p].first_index / 3, dr->index_count / 3, &r->geo[p],
+                                              false);
                 rtcAttachGeometry(ps, pg);
                 rtcReleaseGeometry(pg);
-                commit_scene(ps);
+                commit_scene(ps, false);
                 r->protos[p] = ps;
             }
             g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_INSTANCE);
@@ -154,8 +166,28 @@ static void attach_draws(sb_reference *r, RTCDevice dev, RTCScene top, const sb_
         unsigned gid = rtcAttachGeometry(top, g);
         rtcReleaseGeometry(g);
         if (gid < n) r->geom_first[gid] = first;
+        if (dr->motion != SB_DRAW_STILL) {
+            r->moving_geoms = sb_xrealloc(r->moving_geoms, sizeof(uint32_t) * (r->moving_count + 1));
+            r->moving_geoms[r->moving_count++] = gid;
+        }
     }
     free(repeated);
+}
+
+void sb_reference_update(sb_reference *r) {
+    const sb_scene *s = r->src;
+    if (!r->moving_count || r->pose_serial == s->pose_serial) return;
+    double t0 = sb_now_ms();
+    for (uint32_t i = 0; i < r->moving_count; i++) {
+        RTCGeometry g = rtcGetGeometry((RTCScene)r->scene, r->moving_geoms[i]);
+        rtcUpdateGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0);
+        rtcCommitGeometry(g);
+    }
+    rtcCommitScene((RTCScene)r->scene);
+    r->pose_serial = s->pose_serial;
+    r->pose_key = pose_key(s);
+    r->refit_ms += sb_now_ms() - t0;
+    r->refits++;
 }
 
 bool sb_reference_build(sb_reference *r, const sb_scene *s, sb_err *err) {
@@ -166,15 +198,17 @@ bool sb_reference_build(sb_reference *r, const sb_scene *s, sb_err *err) {
     r->src = s;
     r->tri = triangle_flags(s);
     RTCScene scene = rtcNewScene(dev);
-    if (s->instance_draws) {
+    if (s->instance_draws || sb_scene_moves(s)) {
         attach_draws(r, dev, scene, s);
     } else {
         r->geo = sb_xcalloc(1, sizeof(sb_ref_geo));
-        RTCGeometry g = tri_geometry(r, dev, s, 0, s->index_count / 3, r->geo);
+        RTCGeometry g = tri_geometry(r, dev, s, 0, s->index_count / 3, r->geo, false);
         rtcAttachGeometry(scene, g);
         rtcReleaseGeometry(g);
     }
-    commit_scene(scene);
+    commit_scene(scene, sb_scene_moves(s));
+    r->pose_serial = s->pose_serial;
+    r->pose_key = pose_key(s);
     r->device = dev;
     r->scene = scene;
     enum RTCError e = rtcGetDeviceError(dev);
@@ -194,6 +228,7 @@ void sb_reference_free(sb_reference *r) {
         for (uint32_t d = 0; d < r->src->draw_count; d++)
             if (r->protos[d]) rtcReleaseScene(r->protos[d]);
     free(r->protos);
+    free(r->moving_geoms);
     free(r->geom_first);
     free(r->geo);
     if (r->device) rtcReleaseDevice(r->device);

@@ -18,6 +18,14 @@ typedef struct sb_reference {
     struct sb_ref_geo *geo;     /* what the filter reads of each geometry */
     double build_ms;
     float eps_scene;            /* a length relative to the scene size, for ray offsets */
+    /* A scene whose clips play (sb_scene_moves): every draw a geometry of its own, the moving ones refit when
+       the scene is posed (sb_reference_update); the answers a pose gives are kept under its key. */
+    uint32_t *moving_geoms;     /* top-level geometry ids of the moving draws */
+    uint32_t moving_count;
+    uint64_t pose_serial;       /* the scene's pose_serial the geometry holds */
+    uint64_t pose_key;          /* what view keys of kept answers mix in: 0 for a still scene */
+    double refit_ms;            /* time spent refitting, summed */
+    uint32_t refits;
     /* the light's size (sb_reference_set_light_size; 0: a light of no size, one ray a point) */
     double sun_size_deg, sun_tan;   /* the sun's angular diameter; tan of half of it */
     float lamp_radius;          /* a point or spot light's radius */
@@ -42,6 +50,9 @@ enum { SB_REF_SINGLE_SIDED = 1, SB_REF_ALPHA = 2 };
  * filter for those that need one (the scene must outlive it). */
 bool sb_reference_build(sb_reference *r, const sb_scene *s, sb_err *err);
 void sb_reference_free(sb_reference *r);
+/* After sb_scene_pose: the moving draws' triangles refit (RTC_BUILD_QUALITY_REFIT) to the scene's vertices as
+ * they are now, and the top level committed again. Nothing when the reference already holds that pose. */
+void sb_reference_update(sb_reference *r);
 
 /* A point to test: origin-relative position, geometric normal facing the
  * viewer (may be zero), and how far the point may be off the true surface

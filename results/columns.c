@@ -55,6 +55,19 @@ static sb_cell f_pages(const sb_frame_row *r, int off) {
     return r->rec->counters.paged ? integer(COUNTER(r, off, int)) : empty();
 }
 
+/* a motion counter: empty where nothing moves (and for the cache counters, a technique without that cache) */
+static sb_cell f_motion(const sb_frame_row *r, int off) {
+    return r->rec->counters.moving ? integer(COUNTER(r, off, int)) : empty();
+}
+static sb_cell f_motion_maps(const sb_frame_row *r, int off) {
+    return r->rec->counters.moving && has(r->stages, SB_STAGE_CASCADE) && !r->rec->counters.paged
+               ? integer(COUNTER(r, off, int)) : empty();
+}
+static sb_cell f_motion_pages(const sb_frame_row *r, int off) {
+    return r->rec->counters.moving && r->rec->counters.paged ? integer(COUNTER(r, off, int)) : empty();
+}
+static sb_cell f_anim_ms(const sb_frame_row *r, int a) { (void)a; return number(r->rec->anim_ms); }
+
 static sb_cell f_stage_ms(const sb_frame_row *r, int s) {
     return has(r->stages, s) && (r->t->mask & SB_STAGE_BIT(s)) ? number(r->t->ms[s]) : empty();
 }
@@ -131,6 +144,14 @@ static const sb_frame_col frame_cols[] = {
           "virtual: coarser pages drawn or kept in place of pages given up (counted in pages_rendered and "
           "pages_cached: rendered + cached - stand_in + pool_overflow = needed)"),
     COUNT("warp_fallbacks", f_maps, warp_fallbacks, SB_STAT_MEAN, 0, "warped maps that fell back to the uniform fit"),
+    COUNT("casters_moved", f_motion, casters_moved, SB_STAT_MEAN, 0,
+          "draws whose box changed since the technique's previous frame (empty: nothing in the scene moves)"),
+    COUNT("cascades_invalidated", f_motion_maps, cascades_invalidated, SB_STAT_MEAN, 0,
+          "cache=on: kept shadow maps drawn again because a moved caster's box, before or after the move, overlaps "
+          "their light volume (empty: nothing moves, or no maps)"),
+    COUNT("pages_invalidated", f_motion_pages, pages_invalidated, SB_STAT_MEAN, 0,
+          "virtual cache=on: kept pages dropped because a moved caster's light-space box, before or after the "
+          "move, overlaps them (empty: nothing moves, or no virtual map)"),
     STAGE_MS(SB_STAGE_ZPASS, 0, "camera depth pre-pass"),
     STAGE_MS(SB_STAGE_MINMAX, 0, "depth reduction"),
     STAGE_MS(SB_STAGE_CASCADE, ALL_USES | SB_USE_NIGHT, "all shadow-map rendering"),
@@ -139,6 +160,9 @@ static const sb_frame_col frame_cols[] = {
     STAGE_MS(SB_STAGE_RAYS, 0, "CPU ray casting (raycast)"),
     {.name = "gpu_ms", .get = f_gpu_ms, .unit = "ms", .stats = SB_STATS_TIMING | SB_STAT_MIN, .role = SB_ROLE_TIME,
      .flags = ALL_USES | SB_USE_PAIR | SB_USE_NIGHT, .doc = "sum of the stage times"},
+    METRIC("anim_ms", f_anim_ms, 0, "ms", SB_STATS_TIMING, 0,
+           "posing the scene's moving draws at the frame's time and sending their vertices to the GPU, on the CPU "
+           "(not in gpu_ms; empty: nothing moves)"),
     METRIC("cpu_ms", f_cpu_ms, 0, "ms", SB_STATS_TIMING, 0, "frame wall time not spent waiting for the GPU"),
     METRIC("wall_ms", f_wall_ms, 0, "ms", SB_STATS_TIMING, 0, "frame wall time"),
     METRIC("cpu_wait_ms", f_cpu_wait_ms, 0, "ms", SB_STAT_MEAN, 0,
@@ -174,9 +198,13 @@ static const sb_frame_col frame_cols[] = {
     ERROR("flicker_vis", flicker_vis, "visibility", ERR_STATS, 0,
           "mean |visibility change| at those points between the frame's maps and the twin's"),
     ERROR("ref_flicker", ref_flicker, "share", ERR_STATS, 0,
-          "share of those points whose reference changes between frame and twin (a moving light: real, not flicker)"),
+          "share of those points whose reference changes between frame and twin (a moving light or caster: real, "
+          "not flicker)"),
     ERROR("split_jitter", split_jitter, "share", ERR_STATS, SB_USE_PAIR,
           "largest relative change of a cascade split distance between frame and twin"),
+    ERROR("stale_px", stale_px, "share", SB_STAT_MEAN | SB_STAT_MAX, SB_USE_COMPARE | SB_USE_HISTORY | SB_USE_REPORT,
+          "a cached technique where something moves: share of evaluated pixels whose visibility differs from the same "
+          "technique's with its caches bypassed on the same frame (0 is right; empty: nothing cached or moving)"),
     ERROR("geom_mismatch", geom_mismatch, "share", 0, 0,
           "share of sampled pixels where a camera ray's first hit is not the rasterized surface (one geometry?)"),
     ERROR("err_floor", err_floor, "share", 0, 0,

@@ -22,6 +22,7 @@ typedef struct sb_frame_rec {
     uint64_t throttle;          /* clock event (throttle) reason bits then */
     sb_counters counters;
     double cpu_ms, wall_ms;
+    double anim_ms;             /* posing the scene at the frame's time (NaN: nothing moves) */
     bool evaluated;
     sb_error_metrics err;
 } sb_frame_rec;

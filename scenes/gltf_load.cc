@@ -25,16 +25,31 @@
 
 #include <tiny_gltf.h>
 
+#include "motion_data.h"
+
 extern "C" {
 #include "anim.h"
 #include "gltf_check.h"
 #include "gltf_draco.h"
 #include "gltf_load.h"
+#include "motion.h"
 #include "scene.h"
 #include "scene_cache.h"
 }
 
 namespace {
+
+using sbm::Channel;
+using sbm::MoChannel;
+using sbm::MoClip;
+using sbm::MoPlace;
+using sbm::PrimData;
+using sbm::normal_matrix;
+using sbm::skin_vertices;
+using sbm::PATH_R;
+using sbm::PATH_S;
+using sbm::PATH_T;
+using sbm::PATH_W;
 
 // Images are kept encoded as they are read; only the ones an alpha test needs
 // are decoded afterwards (shadows need no other texture).
@@ -271,23 +286,15 @@ double det3(const sb_m4 &w) {
            w.m[8] * (w.m[1] * w.m[6] - w.m[5] * w.m[2]);
 }
 
-// The inverse transpose of the upper 3x3: what transforms normals.
-sb_m4 normal_matrix(const sb_m4 &w) {
-    sb_m4 nm = sb_m4_identity(), inv;
-    if (sb_m4_invert(w, &inv))
-        for (int r = 0; r < 3; r++)
-            for (int col = 0; col < 3; col++) nm.m[col * 4 + r] = inv.m[r * 4 + col];
-    return nm;
-}
 
 // One animation channel read into a sampler (its arrays kept alive by the owner).
-struct Channel {
-    std::vector<double> in, out;
-    sb_anim_sampler s;
-};
 
+// A channel the tool cannot play as written (key times that do not increase, which exported files carry; an
+// output count that does not match the input's) is not an error of the file: *skip says why, and it is left
+// out (said in info and in every run's warnings). References out of range stay errors.
 bool read_channel(Ctx &c, const tinygltf::Animation &an, const tinygltf::AnimationChannel &ch, const std::string &where,
-                  int ncomp, Channel &dst) {
+                  int ncomp, Channel &dst, std::string *skip) {
+    skip->clear();
     if (ch.sampler < 0 || ch.sampler >= (int)an.samplers.size()) return c.fail(where, "sampler out of range");
     const auto &smp = an.samplers[ch.sampler];
     if (!read_vec(c, smp.input, where + "/input", 1, dst.in)) return false;
@@ -295,23 +302,22 @@ bool read_channel(Ctx &c, const tinygltf::Animation &an, const tinygltf::Animati
         return false;
     size_t k = dst.in.size();
     bool cubic = smp.interpolation == "CUBICSPLINE";
-    if (k == 0 || dst.out.size() != (cubic ? 3 : 1) * k * (size_t)ncomp)
-        return c.fail(where, "the sampler's output count does not match its input count");
+    if (k == 0 || dst.out.size() != (cubic ? 3 : 1) * k * (size_t)ncomp) {
+        *skip = where + ": the sampler's output count (" + std::to_string(dst.out.size() / (size_t)ncomp) +
+                " values) does not match its input count (" + std::to_string(k) + " key times): left out";
+        return true;
+    }
     for (size_t i = 1; i < k; i++)
-        if (!(dst.in[i] > dst.in[i - 1])) return c.fail(where + "/input", "times must increase");
+        if (!(dst.in[i] > dst.in[i - 1])) {
+            *skip = where + "/input: key times do not increase (key " + std::to_string(i) + "): left out";
+            return true;
+        }
     dst.s = {dst.in.data(), dst.out.data(), k, ncomp, ch.target_path == "rotation",
              cubic ? SB_INTERP_CUBIC : smp.interpolation == "STEP" ? SB_INTERP_STEP : SB_INTERP_LINEAR};
     return true;
 }
 
 // A primitive's vertex data, from accessors or a Draco bitstream.
-struct PrimData {
-    std::vector<double> pos, nrm, uv;
-    std::vector<uint32_t> idx;          // as the file lists them (mode 4, 5 or 6)
-    std::vector<double> joints[2], weights[2];
-    bool have_n = false, have_uv = false;
-    int skin_sets = 0;
-};
 
 // A primitive decoded once for every node that draws its mesh (when nothing
 // per node changes it: no skin, no morph targets): its vertices, triangle
@@ -337,8 +343,17 @@ struct Loader {
     std::map<std::pair<int, int>, std::shared_ptr<Decoded>> decoded = {};   // (mesh, primitive) -> decoded once
     std::vector<double> wp = {}, wn = {};       // emit's world positions and normals, reused
     std::vector<uint32_t> wt = {};              // and its triangles
+    sb_motion *mo = nullptr;                    // the clips that play (NULL: none), handed to the scene
+    std::vector<char> moves = {}, morphs = {};  // per node: a played clip moves it (or an ancestor); animates its weights
 
     bool fail(const std::string &where, const std::string &what) { return c.fail(where, what); }
+
+    // A part of the file left out, not refused: said now, in info and in every run's warnings.
+    void left_out(const std::string &why) {
+        sb_log("%s: left out, not refused: %s", c.file, why.c_str());
+        size_t l = strlen(s->unused);
+        if (l + 3 < sizeof s->unused) snprintf(s->unused + l, sizeof s->unused - l, "%s%s", l ? "; " : "", why.c_str());
+    }
 
     // Local transforms: the nodes' own, or sampled from the first animation at --pose T.
     bool pose() {
@@ -365,7 +380,12 @@ struct Loader {
                 int ncomp = ch.target_path == "rotation" ? 4 : w ? (int)weights[ni].size() : 3;
                 if (ncomp == 0) continue;
                 Channel chan;
-                if (!read_channel(c, an, ch, where, ncomp, chan)) return false;
+                std::string skip;
+                if (!read_channel(c, an, ch, where, ncomp, chan, &skip)) return false;
+                if (!skip.empty()) {
+                    left_out(skip);
+                    continue;
+                }
                 double v[64] = {0};
                 if (ncomp > 64) return fail(where, "more than 64 morph weights");
                 sb_anim_sample(&chan.s, opts->pose_time, v);
@@ -612,28 +632,48 @@ struct Loader {
             jm[j] = sb_m4_mul(world[jn], inv);
         }
         size_t nv = d.pos.size() / 3;
-        for (size_t v = 0; v < nv; v++) {
-            sb_m4 sum = {{0}};
+        for (size_t v = 0; v < nv; v++)
             for (int set = 0; set < d.skin_sets; set++)
                 for (int k = 0; k < 4; k++) {
-                    double wgt = d.weights[set][4 * v + k];
                     size_t j = (size_t)d.joints[set][4 * v + k];
-                    if (wgt == 0) continue;
-                    if (j >= jm.size()) return fail(where + "/attributes/JOINTS_" + std::to_string(set),
-                                                    "joint " + std::to_string(j) + " of vertex " + std::to_string(v) +
-                                                        " is not in skin " + std::to_string(si));
-                    for (int e = 0; e < 16; e++) sum.m[e] += wgt * jm[j].m[e];
+                    if (d.weights[set][4 * v + k] != 0 && j >= jm.size())
+                        return fail(where + "/attributes/JOINTS_" + std::to_string(set),
+                                    "joint " + std::to_string(j) + " of vertex " + std::to_string(v) +
+                                        " is not in skin " + std::to_string(si));
                 }
-            sb_v3 q = sb_m4_point(sum, sb_v3_make(d.pos[3 * v], d.pos[3 * v + 1], d.pos[3 * v + 2]));
-            d.pos[3 * v] = q.x, d.pos[3 * v + 1] = q.y, d.pos[3 * v + 2] = q.z;
-            if (!d.have_n) continue;
-            sb_v3 n = sb_m4_dir(normal_matrix(sum), sb_v3_make(d.nrm[3 * v], d.nrm[3 * v + 1], d.nrm[3 * v + 2]));
-            d.nrm[3 * v] = n.x, d.nrm[3 * v + 1] = n.y, d.nrm[3 * v + 2] = n.z;
+        if (mo && (size_t)si < mo->skin_ibm.size() && mo->skin_ibm[si].empty()) {   // what posing it again needs
+            mo->skin_joints[si] = sk.joints;
+            mo->skin_ibm[si].resize(jm.size());
+            for (size_t j = 0; j < jm.size(); j++) {
+                sb_m4 inv = sb_m4_identity();
+                if (ibm.size() >= 16 * (j + 1))
+                    for (int k = 0; k < 16; k++) inv.m[k] = ibm[16 * j + k];
+                mo->skin_ibm[si][j] = inv;
+            }
         }
+        skin_vertices(jm, d, d.pos, d.nrm);
         return finite_all(c, where + " (skinned)", d.pos, 3);
     }
 
+    // The morph targets' deltas of a primitive (each target's POSITION and NORMAL, empty where it has none).
+    bool targets(const tinygltf::Primitive &p, const std::string &where, const PrimData &d, MoPlace &pl) {
+        pl.dpos.resize(p.targets.size());
+        pl.dnrm.resize(p.targets.size());
+        for (size_t t = 0; t < p.targets.size(); t++)
+            for (const char *name : {"POSITION", "NORMAL"}) {
+                auto it = p.targets[t].find(name);
+                if (it == p.targets[t].end()) continue;
+                std::vector<double> &dst = name[0] == 'P' ? pl.dpos[t] : pl.dnrm[t];
+                if (!read_vec(c, it->second, where + "/targets/" + std::to_string(t) + "/" + name, 3, dst)) return false;
+                if (dst.size() != (name[0] == 'P' ? d.pos : d.nrm).size()) dst.clear();   // NORMAL deltas without normals
+            }
+        return true;
+    }
+
+    bool clips();
+
     bool prim(int node, int mesh, int pi, const std::vector<sb_m4> &instances);
+    bool skin_moves(int si);
     bool triangles(const tinygltf::Primitive &p, const std::string &where, const PrimData &d, std::vector<uint32_t> &tris);
     void emit(const PrimData &d, const std::vector<uint32_t> &tris, const sb_m4 *w, int node, uint32_t mat,
               bool double_sided, const float color[4], int *closed_known, Decoded *shared = nullptr);
@@ -771,8 +811,12 @@ bool Loader::prim(int node, int mesh, int pi, const std::vector<sb_m4> &inst) {
     if (pm && pm->alphaMode == "MASK") s->features.mask++;
     if (drop) return true;
     bool skinned = n.skin >= 0 && n.skin < (int)m.skins.size();
-    // decoded once for every node that shares the mesh, unless a skin or morph targets make it the node's own
-    bool shared = !skinned && p.targets.empty();
+    // moves while the clips play: under an animated node, skinned by a moving joint, or morphed by animated weights
+    bool moving = mo && (skinned ? skin_moves(n.skin) : moves[node]), morphing = mo && !p.targets.empty() && morphs[node];
+    // decoded once for every node that shares the mesh, unless a skin or morph targets make it the node's own (or
+    // it moves: its vertices are its own to pose)
+    bool shared = !skinned && p.targets.empty() && !moving && !morphing;
+    MoPlace place;
     std::shared_ptr<Decoded> dec;
     auto found = shared ? decoded.find({mesh, pi}) : decoded.end();
     if (found != decoded.end()) {
@@ -784,6 +828,10 @@ bool Loader::prim(int node, int mesh, int pi, const std::vector<sb_m4> &inst) {
                                        : read_prim(p, where, uv_set, skinned, dec->d)) ||
             !triangles(p, where, dec->d, dec->tris))
             return false;
+        if (moving || morphing) {   // the data before morph and skin, to pose again
+            place.base = dec->d;
+            if (morphing && !targets(p, where, dec->d, place)) return false;
+        }
         if (!dec->tris.empty() && !p.targets.empty() && !morph(p, where, weights[node], dec->d)) return false;
         if (shared) decoded[{mesh, pi}] = dec;
     }
@@ -801,12 +849,125 @@ bool Loader::prim(int node, int mesh, int pi, const std::vector<sb_m4> &inst) {
     s->features.prims++;
     s->features.double_sided += ds;
     s->features.skinned += skinned;
+    place.node = node;
+    place.kind = skinned || morphing ? SB_DRAW_DEFORMING : SB_DRAW_RIGID;
     if (skinned) { // a skinned mesh ignores its node's transform (and instancing)
         int unknown = 0;
+        place.first = s->vertex_count;
         emit(d, tris, nullptr, node, mat, ds, color, &unknown);
+        if (moving || morphing) {
+            place.skin = n.skin;
+            place.count = s->vertex_count - place.first;
+            mo->places.push_back(std::move(place));
+        }
         return true;
     }
-    for (const sb_m4 &w : inst) emit(d, tris, &w, node, mat, ds, color, &dec->closed_known, dec.get());
+    sb_m4 node_inv = sb_m4_identity();
+    if ((moving || morphing) && !sb_m4_invert(world[node], &node_inv)) node_inv = sb_m4_identity();
+    for (const sb_m4 &w : inst) {
+        uint32_t first = s->vertex_count;
+        emit(d, tris, &w, node, mat, ds, color, &dec->closed_known, moving || morphing ? nullptr : dec.get());
+        if (!(moving || morphing)) continue;
+        mo->places.push_back(place);
+        MoPlace &pl = mo->places.back();
+        pl.first = first;
+        pl.count = s->vertex_count - first;
+        pl.inst = sb_m4_mul(node_inv, w);
+    }
+    return true;
+}
+
+// Whether a played clip moves one of the skin's joints.
+bool Loader::skin_moves(int si) {
+    for (int j : c.m->skins[si].joints)
+        if (j >= 0 && j < (int)moves.size() && moves[j]) return true;
+    return false;
+}
+
+// The clips that play (sb_scene_opts.anim): their channels read, the nodes they move marked. With every clip
+// playing, a node's translation (rotation, scale, weights) is the first clip's that animates it: files hold
+// clips meant one at a time (a character's walk and run), and the first is what a viewer shows.
+bool Loader::clips() {
+    const tinygltf::Model &m = *c.m;
+    size_t nn = m.nodes.size();
+    moves.assign(nn, 0);
+    morphs.assign(nn, 0);
+    if (opts->pose || opts->anim == SB_ANIM_NONE || m.animations.empty()) return true;
+    auto clip_name = [&](size_t ai) { return m.animations[ai].name.empty() ? std::to_string(ai) : m.animations[ai].name; };
+    std::vector<char> plays(m.animations.size(), opts->anim == SB_ANIM_ALL);
+    if (opts->anim == SB_ANIM_LIST) {
+        std::string list = opts->anim_clips, all;
+        for (size_t ai = 0; ai < m.animations.size(); ai++) all += (ai ? ", " : "") + clip_name(ai);
+        for (size_t at = 0; at <= list.size();) {
+            size_t comma = list.find(',', at);
+            std::string name = list.substr(at, comma == std::string::npos ? std::string::npos : comma - at);
+            at = comma == std::string::npos ? list.size() + 1 : comma + 1;
+            size_t ai = 0;
+            while (ai < m.animations.size() && clip_name(ai) != name) ai++;
+            if (ai == m.animations.size())
+                return fail("/animations", "--anim " + name + ": no clip of that name (its clips: " + all + ")");
+            plays[ai] = 1;
+        }
+    }
+    std::unique_ptr<sb_motion> mm(new sb_motion);
+    mm->parent = parent;
+    mm->rest.resize(nn);
+    mm->has_matrix.resize(nn);
+    mm->rest_local.resize(nn);
+    mm->rest_weights = weights;
+    for (size_t i = 0; i < nn; i++) {
+        mm->rest[i] = node_trs(m.nodes[i]);
+        mm->has_matrix[i] = m.nodes[i].matrix.size() == 16;
+        mm->rest_local[i] = node_local(m.nodes[i]);
+    }
+    std::vector<std::vector<int>> children(nn);   // parents first: roots, then breadth-first
+    for (size_t i = 0; i < nn; i++)
+        if (parent[i] >= 0) children[parent[i]].push_back((int)i);
+        else mm->topo.push_back((int)i);
+    for (size_t k = 0; k < mm->topo.size(); k++)
+        for (int ch : children[mm->topo[k]]) mm->topo.push_back(ch);
+    std::set<std::pair<int, int>> claimed;
+    std::vector<char> animated(nn);
+    for (size_t ai = 0; ai < m.animations.size(); ai++) {
+        if (!plays[ai]) continue;
+        const auto &an = m.animations[ai];
+        MoClip clip;
+        clip.name = clip_name(ai);
+        std::set<int> nodes;
+        for (size_t ci = 0; ci < an.channels.size(); ci++) {
+            const auto &ch = an.channels[ci];
+            int ni = ch.target_node, path = ch.target_path == "translation" ? PATH_T : ch.target_path == "rotation" ? PATH_R
+                                           : ch.target_path == "scale" ? PATH_S : ch.target_path == "weights" ? PATH_W : -1;
+            if (ni < 0 || ni >= (int)nn || path < 0) continue;   // a pointer channel: left out by the check, said
+            int ncomp = path == PATH_R ? 4 : path == PATH_W ? (int)weights[ni].size() : 3;
+            if (ncomp == 0 || ncomp > 64 || !claimed.insert({ni, path}).second) continue;
+            MoChannel mc{(int)mm->clips.size(), ni, path, {}};
+            std::string where = "/animations/" + std::to_string(ai) + "/channels/" + std::to_string(ci), skip;
+            if (!read_channel(c, an, ch, where, ncomp, mc.ch, &skip)) return false;
+            if (!skip.empty()) {
+                left_out(skip);
+                mm->skipped++;
+                continue;
+            }
+            clip.duration = std::max(clip.duration, mc.ch.in.back());
+            clip.channels++;
+            nodes.insert(ni);
+            animated[ni] = 1;
+            (path == PATH_W ? morphs : moves)[ni] = 1;
+            mm->channels.push_back(std::move(mc));
+            mm->channels.back().ch.s.in = mm->channels.back().ch.in.data();   // the sampler reads its own arrays
+            mm->channels.back().ch.s.out = mm->channels.back().ch.out.data();
+        }
+        clip.nodes = (uint32_t)nodes.size();
+        mm->clips.push_back(clip);
+    }
+    for (int ni : mm->topo)   // a node under a moving one moves
+        if (parent[ni] >= 0 && moves[parent[ni]]) moves[ni] = 1;
+    for (char a : animated) mm->animated_nodes += a;
+    mm->skin_joints.resize(m.skins.size());
+    mm->skin_ibm.resize(m.skins.size());
+    if (!mm->channels.empty()) mo = mm.release();
+    else if (mm->skipped) sb_log("%s: no clip channel can be played: the scene stands still", c.file);
     return true;
 }
 
@@ -1186,6 +1347,7 @@ bool build_model(const sb_json *root, Source &src, const char *file, tinygltf::M
     });
     each(root, "animations", [&](const sb_json *o) {
         tinygltf::Animation an;
+        an.name = str_of(o, "name", "");
         each(o, "samplers", [&](const sb_json *q) {
             tinygltf::AnimationSampler s;
             s.input = int_of(q, "input", -1);
@@ -1366,9 +1528,15 @@ extern "C" bool sb_gltf_load(sb_scene *s, const char *path, const sb_scene_opts 
         Loader L{Ctx{path, &model, &doc, err}, s, opts, &images, {}, {}, {}, {}, {}, {}};
         read_cameras(s, model);
         std::vector<int> roots;
-        if (!scene_roots(path, model, roots, err) || !L.pose() || !L.walk(roots)) return false;
+        bool ok = scene_roots(path, model, roots, err) && L.pose() && L.walk(roots) && L.clips();
+        std::unique_ptr<sb_motion> motion(L.mo);   // freed on every way out but the scene's
+        if (!ok) return false;
         L.reserve();
         if (!L.emit_nodes()) return false;
+        if (motion && !motion->places.empty()) {
+            s->motion = motion.release();
+            s->motion_free = sb_motion_free;
+        }
         s->features.textures_skipped = (uint32_t)model.images.size() - s->features.textures_decoded;
         s->content_hash = hash;
         log_features(path, s, model, images);
@@ -1413,7 +1581,13 @@ extern "C" bool sb_gltf_camera_keys(sb_camera_keys *p, const char *path, int cam
                 if (ch.target_node != cn || (ch.target_path != "translation" && ch.target_path != "rotation")) continue;
                 chans.emplace_back();
                 std::string where = "/animations/" + std::to_string(ai) + "/channels/" + std::to_string(ci);
-                if (!read_channel(c, an, ch, where, ch.target_path == "rotation" ? 4 : 3, chans.back())) return false;
+                std::string skip;
+                if (!read_channel(c, an, ch, where, ch.target_path == "rotation" ? 4 : 3, chans.back(), &skip))
+                    return false;
+                if (!skip.empty()) {   // the camera keeps its other channels
+                    sb_log("%s: %s", path, skip.c_str());
+                    chans.pop_back();
+                }
             }
         }
         std::set<double> times;
@@ -1451,3 +1625,4 @@ extern "C" bool sb_gltf_camera_keys(sb_camera_keys *p, const char *path, int cam
         return sb_fail(err, "%s: %s", path, ex.what());
     }
 }
+

@@ -806,8 +806,62 @@ void sb_scene_free(sb_scene *s) {
     for (uint32_t i = 0; i < s->plane_count; i++) free_owned(s, s->planes[i].tris);
     sb_bvh_free(&s->bvh);
     sb_unmap_file(s->cache_map, s->cache_map_len);
+    if (s->motion) s->motion_free(s->motion);
     memset(s, 0, sizeof *s);
 }
+
+/* ---- motion ---- */
+
+/* The box of a draw over the vertices its triangles use, as they are now. */
+static sb_aabb draw_box_now(const sb_scene *s, const sb_draw *d) {
+    sb_aabb b = {{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
+    for (uint32_t i = 0; i < d->index_count; i++) {
+        const float *v = sb_vertex(s, s->indices[d->first_index + i]);
+        sb_v3 p = sb_v3_make(v[0], v[1], v[2]);
+        b.lo = sb_v3_min(b.lo, p), b.hi = sb_v3_max(b.hi, p);
+    }
+    return b;
+}
+
+void sb_scene_repose_prim(sb_scene *s, uint32_t first, uint32_t count, const double *pos, const double *nrm) {
+    for (uint32_t v = 0; v < count; v++) {
+        float *o = sb_vertex(s, first + v);
+        const double *p = pos + 3 * (size_t)v;
+        o[0] = (float)(p[0] - s->origin.x);
+        o[1] = (float)(p[1] - s->origin.y);
+        o[2] = (float)(p[2] - s->origin.z);
+        if (nrm) {
+            sb_v3 n = sb_v3_norm(sb_v3_make(nrm[3 * (size_t)v], nrm[3 * (size_t)v + 1], nrm[3 * (size_t)v + 2]));
+            o[3] = (float)n.x, o[4] = (float)n.y, o[5] = (float)n.z;
+        } else {
+            o[3] = o[4] = o[5] = 0;
+        }
+    }
+    /* the draws made of these vertices (a primitive's chunks name all of them): face normals where the file gave
+       none, as at load, and their boxes */
+    for (uint32_t d = 0; d < s->draw_count; d++) {
+        sb_draw *dr = &s->draws[d];
+        if (dr->first_vertex != first || dr->vertex_count != count) continue;
+        for (uint32_t i = 0; !nrm && i + 2 < dr->index_count; i += 3) {
+            const uint32_t *t = s->indices + dr->first_index + i;
+            const double *a = pos + 3 * (size_t)(t[0] - first), *b = pos + 3 * (size_t)(t[1] - first),
+                         *c = pos + 3 * (size_t)(t[2] - first);
+            sb_v3 n = sb_v3_cross(sb_v3_make(b[0] - a[0], b[1] - a[1], b[2] - a[2]),
+                                  sb_v3_make(c[0] - a[0], c[1] - a[1], c[2] - a[2]));
+            for (int k = 0; k < 3; k++) {
+                float *o = sb_vertex(s, t[k]);
+                o[3] += (float)n.x, o[4] += (float)n.y, o[5] += (float)n.z;
+            }
+        }
+        dr->box = draw_box_now(s, dr);
+    }
+    for (uint32_t v = 0; !nrm && v < count; v++) {
+        float *o = sb_vertex(s, first + v);
+        sb_v3 n = sb_v3_norm(sb_v3_make(o[3], o[4], o[5]));
+        o[3] = (float)n.x, o[4] = (float)n.y, o[5] = (float)n.z;
+    }
+}
+
 
 void sb_scene_info(const sb_scene *s, FILE *out) {
     const sb_scene_features *f = &s->features;

@@ -32,7 +32,15 @@ typedef struct sb_draw {
      * buffers and the reference's BVH hold the proto's once and draw or trace it through the transform. */
     uint32_t proto;
     float xform[12];
+    uint8_t motion;         /* sb_draw_motion: whether a playing clip moves it, and how */
 } sb_draw;
+
+/* How a draw moves while the file's clips play (motion.h). */
+typedef enum sb_draw_motion {
+    SB_DRAW_STILL,          /* never: its vertices are those of the load */
+    SB_DRAW_RIGID,          /* under an animated node: moved whole */
+    SB_DRAW_DEFORMING,      /* skinned by moving joints, or morphed by animated weights */
+} sb_draw_motion;
 
 /* Whether draw d repeats another's geometry (sb_draw.proto). */
 #define SB_DRAW_IS_INSTANCE(s, d) ((s)->draws[d].proto != (d))
@@ -109,12 +117,22 @@ typedef struct sb_plane {
     uint32_t tri_count;
 } sb_plane;
 
+/* Which of a file's animations play (--anim). */
+typedef enum sb_anim_mode {
+    SB_ANIM_ALL,                 /* the default: every clip of the file plays, as the file says */
+    SB_ANIM_NONE,                /* none: the scene as loaded (its nodes' own transforms), frozen */
+    SB_ANIM_LIST,                /* the clips named in sb_scene_opts.anim_clips */
+} sb_anim_mode;
+
 /* How a scene file is read; zero means the default. */
 typedef struct sb_scene_opts {
     bool allow_external_uris;    /* buffer and image URIs may leave the scene's folder */
     sb_blend_policy blend;       /* --blend-casters */
-    bool pose;                   /* --pose T: nodes and skins at time T of the first animation */
+    bool pose;                   /* --pose T: nodes and skins at time T of the first animation, frozen (no clip plays) */
     double pose_time;            /* otherwise: the nodes' own transforms (skins in their rest pose) */
+    sb_anim_mode anim;           /* --anim */
+    char anim_clips[256];        /* SB_ANIM_LIST: clip names (or indices), comma-separated */
+    double anim_speed;           /* --anim-speed: clip seconds a second of the path's clock (0: 1) */
 } sb_scene_opts;
 
 /* The parts of a scene's load, timed: reading, checking and parsing the file
@@ -169,6 +187,14 @@ typedef struct sb_scene {
                                     there ("; "-separated; "" if nothing): info and every run's warnings say it */
 
     uint32_t instance_draws;     /* draws that repeat another's geometry (sb_draw.proto) */
+
+    /* Motion (motion.h): the file's clips as they play; NULL for a scene where nothing moves. */
+    struct sb_motion *motion;
+    void (*motion_free)(struct sb_motion *);   /* how sb_scene_free frees it (the motion module's) */
+    uint32_t moving_draws;       /* draws whose sb_draw.motion is not SB_DRAW_STILL */
+    sb_aabb still_bounds;        /* the bounds of the draws that never move (relative to origin) */
+    double pose_time;            /* the clip time the vertices hold (NAN: as loaded) */
+    uint64_t pose_serial;        /* how many poses moved something (a changed serial: the geometry moved) */
 
     /* builder scratch, freed by sb_scene_finish */
     double *build_pos;
@@ -234,6 +260,14 @@ void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p);
 void sb_scene_find_planes(sb_scene *s);
 /* Re-bases to the centre, splits big draws into spatial chunks, builds AABBs and the BVH. */
 bool sb_scene_finish(sb_scene *s, sb_err *err);
+
+/* ---- motion ---- */
+
+/* Whether the scene's clips move anything (motion.h poses it). */
+static inline bool sb_scene_moves(const sb_scene *s) { return s->motion && s->moving_draws; }
+/* The posing step of one primitive: writes its vertices [first, first + count) from world positions and
+ * normals (NULL: face normals, as at load) and the boxes of the draws made of them. */
+void sb_scene_repose_prim(sb_scene *s, uint32_t first, uint32_t count, const double *pos, const double *nrm);
 
 /* Culling: visits every draw whose AABB is not fully outside any of the planes
  * (plane: n·p + d >= 0 is inside). Exact AABB-vs-plane tests over the BVH. */

@@ -4,6 +4,8 @@
 #define _XOPEN_SOURCE 700 /* realpath */
 #include "scene_load.h"
 
+#include "motion.h"
+
 #include <limits.h>
 #include <stdlib.h>
 #include <string.h>
@@ -150,14 +152,17 @@ static uint64_t cache_key(const char *scene_dir, const sb_scene_opts *opts, cons
     memset(&o, 0, sizeof o);
     if (opts) o = *opts;
     struct {
-        int flags[3];
+        int flags[4];
         double pose_time;
+        char anim_clips[256];
     } k;
     memset(&k, 0, sizeof k);
     k.flags[0] = o.allow_external_uris;
     k.flags[1] = (int)o.blend;
     k.flags[2] = o.pose;
+    k.flags[3] = (int)o.anim;
     k.pose_time = o.pose_time;
+    memcpy(k.anim_clips, o.anim_clips, sizeof k.anim_clips);
     return sb_scene_cache_key(scene_dir, &k, sizeof k, bytes, size);
 }
 
@@ -227,6 +232,22 @@ static bool load_file(sb_scene *s, const char *path, const sb_scene_opts *opts, 
         sb_scene_free(s);
         return false;
     }
+    if (s->motion && !sb_motion_mark(s->motion, s)) {   /* clips that move nothing drawn (a camera, a light) */
+        s->motion_free(s->motion);
+        s->motion = NULL;
+    }
+    if (s->motion) {   /* clips that play make other figures than the still scene: other run ids */
+        struct {
+            int mode;
+            char clips[256];
+            double speed;
+        } a;
+        memset(&a, 0, sizeof a);
+        a.mode = (int)s->opts.anim;
+        memcpy(a.clips, s->opts.anim_clips, sizeof a.clips);
+        a.speed = s->opts.anim_speed > 0 ? s->opts.anim_speed : 1;
+        s->content_hash = sb_fnv1a(s->content_hash, &a, sizeof a);
+    }
     /* options that change what is drawn change the run ids (the defaults leave them as they were) */
     if (s->opts.blend != SB_BLEND_MASK && s->features.blend)
         s->content_hash = sb_fnv1a(s->content_hash, &s->opts.blend, sizeof s->opts.blend);
@@ -267,7 +288,8 @@ bool sb_scene_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_
         if (cache) sb_scene_cache_begin(scene_dir);
         ok = load_file(s, path, opts, err);
         if (cache && ok) sb_scene_find_planes(s);   /* an entry holds the planes, so a cached load never searches */
-        if (cache) sb_scene_cache_put(key, ok ? write_entry : NULL, s);
+        /* a scene whose clips play is not kept: an entry holds still geometry (and the key says which clips) */
+        if (cache) sb_scene_cache_put(key, ok && !s->motion ? write_entry : NULL, s);
     }
     if (ok) s->load_ms = sb_now_ms() - t0;
     return ok;

@@ -6,6 +6,7 @@
  *   desert     wide flat terrain, ~6000 low boxy buildings (>200k triangles)
  *   towers     a dense block of skyscrapers with setbacks and narrow streets
  *   overhangs  cantilevered buildings and bridges over open ground, far views
+ *   movers     plane-box's slab with a sliding box and a turning bar (node animation)
  * and the conformance set (conformance.h). */
 #include <math.h>
 #include <stdarg.h>
@@ -269,12 +270,61 @@ static int gen_towers_draco(const char *dir) {
     return rc;
 }
 
+/* movers: plane-box's slab with casters that move by node animation, as a file would carry them: a 2x2x2 box
+ * sliding along x from -8 to 8 and back over 8 s (clip "slide", LINEAR translation), a 6 m bar at 3 m turning
+ * about the vertical once in 8 s (clip "turn", rotation), and a box that stays. Its path holds the camera still
+ * for 8 s above the slider's track, so that all that changes is what moves (tests, the nightly's dynamic
+ * section). */
+static int gen_movers(const char *dir) {
+    sb_glb_scene s = {0};
+    s.sun = sb_sun_dir(30, 50);
+    sb_glb_box(sb_glb_new_mesh(&s, 0), -20, -0.5, -20, 20, 0, 20);
+    sb_glb_box(sb_glb_new_mesh(&s, 1), 6, 0, 6, 8, 2, 8);
+    sb_glb_mesh *m = sb_glb_new_mesh(&s, 2);
+    sb_glb_box(m, -1, 0, -1, 1, 2, 1);
+    m->no_node = true;
+    int slider = sb_glb_node(&s, true, "{\"name\":\"slider\",\"mesh\":%d,\"translation\":[-8,0,-4]}", s.n - 1);
+    sb_glb_mesh *b = sb_glb_new_mesh(&s, 3);
+    sb_glb_box(b, -3, 2.7, -0.3, 3, 3.3, 0.3);
+    b->no_node = true;
+    int turner = sb_glb_node(&s, true, "{\"name\":\"turner\",\"mesh\":%d,\"translation\":[0,0,6]}", s.n - 1);
+    const float st[3] = {0, 4, 8}, sv[9] = {-8, 0, -4, 8, 0, -4, -8, 0, -4};
+    float tt[5], tv[20];
+    for (int k = 0; k < 5; k++) {   /* a quarter turn a key: slerp between them turns the short way */
+        double a = k * SB_PI / 2;
+        tt[k] = (float)(2 * k);
+        tv[4 * k] = 0, tv[4 * k + 1] = (float)sin(a / 2), tv[4 * k + 2] = 0, tv[4 * k + 3] = (float)cos(a / 2);
+    }
+    int ast = sb_glb_accessor(&s, "{\"bufferView\":%d,\"componentType\":5126,\"count\":3,\"type\":\"SCALAR\","
+                                  "\"min\":[0],\"max\":[8]}", sb_glb_view(&s, st, sizeof st));
+    int asv = sb_glb_accessor(&s, "{\"bufferView\":%d,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}",
+                              sb_glb_view(&s, sv, sizeof sv));
+    int att = sb_glb_accessor(&s, "{\"bufferView\":%d,\"componentType\":5126,\"count\":5,\"type\":\"SCALAR\","
+                                  "\"min\":[0],\"max\":[8]}", sb_glb_view(&s, tt, sizeof tt));
+    int atv = sb_glb_accessor(&s, "{\"bufferView\":%d,\"componentType\":5126,\"count\":5,\"type\":\"VEC4\"}",
+                              sb_glb_view(&s, tv, sizeof tv));
+    sb_glb_top(&s, "\"animations\":[{\"name\":\"slide\",\"channels\":[{\"sampler\":0,\"target\":{\"node\":%d,"
+                   "\"path\":\"translation\"}}],\"samplers\":[{\"input\":%d,\"output\":%d}]},{\"name\":\"turn\","
+                   "\"channels\":[{\"sampler\":0,\"target\":{\"node\":%d,\"path\":\"rotation\"}}],\"samplers\":"
+                   "[{\"input\":%d,\"output\":%d}]}]", slider, ast, asv, turner, att, atv);
+    char p[4096];
+    snprintf(p, sizeof p, "%s/movers.glb", dir);
+    int rc = sb_glb_write(&s, p);
+    snprintf(p, sizeof p, "%s/movers.path", dir);
+    rc |= write_text(p,
+                     "# movers: a still camera above the slider's track for the clips' 8 s\n"
+                     "fov 60\n"
+                     "look 0   0 16 -16    0 0 -3\n"
+                     "look 8   0 16 -16    0 0 -3\n");
+    return rc;
+}
+
 int main(int argc, char **argv) {
     if (argc != 2) {
         fprintf(stderr, "usage: scenegen OUTDIR\n");
         return 2;
     }
     return gen_plane_box(argv[1]) | gen_plane_box_lamp(argv[1]) | gen_desert(argv[1]) | gen_towers(argv[1]) |
-           gen_towers_night(argv[1]) | gen_overhangs(argv[1]) | gen_towers_draco(argv[1]) |
+           gen_towers_night(argv[1]) | gen_overhangs(argv[1]) | gen_towers_draco(argv[1]) | gen_movers(argv[1]) |
            sb_conformance_write(argv[1]);
 }

@@ -330,6 +330,30 @@ static float slope_factor(const sb_csm *c) {
     return (float)c->d.slope;
 }
 
+/* Whether a box (origin-relative) reaches into a layer's light volume: its window across, anywhere from the
+ * light to the far plane along (depth clamp keeps casters toward the light). The fit is orthographic wherever a
+ * cache is kept (stable=on, no warp). */
+static bool box_in_layer(const float vp[16], const sb_aabb *b) {
+    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+    for (int k = 0; k < 8; k++) {
+        double p[3] = {k & 1 ? b->hi.x : b->lo.x, k & 2 ? b->hi.y : b->lo.y, k & 4 ? b->hi.z : b->lo.z};
+        for (int r = 0; r < 3; r++) {
+            double v = vp[r] * p[0] + vp[4 + r] * p[1] + vp[8 + r] * p[2] + vp[12 + r];
+            lo[r] = fmin(lo[r], v), hi[r] = fmax(hi[r], v);
+        }
+    }
+    return hi[0] >= -1 && lo[0] <= 1 && hi[1] >= -1 && lo[1] <= 1 && lo[2] <= 1;
+}
+
+/* Whether a caster moved into, out of or within layer k since the last frame (its box before or after). */
+static bool moved_into(const sb_csm *c, const sb_frame *f, int k) {
+    const sb_scene *s = f->gpu->scene;
+    for (uint32_t i = 0; i < f->moved_count; i++)
+        if (box_in_layer(c->cpu.light_vp[k], &f->moved_from[i]) || box_in_layer(c->cpu.light_vp[k], &s->draws[f->moved[i]].box))
+            return true;
+    return false;
+}
+
 void sb_csm_render(sb_csm *c, sb_frame *f) {
     const sb_gpu *g = f->gpu;
     const sb_csm_desc *d = &c->d;
@@ -341,18 +365,24 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
     glDepthFunc(GL_LESS);
     glDepthMask(GL_TRUE);
     /* cache=on: a layer still holding what this frame's fit would draw (the same light view-projection, bit for
-       bit: the same snapped window and light; the scene's casters do not move) is kept, not drawn again */
+       bit: the same snapped window and light) is kept, not drawn again, unless a caster moved into, out of or
+       within its light volume since the last frame (its box before or after the move overlaps it: UE5's rule);
+       the stale check's frame (bypass_cache) draws every layer and keeps none of them */
     unsigned todo = 0;
-    int cached = 0;
+    int cached = 0, invalidated = 0;
     for (int k = 0; k < c->count; k++) {
         if (!c->active[k]) continue;
-        bool keep = d->cache && c->cached[k] && !memcmp(c->cached_vp[k], c->cpu.light_vp[k], sizeof c->cached_vp[k]);
+        bool same = d->cache && c->cached[k] && !memcmp(c->cached_vp[k], c->cpu.light_vp[k], sizeof c->cached_vp[k]);
+        bool moved = same && f->moved_count && moved_into(c, f, k);
+        bool keep = same && !moved && !f->bypass_cache;
+        invalidated += moved;
         cached += keep;
         if (keep) continue;
         todo |= 1u << k;
         memcpy(c->cached_vp[k], c->cpu.light_vp[k], sizeof c->cached_vp[k]);
-        c->cached[k] = d->cache != 0;
+        c->cached[k] = d->cache && !f->bypass_cache;
     }
+    f->counters.cascades_invalidated = invalidated;
     /* cleared: every layer at once (fbo_all), or with the cache each layer drawn again */
     for (int k = 0; k < (d->cache ? c->count : 1); k++) {
         if (d->cache && !(todo & (1u << k))) continue;

@@ -65,7 +65,8 @@ typedef struct sb_csm_desc {
                "per-cascade draws, or one draw per caster routed by a geometry shader / vertex-shader gl_Layer"), \
     SB_PARAM_E(sb_csm_desc, warp, none, "none|lispsm|tsm", "perspective warp of each cascade (LiSPSM, TSM)"),     \
     SB_PARAM_E_LATE(sb_csm_desc, cache, off, "off|on",                                                          \
-                    "a cascade whose snapped window, light and casters did not change is not rendered again (stable=on)")
+                    "a cascade whose snapped window and light did not change, and into whose light volume no caster "  \
+                    "moved, is not rendered again (stable=on)", .role = SB_PARAM_CACHE)
 
 /* Split distances out[0..m] over [n, f]: practical = lambda*log + (1-lambda)*uniform. */
 void sb_split_distances(double lambda, int m, double n, double f, double *out);

@@ -120,6 +120,7 @@ enum { SHARE_ALL, SHARE_WHOLE, SHARE_NONE };
 struct sb_gpu_geom {
     int mode;
     uint32_t *first;            /* per draw: its first index in the GPU's index buffer */
+    uint32_t *vbase;            /* per draw: where its first vertex (sb_draw.first_vertex) is in the vertex buffer */
     uint32_t index_count;       /* the GPU's index buffer */
     uint32_t *orig;             /* that buffer as uploaded (NULL: the scene's own indices, nothing shared) */
 };
@@ -172,6 +173,7 @@ static void upload_geometry(const sb_gpu *g, int mode) {
     free(xf);
     if (!any) {   /* every draw its own vertices: the scene's arrays as they are */
         for (uint32_t d = 0; d < s->draw_count; d++) gm->first[d] = s->draws[d].first_index;
+        for (uint32_t d = 0; d < s->draw_count; d++) gm->vbase[d] = s->draws[d].first_vertex;
         gm->index_count = s->index_count;
         glBindBuffer(GL_ARRAY_BUFFER, g->vbo);
         glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)s->vertex_count * SB_VERTEX_BYTES, s->vertices, GL_STATIC_DRAW);
@@ -201,6 +203,8 @@ static void upload_geometry(const sb_gpu *g, int mode) {
     }
     for (uint32_t d = 0; d < s->draw_count; d++)
         if (shares(s, d, mode)) gm->first[d] = gm->first[s->draws[d].proto];
+    for (uint32_t d = 0; d < s->draw_count; d++)   /* a draw drawn from its own vertices keeps them in order */
+        gm->vbase[d] = shares(s, d, mode) ? UINT32_MAX : remap[s->draws[d].first_vertex];
     free(remap);
     gm->index_count = at;
     glBindBuffer(GL_ARRAY_BUFFER, g->vbo);
@@ -321,6 +325,21 @@ static void facing_reset(const sb_gpu *g) {
     g->facing->valid = false;
 }
 
+void sb_gpu_update_motion(const sb_gpu *g) {
+    const sb_scene *s = g->scene;
+    const struct sb_gpu_geom *gm = g->geom;
+    glBindBuffer(GL_ARRAY_BUFFER, g->vbo);
+    uint32_t done = UINT32_MAX;   /* a primitive's chunks name the same vertices: the last one sent */
+    for (uint32_t d = 0; d < s->draw_count; d++) {
+        const sb_draw *dr = &s->draws[d];
+        if (dr->motion == SB_DRAW_STILL || dr->first_vertex == done || gm->vbase[d] == UINT32_MAX) continue;
+        glBufferSubData(GL_ARRAY_BUFFER, (GLintptr)gm->vbase[d] * SB_VERTEX_BYTES,
+                        (GLsizeiptr)dr->vertex_count * SB_VERTEX_BYTES, sb_vertex(s, dr->first_vertex));
+        done = dr->first_vertex;
+    }
+    if (g->facing) g->facing->valid = false;   /* an open moving draw faces the light otherwise now */
+}
+
 void sb_gpu_share(const sb_gpu *g, bool planar) {
     int mode = planar ? SHARE_NONE : SHARE_WHOLE;
     if (!g->scene->instance_draws || g->geom->mode >= mode) return;
@@ -343,6 +362,7 @@ bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g->ibo);   /* the VAO's element buffer */
     g->geom = sb_xcalloc(1, sizeof *g->geom);
     g->geom->first = sb_xcalloc(s->draw_count + 1, sizeof(uint32_t));
+    g->geom->vbase = sb_xcalloc(s->draw_count + 1, sizeof(uint32_t));
     upload_geometry(g, SHARE_ALL);
     bool open_single_sided = false;
     for (uint32_t d = 0; d < s->draw_count; d++) open_single_sided |= !s->draws[d].double_sided && !s->draws[d].closed;
@@ -448,6 +468,7 @@ void sb_gpu_free(sb_gpu *g) {
     }
     if (g->geom) {
         free(g->geom->first);
+        free(g->geom->vbase);
         free(g->geom->orig);
         free(g->geom);
     }

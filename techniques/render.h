@@ -115,6 +115,14 @@ typedef struct sb_frame {
     const sb_look *look;                /* the flicker twin's lookup (NULL: the frame's own camera) */
     bool look_depth;                    /* the target's depth is the look camera's (a G-buffer pass drew it) */
     bool look_failed;                   /* the technique's final pass could not look the points up */
+    /* Motion (a scene whose clips play): the draws whose box changed since the technique's previous frame, and
+     * their boxes then (origin-relative); their boxes now are the scene's. A cache invalidates what the old or
+     * the new box of one of them overlaps. The harness fills them before the technique's frame. */
+    const uint32_t *moved;
+    const sb_aabb *moved_from;
+    uint32_t moved_count;
+    bool bypass_cache;                  /* draw every cached map or page again this frame (the stale check) */
+    double anim_ms;                     /* posing the scene and uploading its moving vertices (NAN: none) */
 } sb_frame;
 
 bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *scene, int width, int height, sb_v3 sun,
@@ -129,6 +137,9 @@ double sb_gpu_scene_bytes(const sb_scene *s);
  * receiver plane's (planar draws triangles by their scene numbers: none shared). Sharing only goes down in a
  * session; the pictures are the same either way. */
 void sb_gpu_share(const sb_gpu *g, bool planar);
+/* After sb_scene_pose moved the scene: the moving draws' vertices into the vertex buffer (and the light-facing
+ * order of open ones made again when next needed). */
+void sb_gpu_update_motion(const sb_gpu *g);
 void sb_gpu_free(sb_gpu *g);
 /* The final-pass program with the technique's visibility GLSL. */
 bool sb_final_prog_create(sb_final_prog *fp, const sb_gpu *g, const char *label, const char *vis_glsl,

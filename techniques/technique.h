@@ -42,6 +42,7 @@ typedef enum sb_param_role {
     SB_PARAM_RES,           /* texels per side of each shadow map */
     SB_PARAM_MAPS,          /* shadow maps (cascades) rendered a frame */
     SB_PARAM_SUN_SIZE,      /* the sun's angular diameter a soft filter assumes: follows --sun-size unless given */
+    SB_PARAM_CACHE,         /* on: maps or pages kept across frames (the stale check compares them with a fresh draw) */
 } sb_param_role;
 
 /* What a technique is to the commands that choose among techniques. */

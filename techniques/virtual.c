@@ -19,7 +19,8 @@
  *   final    the lookup through the table (vis_virtual.glsl).
  *
  * Pages are keyed by their absolute place in the level's page grid, so a camera that moves keeps every page it
- * still needs; a sun that moves invalidates all of them. A pool too small for a frame's pages has the finest
+ * still needs; a sun that moves invalidates all of them, a caster that moves the pages its light-space box
+ * overlaps before and after the move (pages_invalidated). A pool too small for a frame's pages has the finest
  * level's pages give way to their parents a level coarser until the rest fit (pool_overflow counts the pages
  * given up; the run warns): their pixels are looked up in the parent, never in another page's texels. */
 #include <stdlib.h>
@@ -48,7 +49,9 @@ static const sb_param_def virtual_params[] = {
     SB_PARAM_FA(virtual_desc, slope, 0.5, 0, 100, "slope-scaled bias (glPolygonOffset factor)"),
     SB_PARAM_FA(virtual_desc, normal, 0.25, 0, 100, "normal offset, in texels of the level"),
     SB_PARAM_E(virtual_desc, filter, hw, "none|hw|pcf3", "shadow filter", .tune = "none,hw,pcf3"),
-    SB_PARAM_E(virtual_desc, cache, on, "off|on", "keep a page across frames while its level, place and light hold"),
+    SB_PARAM_E(virtual_desc, cache, on, "off|on",
+               "keep a page across frames while its level, place and light hold and no moved caster's light-space box "
+               "overlaps it", .role = SB_PARAM_CACHE),
 };
 
 /* The pool's layout, from the parameters alone (the GPU-memory check, shadow_mb and create share it). */
@@ -410,6 +413,44 @@ static void render_page(virtual_state *s, sb_frame *f, page_key k, int i) {
     }
 }
 
+/* The light-space window of a box (origin-relative): its x and y across the light's view. */
+static void light_rect(const virtual_state *s, const sb_aabb *b, double r[4]) {
+    r[0] = r[1] = 1e300, r[2] = r[3] = -1e300;
+    for (int k = 0; k < 8; k++) {
+        sb_v3 q = sb_m4_point(s->lview, sb_v3_make(k & 1 ? b->hi.x : b->lo.x, k & 2 ? b->hi.y : b->lo.y,
+                                                    k & 4 ? b->hi.z : b->lo.z));
+        r[0] = fmin(r[0], q.x), r[1] = fmin(r[1], q.y), r[2] = fmax(r[2], q.x), r[3] = fmax(r[3], q.y);
+    }
+}
+
+/* Casters that moved since the last frame: every kept page whose window (with its border) a moved caster's
+ * light-space box overlaps, before or after the move, is dropped (UE5's rule; depth does not matter: a page's
+ * view spans the scene's depth). Returns how many. */
+static int invalidate_moved(virtual_state *s, const sb_frame *f) {
+    const sb_scene *sc = f->gpu->scene;
+    double (*rects)[4] = sb_xmalloc(sizeof *rects * 2 * (f->moved_count + 1));
+    for (uint32_t i = 0; i < f->moved_count; i++) {
+        light_rect(s, &f->moved_from[i], rects[2 * i]);
+        light_rect(s, &sc->draws[f->moved[i]].box, rects[2 * i + 1]);
+    }
+    int dropped = 0;
+    for (int i = 0; i < s->p.slots; i++) {
+        page_key k = s->slot_key[i];
+        if (k.level < 0) continue;
+        double t = level_texel(s, k.level), pg = s->d.page;
+        double x0 = ((double)k.x * pg - BORDER) * t, x1 = ((double)(k.x + 1) * pg + BORDER) * t;
+        double y0 = ((double)k.y * pg - BORDER) * t, y1 = ((double)(k.y + 1) * pg + BORDER) * t;
+        for (uint32_t j = 0; j < 2 * f->moved_count; j++)
+            if (rects[j][2] >= x0 && rects[j][0] <= x1 && rects[j][3] >= y0 && rects[j][1] <= y1) {
+                s->slot_key[i].level = -1, s->slot_used[i] = -1;
+                dropped++;
+                break;
+            }
+    }
+    free(rects);
+    return dropped;
+}
+
 /* What became of a frame's pages: drawn, kept from before, left out for want of a slot; of the drawn and the kept,
  * the stand-ins (a coarser page held in place of pages given up). */
 typedef struct pool_tally {
@@ -490,7 +531,8 @@ static void virtual_frame(void *state, sb_frame *f) {
         invalidate(s);
         fit_clipmap(s, f);
     }
-    if (!s->d.cache) invalidate(s);
+    if (!s->d.cache || f->bypass_cache) invalidate(s);   /* the stale check draws every page afresh */
+    else if (f->moved_count) f->counters.pages_invalidated = invalidate_moved(s, f);
     place_windows(s, f);
     mark_pages(s, f);
     int needed = 0, P = s->p.pages;
@@ -532,6 +574,7 @@ static void virtual_frame(void *state, sb_frame *f) {
     glUniform3f(s->u_light, (float)g->sun.x, (float)g->sun.y, (float)g->sun.z);
     sb_final_pass(f, &s->fp, true);
     sb_stage_end(f, SB_STAGE_FINAL);
+    if (f->bypass_cache) invalidate(s);   /* ... and keeps none of them */
 }
 
 static void virtual_destroy(void *state) {

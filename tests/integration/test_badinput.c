@@ -69,7 +69,7 @@ static void test_bad_index(void **st) {
 
 static void test_unknown_parameter(void **st) {
     (void)st;
-    expect_cli_fail("sm: unknown parameter 'rez' (valid: res, depth, bias, slope, normal, filter, sun_size, stable, format, blur, bleed, exponent)",
+    expect_cli_fail("sm: unknown parameter 'rez' (valid: res, depth, bias, slope, normal, filter, sun_size, stable, format, blur, bleed, exponent, distance)",
                 "%s run plane-box plane-box sm:rez=2 --out %s/x", test_binary(), g_tmp);
     expect_cli_fail("unknown technique 'smm'", "%s run plane-box plane-box smm --out %s/x", test_binary(), g_tmp);
     /* rejected before anything is written */

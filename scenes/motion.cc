@@ -1,0 +1,159 @@
+// motion.cc - a scene's clips as they play (motion.h): the nodes' transforms at a clip time, every moving
+// placement posed again (morph targets, skin or node transform) and written into the scene, its boxes, bounds
+// and BVH made true to the pose. C++ for the data the glTF adapter leaves it (motion_data.h); everything it
+// exposes is a C function.
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <map>
+
+#include "motion_data.h"
+
+extern "C" {
+#include "motion.h"
+}
+
+namespace {
+
+// The nodes' world transforms at clip time t: each clip's channels sampled at t modulo its duration.
+void motion_nodes(sb_motion &m, double t) {
+    size_t n = m.parent.size();
+    m.trs = m.rest;
+    m.anim.assign(n, 0);
+    m.weights = m.rest_weights;
+    for (sbm::MoChannel &c : m.channels) {
+        const sbm::MoClip &cl = m.clips[c.clip];
+        double ct = cl.duration > 0 ? fmod(t, cl.duration) : 0;
+        if (ct < 0) ct += cl.duration;
+        double v[64] = {0};
+        sb_anim_sample(&c.ch.s, ct, v);
+        if (c.path == sbm::PATH_W) {
+            m.weights[c.node].assign(v, v + c.ch.s.ncomp);
+            continue;
+        }
+        double *dst = c.path == sbm::PATH_T ? m.trs[c.node].t : c.path == sbm::PATH_R ? m.trs[c.node].r : m.trs[c.node].s;
+        memcpy(dst, v, sizeof(double) * (c.path == sbm::PATH_R ? 4 : 3));
+        m.anim[c.node] = 1;
+    }
+    m.world.resize(n);
+    for (int ni : m.topo) {
+        sb_m4 local = m.anim[ni] || !m.has_matrix[ni] ? sb_trs_matrix(&m.trs[ni]) : m.rest_local[ni];
+        m.world[ni] = m.parent[ni] < 0 ? local : sb_m4_mul(m.world[m.parent[ni]], local);
+    }
+}
+
+// One placement at the pose motion_nodes made: its morph targets at its node's weights, then its skin or its
+// node's transform, written into the scene.
+void motion_place(sb_motion &m, sb_scene *s, const sbm::MoPlace &p) {
+    m.pos = p.base.pos;
+    m.nrm = p.base.nrm;
+    const std::vector<double> &w = m.weights[p.node];
+    for (size_t t = 0; t < p.dpos.size() && t < w.size(); t++) {
+        if (w[t] == 0) continue;
+        for (size_t i = 0; i < p.dpos[t].size() && i < m.pos.size(); i++) m.pos[i] += w[t] * p.dpos[t][i];
+        for (size_t i = 0; i < p.dnrm[t].size() && i < m.nrm.size(); i++) m.nrm[i] += w[t] * p.dnrm[t][i];
+    }
+    if (p.skin >= 0) {
+        const std::vector<int> &joints = m.skin_joints[p.skin];
+        m.jm.resize(joints.size());
+        for (size_t j = 0; j < joints.size(); j++) m.jm[j] = sb_m4_mul(m.world[joints[j]], m.skin_ibm[p.skin][j]);
+        sbm::skin_vertices(m.jm, p.base, m.pos, m.nrm);
+    } else {
+        sb_m4 w4 = sb_m4_mul(m.world[p.node], p.inst), nm = sbm::normal_matrix(w4);
+        for (size_t v = 0; v < m.pos.size() / 3; v++) {
+            sb_v3 q = sb_m4_point(w4, sb_v3_make(m.pos[3 * v], m.pos[3 * v + 1], m.pos[3 * v + 2]));
+            m.pos[3 * v] = q.x, m.pos[3 * v + 1] = q.y, m.pos[3 * v + 2] = q.z;
+            if (!p.base.have_n) continue;
+            sb_v3 nn = sb_m4_dir(nm, sb_v3_make(m.nrm[3 * v], m.nrm[3 * v + 1], m.nrm[3 * v + 2]));
+            m.nrm[3 * v] = nn.x, m.nrm[3 * v + 1] = nn.y, m.nrm[3 * v + 2] = nn.z;
+        }
+    }
+    sb_scene_repose_prim(s, p.first, p.count, m.pos.data(), p.base.have_n ? m.nrm.data() : nullptr);
+}
+
+} // namespace
+
+extern "C" uint32_t sb_motion_pose(sb_motion *m, sb_scene *s, double t) {
+    motion_nodes(*m, t);
+    for (const sbm::MoPlace &p : m->places) motion_place(*m, s, p);
+    return (uint32_t)m->places.size();
+}
+
+extern "C" uint32_t sb_motion_mark(const sb_motion *m, sb_scene *s) {
+    std::map<uint32_t, uint8_t> kind;   // a placement's first vertex -> how it moves
+    for (const sbm::MoPlace &p : m->places) kind[p.first] = p.kind;
+    uint32_t n = 0;
+    sb_aabb still = {{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
+    for (uint32_t d = 0; d < s->draw_count; d++) {
+        sb_draw &dr = s->draws[d];
+        auto it = kind.find(dr.first_vertex);
+        dr.motion = it != kind.end() ? it->second : (uint8_t)SB_DRAW_STILL;
+        n += dr.motion != SB_DRAW_STILL;
+        if (dr.motion == SB_DRAW_STILL) still.lo = sb_v3_min(still.lo, dr.box.lo), still.hi = sb_v3_max(still.hi, dr.box.hi);
+    }
+    s->still_bounds = still;
+    s->moving_draws = n;
+    s->pose_time = NAN;
+    return n;
+}
+
+extern "C" sb_motion_stats sb_motion_statistics(const sb_motion *m) {
+    sb_motion_stats st;
+    memset(&st, 0, sizeof st);
+    st.clips = (uint32_t)m->clips.size();
+    st.channels = (uint32_t)m->channels.size();
+    st.skipped = m->skipped;
+    st.animated_nodes = m->animated_nodes;
+    for (const sbm::MoPlace &p : m->places) {
+        if (p.skin >= 0) st.skinned_prims++;
+        else if (p.kind == SB_DRAW_DEFORMING) st.morphing_prims++;
+        else st.rigid_prims++;
+    }
+    return st;
+}
+
+extern "C" sb_clip_info sb_motion_clip(const sb_motion *m, uint32_t i) {
+    const sbm::MoClip &c = m->clips[i];
+    return sb_clip_info{c.name.c_str(), c.duration, c.channels, c.nodes};
+}
+
+extern "C" void sb_motion_free(sb_motion *m) { delete m; }
+
+
+extern "C" bool sb_scene_pose(sb_scene *s, double t) {
+    if (!sb_scene_moves(s) || s->pose_time == t) return false;
+    sb_motion_pose(s->motion, s, t);
+    s->pose_time = t;
+    s->pose_serial++;
+    sb_aabb b = s->still_bounds;
+    for (uint32_t d = 0; d < s->draw_count; d++)
+        if (s->draws[d].motion != SB_DRAW_STILL) {
+            b.lo = sb_v3_min(b.lo, s->draws[d].box.lo);
+            b.hi = sb_v3_max(b.hi, s->draws[d].box.hi);
+        }
+    s->bounds = b;
+    sb_scene_build_bvh(s);   /* over the draws' boxes as they are now */
+    return true;
+}
+
+extern "C" void sb_motion_info(const sb_scene *s, FILE *out) {
+    if (s->motion) {
+        sb_motion_stats m = sb_motion_statistics(s->motion);
+        fprintf(out, "animation: %u clip(s) playing (--anim %s), %u channel(s) on %u node(s), %u left out; moving: %u of "
+                "%u draws (%u rigid primitive placement(s), %u skinned, %u morphing)\n", m.clips,
+                s->opts.anim == SB_ANIM_LIST ? s->opts.anim_clips : "all", m.channels, m.animated_nodes, m.skipped,
+                s->moving_draws, s->draw_count, m.rigid_prims, m.skinned_prims, m.morphing_prims);
+        for (uint32_t i = 0; i < m.clips; i++) {
+            sb_clip_info c = sb_motion_clip(s->motion, i);
+            if (c.channels)
+                fprintf(out, "  clip %s: %.4g s (loops), %u channel(s), %u node(s)\n", c.name, c.duration, c.channels,
+                        c.nodes);
+            else
+                fprintf(out, "  clip %s: nothing of its own (an earlier clip animates its nodes: --anim %s plays it)\n",
+                        c.name, c.name);
+        }
+    } else {
+        fprintf(out, "animation: %s\n", s->opts.pose ? "frozen at --pose" : s->opts.anim == SB_ANIM_NONE ?
+                "none played (--anim none)" : "nothing moves");
+    }
+}

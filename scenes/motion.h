@@ -1,0 +1,52 @@
+/* motion.h - a scene's animations as they play: the glTF clips (node
+ * translation, rotation and scale, morph target weights, and the skins the
+ * moving joints carry) sampled at a time on the path's clock, posing the
+ * scene's moving primitives again. Built by the glTF adapter (gltf_load.cc)
+ * when a file has clips and they play (sb_scene_opts.anim); read by
+ * sb_scene_pose (scene.h), which keeps the scene's boxes, bounds and BVH true
+ * to the pose. A primitive is posed on the CPU, in double precision, by the
+ * same code that placed it at load: a rigid one by its node's (and its
+ * EXT_mesh_gpu_instancing instance's) world transform, a morphing one by its
+ * targets at the node's weights, a skinned one by its joints. */
+#pragma once
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+struct sb_scene;
+typedef struct sb_motion sb_motion;
+
+/* What a clip is (shadowbench info SCENE). */
+typedef struct sb_clip_info {
+    const char *name;           /* the file's name, or its index ("0") when it has none */
+    double duration;            /* its last key time: it loops with that period */
+    uint32_t channels;          /* channels played */
+    uint32_t nodes;             /* nodes it animates */
+} sb_clip_info;
+
+/* What moves (info, the run's warnings). */
+typedef struct sb_motion_stats {
+    uint32_t clips, channels, skipped;      /* clips and channels played; channels left out (warnings) */
+    uint32_t animated_nodes;                /* nodes a played channel targets */
+    uint32_t rigid_prims, skinned_prims, morphing_prims;   /* primitive placements that move, by kind */
+} sb_motion_stats;
+
+#include <stdio.h>
+
+/* Poses the scene at clip time t: the moving draws' vertices and boxes, the scene's bounds and its BVH. False
+ * when nothing moves or the scene already holds that time. */
+bool sb_scene_pose(struct sb_scene *s, double t);
+/* The animation lines of `shadowbench info SCENE`: the clips that play, what moves and how. */
+void sb_motion_info(const struct sb_scene *s, FILE *out);
+
+/* Poses every moving primitive of s at clip time t (seconds; each clip
+ * loops over its duration) and writes its vertices (sb_scene_repose_prim).
+ * Returns the placements posed. */
+uint32_t sb_motion_pose(sb_motion *m, struct sb_scene *s, double t);
+/* Marks the scene's draws by how they move (sb_draw.motion) once the scene is
+ * finished (its draws chunked); returns how many move. */
+uint32_t sb_motion_mark(const sb_motion *m, struct sb_scene *s);
+sb_motion_stats sb_motion_statistics(const sb_motion *m);
+/* The i-th clip played (i < stats.clips). */
+sb_clip_info sb_motion_clip(const sb_motion *m, uint32_t i);
+void sb_motion_free(sb_motion *m);

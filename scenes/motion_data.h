@@ -1,0 +1,110 @@
+/* motion_data.h - what the glTF adapter (gltf_load.cc) and the motion module
+ * (motion.cc) share, C++ only: a primitive's vertex data as read, an animation
+ * channel as a sampler, and the played clips (struct sb_motion, motion.h's
+ * opaque type) with every moving placement and the data to pose it again. */
+#pragma once
+#ifndef __cplusplus
+#error "motion_data.h is C++ (gltf_load.cc and motion.cc)"
+#endif
+#include <string>
+#include <vector>
+
+extern "C" {
+#include "anim.h"
+#include "scene.h"
+}
+
+namespace sbm {
+
+// One animation channel read into a sampler (its arrays kept alive by the owner).
+struct Channel {
+    std::vector<double> in, out;
+    sb_anim_sampler s;
+};
+
+// A primitive's vertex data, from accessors or a Draco bitstream.
+struct PrimData {
+    std::vector<double> pos, nrm, uv;
+    std::vector<uint32_t> idx;          // as the file lists them (mode 4, 5 or 6)
+    std::vector<double> joints[2], weights[2];
+    bool have_n = false, have_uv = false;
+    int skin_sets = 0;
+};
+
+// The inverse transpose of the upper 3x3: what transforms normals.
+inline sb_m4 normal_matrix(const sb_m4 &w) {
+    sb_m4 nm = sb_m4_identity(), inv;
+    if (sb_m4_invert(w, &inv))
+        for (int r = 0; r < 3; r++)
+            for (int col = 0; col < 3; col++) nm.m[col * 4 + r] = inv.m[r * 4 + col];
+    return nm;
+}
+
+// The skinned positions and normals of a primitive's vertices: each by its joints' matrices (world x inverse
+// bind), weighted. The joints were checked against the skin where the primitive was first read.
+inline void skin_vertices(const std::vector<sb_m4> &jm, const PrimData &d, std::vector<double> &pos,
+                          std::vector<double> &nrm) {
+    size_t nv = pos.size() / 3;
+    for (size_t v = 0; v < nv; v++) {
+        sb_m4 sum = {{0}};
+        for (int set = 0; set < d.skin_sets; set++)
+            for (int k = 0; k < 4; k++) {
+                double wgt = d.weights[set][4 * v + k];
+                size_t j = (size_t)d.joints[set][4 * v + k];
+                if (wgt == 0 || j >= jm.size()) continue;
+                for (int e = 0; e < 16; e++) sum.m[e] += wgt * jm[j].m[e];
+            }
+        sb_v3 q = sb_m4_point(sum, sb_v3_make(pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]));
+        pos[3 * v] = q.x, pos[3 * v + 1] = q.y, pos[3 * v + 2] = q.z;
+        if (!d.have_n) continue;
+        sb_v3 n = sb_m4_dir(normal_matrix(sum), sb_v3_make(nrm[3 * v], nrm[3 * v + 1], nrm[3 * v + 2]));
+        nrm[3 * v] = n.x, nrm[3 * v + 1] = n.y, nrm[3 * v + 2] = n.z;
+    }
+}
+
+enum { PATH_T, PATH_R, PATH_S, PATH_W };   // what a channel animates: translation, rotation, scale, weights
+
+struct MoChannel {
+    int clip, node, path;
+    Channel ch;
+};
+
+struct MoClip {
+    std::string name;
+    double duration = 0;
+    uint32_t channels = 0, nodes = 0;
+};
+
+// A primitive placement that moves: what posing it again needs.
+struct MoPlace {
+    int node = -1, skin = -1;                       // skin: its joints pose it (the node's transform is ignored)
+    sb_m4 inst = sb_m4_identity();                  // an EXT_mesh_gpu_instancing instance, relative to the node
+    PrimData base;                                  // object space, before morph targets and skin
+    std::vector<std::vector<double>> dpos, dnrm;    // the morph targets' deltas (empty: none)
+    uint32_t first = 0, count = 0;                  // its vertices in the scene
+    uint8_t kind = SB_DRAW_RIGID;
+};
+
+} // namespace sbm
+
+// The clips that play (motion.h): the node graph's rest pose, the channels, the moving placements.
+struct sb_motion {
+    std::vector<int> parent, topo;                  // topo: every node after its parent
+    std::vector<sb_trs> rest;
+    std::vector<char> has_matrix;
+    std::vector<sb_m4> rest_local;
+    std::vector<std::vector<double>> rest_weights;
+    std::vector<sbm::MoChannel> channels;
+    std::vector<sbm::MoClip> clips;
+    std::vector<sbm::MoPlace> places;
+    std::vector<std::vector<int>> skin_joints;
+    std::vector<std::vector<sb_m4>> skin_ibm;
+    uint32_t skipped = 0, animated_nodes = 0;
+    // scratch of a pose
+    std::vector<sb_trs> trs;
+    std::vector<char> anim;
+    std::vector<sb_m4> world;
+    std::vector<std::vector<double>> weights;
+    std::vector<double> pos, nrm;
+    std::vector<sb_m4> jm;
+};
