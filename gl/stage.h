@@ -38,6 +38,7 @@ typedef struct sb_counters {
     int casters_moved;                              /* draws whose box changed since the technique's last frame */
     int cascades_invalidated;                       /* cache=on: kept maps drawn again for a moved caster */
     int pages_invalidated;                          /* virtual cache=on: kept pages dropped for a moved caster */
+    int pages_dynamic;                              /* virtual split=on: pages the moving casters were drawn over */
     int split_count;                                /* cascades whose far split is known this frame */
     double splits[SB_MAX_CASCADES];                 /* view-space far distance of each cascade */
 } sb_counters;

@@ -359,9 +359,12 @@ static bool finish_run(sb_run *r) {
     if (r->failed) return false;
     if (o->error_every > 0 || o->images > 0) {
         if (!ensure_instance(r)) return false;
-        double t0 = sb_now_ms();
+        double t0 = sb_now_ms(), refit0 = r->s->ref ? r->s->ref->refit_ms : 0;
+        uint32_t refits0 = r->s->ref ? r->s->ref->refits : 0;
         bool evaluated = evaluate(r->s, &r->in, r->seq, r->out_dir, r->run_id, r->recs, &r->err);
         r->info.eval_s = (sb_now_ms() - t0) / 1e3;
+        if (r->s->ref && r->s->ref->refits > refits0)   /* a moving scene: the reference refit at each pose */
+            r->info.ref_refit_ms = (r->s->ref->refit_ms - refit0) / (r->s->ref->refits - refits0);
         if (!evaluated) {
             r->interrupted = sb_interrupted() != 0;
             return fail_run(r, "%s", r->err.msg);
@@ -416,7 +419,7 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
         .reason = "", .frames = o->frames, .warmup = o->warmup, .width = o->width, .height = o->height,
         .target_ci = o->target_ci, .scene_triangles = sb_scene_triangles(&s->scene), .load_ms = s->scene.load_ms,
         .shadow_mb = sb_spec_shadow_bytes(spec) / 1048576.0,
-        .calib_ms_before = NAN, .calib_ms_after = NAN, .eval_s = NAN, .stable = "", .unstable_reason = "",
+        .calib_ms_before = NAN, .calib_ms_after = NAN, .eval_s = NAN, .ref_refit_ms = NAN, .stable = "", .unstable_reason = "",
     };
     if (o->sun_size > 0 || o->lamp_radius > 0) {
         char sun[40] = "", lamp[40] = "";

@@ -124,10 +124,12 @@ static const char *pair_cell(const void *src, int r, int c) {
 }
 
 /* The pairs users compare (PSSM against SDSM, layered against per-cascade, PSSM's four 2048² cascades against a
- * cached virtual map), as compare --pair makes them. */
+ * cached virtual map, cached against drawn every frame: under motion on the movers scene), as compare --pair
+ * makes them. */
 static void night_pairs(const sb_table *summary, sb_jw *j) {
     static const char *const keys[] = {"technique=pssm,sdsm", "layered=off,on", "layered=off,gs",
-                                       "technique=pssm:res=2048:layered=off:stable=off,virtual:cache=on"};
+                                       "technique=pssm:res=2048:layered=off:stable=off,virtual:cache=on",
+                                       "cache=off,on"};
     sb_jw_arr(j);
     for (size_t k = 0; k < SB_COUNT(keys); k++) {
         sb_compare_opts o = {.pair = keys[k], .threshold_pct = 5};

@@ -152,6 +152,9 @@ static const sb_frame_col frame_cols[] = {
     COUNT("pages_invalidated", f_motion_pages, pages_invalidated, SB_STAT_MEAN, 0,
           "virtual cache=on: kept pages dropped because a moved caster's light-space box, before or after the "
           "move, overlaps them (empty: nothing moves, or no virtual map)"),
+    COUNT("pages_dynamic", f_motion_pages, pages_dynamic, SB_STAT_MEAN, 0,
+          "virtual split=on: pages a moving caster's light-space box overlaps, copied from the kept still page with the "
+          "moving casters drawn over the copy this frame (0 without split)"),
     STAGE_MS(SB_STAGE_ZPASS, 0, "camera depth pre-pass"),
     STAGE_MS(SB_STAGE_MINMAX, 0, "depth reduction"),
     STAGE_MS(SB_STAGE_CASCADE, ALL_USES | SB_USE_NIGHT, "all shadow-map rendering"),
@@ -371,6 +374,9 @@ static const sb_run_col run_cols[] = {
     INFO_METRIC("run_wall_s", r_num, run_wall_s, "s", "wall time of the run"),
     INFO_METRIC("eval_s", r_num, eval_s, "s",
                 "wall time of the untimed evaluation pass: its frames, their flicker twins, the reference"),
+    INFO_METRIC("ref_refit_ms", r_num, ref_refit_ms, "ms",
+                "a moving scene: the reference's refit of its moving draws to a frame's pose, mean over the evaluation "
+                "pass (empty: nothing moves)"),
     RUN_METRIC("harness_share", r_harness_share, 0, "share", "share of the run's wall time outside rendered frames"),
     RUN("throttle_reasons", r_throttle, 0, "clock event (throttle) reasons seen in the measured frames (NVML)"),
     RUN("error_frames", r_error_frames, 0, "frames evaluated against the reference"),

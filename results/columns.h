@@ -57,6 +57,7 @@ typedef struct sb_run_info {
     double load_ms, run_wall_s, frames_wall_ms;   /* frames: every rendered frame, warm-up included */
     double shadow_mb;           /* the shadow storage the run holds (sb_params_shadow_bytes), MiB */
     double eval_s;              /* wall time of the untimed evaluation pass (its frames, twins, reference) */
+    double ref_refit_ms;        /* a moving scene: the reference's refit to a pose, mean (NaN: none) */
     char warnings[512];         /* what the tool cannot stand behind in an ok run ("; "-separated, "" if nothing) */
     char auto_params[160];      /* values calibrated for "auto" parameters ("bias=0.5:normal=0.125"; "" if none) */
     char light[96];             /* the light's size when it has one ("sun 0.53 deg, 64 rays"; "" a light of no size) */

@@ -5,7 +5,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <algorithm>
+#include <atomic>
 #include <map>
+#include <thread>
 
 #include "motion_data.h"
 
@@ -44,39 +47,58 @@ void motion_nodes(sb_motion &m, double t) {
 
 // One placement at the pose motion_nodes made: its morph targets at its node's weights, then its skin or its
 // node's transform, written into the scene.
-void motion_place(sb_motion &m, sb_scene *s, const sbm::MoPlace &p) {
-    m.pos = p.base.pos;
-    m.nrm = p.base.nrm;
+// What one placement's posing writes as it goes (one a thread).
+struct Scratch {
+    std::vector<double> pos, nrm;
+    std::vector<sb_m4> jm;
+};
+
+void motion_place(const sb_motion &m, Scratch &x, sb_scene *s, const sbm::MoPlace &p) {
+    x.pos = p.base.pos;
+    x.nrm = p.base.nrm;
     const std::vector<double> &w = m.weights[p.node];
     for (size_t t = 0; t < p.dpos.size() && t < w.size(); t++) {
         if (w[t] == 0) continue;
-        for (size_t i = 0; i < p.dpos[t].size() && i < m.pos.size(); i++) m.pos[i] += w[t] * p.dpos[t][i];
-        for (size_t i = 0; i < p.dnrm[t].size() && i < m.nrm.size(); i++) m.nrm[i] += w[t] * p.dnrm[t][i];
+        for (size_t i = 0; i < p.dpos[t].size() && i < x.pos.size(); i++) x.pos[i] += w[t] * p.dpos[t][i];
+        for (size_t i = 0; i < p.dnrm[t].size() && i < x.nrm.size(); i++) x.nrm[i] += w[t] * p.dnrm[t][i];
     }
     if (p.skin >= 0) {
         const std::vector<int> &joints = m.skin_joints[p.skin];
-        m.jm.resize(joints.size());
-        for (size_t j = 0; j < joints.size(); j++) m.jm[j] = sb_m4_mul(m.world[joints[j]], m.skin_ibm[p.skin][j]);
-        sbm::skin_vertices(m.jm, p.base, m.pos, m.nrm);
+        x.jm.resize(joints.size());
+        for (size_t j = 0; j < joints.size(); j++) x.jm[j] = sb_m4_mul(m.world[joints[j]], m.skin_ibm[p.skin][j]);
+        sbm::skin_vertices(x.jm, p.base, x.pos, x.nrm);
     } else {
         sb_m4 w4 = sb_m4_mul(m.world[p.node], p.inst), nm = sbm::normal_matrix(w4);
-        for (size_t v = 0; v < m.pos.size() / 3; v++) {
-            sb_v3 q = sb_m4_point(w4, sb_v3_make(m.pos[3 * v], m.pos[3 * v + 1], m.pos[3 * v + 2]));
-            m.pos[3 * v] = q.x, m.pos[3 * v + 1] = q.y, m.pos[3 * v + 2] = q.z;
+        for (size_t v = 0; v < x.pos.size() / 3; v++) {
+            sb_v3 q = sb_m4_point(w4, sb_v3_make(x.pos[3 * v], x.pos[3 * v + 1], x.pos[3 * v + 2]));
+            x.pos[3 * v] = q.x, x.pos[3 * v + 1] = q.y, x.pos[3 * v + 2] = q.z;
             if (!p.base.have_n) continue;
-            sb_v3 nn = sb_m4_dir(nm, sb_v3_make(m.nrm[3 * v], m.nrm[3 * v + 1], m.nrm[3 * v + 2]));
-            m.nrm[3 * v] = nn.x, m.nrm[3 * v + 1] = nn.y, m.nrm[3 * v + 2] = nn.z;
+            sb_v3 nn = sb_m4_dir(nm, sb_v3_make(x.nrm[3 * v], x.nrm[3 * v + 1], x.nrm[3 * v + 2]));
+            x.nrm[3 * v] = nn.x, x.nrm[3 * v + 1] = nn.y, x.nrm[3 * v + 2] = nn.z;
         }
     }
-    sb_scene_repose_prim(s, p.first, p.count, m.pos.data(), p.base.have_n ? m.nrm.data() : nullptr);
+    sb_scene_repose_prim(s, p.first, p.count, x.pos.data(), p.base.have_n ? x.nrm.data() : nullptr);
 }
 
 } // namespace
 
+// The placements are posed on every core (each writes vertices and boxes of its own): 64 skinned characters are
+// 60 % of a frame on one core of this machine (docs/measurements.md, Moving casters).
 extern "C" uint32_t sb_motion_pose(sb_motion *m, sb_scene *s, double t) {
     motion_nodes(*m, t);
-    for (const sbm::MoPlace &p : m->places) motion_place(*m, s, p);
-    return (uint32_t)m->places.size();
+    size_t n = m->places.size();
+    unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+    size_t threads = std::min<size_t>(std::min<size_t>(cores, 16), n);
+    std::atomic<size_t> next(0);
+    auto work = [&]() {
+        Scratch x;
+        for (size_t i; (i = next.fetch_add(1)) < n;) motion_place(*m, x, s, m->places[i]);
+    };
+    std::vector<std::thread> pool;
+    for (size_t k = 1; k < threads; k++) pool.emplace_back(work);
+    work();
+    for (std::thread &th : pool) th.join();
+    return (uint32_t)n;
 }
 
 extern "C" uint32_t sb_motion_mark(const sb_motion *m, sb_scene *s) {

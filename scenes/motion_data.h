@@ -100,11 +100,9 @@ struct sb_motion {
     std::vector<std::vector<int>> skin_joints;
     std::vector<std::vector<sb_m4>> skin_ibm;
     uint32_t skipped = 0, animated_nodes = 0;
-    // scratch of a pose
+    // the nodes at the pose (motion_nodes), read by every placement's posing
     std::vector<sb_trs> trs;
     std::vector<char> anim;
     std::vector<sb_m4> world;
     std::vector<std::vector<double>> weights;
-    std::vector<double> pos, nrm;
-    std::vector<sb_m4> jm;
 };

@@ -30,7 +30,7 @@
 #include "shaders.h"
 
 typedef struct virtual_desc {
-    int res, page, pool, levels, filter, cache;
+    int res, page, pool, levels, filter, cache, split;
     double lod, bias, slope, normal;
 } virtual_desc;
 
@@ -52,6 +52,10 @@ static const sb_param_def virtual_params[] = {
     SB_PARAM_E(virtual_desc, cache, on, "off|on",
                "keep a page across frames while its level, place and light hold and no moved caster's light-space box "
                "overlaps it", .role = SB_PARAM_CACHE),
+    SB_PARAM_E_LATE(virtual_desc, split, off, "off|on",
+                    "cache=on: pages hold the still casters only, kept while nothing still changes; each frame a page a "
+                    "moving caster overlaps is copied and the moving casters drawn over the copy (UE5's static and "
+                    "dynamic cache)"),
 };
 
 /* The pool's layout, from the parameters alone (the GPU-memory check, shadow_mb and create share it). */
@@ -87,6 +91,8 @@ static bool virtual_check(const void *desc, sb_err *err) {
     if (d->res / d->page > MAX_PAGES)
         return sb_fail(err, "res=%d holds %d pages a side at page=%d: at most %d (valid: res <= %d)", d->res,
                        d->res / d->page, d->page, MAX_PAGES, MAX_PAGES * d->page);
+    if (d->split && !d->cache)
+        return sb_fail(err, "split=on needs cache=on (the still pages it keeps are the cache)");
     pool_layout p = layout_of(d);
     if (p.slots < 1)
         return sb_fail(err, "pool=%d MiB holds no page of %d texels with its table (valid: pool >= %.0f MiB here)",
@@ -156,6 +162,9 @@ typedef struct virtual_state {
     int *free_slots;
     int frame_no;
     bool fitted;
+    /* split=on: this frame's copies of pages with the moving casters drawn over them (the page, its copy's slot) */
+    page_key *over_key;
+    int *over_slot, *over_keep, nover;   /* the page's slot, and where its still page is kept aside (-1: given up) */
 } virtual_state;
 
 /* World size of a pixel per unit of view depth, times 2^lod: the footprint a level's texel is matched to. */
@@ -262,6 +271,9 @@ static bool virtual_create(void *state, const sb_run_ctx *rc, const void *desc, 
     s->need = sb_xcalloc((size_t)entries, sizeof *s->need);
     s->missing = sb_xcalloc((size_t)entries, sizeof *s->missing);
     s->free_slots = sb_xcalloc((size_t)s->p.slots, sizeof *s->free_slots);
+    s->over_key = sb_xcalloc((size_t)entries + 1, sizeof *s->over_key);
+    s->over_slot = sb_xcalloc((size_t)entries + 1, sizeof *s->over_slot);
+    s->over_keep = sb_xcalloc((size_t)entries + 1, sizeof *s->over_keep);
     invalidate(s);
 
     s->atlas = sb_shadow_texture(GL_TEXTURE_2D, GL_DEPTH_COMPONENT32F, s->p.slots_x * s->p.slot, s->p.rows * s->p.slot,
@@ -388,27 +400,41 @@ static int by_staleness(const void *a, const void *b) {   /* empty slots first, 
     return ia - ib;
 }
 
-/* Draws page k into slot i: the page's window with its border, its casters culled over the BVH. */
-static void render_page(virtual_state *s, sb_frame *f, page_key k, int i) {
-    const sb_gpu *g = f->gpu;
+/* Which casters a page's draw takes: all, the still ones (split=on's kept pages), the moving ones (its copies). */
+enum { CASTERS_ALL, CASTERS_STILL, CASTERS_MOVING };
+
+/* The orthographic view of page k's window with its border. */
+static sb_m4 page_view(const virtual_state *s, page_key k) {
     double t = level_texel(s, k.level), pg = s->d.page;
     double x0 = ((double)k.x * pg - BORDER) * t, x1 = ((double)(k.x + 1) * pg + BORDER) * t;
     double y0 = ((double)k.y * pg - BORDER) * t, y1 = ((double)(k.y + 1) * pg + BORDER) * t;
-    sb_m4 vp = sb_m4_mul(sb_m4_ortho(x0, x1, y0, y1, s->zn, s->zf), s->lview);
+    return sb_m4_mul(sb_m4_ortho(x0, x1, y0, y1, s->zn, s->zf), s->lview);
+}
+
+/* Draws page k into slot i: the page's window with its border, its casters (of the kind asked) culled over the
+ * BVH; `clear`: the slot is cleared first (a copy keeps what it holds). */
+static void render_page(virtual_state *s, sb_frame *f, page_key k, int i, int casters, bool clear) {
+    const sb_gpu *g = f->gpu;
+    sb_m4 vp = page_view(s, k);
     double planes[6][4];
     sb_frustum_planes(vp, planes);
     int sx = (i % s->p.slots_x) * s->p.slot, sy = (i / s->p.slots_x) * s->p.slot;
     glViewport(sx, sy, s->p.slot, s->p.slot);
     glScissor(sx, sy, s->p.slot, s->p.slot);
-    glClear(GL_DEPTH_BUFFER_BIT);
+    if (clear) glClear(GL_DEPTH_BUFFER_BIT);
     uint32_t n = sb_scene_collect(g->scene, (const double(*)[4])planes, 4, f->scratch);   /* x and y: depth spans all */
     float m[16];
     sb_m4_to_float(vp, m);
     for (int a = 0; a < 2 && s->depth_prog[a]; a++) {
         glUseProgram(s->depth_prog[a]);
         glUniformMatrix4fv(s->u_vp[a], 1, GL_FALSE, m);
-        for (uint32_t j = 0; j < n; j++)
-            if (sb_draw_variant(g, f->scratch[j]) == a) sb_submit(f, f->scratch[j], 1);
+        for (uint32_t j = 0; j < n; j++) {
+            uint32_t d = f->scratch[j];
+            bool moving = g->scene->draws[d].motion != SB_DRAW_STILL;
+            if (sb_draw_variant(g, d) != a || (casters == CASTERS_STILL && moving) || (casters == CASTERS_MOVING && !moving))
+                continue;
+            sb_submit(f, d, 1);
+        }
         sb_submit_flush(f);
     }
 }
@@ -457,8 +483,29 @@ typedef struct pool_tally {
     int drawn, left_out, left_out_own, stand_ins;
 } pool_tally;
 
-/* Keeps the needed pages the pool holds, gives the others slots and draws them. */
-static void update_pool(virtual_state *s, sb_frame *f, int needed, pool_tally *t) {
+/* The GL state every page's draw shares. */
+static void pages_begin(virtual_state *s, const sb_frame *f) {
+    glBindFramebuffer(GL_FRAMEBUFFER, s->fbo);
+    glEnable(GL_SCISSOR_TEST);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    glEnable(GL_DEPTH_CLAMP);   /* casters toward the light stay, at depth 0 */
+    if (s->d.slope != 0) {
+        glEnable(GL_POLYGON_OFFSET_FILL);
+        glPolygonOffset((float)s->d.slope, 0.0f);
+    }
+    glBindVertexArray(f->gpu->vao);
+}
+
+static void pages_end(void) {
+    glDisable(GL_POLYGON_OFFSET_FILL);
+    glDisable(GL_DEPTH_CLAMP);
+    glDisable(GL_SCISSOR_TEST);
+}
+
+/* Keeps the needed pages the pool holds, gives the others slots and draws them (with the casters asked). */
+static void update_pool(virtual_state *s, sb_frame *f, int needed, int casters, pool_tally *t) {
     int cur = ++s->frame_no, nmiss = 0;
     hash_rebuild(s);
     for (int j = 0; j < needed; j++) {
@@ -480,27 +527,81 @@ static void update_pool(virtual_state *s, sb_frame *f, int needed, pool_tally *t
         t->stand_ins -= s->missing[j].stand_in;
     }
     if (!drawn) return;
-    const sb_gpu *g = f->gpu;
-    glBindFramebuffer(GL_FRAMEBUFFER, s->fbo);
-    glEnable(GL_SCISSOR_TEST);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    glDepthMask(GL_TRUE);
-    glEnable(GL_DEPTH_CLAMP);   /* casters toward the light stay, at depth 0 */
-    if (s->d.slope != 0) {
-        glEnable(GL_POLYGON_OFFSET_FILL);
-        glPolygonOffset((float)s->d.slope, 0.0f);
-    }
-    glBindVertexArray(g->vao);
+    pages_begin(s, f);
     for (int j = 0; j < drawn; j++) {
         int i = s->free_slots[j];
         s->slot_key[i] = s->missing[j];
         s->slot_used[i] = cur;
-        render_page(s, f, s->missing[j], i);
+        render_page(s, f, s->missing[j], i, casters, true);
     }
-    glDisable(GL_POLYGON_OFFSET_FILL);
-    glDisable(GL_DEPTH_CLAMP);
-    glDisable(GL_SCISSOR_TEST);
+    pages_end();
+}
+
+/* The depth of slot `from` into slot `to` (the atlas's texels, the border too). */
+static void copy_slot(const virtual_state *s, int from, int to) {
+    glCopyImageSubData(s->atlas, GL_TEXTURE_2D, 0, (from % s->p.slots_x) * s->p.slot, (from / s->p.slots_x) * s->p.slot,
+                       0, s->atlas, GL_TEXTURE_2D, 0, (to % s->p.slots_x) * s->p.slot, (to / s->p.slots_x) * s->p.slot, 0,
+                       s->p.slot, s->p.slot, 1);
+}
+
+/* split=on: every needed page a moving caster's light-space box overlaps is kept aside in a slot no page of this
+ * frame needs, and the moving casters are drawn over it in its own slot; after the frame the still page is put
+ * back and the spare slot is free again (the pages stay kept with the still casters alone).
+ * A page with no slot to spare is drawn with every caster in its own slot and given up after the frame, never
+ * shown without its moving casters. Returns the pages the moving casters were drawn for. */
+static int overlay_moving(virtual_state *s, sb_frame *f, int needed) {
+    const sb_scene *sc = f->gpu->scene;
+    s->nover = 0;
+    hash_rebuild(s);   /* the pages update_pool just drew too */
+    double (*rects)[4] = sb_xmalloc(sizeof *rects * (sc->moving_draws + 1));
+    uint32_t nr = 0;
+    for (uint32_t d = 0; d < sc->draw_count; d++)
+        if (sc->draws[d].motion != SB_DRAW_STILL) light_rect(s, &sc->draws[d].box, rects[nr++]);
+    int spare = 0, drawn = 0;
+    for (int j = 0; j < needed; j++) {
+        page_key k = s->need[j];
+        int i = hash_find(s, k);
+        if (i < 0) continue;   /* left out for want of a slot */
+        double t = level_texel(s, k.level), pg = s->d.page;
+        double x0 = ((double)k.x * pg - BORDER) * t, x1 = ((double)(k.x + 1) * pg + BORDER) * t;
+        double y0 = ((double)k.y * pg - BORDER) * t, y1 = ((double)(k.y + 1) * pg + BORDER) * t;
+        bool over = false;
+        for (uint32_t r = 0; r < nr && !over; r++)
+            over = rects[r][2] >= x0 && rects[r][0] <= x1 && rects[r][3] >= y0 && rects[r][1] <= y1;
+        if (!over) continue;
+        if (!drawn++) pages_begin(s, f);
+        while (spare < s->p.slots && s->slot_used[spare] == s->frame_no) spare++;
+        if (spare == s->p.slots) {   /* no slot to spare: the page itself, every caster, not kept */
+            render_page(s, f, k, i, CASTERS_ALL, true);
+            s->over_key[s->nover] = k, s->over_slot[s->nover] = i, s->over_keep[s->nover++] = -1;
+            continue;
+        }
+        /* the still page kept aside in the spare slot, the moving casters drawn over it where it is (the same
+           place in the atlas as any draw of that page: the same rasterization), put back after the frame */
+        int c = spare++;
+        s->slot_key[c].level = -1, s->slot_used[c] = s->frame_no;
+        copy_slot(s, i, c);
+        render_page(s, f, k, i, CASTERS_MOVING, false);
+        s->over_key[s->nover] = k, s->over_slot[s->nover] = i, s->over_keep[s->nover++] = c;
+    }
+    if (drawn) pages_end();
+    free(rects);
+    return drawn;
+}
+
+/* After the frame: each still page put back from where it was kept aside, that slot free again; a page drawn
+ * whole in its own slot (no slot to spare) given up. */
+static void overlay_done(virtual_state *s) {
+    for (int o = 0; o < s->nover; o++) {
+        int i = s->over_slot[o], c = s->over_keep[o];
+        if (c < 0) {
+            s->slot_key[i].level = -1, s->slot_used[i] = -1;
+            continue;
+        }
+        copy_slot(s, c, i);
+        s->slot_key[c].level = -1, s->slot_used[c] = -1;
+    }
+    s->nover = 0;
 }
 
 /* The page table: slot + 1 for every resident page inside its level's window this frame. */
@@ -513,6 +614,12 @@ static void upload_table(virtual_state *s) {
         if (k.level < 0) continue;
         int64_t x = k.x - s->origin[k.level][0], y = k.y - s->origin[k.level][1];
         if (x >= 0 && y >= 0 && x < P && y < P) s->table[((size_t)k.level * P + (size_t)y) * P + (size_t)x] = (uint16_t)(i + 1);
+    }
+    for (int o = 0; o < s->nover; o++) {   /* split=on: this frame's copies with the moving casters */
+        page_key k = s->over_key[o];
+        int64_t x = k.x - s->origin[k.level][0], y = k.y - s->origin[k.level][1];
+        if (x >= 0 && y >= 0 && x < P && y < P)
+            s->table[((size_t)k.level * P + (size_t)y) * P + (size_t)x] = (uint16_t)(s->over_slot[o] + 1);
     }
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, s->table_buf);
     glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, (GLsizeiptr)(entries + 1) / 2 * 4, s->table);
@@ -531,8 +638,10 @@ static void virtual_frame(void *state, sb_frame *f) {
         invalidate(s);
         fit_clipmap(s, f);
     }
+    /* split=on keeps pages of the still casters: a moving one never invalidates them, it is drawn over copies */
+    const bool split = s->d.split && !f->bypass_cache && sb_scene_moves(g->scene);
     if (!s->d.cache || f->bypass_cache) invalidate(s);   /* the stale check draws every page afresh */
-    else if (f->moved_count) f->counters.pages_invalidated = invalidate_moved(s, f);
+    else if (f->moved_count && !split) f->counters.pages_invalidated = invalidate_moved(s, f);
     place_windows(s, f);
     mark_pages(s, f);
     int needed = 0, P = s->p.pages;
@@ -546,7 +655,8 @@ static void virtual_frame(void *state, sb_frame *f) {
     sb_stage_begin(f, SB_STAGE_CASCADE);
     int held = needed, given_up = coarsen_to_fit(s, &held);
     pool_tally t = {0};
-    update_pool(s, f, held, &t);
+    update_pool(s, f, held, split ? CASTERS_STILL : CASTERS_ALL, &t);
+    if (split) f->counters.pages_dynamic = overlay_moving(s, f, held);
     upload_table(s);
     /* a partition of the pages needed: drawn or kept for themselves, or given up (pool_overflow); the stand-ins
        drawn or kept in their place are counted apart, inside pages_rendered and pages_cached */
@@ -574,6 +684,7 @@ static void virtual_frame(void *state, sb_frame *f) {
     glUniform3f(s->u_light, (float)g->sun.x, (float)g->sun.y, (float)g->sun.z);
     sb_final_pass(f, &s->fp, true);
     sb_stage_end(f, SB_STAGE_FINAL);
+    overlay_done(s);
     if (f->bypass_cache) invalidate(s);   /* ... and keeps none of them */
 }
 
@@ -596,6 +707,9 @@ static void virtual_destroy(void *state) {
     free(s->need);
     free(s->missing);
     free(s->free_slots);
+    free(s->over_key);
+    free(s->over_slot);
+    free(s->over_keep);
     memset(s, 0, sizeof *s);
 }
 

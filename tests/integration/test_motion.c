@@ -201,14 +201,16 @@ static void test_caches_invalidate_what_moved(void **st) {
     assert_non_null(pf);
     fprintf(pf, "fov 60\nlook 0  0 6 -22  0 1 0\nlook 8  0 6 -22  0 1 0\n");
     fclose(pf);
-    assert_int_equal(sh("%s run movers %s pssm:stable=on:cache=on virtual:cache=on virtual:cache=off raycast --anim slide "
+    assert_int_equal(sh("%s run movers %s pssm:stable=on:cache=on virtual:cache=on virtual:cache=off "
+                        "virtual:cache=on:split=on raycast --anim slide "
                         "--frames 9 --size 320x180 --error-every 2 --quiet --out %s/caches", test_binary(), path, g_tmp), 0);
     char dir[4096];
     snprintf(dir, sizeof dir, "%s", last_line());
-    sb_table p, von, voff, sum;
+    sb_table p, von, voff, vsplit, sum;
     assert_true(frames_of(dir, "pssm", "cache=on", &p));
-    assert_true(frames_of(dir, "virtual", "cache=on", &von));
+    assert_true(frames_of(dir, "virtual", "filter=hw:cache=on", &von));   /* its canonical text ends there */
     assert_true(frames_of(dir, "virtual", "cache=off", &voff));
+    assert_true(frames_of(dir, "virtual", "split=on", &vsplit));
     int partial = 0;
     for (int r = 1; r < p.nrows; r++) {   /* frame 0 draws everything: nothing was kept yet */
         long moved = cell(&p, r, "casters_moved"), inval = cell(&p, r, "cascades_invalidated"),
@@ -225,7 +227,16 @@ static void test_caches_invalidate_what_moved(void **st) {
         printf("virtual frame %d: pages drawn cache=on %ld (invalidated %ld), cache=off %ld\n", r, pon, pinv, poff);
         assert_true(pon < poff);
         if (moved) assert_true(pon > 0 && pinv > 0);
+        /* split=on: no still page is given up for the mover (only pages newly needed are drawn: the mover's own
+           top moves under other pages), the mover drawn over copies of the pages it overlaps */
+        long sdrawn = cell(&vsplit, r, "pages_rendered"), sdyn = cell(&vsplit, r, "pages_dynamic");
+        printf("virtual split=on frame %d: pages drawn %ld, invalidated %s, the mover drawn over %ld\n", r, sdrawn,
+               sb_table_get(&vsplit, r, "pages_invalidated"), sdyn);
+        assert_true(sdrawn <= pon - pinv);
+        assert_int_equal(cell(&vsplit, r, "pages_invalidated"), 0);
+        if (moved) assert_true(sdyn > 0);
     }
+    sb_table_free(&vsplit);
     assert_true(partial > 0);   /* some frames keep the cascades the mover does not reach */
     sb_table_free(&p);
     sb_table_free(&von);
@@ -420,6 +431,38 @@ static void test_bad_input(void **st) {
     assert_non_null(strstr(g_out, "animation: nothing moves"));
 }
 
+/* The nightly's runs of still scenes keep their index, id and parameters: a scene that moves only adds runs. */
+static void test_nightly_ids_hold(void **st) {
+    (void)st;
+    assert_int_equal(sh("%s batch %s --dry-run", test_binary(), test_data("../../scripts/nightly.bench")), 0);
+    size_t len;
+    sb_err err;
+    char *golden = sb_read_file(test_data("nightly-ids.csv"), &len, &err);
+    assert_non_null(golden);
+    int rows = 0, found = 0;
+    for (char *line = strtok(golden, "\n"); line; line = strtok(NULL, "\n")) {
+        if (line[0] == '#') continue;
+        rows++;
+        /* the dry run's line: index,run_id,scene,path,technique,params,cost; the golden one leaves path and cost out */
+        char idx[16], id[32], scene[64], rest[1024];
+        assert_int_equal(sscanf(line, "%15[^,],%31[^,],%63[^,],%1023[^\n]", idx, id, scene, rest), 4);
+        char want[1200];
+        snprintf(want, sizeof want, "\n%s,%s,%s,", idx, id, scene);
+        char *at = strstr(g_out, want);
+        if (!at) print_error("the nightly lost run %s (%s)\n", id, line);
+        assert_non_null(at);
+        char *tech = strchr(at + strlen(want), ',');   /* past the path */
+        assert_non_null(tech);
+        tech++;
+        assert_memory_equal(tech, rest, strlen(rest));   /* the same technique and parameters */
+        found++;
+    }
+    printf("the nightly's %d runs of still scenes: all there, the same index, id and parameters\n", found);
+    assert_true(rows >= 150);
+    assert_int_equal(found, rows);
+    free(golden);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_bad_input),
@@ -427,6 +470,7 @@ int main(void) {
         cmocka_unit_test(test_caches_invalidate_what_moved),
         cmocka_unit_test(test_real_animated_files),
         cmocka_unit_test(test_anim_none_is_the_still_file),
+        cmocka_unit_test(test_nightly_ids_hold),
     };
     return cmocka_run_group_tests_name("motion", tests, setup, teardown);
 }
