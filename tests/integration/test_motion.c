@@ -74,26 +74,6 @@ static double slider_x(double t) {
     return t <= 4 ? -8 + 4 * t : 8 - 4 * (t - 4);
 }
 
-/* Whether the ray from p toward the sun meets the box [lo, hi]. */
-static bool ray_meets_box(sb_v3 p, sb_v3 d, const double lo[3], const double hi[3]) {
-    const double o[3] = {p.x, p.y, p.z}, v[3] = {d.x, d.y, d.z};
-    double t0 = 1e-9, t1 = 1e300;
-    for (int a = 0; a < 3; a++) {
-        if (fabs(v[a]) < 1e-15) {
-            if (o[a] < lo[a] || o[a] > hi[a]) return false;
-            continue;
-        }
-        double ta = (lo[a] - o[a]) / v[a], tb = (hi[a] - o[a]) / v[a];
-        if (ta > tb) {
-            double x = ta;
-            ta = tb, tb = x;
-        }
-        t0 = fmax(t0, ta), t1 = fmin(t1, tb);
-        if (t0 > t1) return false;
-    }
-    return true;
-}
-
 typedef struct centroid {
     double x, z;
     long n;
@@ -150,7 +130,7 @@ static void test_box_shadow_follows_the_clip(void **st) {
                     const float *r = b.pos + 4 * (i + 1);
                     if (xx + 1 < w && b.ref[i + 1] != 128 && fabs(r[1] + s.scene.origin.y) <= 1e-3)   /* on the plane */
                         foot = fmax(foot, hypot(r[0] - q[0], r[2] - q[2]));
-                    if (ray_meets_box(p, sun, lo, hi)) add_point(&want, p);
+                    if (box_blocks(p, sun, 1e300, lo, hi)) add_point(&want, p);
                     if (b.ref[i] < 128) add_point(&ref, p);
                     if (b.vis[i] < 128) add_point(&got, p);
                 }

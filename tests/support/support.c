@@ -108,6 +108,10 @@ bool pb_box_shadows(sb_v3 p, sb_v3 d) { return pb_box_blocks(p, d, 1e300); }
 
 bool pb_box_blocks(sb_v3 p, sb_v3 d, double tmax) {
     const double lo[3] = {-1, 0, -1}, hi[3] = {1, 2, 1};
+    return box_blocks(p, d, tmax, lo, hi);
+}
+
+bool box_blocks(sb_v3 p, sb_v3 d, double tmax, const double lo[3], const double hi[3]) {
     const double o[3] = {p.x, p.y, p.z}, v[3] = {d.x, d.y, d.z};
     double t0 = 1e-9, t1 = tmax;
     for (int a = 0; a < 3; a++) {

@@ -38,6 +38,8 @@ bool eval_instance(sb_session *s, sb_instance *in, int i, int n, sb_error_metric
 bool pb_box_shadows(sb_v3 p, sb_v3 sun);
 /* Does the segment p + t d, t in (0, tmax), cross that box? */
 bool pb_box_blocks(sb_v3 p, sb_v3 d, double tmax);
+/* Whether the segment p + t d, t in (0, tmax], meets the axis-aligned box [lo, hi]. */
+bool box_blocks(sb_v3 p, sb_v3 d, double tmax, const double lo[3], const double hi[3]);
 /* Path of a file in the source tree's tests/data. */
 const char *test_data(const char *name);
 /* Path of the built shadowbench binary. */
