@@ -589,6 +589,19 @@ static int overlay_moving(virtual_state *s, sb_frame *f, int needed) {
     return drawn;
 }
 
+/* The stale check (bypass_cache): every needed page the pool kept is drawn again with every caster, in its own
+ * slot (a page rasterized at another place in the atlas can differ by a texel at an edge, on llvmpipe and on a
+ * GPU alike: that would be no staleness), and the frame then forgets them all (virtual_frame). */
+static void redraw_in_place(virtual_state *s, sb_frame *f, int needed) {
+    hash_rebuild(s);
+    pages_begin(s, f);
+    for (int j = 0; j < needed; j++) {
+        int i = hash_find(s, s->need[j]);
+        if (i >= 0) render_page(s, f, s->need[j], i, CASTERS_ALL, true);
+    }
+    pages_end();
+}
+
 /* After the frame: each still page put back from where it was kept aside, that slot free again; a page drawn
  * whole in its own slot (no slot to spare) given up. */
 static void overlay_done(virtual_state *s) {
@@ -640,8 +653,8 @@ static void virtual_frame(void *state, sb_frame *f) {
     }
     /* split=on keeps pages of the still casters: a moving one never invalidates them, it is drawn over copies */
     const bool split = s->d.split && !f->bypass_cache && sb_scene_moves(g->scene);
-    if (!s->d.cache || f->bypass_cache) invalidate(s);   /* the stale check draws every page afresh */
-    else if (f->moved_count && !split) f->counters.pages_invalidated = invalidate_moved(s, f);
+    if (!s->d.cache) invalidate(s);
+    else if (f->moved_count && !split && !f->bypass_cache) f->counters.pages_invalidated = invalidate_moved(s, f);
     place_windows(s, f);
     mark_pages(s, f);
     int needed = 0, P = s->p.pages;
@@ -657,6 +670,7 @@ static void virtual_frame(void *state, sb_frame *f) {
     pool_tally t = {0};
     update_pool(s, f, held, split ? CASTERS_STILL : CASTERS_ALL, &t);
     if (split) f->counters.pages_dynamic = overlay_moving(s, f, held);
+    if (f->bypass_cache) redraw_in_place(s, f, held);
     upload_table(s);
     /* a partition of the pages needed: drawn or kept for themselves, or given up (pool_overflow); the stand-ins
        drawn or kept in their place are counted apart, inside pages_rendered and pages_cached */
