@@ -12,6 +12,7 @@
 #include "csv.h"
 #include "columns.h"
 #include "resultset.h"
+#include "technique.h"
 #include "table.h"
 
 /* A results set's summary (the set's folder, or its summary.csv), the set verified whole first (resultset.h). */
@@ -337,6 +338,19 @@ static void cell_num(char *out, double v) {
     else snprintf(out, 160, "%.4g", v);
 }
 
+/* value of key in a run's params, where a late parameter at its default is left out of the text
+ * (sb_param_def.late): then its default, from the technique's table */
+static bool run_param(const char *tech, const char *params, const char *key, char *out, size_t len) {
+    if (param_value(params, key, out, len)) return true;
+    const sb_technique *t = sb_technique_find(tech);
+    for (int i = 0; t && i < t->param_count; i++)
+        if (t->params[i].late && !strcmp(t->params[i].name, key)) {
+            snprintf(out, len, "%s", t->params[i].def);
+            return true;
+        }
+    return false;
+}
+
 /* Do runs ra and rb form a pair for key (A's value va, B's vb)? */
 static bool is_pair(const sb_table *t, int ra, int rb, const char *key, const char *va, const char *vb) {
     const char *pa = sb_table_get(t, ra, "params"), *pb = sb_table_get(t, rb, "params");
@@ -356,9 +370,9 @@ static bool is_pair(const sb_table *t, int ra, int rb, const char *key, const ch
         if (strlen(ta) != la || strncmp(ta, va, la) || strlen(tb) != lb || strncmp(tb, vb, lb)) return false;
         return qa || qb ? meets(pa, qa ? qa + 1 : "") && meets(pb, qb ? qb + 1 : "") : agree(pa, pb, NULL);
     }
-    return !strcmp(sb_table_get(t, ra, "technique"), sb_table_get(t, rb, "technique")) &&
-           param_value(pa, key, v, sizeof v) && !strcmp(v, va) && param_value(pb, key, v, sizeof v) &&
-           !strcmp(v, vb) && agree(pa, pb, key);
+    const char *tech = sb_table_get(t, ra, "technique");
+    return !strcmp(tech, sb_table_get(t, rb, "technique")) && run_param(tech, pa, key, v, sizeof v) &&
+           !strcmp(v, va) && run_param(tech, pb, key, v, sizeof v) && !strcmp(v, vb) && agree(pa, pb, key);
 }
 
 /* The table: scene (and path where it is not the scene's), technique (unless it
