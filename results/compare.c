@@ -229,6 +229,19 @@ static bool param_value(const char *params, const char *key, char *out, size_t l
     return false;
 }
 
+/* value of key in a run's params, where a late parameter at its default is left out of the text
+ * (sb_param_def.late): then its default, from the technique's table */
+static bool run_param(const char *tech, const char *params, const char *key, char *out, size_t len) {
+    if (param_value(params, key, out, len)) return true;
+    const sb_technique *t = sb_technique_find(tech);
+    for (int i = 0; t && i < t->param_count; i++)
+        if (t->params[i].late && !strcmp(t->params[i].name, key)) {
+            snprintf(out, len, "%s", t->params[i].def);
+            return true;
+        }
+    return false;
+}
+
 /* Do two params strings agree on every key both have, other than `skip`? */
 static bool agree(const char *a, const char *b, const char *skip) {
     char buf[2048];
@@ -244,8 +257,8 @@ static bool agree(const char *a, const char *b, const char *skip) {
     return true;
 }
 
-/* Does a params string have every key=value of `want` ("res=2048:layered=off")? */
-static bool meets(const char *params, const char *want) {
+/* Does a run of technique tech have every key=value of `want` ("res=2048:layered=off")? */
+static bool meets(const char *tech, const char *params, const char *want) {
     char buf[512];
     snprintf(buf, sizeof buf, "%s", want);
     char *save = NULL;
@@ -254,7 +267,7 @@ static bool meets(const char *params, const char *want) {
         if (!eq) continue;
         *eq = 0;
         char v[256];
-        if (!param_value(params, t, v, sizeof v) || strcmp(v, eq + 1)) return false;
+        if (!run_param(tech, params, t, v, sizeof v) || strcmp(v, eq + 1)) return false;
     }
     return true;
 }
@@ -338,19 +351,6 @@ static void cell_num(char *out, double v) {
     else snprintf(out, 160, "%.4g", v);
 }
 
-/* value of key in a run's params, where a late parameter at its default is left out of the text
- * (sb_param_def.late): then its default, from the technique's table */
-static bool run_param(const char *tech, const char *params, const char *key, char *out, size_t len) {
-    if (param_value(params, key, out, len)) return true;
-    const sb_technique *t = sb_technique_find(tech);
-    for (int i = 0; t && i < t->param_count; i++)
-        if (t->params[i].late && !strcmp(t->params[i].name, key)) {
-            snprintf(out, len, "%s", t->params[i].def);
-            return true;
-        }
-    return false;
-}
-
 /* Do runs ra and rb form a pair for key (A's value va, B's vb)? */
 static bool is_pair(const sb_table *t, int ra, int rb, const char *key, const char *va, const char *vb) {
     const char *pa = sb_table_get(t, ra, "params"), *pb = sb_table_get(t, rb, "params");
@@ -368,7 +368,7 @@ static bool is_pair(const sb_table *t, int ra, int rb, const char *key, const ch
         size_t la = qa ? (size_t)(qa - va) : strlen(va), lb = qb ? (size_t)(qb - vb) : strlen(vb);
         const char *ta = sb_table_get(t, ra, "technique"), *tb = sb_table_get(t, rb, "technique");
         if (strlen(ta) != la || strncmp(ta, va, la) || strlen(tb) != lb || strncmp(tb, vb, lb)) return false;
-        return qa || qb ? meets(pa, qa ? qa + 1 : "") && meets(pb, qb ? qb + 1 : "") : agree(pa, pb, NULL);
+        return qa || qb ? meets(ta, pa, qa ? qa + 1 : "") && meets(tb, pb, qb ? qb + 1 : "") : agree(pa, pb, NULL);
     }
     const char *tech = sb_table_get(t, ra, "technique");
     return !strcmp(tech, sb_table_get(t, rb, "technique")) && run_param(tech, pa, key, v, sizeof v) &&

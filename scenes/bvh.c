@@ -83,6 +83,23 @@ void sb_bvh_build(sb_bvh *b, sb_boxes boxes) {
     build(&bd, 0, boxes.count);
 }
 
+void sb_bvh_refit(sb_bvh *b, sb_boxes boxes) {
+    for (uint32_t n = b->node_count; n-- > 0;) {
+        sb_bvh_node *node = &b->nodes[n];
+        if (node->left < 0) {
+            node->box = *sb_boxes_at(boxes, b->items[node->first]);
+            for (uint32_t i = node->first + 1; i < node->first + node->count; i++) {
+                const sb_aabb *db = sb_boxes_at(boxes, b->items[i]);
+                node->box.lo = sb_v3_min(node->box.lo, db->lo);
+                node->box.hi = sb_v3_max(node->box.hi, db->hi);
+            }
+        } else {
+            const sb_aabb *l = &b->nodes[node->left].box, *r = &b->nodes[node->right].box;
+            node->box = (sb_aabb){sb_v3_min(l->lo, r->lo), sb_v3_max(l->hi, r->hi)};
+        }
+    }
+}
+
 void sb_bvh_free(sb_bvh *b) {
     free(b->nodes);
     free(b->items);

@@ -36,6 +36,9 @@ static inline const sb_aabb *sb_boxes_at(sb_boxes b, uint32_t i) {
  * axis of the centres, a stable order for equal centres. */
 void sb_bvh_build(sb_bvh *b, sb_boxes boxes);
 void sb_bvh_free(sb_bvh *b);
+/* The same tree over boxes that moved: every node's box made again from its items (a child comes after its
+ * parent), the split kept; boxes must be the ones it was built over, in number. */
+void sb_bvh_refit(sb_bvh *b, sb_boxes boxes);
 bool sb_aabb_outside_plane(const sb_aabb *b, const double plane[4]);
 /* Visits every box not fully outside any of the planes (n·p + d >= 0 is inside); returns how many. */
 typedef void (*sb_bvh_visit)(uint32_t item, void *user);

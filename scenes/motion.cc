@@ -77,7 +77,8 @@ void motion_place(const sb_motion &m, Scratch &x, sb_scene *s, const sbm::MoPlac
             x.nrm[3 * v] = nn.x, x.nrm[3 * v + 1] = nn.y, x.nrm[3 * v + 2] = nn.z;
         }
     }
-    sb_scene_repose_prim(s, p.first, p.count, x.pos.data(), p.base.have_n ? x.nrm.data() : nullptr);
+    sb_scene_repose_prim(s, p.first, p.count, x.pos.data(), p.base.have_n ? x.nrm.data() : nullptr, p.draws.data(),
+                         (uint32_t)p.draws.size());
 }
 
 } // namespace
@@ -101,15 +102,16 @@ extern "C" uint32_t sb_motion_pose(sb_motion *m, sb_scene *s, double t) {
     return (uint32_t)n;
 }
 
-extern "C" uint32_t sb_motion_mark(const sb_motion *m, sb_scene *s) {
-    std::map<uint32_t, uint8_t> kind;   // a placement's first vertex -> how it moves
-    for (const sbm::MoPlace &p : m->places) kind[p.first] = p.kind;
+extern "C" uint32_t sb_motion_mark(sb_motion *m, sb_scene *s) {
+    std::map<uint32_t, sbm::MoPlace *> place;   // a placement's first vertex -> it
+    for (sbm::MoPlace &p : m->places) place[p.first] = &p, p.draws.clear();
     uint32_t n = 0;
     sb_aabb still = {{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
     for (uint32_t d = 0; d < s->draw_count; d++) {
         sb_draw &dr = s->draws[d];
-        auto it = kind.find(dr.first_vertex);
-        dr.motion = it != kind.end() ? it->second : (uint8_t)SB_DRAW_STILL;
+        auto it = place.find(dr.first_vertex);
+        dr.motion = it != place.end() ? it->second->kind : (uint8_t)SB_DRAW_STILL;
+        if (it != place.end()) it->second->draws.push_back(d);   /* each pose writes these boxes, no search */
         n += dr.motion != SB_DRAW_STILL;
         if (dr.motion == SB_DRAW_STILL) still.lo = sb_v3_min(still.lo, dr.box.lo), still.hi = sb_v3_max(still.hi, dr.box.hi);
     }
@@ -154,7 +156,7 @@ extern "C" bool sb_scene_pose(sb_scene *s, double t) {
             b.hi = sb_v3_max(b.hi, s->draws[d].box.hi);
         }
     s->bounds = b;
-    sb_scene_build_bvh(s);   /* over the draws' boxes as they are now */
+    sb_scene_refit_bvh(s);   /* the load's tree over the draws' boxes as they are now */
     return true;
 }
 

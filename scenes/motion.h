@@ -45,7 +45,7 @@ void sb_motion_info(const struct sb_scene *s, FILE *out);
 uint32_t sb_motion_pose(sb_motion *m, struct sb_scene *s, double t);
 /* Marks the scene's draws by how they move (sb_draw.motion) once the scene is
  * finished (its draws chunked); returns how many move. */
-uint32_t sb_motion_mark(const sb_motion *m, struct sb_scene *s);
+uint32_t sb_motion_mark(sb_motion *m, struct sb_scene *s);
 sb_motion_stats sb_motion_statistics(const sb_motion *m);
 /* The i-th clip played (i < stats.clips). */
 sb_clip_info sb_motion_clip(const sb_motion *m, uint32_t i);

@@ -82,6 +82,7 @@ struct MoPlace {
     PrimData base;                                  // object space, before morph targets and skin
     std::vector<std::vector<double>> dpos, dnrm;    // the morph targets' deltas (empty: none)
     uint32_t first = 0, count = 0;                  // its vertices in the scene
+    std::vector<uint32_t> draws;                    // its draws once the scene is finished (sb_motion_mark)
     uint8_t kind = SB_DRAW_RIGID;
 };
 

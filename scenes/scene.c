@@ -823,7 +823,8 @@ static sb_aabb draw_box_now(const sb_scene *s, const sb_draw *d) {
     return b;
 }
 
-void sb_scene_repose_prim(sb_scene *s, uint32_t first, uint32_t count, const double *pos, const double *nrm) {
+void sb_scene_repose_prim(sb_scene *s, uint32_t first, uint32_t count, const double *pos, const double *nrm,
+                          const uint32_t *draws, uint32_t ndraws) {
     for (uint32_t v = 0; v < count; v++) {
         float *o = sb_vertex(s, first + v);
         const double *p = pos + 3 * (size_t)v;
@@ -837,11 +838,10 @@ void sb_scene_repose_prim(sb_scene *s, uint32_t first, uint32_t count, const dou
             o[3] = o[4] = o[5] = 0;
         }
     }
-    /* the draws made of these vertices (a primitive's chunks name all of them): face normals where the file gave
-       none, as at load, and their boxes */
-    for (uint32_t d = 0; d < s->draw_count; d++) {
-        sb_draw *dr = &s->draws[d];
-        if (dr->first_vertex != first || dr->vertex_count != count) continue;
+    /* its draws (a primitive's chunks name all of its vertices): face normals where the file gave none, as at
+       load, and their boxes */
+    for (uint32_t k = 0; k < ndraws; k++) {
+        sb_draw *dr = &s->draws[draws[k]];
         for (uint32_t i = 0; !nrm && i + 2 < dr->index_count; i += 3) {
             const uint32_t *t = s->indices + dr->first_index + i;
             const double *a = pos + 3 * (size_t)(t[0] - first), *b = pos + 3 * (size_t)(t[1] - first),
@@ -903,6 +903,7 @@ static sb_boxes draw_boxes(const sb_scene *s) {
 }
 
 void sb_scene_build_bvh(sb_scene *s) { sb_bvh_build(&s->bvh, draw_boxes(s)); }
+void sb_scene_refit_bvh(sb_scene *s) { sb_bvh_refit(&s->bvh, draw_boxes(s)); }
 
 uint32_t sb_scene_cull(const sb_scene *s, const double (*planes)[4], int plane_count, sb_bvh_visit visit, void *user) {
     return sb_bvh_cull(&s->bvh, draw_boxes(s), planes, plane_count, visit, user);

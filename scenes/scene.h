@@ -266,8 +266,9 @@ bool sb_scene_finish(sb_scene *s, sb_err *err);
 /* Whether the scene's clips move anything (motion.h poses it). */
 static inline bool sb_scene_moves(const sb_scene *s) { return s->motion && s->moving_draws; }
 /* The posing step of one primitive: writes its vertices [first, first + count) from world positions and
- * normals (NULL: face normals, as at load) and the boxes of the draws made of them. */
-void sb_scene_repose_prim(sb_scene *s, uint32_t first, uint32_t count, const double *pos, const double *nrm);
+ * normals (NULL: face normals, as at load) and the boxes of its draws (the ndraws of draws: its chunks). */
+void sb_scene_repose_prim(sb_scene *s, uint32_t first, uint32_t count, const double *pos, const double *nrm,
+                          const uint32_t *draws, uint32_t ndraws);
 
 /* Culling: visits every draw whose AABB is not fully outside any of the planes
  * (plane: n·p + d >= 0 is inside). Exact AABB-vs-plane tests over the BVH. */
@@ -276,6 +277,8 @@ uint32_t sb_scene_cull(const sb_scene *s, const double (*planes)[4], int plane_c
 uint32_t sb_scene_collect(const sb_scene *s, const double (*planes)[4], int plane_count, uint32_t *out);
 /* (Re)builds the culling BVH over the draws' boxes. */
 void sb_scene_build_bvh(sb_scene *s);
+/* The BVH over the draws' boxes as they are now (a pose moved them), its tree kept. */
+void sb_scene_refit_bvh(sb_scene *s);
 /* The nearest triangle (either side) the ray o + t d meets, t in (0, tmax)
  * (origin-relative; d need not be unit): its t, or INFINITY. *backface (may
  * be NULL): it is the inside of a closed single-sided surface (o is inside it). */

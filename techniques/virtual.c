@@ -403,12 +403,23 @@ static int by_staleness(const void *a, const void *b) {   /* empty slots first, 
 /* Which casters a page's draw takes: all, the still ones (split=on's kept pages), the moving ones (its copies). */
 enum { CASTERS_ALL, CASTERS_STILL, CASTERS_MOVING };
 
+/* Page k's window with its border, in light space: x0, y0, x1, y1 (as light_rect's). */
+static void page_rect(const virtual_state *s, page_key k, double r[4]) {
+    double t = level_texel(s, k.level), pg = s->d.page;
+    r[0] = ((double)k.x * pg - BORDER) * t, r[2] = ((double)(k.x + 1) * pg + BORDER) * t;
+    r[1] = ((double)k.y * pg - BORDER) * t, r[3] = ((double)(k.y + 1) * pg + BORDER) * t;
+}
+
+/* Whether two light-space windows (x0, y0, x1, y1) overlap. */
+static bool rects_meet(const double a[4], const double b[4]) {
+    return a[2] >= b[0] && a[0] <= b[2] && a[3] >= b[1] && a[1] <= b[3];
+}
+
 /* The orthographic view of page k's window with its border. */
 static sb_m4 page_view(const virtual_state *s, page_key k) {
-    double t = level_texel(s, k.level), pg = s->d.page;
-    double x0 = ((double)k.x * pg - BORDER) * t, x1 = ((double)(k.x + 1) * pg + BORDER) * t;
-    double y0 = ((double)k.y * pg - BORDER) * t, y1 = ((double)(k.y + 1) * pg + BORDER) * t;
-    return sb_m4_mul(sb_m4_ortho(x0, x1, y0, y1, s->zn, s->zf), s->lview);
+    double r[4];
+    page_rect(s, k, r);
+    return sb_m4_mul(sb_m4_ortho(r[0], r[2], r[1], r[3], s->zn, s->zf), s->lview);
 }
 
 /* Draws page k into slot i: the page's window with its border, its casters (of the kind asked) culled over the
@@ -463,11 +474,10 @@ static int invalidate_moved(virtual_state *s, const sb_frame *f) {
     for (int i = 0; i < s->p.slots; i++) {
         page_key k = s->slot_key[i];
         if (k.level < 0) continue;
-        double t = level_texel(s, k.level), pg = s->d.page;
-        double x0 = ((double)k.x * pg - BORDER) * t, x1 = ((double)(k.x + 1) * pg + BORDER) * t;
-        double y0 = ((double)k.y * pg - BORDER) * t, y1 = ((double)(k.y + 1) * pg + BORDER) * t;
+        double pr[4];
+        page_rect(s, k, pr);
         for (uint32_t j = 0; j < 2 * f->moved_count; j++)
-            if (rects[j][2] >= x0 && rects[j][0] <= x1 && rects[j][3] >= y0 && rects[j][1] <= y1) {
+            if (rects_meet(rects[j], pr)) {
                 s->slot_key[i].level = -1, s->slot_used[i] = -1;
                 dropped++;
                 break;
@@ -562,12 +572,11 @@ static int overlay_moving(virtual_state *s, sb_frame *f, int needed) {
         page_key k = s->need[j];
         int i = hash_find(s, k);
         if (i < 0) continue;   /* left out for want of a slot */
-        double t = level_texel(s, k.level), pg = s->d.page;
-        double x0 = ((double)k.x * pg - BORDER) * t, x1 = ((double)(k.x + 1) * pg + BORDER) * t;
-        double y0 = ((double)k.y * pg - BORDER) * t, y1 = ((double)(k.y + 1) * pg + BORDER) * t;
+        double pr[4];
+        page_rect(s, k, pr);
         bool over = false;
         for (uint32_t r = 0; r < nr && !over; r++)
-            over = rects[r][2] >= x0 && rects[r][0] <= x1 && rects[r][3] >= y0 && rects[r][1] <= y1;
+            over = rects_meet(rects[r], pr);
         if (!over) continue;
         if (!drawn++) pages_begin(s, f);
         while (spare < s->p.slots && s->slot_used[spare] == s->frame_no) spare++;

@@ -47,18 +47,6 @@ static int teardown(void **st) {
     return tmp_remove(g_tmp);
 }
 
-static const char *last_line(void) {
-    static char dir[4096];
-    char *nl = strrchr(g_out, '\n');
-    if (nl && nl[1] == 0) *nl = 0;
-    char *start = strrchr(g_out, '\n');
-    const char *line = start ? start + 1 : g_out;
-    size_t n = strlen(line) < sizeof dir - 1 ? strlen(line) : sizeof dir - 1;
-    memcpy(dir, line, n);
-    dir[n] = 0;
-    return dir;
-}
-
 static bool open_scene(sb_session *s, const char *scene, const char *path, int w, int h, int frames, const char *anim,
                        sb_err *err) {
     sb_run_opts o;
@@ -185,7 +173,7 @@ static void test_caches_invalidate_what_moved(void **st) {
                         "virtual:cache=on:split=on raycast --anim slide "
                         "--frames 9 --size 320x180 --error-every 2 --quiet --out %s/caches", test_binary(), path, g_tmp), 0);
     char dir[4096];
-    snprintf(dir, sizeof dir, "%s", last_line());
+    snprintf(dir, sizeof dir, "%s", last_line_of(g_out));
     sb_table p, von, voff, vsplit, sum;
     assert_true(frames_of(dir, "pssm", "cache=on", &p));
     assert_true(frames_of(dir, "virtual", "filter=hw:cache=on", &von));   /* its canonical text ends there */
@@ -293,7 +281,7 @@ static void test_real_animated_files(void **st) {
         assert_int_equal(sh("%s run %s orbit sm raycast --anim %s --frames 5 --size 256x144 --error-every 1 --quiet "
                             "--out %s/real", test_binary(), path, files[i][1], g_tmp), 0);
         char dir[4096];
-        snprintf(dir, sizeof dir, "%s", last_line());
+        snprintf(dir, sizeof dir, "%s", last_line_of(g_out));
         const char *techs[] = {"sm", "raycast"};
         for (int k = 0; k < 2; k++) {
             sb_table t;
@@ -363,7 +351,7 @@ static void test_anim_none_is_the_still_file(void **st) {
     for (int k = 0; k < 2; k++) {
         assert_int_equal(sh("%s run %s conf-skin sm pssm raycast --frames 5 --size 256x144 --error-every 2 --quiet "
                             "--out %s/none%d", test_binary(), k ? still : "conf-skin --anim none", g_tmp, k), 0);
-        snprintf(dirs[k], sizeof dirs[k], "%s", last_line());
+        snprintf(dirs[k], sizeof dirs[k], "%s", last_line_of(g_out));
     }
     sb_table a, b;
     summary_table(dirs[0], &a);

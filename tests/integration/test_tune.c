@@ -42,15 +42,6 @@ static int g_n;
 
 #define sh(...) run_logged(g_out, sizeof g_out, __VA_ARGS__)
 
-static void last_line(char *dir, size_t len) {
-    char *nl = strrchr(g_out, '\n');
-    if (nl && nl[1] == 0) *nl = 0;
-    char *start = strrchr(g_out, '\n');
-    start = start ? start + 1 : g_out;
-    assert_true(strlen(start) < len);
-    snprintf(dir, len, "%s", start);
-}
-
 static void key_of(const sb_table *t, int r, char *out, size_t len) {
     snprintf(out, len, "%s:%s", sb_table_get(t, r, "technique"), sb_table_get(t, r, "params"));
 }
@@ -77,7 +68,7 @@ static int setup(void **st) {
            test_binary(), g_tmp))
         return -1;
     char dir[4096];
-    last_line(dir, sizeof dir);
+    snprintf(dir, sizeof dir, "%s", last_line_of(g_out));
     sb_table t;
     summary_table(dir, &t);
     for (int r = 0; r < t.nrows && g_n < MAXC; r++) {
@@ -207,7 +198,7 @@ static void tune_grid(const char *specs, const char *option, double bound, const
     assert_int_equal(sh("%s tune towers auto %s " COMMON " %s %.9g --seed 7 --out %s/%s", test_binary(), specs, option,
                         bound, g_tmp, sub), 0);
     char dir[4096];
-    last_line(dir, sizeof dir);
+    snprintf(dir, sizeof dir, "%s", last_line_of(g_out));
     read_tune(dir, t);
     printf("%s %.5g: %s\n  %s\n", option, bound, t->label, t->verdict);
 }
@@ -274,7 +265,7 @@ static void test_time_limit_resume_and_seed(void **st) {
     assert_int_equal(sh("%s tune towers auto " SEEDSPECS " " COMMON " --max-err %.9g --seed 11 --out %s/seed", test_binary(),
                         bound, g_tmp), 0);
     char whole[4096], cut[4096];
-    last_line(whole, sizeof whole);
+    snprintf(whole, sizeof whole, "%s", last_line_of(g_out));
     /* the frames: the search (the warm-up run, rung 0) within a quarter of the grid's, the last rung the finalists'
        passes, at least the two leaders */
     tuned tw;
@@ -288,7 +279,7 @@ static void test_time_limit_resume_and_seed(void **st) {
     sh("%s tune towers auto " SEEDSPECS " " COMMON " --max-err %.9g --seed 11 --time-limit 1s --out %s/cut", test_binary(),
        bound, g_tmp);
     assert_non_null(strstr(g_out, "time limit"));
-    last_line(cut, sizeof cut);
+    snprintf(cut, sizeof cut, "%s", last_line_of(g_out));
     char a[NSEED + 1][17], b[NSEED + 1][17], c[NSEED + 1][17];
     int nb = rung_ids(cut, 0, b, NSEED + 1);
     printf("the cut search measured %d of %d at rung 0\n", nb, NSEED);
@@ -326,7 +317,7 @@ static void test_time_limit_resume_and_seed(void **st) {
     assert_int_equal(sh("%s tune towers auto " SEEDSPECS " " COMMON " --max-err %.9g --seed 12 --time-limit 1s --out %s/seed2",
                         test_binary(), bound, g_tmp) >= 0, 1);
     char other[4096];
-    last_line(other, sizeof other);
+    snprintf(other, sizeof other, "%s", last_line_of(g_out));
     int no = rung_ids(other, 0, b, NSEED + 1), same = 0;
     for (int i = 0; i < no; i++) same += !strcmp(a[i], b[i]);
     printf("seed 12: %d of the first %d in seed 11's order\n", same, no);
@@ -352,7 +343,7 @@ static void test_budget(void **st) {
     assert_int_equal(sh("%s tune towers auto sm:res=256,512 " COMMON " --budget-ms 0.001 --out %s/budget", test_binary(),
                         g_tmp), 1);
     assert_non_null(strstr(g_out, "nothing met the bound"));
-    last_line(dir, sizeof dir);
+    snprintf(dir, sizeof dir, "%s", last_line_of(g_out));
     char path[4200];
     snprintf(path, sizeof path, "%s/tune.bench", dir);
     size_t n;

@@ -424,7 +424,15 @@ static void test_bvh_cull_exact(void **st) {
     assert_true(sb_scene_load(&s, "towers", NULL, &err));
     srand(7);
     char *hit = calloc(s.draw_count, 1);
-    for (int trial = 0; trial < 200; trial++) {
+    for (int trial = 0; trial < 400; trial++) {
+        if (trial == 200) {   /* draws moved (as a pose moves them) and the tree refit, not rebuilt: still exact */
+            for (uint32_t d = 0; d < s.draw_count; d += 3) {
+                sb_v3 dv = sb_v3_make(rand() % 41 - 20, rand() % 11 - 5, rand() % 41 - 20);
+                s.draws[d].box.lo = sb_v3_add(s.draws[d].box.lo, dv);
+                s.draws[d].box.hi = sb_v3_add(s.draws[d].box.hi, dv);
+            }
+            sb_scene_refit_bvh(&s);
+        }
         double planes[4][4];
         for (int k = 0; k < 4; k++) {
             sb_v3 n = sb_v3_norm(sb_v3_make(rand() / (double)RAND_MAX - 0.5, rand() / (double)RAND_MAX - 0.5,
