@@ -1074,9 +1074,12 @@ struct Source {
 };
 
 const sb_json *member(const sb_json *o, const char *key) { return o ? sb_json_get(o, key) : nullptr; }
+// Every integer glTF field read here is an index or an enum: a number that is no int (1e30, 2.5) reads as
+// INT_MAX, an index nothing has and a value no enum holds, so the checks that follow refuse it by name.
 int int_of(const sb_json *o, const char *key, int def) {
     const sb_json *v = member(o, key);
-    return v && v->type == SB_JSON_NUMBER ? (int)v->num : def;
+    if (!v || v->type != SB_JSON_NUMBER) return def;
+    return v->num >= INT_MIN && v->num <= INT_MAX && v->num == (int)v->num ? (int)v->num : INT_MAX;
 }
 size_t size_of(const sb_json *o, const char *key) {
     uint64_t u = 0;
