@@ -172,10 +172,12 @@ bool read_accessor(Ctx &c, int acc, const std::string &where, int want_type, std
     bool contiguous_floats = a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT && rows == ncomp && !a.sparse.isSparse &&
                              a.bufferView >= 0 && a.bufferView < (int)m.bufferViews.size() &&
                              (m.bufferViews[a.bufferView].byteStride == 0 || m.bufferViews[a.bufferView].byteStride == elem);
-    if (contiguous_floats) { // the common case: converted as they come, without a pass of zeros first
-        const unsigned char *d;
-        if (!view_range(c, a.bufferView, a.byteOffset, a.count, elem, elem, ap, &d)) return false;
-        const float *f = reinterpret_cast<const float *>(d);   // 4-byte aligned: the check saw to that
+    const unsigned char *d0 = nullptr;
+    if (contiguous_floats && !view_range(c, a.bufferView, a.byteOffset, a.count, elem, elem, ap, &d0)) return false;
+    // the common case: converted as they come, without a pass of zeros first. The check sees to 4-byte alignment
+    // for the accessors it checks; one only an extension reads (EXT_mesh_gpu_instancing) may sit anywhere
+    if (contiguous_floats && reinterpret_cast<uintptr_t>(d0) % alignof(float) == 0) {
+        const float *f = reinterpret_cast<const float *>(d0);
         out.assign(f, f + total);
         return true;
     }
