@@ -33,12 +33,13 @@ void sb_eval_buf_free(sb_eval_buf *b) {
 /* Renders path frame pf of n (after `replay` earlier ones) with the
  * evaluation targets bound and reads them back; view points into b. */
 static void render_targets(sb_session *s, sb_instance *in, int pf, int n, int replay, int *seq, sb_eval_buf *b,
-                           sb_frame *f, bool vis, sb_m4 *inv, sb_eval_view *view) {
+                           sb_frame *f, bool vis, sb_m4 *inv, sb_eval_view *view, int light) {
     sb_timer timer;
     sb_timer_init(&timer, SB_TIMING_SYNC, 1, 1);
     for (int k = replay; k >= 0; k--) {
         if (pf - k < 0) continue;
         memset(f, 0, sizeof *f);
+        f->eval_light = light;
         f->anim_ms = sb_session_pose(s, sb_session_frame_time(s, pf - k, n));
         sb_timer_frame_begin(&timer, 0);
         sb_camera cam = sb_path_camera(&s->path, pf - k, n, (double)s->opts.width / s->opts.height, &s->scene);
@@ -52,7 +53,7 @@ static void render_targets(sb_session *s, sb_instance *in, int pf, int n, int re
     sb_gpu_readback_eval(&s->gpu, b->pos, b->aux);
     bool have_inv = sb_m4_invert(f->view_proj, inv);
     *view = (sb_eval_view){b->w, b->h, b->pos, b->aux, sb_v3_sub(f->cam.pos, s->scene.origin), have_inv ? inv : NULL,
-                           f->shade_light};
+                           f->shade_light, f->shade_range};
 }
 
 /* Whether the instance keeps maps or pages across frames while the scene moves: what the stale check is for. */
@@ -87,16 +88,52 @@ static double stale_share(sb_session *s, sb_instance *in, int *seq, const sb_eva
     return n ? (double)differ / n : NAN;
 }
 
-bool sb_eval_frame(sb_session *s, sb_instance *in, int pf, int n, int replay, int *seq, sb_eval_buf *b, sb_frame *f,
-                   sb_error_metrics *m, sb_err *err) {
+/* One light's evaluation (light: 1 + its place in the run's --lights; 0: the run's one light). */
+static bool eval_light(sb_session *s, sb_instance *in, int pf, int n, int replay, int *seq, sb_eval_buf *b, sb_frame *f,
+                       sb_error_metrics *m, int light, sb_err *err) {
     sb_m4 inv;
     sb_eval_view view;
-    render_targets(s, in, pf, n, replay, seq, b, f, true, &inv, &view);
+    render_targets(s, in, pf, n, replay, seq, b, f, true, &inv, &view, light);
     const sb_reference *ref = sb_session_reference(s, err);   /* refit to the frame's pose */
     if (!ref) return false;
     sb_evaluate_frame(ref, s->ref_cache, &view, b->vis, b->ref, m, s->opts.threads);
     m->stale_px = caches_in_motion(s, in) ? stale_share(s, in, seq, b, f) : NAN;
+    m->lights_px = NAN;
     return sb_gl_check("evaluation pass", err);
+}
+
+bool sb_eval_frame(sb_session *s, sb_instance *in, int pf, int n, int replay, int *seq, sb_eval_buf *b, sb_frame *f,
+                   sb_error_metrics *m, sb_err *err) {
+    const sb_light_set *set = in->rc.lights;
+    if (!set) return eval_light(s, in, pf, n, replay, seq, b, f, m, 0, err);
+    /* --lights: each light of the set scored on its own (pixels it lights, rays to it), the figures over every
+       (pixel, light) pair; b->vis and b->ref hold the last light's, images show the frame lit by every light */
+    size_t np = (size_t)b->w * b->h;
+    uint16_t *lit = sb_xcalloc(np, sizeof *lit);
+    for (int i = 0; i < set->count; i++) {
+        sb_error_metrics e;
+        if (!eval_light(s, in, pf, n, replay, seq, b, f, &e, i + 1, err)) {
+            free(lit);
+            return false;
+        }
+        sb_error_metrics_add(m, &e, i == 0);
+        for (size_t k = 0; k < np; k++) lit[k] += b->ref[k] != 128;
+    }
+    long pairs = 0, pixels = 0;
+    for (size_t k = 0; k < np; k++) pairs += lit[k], pixels += lit[k] > 0;
+    m->lights_px = pixels ? (double)pairs / pixels : NAN;
+    free(lit);
+    if (b->rgba) {   /* the frame as timed frames draw it: every light */
+        sb_frame g;
+        memset(&g, 0, sizeof g);
+        sb_timer timer;
+        sb_timer_init(&timer, SB_TIMING_SYNC, 1, 1);
+        sb_timer_frame_begin(&timer, 0);
+        sb_render_camera(s, in, &g, &f->cam, (*seq)++, &timer, true);
+        sb_timer_free(&timer);
+        sb_gpu_readback(&s->gpu, NULL, NULL, b->rgba);
+    }
+    return true;
 }
 
 bool sb_eval_flicker(sb_session *s, sb_instance *in, int pf, int n, int *seq, sb_eval_buf *b, const sb_frame *f,
@@ -105,7 +142,7 @@ bool sb_eval_flicker(sb_session *s, sb_instance *in, int pf, int n, int *seq, sb
     m->flicker_points = 0;
     b->flicker_drawn = false;
     const double dt = s->opts.flicker_dt;
-    if (dt <= 0) return true;
+    if (dt <= 0 || in->rc.lights) return true;   /* --lights: not measured over several lights (docs/error.md) */
     const size_t np = (size_t)b->w * b->h;
     if (!b->twin_vis) {
         b->twin_vis = sb_xmalloc(np);
@@ -156,7 +193,7 @@ bool sb_eval_background(sb_session *s, sb_err *err) {
     /* auto: not on a CPU rasterizer, which leaves the background no idle core during timed frames and draws
        the extra frames on the CPU too (measured: a net loss there; README, Error); never where the scene
        moves (the background would need the scene posed at its frames' times while the runs pose it at theirs) */
-    bool on = (o->overlap < 0 ? !s->ctx.software : o->overlap > 0) && !sb_scene_moves(&s->scene);
+    bool on = (o->overlap < 0 ? !s->ctx.software : o->overlap > 0) && !sb_scene_moves(&s->scene) && !s->lights.count;
     if (!on || o->error_every <= 0) return true;
     const sb_reference *ref = sb_session_reference(s, err);
     if (!ref) return false;
@@ -178,7 +215,7 @@ bool sb_eval_background(sb_session *s, sb_err *err) {
         sb_frame f;
         sb_m4 inv;
         sb_eval_view view;
-        render_targets(s, &in, pf, o->frames, 0, &seq, &b, &f, false, &inv, &view);
+        render_targets(s, &in, pf, o->frames, 0, &seq, &b, &f, false, &inv, &view, 0);
         if (sb_ref_background_add(s->ref_cache, &view) < 0) break; /* as much as it may hold */
     }
     sb_eval_buf_free(&b);

@@ -99,6 +99,11 @@ const sb_option sb_options[] = {
     {.name = "--lamp-radius", .kind = SB_OPT_NUM, .arg = "M", .max = INFINITY, .def = "0", .def_help = "0, no size",
      .with = SB_CMDF_MEASURE, RUN_OPT, .line_option = true, .identity = SB_ID_LIGHT, .field = RUN(lamp_radius),
      .help = "point and spot lights' radius in scene units: the reference casts rays over it"},
+    {.name = "--lights", .kind = SB_OPT_TEXT, .arg = "sun|lamps|all|LIST", .def = NULL,
+     .def_help = "the light the technique shadows alone: the sun; light= of cube and dpsm", .with = SB_CMDF_MEASURE,
+     RUN_OPT, .line_option = true, .identity = SB_ID_TEXT, .field = RUN(lights),
+     .help = "the lights a run shadows and scores, each with its own shadows: every point and spot light (lamps), "
+             "the sun and every lamp (all), or a list such as sun,0,3 (lamps by number in file order)"},
     {.name = "--ref-samples", .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 4096, .def = "64",
      .with = SB_CMDF_MEASURE, RUN_OPT, .line_option = true, .identity = SB_ID_LIGHT, .field = RUN(ref_samples),
      .help = "rays over a sized light at a penumbra point (centre and rim decide the rest)"},
@@ -694,7 +699,7 @@ static void choice_name(const sb_option *opt, int value, char *out, size_t len) 
     }
 }
 
-/* The hash's blocks, in order: the dimensions, what was given, what is not its default, the light. Each block as
+/* The hash's blocks, in order: the dimensions, what was given, what is not its default, the light, the texts given. Each block as
  * the ids of before each row joined it hashed it, so that every earlier run id holds. */
 static uint64_t identity_blocks(uint64_t h, const sb_run_opts *o) {
     int dims[8] = {0}, ndims = 0;
@@ -730,6 +735,11 @@ static uint64_t identity_blocks(uint64_t h, const sb_run_opts *o) {
         if (strcmp(name, def)) h = sb_fnv1a(h, name, strlen(name) + 1);
     }
     if (light_on) h = sb_fnv1a(h, light, sizeof *light * (size_t)nlight);
+    for (int i = 0; i < sb_option_count; i++) {   /* last: the ids of before hold */
+        const sb_option *opt = &sb_options[i];
+        const char *text = opt->identity == SB_ID_TEXT ? *(const char *const *)run_field(o, opt->field) : NULL;
+        if (text) h = sb_fnv1a(sb_fnv1a(h, opt->name, strlen(opt->name) + 1), text, strlen(text) + 1);
+    }
     return h;
 }
 

@@ -93,6 +93,7 @@ typedef enum sb_identity {
     SB_ID_GIVEN,        /* when given: its doubles (ANGLES: both) */
     SB_ID_NAMED,        /* when not its default: its choice's name */
     SB_ID_LIGHT,        /* the light block, its value as a double, when a LIGHT row whose default is 0 is not */
+    SB_ID_TEXT,         /* a TEXT row whose default is none, when given: its name and text */
 } sb_identity;
 
 /* Every option's parsed value, and which were given. */

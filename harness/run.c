@@ -427,6 +427,12 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
         if (o->lamp_radius > 0) snprintf(lamp, sizeof lamp, "lamp %g, ", o->lamp_radius);
         snprintf(r->info.light, sizeof r->info.light, "%s%s%d rays", sun, lamp, o->ref_samples);
     }
+    if (s->lights.count) {   /* --lights: a series of its own */
+        size_t used = strlen(r->info.light);
+        snprintf(r->info.light + used, sizeof r->info.light - used, "%slights %s (%d)", used ? "; " : "", o->lights,
+                 s->lights.count);
+        if (spec->tech->lights == SB_LIGHTS_LAMPS) r->info.shadow_mb *= s->lights.count;   /* a map set each */
+    }
     const char *skip = sb_skip_reason(s, spec->tech, spec);
     if (skip) {
         r->finished = true;

@@ -41,6 +41,7 @@ typedef struct sb_run_opts {
     int error_every;            /* evaluate the error of every K-th frame (0: off), untimed pass; default 10 */
     double sun_size;            /* --sun-size: the sun's angular diameter in degrees (0: no size, the hard reference) */
     double lamp_radius;         /* --lamp-radius: point and spot lights' radius (0: none) */
+    const char *lights;         /* --lights sun|lamps|all|LIST (NULL: the one light the technique shadows) */
     int ref_samples;            /* --ref-samples: rays over a sized light at a penumbra point (default 64) */
     double flicker_dt;          /* path seconds from an evaluated frame to its flicker twin (0: none); default 1/60 */
     int repeat;                 /* repetitions of the path (default 1) */

@@ -70,7 +70,17 @@ bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, con
         sb_scene_free(&sc);
         return false;
     }
+    sb_light_set lights = {0};
+    if (o->lights && !sb_scene_light_set(&sc, o->lights, sc.has_sun || o->sun_override, &lights, err)) {
+        char why[sizeof err->msg];
+        memcpy(why, err->msg, sizeof why);
+        sb_fail(err, "%s: %.*s", scene, (int)(sizeof why / 2), why);
+        sb_scene_free(&sc);
+        sb_path_free(&p);
+        return false;
+    }
     if (!sb_session_attach(s, o, &sc, &p, err)) return false;
+    s->lights = lights;
     base_name(scene, s->scene_name, sizeof s->scene_name);
     base_name(path, s->path_name, sizeof s->path_name);
     return true;
@@ -257,6 +267,14 @@ static const char *scene_skip_reason(sb_session *s, const sb_technique *t) {
     }
     if ((t->needs & SB_NEEDS_PLANE) && sc->plane_count == 0) return "the scene has no large planar receiver";
     if ((t->needs & SB_NEEDS_POINT_LIGHT) && !(points + spots)) return "the scene has no point or spot light";
+    for (int i = 0; i < s->lights.count; i++) {
+        bool sun = s->lights.idx[i] == SB_LIGHT_SUN;
+        if (t->lights == SB_LIGHTS_ANY || (t->lights == SB_LIGHTS_LAMPS) != sun) continue;
+        snprintf(s->skip, sizeof s->skip, "%s shadows %s; --lights %s names %s", t->name,
+                 t->lights == SB_LIGHTS_LAMPS ? "point and spot lights" : "the sun alone", s->opts.lights,
+                 sun ? "the sun" : "a lamp");
+        return s->skip;
+    }
     return NULL;
 }
 
@@ -269,7 +287,7 @@ const char *sb_skip_reason(sb_session *s, const sb_technique *t, const sb_run_sp
         sb_spec_defaults(defaults, t);
         spec = defaults;
     }
-    sb_run_ctx rc = {.gpu = &s->gpu, .tech = t};
+    sb_run_ctx rc = {.gpu = &s->gpu, .tech = t, .lights = s->lights.count ? &s->lights : NULL};
     sb_err e;
     bool ok = t->supported(&rc, spec->desc, &e);
     free(defaults);
@@ -312,7 +330,7 @@ bool sb_instance_create(sb_instance *in, sb_session *s, const sb_run_spec *spec,
     in->spec = sb_xmalloc(sizeof *in->spec);
     *in->spec = *spec;
     in->desc = in->spec->desc;
-    in->rc = (sb_run_ctx){.gpu = &s->gpu, .tech = t, .frames = frames};
+    in->rc = (sb_run_ctx){.gpu = &s->gpu, .tech = t, .frames = frames, .lights = s->lights.count ? &s->lights : NULL};
     shadow_range(s, &in->rc.shadow_near, &in->rc.shadow_far);
     if (t->needs & SB_NEEDS_PLANE) sb_scene_find_planes(&s->scene);   /* on the first need, not at load */
     /* shared geometry the technique cannot draw shared (render.h): copies uploaded now, not in a timed frame */

@@ -31,6 +31,7 @@ typedef struct sb_session {
     sb_timing_mode timing;      /* resolved */
     char scene_name[256], path_name[256];
     char skip[SB_ERR_LEN + 64]; /* the last skip reason */
+    sb_light_set lights;        /* --lights read against the scene (count 0: not given) */
     uint32_t *scratch;          /* draw_count entries: a frame's culling results */
     uint32_t *cmds;             /* --submit indirect: a pass's pending commands (5 words a draw) */
     struct sb_reference *ref;   /* the scene's Embree reference, built on first use */

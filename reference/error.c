@@ -22,6 +22,7 @@ int sb_ref_points(const sb_reference *r, const sb_eval_view *v, sb_ref_point *pt
         if (v->light[3] > 0.5)
             for (int k = 0; k < 3; k++) L[k] -= p[k];
         if (a[0] * L[0] + a[1] * L[1] + a[2] * L[2] <= 0) continue; /* facing away from the light */
+        if (v->range > 0 && v->light[3] > 0.5 && sqrt(L[0] * L[0] + L[1] * L[1] + L[2] * L[2]) > v->range) continue;
         sb_ref_point *q = &pts[m];
         memcpy(q->p, p, sizeof q->p);
         memcpy(q->n, a, sizeof q->n);
@@ -329,6 +330,11 @@ static void view_key(const sb_reference *r, const sb_eval_view *v, uint64_t key[
     if (v->inv_view_proj) memcpy(cam, v->inv_view_proj->m, sizeof(double) * 16);
     memcpy(cam + 16, v->light, sizeof(double) * 4);
     cam[20] = v->eye.x, cam[21] = v->eye.y, cam[22] = v->eye.z;
+    if (v->range > 0) {   /* a range leaves points out: other answers (0, as before ranges, keeps every key) */
+        uint64_t w;
+        memcpy(&w, &v->range, 8);
+        h1 ^= sb_mix64(w + 7), h2 = sb_mix64(h2 ^ h1);
+    }
     for (size_t i = 0; i < sizeof cam / sizeof cam[0]; i++) {
         uint64_t w;
         memcpy(&w, &cam[i], 8);
@@ -556,6 +562,46 @@ void sb_evaluate_frame(const sb_reference *r, sb_ref_cache *cache, const sb_eval
     free(pix);
 }
 
+/* A share of n items, weighted: sum += share * n (NaN shares add nothing). */
+static void add_share(double *sum, double share, double n) {
+    if (!isnan(share)) *sum += share * n;
+}
+
+void sb_error_metrics_add(sb_error_metrics *acc, const sb_error_metrics *e, bool first) {
+    if (first) {
+        *acc = *e;
+        acc->lights_px = e->pixels ? 1 : NAN;
+        return;
+    }
+    double a = (double)acc->pixels, b = (double)e->pixels, n = a + b;
+    double pen_a = acc->penumbra_px * a, pen_b = e->penumbra_px * b;
+    double *shares[] = {&acc->err_rate, &acc->false_shadow, &acc->false_lit, &acc->vis_mae, &acc->penumbra_px};
+    const double adds[] = {e->err_rate, e->false_shadow, e->false_lit, e->vis_mae, e->penumbra_px};
+    for (size_t k = 0; k < SB_COUNT(shares); k++) {
+        double sum = 0;
+        add_share(&sum, *shares[k], a);
+        add_share(&sum, adds[k], b);
+        *shares[k] = n > 0 ? sum / n : NAN;
+    }
+    double pen_err = 0;
+    add_share(&pen_err, acc->penumbra_err, isnan(pen_a) ? 0 : pen_a);
+    add_share(&pen_err, e->penumbra_err, isnan(pen_b) ? 0 : pen_b);
+    double pens = (isnan(pen_a) ? 0 : pen_a) + (isnan(pen_b) ? 0 : pen_b);
+    acc->penumbra_err = pens > 0 ? pen_err / pens : NAN;
+    double res = 0;
+    add_share(&res, acc->res_err_mean, a);
+    add_share(&res, e->res_err_mean, b);
+    acc->res_err_mean = isnan(acc->res_err_mean) && isnan(e->res_err_mean) ? NAN : res / n;
+    acc->res_err_p95 = fmax(acc->res_err_p95, e->res_err_p95);      /* the worse light's (fmax skips NaN) */
+    acc->texel_px_p95 = fmin(acc->texel_px_p95, e->texel_px_p95);
+    acc->stale_px = isnan(acc->stale_px) ? e->stale_px : fmax(acc->stale_px, e->stale_px);
+    acc->pixels += e->pixels;
+    acc->rays += e->rays;
+    acc->ray_ms += e->ray_ms;
+    acc->reused = acc->reused && e->reused;
+    acc->background = acc->background || e->background;
+}
+
 /* ---- the background ---- */
 
 static void *background(void *arg) {
@@ -571,7 +617,7 @@ static void *background(void *arg) {
         }
         j->casting = true;
         pthread_mutex_unlock(&c->mu);
-        sb_eval_view v = {j->w, j->h, j->pos, j->aux, j->eye, j->have_inv ? &j->inv : NULL, j->light};
+        sb_eval_view v = {j->w, j->h, j->pos, j->aux, j->eye, j->have_inv ? &j->inv : NULL, j->light, 0};
         sb_ref_point *pts;
         int *pix, m = view_points(c->r, &v, &pts, &pix);
         unsigned char *ref = sb_xmalloc((size_t)(m > 0 ? m : 1));

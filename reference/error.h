@@ -41,11 +41,19 @@ typedef struct sb_error_metrics {
      * from the same technique's with its caches bypassed on the same frame (0 is the only right answer; NaN:
      * not measured, nothing cached or nothing moves). */
     double stale_px;
+    /* --lights: the mean number of the run's lights evaluated at a pixel that at least one of them lights (NaN:
+     * one light, as without --lights) */
+    double lights_px;
     uint64_t rays;                     /* reference rays cast for this frame (0: the answers were reused) */
     double ray_ms;                     /* time in the reference for this frame (casting, or finding the answers) */
     bool reused;                       /* the reference's answers came from the cache */
     bool background;                   /* they were cast in the background for this run (rays counts them) */
 } sb_error_metrics;
+
+/* --lights: one light's figures of a frame added to those of the lights before it (acc zeroed first, its
+ * err_rate... then shares of every evaluated (pixel, light) pair; the geometry check's, the camera's, from the
+ * first light). */
+void sb_error_metrics_add(sb_error_metrics *acc, const sb_error_metrics *e, bool first);
 
 /* The reference's answers for a frame, kept by their exact inputs: the
  * rasterized positions and normals of every pixel, the camera, the size and
@@ -100,10 +108,11 @@ struct sb_eval_view {
     sb_v3 eye;                         /* camera position relative to the scene origin */
     const sb_m4 *inv_view_proj;        /* origin-relative clip -> world (NULL: no geometry check) */
     const double *light;               /* as sb_reference_visibility_light: the technique's shaded light */
+    double range;                      /* --lights: a lamp's range; points beyond it are not evaluated (0: none) */
 };
 
 /* The points the reference casts from (pts and pix: w*h capacity; pix[k] is
- * the pixel of pts[k]): every pixel that is not sky and faces the light, from
+ * the pixel of pts[k]): every pixel that is not sky, faces the light and lies within its range, from
  * its rasterized position and geometric normal. Returns how many. */
 int sb_ref_points(const sb_reference *r, const sb_eval_view *v, sb_ref_point *pts, int *pix);
 

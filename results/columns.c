@@ -208,6 +208,9 @@ static const sb_frame_col frame_cols[] = {
     ERROR("stale_px", stale_px, "share", SB_STAT_MEAN | SB_STAT_MAX, SB_USE_COMPARE | SB_USE_HISTORY | SB_USE_REPORT,
           "a cached technique where something moves: share of evaluated pixels whose visibility differs from the same "
           "technique's with its caches bypassed on the same frame (0 is right; empty: nothing cached or moving)"),
+    ERROR("lights_px", lights_px, "lights", SB_STAT_MEAN, 0,
+          "--lights: mean number of the run's lights that light an evaluated pixel (in range, facing it; empty: one "
+          "light)"),
     ERROR("geom_mismatch", geom_mismatch, "share", 0, 0,
           "share of sampled pixels where a camera ray's first hit is not the rasterized surface (one geometry?)"),
     ERROR("err_floor", err_floor, "share", 0, 0,
@@ -309,6 +312,14 @@ static sb_cell r_pooled(const sb_run_row *r, int a) {
     }
     return number(n ? (double)hit / n : NAN);
 }
+static sb_cell r_rays_px(const sb_run_row *r, int a) {
+    (void)a;
+    int cast = 0;
+    for (int i = 0; i < r->n; i++) cast += r->recs[i].evaluated && !r->recs[i].err.reused && !r->recs[i].err.background;
+    ref_totals t = ref_sum(r->recs, r->n);
+    double px = (double)cast * r->info->width * r->info->height;
+    return number(px > 0 ? t.cast_rays / px : NAN);
+}
 static sb_cell r_rays_per_s(const sb_run_row *r, int a) {
     (void)a;
     ref_totals t = ref_sum(r->recs, r->n);
@@ -339,8 +350,9 @@ static const sb_run_col run_cols[] = {
     INFO("params", r_str, params, "every parameter, in table order (one added after series began, such as "
                                   "cache, only when not at its default)"),
     INFO("auto_params", r_chars, auto_params, "the values a run calibrated for its parameters given as auto (bias=auto...)"),
-    INFO("light", r_chars, light, "the reference light's size (--sun-size, --lamp-radius: \"sun 0.53 deg, 64 rays\"); "
-                                  "empty: a light of no size, the hard reference"),
+    INFO("light", r_chars, light, "the reference light's size (--sun-size, --lamp-radius: \"sun 0.53 deg, 64 rays\") "
+                                  "and the lights shadowed (--lights: \"lights lamps (6)\"); empty: the technique's "
+                                  "one light, of no size"),
     INFO("backend", r_str, backend, "egl or osmesa"),
     INFO("renderer", r_str, renderer, "GL_RENDERER"),
     INFO("timing", r_str, timing, "queries or sync: the timing mode used"),
@@ -386,6 +398,9 @@ static const sb_run_col run_cols[] = {
     RUN_METRIC("err_floor", r_pooled, 1, "share",
                "share of sampled evaluated pixels whose reference flips when cast from the exact hit: the error figures' floor"),
     RUN_METRIC("ref_rays", r_ref, 0, "count", "reference rays cast for this run: 0 when every evaluated frame's answers were reused"),
+    RUN_METRIC("ref_rays_px", r_rays_px, 0, "rays/px",
+               "reference rays cast per pixel of a frame it cast for (every light of --lights: only toward the points "
+               "each one lights; empty when every answer was reused)"),
     RUN("ref_reused", r_ref, 2, "evaluated frames whose reference came from an earlier run of the same frame"),
     RUN("ref_background", r_ref, 3, "evaluated frames whose reference was cast in the background for this run (--overlap; their rays are in ref_rays)"),
     RUN_METRIC("ref_ms", r_ref, 1, "ms", "time the run spent in the reference (casting, geometry check, finding the answers or waiting for the background)"),

@@ -785,6 +785,52 @@ const sb_light *sb_scene_point_light(const sb_scene *s, int index, int *count) {
     return found;
 }
 
+static bool light_add(sb_light_set *o, int idx, const char *spec, sb_err *err) {
+    for (int i = 0; i < o->count; i++)
+        if (o->idx[i] == idx) return sb_fail(err, "--lights %s: a light named twice", spec);
+    if (o->count >= SB_MAX_LIGHTS) return sb_fail(err, "--lights %s: more than %d lights", spec, SB_MAX_LIGHTS);
+    o->idx[o->count++] = (int16_t)idx;
+    return true;
+}
+
+bool sb_scene_light_set(const sb_scene *s, const char *spec, bool has_sun, sb_light_set *out, sb_err *err) {
+    int lamps = 0;
+    sb_scene_point_light(s, 0, &lamps);
+    memset(out, 0, sizeof *out);
+    const char *p = spec;
+    while (*p) {
+        size_t n = strcspn(p, ",");
+        char word[32];
+        if (n == 0 || n >= sizeof word)
+            return sb_fail(err, "--lights %s: expected sun, lamps, all, or sun and lamp numbers separated by commas", spec);
+        memcpy(word, p, n);
+        word[n] = 0;
+        char *end;
+        long k = strtol(word, &end, 10);
+        bool sun = !strcmp(word, "sun") || (!strcmp(word, "all") && has_sun), every = !strcmp(word, "lamps") || !strcmp(word, "all");
+        if (!strcmp(word, "sun") && !has_sun)
+            return sb_fail(err, "--lights %s: the scene has no sun (no directional light; --sun AZ,EL adds one)", spec);
+        if (sun && !light_add(out, SB_LIGHT_SUN, spec, err)) return false;
+        if (every && !lamps && strcmp(word, "all"))
+            return sb_fail(err, "--lights %s: the scene has no point or spot light", spec);
+        for (int i = 0; every && i < lamps; i++)
+            if (!light_add(out, i, spec, err)) return false;
+        if (!sun && !every) {
+            if (end == word || *end || k < 0)
+                return sb_fail(err, "--lights %s: '%s' is not sun, lamps, all or a lamp number", spec, word);
+            if (k >= lamps && !lamps) return sb_fail(err, "--lights %s: the scene has no point or spot light", spec);
+            if (k >= lamps)
+                return sb_fail(err, "--lights %s: the scene has no lamp %ld (its point and spot lights are 0..%d)", spec, k,
+                               lamps - 1);
+            if (!light_add(out, (int)k, spec, err)) return false;
+        }
+        p += n + (p[n] == ',');
+        if (p[-1] == ',' && !*p) return sb_fail(err, "--lights %s: a comma at the end", spec);
+    }
+    if (!out->count) return sb_fail(err, "--lights %s: no light chosen", spec);
+    return true;
+}
+
 /* Frees *p unless it points into the mapped cache entry. */
 static void free_owned(const sb_scene *s, void *p) {
     const char *m = s->cache_map, *q = p;

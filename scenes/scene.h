@@ -217,6 +217,19 @@ double sb_scene_cpu_bytes(const sb_scene *s);
  * is none); *count (may be NULL) gets how many there are. */
 const sb_light *sb_scene_point_light(const sb_scene *s, int index, int *count);
 
+/* The lights one run shadows (--lights): each the index of a point or spot light in the order of
+ * sb_scene_point_light, or SB_LIGHT_SUN. */
+#define SB_MAX_LIGHTS 256
+#define SB_LIGHT_SUN (-1)
+typedef struct sb_light_set {
+    int count;
+    int16_t idx[SB_MAX_LIGHTS];
+} sb_light_set;
+/* Reads sun|lamps|all|LIST (LIST: sun and lamp indices, commas between) against the scene: false, with one line
+ * naming what the scene lacks and what it has, for a lamp it does not have, a sun where it has none (the run's
+ * --sun counts as one: has_sun), an empty set, a word it does not know or a light named twice. */
+bool sb_scene_light_set(const sb_scene *s, const char *spec, bool has_sun, sb_light_set *out, sb_err *err);
+
 /* Builder used by the glTF adapter: appends one primitive already transformed
  * to world space (double positions); vertices are re-based to the origin later. */
 typedef struct sb_prim_desc {

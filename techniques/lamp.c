@@ -1,6 +1,8 @@
 /* lamp.c - the point-light techniques' shared machinery (lamp.h). */
 #include "lamp.h"
 
+#include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 double sb_lamp_technique_shadow_bytes(const sb_technique *t, const void *desc) {
@@ -13,9 +15,10 @@ bool sb_lamp_technique_supported(const sb_run_ctx *rc, const void *desc, sb_err 
     const sb_lamp_kind *k = rc->tech->impl;
     const sb_lamp_desc *d = desc;
     const char *name = rc->tech->name;
-    if (!sb_lamp_supported(rc->gpu, d->light, name, why)) return false;
+    if (!rc->lights && !sb_lamp_supported(rc->gpu, d->light, name, why)) return false;   /* --lights: read at load */
     if (k->layered && !sb_layered_supported(rc->gpu->ctx, d->layered, name, why)) return false;
-    return sb_lamp_maps_fit(rc->gpu, name, d->res, sb_lamp_technique_shadow_bytes(rc->tech, desc),
+    int count = rc->lights ? rc->lights->count : 1;   /* a map set a light */
+    return sb_lamp_maps_fit(rc->gpu, name, d->res, count * sb_lamp_technique_shadow_bytes(rc->tech, desc),
                             k->target == GL_TEXTURE_CUBE_MAP, why);
 }
 
@@ -44,6 +47,23 @@ static bool make_targets(sb_lamp_state *s, const char *name, sb_err *err) {
     return true;
 }
 
+sb_lamp_state *sb_lamp_light(sb_lamp_state *s, int i) {
+    return i ? (sb_lamp_state *)(s->others + (size_t)(i - 1) * s->size) : s;
+}
+
+/* Light i's lamp, clip range and maps (the kind's per-lamp setup too). */
+static bool place(sb_lamp_state *l, const sb_run_ctx *rc, int which, sb_err *err) {
+    const sb_gpu *g = rc->gpu;
+    const sb_light *lamp = sb_scene_point_light(g->scene, which, NULL);
+    l->lamp = lamp->position;
+    double diag = sb_v3_len(sb_v3_sub(g->scene->bounds.hi, g->scene->bounds.lo));
+    l->far = lamp->range > 0 ? lamp->range : 2 * diag;
+    l->range = rc->lights && lamp->range > 0 ? lamp->range : 0;
+    l->near = fmax(l->far * l->kind->near_share, l->kind->near_share * 1e-2);
+    if (l->kind->setup) l->kind->setup(l);
+    return make_targets(l, rc->tech->name, err);
+}
+
 bool sb_lamp_technique_create(void *state, const sb_run_ctx *rc, const void *desc, sb_err *err) {
     sb_lamp_state *s = state;
     const sb_gpu *g = rc->gpu;
@@ -51,13 +71,16 @@ bool sb_lamp_technique_create(void *state, const sb_run_ctx *rc, const void *des
     s->kind = rc->tech->impl;
     s->d = desc;
     s->layered = s->kind->layered ? sb_layered_resolve(g->ctx, s->d->layered) : 0;
-    const sb_light *lamp = sb_scene_point_light(g->scene, s->d->light, NULL);
-    s->lamp = lamp->position;
-    double diag = sb_v3_len(sb_v3_sub(g->scene->bounds.hi, g->scene->bounds.lo));
-    s->far = lamp->range > 0 ? lamp->range : 2 * diag;
-    s->near = fmax(s->far * s->kind->near_share, s->kind->near_share * 1e-2);
-    if (s->kind->setup) s->kind->setup(s);
-    if (!make_targets(s, name, err)) return false;
+    s->count = rc->lights ? rc->lights->count : 1;
+    s->size = rc->tech->state_size;
+    if (s->count > 1) s->others = sb_xcalloc((size_t)s->count - 1, s->size);
+    for (int i = 0; i < s->count; i++) {
+        sb_lamp_state *l = sb_lamp_light(s, i);
+        l->kind = s->kind;
+        l->d = s->d;
+        l->layered = s->layered;
+        if (!place(l, rc, rc->lights ? rc->lights->idx[i] : s->d->light, err)) return false;
+    }
     for (int a = 0; a < (g->scene->alpha_tested_draws ? 2 : 1); a++)
         if (!s->kind->program(s, a, a ? NULL : sb_opaque_define(g), err)) return false;
     char defines[64];
@@ -68,6 +91,14 @@ bool sb_lamp_technique_create(void *state, const sb_run_ctx *rc, const void *des
     for (size_t i = 0; i < SB_COUNT(names); i++) *locs[i] = glGetUniformLocation(s->fp.prog, names[i]);
     for (int i = 0; i < 4; i++)
         s->u_lookup[i] = s->kind->lookup_uniforms[i] ? glGetUniformLocation(s->fp.prog, s->kind->lookup_uniforms[i]) : -1;
+    for (int i = 1; i < s->count; i++) {   /* the programs, shared: only the first light's state frees them */
+        sb_lamp_state *l = sb_lamp_light(s, i);
+        memcpy(l->pass, s->pass, sizeof s->pass);
+        l->fp = s->fp;
+        l->u_map = s->u_map, l->u_lamp = s->u_lamp, l->u_near = s->u_near, l->u_far = s->u_far;
+        l->u_res = s->u_res, l->u_bias = s->u_bias, l->u_normal = s->u_normal;
+        memcpy(l->u_lookup, s->u_lookup, sizeof s->u_lookup);
+    }
     return sb_gl_check(name, err);
 }
 
@@ -88,52 +119,82 @@ void sb_lamp_draw(sb_lamp_state *s, sb_frame *f, uint32_t n, int instances,
     }
 }
 
+/* One light's maps, inside the shadow stage; returns how many it rendered. */
+static int render_maps(sb_lamp_state *l, sb_frame *f) {
+    /* the lamp first: its draws keep the triangles facing it */
+    sb_frame_shade_point(f, l->lamp);
+    glBindFramebuffer(GL_FRAMEBUFFER, l->fbo_all);
+    glViewport(0, 0, l->d->res, l->d->res);
+    glClear(GL_DEPTH_BUFFER_BIT);   /* every layer */
+    return l->kind->render(l, f);
+}
+
+/* One light's camera pass: the first clears and lays the ambient, each further one adds its light. */
+static void shade(sb_lamp_state *l, sb_frame *f, bool first) {
+    sb_frame_shade_point(f, l->lamp);
+    f->shade_range = l->range;
+    f->shade_add = !first;
+    glUseProgram(l->fp.prog);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(l->kind->target, l->tex);
+    glUniform1i(l->u_map, 0);
+    glUniform3f(l->u_lamp, (float)l->lamp.x, (float)l->lamp.y, (float)l->lamp.z);
+    glUniform1f(l->u_near, (float)l->near);
+    glUniform1f(l->u_far, (float)l->far);
+    glUniform1f(l->u_res, (float)l->d->res);
+    glUniform1f(l->u_bias, (float)l->d->bias);
+    glUniform1f(l->u_normal, (float)l->d->normal);
+    if (l->kind->lookup) l->kind->lookup(l);
+    if (first) {
+        sb_final_pass(f, &l->fp, false);
+        return;
+    }
+    glEnablei(GL_BLEND, 0);
+    glBlendFunci(0, GL_ONE, GL_ONE);
+    sb_final_draw(f, &l->fp, true);
+    glDisablei(GL_BLEND, 0);
+}
+
 void sb_lamp_technique_frame(void *state, sb_frame *f) {
     sb_lamp_state *s = state;
     const sb_lamp_kind *k = s->kind;
-    /* the lamp, before the shadow stage: its draws keep the triangles facing it */
-    sb_frame_shade_point(f, s->lamp);
+    /* every light, or the one an evaluation pass scores */
+    int first = f->eval_light ? f->eval_light - 1 : 0, end = f->eval_light ? f->eval_light : s->count;
     sb_stage_begin(f, SB_STAGE_CASCADE);
-    glBindFramebuffer(GL_FRAMEBUFFER, s->fbo_all);
-    glViewport(0, 0, s->d->res, s->d->res);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
     glDepthMask(GL_TRUE);
-    glClear(GL_DEPTH_BUFFER_BIT);   /* every layer */
     glDisable(GL_CULL_FACE);
     if (s->d->slope != 0) {
         glEnable(GL_POLYGON_OFFSET_FILL);
         glPolygonOffset((float)s->d->slope, 0.0f);
     }
     glBindVertexArray(f->gpu->vao);
-    int rendered = k->render(s, f);
+    int rendered = 0;
+    for (int i = first; i < end; i++) rendered += render_maps(sb_lamp_light(s, i), f);
     glDisable(GL_POLYGON_OFFSET_FILL);
     f->counters.cascades_rendered = rendered;
-    f->counters.cascades_skipped = k->maps - rendered;
+    f->counters.cascades_skipped = k->maps * (end - first) - rendered;
     sb_stage_end(f, SB_STAGE_CASCADE);
 
     sb_stage_begin(f, SB_STAGE_FINAL);
-    glUseProgram(s->fp.prog);
-    glActiveTexture(GL_TEXTURE0);
-    glBindTexture(k->target, s->tex);
-    glUniform1i(s->u_map, 0);
-    glUniform3f(s->u_lamp, (float)s->lamp.x, (float)s->lamp.y, (float)s->lamp.z);
-    glUniform1f(s->u_near, (float)s->near);
-    glUniform1f(s->u_far, (float)s->far);
-    glUniform1f(s->u_res, (float)s->d->res);
-    glUniform1f(s->u_bias, (float)s->d->bias);
-    glUniform1f(s->u_normal, (float)s->d->normal);
-    if (k->lookup) k->lookup(s);
-    sb_final_pass(f, &s->fp, false);
+    for (int i = first; i < end; i++) shade(sb_lamp_light(s, i), f, i == first);
+    f->shade_add = false;
     sb_stage_end(f, SB_STAGE_FINAL);
+}
+
+static void free_maps(sb_lamp_state *l) {
+    if (l->fbo_all) glDeleteFramebuffers(1, &l->fbo_all);
+    if (l->fbo[0] && l->kind) glDeleteFramebuffers(l->kind->maps, l->fbo);
+    if (l->tex) glDeleteTextures(1, &l->tex);
 }
 
 void sb_lamp_technique_destroy(void *state) {
     sb_lamp_state *s = state;
+    for (int i = 1; s->others && i < s->count; i++) free_maps(sb_lamp_light(s, i));
+    free(s->others);
     sb_final_prog_free(&s->fp);
     for (int a = 0; a < 2; a++)
         if (s->pass[a].prog) glDeleteProgram(s->pass[a].prog);
-    if (s->fbo_all) glDeleteFramebuffers(1, &s->fbo_all);
-    if (s->fbo[0] && s->kind) glDeleteFramebuffers(s->kind->maps, s->fbo);
-    if (s->tex) glDeleteTextures(1, &s->tex);
+    free_maps(s);
 }

@@ -5,7 +5,9 @@
  * and the final pass with the shared lookup uniforms. A lamp technique is its
  * parameter table (SB_LAMP_PARAMS and its own rows) and an sb_lamp_kind: how
  * it lays out and renders its maps and which lookup reads them, put together
- * by SB_LAMP_TECHNIQUE (cube.c, dpsm.c). */
+ * by SB_LAMP_TECHNIQUE (cube.c, dpsm.c). With --lights it shadows every lamp
+ * named, a map set each, and adds each lamp's light in a camera pass of its own
+ * (the naive way an atlas is measured against). */
 #pragma once
 #include "render.h"
 
@@ -59,7 +61,16 @@ struct sb_lamp_state {
     sb_final_prog fp;
     GLint u_map, u_lamp, u_near, u_far, u_res, u_bias, u_normal;
     GLint u_lookup[4];          /* the kind's lookup_uniforms */
+    /* --lights: the first light's state is the technique's; the others follow in `others` (count - 1 states of the
+       technique's size, each with its lamp and maps, this one's programs shared) */
+    int count;
+    size_t size;
+    char *others;
+    double range;               /* the lamp's range: shaded only within it with --lights (0: none) */
 };
+
+/* The i-th light's state of a technique's (0: itself). */
+sb_lamp_state *sb_lamp_light(sb_lamp_state *s, int i);
 
 /* Casters within the lamp's range (the box around it) into f->scratch; returns how many. */
 uint32_t sb_lamp_casters(const sb_lamp_state *s, sb_frame *f);
@@ -79,7 +90,7 @@ void sb_lamp_technique_destroy(void *state);
     {                                                                                                              \
         .name = NAME, .summary = SUMMARY, .params = PARAMS, .param_count = (int)SB_COUNT(PARAMS),                  \
         .desc_size = sizeof(sb_lamp_desc), .stages = SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_FINAL), \
-        .needs = SB_NEEDS_POINT_LIGHT, .state_size = sizeof(STATE_T), .supported = sb_lamp_technique_supported,    \
+        .needs = SB_NEEDS_POINT_LIGHT, .lights = SB_LIGHTS_LAMPS, .state_size = sizeof(STATE_T), .supported = sb_lamp_technique_supported,    \
         .shadow_bytes = sb_lamp_technique_shadow_bytes,                                                            \
         .create = sb_lamp_technique_create, .frame = sb_lamp_technique_frame,                                      \
         .destroy = sb_lamp_technique_destroy, .impl = KIND,                                                         \

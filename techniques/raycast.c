@@ -9,7 +9,9 @@
  * err_floor. It has a cost of its own: the position pass is its `zpass`, the
  * readback and rays its `rays` stage. On a scene lit only by point lights it
  * casts toward the first of them (or the one `light` names), so the
- * point-light techniques have their reference row too. */
+ * point-light techniques have their reference row too. With --lights it
+ * casts toward every light named (the sun, lamps within their range) and adds
+ * each light in a camera pass of its own. */
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -37,10 +39,11 @@ typedef struct {
     int threads;
     bool point;             /* toward a point light, not the sun */
     sb_v3 lamp;
+    const sb_light_set *lights; /* --lights (NULL: the one light above) */
     float *pos, *aux;           /* the position pass's targets */
     sb_ref_point *pts;
     int *pix;
-    unsigned char *hits, *vis;
+    unsigned char *hits, *vis;  /* vis: a frame's worth a light */
 } raycast_state;
 
 /* The point light the rays go to (light=K, or the first lamp of a scene without a sun), or -1: the sun. */
@@ -74,8 +77,9 @@ static bool raycast_create(void *state, const sb_run_ctx *rc, const void *desc, 
     s->aux = sb_xmalloc(sizeof(float) * 4 * n);
     s->pts = sb_xmalloc(sizeof(sb_ref_point) * n);
     s->pix = sb_xmalloc(sizeof(int) * n);
+    s->lights = rc->lights;
     s->hits = sb_xmalloc(n);
-    s->vis = sb_xmalloc(n);
+    s->vis = sb_xmalloc(n * (rc->lights ? (size_t)rc->lights->count : 1));
     glGenTextures(1, &s->tex);
     glBindTexture(GL_TEXTURE_2D, s->tex);
     glTexStorage2D(GL_TEXTURE_2D, 1, GL_R8, g->width, g->height);
@@ -86,11 +90,20 @@ static bool raycast_create(void *state, const sb_run_ctx *rc, const void *desc, 
     return sb_gl_check("raycast", err);
 }
 
+/* Light i of the frame: the run's --lights, or the one light of before. */
+static void shade(const raycast_state *s, sb_frame *f, int i) {
+    if (s->lights) sb_frame_shade_light_of(f, s->lights->idx[i]);
+    else if (s->point) sb_frame_shade_point(f, s->lamp);
+}
+
 static void raycast_frame(void *state, sb_frame *f) {
     raycast_state *s = state;
     const sb_gpu *g = f->gpu;
     const int w = g->width, h = g->height;
-    if (s->point) sb_frame_shade_point(f, s->lamp);
+    const size_t np = (size_t)w * h;
+    /* every light, or the one an evaluation pass scores */
+    int first = f->eval_light ? f->eval_light - 1 : 0, end = f->eval_light ? f->eval_light : s->lights ? s->lights->count : 1;
+    shade(s, f, first);
 
     /* the camera pass with the evaluation targets: positions and normals. Its
        depth test is the final pass's (LEQUAL: of equal depths the last drawn
@@ -105,22 +118,40 @@ static void raycast_frame(void *state, sb_frame *f) {
 
     sb_stage_begin(f, SB_STAGE_RAYS);
     sb_gpu_readback_eval(g, s->pos, s->aux);
-    sb_eval_view view = {w, h, s->pos, s->aux, sb_frame_eye(f), NULL, f->shade_light};
-    int m = sb_ref_points(s->ref, &view, s->pts, s->pix);
-    memset(s->vis, 255, (size_t)w * h);
-    sb_reference_visibility_view(s->ref, f->shade_light, s->pts, s->pix, m, w, h, s->hits, s->threads);
-    for (int k = 0; k < m; k++) s->vis[s->pix[k]] = s->hits[k];   /* 255 lit, 0 shadowed; a sized light between */
+    for (int i = first; i < end; i++) {
+        shade(s, f, i);
+        unsigned char *vis = s->vis + (size_t)(i - first) * np;
+        sb_eval_view view = {w, h, s->pos, s->aux, sb_frame_eye(f), NULL, f->shade_light, f->shade_range};
+        int m = sb_ref_points(s->ref, &view, s->pts, s->pix);
+        memset(vis, 255, np);
+        sb_reference_visibility_view(s->ref, f->shade_light, s->pts, s->pix, m, w, h, s->hits, s->threads);
+        for (int k = 0; k < m; k++) vis[s->pix[k]] = s->hits[k];   /* 255 lit, 0 shadowed; a sized light between */
+    }
     glBindTexture(GL_TEXTURE_2D, s->tex);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, w, h, GL_RED, GL_UNSIGNED_BYTE, s->vis);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, w, h, GL_RED, GL_UNSIGNED_BYTE, s->vis);   /* the first light's */
     sb_stage_end(f, SB_STAGE_RAYS);
 
     sb_stage_begin(f, SB_STAGE_FINAL);
-    glUseProgram(s->fp.prog);
-    glActiveTexture(GL_TEXTURE0);
-    glBindTexture(GL_TEXTURE_2D, s->tex);
-    glUniform1i(s->u_rays, 0);
-    sb_final_pass(f, &s->fp, true);
+    for (int i = first; i < end; i++) {   /* the first clears and lays the ambient, each further one adds its light */
+        shade(s, f, i);
+        f->shade_add = i > first;
+        glBindTexture(GL_TEXTURE_2D, s->tex);
+        if (i > first) glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, w, h, GL_RED, GL_UNSIGNED_BYTE, s->vis + (size_t)(i - first) * np);
+        glUseProgram(s->fp.prog);
+        glActiveTexture(GL_TEXTURE0);
+        glBindTexture(GL_TEXTURE_2D, s->tex);
+        glUniform1i(s->u_rays, 0);
+        if (i == first) {
+            sb_final_pass(f, &s->fp, true);
+            continue;
+        }
+        glEnablei(GL_BLEND, 0);
+        glBlendFunci(0, GL_ONE, GL_ONE);
+        sb_final_draw(f, &s->fp, true);
+        glDisablei(GL_BLEND, 0);
+    }
+    f->shade_add = false;
     sb_stage_end(f, SB_STAGE_FINAL);
 }
 
@@ -145,6 +176,7 @@ const sb_technique sb_technique_raycast = {
     .stages = SB_STAGE_BIT(SB_STAGE_ZPASS) | SB_STAGE_BIT(SB_STAGE_RAYS) | SB_STAGE_BIT(SB_STAGE_FINAL),
     .needs = SB_NEEDS_REFERENCE,
     .traits = SB_TRAIT_EXACT,
+    .lights = SB_LIGHTS_ANY,
     .pixel_cost = 20,
     .stress = "",
     .state_size = sizeof(raycast_state),

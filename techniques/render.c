@@ -32,6 +32,7 @@ static bool final_variant(sb_final_prog *fp, int i, const sb_gpu *g, const char 
     v->u_view = glGetUniformLocation(v->prog, "u_view");
     v->u_proj = glGetUniformLocation(v->prog, "u_proj");
     v->u_light = glGetUniformLocation(v->prog, "u_shade_light");
+    v->u_more = glGetUniformLocation(v->prog, "u_shade_more");
     v->u_depth_view = glGetUniformLocation(v->prog, "u_depth_view");
     if (i == 0) return true;
     /* the technique's uniforms reach this variant by copy from v[0]: one only it read would keep
@@ -47,7 +48,7 @@ static bool final_variant(sb_final_prog *fp, int i, const sb_gpu *g, const char 
         if (block >= 0 || glGetUniformLocation(fp->v[0].prog, un) >= 0) continue;
         /* the shared pass's own: set on each variant, or bound by the shader (the alpha test's sb_ samplers) */
         bool own = !strncmp(un, "sb_", 3);
-        const char *shared[] = {"u_view", "u_proj", "u_shade_light", "u_depth_view"};
+        const char *shared[] = {"u_view", "u_proj", "u_shade_light", "u_shade_more", "u_depth_view"};
         for (size_t k = 0; k < SB_COUNT(shared); k++) own |= !strcmp(un, shared[k]);
         if (!own)
             return sb_fail(err, "%s: uniform %s is read by the %s variant of the camera pass only: its value would not "
@@ -535,6 +536,14 @@ void sb_frame_shade_point(sb_frame *f, sb_v3 pos) {
     f->shade_light[3] = 1;
 }
 
+void sb_frame_shade_light_of(sb_frame *f, int idx) {
+    const sb_gpu *g = f->gpu;
+    const sb_light *lamp = idx == SB_LIGHT_SUN ? NULL : sb_scene_point_light(g->scene, idx, NULL);
+    if (lamp) sb_frame_shade_point(f, lamp->position);
+    else f->shade_light[0] = g->sun.x, f->shade_light[1] = g->sun.y, f->shade_light[2] = g->sun.z, f->shade_light[3] = 0;
+    f->shade_range = lamp && lamp->range > 0 ? lamp->range : 0;
+}
+
 void sb_stage_begin(sb_frame *f, sb_stage s) {
     f->stage = s;
     sb_timer_stage_begin(f->timer, s);
@@ -729,6 +738,7 @@ static void draw_scene(sb_frame *f, const sb_final_prog *fp, GLenum depth_func, 
         if (v->u_depth_view >= 0) glUniformMatrix4fv(v->u_depth_view, 1, GL_FALSE, depth_view);
         glUniform4f(v->u_light, (float)f->shade_light[0], (float)f->shade_light[1], (float)f->shade_light[2],
                     (float)f->shade_light[3]);
+        if (v->u_more >= 0) glUniform2f(v->u_more, (float)f->shade_range, f->shade_add ? 1.0f : 0.0f);
         for (uint32_t i = 0; i < n; i++)
             if (sb_draw_variant(g, f->scratch[i]) == a) camera_submit(f, f->scratch[i], &culling);
         sb_submit_flush(f);

@@ -16,7 +16,7 @@ struct sb_reference;
  * it and the links that bring the technique's uniforms over from `prog`. */
 typedef struct sb_final_variant {
     GLuint prog;
-    GLint u_view, u_proj, u_light;
+    GLint u_view, u_proj, u_light, u_more;
     GLint u_depth_view;     /* evaluation variants: the view the lookup's depth is in */
     sb_gl_links from_timed;
 } sb_final_variant;
@@ -70,6 +70,7 @@ typedef struct sb_run_ctx {
     int frames;                         /* frames the run will render, warm-up and repeats included */
     void *scene_data;                   /* what the technique's load step made for this scene (or NULL) */
     const struct sb_reference *reference;   /* the Embree reference, for SB_NEEDS_REFERENCE (else NULL) */
+    const sb_light_set *lights;         /* --lights: the lights to shadow (NULL: the technique's one light) */
     /* the run's shadow range, the same every frame (engines' shadow distance): the path's nearest near plane
        and its farthest far plane, clamped to the farthest the scene reaches from any of its cameras */
     double shadow_near, shadow_far;
@@ -106,6 +107,8 @@ typedef struct sb_frame {
                                            evaluation tests it; xyz toward the sun (w 0) or a point light's
                                            position (w 1); the sun unless the technique shades a lamp
                                            (sb_frame_shade_point, before its shadow stage) */
+    double shade_range;                 /* --lights: the shaded lamp's range, beyond which it lights nothing (0: none) */
+    bool shade_add;                     /* --lights: a camera pass adding one more light to the colour (no ambient) */
     uint32_t *scratch;                  /* draw_count entries, for culling results */
     uint32_t *cmds;                     /* --submit indirect: the pass's pending commands, 5 words each (at most
                                            draw_count: a pass issues each draw once between flushes) */
@@ -123,6 +126,9 @@ typedef struct sb_frame {
     uint32_t moved_count;
     bool bypass_cache;                  /* draw every cached map or page again this frame (the stale check) */
     double anim_ms;                     /* posing the scene and uploading its moving vertices (NAN: none) */
+    /* --lights, in an evaluation pass: 1 + the place in the run's set of the one light the frame shades and writes
+       the visibility of, with maps for it alone (0: every light of the set, as a timed frame) */
+    int eval_light;
 } sb_frame;
 
 bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *scene, int width, int height, sb_v3 sun,
@@ -197,6 +203,8 @@ bool sb_lamp_supported(const sb_gpu *g, int light, const char *technique, sb_err
  * cube when cube is true): within GL_MAX_CUBE_MAP_TEXTURE_SIZE or
  * GL_MAX_TEXTURE_SIZE and within the GPU memory (sb_gpu_memory_fits). */
 bool sb_lamp_maps_fit(const sb_gpu *g, const char *technique, int res, double bytes, bool cube, sb_err *why);
+/* --lights: makes the frame lit by one light of a set (SB_LIGHT_SUN or a lamp's index), its range too. */
+void sb_frame_shade_light_of(sb_frame *f, int idx);
 /* Makes the frame lit by a point light at pos: call it before the shadow
  * stage (its draws keep the triangles facing the lamp), and the final pass
  * shades and the evaluation tests that lamp. */

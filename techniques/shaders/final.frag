@@ -7,6 +7,7 @@ in vec3 v_pos;
 in vec3 v_nrm;
 in float v_view_z;
 uniform vec4 u_shade_light;   // xyz toward the sun (w 0), or a point light's position (w 1)
+uniform vec2 u_shade_more;    // x: the lamp's range (0: none); y: 1 in a pass adding a further light (no ambient)
 flat in vec4 v_color;          // the draw's colour
 layout(location = 0) out vec4 o_color;
 #ifdef SB_EVAL
@@ -19,8 +20,9 @@ void main() {
     vec3 n = normalize(v_nrm);
     vec3 L = u_shade_light.w > 0.5 ? normalize(u_shade_light.xyz - v_pos) : u_shade_light.xyz;
     float ndl = dot(n, L);
+    if (u_shade_light.w > 0.5 && u_shade_more.x > 0.0 && length(u_shade_light.xyz - v_pos) > u_shade_more.x) ndl = 0.0;
     float vis = sb_visibility(v_pos, n, v_view_z);
-    o_color = vec4(v_color.rgb * (0.3 + 0.7 * max(ndl, 0.0) * vis), 1.0);
+    o_color = vec4(v_color.rgb * ((1.0 - u_shade_more.y) * 0.3 + 0.7 * max(ndl, 0.0) * vis), 1.0);
 #ifdef SB_EVAL
     o_vis = vis;
     vec3 ng = normalize(cross(dFdx(v_pos), dFdy(v_pos)));
