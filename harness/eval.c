@@ -94,6 +94,7 @@ static bool eval_light(sb_session *s, sb_instance *in, int pf, int n, int replay
     sb_m4 inv;
     sb_eval_view view;
     render_targets(s, in, pf, n, replay, seq, b, f, true, &inv, &view, light);
+    if (light > 1) view.inv_view_proj = NULL;   /* the camera's geometry check: once, with the first light */
     const sb_reference *ref = sb_session_reference(s, err);   /* refit to the frame's pose */
     if (!ref) return false;
     sb_evaluate_frame(ref, s->ref_cache, &view, b->vis, b->ref, m, s->opts.threads);

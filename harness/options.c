@@ -619,7 +619,7 @@ static void usage_lines(FILE *f, const sb_command_def *c) {
 
 static const char *const operands = "SCENE: a .gltf/.glb file or a bundled scene (plane-box, desert, towers, "
                                     "overhangs, plane-box-lamp,\n"
-                                    "       towers-night, movers, conf-*)\n"
+                                    "       towers-night, street-lamps, movers, conf-*)\n"
                                     "PATH:  a .path file, a bundled path (same names), auto, orbit, or "
                                     "FILE.glb#camera=K\n"
                                     "SPEC:  technique[:param=value[,value...]]...  e.g. "

@@ -344,7 +344,10 @@ static void write_lights(sb_glb_scene *s, sb_glb_str *lights) {
         sb_v3 p = sb_v3_add(s->lamps[i], s->offset);
         sb_glb_node(s, true, "{\"name\":\"lamp%d\",\"translation\":[%.17g,%.17g,%.17g],"
                              "\"extensions\":{\"KHR_lights_punctual\":{\"light\":%d}}}", i, p.x, p.y, p.z, nl);
-        put(lights, "%s{\"type\":\"point\",\"name\":\"lamp%d\",\"color\":[1,0.85,0.6],\"intensity\":40}", nl ? "," : "", i);
+        char range[48] = "";
+        if (s->lamp_range[i] > 0) snprintf(range, sizeof range, ",\"range\":%.17g", s->lamp_range[i]);
+        put(lights, "%s{\"type\":\"point\",\"name\":\"lamp%d\",\"color\":[1,0.85,0.6],\"intensity\":40%s}", nl ? "," : "", i,
+            range);
         nl++;
     }
 }

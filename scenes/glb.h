@@ -40,7 +40,8 @@ typedef struct sb_glb_scene {
     sb_v3 sun;                  /* toward the sun */
     sb_v3 offset;               /* translation of every mesh node (double precision in the JSON) */
     bool no_sun;                /* a night scene: point lights only */
-    sb_v3 lamps[16];            /* point lights (KHR_lights_punctual), positions */
+    sb_v3 lamps[256];           /* point lights (KHR_lights_punctual), positions */
+    double lamp_range[256];     /* each one's range (0: none written, no limit) */
     int nlamps;
     /* the caller's own (conformance scenes): */
     unsigned char *bin;         /* buffer views so far */

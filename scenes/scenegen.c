@@ -206,6 +206,34 @@ static int gen_towers_night(const char *dir) {
     return rc;
 }
 
+/* a street lit by 64 lamps of range 7 in two rows, a post and a crate under each: the camera looks down the
+ * street, so near lamps light much of the screen and far ones a few pixels (--lights, atlas policies) */
+static int gen_street_lamps(const char *dir) {
+    sb_glb_scene s = {0};
+    s.no_sun = true;
+    sb_glb_box(sb_glb_new_mesh(&s, 0), -12, -0.5, -8, 12, 0, 200);
+    sb_glb_mesh *posts = sb_glb_new_mesh(&s, 4), *crates = sb_glb_new_mesh(&s, 1);
+    for (int i = 0; i < 64; i++) {
+        double x = i % 2 ? 4 : -4, z = 6 * (i / 2), side = i % 2 ? 1 : -1;
+        sb_glb_box(posts, x + side * 0.6, 0, z - 0.1, x + side * 0.8, 3.8, z + 0.1);
+        sb_glb_box(crates, x - side * 1.5 - 0.5, 0, z + 1, x - side * 1.5 + 0.5, 1, z + 2);
+        s.lamp_range[s.nlamps] = 7;
+        s.lamps[s.nlamps++] = sb_v3_make(x, 4, z);
+    }
+    char p[4096];
+    snprintf(p, sizeof p, "%s/street-lamps.glb", dir);
+    int rc = sb_glb_write(&s, p);
+    snprintf(p, sizeof p, "%s/street-lamps.path", dir);
+    rc |= write_text(p,
+                     "# street-lamps: down the street between the two rows of lamps\n"
+                     "fov 60\n"
+                     "near 0.1\n"
+                     "far 300\n"
+                     "look 0   0 3 -6     0 1 40\n"
+                     "look 8   0 3 30     0 1 80\n");
+    return rc;
+}
+
 static int gen_overhangs(const char *dir) {
     sb_glb_scene s = {0};
     s.sun = sb_sun_dir(60, 30);
@@ -325,6 +353,6 @@ int main(int argc, char **argv) {
         return 2;
     }
     return gen_plane_box(argv[1]) | gen_plane_box_lamp(argv[1]) | gen_desert(argv[1]) | gen_towers(argv[1]) |
-           gen_towers_night(argv[1]) | gen_overhangs(argv[1]) | gen_towers_draco(argv[1]) | gen_movers(argv[1]) |
+           gen_towers_night(argv[1]) | gen_street_lamps(argv[1]) | gen_overhangs(argv[1]) | gen_towers_draco(argv[1]) | gen_movers(argv[1]) |
            sb_conformance_write(argv[1]);
 }

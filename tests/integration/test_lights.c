@@ -1,0 +1,182 @@
+/* --lights: several lights shadowed and scored in one run, on real renders.
+ *
+ * - towers-night with its six lamps: raycast's error is exactly 0 over every
+ *   (pixel, lamp) pair, cube's and dpsm's are small and finite, the run names
+ *   its lights (a series of its own), shadow_mb holds a map set a lamp, and a
+ *   sun technique is skipped with its reason.
+ * - Each lamp's shadows are its own: on street-lamps (lamps of range 7), one
+ *   lamp moved changes only pixels within its range (before or after), for the
+ *   per-light cube maps and for raycast.
+ * - A light the scene lacks, or a word --lights does not know: exit 2, one line. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "session.h"
+#include "spec.h"
+#include "support.h"
+#include "table.h"
+
+SB_TEST_SCRATCH("sblights")
+
+static double cell(const sb_table *t, int r, const char *col) {
+    const char *v = sb_table_get(t, r, col);
+    return v && *v ? atof(v) : NAN;
+}
+
+static int row_of(const sb_table *t, const char *technique, const char *light) {
+    for (int r = 0; r < t->nrows; r++)
+        if (!strcmp(sb_table_get(t, r, "technique"), technique) && !strcmp(sb_table_get(t, r, "light"), light)) return r;
+    fail_msg("no %s run with light '%s'", technique, light);
+    return -1;
+}
+
+static void test_every_lamp_of_towers_night(void **st) {
+    (void)st;
+    char out[16384], dir[512];
+    int rc = run_logged(out, sizeof out,
+                        "%s run towers-night towers-night raycast cube:res=512 dpsm:res=512 pssm --frames 2 --warmup 0 "
+                        "--size 256x144 --error-every 1 --lights lamps --quiet --out %s/all",
+                        test_binary(), g_tmp);
+    assert_int_equal(rc, 0);
+    snprintf(dir, sizeof dir, "%s", last_line_of(out));
+    rc = run_logged(out, sizeof out,
+                    "%s run towers-night towers-night cube:res=512 --frames 2 --warmup 0 --size 256x144 --error-every 1 "
+                    "--quiet --out %s/one",
+                    test_binary(), g_tmp);
+    assert_int_equal(rc, 0);
+    sb_table all, one;
+    summary_table(dir, &all);
+    summary_table(last_line_of(out), &one);
+    const char *six = "lights lamps (6)";
+    int ray = row_of(&all, "raycast", six), cube = row_of(&all, "cube", six), dpsm = row_of(&all, "dpsm", six);
+    print_message("err_rate over (pixel, lamp): raycast %g, cube %g, dpsm %g; lights_px %g\n", cell(&all, ray, "err_rate_mean"),
+                  cell(&all, cube, "err_rate_mean"), cell(&all, dpsm, "err_rate_mean"), cell(&all, ray, "lights_px_mean"));
+    assert_true(cell(&all, ray, "err_rate_mean") == 0);   /* exact, every lamp */
+    for (int r = 0; r < all.nrows; r++) {
+        if (strcmp(sb_table_get(&all, r, "technique"), "pssm")) {
+            assert_string_equal(sb_table_get(&all, r, "status"), "ok");
+            double e = cell(&all, r, "err_rate_mean"), lp = cell(&all, r, "lights_px_mean");
+            assert_true(isfinite(e) && e < 0.03);
+            assert_true(lp >= 1 && lp <= 6);
+            assert_true(cell(&all, r, "error_frames") == 2);
+        }
+    }
+    /* a sun technique says why it has nothing to do: here no sun; beside a sun, that it shadows the sun alone */
+    int pssm = row_of(&all, "pssm", six);
+    assert_string_equal(sb_table_get(&all, pssm, "status"), "skipped");
+    assert_non_null(strstr(sb_table_get(&all, pssm, "reason"), "no sun"));
+    rc = run_logged(out, sizeof out, "%s run plane-box-lamp plane-box-lamp pssm raycast --frames 1 --warmup 0 --size 64x36 "
+                    "--error-every 0 --lights all --quiet --out %s/sun", test_binary(), g_tmp);
+    assert_int_equal(rc, 0);
+    sb_table sun;
+    summary_table(last_line_of(out), &sun);
+    pssm = row_of(&sun, "pssm", "lights all (2)");
+    assert_string_equal(sb_table_get(&sun, pssm, "status"), "skipped");
+    assert_non_null(strstr(sb_table_get(&sun, pssm, "reason"), "pssm shadows the sun alone; --lights all names a lamp"));
+    assert_string_equal(sb_table_get(&sun, row_of(&sun, "raycast", "lights all (2)"), "status"), "ok");
+    sb_table_free(&sun);
+    /* a map set a lamp; the same technique without --lights is another run (and series) */
+    int single = row_of(&one, "cube", "");
+    assert_true(fabs(cell(&all, cube, "shadow_mb") - 6 * cell(&one, single, "shadow_mb")) < 1e-9);
+    assert_string_not_equal(sb_table_get(&all, cube, "run_id"), sb_table_get(&one, single, "run_id"));
+    assert_true(isnan(cell(&one, single, "lights_px_mean")));   /* one light: not a figure of several */
+    sb_table_free(&all);
+    sb_table_free(&one);
+}
+
+/* Renders frame 0 of street-lamps with the technique shadowing lamps 0 and 1: colour, and positions. */
+static void render_two_lamps(sb_session *s, const char *technique, unsigned char *rgba, float *pos, float *aux) {
+    sb_err err;
+    sb_run_spec *runs = NULL;
+    int n = 0;
+    assert_true(sb_spec_expand(technique, NULL, &runs, &n, &err));
+    sb_instance in;
+    if (!sb_instance_create(&in, s, &runs[0], 1, &err)) fail_msg("%s", err.msg);
+    sb_timer t;
+    sb_timer_init(&t, SB_TIMING_SYNC, 1, 1);
+    sb_timer_frame_begin(&t, 0);
+    sb_frame f;
+    memset(&f, 0, sizeof f);
+    render_frame_eval(s, &in, &f, 0, 1, 0, &t);   /* every light of the set: the colour a timed frame draws */
+    sb_gpu_readback(&s->gpu, NULL, NULL, rgba);
+    sb_gpu_readback_eval(&s->gpu, pos, aux);
+    sb_timer_free(&t);
+    sb_instance_destroy(&in);
+    free(runs);
+}
+
+static double dist(const float *p, sb_v3 q) {
+    return sqrt((p[0] - q.x) * (p[0] - q.x) + (p[1] - q.y) * (p[1] - q.y) + (p[2] - q.z) * (p[2] - q.z));
+}
+
+static void moved_lamp(const char *technique) {
+    sb_session s;
+    sb_err err;
+    const int w = 320, h = 180, np = w * h;
+    assert_true(test_open(&s, "street-lamps", "street-lamps", w, h, &err));
+    assert_true(sb_scene_light_set(&s.scene, "0,1", false, &s.lights, &err));
+    unsigned char *a = malloc(4 * (size_t)np), *b = malloc(4 * (size_t)np);
+    float *pos = malloc(sizeof(float) * 4 * np), *aux = malloc(sizeof(float) * 4 * np);
+    render_two_lamps(&s, technique, a, pos, aux);
+    sb_light *lamp1 = (sb_light *)sb_scene_point_light(&s.scene, 1, NULL);
+    sb_v3 before = lamp1->position, after = sb_v3_add(before, sb_v3_make(0, 0, 2.5));
+    double range = lamp1->range;
+    lamp1->position = after;
+    render_two_lamps(&s, technique, b, pos, aux);
+    int differ = 0, outside = 0, lit0 = 0, ground = 0;
+    sb_v3 lamp0 = sb_scene_point_light(&s.scene, 0, NULL)->position;
+    for (int i = 0; i < np; i++) {
+        const float *p = pos + 4 * (size_t)i;
+        const float *n = aux + 4 * (size_t)i;
+        if (n[0] * n[0] + n[1] * n[1] + n[2] * n[2] < 0.25) continue;   /* sky */
+        ground++;
+        bool in1 = dist(p, before) <= range * 1.001 || dist(p, after) <= range * 1.001;
+        lit0 += dist(p, lamp0) <= range && !in1;
+        if (!memcmp(a + 4 * (size_t)i, b + 4 * (size_t)i, 4)) continue;
+        differ++;
+        outside += !in1;
+    }
+    print_message("%s: lamp 1 moved 2.5 along z: %d pixels changed, %d of them beyond its range; %d pixels lit by lamp 0 "
+                  "alone (of %d not sky)\n", technique, differ, outside, lit0, ground);
+    assert_true(differ > 500);
+    assert_true(lit0 > 500);      /* pixels that only lamp 0 lights exist, and none of them changed */
+    assert_int_equal(outside, 0);
+    free(a);
+    free(b);
+    free(pos);
+    free(aux);
+    sb_session_close(&s);
+}
+
+static void test_moved_lamp_changes_only_its_pixels(void **st) {
+    (void)st;
+    moved_lamp("cube:res=512");
+    moved_lamp("raycast");
+}
+
+static void test_bad_lights(void **st) {
+    (void)st;
+    expect_cli_fail("--lights 0,64: the scene has no lamp 64 (its point and spot lights are 0..63)",
+                    "%s run street-lamps street-lamps cube --frames 1 --lights 0,64 --out %s/x", test_binary(), g_tmp);
+    expect_cli_fail("--lights sun: the scene has no sun", "%s run towers-night towers-night raycast --frames 1 --lights sun "
+                    "--out %s/x", test_binary(), g_tmp);
+    expect_cli_fail("--lights lamp: 'lamp' is not sun, lamps, all or a lamp number",
+                    "%s run towers-night towers-night cube --frames 1 --lights lamp --out %s/x", test_binary(), g_tmp);
+    expect_cli_fail("--lights 1,1: a light named twice",
+                    "%s run towers-night towers-night cube --frames 1 --lights 1,1 --out %s/x", test_binary(), g_tmp);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_every_lamp_of_towers_night),
+        cmocka_unit_test(test_moved_lamp_changes_only_its_pixels),
+        cmocka_unit_test(test_bad_lights),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}
