@@ -39,6 +39,11 @@ typedef struct sb_counters {
     int cascades_invalidated;                       /* cache=on: kept maps drawn again for a moved caster */
     int pages_invalidated;                          /* virtual cache=on: kept pages dropped for a moved caster */
     int pages_dynamic;                              /* virtual split=on: pages the moving casters were drawn over */
+    bool atlas;                                     /* a shadow atlas of lamps: the counters below are its */
+    int lights_shadowed;                            /* lamps with tiles this frame */
+    int lights_dropped;                             /* lamps in view left unshadowed: max_lights, or no room */
+    int lights_downscaled;                          /* lamps whose tiles are smaller than they asked for (no room) */
+    double atlas_occupancy;                         /* share of the atlas its tiles cover */
     int split_count;                                /* cascades whose far split is known this frame */
     double splits[SB_MAX_CASCADES];                 /* view-space far distance of each cascade */
 } sb_counters;

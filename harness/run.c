@@ -313,6 +313,28 @@ static void check_pool(sb_run *r) {
                     r->done);
 }
 
+/* A lamp atlas that could not give every lamp in view the tiles its policy asked for: said, with exact counts. */
+static void check_atlas(sb_run *r) {
+    int frames = 0, dropped = 0, down = 0, lamps = 0;
+    for (int i = 0; i < r->done; i++) {
+        const sb_counters *k = &r->recs[i].counters;
+        if (!k->atlas || !(k->lights_dropped || k->lights_downscaled)) continue;
+        frames++;
+        if (k->lights_dropped > dropped) dropped = k->lights_dropped;
+        if (k->lights_downscaled > down) down = k->lights_downscaled;
+        int inview = k->lights_shadowed + k->lights_dropped;
+        if (inview > lamps) lamps = inview;
+    }
+    if (!frames) return;
+    char what[128];
+    if (dropped && down)
+        snprintf(what, sizeof what, "up to %d lamp(s) dropped (lit without shadows) and up to %d downscaled", dropped, down);
+    else if (dropped) snprintf(what, sizeof what, "up to %d lamp(s) dropped (lit without shadows)", dropped);
+    else snprintf(what, sizeof what, "up to %d lamp(s) downscaled", down);
+    sb_run_warn(&r->info, "atlas: %s, of up to %d in view, in %d of %d frames: a larger size= (or max_lights=) holds them",
+                what, lamps, frames, r->done);
+}
+
 /* When the evaluation cannot stand behind its figures: rays and rasterizer
  * disagree on the geometry, or the reference itself is not exact enough. */
 static void check_geometry(sb_run *r) {
@@ -377,6 +399,7 @@ static bool finish_run(sb_run *r) {
         return fail_run(r, "%s", r->err.msg);
     check_shadows_drawn(r);
     check_pool(r);
+    check_atlas(r);
     if (r->s->path_note[0])   /* the path check's flagged frames: their figures are the geometry check's doubt */
         sb_run_warn(&r->info, "the path's cameras: %s", r->s->path_note);
     /* a size for a light the run does not shade is no size at all: said, not ignored in silence */

@@ -246,6 +246,15 @@ static bool scene_data(sb_session *s, const sb_technique *t, void **out, sb_err 
 
 /* ---- why a run cannot apply ---- */
 
+/* The lights a technique's run shadows: --lights, or for one that shadows every lamp by default, every lamp. */
+static const sb_light_set *instance_lights(sb_session *s, const sb_technique *t) {
+    if (s->lights.count) return &s->lights;
+    if (t->lights != SB_LIGHTS_EVERY_LAMP) return NULL;
+    sb_err e;
+    if (!s->every_lamp.count && !sb_scene_light_set(&s->scene, "lamps", false, &s->every_lamp, &e)) return NULL;
+    return &s->every_lamp;
+}
+
 static const char *scene_skip_reason(sb_session *s, const sb_technique *t) {
     if (t->needs & SB_NEEDS_PLANE) sb_scene_find_planes(&s->scene);   /* searched on the first need */
     const sb_scene *sc = &s->scene;
@@ -269,9 +278,10 @@ static const char *scene_skip_reason(sb_session *s, const sb_technique *t) {
     if ((t->needs & SB_NEEDS_POINT_LIGHT) && !(points + spots)) return "the scene has no point or spot light";
     for (int i = 0; i < s->lights.count; i++) {
         bool sun = s->lights.idx[i] == SB_LIGHT_SUN;
-        if (t->lights == SB_LIGHTS_ANY || (t->lights == SB_LIGHTS_LAMPS) != sun) continue;
+        bool lamps = t->lights == SB_LIGHTS_LAMPS || t->lights == SB_LIGHTS_EVERY_LAMP;
+        if (t->lights == SB_LIGHTS_ANY || lamps != sun) continue;
         snprintf(s->skip, sizeof s->skip, "%s shadows %s; --lights %s names %s", t->name,
-                 t->lights == SB_LIGHTS_LAMPS ? "point and spot lights" : "the sun alone", s->opts.lights,
+                 lamps ? "point and spot lights" : "the sun alone", s->opts.lights,
                  sun ? "the sun" : "a lamp");
         return s->skip;
     }
@@ -287,7 +297,7 @@ const char *sb_skip_reason(sb_session *s, const sb_technique *t, const sb_run_sp
         sb_spec_defaults(defaults, t);
         spec = defaults;
     }
-    sb_run_ctx rc = {.gpu = &s->gpu, .tech = t, .lights = s->lights.count ? &s->lights : NULL};
+    sb_run_ctx rc = {.gpu = &s->gpu, .tech = t, .lights = instance_lights(s, t)};
     sb_err e;
     bool ok = t->supported(&rc, spec->desc, &e);
     free(defaults);
@@ -330,7 +340,7 @@ bool sb_instance_create(sb_instance *in, sb_session *s, const sb_run_spec *spec,
     in->spec = sb_xmalloc(sizeof *in->spec);
     *in->spec = *spec;
     in->desc = in->spec->desc;
-    in->rc = (sb_run_ctx){.gpu = &s->gpu, .tech = t, .frames = frames, .lights = s->lights.count ? &s->lights : NULL};
+    in->rc = (sb_run_ctx){.gpu = &s->gpu, .tech = t, .frames = frames, .lights = instance_lights(s, t)};
     shadow_range(s, &in->rc.shadow_near, &in->rc.shadow_far);
     if (t->needs & SB_NEEDS_PLANE) sb_scene_find_planes(&s->scene);   /* on the first need, not at load */
     /* shared geometry the technique cannot draw shared (render.h): copies uploaded now, not in a timed frame */

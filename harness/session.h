@@ -32,6 +32,7 @@ typedef struct sb_session {
     char scene_name[256], path_name[256];
     char skip[SB_ERR_LEN + 64]; /* the last skip reason */
     sb_light_set lights;        /* --lights read against the scene (count 0: not given) */
+    sb_light_set every_lamp;    /* every lamp of the scene, for a technique that shadows them all by default */
     uint32_t *scratch;          /* draw_count entries: a frame's culling results */
     uint32_t *cmds;             /* --submit indirect: a pass's pending commands (5 words a draw) */
     struct sb_reference *ref;   /* the scene's Embree reference, built on first use */

@@ -55,6 +55,14 @@ static sb_cell f_pages(const sb_frame_row *r, int off) {
     return r->rec->counters.paged ? integer(COUNTER(r, off, int)) : empty();
 }
 
+/* a shadow atlas's counter: empty for every other technique */
+static sb_cell f_atlas(const sb_frame_row *r, int off) {
+    return r->rec->counters.atlas ? integer(COUNTER(r, off, int)) : empty();
+}
+static sb_cell f_atlas_share(const sb_frame_row *r, int off) {
+    return r->rec->counters.atlas ? number(COUNTER(r, off, double)) : empty();
+}
+
 /* a motion counter: empty where nothing moves (and for the cache counters, a technique without that cache) */
 static sb_cell f_motion(const sb_frame_row *r, int off) {
     return r->rec->counters.moving ? integer(COUNTER(r, off, int)) : empty();
@@ -132,6 +140,14 @@ static const sb_frame_col frame_cols[] = {
     COUNT("cascades_skipped", f_maps, cascades_skipped, SB_STAT_MEAN, 0, "shadow maps skipped for want of receivers"),
     COUNT("cascades_cached", f_maps, cascades_cached, SB_STAT_MEAN, 0,
           "shadow maps kept from an earlier frame, not rendered again (cache=on: the same snapped window and light)"),
+    COUNT("lights_shadowed", f_atlas, lights_shadowed, SB_STAT_MEAN, 0,
+          "atlas: lamps with tiles this frame (empty: no atlas)"),
+    COUNT("lights_dropped", f_atlas, lights_dropped, SB_STAT_MEAN | SB_STAT_MAX, SB_USE_COMPARE,
+          "atlas: lamps lighting the view left without shadows (beyond max_lights, or no room at the smallest tile)"),
+    COUNT("lights_downscaled", f_atlas, lights_downscaled, SB_STAT_MEAN | SB_STAT_MAX, 0,
+          "atlas: lamps whose tiles are smaller than their policy asked for, for want of room"),
+    METRIC("atlas_occupancy", f_atlas_share, offsetof(sb_counters, atlas_occupancy), "share", SB_STAT_MEAN, 0,
+           "atlas: share of the atlas its tiles cover this frame"),
     COUNT("pages_needed", f_pages, pages_needed, SB_STAT_MEAN, 0,
           "virtual: pages the frame's visible pixels need (empty: no virtual map)"),
     COUNT("pages_rendered", f_pages, pages_rendered, SB_STAT_MEAN, 0,

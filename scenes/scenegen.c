@@ -215,7 +215,8 @@ static int gen_street_lamps(const char *dir) {
     sb_glb_mesh *posts = sb_glb_new_mesh(&s, 4), *crates = sb_glb_new_mesh(&s, 1);
     for (int i = 0; i < 64; i++) {
         double x = i % 2 ? 4 : -4, z = 6 * (i / 2), side = i % 2 ? 1 : -1;
-        sb_glb_box(posts, x + side * 0.6, 0, z - 0.1, x + side * 0.8, 3.8, z + 0.1);
+        sb_glb_box(posts, fmin(x + side * 0.6, x + side * 0.8), 0, z - 0.1, fmax(x + side * 0.6, x + side * 0.8), 3.8,
+                   z + 0.1);   /* a box's corners low, then high: its faces wind outward */
         sb_glb_box(crates, x - side * 1.5 - 0.5, 0, z + 1, x - side * 1.5 + 0.5, 1, z + 2);
         s.lamp_range[s.nlamps] = 7;
         s.lamps[s.nlamps++] = sb_v3_make(x, 4, z);
@@ -227,8 +228,8 @@ static int gen_street_lamps(const char *dir) {
     rc |= write_text(p,
                      "# street-lamps: down the street between the two rows of lamps\n"
                      "fov 60\n"
-                     "near 0.1\n"
-                     "far 300\n"
+                     "near 0.5\n"
+                     "far 220\n"
                      "look 0   0 3 -6     0 1 40\n"
                      "look 8   0 3 30     0 1 80\n");
     return rc;

@@ -105,7 +105,7 @@ typedef struct sb_params {
 /* "res=2048:filter=pcf3:..." in table order (a late parameter only when not at its default) */
 void sb_params_canonical(const sb_params *p, char *out, size_t len);
 
-enum { SB_LIGHTS_SUN, SB_LIGHTS_LAMPS, SB_LIGHTS_ANY };
+enum { SB_LIGHTS_SUN, SB_LIGHTS_LAMPS, SB_LIGHTS_ANY, SB_LIGHTS_EVERY_LAMP };
 
 struct sb_gpu;
 struct sb_frame;
@@ -122,7 +122,8 @@ typedef struct sb_technique {
     unsigned needs;                 /* SB_NEEDS_* */
     unsigned traits;                /* SB_TRAIT_* */
     /* what --lights may name for it: SB_LIGHTS_SUN (0: the sun alone, as before), SB_LIGHTS_LAMPS (point and spot
-       lights, any number: a map set each), SB_LIGHTS_ANY (the sun and lamps); a run naming another is skipped */
+       lights, any number: a map set each), SB_LIGHTS_ANY (the sun and lamps), SB_LIGHTS_EVERY_LAMP (lamps, and
+       without --lights every lamp of the scene: the atlas); a run naming another is skipped */
     unsigned lights;
     /* the cost model (batch's shards): a pixel's work beyond the final pass's, in units of one (raycast: a CPU ray
        a pixel, 20) */

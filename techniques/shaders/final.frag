@@ -18,11 +18,26 @@ layout(location = 3) out vec4 o_aux;   // geometric normal (facing the viewer), 
 void main() {
     SB_ALPHA_TEST();
     vec3 n = normalize(v_nrm);
+#ifdef SB_LIGHT_LOOP
+    // every lamp in one pass (the atlas): the technique's GLSL gives sb_light_count(), sb_light_at(i) (xyz the
+    // lamp, w its range, 0: none) and sb_visibility_at(i, p, n). An evaluation pass holds the one lamp it scores.
+    float lit = 0.0, vis = 1.0;
+    for (int i = 0; i < sb_light_count(); i++) {
+        vec4 l = sb_light_at(i);
+        vec3 d = l.xyz - v_pos;
+        float dist = length(d), ndl = dot(n, d / max(dist, 1e-20));
+        if ((l.w > 0.0 && dist > l.w) || ndl <= 0.0) continue;
+        vis = sb_visibility_at(i, v_pos, n);
+        lit += 0.7 * ndl * vis;
+    }
+    o_color = vec4(v_color.rgb * (0.3 + lit), 1.0);
+#else
     vec3 L = u_shade_light.w > 0.5 ? normalize(u_shade_light.xyz - v_pos) : u_shade_light.xyz;
     float ndl = dot(n, L);
     if (u_shade_light.w > 0.5 && u_shade_more.x > 0.0 && length(u_shade_light.xyz - v_pos) > u_shade_more.x) ndl = 0.0;
     float vis = sb_visibility(v_pos, n, v_view_z);
     o_color = vec4(v_color.rgb * ((1.0 - u_shade_more.y) * 0.3 + 0.7 * max(ndl, 0.0) * vis), 1.0);
+#endif
 #ifdef SB_EVAL
     o_vis = vis;
     vec3 ng = normalize(cross(dFdx(v_pos), dFdy(v_pos)));

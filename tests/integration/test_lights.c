@@ -40,7 +40,7 @@ static void test_every_lamp_of_towers_night(void **st) {
     (void)st;
     char out[16384], dir[512];
     int rc = run_logged(out, sizeof out,
-                        "%s run towers-night towers-night raycast cube:res=512 dpsm:res=512 pssm --frames 2 --warmup 0 "
+                        "%s run towers-night towers-night raycast cube:res=512 dpsm:res=512 atlas:res=512 pssm --frames 2 --warmup 0 "
                         "--size 256x144 --error-every 1 --lights lamps --quiet --out %s/all",
                         test_binary(), g_tmp);
     assert_int_equal(rc, 0);
@@ -55,8 +55,12 @@ static void test_every_lamp_of_towers_night(void **st) {
     summary_table(last_line_of(out), &one);
     const char *six = "lights lamps (6)";
     int ray = row_of(&all, "raycast", six), cube = row_of(&all, "cube", six), dpsm = row_of(&all, "dpsm", six);
-    print_message("err_rate over (pixel, lamp): raycast %g, cube %g, dpsm %g; lights_px %g\n", cell(&all, ray, "err_rate_mean"),
-                  cell(&all, cube, "err_rate_mean"), cell(&all, dpsm, "err_rate_mean"), cell(&all, ray, "lights_px_mean"));
+    int atlas = row_of(&all, "atlas", six);
+    print_message("err_rate over (pixel, lamp): raycast %g, cube %g, dpsm %g, atlas %g; lights_px %g\n",
+                  cell(&all, ray, "err_rate_mean"), cell(&all, cube, "err_rate_mean"), cell(&all, dpsm, "err_rate_mean"),
+                  cell(&all, atlas, "err_rate_mean"), cell(&all, ray, "lights_px_mean"));
+    assert_true(cell(&all, atlas, "lights_dropped_mean") == 0 && cell(&all, atlas, "lights_downscaled_mean") == 0);
+    assert_true(fabs(cell(&all, atlas, "shadow_mb") - 64) < 1e-9);   /* one 4096^2 32F atlas, however many lamps */
     assert_true(cell(&all, ray, "err_rate_mean") == 0);   /* exact, every lamp */
     for (int r = 0; r < all.nrows; r++) {
         if (strcmp(sb_table_get(&all, r, "technique"), "pssm")) {
@@ -157,7 +161,96 @@ static void moved_lamp(const char *technique) {
 static void test_moved_lamp_changes_only_its_pixels(void **st) {
     (void)st;
     moved_lamp("cube:res=512");
+    moved_lamp("atlas:res=512");
     moved_lamp("raycast");
+}
+
+/* The run's frames, as their per-frame CSV holds them. */
+static void frames_of(const char *dir, const sb_table *sum, int r, sb_table *t) { frames_table(dir, sum, r, t); }
+
+/* An atlas too small for street-lamps' 64 lamps, or capped below them: the exact counts in the warning, per-frame
+ * columns that agree, a finite error; policy=screen beats fixed at the same size (near lamps get the texels). */
+static void test_atlas_under_budget(void **st) {
+    (void)st;
+    char out[16384], dir[512];
+    int rc = run_logged(out, sizeof out,
+                        "%s run street-lamps street-lamps atlas:size=512:res=256 atlas:res=256:max_lights=8 "
+                        "atlas:size=2048:res=256:policy=fixed,screen --frames 3 --warmup 0 --size 320x180 --error-every 1 "
+                        "--quiet --out %s/budget", test_binary(), g_tmp);
+    assert_int_equal(rc, 0);
+    snprintf(dir, sizeof dir, "%s", last_line_of(out));
+    sb_table sum;
+    summary_table(dir, &sum);
+    assert_int_equal(sum.nrows, 4);
+    for (int r = 0; r < sum.nrows; r++) {
+        assert_string_equal(sb_table_get(&sum, r, "status"), "ok");
+        assert_true(isfinite(cell(&sum, r, "err_rate_mean")) && cell(&sum, r, "err_rate_mean") < 0.05);
+        sb_table fr;
+        frames_of(dir, &sum, r, &fr);
+        long dropped = 0, down = 0, inview = 0, frames = 0;
+        for (int i = 0; i < fr.nrows; i++) {
+            long d = table_int(&fr, i, "lights_dropped"), w = table_int(&fr, i, "lights_downscaled");
+            long v = table_int(&fr, i, "lights_shadowed") + d;
+            if (!d && !w) continue;   /* the warning is over the frames short of room */
+            frames++;
+            dropped = d > dropped ? d : dropped, down = w > down ? w : down, inview = v > inview ? v : inview;
+        }
+        sb_table_free(&fr);
+        char want[256];
+        if (dropped && down)
+            snprintf(want, sizeof want, "atlas: up to %ld lamp(s) dropped (lit without shadows) and up to %ld downscaled, "
+                     "of up to %ld in view, in %ld of 3 frames", dropped, down, inview, frames);
+        else if (dropped)
+            snprintf(want, sizeof want, "atlas: up to %ld lamp(s) dropped (lit without shadows), of up to %ld in view, in "
+                     "%ld of 3 frames", dropped, inview, frames);
+        else
+            snprintf(want, sizeof want, "atlas: up to %ld lamp(s) downscaled, of up to %ld in view, in %ld of 3 frames",
+                     down, inview, frames);
+        print_message("%s: err_rate %g; %s\n", sb_table_get(&sum, r, "params"), cell(&sum, r, "err_rate_mean"),
+                      sb_table_get(&sum, r, "warnings"));
+        assert_true(frames > 0);
+        assert_non_null(strstr(sb_table_get(&sum, r, "warnings"), want));
+    }
+    /* 512^2 holds 64 lamps' six tiles only at the smallest (16): every lamp downscaled; max_lights=8: 56 dropped */
+    assert_true(cell(&sum, 0, "lights_downscaled_max") >= 56);
+    assert_true(cell(&sum, 1, "lights_dropped_max") >= 50 && cell(&sum, 1, "lights_shadowed_mean") == 8);
+    double fixed = cell(&sum, 2, "err_rate_mean"), screen = cell(&sum, 3, "err_rate_mean");
+    print_message("size=2048: fixed %g, screen %g\n", fixed, screen);
+    assert_true(screen < fixed);
+    sb_table_free(&sum);
+}
+
+/* cache=on with still lamps, casters and camera: no tile drawn after the first frame, figures equal cache=off's. */
+static void test_atlas_cache_still(void **st) {
+    (void)st;
+    char out[16384], path[512];
+    snprintf(path, sizeof path, "%s/still.path", g_tmp);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs("near 0.5\nfar 220\nlook 0  0 3 -6  0 1 40\nlook 4  0 3 -6  0 1 40\n", f);
+    fclose(f);
+    int rc = run_logged(out, sizeof out, "%s run street-lamps %s atlas:res=128:cache=off,on --frames 4 --warmup 0 --size "
+                        "256x144 --error-every 1 --quiet --out %s/cache", test_binary(), path, g_tmp);
+    assert_int_equal(rc, 0);
+    char dir[512];
+    snprintf(dir, sizeof dir, "%s", last_line_of(out));
+    sb_table sum, off, on;
+    summary_table(dir, &sum);
+    frames_of(dir, &sum, 0, &off);
+    frames_of(dir, &sum, 1, &on);
+    assert_int_equal(off.nrows, 4);
+    assert_int_equal(on.nrows, 4);
+    for (int i = 0; i < 4; i++) {
+        long drawn = table_int(&on, i, "cascades_rendered"), kept = table_int(&on, i, "cascades_cached");
+        print_message("frame %d: cache=on drew %ld tiles, kept %ld; cache=off drew %ld\n", i, drawn, kept,
+                      table_int(&off, i, "cascades_rendered"));
+        assert_true(i == 0 ? drawn > 0 && kept == 0 : drawn == 0 && kept > 0);
+        assert_string_equal(sb_table_get(&on, i, "err_rate"), sb_table_get(&off, i, "err_rate"));
+    }
+    assert_string_equal(sb_table_get(&sum, 1, "err_rate_mean"), sb_table_get(&sum, 0, "err_rate_mean"));
+    sb_table_free(&off);
+    sb_table_free(&on);
+    sb_table_free(&sum);
 }
 
 static void test_bad_lights(void **st) {
@@ -168,6 +261,10 @@ static void test_bad_lights(void **st) {
                     "--out %s/x", test_binary(), g_tmp);
     expect_cli_fail("--lights lamp: 'lamp' is not sun, lamps, all or a lamp number",
                     "%s run towers-night towers-night cube --frames 1 --lights lamp --out %s/x", test_binary(), g_tmp);
+    expect_cli_fail("atlas:size=3000: not a power of two", "%s run street-lamps street-lamps atlas:size=3000 --frames 1 "
+                    "--out %s/x", test_binary(), g_tmp);
+    expect_cli_fail("max_lights", "%s run street-lamps street-lamps atlas:max_lights=300 --frames 1 --out %s/x",
+                    test_binary(), g_tmp);
     expect_cli_fail("--lights 1,1: a light named twice",
                     "%s run towers-night towers-night cube --frames 1 --lights 1,1 --out %s/x", test_binary(), g_tmp);
 }
@@ -176,6 +273,8 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_every_lamp_of_towers_night),
         cmocka_unit_test(test_moved_lamp_changes_only_its_pixels),
+        cmocka_unit_test(test_atlas_under_budget),
+        cmocka_unit_test(test_atlas_cache_still),
         cmocka_unit_test(test_bad_lights),
     };
     return cmocka_run_group_tests(tests, setup, teardown);

@@ -1,0 +1,38 @@
+// vis_atlas.glsl - lamps' shadows from one depth atlas (atlas.c): each lamp six
+// perspective tiles (a cube's faces, each a square of the atlas), its record in
+// the texture buffer u_lights, SB_LREC texels a lamp: the lamp and its range;
+// near, far and tile texels (0: no tiles, lit); the six tiles' corners and
+// sizes in atlas UV; the six faces' matrices. The lookup is the cube's (bias
+// and normal offset in texels of the tile at the point's distance), clamped
+// half a texel inside the tile. SB_FILTER: 0 none, 1 hw (bilinear compare).
+uniform sampler2DShadow u_atlas;
+uniform samplerBuffer u_lights;
+uniform int u_count;
+uniform float u_bias, u_normal;
+#define SB_LREC 32
+
+int sb_light_count() { return u_count; }
+vec4 sb_light_at(int i) { return texelFetch(u_lights, SB_LREC * i); }
+
+float sb_visibility_at(int i, vec3 p, vec3 n) {
+    int b = SB_LREC * i;
+    vec4 lamp = texelFetch(u_lights, b), a = texelFetch(u_lights, b + 1);   // a: near, far, tile texels
+    if (a.z <= 0.0) return 1.0;
+    vec3 d = p - lamp.xyz;
+    float dist = length(d);
+    float texel = 2.0 * max(abs(d.x), max(abs(d.y), abs(d.z))) / a.z;
+    float cosl = clamp(dot(n, -d / max(dist, 1e-20)), -1.0, 1.0);
+    vec3 dq = d + n * (u_normal * texel * sqrt(1.0 - cosl * cosl));
+    vec3 ad = abs(dq);
+    int face = ad.x >= ad.y && ad.x >= ad.z ? (dq.x > 0.0 ? 0 : 1) : ad.y >= ad.z ? (dq.y > 0.0 ? 2 : 3) : (dq.z > 0.0 ? 4 : 5);
+    float axis = max(ad.x, max(ad.y, ad.z));
+    axis -= u_bias * 2.0 * axis / a.z;
+    if (axis >= a.y) return 1.0;
+    float z = (a.y + a.x) / (a.y - a.x) - 2.0 * a.y * a.x / ((a.y - a.x) * max(axis, a.x));
+    int m = b + 8 + 4 * face;
+    vec4 c = mat4(texelFetch(u_lights, m), texelFetch(u_lights, m + 1), texelFetch(u_lights, m + 2),
+                  texelFetch(u_lights, m + 3)) * vec4(lamp.xyz + dq, 1.0);
+    vec2 uv = clamp(c.xy / c.w * 0.5 + 0.5, 0.5 / a.z, 1.0 - 0.5 / a.z);
+    vec4 r = texelFetch(u_lights, b + 2 + face);
+    return texture(u_atlas, vec3(r.xy + uv * r.z, 0.5 * z + 0.5));
+}
