@@ -70,6 +70,7 @@ static double stale_share(sb_session *s, sb_instance *in, int *seq, const sb_eva
     memset(&g, 0, sizeof g);
     g.index = f->index;
     g.progress = f->progress;
+    g.eval_light = f->eval_light;   /* --lights: the same one light */
     g.bypass_cache = true;
     sb_timer timer;
     sb_timer_init(&timer, SB_TIMING_SYNC, 1, 1);

@@ -919,7 +919,9 @@ void sb_scene_info(const sb_scene *s, FILE *out) {
     char parts[256];
     sb_scene_load_parts(s, parts, sizeof parts);
     fprintf(out, "loaded in: %.0f ms (%s)\n", s->load_ms, parts);
-    fprintf(out, "size: %.6g x %.6g x %.6g\nsun: %s\nlights: %u\ncameras: %u\n", e.x, e.y, e.z,
+    sb_v3 lo = sb_v3_add(s->bounds.lo, s->origin), hi = sb_v3_add(s->bounds.hi, s->origin);
+    fprintf(out, "size: %.6g x %.6g x %.6g\nbounds: %.9g %.9g %.9g .. %.9g %.9g %.9g (world)\nsun: %s\nlights: %u\n"
+            "cameras: %u\n", e.x, e.y, e.z, lo.x, lo.y, lo.z, hi.x, hi.y, hi.z,
             s->has_sun ? "from the file" : "none in the file (default or --sun)", s->light_count, s->camera_count);
     fprintf(out, "double-sided primitives: %u (back faces drawn and hit)\n", f->double_sided);
     fprintf(out, "single-sided draws: %u (back faces culled in every pass and not hit by rays; %u closed)\n",

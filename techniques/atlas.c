@@ -76,6 +76,7 @@ typedef struct atlas_state {
     lamp *lamps;
     int *order;                 /* scratch: lamp indices */
     GLuint tex, fbo, buf, buf_tex;
+    GLuint fresh_tex, fresh_fbo;   /* the stale check's atlas (made on its first frame): the kept one untouched */
     GLuint depth_prog[2];       /* opaque, alpha-tested draws */
     GLint u_vp[2];
     sb_final_prog fp;
@@ -126,6 +127,17 @@ static void place_lamp(lamp *l, const sb_gpu *g, int which) {
     }
 }
 
+/* A depth texture of the atlas's size and its framebuffer; false when incomplete. */
+static bool make_atlas(const atlas_state *s, GLuint *tex, GLuint *fbo) {
+    *tex = sb_shadow_texture(GL_TEXTURE_2D, GL_DEPTH_COMPONENT32F, s->d->size, s->d->size, 1, s->d->filter != 0);
+    glGenFramebuffers(1, fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, *fbo);
+    glFramebufferTexture(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, *tex, 0);
+    glDrawBuffer(GL_NONE);
+    glReadBuffer(GL_NONE);
+    return glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
+}
+
 static bool atlas_create(void *state, const sb_run_ctx *rc, const void *desc, sb_err *err) {
     atlas_state *s = state;
     const sb_gpu *g = rc->gpu;
@@ -135,14 +147,7 @@ static bool atlas_create(void *state, const sb_run_ctx *rc, const void *desc, sb
     s->order = sb_xcalloc((size_t)s->count, sizeof *s->order);
     s->records = sb_xcalloc((size_t)s->count * LREC * 4, sizeof(float));
     for (int i = 0; i < s->count; i++) place_lamp(&s->lamps[i], g, rc->lights->idx[i]);
-    s->tex = sb_shadow_texture(GL_TEXTURE_2D, GL_DEPTH_COMPONENT32F, s->d->size, s->d->size, 1, s->d->filter != 0);
-    glGenFramebuffers(1, &s->fbo);
-    glBindFramebuffer(GL_FRAMEBUFFER, s->fbo);
-    glFramebufferTexture(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, s->tex, 0);
-    glDrawBuffer(GL_NONE);
-    glReadBuffer(GL_NONE);
-    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-        return sb_fail(err, "atlas:size=%d: the atlas's framebuffer is incomplete", s->d->size);
+    if (!make_atlas(s, &s->tex, &s->fbo)) return sb_fail(err, "atlas:size=%d: the atlas's framebuffer is incomplete", s->d->size);
     glGenBuffers(1, &s->buf);
     glBindBuffer(GL_TEXTURE_BUFFER, s->buf);
     glBufferData(GL_TEXTURE_BUFFER, (GLsizeiptr)s->count * LREC * 16, NULL, GL_DYNAMIC_DRAW);
@@ -293,9 +298,17 @@ static bool mover_reaches(const lamp *l, const sb_frame *f) {
     return false;
 }
 
+/* Every kept lamp a moved caster reaches forgets its tiles: every frame, for every lamp, whether or not the frame
+ * draws it (an evaluation pass draws one), since what moved is told once, from one frame to the next. */
+static void invalidate_moved(atlas_state *s, const sb_frame *f) {
+    if (f->bypass_cache || !f->moved_count) return;
+    for (int i = 0; i < s->count; i++)
+        if (s->lamps[i].valid && mover_reaches(&s->lamps[i], f)) s->lamps[i].valid = false;
+}
+
 static bool kept(const atlas_state *s, const lamp *l, const sb_frame *f) {
     return s->d->cache && !f->bypass_cache && l->valid && l->kz == l->z && l->ktile == l->tile &&
-           !memcmp(&l->kpos, &l->pos, sizeof l->pos) && !mover_reaches(l, f);
+           !memcmp(&l->kpos, &l->pos, sizeof l->pos);
 }
 
 /* Another lamp's kept tiles that this lamp's place overlaps are forgotten. */
@@ -361,7 +374,11 @@ static void atlas_frame(void *state, sb_frame *f) {
     int only = f->eval_light ? f->eval_light - 1 : -1;
     sb_stage_begin(f, SB_STAGE_CASCADE);
     int n = allocate(s, f), rendered = 0, cached = 0;
-    glBindFramebuffer(GL_FRAMEBUFFER, s->fbo);
+    invalidate_moved(s, f);
+    /* the stale check draws every tile afresh into an atlas of its own, leaving the kept one as it was */
+    if (f->bypass_cache && !s->fresh_fbo) make_atlas(s, &s->fresh_tex, &s->fresh_fbo);
+    GLuint atlas = f->bypass_cache ? s->fresh_tex : s->tex;
+    glBindFramebuffer(GL_FRAMEBUFFER, f->bypass_cache ? s->fresh_fbo : s->fbo);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
     glDepthMask(GL_TRUE);
@@ -379,13 +396,12 @@ static void atlas_frame(void *state, sb_frame *f) {
             cached += 6;
             continue;
         }
-        forget_under(s, l);
         rendered += draw_tiles(s, l, f);
-        l->valid = d->cache && !f->bypass_cache;   /* a bypassing draw keeps nothing */
+        if (f->bypass_cache) continue;   /* the stale check's own atlas: the kept one's state unchanged */
+        forget_under(s, l);
+        l->valid = d->cache;
         l->kz = l->z, l->ktile = l->tile, l->kpos = l->pos;
     }
-    if (f->bypass_cache)
-        for (int i = 0; i < s->count; i++) s->lamps[i].valid = false;
     glDisable(GL_POLYGON_OFFSET_FILL);
     glDisable(GL_SCISSOR_TEST);
     f->counters.cascades_rendered = rendered;
@@ -404,7 +420,7 @@ static void atlas_frame(void *state, sb_frame *f) {
     if (only >= 0) sb_frame_shade_light_of(f, s->lamps[only].light);   /* what the evaluation scores */
     glUseProgram(s->fp.prog);
     glActiveTexture(GL_TEXTURE0);
-    glBindTexture(GL_TEXTURE_2D, s->tex);
+    glBindTexture(GL_TEXTURE_2D, atlas);
     glUniform1i(s->u_atlas, 0);
     glActiveTexture(GL_TEXTURE1);
     glBindTexture(GL_TEXTURE_BUFFER, s->buf_tex);
@@ -424,6 +440,8 @@ static void atlas_destroy(void *state) {
         if (s->depth_prog[a]) glDeleteProgram(s->depth_prog[a]);
     if (s->fbo) glDeleteFramebuffers(1, &s->fbo);
     if (s->tex) glDeleteTextures(1, &s->tex);
+    if (s->fresh_fbo) glDeleteFramebuffers(1, &s->fresh_fbo);
+    if (s->fresh_tex) glDeleteTextures(1, &s->fresh_tex);
     if (s->buf_tex) glDeleteTextures(1, &s->buf_tex);
     if (s->buf) glDeleteBuffers(1, &s->buf);
     free(s->lamps);

@@ -253,6 +253,48 @@ static void test_atlas_cache_still(void **st) {
     sb_table_free(&sum);
 }
 
+/* scripts/add-lamps on a file with moving casters (the bundled movers: a sliding box, a turning bar): four lamps of
+ * range 5 along the slider's track. atlas:cache=on draws again only the lamps the slider reaches, keeps the
+ * others, and is never stale (stale_px 0; its error frame for frame cache=off's). */
+static void test_atlas_cache_with_movers(void **st) {
+    (void)st;
+    char out[16384], scene[512], dir[512];
+    snprintf(scene, sizeof scene, "%s/movers-lamps.glb", g_tmp);
+    int rc = run_logged(out, sizeof out, "SHADOWBENCH=%s %s/scripts/add-lamps %s/movers.glb %s --count 4 --range 5 "
+                        "--line=-12,4,-4:12,4,-4", test_binary(), getenv("SB_SOURCE_ROOT"), getenv("SB_DATA_DIR"), scene);
+    assert_int_equal(rc, 0);
+    rc = run_logged(out, sizeof out, "%s info %s", test_binary(), scene);
+    assert_int_equal(rc, 0);
+    assert_non_null(strstr(out, "lights: 5\n"));   /* the file's sun and four lamps */
+    rc = run_logged(out, sizeof out, "%s run %s movers atlas:res=128:cache=off,on --lights lamps --frames 6 --warmup 0 "
+                    "--size 160x90 --error-every 1 --quiet --out %s/movers", test_binary(), scene, g_tmp);
+    assert_int_equal(rc, 0);
+    snprintf(dir, sizeof dir, "%s", last_line_of(out));
+    sb_table sum, off, on;
+    summary_table(dir, &sum);
+    frames_of(dir, &sum, 0, &off);
+    frames_of(dir, &sum, 1, &on);
+    long drawn = 0, kept = 0;
+    for (int i = 0; i < on.nrows; i++) {
+        print_message("frame %d: cache=on drew %ld tiles, kept %ld; stale_px %s; err_rate %s (off %s)\n", i,
+                      table_int(&on, i, "cascades_rendered"), table_int(&on, i, "cascades_cached"),
+                      sb_table_get(&on, i, "stale_px"), sb_table_get(&on, i, "err_rate"), sb_table_get(&off, i, "err_rate"));
+        if (i) drawn += table_int(&on, i, "cascades_rendered"), kept += table_int(&on, i, "cascades_cached");
+        assert_true(cell(&on, i, "stale_px") == 0);
+        assert_string_equal(sb_table_get(&on, i, "err_rate"), sb_table_get(&off, i, "err_rate"));
+    }
+    assert_true(drawn > 0);   /* the lamps the slider reaches, drawn again */
+    assert_true(kept > 0);    /* the others kept */
+    assert_true(cell(&sum, 1, "stale_px_max") == 0);
+    sb_table_free(&off);
+    sb_table_free(&on);
+    sb_table_free(&sum);
+    rc = run_logged(out, sizeof out, "%s/scripts/add-lamps %s/movers.glb %s --count 0", getenv("SB_SOURCE_ROOT"),
+                    getenv("SB_DATA_DIR"), scene);
+    assert_int_equal(rc, 2);
+    assert_non_null(strstr(out, "add-lamps: --count 0: from 1 to 256"));
+}
+
 static void test_bad_lights(void **st) {
     (void)st;
     expect_cli_fail("--lights 0,64: the scene has no lamp 64 (its point and spot lights are 0..63)",
@@ -275,6 +317,7 @@ int main(void) {
         cmocka_unit_test(test_moved_lamp_changes_only_its_pixels),
         cmocka_unit_test(test_atlas_under_budget),
         cmocka_unit_test(test_atlas_cache_still),
+        cmocka_unit_test(test_atlas_cache_with_movers),
         cmocka_unit_test(test_bad_lights),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
