@@ -226,6 +226,24 @@ static bool load_scenes(parse *ps) {
     return true;
 }
 
+/* A --lights (the defaults line's, or a run line's) read against every scene its line applies to: a lamp a scene
+ * lacks is refused with the line, before anything renders. */
+static bool check_lights(parse *ps) {
+    sb_batch *b = ps->b;
+    for (int l = 0; l < ps->nlines; l++) {
+        sb_run_opts ro = line_opts(&b->opts, &ps->lines[l]);
+        for (int i = 0; ro.lights && i < b->nscenes; i++) {
+            sb_light_set set;
+            sb_err e;
+            const sb_scene *sc = &b->scenes[i].scene;
+            if (line_applies(&ps->lines[l], b->scenes[i].name) &&
+                !sb_scene_light_set(sc, ro.lights, sc->has_sun || ro.sun_override, &set, &e))
+                return sb_fail(ps->err, "%s:%d: scene %s: %s", ps->file, ps->lines[l].line, b->scenes[i].name, e.msg);
+        }
+    }
+    return true;
+}
+
 /* The matrix: scenes (in file order) x run lines x each line's grid. */
 static void expand_matrix(parse *ps) {
     sb_batch *b = ps->b;
@@ -245,6 +263,7 @@ static void expand_matrix(parse *ps) {
                     br->spec = rs[r];
                     sb_run_opts ro = line_opts(&b->opts, &ps->lines[l]);
                     br->sun_size = ro.sun_size, br->lamp_radius = ro.lamp_radius, br->ref_samples = ro.ref_samples;
+                    br->lights = ro.lights;
                     sb_run_spec as_run = rs[r];
                     sb_spec_light_size(&as_run, ro.sun_size);
                     sb_run_id(sc->scene.content_hash, sc->path.content_hash, &ro, &as_run, br->run_id);
@@ -266,7 +285,7 @@ static bool batch_build(sb_batch *b, const char *file, char *text, const sb_run_
     if (dot && dot != b->name) *dot = 0;
     b->opts = *base;
     parse ps = {.b = b, .file = file, .err = err};
-    bool ok = parse_lines(&ps, text) && check_references(&ps, cli, load) && (!load || load_scenes(&ps));
+    bool ok = parse_lines(&ps, text) && check_references(&ps, cli, load) && (!load || (load_scenes(&ps) && check_lights(&ps)));
     if (ok && load) expand_matrix(&ps);
     if (ok) sb_run_opts_finish(&b->opts);
     for (int l = 0; l < ps.nlines; l++) {
@@ -456,13 +475,17 @@ static void run_scenes(sb_batch *b, const bool *selected, const bool *done, int 
             for (int i = first; i < b->nruns; i++) {
                 const sb_batch_run *br = &b->runs[i];
                 if (br->scene != sc || !selected[i] || done[i] || taken[i] || br->sun_size != lead->sun_size ||
-                    br->lamp_radius != lead->lamp_radius || br->ref_samples != lead->ref_samples)
+                    br->lamp_radius != lead->lamp_radius || br->ref_samples != lead->ref_samples ||
+                    br->lights != lead->lights)   /* interned: one pointer a text */
                     continue;
                 taken[i] = true;
                 specs[n] = &b->runs[i].spec, index[n++] = b->runs[i].index;
                 if (!open) fail_runs(b, i, s->ctx.renderer, err.msg, sum);
             }
-            if (open) {
+            sb_err le;
+            if (open && !sb_session_set_lights(s, lead->lights, &le))   /* checked at load: not expected */
+                for (int i = 0; i < n; i++) fail_runs(b, index[i], s->ctx.renderer, le.msg, sum);
+            else if (open) {
                 sb_session_set_light_size(s, lead->sun_size, lead->lamp_radius, lead->ref_samples);
                 sb_run_group(s, specs, index, n, dir, sum, k, todo);
             }
@@ -512,6 +535,7 @@ static void rerun_unstable(sb_batch *b, const bool *selected, const char *dir, s
                 snprintf(s->path_name, sizeof s->path_name, "%s", bs->path_label);
                 sb_session_keep_reference(s, dir);
                 sb_session_set_light_size(s, br->sun_size, br->lamp_radius, br->ref_samples);
+                if (!sb_session_set_lights(s, br->lights, &err)) continue;   /* it ran with them before */
                 const sb_run_spec *spec = &br->spec;
                 sb_run_again(s, &spec, &br->index, 1, dir, sum, attempt);
                 again++;

@@ -39,6 +39,7 @@ typedef struct sb_batch_run {
     double cost;                /* estimated work, for balancing shards */
     double sun_size, lamp_radius;   /* the light of the run (its line's, else the file's) */
     int ref_samples;
+    const char *lights;         /* its --lights (interned; NULL: none) */
 } sb_batch_run;
 
 typedef struct sb_batch {

@@ -244,6 +244,12 @@ static bool scene_data(sb_session *s, const sb_technique *t, void **out, sb_err 
     return true;
 }
 
+bool sb_session_set_lights(sb_session *s, const char *spec, sb_err *err) {
+    s->opts.lights = spec;
+    memset(&s->lights, 0, sizeof s->lights);
+    return !spec || sb_scene_light_set(&s->scene, spec, s->gpu.has_sun, &s->lights, err);
+}
+
 /* ---- why a run cannot apply ---- */
 
 /* The lights a technique's run shadows: --lights, or for one that shadows every lamp by default, every lamp. */

@@ -124,12 +124,12 @@ static const char *pair_cell(const void *src, int r, int c) {
 }
 
 /* The pairs users compare (PSSM against SDSM, layered against per-cascade, PSSM's four 2048² cascades against a
- * cached virtual map, cached against drawn every frame: under motion on the movers scene), as compare --pair
- * makes them. */
+ * cached virtual map, cached against drawn every frame: under motion on the movers scene, per-light cube maps
+ * against the lamp atlas: on street-lamps), as compare --pair makes them. */
 static void night_pairs(const sb_table *summary, sb_jw *j) {
     static const char *const keys[] = {"technique=pssm,sdsm", "layered=off,on", "layered=off,gs",
                                        "technique=pssm:res=2048:layered=off:stable=off,virtual:cache=on",
-                                       "cache=off,on"};
+                                       "cache=off,on", "technique=cube:res=128,atlas:res=128:policy=fixed:cache=off"};
     sb_jw_arr(j);
     for (size_t k = 0; k < SB_COUNT(keys); k++) {
         sb_compare_opts o = {.pair = keys[k], .threshold_pct = 5};

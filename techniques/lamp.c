@@ -58,7 +58,7 @@ static bool place(sb_lamp_state *l, const sb_run_ctx *rc, int which, sb_err *err
     l->lamp = lamp->position;
     double diag = sb_v3_len(sb_v3_sub(g->scene->bounds.hi, g->scene->bounds.lo));
     l->far = lamp->range > 0 ? lamp->range : 2 * diag;
-    l->range = rc->lights && lamp->range > 0 ? lamp->range : 0;
+    l->range = lamp->range > 0 ? lamp->range : 0;   /* it lights nothing beyond (shading and evaluation alike) */
     l->near = fmax(l->far * l->kind->near_share, l->kind->near_share * 1e-2);
     if (l->kind->setup) l->kind->setup(l);
     return make_targets(l, rc->tech->name, err);

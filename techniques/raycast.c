@@ -39,6 +39,7 @@ typedef struct {
     int threads;
     bool point;             /* toward a point light, not the sun */
     sb_v3 lamp;
+    int lamp_index;
     const sb_light_set *lights; /* --lights (NULL: the one light above) */
     float *pos, *aux;           /* the position pass's targets */
     sb_ref_point *pts;
@@ -71,6 +72,7 @@ static bool raycast_create(void *state, const sb_run_ctx *rc, const void *desc, 
     if (want >= 0) {
         s->point = true;
         s->lamp = sb_scene_point_light(g->scene, want, NULL)->position;
+        s->lamp_index = want;
     }
     size_t n = (size_t)g->width * g->height;
     s->pos = sb_xmalloc(sizeof(float) * 4 * n);
@@ -93,7 +95,7 @@ static bool raycast_create(void *state, const sb_run_ctx *rc, const void *desc, 
 /* Light i of the frame: the run's --lights, or the one light of before. */
 static void shade(const raycast_state *s, sb_frame *f, int i) {
     if (s->lights) sb_frame_shade_light_of(f, s->lights->idx[i]);
-    else if (s->point) sb_frame_shade_point(f, s->lamp);
+    else if (s->point) sb_frame_shade_light_of(f, s->lamp_index);   /* its range too */
 }
 
 static void raycast_frame(void *state, sb_frame *f) {

@@ -295,6 +295,35 @@ static void test_atlas_cache_with_movers(void **st) {
     assert_non_null(strstr(out, "add-lamps: --count 0: from 1 to 256"));
 }
 
+/* A batch line's --lights: its runs shadow those lamps (a series of their own); a lamp a scene lacks is refused with
+ * the file and line before anything renders. */
+static void test_batch_lights(void **st) {
+    (void)st;
+    char file[512], out[16384];
+    snprintf(file, sizeof file, "%s/lamps.bench", g_tmp);
+    FILE *f = fopen(file, "w");
+    assert_non_null(f);
+    fputs("scene street street-lamps\npath street street-lamps\ndefaults --frames 1 --warmup 0 --size 64x36 --error-every 1\n"
+          "cube:res=64\n@street cube:res=64 atlas:res=64 --lights 0,1,2\n", f);
+    fclose(f);
+    int rc = run_logged(out, sizeof out, "%s batch %s --quiet --out %s/batch", test_binary(), file, g_tmp);
+    assert_int_equal(rc, 0);
+    sb_table sum;
+    summary_table(last_line_of(out), &sum);
+    assert_int_equal(sum.nrows, 3);
+    assert_string_equal(sb_table_get(&sum, 0, "light"), "");
+    assert_string_equal(sb_table_get(&sum, 1, "light"), "lights 0,1,2 (3)");
+    assert_string_equal(sb_table_get(&sum, 2, "light"), "lights 0,1,2 (3)");
+    assert_true(fabs(cell(&sum, 1, "shadow_mb") - 3 * cell(&sum, 0, "shadow_mb")) < 1e-9);
+    sb_table_free(&sum);
+    f = fopen(file, "w");
+    fputs("scene street street-lamps\nscene night towers-night\npath street street-lamps\npath night towers-night\n"
+          "cube\n@street,night cube --lights 0,9\n", f);
+    fclose(f);
+    expect_cli_fail("lamps.bench:6: scene night: --lights 0,9: the scene has no lamp 9 (its point and spot lights are 0..5)",
+                    "%s batch %s --quiet --out %s/batch2", test_binary(), file, g_tmp);
+}
+
 static void test_bad_lights(void **st) {
     (void)st;
     expect_cli_fail("--lights 0,64: the scene has no lamp 64 (its point and spot lights are 0..63)",
@@ -318,6 +347,7 @@ int main(void) {
         cmocka_unit_test(test_atlas_under_budget),
         cmocka_unit_test(test_atlas_cache_still),
         cmocka_unit_test(test_atlas_cache_with_movers),
+        cmocka_unit_test(test_batch_lights),
         cmocka_unit_test(test_bad_lights),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
