@@ -441,7 +441,7 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
         .order = sb_order_name(o->order), .submit = sb_submit_name(o->submit), .seed = o->order == SB_ORDER_SHUFFLE ? o->seed : 0,
         .reason = "", .frames = o->frames, .warmup = o->warmup, .width = o->width, .height = o->height,
         .target_ci = o->target_ci, .scene_triangles = sb_scene_triangles(&s->scene), .load_ms = s->scene.load_ms,
-        .shadow_mb = sb_spec_shadow_bytes(spec) / 1048576.0,
+        .shadow_mb = sb_session_shadow_bytes(s, spec) / 1048576.0,
         .calib_ms_before = NAN, .calib_ms_after = NAN, .eval_s = NAN, .ref_refit_ms = NAN, .stable = "", .unstable_reason = "",
     };
     if (o->sun_size > 0 || o->lamp_radius > 0) {
@@ -454,7 +454,6 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
         size_t used = strlen(r->info.light);
         snprintf(r->info.light + used, sizeof r->info.light - used, "%slights %s (%d)", used ? "; " : "", o->lights,
                  s->lights.count);
-        if (spec->tech->lights == SB_LIGHTS_LAMPS) r->info.shadow_mb *= s->lights.count;   /* a map set each */
     }
     const char *skip = sb_skip_reason(s, spec->tech, spec);
     if (skip) {

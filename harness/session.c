@@ -244,6 +244,11 @@ static bool scene_data(sb_session *s, const sb_technique *t, void **out, sb_err 
     return true;
 }
 
+double sb_session_shadow_bytes(const sb_session *s, const sb_run_spec *rs) {
+    double bytes = sb_spec_shadow_bytes(rs);
+    return rs->tech->lights == SB_LIGHTS_LAMPS && s->lights.count ? bytes * s->lights.count : bytes;   /* a set each */
+}
+
 bool sb_session_set_lights(sb_session *s, const char *spec, sb_err *err) {
     s->opts.lights = spec;
     memset(&s->lights, 0, sizeof s->lights);

@@ -213,17 +213,22 @@ static bool make_candidates(tune *t, sb_err *err) {
         t->c[i].rung = -1;
         t->c[i].alive = true;
         short_label(&runs[i], t->c[i].label, sizeof t->c[i].label);
-        /* a memory bound is known from the parameters alone: a setting over it is never rendered */
-        double mb = sb_spec_shadow_bytes(&runs[i]) / 1048576.0;
-        if (t->cmd->max_mb > 0 && mb > t->cmd->max_mb) {
-            t->c[i].alive = false;
-            t->c[i].skipped = true;
-            snprintf(t->c[i].reason, sizeof t->c[i].reason, "holds %.4g MiB of shadow storage, over --max-mb %g", mb,
-                     t->cmd->max_mb);
-        }
     }
     free(runs);
     return true;
+}
+
+/* A memory bound is known from the parameters and the scene's lamps (--lights) alone: a setting over it is never
+ * rendered. */
+static void memory_bound(tune *t) {
+    for (int i = 0; i < t->n && t->cmd->max_mb > 0; i++) {
+        double mb = sb_session_shadow_bytes(&t->s, &t->c[i].spec) / 1048576.0;
+        if (mb <= t->cmd->max_mb) continue;
+        t->c[i].alive = false;
+        t->c[i].skipped = true;
+        snprintf(t->c[i].reason, sizeof t->c[i].reason, "holds %.4g MiB of shadow storage, over --max-mb %g", mb,
+                 t->cmd->max_mb);
+    }
 }
 
 /* ---- the rungs ---- */
@@ -668,7 +673,7 @@ static void bound_flag(const tune *t, char *out, size_t len) {
  * other count (the error when the time is minimised, the time when the error is); says which decided. */
 static int tiebreak(const tune *t, int a, int b, char *on, size_t len) {
     const cand *x = &t->c[a], *y = &t->c[b];
-    double mx = sb_spec_shadow_bytes(&x->spec) / 1048576.0, my = sb_spec_shadow_bytes(&y->spec) / 1048576.0;
+    double mx = sb_session_shadow_bytes(&t->s, &x->spec) / 1048576.0, my = sb_session_shadow_bytes(&t->s, &y->spec) / 1048576.0;
     if (mx != my) {
         snprintf(on, len, "%s %.4g MiB against %.4g", t->col.memory, fmin(mx, my), fmax(mx, my));
         return mx < my ? a : b;
@@ -880,7 +885,8 @@ static bool write_bench(const tune *t, const verdict *v, sb_err *err) {
     char say[1600];
     verdict_text(t, v, say, sizeof say);
     if (chosen >= 0) line(&b, "# %s: %s", t->c[chosen].label, say);
-    if (chosen >= 0) line(&b, "@%s %s", t->s.scene_name, t->c[chosen].label);
+    const char *lights = o->lights ? " --lights " : "";   /* the lamps it was tuned for (a series of its own) */
+    if (chosen >= 0) line(&b, "@%s %s%s%s", t->s.scene_name, t->c[chosen].label, lights, o->lights ? o->lights : "");
     else line(&b, "# nothing met the bound");
     char file[4200];
     snprintf(file, sizeof file, "%s/tune.bench", t->dir);
@@ -970,7 +976,10 @@ static void print_report(const tune *t, const verdict *v) {
                t->final_reps);
     for (int i = 0, shown = 0; i < t->n && shown < 5; i++)
         if (t->c[i].skipped) printf("  skipped %s: %s\n", t->c[i].label, t->c[i].reason), shown++;
-    if (chosen >= 0 && met) printf("\nbatch line (pin it in a nightly):\n  @%s %s\n", t->s.scene_name, t->c[chosen].label);
+    const char *lights = t->cmd->opts->lights;
+    if (chosen >= 0 && met)
+        printf("\nbatch line (pin it in a nightly):\n  @%s %s%s%s\n", t->s.scene_name, t->c[chosen].label,
+               lights ? " --lights " : "", lights ? lights : "");
     printf("\nfront.html (open it in a browser), tune.csv and tune.bench in\n%s\n", t->dir);
     free(vv);
 }
@@ -1019,6 +1028,7 @@ int sb_tune_main(const sb_tune_cmd *cmd) {
         }
     }
     sb_session_keep_reference(&t.s, t.dir);   /* OUT/tune-SCENE/.reference: reruns and --resume cast no ray twice */
+    memory_bound(&t);
     sb_log("tune: %d candidate(s), rungs of %d/%d/%d frames, seed %llu, results in %s", t.n, t.rung_frames[0],
            t.nrungs > 1 ? t.rung_frames[1] : t.rung_frames[0], t.rung_frames[t.nrungs - 1],
            (unsigned long long)cmd->opts->seed, t.dir);

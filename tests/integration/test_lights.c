@@ -324,6 +324,21 @@ static void test_batch_lights(void **st) {
                     "%s batch %s --quiet --out %s/batch2", test_binary(), file, g_tmp);
 }
 
+/* tune --max-mb on a many-lamp scene: the per-light maps hold a set a lamp (four lamps of 512² cubes: 24 MiB, over
+ * 20), the atlas one texture; the answer is an atlas of 2048², its batch line carries the lamps. */
+static void test_tune_atlas_under_memory(void **st) {
+    (void)st;
+    char out[65536];
+    int rc = run_logged(out, sizeof out, "%s tune street-lamps street-lamps --techniques atlas,cube --lights 0,1,2,3 "
+                        "--max-err 0.05 --max-mb 20 --size 96x54 --frames 5 --out %s/tune", test_binary(), g_tmp);
+    assert_int_equal(rc, 0);
+    assert_non_null(strstr(out, "skipped cube:res=512: holds 24 MiB of shadow storage, over --max-mb 20"));
+    assert_non_null(strstr(out, "recommended: atlas:size=2048"));
+    const char *pin = strstr(out, "batch line (pin it in a nightly):\n  @street-lamps atlas:size=2048");
+    assert_non_null(pin);
+    assert_non_null(strstr(pin, " --lights 0,1,2,3\n"));
+}
+
 static void test_bad_lights(void **st) {
     (void)st;
     expect_cli_fail("--lights 0,64: the scene has no lamp 64 (its point and spot lights are 0..63)",
@@ -348,6 +363,7 @@ int main(void) {
         cmocka_unit_test(test_atlas_cache_still),
         cmocka_unit_test(test_atlas_cache_with_movers),
         cmocka_unit_test(test_batch_lights),
+        cmocka_unit_test(test_tune_atlas_under_memory),
         cmocka_unit_test(test_bad_lights),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
