@@ -133,7 +133,6 @@ static int render_maps(sb_lamp_state *l, sb_frame *f) {
 static void shade(sb_lamp_state *l, sb_frame *f, bool first) {
     sb_frame_shade_point(f, l->lamp);
     f->shade_range = l->range;
-    f->shade_add = !first;
     glUseProgram(l->fp.prog);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(l->kind->target, l->tex);
@@ -145,14 +144,8 @@ static void shade(sb_lamp_state *l, sb_frame *f, bool first) {
     glUniform1f(l->u_bias, (float)l->d->bias);
     glUniform1f(l->u_normal, (float)l->d->normal);
     if (l->kind->lookup) l->kind->lookup(l);
-    if (first) {
-        sb_final_pass(f, &l->fp, false);
-        return;
-    }
-    glEnablei(GL_BLEND, 0);
-    glBlendFunci(0, GL_ONE, GL_ONE);
-    sb_final_draw(f, &l->fp, true);
-    glDisablei(GL_BLEND, 0);
+    if (first) sb_final_pass(f, &l->fp, false);
+    else sb_final_pass_add(f, &l->fp);
 }
 
 void sb_lamp_technique_frame(void *state, sb_frame *f) {
@@ -179,7 +172,6 @@ void sb_lamp_technique_frame(void *state, sb_frame *f) {
 
     sb_stage_begin(f, SB_STAGE_FINAL);
     for (int i = first; i < end; i++) shade(sb_lamp_light(s, i), f, i == first);
-    f->shade_add = false;
     sb_stage_end(f, SB_STAGE_FINAL);
 }
 

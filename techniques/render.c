@@ -703,6 +703,15 @@ void sb_gbuffer_pass(sb_frame *f, const sb_final_prog *fp) {
     f->look_depth = f->look != NULL;
 }
 
+void sb_final_pass_add(sb_frame *f, const sb_final_prog *fp) {
+    f->shade_add = true;
+    glEnablei(GL_BLEND, 0);
+    glBlendFunci(0, GL_ONE, GL_ONE);
+    sb_final_draw(f, fp, true);
+    glDisablei(GL_BLEND, 0);
+    f->shade_add = false;
+}
+
 void sb_final_draw(sb_frame *f, const sb_final_prog *fp, bool reuse_depth) {
     if (f->look && !f->look_depth) reuse_depth = false;
     draw_scene(f, fp, reuse_depth ? GL_LEQUAL : GL_LESS, !reuse_depth);

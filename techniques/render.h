@@ -174,6 +174,9 @@ void sb_final_pass(sb_frame *f, const sb_final_prog *fp, bool reuse_depth);
  * so both put the same triangle in every pixel (raycast's position pass). */
 void sb_gbuffer_pass(sb_frame *f, const sb_final_prog *fp);
 /* The same draws without clearing anything (a second pass over the frame). */
+/* --lights: one more light added to the colour of the camera pass before it (blended, no ambient, its depth kept):
+ * the technique has set the light's uniforms and sb_frame_shade_light_of / sb_frame_shade_point. */
+void sb_final_pass_add(sb_frame *f, const sb_final_prog *fp);
 void sb_final_draw(sb_frame *f, const sb_final_prog *fp, bool reuse_depth);
 /* The eye the camera pass draws from (origin-relative): the frame's, or its look's. */
 sb_v3 sb_frame_eye(const sb_frame *f);
