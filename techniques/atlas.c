@@ -1,6 +1,7 @@
 /* atlas.c - every lamp's shadows in one depth atlas, as engines shadow many
  * local lights (Unity HDRP's shadow atlas): each lamp six perspective tiles
- * (a cube's faces), squares of one 2D depth texture of `size` texels a side,
+ * (a cube's faces; kind=dpsm: two paraboloids, dpsm.c's, a hemisphere each),
+ * squares of one 2D depth texture of `size` texels a side,
  * and one camera pass that shades every lamp (final.frag's SB_LIGHT_LOOP,
  * vis_atlas.glsl reading each lamp's record from a texture buffer).
  *
@@ -31,17 +32,21 @@
 #define LREC 32          /* texels of a lamp's record (vis_atlas.glsl's SB_LREC) */
 
 typedef struct atlas_desc {
-    int size, res, max_lights, policy, cache, filter;
+    int size, res, kind, max_lights, policy, cache, filter;
     double bias, slope, normal;
 } atlas_desc;
 
 enum { POLICY_FIXED, POLICY_SCREEN };
+enum { KIND_CUBE, KIND_DPSM };
 
 static const sb_param_def atlas_params[] = {
     SB_PARAM_I(atlas_desc, size, 4096, 256, 16384, "the atlas's side in texels, a power of two",
                .tune = "2048,4096,8192", .role = SB_PARAM_RES),
     SB_PARAM_I(atlas_desc, res, 512, MIN_TILE, 4096, "a lamp's face at full scale, in texels (a power of two)",
                .tune = "256,512,1024"),
+    SB_PARAM_E(atlas_desc, kind, cube, "cube|dpsm",
+               "a lamp's tiles: six perspective faces of a cube, or two paraboloids (dpsm's, a hemisphere each)",
+               .tune = "cube,dpsm"),
     SB_PARAM_I(atlas_desc, max_lights, 64, 1, SB_MAX_LIGHTS, "the most lamps shadowed a frame (the largest on screen)"),
     SB_PARAM_E(atlas_desc, policy, fixed, "fixed|screen",
                "a lamp's tile size: res for every lamp, or res scaled by the screen height its range covers",
@@ -77,8 +82,9 @@ typedef struct atlas_state {
     int *order;                 /* scratch: lamp indices */
     GLuint tex, fbo, buf, buf_tex;
     GLuint fresh_tex, fresh_fbo;   /* the stale check's atlas (made on its first frame): the kept one untouched */
+    int faces;                  /* tiles a lamp: 6 (cube) or 2 (dpsm) */
     GLuint depth_prog[2];       /* opaque, alpha-tested draws */
-    GLint u_vp[2];
+    GLint u[2][5];              /* cube: u_vp; dpsm: u_lamp, u_frame, u_side, u_near, u_far */
     sb_final_prog fp;
     GLint u_atlas, u_lights, u_count, u_bias, u_normal;
     float *records;             /* count * LREC * 4 floats */
@@ -118,7 +124,7 @@ static void place_lamp(lamp *l, const sb_gpu *g, int which) {
     l->pos = src->position;
     l->range = src->range > 0 ? src->range : 0;
     l->far = l->range > 0 ? l->range : 2 * sb_v3_len(sb_v3_sub(g->scene->bounds.hi, g->scene->bounds.lo));
-    l->near = fmax(l->far * 1e-4, 1e-6);
+    l->near = fmax(l->far * 1e-4, 1e-6);   /* as cube's (dpsm's paraboloids store the distance, linear in it) */
     sb_m4 proj = sb_m4_perspective(SB_PI / 2, 1, l->near, l->far);
     for (int k = 0; k < 6; k++) {
         sb_v3 dir = sb_v3_make(face_dir[k][0], face_dir[k][1], face_dir[k][2]);
@@ -154,12 +160,16 @@ static bool atlas_create(void *state, const sb_run_ctx *rc, const void *desc, sb
     glGenTextures(1, &s->buf_tex);
     glBindTexture(GL_TEXTURE_BUFFER, s->buf_tex);
     glTexBuffer(GL_TEXTURE_BUFFER, GL_RGBA32F, s->buf);
-    const char *vs[] = {sb_shader_cube_depth_vert}, *fs[] = {sb_shader_depth_frag};
+    s->faces = s->d->kind == KIND_DPSM ? 2 : 6;
+    const char *vs[] = {s->d->kind == KIND_DPSM ? sb_shader_dpsm_vert : sb_shader_cube_depth_vert},
+               *fs[] = {sb_shader_depth_frag};
+    static const char *const prog_u[2][5] = {{"u_vp"}, {"u_lamp", "u_frame", "u_side", "u_near", "u_far"}};
     for (int a = 0; a < (g->scene->alpha_tested_draws ? 2 : 1); a++) {
         s->depth_prog[a] = sb_gpu_program(a ? "atlas tile (alpha-tested draws)" : "atlas tile", a ? NULL : sb_opaque_define(g),
                                           vs, 1, fs, 1, err);
         if (!s->depth_prog[a]) return false;
-        s->u_vp[a] = glGetUniformLocation(s->depth_prog[a], "u_vp");
+        for (int k = 0; k < 5; k++)
+            s->u[a][k] = prog_u[s->d->kind][k] ? glGetUniformLocation(s->depth_prog[a], prog_u[s->d->kind][k]) : -1;
     }
     char defines[64];
     snprintf(defines, sizeof defines, "#define SB_LIGHT_LOOP\n#define SB_FILTER %d\n", s->d->filter);
@@ -198,8 +208,8 @@ static int cmp_tile(const void *a, const void *b) {
     return x != y ? y - x : i - j;
 }
 
-/* Cells of the atlas (MIN_TILE texels a side) a lamp's six tiles take. */
-static double cells(int tile) { return 6.0 * (tile / MIN_TILE) * (tile / MIN_TILE); }
+/* Cells of the atlas (MIN_TILE texels a side) a lamp's tiles take. */
+static double cells(const atlas_state *s, int tile) { return (double)s->faces * (tile / MIN_TILE) * (tile / MIN_TILE); }
 
 /* The x or y of a Z-order cell index (every other bit). */
 static int unzip(uint64_t z) {
@@ -233,7 +243,7 @@ static int allocate(atlas_state *s, sb_frame *f) {
         l->want = l->tile = t;
     }
     double capacity = (double)(d->size / MIN_TILE) * (d->size / MIN_TILE), need = 0;
-    for (int k = 0; k < n; k++) need += cells(s->lamps[s->order[k]].tile);
+    for (int k = 0; k < n; k++) need += cells(s, s->lamps[s->order[k]].tile);
     while (need > capacity && n > 0) {
         int big = -1;   /* the largest tile above the smallest, the least important of those */
         for (int k = n - 1; k >= 0; k--) {
@@ -241,10 +251,10 @@ static int allocate(atlas_state *s, sb_frame *f) {
             if (l->tile > MIN_TILE && (big < 0 || l->tile > s->lamps[s->order[big]].tile)) big = k;
         }
         lamp *l = &s->lamps[s->order[big < 0 ? n - 1 : big]];
-        need -= cells(l->tile);
+        need -= cells(s, l->tile);
         if (big >= 0) {
             l->tile /= 2;
-            need += cells(l->tile);
+            need += cells(s, l->tile);
         } else {
             l->tile = 0;   /* every tile at the smallest: the least important goes */
             n--;
@@ -260,7 +270,7 @@ static int allocate(atlas_state *s, sb_frame *f) {
     for (int k = 0; k < n; k++) {
         lamp *l = &s->lamps[place[k]];
         l->z = z;
-        z += (uint64_t)cells(l->tile);
+        z += (uint64_t)cells(s, l->tile);
     }
     free(place);
     f->counters.atlas = true;
@@ -313,56 +323,78 @@ static bool kept(const atlas_state *s, const lamp *l, const sb_frame *f) {
 
 /* Another lamp's kept tiles that this lamp's place overlaps are forgotten. */
 static void forget_under(atlas_state *s, const lamp *l) {
-    uint64_t a0 = l->z, a1 = l->z + (uint64_t)cells(l->tile);
+    uint64_t a0 = l->z, a1 = l->z + (uint64_t)cells(s, l->tile);
     for (int i = 0; i < s->count; i++) {
         lamp *o = &s->lamps[i];
         if (o == l || !o->valid) continue;
-        uint64_t b0 = o->kz, b1 = o->kz + (uint64_t)cells(o->ktile);
+        uint64_t b0 = o->kz, b1 = o->kz + (uint64_t)cells(s, o->ktile);
         if (a0 < b1 && b0 < a1) o->valid = false;
     }
 }
 
-/* Draws one lamp's six tiles (casters culled per face); returns how many faces had casters. */
+/* The lamp's frame of dpsm.c: x = +X, y = +Z, z = -Y (the front hemisphere looks down), column-major. */
+static const float lamp_frame[9] = {1, 0, 0, 0, 0, -1, 0, 1, 0};
+
+/* Sets tile k's uniforms on the depth program of variant a. */
+static void set_tile(const atlas_state *s, const lamp *l, int a, int k) {
+    const GLint *u = s->u[a];
+    if (s->d->kind == KIND_CUBE) {
+        float m[16];
+        sb_m4_to_float(l->face_vp[k], m);
+        glUniformMatrix4fv(u[0], 1, GL_FALSE, m);
+        return;
+    }
+    glUniform3f(u[0], (float)l->pos.x, (float)l->pos.y, (float)l->pos.z);
+    glUniformMatrix3fv(u[1], 1, GL_FALSE, lamp_frame);
+    glUniform1f(u[2], k ? -1.0f : 1.0f);
+    glUniform1f(u[3], (float)l->near);
+    glUniform1f(u[4], (float)l->far);
+}
+
+/* Draws one lamp's tiles (casters culled per cube face, or to its range for the paraboloids); returns how many
+ * tiles had casters. */
 static int draw_tiles(atlas_state *s, lamp *l, sb_frame *f) {
     const sb_scene *sc = f->gpu->scene;
-    int faces = 0;
+    int drawn = 0;
     sb_frame_shade_point(f, l->pos);   /* its single-sided draws keep the triangles facing it */
-    for (int k = 0; k < 6; k++) {
+    if (s->d->kind == KIND_DPSM) glEnable(GL_CLIP_DISTANCE0);   /* each hemisphere clipped at its rim */
+    for (int k = 0; k < s->faces; k++) {
         int x, y;
         face_rect(l, k, &x, &y);
         glViewport(x, y, l->tile, l->tile);
         glScissor(x, y, l->tile, l->tile);
         glClear(GL_DEPTH_BUFFER_BIT);
         double planes[6][4];
-        sb_frustum_planes(l->face_vp[k], planes);
+        if (s->d->kind == KIND_CUBE) sb_frustum_planes(l->face_vp[k], planes);
+        else sb_cube_planes(l->pos, l->far, planes);
         uint32_t n = sb_scene_collect(sc, (const double(*)[4])planes, 6, f->scratch);
         if (!n) continue;
-        faces++;
-        float m[16];
-        sb_m4_to_float(l->face_vp[k], m);
+        drawn++;
         for (int a = 0; a < 2 && s->depth_prog[a]; a++) {
             glUseProgram(s->depth_prog[a]);
-            glUniformMatrix4fv(s->u_vp[a], 1, GL_FALSE, m);
+            set_tile(s, l, a, k);
             for (uint32_t i = 0; i < n; i++)
                 if (sb_draw_variant(f->gpu, f->scratch[i]) == a) sb_submit(f, f->scratch[i], 1);
             sb_submit_flush(f);
         }
     }
-    return faces;
+    glDisable(GL_CLIP_DISTANCE0);
+    return drawn;
 }
 
-/* A lamp's record for the lookup (vis_atlas.glsl): the lamp and range; near, far, tile texels; the tiles; the faces. */
+/* A lamp's record for the lookup (vis_atlas.glsl): the lamp and range; near, far, tile texels, kind; the tiles; the
+ * cube's faces. */
 static void write_record(const atlas_state *s, const lamp *l, float *r) {
     float size = (float)s->d->size;
     memset(r, 0, sizeof(float) * LREC * 4);
     r[0] = (float)l->pos.x, r[1] = (float)l->pos.y, r[2] = (float)l->pos.z, r[3] = (float)l->range;
-    r[4] = (float)l->near, r[5] = (float)l->far, r[6] = (float)l->tile;
-    for (int k = 0; l->tile && k < 6; k++) {
+    r[4] = (float)l->near, r[5] = (float)l->far, r[6] = (float)l->tile, r[7] = (float)s->d->kind;
+    for (int k = 0; l->tile && k < s->faces; k++) {
         int x, y;
         face_rect(l, k, &x, &y);
         float *q = r + 4 * (2 + k);
         q[0] = x / size, q[1] = y / size, q[2] = l->tile / size;
-        sb_m4_to_float(l->face_vp[k], r + 4 * (8 + 4 * k));
+        if (s->d->kind == KIND_CUBE) sb_m4_to_float(l->face_vp[k], r + 4 * (8 + 4 * k));
     }
 }
 
@@ -393,7 +425,7 @@ static void atlas_frame(void *state, sb_frame *f) {
         lamp *l = &s->lamps[s->order[k]];
         if (only >= 0 && s->order[k] != only) continue;
         if (kept(s, l, f)) {
-            cached += 6;
+            cached += s->faces;
             continue;
         }
         rendered += draw_tiles(s, l, f);
@@ -406,7 +438,7 @@ static void atlas_frame(void *state, sb_frame *f) {
     glDisable(GL_SCISSOR_TEST);
     f->counters.cascades_rendered = rendered;
     f->counters.cascades_cached = cached;
-    f->counters.cascades_skipped = 6 * n - rendered - cached;
+    f->counters.cascades_skipped = s->faces * n - rendered - cached;
     /* the records of the lamps whose range reaches the view (those without tiles lit) */
     int shown = 0;
     for (int i = 0; i < s->count; i++)

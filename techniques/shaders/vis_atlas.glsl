@@ -1,10 +1,11 @@
 // vis_atlas.glsl - lamps' shadows from one depth atlas (atlas.c): each lamp six
-// perspective tiles (a cube's faces, each a square of the atlas), its record in
-// the texture buffer u_lights, SB_LREC texels a lamp: the lamp and its range;
-// near, far and tile texels (0: no tiles, lit); the six tiles' corners and
-// sizes in atlas UV; the six faces' matrices. The lookup is the cube's (bias
-// and normal offset in texels of the tile at the point's distance), clamped
-// half a texel inside the tile. SB_FILTER: 0 none, 1 hw (bilinear compare).
+// perspective tiles (a cube's faces) or two paraboloids (dpsm's), each a square
+// of the atlas, its record in the texture buffer u_lights, SB_LREC texels a
+// lamp: the lamp and its range; near, far, tile texels (0: no tiles, lit) and
+// kind (0 cube, 1 dpsm); the tiles' corners and sizes in atlas UV; the cube
+// faces' matrices. The lookups are cube's and dpsm's (bias and normal offset in
+// texels of the tile at the point's distance), clamped half a texel inside the
+// tile. SB_FILTER: 0 none, 1 hw (bilinear compare).
 uniform sampler2DShadow u_atlas;
 uniform samplerBuffer u_lights;
 uniform int u_count;
@@ -14,10 +15,30 @@ uniform float u_bias, u_normal;
 int sb_light_count() { return u_count; }
 vec4 sb_light_at(int i) { return texelFetch(u_lights, SB_LREC * i); }
 
+// dpsm's lookup in the lamp's two tiles: its frame x = +X, y = +Z, z = -Y (the front hemisphere looks down)
+const mat3 sb_lamp_frame = mat3(1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0);
+float sb_paraboloid_at(int b, vec3 lamp, vec4 a, vec3 p, vec3 n) {
+    vec3 dw = p - lamp;
+    float dist = length(dw);
+    float texel = 2.0 * dist / a.z;
+    float cosl = clamp(dot(n, -dw / max(dist, 1e-20)), -1.0, 1.0);
+    vec3 v = sb_lamp_frame * (dw + n * (u_normal * texel * sqrt(1.0 - cosl * cosl)));
+    int face = v.z >= 0.0 ? 0 : 1;
+    v.z = abs(v.z);
+    float len = length(v);
+    vec3 d = v / max(len, 1e-20);
+    vec2 uv = clamp(d.xy / (1.0 + d.z) * 0.5 + 0.5, 0.5 / a.z, 1.0 - 0.5 / a.z);
+    float ref = (len - u_bias * texel - a.x) / (a.y - a.x);
+    if (ref >= 1.0) return 1.0;
+    vec4 r = texelFetch(u_lights, b + 2 + face);
+    return texture(u_atlas, vec3(r.xy + uv * r.z, ref));
+}
+
 float sb_visibility_at(int i, vec3 p, vec3 n) {
     int b = SB_LREC * i;
-    vec4 lamp = texelFetch(u_lights, b), a = texelFetch(u_lights, b + 1);   // a: near, far, tile texels
+    vec4 lamp = texelFetch(u_lights, b), a = texelFetch(u_lights, b + 1);   // a: near, far, tile texels, kind
     if (a.z <= 0.0) return 1.0;
+    if (a.w > 0.5) return sb_paraboloid_at(b, lamp.xyz, a, p, n);
     vec3 d = p - lamp.xyz;
     float dist = length(d);
     float texel = 2.0 * max(abs(d.x), max(abs(d.y), abs(d.z))) / a.z;

@@ -40,7 +40,7 @@ static void test_every_lamp_of_towers_night(void **st) {
     (void)st;
     char out[16384], dir[512];
     int rc = run_logged(out, sizeof out,
-                        "%s run towers-night towers-night raycast cube:res=512 dpsm:res=512 atlas:res=512 pssm --frames 2 --warmup 0 "
+                        "%s run towers-night towers-night raycast cube:res=512 dpsm:res=512 atlas:res=512:kind=cube,dpsm pssm --frames 2 --warmup 0 "
                         "--size 256x144 --error-every 1 --lights lamps --quiet --out %s/all",
                         test_binary(), g_tmp);
     assert_int_equal(rc, 0);
@@ -55,7 +55,14 @@ static void test_every_lamp_of_towers_night(void **st) {
     summary_table(last_line_of(out), &one);
     const char *six = "lights lamps (6)";
     int ray = row_of(&all, "raycast", six), cube = row_of(&all, "cube", six), dpsm = row_of(&all, "dpsm", six);
-    int atlas = row_of(&all, "atlas", six);
+    int atlas = row_of(&all, "atlas", six), atlas_dpsm = atlas + 1;
+    assert_string_equal(sb_table_get(&all, atlas_dpsm, "technique"), "atlas");
+    assert_non_null(strstr(sb_table_get(&all, atlas_dpsm, "params"), "kind=dpsm"));
+    /* the atlas's tiles hold what the per-light maps hold: the same lookups, the same error within a tile's edge */
+    print_message("atlas kind=cube %g (cube %g), kind=dpsm %g (dpsm %g)\n", cell(&all, atlas, "err_rate_mean"),
+                  cell(&all, cube, "err_rate_mean"), cell(&all, atlas_dpsm, "err_rate_mean"), cell(&all, dpsm, "err_rate_mean"));
+    assert_true(fabs(cell(&all, atlas, "err_rate_mean") - cell(&all, cube, "err_rate_mean")) < 0.002);
+    assert_true(fabs(cell(&all, atlas_dpsm, "err_rate_mean") - cell(&all, dpsm, "err_rate_mean")) < 0.002);
     print_message("err_rate over (pixel, lamp): raycast %g, cube %g, dpsm %g, atlas %g; lights_px %g\n",
                   cell(&all, ray, "err_rate_mean"), cell(&all, cube, "err_rate_mean"), cell(&all, dpsm, "err_rate_mean"),
                   cell(&all, atlas, "err_rate_mean"), cell(&all, ray, "lights_px_mean"));
