@@ -53,7 +53,8 @@ static void render_targets(sb_session *s, sb_instance *in, int pf, int n, int re
     sb_gpu_readback_eval(&s->gpu, b->pos, b->aux);
     bool have_inv = sb_m4_invert(f->view_proj, inv);
     *view = (sb_eval_view){b->w, b->h, b->pos, b->aux, sb_v3_sub(f->cam.pos, s->scene.origin), have_inv ? inv : NULL,
-                           f->shade_light, f->shade_range};
+                           f->shade_light, f->shade_range, {f->shade_spot[0], f->shade_spot[1], f->shade_spot[2],
+                           f->shade_spot[3]}};
 }
 
 /* Whether the instance keeps maps or pages across frames while the scene moves: what the stale check is for. */

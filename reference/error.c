@@ -22,7 +22,11 @@ int sb_ref_points(const sb_reference *r, const sb_eval_view *v, sb_ref_point *pt
         if (v->light[3] > 0.5)
             for (int k = 0; k < 3; k++) L[k] -= p[k];
         if (a[0] * L[0] + a[1] * L[1] + a[2] * L[2] <= 0) continue; /* facing away from the light */
-        if (v->range > 0 && v->light[3] > 0.5 && sqrt(L[0] * L[0] + L[1] * L[1] + L[2] * L[2]) > v->range) continue;
+        double dist = sqrt(L[0] * L[0] + L[1] * L[1] + L[2] * L[2]);
+        if (v->range > 0 && v->light[3] > 0.5 && dist > v->range) continue;
+        if (v->spot[3] > 0 && v->light[3] > 0.5 &&   /* outside a spot's cone: L points from the point to the light */
+            -(L[0] * v->spot[0] + L[1] * v->spot[1] + L[2] * v->spot[2]) < (1 - v->spot[3]) * dist)
+            continue;
         sb_ref_point *q = &pts[m];
         memcpy(q->p, p, sizeof q->p);
         memcpy(q->n, a, sizeof q->n);
@@ -335,6 +339,11 @@ static void view_key(const sb_reference *r, const sb_eval_view *v, uint64_t key[
         memcpy(&w, &v->range, 8);
         h1 ^= sb_mix64(w + 7), h2 = sb_mix64(h2 ^ h1);
     }
+    for (int k = 0; v->spot[3] > 0 && k < 4; k++) {   /* so does a cone */
+        uint64_t w;
+        memcpy(&w, &v->spot[k], 8);
+        h1 ^= sb_mix64(w + 11 + (uint64_t)k), h2 = sb_mix64(h2 ^ h1);
+    }
     for (size_t i = 0; i < sizeof cam / sizeof cam[0]; i++) {
         uint64_t w;
         memcpy(&w, &cam[i], 8);
@@ -617,7 +626,7 @@ static void *background(void *arg) {
         }
         j->casting = true;
         pthread_mutex_unlock(&c->mu);
-        sb_eval_view v = {j->w, j->h, j->pos, j->aux, j->eye, j->have_inv ? &j->inv : NULL, j->light, 0};
+        sb_eval_view v = {j->w, j->h, j->pos, j->aux, j->eye, j->have_inv ? &j->inv : NULL, j->light, 0, {0, 0, 0, 0}};
         sb_ref_point *pts;
         int *pix, m = view_points(c->r, &v, &pts, &pix);
         unsigned char *ref = sb_xmalloc((size_t)(m > 0 ? m : 1));

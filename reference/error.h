@@ -108,11 +108,13 @@ struct sb_eval_view {
     sb_v3 eye;                         /* camera position relative to the scene origin */
     const sb_m4 *inv_view_proj;        /* origin-relative clip -> world (NULL: no geometry check) */
     const double *light;               /* as sb_reference_visibility_light: the technique's shaded light */
-    double range;                      /* --lights: a lamp's range; points beyond it are not evaluated (0: none) */
+    double range;                      /* a lamp's range; points beyond it are not evaluated (0: none) */
+    double spot[4];                    /* a spot light: the way it shines (unit) and 1 - cos of its outer cone;
+                                          points outside the cone are not evaluated (all 0: none) */
 };
 
 /* The points the reference casts from (pts and pix: w*h capacity; pix[k] is
- * the pixel of pts[k]): every pixel that is not sky, faces the light and lies within its range, from
+ * the pixel of pts[k]): every pixel that is not sky, faces the light and lies within its range and cone, from
  * its rasterized position and geometric normal. Returns how many. */
 int sb_ref_points(const sb_reference *r, const sb_eval_view *v, sb_ref_point *pts, int *pix);
 

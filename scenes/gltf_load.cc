@@ -1023,6 +1023,7 @@ bool Loader::light(int ni) {
     for (int k = 0; k < 3; k++) l.color[k] = k < (int)L.color.size() ? (float)L.color[k] : 1.0f;
     l.intensity = L.intensity;
     l.range = L.range;
+    l.cone = l.type == SB_LIGHT_SPOT ? L.spot.outerConeAngle : 0;
     s->lights = (sb_light *)sb_xrealloc(s->lights, (s->light_count + 1) * sizeof(sb_light));
     s->lights[s->light_count++] = l;
     if (l.type == SB_LIGHT_DIRECTIONAL && !s->has_sun) {
@@ -1417,6 +1418,7 @@ bool build_model(const sb_json *root, Source &src, const char *file, tinygltf::M
         l.color = nums_of(o, "color");
         l.intensity = num_of(o, "intensity", 1.0);
         l.range = num_of(o, "range", 0.0);
+        l.spot.outerConeAngle = num_of(member(o, "spot"), "outerConeAngle", SB_PI / 4);
         m.lights.push_back(l);
     });
     each(root, "scenes", [&](const sb_json *o) {

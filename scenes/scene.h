@@ -100,6 +100,7 @@ typedef struct sb_light {
     sb_v3 direction;        /* direction the light travels (spot/directional) */
     float color[3];
     double intensity, range;
+    double cone;            /* a spot light's outer cone, its half-angle in radians (0: none, a point light) */
 } sb_light;
 
 typedef struct sb_scene_camera {

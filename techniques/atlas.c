@@ -1,7 +1,8 @@
 /* atlas.c - every lamp's shadows in one depth atlas, as engines shadow many
  * local lights (Unity HDRP's shadow atlas): each lamp six perspective tiles
  * (a cube's faces; kind=dpsm: two paraboloids, dpsm.c's, a hemisphere each),
- * squares of one 2D depth texture of `size` texels a side,
+ * a spot whose cone fits a 90-degree frustum one perspective tile down its
+ * cone), squares of one 2D depth texture of `size` texels a side,
  * and one camera pass that shades every lamp (final.frag's SB_LIGHT_LOOP,
  * vis_atlas.glsl reading each lamp's record from a texture buffer).
  *
@@ -29,7 +30,7 @@
 #include "shaders.h"
 
 #define MIN_TILE 16      /* the smallest tile, and the atlas's cell */
-#define LREC 32          /* texels of a lamp's record (vis_atlas.glsl's SB_LREC) */
+#define LREC 36          /* texels of a lamp's record (vis_atlas.glsl's SB_LREC) */
 
 typedef struct atlas_desc {
     int size, res, kind, max_lights, policy, cache, filter;
@@ -66,6 +67,10 @@ typedef struct lamp {
     sb_v3 pos;                  /* origin-relative */
     double range, near, far;    /* range 0: none (the scene's size for far) */
     double importance;          /* this frame: the screen height its range covers, in pixels (0: out of view) */
+    int faces;                  /* its tiles: the kind's (6 cube, 2 dpsm), or 1 for a spot whose cone fits one
+                                   90-degree perspective tile */
+    double cone;                /* a spot's outer half-angle (0: a point light) */
+    sb_v3 dir;                  /* the way a spot shines */
     int want, tile;             /* texels a face: asked for, given (0: none) */
     uint64_t z;                 /* its first tile's Z-order cell (MIN_TILE cells): face k is tile z / tile cells + k */
     bool valid;                 /* cache: its tiles in the atlas are its own, drawn at kz, ktile from kpos */
@@ -82,9 +87,8 @@ typedef struct atlas_state {
     int *order;                 /* scratch: lamp indices */
     GLuint tex, fbo, buf, buf_tex;
     GLuint fresh_tex, fresh_fbo;   /* the stale check's atlas (made on its first frame): the kept one untouched */
-    int faces;                  /* tiles a lamp: 6 (cube) or 2 (dpsm) */
-    GLuint depth_prog[2];       /* opaque, alpha-tested draws */
-    GLint u[2][5];              /* cube: u_vp; dpsm: u_lamp, u_frame, u_side, u_near, u_far */
+    GLuint depth_prog[2][2];    /* [perspective tiles, paraboloids][opaque, alpha-tested draws] */
+    GLint u[2][2][5];           /* perspective: u_vp; paraboloid: u_lamp, u_frame, u_side, u_near, u_far */
     sb_final_prog fp;
     GLint u_atlas, u_lights, u_count, u_bias, u_normal;
     float *records;             /* count * LREC * 4 floats */
@@ -118,13 +122,22 @@ static bool atlas_supported(const sb_run_ctx *rc, const void *desc, sb_err *why)
 static const double face_dir[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
 static const double face_up[6][3] = {{0, -1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}, {0, -1, 0}, {0, -1, 0}};
 
-static void place_lamp(lamp *l, const sb_gpu *g, int which) {
+static void place_lamp(lamp *l, const sb_gpu *g, int which, int kind) {
     const sb_light *src = sb_scene_point_light(g->scene, which, NULL);
     l->light = which;
     l->pos = src->position;
     l->range = src->range > 0 ? src->range : 0;
     l->far = l->range > 0 ? l->range : 2 * sb_v3_len(sb_v3_sub(g->scene->bounds.hi, g->scene->bounds.lo));
     l->near = fmax(l->far * 1e-4, 1e-6);   /* as cube's (dpsm's paraboloids store the distance, linear in it) */
+    l->cone = src->type == SB_LIGHT_SPOT ? src->cone : 0;
+    l->dir = src->direction;
+    l->faces = l->cone > 0 && l->cone <= SB_PI / 4 ? 1 : kind == KIND_DPSM ? 2 : 6;
+    if (l->faces == 1) {   /* one perspective tile down the cone, as wide as the cone */
+        sb_v3 up = fabs(l->dir.y) > 0.9 ? sb_v3_make(1, 0, 0) : sb_v3_make(0, 1, 0);
+        l->face_vp[0] = sb_m4_mul(sb_m4_perspective(2 * l->cone, 1, l->near, l->far),
+                                  sb_m4_look_at(l->pos, sb_v3_add(l->pos, l->dir), up));
+        return;
+    }
     sb_m4 proj = sb_m4_perspective(SB_PI / 2, 1, l->near, l->far);
     for (int k = 0; k < 6; k++) {
         sb_v3 dir = sb_v3_make(face_dir[k][0], face_dir[k][1], face_dir[k][2]);
@@ -152,7 +165,7 @@ static bool atlas_create(void *state, const sb_run_ctx *rc, const void *desc, sb
     s->lamps = sb_xcalloc((size_t)s->count, sizeof *s->lamps);
     s->order = sb_xcalloc((size_t)s->count, sizeof *s->order);
     s->records = sb_xcalloc((size_t)s->count * LREC * 4, sizeof(float));
-    for (int i = 0; i < s->count; i++) place_lamp(&s->lamps[i], g, rc->lights->idx[i]);
+    for (int i = 0; i < s->count; i++) place_lamp(&s->lamps[i], g, rc->lights->idx[i], s->d->kind);
     if (!make_atlas(s, &s->tex, &s->fbo)) return sb_fail(err, "atlas:size=%d: the atlas's framebuffer is incomplete", s->d->size);
     glGenBuffers(1, &s->buf);
     glBindBuffer(GL_TEXTURE_BUFFER, s->buf);
@@ -160,17 +173,18 @@ static bool atlas_create(void *state, const sb_run_ctx *rc, const void *desc, sb
     glGenTextures(1, &s->buf_tex);
     glBindTexture(GL_TEXTURE_BUFFER, s->buf_tex);
     glTexBuffer(GL_TEXTURE_BUFFER, GL_RGBA32F, s->buf);
-    s->faces = s->d->kind == KIND_DPSM ? 2 : 6;
-    const char *vs[] = {s->d->kind == KIND_DPSM ? sb_shader_dpsm_vert : sb_shader_cube_depth_vert},
-               *fs[] = {sb_shader_depth_frag};
     static const char *const prog_u[2][5] = {{"u_vp"}, {"u_lamp", "u_frame", "u_side", "u_near", "u_far"}};
-    for (int a = 0; a < (g->scene->alpha_tested_draws ? 2 : 1); a++) {
-        s->depth_prog[a] = sb_gpu_program(a ? "atlas tile (alpha-tested draws)" : "atlas tile", a ? NULL : sb_opaque_define(g),
-                                          vs, 1, fs, 1, err);
-        if (!s->depth_prog[a]) return false;
-        for (int k = 0; k < 5; k++)
-            s->u[a][k] = prog_u[s->d->kind][k] ? glGetUniformLocation(s->depth_prog[a], prog_u[s->d->kind][k]) : -1;
-    }
+    const char *fs[] = {sb_shader_depth_frag};
+    for (int kp = 0; kp <= s->d->kind; kp++)   /* perspective tiles always (cube faces, spots), paraboloids for dpsm */
+        for (int a = 0; a < (g->scene->alpha_tested_draws ? 2 : 1); a++) {
+            const char *vs[] = {kp ? sb_shader_dpsm_vert : sb_shader_cube_depth_vert};
+            char label[64];
+            snprintf(label, sizeof label, "atlas %s tile%s", kp ? "paraboloid" : "perspective", a ? " (alpha-tested draws)" : "");
+            s->depth_prog[kp][a] = sb_gpu_program(label, a ? NULL : sb_opaque_define(g), vs, 1, fs, 1, err);
+            if (!s->depth_prog[kp][a]) return false;
+            for (int k = 0; k < 5; k++)
+                s->u[kp][a][k] = prog_u[kp][k] ? glGetUniformLocation(s->depth_prog[kp][a], prog_u[kp][k]) : -1;
+        }
     char defines[64];
     snprintf(defines, sizeof defines, "#define SB_LIGHT_LOOP\n#define SB_FILTER %d\n", s->d->filter);
     if (!sb_final_prog_create(&s->fp, g, "atlas", sb_shader_vis_atlas_glsl, defines, err)) return false;
@@ -209,7 +223,7 @@ static int cmp_tile(const void *a, const void *b) {
 }
 
 /* Cells of the atlas (MIN_TILE texels a side) a lamp's tiles take. */
-static double cells(const atlas_state *s, int tile) { return (double)s->faces * (tile / MIN_TILE) * (tile / MIN_TILE); }
+static double cells(const lamp *l, int tile) { return (double)l->faces * (tile / MIN_TILE) * (tile / MIN_TILE); }
 
 /* The x or y of a Z-order cell index (every other bit). */
 static int unzip(uint64_t z) {
@@ -243,7 +257,7 @@ static int allocate(atlas_state *s, sb_frame *f) {
         l->want = l->tile = t;
     }
     double capacity = (double)(d->size / MIN_TILE) * (d->size / MIN_TILE), need = 0;
-    for (int k = 0; k < n; k++) need += cells(s, s->lamps[s->order[k]].tile);
+    for (int k = 0; k < n; k++) need += cells(&s->lamps[s->order[k]], s->lamps[s->order[k]].tile);
     while (need > capacity && n > 0) {
         int big = -1;   /* the largest tile above the smallest, the least important of those */
         for (int k = n - 1; k >= 0; k--) {
@@ -251,10 +265,10 @@ static int allocate(atlas_state *s, sb_frame *f) {
             if (l->tile > MIN_TILE && (big < 0 || l->tile > s->lamps[s->order[big]].tile)) big = k;
         }
         lamp *l = &s->lamps[s->order[big < 0 ? n - 1 : big]];
-        need -= cells(s, l->tile);
+        need -= cells(l, l->tile);
         if (big >= 0) {
             l->tile /= 2;
-            need += cells(s, l->tile);
+            need += cells(l, l->tile);
         } else {
             l->tile = 0;   /* every tile at the smallest: the least important goes */
             n--;
@@ -270,7 +284,7 @@ static int allocate(atlas_state *s, sb_frame *f) {
     for (int k = 0; k < n; k++) {
         lamp *l = &s->lamps[place[k]];
         l->z = z;
-        z += (uint64_t)cells(s, l->tile);
+        z += (uint64_t)cells(l, l->tile);
     }
     free(place);
     f->counters.atlas = true;
@@ -323,11 +337,11 @@ static bool kept(const atlas_state *s, const lamp *l, const sb_frame *f) {
 
 /* Another lamp's kept tiles that this lamp's place overlaps are forgotten. */
 static void forget_under(atlas_state *s, const lamp *l) {
-    uint64_t a0 = l->z, a1 = l->z + (uint64_t)cells(s, l->tile);
+    uint64_t a0 = l->z, a1 = l->z + (uint64_t)cells(l, l->tile);
     for (int i = 0; i < s->count; i++) {
         lamp *o = &s->lamps[i];
         if (o == l || !o->valid) continue;
-        uint64_t b0 = o->kz, b1 = o->kz + (uint64_t)cells(s, o->ktile);
+        uint64_t b0 = o->kz, b1 = o->kz + (uint64_t)cells(o, o->ktile);
         if (a0 < b1 && b0 < a1) o->valid = false;
     }
 }
@@ -337,8 +351,9 @@ static const float lamp_frame[9] = {1, 0, 0, 0, 0, -1, 0, 1, 0};
 
 /* Sets tile k's uniforms on the depth program of variant a. */
 static void set_tile(const atlas_state *s, const lamp *l, int a, int k) {
-    const GLint *u = s->u[a];
-    if (s->d->kind == KIND_CUBE) {
+    bool paraboloid = l->faces == 2;
+    const GLint *u = s->u[paraboloid][a];
+    if (!paraboloid) {
         float m[16];
         sb_m4_to_float(l->face_vp[k], m);
         glUniformMatrix4fv(u[0], 1, GL_FALSE, m);
@@ -357,21 +372,22 @@ static int draw_tiles(atlas_state *s, lamp *l, sb_frame *f) {
     const sb_scene *sc = f->gpu->scene;
     int drawn = 0;
     sb_frame_shade_point(f, l->pos);   /* its single-sided draws keep the triangles facing it */
-    if (s->d->kind == KIND_DPSM) glEnable(GL_CLIP_DISTANCE0);   /* each hemisphere clipped at its rim */
-    for (int k = 0; k < s->faces; k++) {
+    bool paraboloid = l->faces == 2;
+    if (paraboloid) glEnable(GL_CLIP_DISTANCE0);   /* each hemisphere clipped at its rim */
+    for (int k = 0; k < l->faces; k++) {
         int x, y;
         face_rect(l, k, &x, &y);
         glViewport(x, y, l->tile, l->tile);
         glScissor(x, y, l->tile, l->tile);
         glClear(GL_DEPTH_BUFFER_BIT);
         double planes[6][4];
-        if (s->d->kind == KIND_CUBE) sb_frustum_planes(l->face_vp[k], planes);
+        if (!paraboloid) sb_frustum_planes(l->face_vp[k], planes);
         else sb_cube_planes(l->pos, l->far, planes);
         uint32_t n = sb_scene_collect(sc, (const double(*)[4])planes, 6, f->scratch);
         if (!n) continue;
         drawn++;
-        for (int a = 0; a < 2 && s->depth_prog[a]; a++) {
-            glUseProgram(s->depth_prog[a]);
+        for (int a = 0; a < 2 && s->depth_prog[paraboloid][a]; a++) {
+            glUseProgram(s->depth_prog[paraboloid][a]);
             set_tile(s, l, a, k);
             for (uint32_t i = 0; i < n; i++)
                 if (sb_draw_variant(f->gpu, f->scratch[i]) == a) sb_submit(f, f->scratch[i], 1);
@@ -388,14 +404,17 @@ static void write_record(const atlas_state *s, const lamp *l, float *r) {
     float size = (float)s->d->size;
     memset(r, 0, sizeof(float) * LREC * 4);
     r[0] = (float)l->pos.x, r[1] = (float)l->pos.y, r[2] = (float)l->pos.z, r[3] = (float)l->range;
-    r[4] = (float)l->near, r[5] = (float)l->far, r[6] = (float)l->tile, r[7] = (float)s->d->kind;
-    for (int k = 0; l->tile && k < s->faces; k++) {
+    r[4] = (float)l->near, r[5] = (float)l->far, r[6] = (float)l->tile;
+    r[7] = l->faces == 1 ? 2.0f : l->faces == 2 ? 1.0f : 0.0f;   /* the lookup: 0 cube, 1 paraboloids, 2 one spot tile */
+    for (int k = 0; l->tile && k < l->faces; k++) {
         int x, y;
         face_rect(l, k, &x, &y);
         float *q = r + 4 * (2 + k);
         q[0] = x / size, q[1] = y / size, q[2] = l->tile / size;
-        if (s->d->kind == KIND_CUBE) sb_m4_to_float(l->face_vp[k], r + 4 * (8 + 4 * k));
+        if (l->faces != 2) sb_m4_to_float(l->face_vp[k], r + 4 * (8 + 4 * k));
     }
+    float *c = r + 4 * 32;   /* a spot's cone, for the shading */
+    if (l->cone > 0) c[0] = (float)l->dir.x, c[1] = (float)l->dir.y, c[2] = (float)l->dir.z, c[3] = (float)(1 - cos(l->cone));
 }
 
 static void atlas_frame(void *state, sb_frame *f) {
@@ -425,7 +444,7 @@ static void atlas_frame(void *state, sb_frame *f) {
         lamp *l = &s->lamps[s->order[k]];
         if (only >= 0 && s->order[k] != only) continue;
         if (kept(s, l, f)) {
-            cached += s->faces;
+            cached += l->faces;
             continue;
         }
         rendered += draw_tiles(s, l, f);
@@ -438,7 +457,9 @@ static void atlas_frame(void *state, sb_frame *f) {
     glDisable(GL_SCISSOR_TEST);
     f->counters.cascades_rendered = rendered;
     f->counters.cascades_cached = cached;
-    f->counters.cascades_skipped = s->faces * n - rendered - cached;
+    int tiles = 0;
+    for (int k = 0; k < n; k++) tiles += s->lamps[s->order[k]].faces;
+    f->counters.cascades_skipped = tiles - rendered - cached;
     /* the records of the lamps whose range reaches the view (those without tiles lit) */
     int shown = 0;
     for (int i = 0; i < s->count; i++)
@@ -468,8 +489,9 @@ static void atlas_frame(void *state, sb_frame *f) {
 static void atlas_destroy(void *state) {
     atlas_state *s = state;
     sb_final_prog_free(&s->fp);
-    for (int a = 0; a < 2; a++)
-        if (s->depth_prog[a]) glDeleteProgram(s->depth_prog[a]);
+    for (int kp = 0; kp < 2; kp++)
+        for (int a = 0; a < 2; a++)
+            if (s->depth_prog[kp][a]) glDeleteProgram(s->depth_prog[kp][a]);
     if (s->fbo) glDeleteFramebuffers(1, &s->fbo);
     if (s->tex) glDeleteTextures(1, &s->tex);
     if (s->fresh_fbo) glDeleteFramebuffers(1, &s->fresh_fbo);

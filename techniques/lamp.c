@@ -55,6 +55,7 @@ sb_lamp_state *sb_lamp_light(sb_lamp_state *s, int i) {
 static bool place(sb_lamp_state *l, const sb_run_ctx *rc, int which, sb_err *err) {
     const sb_gpu *g = rc->gpu;
     const sb_light *lamp = sb_scene_point_light(g->scene, which, NULL);
+    l->source = lamp;
     l->lamp = lamp->position;
     double diag = sb_v3_len(sb_v3_sub(g->scene->bounds.hi, g->scene->bounds.lo));
     l->far = lamp->range > 0 ? lamp->range : 2 * diag;
@@ -133,6 +134,7 @@ static int render_maps(sb_lamp_state *l, sb_frame *f) {
 static void shade(sb_lamp_state *l, sb_frame *f, bool first) {
     sb_frame_shade_point(f, l->lamp);
     f->shade_range = l->range;
+    sb_frame_shade_spot(f, l->source);
     glUseProgram(l->fp.prog);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(l->kind->target, l->tex);

@@ -66,7 +66,8 @@ struct sb_lamp_state {
     int count;
     size_t size;
     char *others;
-    double range;               /* the lamp's range: shaded only within it with --lights (0: none) */
+    double range;               /* the lamp's range: shaded and scored only within it (0: none) */
+    const sb_light *source;     /* the scene's light (a spot's cone: shaded and scored only inside it) */
 };
 
 /* The i-th light's state of a technique's (0: itself). */

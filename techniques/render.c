@@ -1,6 +1,8 @@
 /* render.c - scene upload, render target, the final-pass program, counted draw submission. */
 #include "render.h"
 
+#include <math.h>
+
 #include <stdlib.h>
 #include <string.h>
 
@@ -33,6 +35,7 @@ static bool final_variant(sb_final_prog *fp, int i, const sb_gpu *g, const char 
     v->u_proj = glGetUniformLocation(v->prog, "u_proj");
     v->u_light = glGetUniformLocation(v->prog, "u_shade_light");
     v->u_more = glGetUniformLocation(v->prog, "u_shade_more");
+    v->u_spot = glGetUniformLocation(v->prog, "u_shade_spot");
     v->u_depth_view = glGetUniformLocation(v->prog, "u_depth_view");
     if (i == 0) return true;
     /* the technique's uniforms reach this variant by copy from v[0]: one only it read would keep
@@ -48,7 +51,7 @@ static bool final_variant(sb_final_prog *fp, int i, const sb_gpu *g, const char 
         if (block >= 0 || glGetUniformLocation(fp->v[0].prog, un) >= 0) continue;
         /* the shared pass's own: set on each variant, or bound by the shader (the alpha test's sb_ samplers) */
         bool own = !strncmp(un, "sb_", 3);
-        const char *shared[] = {"u_view", "u_proj", "u_shade_light", "u_shade_more", "u_depth_view"};
+        const char *shared[] = {"u_view", "u_proj", "u_shade_light", "u_shade_more", "u_shade_spot", "u_depth_view"};
         for (size_t k = 0; k < SB_COUNT(shared); k++) own |= !strcmp(un, shared[k]);
         if (!own)
             return sb_fail(err, "%s: uniform %s is read by the %s variant of the camera pass only: its value would not "
@@ -542,6 +545,13 @@ void sb_frame_shade_light_of(sb_frame *f, int idx) {
     if (lamp) sb_frame_shade_point(f, lamp->position);
     else f->shade_light[0] = g->sun.x, f->shade_light[1] = g->sun.y, f->shade_light[2] = g->sun.z, f->shade_light[3] = 0;
     f->shade_range = lamp && lamp->range > 0 ? lamp->range : 0;
+    sb_frame_shade_spot(f, lamp);
+}
+
+void sb_frame_shade_spot(sb_frame *f, const sb_light *lamp) {
+    bool spot = lamp && lamp->type == SB_LIGHT_SPOT && lamp->cone > 0;
+    f->shade_spot[0] = spot ? lamp->direction.x : 0, f->shade_spot[1] = spot ? lamp->direction.y : 0;
+    f->shade_spot[2] = spot ? lamp->direction.z : 0, f->shade_spot[3] = spot ? 1 - cos(lamp->cone) : 0;
 }
 
 void sb_stage_begin(sb_frame *f, sb_stage s) {
@@ -748,6 +758,9 @@ static void draw_scene(sb_frame *f, const sb_final_prog *fp, GLenum depth_func, 
         glUniform4f(v->u_light, (float)f->shade_light[0], (float)f->shade_light[1], (float)f->shade_light[2],
                     (float)f->shade_light[3]);
         if (v->u_more >= 0) glUniform2f(v->u_more, (float)f->shade_range, f->shade_add ? 1.0f : 0.0f);
+        if (v->u_spot >= 0)
+            glUniform4f(v->u_spot, (float)f->shade_spot[0], (float)f->shade_spot[1], (float)f->shade_spot[2],
+                        (float)f->shade_spot[3]);
         for (uint32_t i = 0; i < n; i++)
             if (sb_draw_variant(g, f->scratch[i]) == a) camera_submit(f, f->scratch[i], &culling);
         sb_submit_flush(f);

@@ -16,7 +16,7 @@ struct sb_reference;
  * it and the links that bring the technique's uniforms over from `prog`. */
 typedef struct sb_final_variant {
     GLuint prog;
-    GLint u_view, u_proj, u_light, u_more;
+    GLint u_view, u_proj, u_light, u_more, u_spot;
     GLint u_depth_view;     /* evaluation variants: the view the lookup's depth is in */
     sb_gl_links from_timed;
 } sb_final_variant;
@@ -107,7 +107,8 @@ typedef struct sb_frame {
                                            evaluation tests it; xyz toward the sun (w 0) or a point light's
                                            position (w 1); the sun unless the technique shades a lamp
                                            (sb_frame_shade_point, before its shadow stage) */
-    double shade_range;                 /* --lights: the shaded lamp's range, beyond which it lights nothing (0: none) */
+    double shade_range;                 /* the shaded lamp's range, beyond which it lights nothing (0: none) */
+    double shade_spot[4];               /* a shaded spot light: the way it shines and 1 - cos of its cone (0: none) */
     bool shade_add;                     /* --lights: a camera pass adding one more light to the colour (no ambient) */
     uint32_t *scratch;                  /* draw_count entries, for culling results */
     uint32_t *cmds;                     /* --submit indirect: the pass's pending commands, 5 words each (at most
@@ -206,7 +207,9 @@ bool sb_lamp_supported(const sb_gpu *g, int light, const char *technique, sb_err
  * cube when cube is true): within GL_MAX_CUBE_MAP_TEXTURE_SIZE or
  * GL_MAX_TEXTURE_SIZE and within the GPU memory (sb_gpu_memory_fits). */
 bool sb_lamp_maps_fit(const sb_gpu *g, const char *technique, int res, double bytes, bool cube, sb_err *why);
-/* --lights: makes the frame lit by one light of a set (SB_LIGHT_SUN or a lamp's index), its range too. */
+/* The frame's spot cone from a lamp (none for a point light, NULL, or the sun). */
+void sb_frame_shade_spot(sb_frame *f, const sb_light *lamp);
+/* Makes the frame lit by one light (SB_LIGHT_SUN or a lamp's index), its range and a spot's cone too. */
 void sb_frame_shade_light_of(sb_frame *f, int idx);
 /* Makes the frame lit by a point light at pos: call it before the shadow
  * stage (its draws keep the triangles facing the lamp), and the final pass

@@ -8,6 +8,7 @@ in vec3 v_nrm;
 in float v_view_z;
 uniform vec4 u_shade_light;   // xyz toward the sun (w 0), or a point light's position (w 1)
 uniform vec2 u_shade_more;    // x: the lamp's range (0: none); y: 1 in a pass adding a further light (no ambient)
+uniform vec4 u_shade_spot;    // a spot light: xyz the way it shines, w 1 - cos of its cone (0: none)
 flat in vec4 v_color;          // the draw's colour
 layout(location = 0) out vec4 o_color;
 #ifdef SB_EVAL
@@ -20,13 +21,14 @@ void main() {
     vec3 n = normalize(v_nrm);
 #ifdef SB_LIGHT_LOOP
     // every lamp in one pass (the atlas): the technique's GLSL gives sb_light_count(), sb_light_at(i) (xyz the
-    // lamp, w its range, 0: none) and sb_visibility_at(i, p, n). An evaluation pass holds the one lamp it scores.
+    // lamp, w its range, 0: none), sb_light_cone(i) and sb_visibility_at(i, p, n). An evaluation pass holds the one lamp it scores.
     float lit = 0.0, vis = 1.0;
     for (int i = 0; i < sb_light_count(); i++) {
         vec4 l = sb_light_at(i);
         vec3 d = l.xyz - v_pos;
         float dist = length(d), ndl = dot(n, d / max(dist, 1e-20));
-        if ((l.w > 0.0 && dist > l.w) || ndl <= 0.0) continue;
+        vec4 cone = sb_light_cone(i);   // a spot: the way it shines, 1 - cos of its cone (w 0: none)
+        if ((l.w > 0.0 && dist > l.w) || ndl <= 0.0 || (cone.w > 0.0 && dot(-d / dist, cone.xyz) < 1.0 - cone.w)) continue;
         vis = sb_visibility_at(i, v_pos, n);
         lit += 0.7 * ndl * vis;
     }
@@ -35,6 +37,8 @@ void main() {
     vec3 L = u_shade_light.w > 0.5 ? normalize(u_shade_light.xyz - v_pos) : u_shade_light.xyz;
     float ndl = dot(n, L);
     if (u_shade_light.w > 0.5 && u_shade_more.x > 0.0 && length(u_shade_light.xyz - v_pos) > u_shade_more.x) ndl = 0.0;
+    if (u_shade_light.w > 0.5 && u_shade_spot.w > 0.0 &&
+        dot(normalize(v_pos - u_shade_light.xyz), u_shade_spot.xyz) < 1.0 - u_shade_spot.w) ndl = 0.0;
     float vis = sb_visibility(v_pos, n, v_view_z);
     o_color = vec4(v_color.rgb * ((1.0 - u_shade_more.y) * 0.3 + 0.7 * max(ndl, 0.0) * vis), 1.0);
 #endif

@@ -346,6 +346,53 @@ static void test_tune_atlas_under_memory(void **st) {
     assert_non_null(strstr(pin, " --lights 0,1,2,3\n"));
 }
 
+/* Spot lights (scripts/add-lamps --spot): scored and shaded only inside their cones (fewer evaluated pixels than
+ * point lamps in the same places), raycast exact, and in the atlas one perspective tile a spot down its cone. */
+static long frames_sum(const char *dir, const sb_table *sum, int r, const char *col) {
+    sb_table t;
+    frames_of(dir, sum, r, &t);
+    long v = 0;
+    for (int i = 0; i < t.nrows; i++) v += table_int(&t, i, col);
+    sb_table_free(&t);
+    return v;
+}
+
+static void test_spots(void **st) {
+    (void)st;
+    char out[16384], spots[512], points[512], dirs[2][512];
+    snprintf(spots, sizeof spots, "%s/spots.glb", g_tmp);
+    snprintf(points, sizeof points, "%s/points.glb", g_tmp);
+    const char *make = "SHADOWBENCH=%s %s/scripts/add-lamps %s/street-lamps.glb %s --count 8 --range 8 %s "
+                       "--line=-4,4.5,3:-4,4.5,45";
+    assert_int_equal(run_logged(out, sizeof out, make, test_binary(), getenv("SB_SOURCE_ROOT"), getenv("SB_DATA_DIR"),
+                                spots, "--spot 30"), 0);
+    assert_int_equal(run_logged(out, sizeof out, make, test_binary(), getenv("SB_SOURCE_ROOT"), getenv("SB_DATA_DIR"),
+                                points, ""), 0);
+    const char *files[2] = {spots, points};
+    for (int k = 0; k < 2; k++) {
+        int rc = run_logged(out, sizeof out, "%s run %s street-lamps raycast cube:res=256 atlas:res=256 --lights "
+                            "64,65,66,67,68,69,70,71 --frames 3 --warmup 0 --size 160x90 --error-every 1 --quiet --out %s/%s",
+                            test_binary(), files[k], g_tmp, k ? "points" : "spots");
+        assert_int_equal(rc, 0);
+        snprintf(dirs[k], sizeof dirs[k], "%s", last_line_of(out));
+    }
+    sb_table s, p;
+    summary_table(dirs[0], &s);
+    summary_table(dirs[1], &p);
+    long spot_px = frames_sum(dirs[0], &s, 0, "eval_pixels"), point_px = frames_sum(dirs[1], &p, 0, "eval_pixels");
+    long tiles = frames_sum(dirs[0], &s, 2, "cascades_rendered"), lamps = frames_sum(dirs[0], &s, 2, "lights_shadowed");
+    print_message("spots: %ld (pixel, lamp) pairs evaluated against %ld as points; atlas drew %ld tiles for %ld lamps; "
+                  "err_rate raycast %g, cube %g, atlas %g\n", spot_px, point_px, tiles, lamps, cell(&s, 0, "err_rate_mean"),
+                  cell(&s, 1, "err_rate_mean"), cell(&s, 2, "err_rate_mean"));
+    assert_true(spot_px > 0 && spot_px < point_px / 2);   /* a 30-degree cone lights far less than the sphere */
+    assert_true(cell(&s, 0, "err_rate_mean") == 0);
+    assert_true(lamps > 0 && tiles == lamps);             /* one tile a spot */
+    assert_true(frames_sum(dirs[1], &p, 2, "cascades_rendered") > 4 * frames_sum(dirs[1], &p, 2, "lights_shadowed"));
+    assert_true(cell(&s, 2, "err_rate_mean") <= cell(&s, 1, "err_rate_mean") + 0.002);
+    sb_table_free(&s);
+    sb_table_free(&p);
+}
+
 static void test_bad_lights(void **st) {
     (void)st;
     expect_cli_fail("--lights 0,64: the scene has no lamp 64 (its point and spot lights are 0..63)",
@@ -371,6 +418,7 @@ int main(void) {
         cmocka_unit_test(test_atlas_cache_with_movers),
         cmocka_unit_test(test_batch_lights),
         cmocka_unit_test(test_tune_atlas_under_memory),
+        cmocka_unit_test(test_spots),
         cmocka_unit_test(test_bad_lights),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
