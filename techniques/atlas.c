@@ -185,8 +185,11 @@ static bool atlas_create(void *state, const sb_run_ctx *rc, const void *desc, sb
             for (int k = 0; k < 5; k++)
                 s->u[kp][a][k] = prog_u[kp][k] ? glGetUniformLocation(s->depth_prog[kp][a], prog_u[kp][k]) : -1;
         }
-    char defines[64];
-    snprintf(defines, sizeof defines, "#define SB_LIGHT_LOOP\n#define SB_FILTER %d\n", s->d->filter);
+    bool spots = false;
+    for (int i = 0; i < s->count; i++) spots |= s->lamps[i].faces == 1;
+    char defines[160];
+    snprintf(defines, sizeof defines, "#define SB_LIGHT_LOOP\n#define SB_FILTER %d\n#define SB_ATLAS_DPSM %d\n"
+             "#define SB_ATLAS_SPOTS %d\n", s->d->filter, s->d->kind == KIND_DPSM, spots);
     if (!sb_final_prog_create(&s->fp, g, "atlas", sb_shader_vis_atlas_glsl, defines, err)) return false;
     const char *names[] = {"u_atlas", "u_lights", "u_count", "u_bias", "u_normal"};
     GLint *locs[] = {&s->u_atlas, &s->u_lights, &s->u_count, &s->u_bias, &s->u_normal};

@@ -14,8 +14,13 @@ uniform float u_bias, u_normal;
 
 int sb_light_count() { return u_count; }
 vec4 sb_light_at(int i) { return texelFetch(u_lights, SB_LREC * i); }
+#if SB_ATLAS_SPOTS
 vec4 sb_light_cone(int i) { return texelFetch(u_lights, SB_LREC * i + 32); }
+#else
+vec4 sb_light_cone(int i) { return vec4(0.0); }   // no spot among the run's lamps
+#endif
 
+#if SB_ATLAS_DPSM
 // dpsm's lookup in the lamp's two tiles: its frame x = +X, y = +Z, z = -Y (the front hemisphere looks down)
 const mat3 sb_lamp_frame = mat3(1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0);
 float sb_paraboloid_at(int b, vec3 lamp, vec4 a, vec3 p, vec3 n) {
@@ -35,6 +40,8 @@ float sb_paraboloid_at(int b, vec3 lamp, vec4 a, vec3 p, vec3 n) {
     return texture(u_atlas, vec3(r.xy + uv * r.z, ref));
 }
 
+#endif
+#if SB_ATLAS_SPOTS
 // a spot's one perspective tile down its cone: the reference depth is the point's depth along the cone's axis
 float sb_spot_at(int b, int i, vec3 lamp, vec4 a, vec3 p, vec3 n) {
     vec4 cone = sb_light_cone(i);
@@ -56,13 +63,19 @@ float sb_spot_at(int b, int i, vec3 lamp, vec4 a, vec3 p, vec3 n) {
     vec4 r = texelFetch(u_lights, b + 2);
     return texture(u_atlas, vec3(r.xy + uv * r.z, 0.5 * z + 0.5));
 }
+#endif
 
 float sb_visibility_at(int i, vec3 p, vec3 n) {
     int b = SB_LREC * i;
     vec4 lamp = texelFetch(u_lights, b), a = texelFetch(u_lights, b + 1);   // a: near, far, tile texels, kind
     if (a.z <= 0.0) return 1.0;
+    // the lookups the run needs, chosen when the program is built (a branch a lamp doubled llvmpipe's pass)
+#if SB_ATLAS_SPOTS
     if (a.w > 1.5) return sb_spot_at(b, i, lamp.xyz, a, p, n);
-    if (a.w > 0.5) return sb_paraboloid_at(b, lamp.xyz, a, p, n);
+#endif
+#if SB_ATLAS_DPSM
+    return sb_paraboloid_at(b, lamp.xyz, a, p, n);
+#else
     vec3 d = p - lamp.xyz;
     float dist = length(d);
     float texel = 2.0 * max(abs(d.x), max(abs(d.y), abs(d.z))) / a.z;
@@ -80,4 +93,5 @@ float sb_visibility_at(int i, vec3 p, vec3 n) {
     vec2 uv = clamp(c.xy / c.w * 0.5 + 0.5, 0.5 / a.z, 1.0 - 0.5 / a.z);
     vec4 r = texelFetch(u_lights, b + 2 + face);
     return texture(u_atlas, vec3(r.xy + uv * r.z, 0.5 * z + 0.5));
+#endif
 }
