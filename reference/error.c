@@ -579,7 +579,6 @@ static void add_share(double *sum, double share, double n) {
 void sb_error_metrics_add(sb_error_metrics *acc, const sb_error_metrics *e, bool first) {
     if (first) {
         *acc = *e;
-        acc->lights_px = e->pixels ? 1 : NAN;
         return;
     }
     double a = (double)acc->pixels, b = (double)e->pixels, n = a + b;
@@ -597,10 +596,10 @@ void sb_error_metrics_add(sb_error_metrics *acc, const sb_error_metrics *e, bool
     add_share(&pen_err, e->penumbra_err, isnan(pen_b) ? 0 : pen_b);
     double pens = (isnan(pen_a) ? 0 : pen_a) + (isnan(pen_b) ? 0 : pen_b);
     acc->penumbra_err = pens > 0 ? pen_err / pens : NAN;
-    double res = 0;
+    double res = 0, res_n = (isnan(acc->res_err_mean) ? 0 : a) + (isnan(e->res_err_mean) ? 0 : b);
     add_share(&res, acc->res_err_mean, a);
     add_share(&res, e->res_err_mean, b);
-    acc->res_err_mean = isnan(acc->res_err_mean) && isnan(e->res_err_mean) ? NAN : res / n;
+    acc->res_err_mean = res_n > 0 ? res / res_n : NAN;   /* over the lights that have a map resolution */
     acc->res_err_p95 = fmax(acc->res_err_p95, e->res_err_p95);      /* the worse light's (fmax skips NaN) */
     acc->texel_px_p95 = fmin(acc->texel_px_p95, e->texel_px_p95);
     acc->stale_px = isnan(acc->stale_px) ? e->stale_px : fmax(acc->stale_px, e->stale_px);

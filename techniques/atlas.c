@@ -425,7 +425,9 @@ static void atlas_frame(void *state, sb_frame *f) {
     const atlas_desc *d = s->d;
     /* the tiles of every lamp as a timed frame gives them; an evaluation pass draws and shades only the one it
        scores, at the place and size the frame gives it (dropped, downscaled: as timed frames see it) */
-    int only = f->eval_light ? f->eval_light - 1 : -1;
+    int first, end;
+    sb_frame_light_range(f, s->count, &first, &end);
+    int only = f->eval_light ? first : -1;
     sb_stage_begin(f, SB_STAGE_CASCADE);
     int n = allocate(s, f), rendered = 0, cached = 0;
     invalidate_moved(s, f);

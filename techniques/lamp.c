@@ -154,7 +154,8 @@ void sb_lamp_technique_frame(void *state, sb_frame *f) {
     sb_lamp_state *s = state;
     const sb_lamp_kind *k = s->kind;
     /* every light, or the one an evaluation pass scores */
-    int first = f->eval_light ? f->eval_light - 1 : 0, end = f->eval_light ? f->eval_light : s->count;
+    int first, end;
+    sb_frame_light_range(f, s->count, &first, &end);
     sb_stage_begin(f, SB_STAGE_CASCADE);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);

@@ -104,7 +104,8 @@ static void raycast_frame(void *state, sb_frame *f) {
     const int w = g->width, h = g->height;
     const size_t np = (size_t)w * h;
     /* every light, or the one an evaluation pass scores */
-    int first = f->eval_light ? f->eval_light - 1 : 0, end = f->eval_light ? f->eval_light : s->lights ? s->lights->count : 1;
+    int first, end;
+    sb_frame_light_range(f, s->lights ? s->lights->count : 1, &first, &end);
     shade(s, f, first);
 
     /* the camera pass with the evaluation targets: positions and normals. Its

@@ -207,6 +207,12 @@ bool sb_lamp_supported(const sb_gpu *g, int light, const char *technique, sb_err
  * cube when cube is true): within GL_MAX_CUBE_MAP_TEXTURE_SIZE or
  * GL_MAX_TEXTURE_SIZE and within the GPU memory (sb_gpu_memory_fits). */
 bool sb_lamp_maps_fit(const sb_gpu *g, const char *technique, int res, double bytes, bool cube, sb_err *why);
+/* The lights [*first, *end) of a set of `count` a frame draws: all of them, or the one an evaluation pass scores
+ * (sb_frame.eval_light). */
+static inline void sb_frame_light_range(const sb_frame *f, int count, int *first, int *end) {
+    *first = f->eval_light ? f->eval_light - 1 : 0;
+    *end = f->eval_light ? f->eval_light : count;
+}
 /* The frame's spot cone from a lamp (none for a point light, NULL, or the sun). */
 void sb_frame_shade_spot(sb_frame *f, const sb_light *lamp);
 /* Makes the frame lit by one light (SB_LIGHT_SUN or a lamp's index), its range and a spot's cone too. */

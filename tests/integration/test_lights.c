@@ -172,9 +172,6 @@ static void test_moved_lamp_changes_only_its_pixels(void **st) {
     moved_lamp("raycast");
 }
 
-/* The run's frames, as their per-frame CSV holds them. */
-static void frames_of(const char *dir, const sb_table *sum, int r, sb_table *t) { frames_table(dir, sum, r, t); }
-
 /* An atlas too small for street-lamps' 64 lamps, or capped below them: the exact counts in the warning, per-frame
  * columns that agree, a finite error; policy=screen beats fixed at the same size (near lamps get the texels). */
 static void test_atlas_under_budget(void **st) {
@@ -193,7 +190,7 @@ static void test_atlas_under_budget(void **st) {
         assert_string_equal(sb_table_get(&sum, r, "status"), "ok");
         assert_true(isfinite(cell(&sum, r, "err_rate_mean")) && cell(&sum, r, "err_rate_mean") < 0.05);
         sb_table fr;
-        frames_of(dir, &sum, r, &fr);
+        frames_table(dir, &sum, r, &fr);
         long dropped = 0, down = 0, inview = 0, frames = 0;
         for (int i = 0; i < fr.nrows; i++) {
             long d = table_int(&fr, i, "lights_dropped"), w = table_int(&fr, i, "lights_downscaled");
@@ -243,8 +240,8 @@ static void test_atlas_cache_still(void **st) {
     snprintf(dir, sizeof dir, "%s", last_line_of(out));
     sb_table sum, off, on;
     summary_table(dir, &sum);
-    frames_of(dir, &sum, 0, &off);
-    frames_of(dir, &sum, 1, &on);
+    frames_table(dir, &sum, 0, &off);
+    frames_table(dir, &sum, 1, &on);
     assert_int_equal(off.nrows, 4);
     assert_int_equal(on.nrows, 4);
     for (int i = 0; i < 4; i++) {
@@ -279,8 +276,8 @@ static void test_atlas_cache_with_movers(void **st) {
     snprintf(dir, sizeof dir, "%s", last_line_of(out));
     sb_table sum, off, on;
     summary_table(dir, &sum);
-    frames_of(dir, &sum, 0, &off);
-    frames_of(dir, &sum, 1, &on);
+    frames_table(dir, &sum, 0, &off);
+    frames_table(dir, &sum, 1, &on);
     long drawn = 0, kept = 0;
     for (int i = 0; i < on.nrows; i++) {
         print_message("frame %d: cache=on drew %ld tiles, kept %ld; stale_px %s; err_rate %s (off %s)\n", i,
@@ -350,7 +347,7 @@ static void test_tune_atlas_under_memory(void **st) {
  * point lamps in the same places), raycast exact, and in the atlas one perspective tile a spot down its cone. */
 static long frames_sum(const char *dir, const sb_table *sum, int r, const char *col) {
     sb_table t;
-    frames_of(dir, sum, r, &t);
+    frames_table(dir, sum, r, &t);
     long v = 0;
     for (int i = 0; i < t.nrows; i++) v += table_int(&t, i, col);
     sb_table_free(&t);
