@@ -3,14 +3,14 @@
 
 Eleven small nights are rendered on llvmpipe. History A is nights 1-5 at the
 default thread count, then nights 6-8 with LP_NUM_THREADS=1 on one core that a
-busy loop shares: a real, steady slowdown (about 3x) with no hook in the code,
+three busy loops share: a real, steady slowdown (about 9x) with no hook in the code,
 well above the nights' own noise on a shared 2-core machine (which moved a
 camera pass by 10-30 % from night to night, more than a 2x step over three
 nights can show at the detector's false-alarm rate). History B is the same nights 1-5, then
 three more at the default count (rendered interleaved with A's, so the
 machine's drift hits both alike). Then:
 
-- `history regressions --noise-floor 15` on A names night 6 for the series whose camera pass
+- `history regressions --noise-floor 30` on A names night 6 for the series whose camera pass
   slowed (final_ms) and finds no change in any error or draw-call metric; it
   exits 1 (a regression in the newest three nights). On B it finds nothing and
   exits 0.
@@ -59,8 +59,8 @@ def sb(*args, env=None, ok=(0,), prefix=()):
 def night(name, slow=False, images=False, hogs=1):
     """One night: three shadowed runs on plane-box (not `none`: a 1-ms frame on a shared CPU moves by
     half between nights for reasons of its own), into WORK/name/<stamp>. A slow night renders with one
-    llvmpipe thread on core 0, beside `hogs` busy loops on that core (one: about 4x slower than a night
-    at the default thread count here; three: about 10x)."""
+    llvmpipe thread on core 0, beside `hogs` busy loops on that core (one: about 4.5x slower than a night
+    at the default thread count here, two: about 6x, three: about 9x)."""
     args = ["run", "plane-box", "plane-box", "sm", "sm:filter=pcf3", "pssm", "--frames", "24", "--size", "960x540",
             "--error-every", "12", "--quiet", "--out", os.path.join(WORK, name)]
     if images:
@@ -76,10 +76,17 @@ def night(name, slow=False, images=False, hogs=1):
             hog.wait()
 
 
-# What this shared 2-core machine does to unchanged code: a camera pass moved by up to 30 % between
-# nights a minute apart (history B found -29 % and -37 % "changes", +25 % on another day, at the
-# llvmpipe default of 5 %). The test says so, as a user of such a machine would.
-NOISE_FLOOR = "15"
+# What a shared 2-core machine does to unchanged code: a camera pass moved by up to 30 % between
+# nights a minute apart here (history B found -29 % and -37 % "changes", +25 % on another day, at the
+# llvmpipe default of 5 %), and on a CI machine by 39 % (B's nights 1-6 at 6.3 ms, 7-8 at 3.9 ms: a
+# "change" at a floor of 15 %). The test says so, as a user of such a machine would: `regressions` runs
+# at a floor of 30 % (a sigma of 0.3 in log). Scaling B's figures in place showed what that floor finds:
+# a step over the newest three nights of 3.5x in all three series, 3x in two, 2.5x in none; CI's 39 %
+# move, none. A's step is about 9x here (one llvmpipe thread beside three busy loops; on the CI machine one
+# busy loop gave 3.3x where it gives 4.5x here).
+# `history check` judges a set by B's band, which its nights' own spread already widens; it keeps 15 %.
+NOISE_FLOOR = "30"
+CHECK_FLOOR = "15"
 
 
 def regressions(hist, *extra):
@@ -110,7 +117,7 @@ def main():
     base = [night("n%d" % i) for i in range(1, 6)]
     slow, same = [], []
     for i in range(6, 9):
-        slow.append(night("a%d" % i, slow=True, images=(i == 8)))
+        slow.append(night("a%d" % i, slow=True, images=(i == 8), hogs=3))
         same.append(night("b%d" % i))
     print("12 nights rendered (one to warm up) in %.0f s" % (time.time() - t0))
     A, B = os.path.join(WORK, "a.sqlite"), os.path.join(WORK, "b.sqlite")
@@ -202,11 +209,11 @@ def main():
     # a shared 2-core machine made a set 2x slower here once), so a set beyond the band is rendered again, once,
     # as `--rerun-unstable` does for a disturbed night; unchanged code is within the band on one of the two.
     fresh = night("c9")
-    p = sb("history", "check", fresh, "--history", B, "--noise-floor", NOISE_FLOOR, ok=(0, 1))
+    p = sb("history", "check", fresh, "--history", B, "--noise-floor", CHECK_FLOOR, ok=(0, 1))
     print(p.stdout)
     if p.returncode == 1:
         print("the unchanged set was beyond B's band: rendered again once")
-        p = sb("history", "check", night("c9b"), "--history", B, "--noise-floor", NOISE_FLOOR, ok=(0, 1))
+        p = sb("history", "check", night("c9b"), "--history", B, "--noise-floor", CHECK_FLOOR, ok=(0, 1))
         print(p.stdout)
     check(p.returncode == 0 and "REGRESSION" not in p.stdout and p.stdout.count("within") >= 12,
           "history check, an unchanged set: every figure within B's band, exit 0 (got %d)" % p.returncode)
@@ -214,7 +221,7 @@ def main():
     # (sigma 0.39 in log) it reached 4.9x above the median, so a night 4x slower (slow[2]) fell inside it
     # for two of the three runs. The set checked here is about 10x slower, beyond such a band.
     slower = night("c10", slow=True, hogs=3)
-    p = sb("history", "check", slower, "--history", B, "--noise-floor", NOISE_FLOOR, ok=(0, 1))
+    p = sb("history", "check", slower, "--history", B, "--noise-floor", CHECK_FLOOR, ok=(0, 1))
     print(p.stdout)
     check(p.returncode == 1 and len(re.findall(r"final_ms .* REGRESSION", p.stdout)) == 3,
           "history check, a slowed set: final_ms beyond B's band for all three runs, exit 1 (got %d)" % p.returncode)
