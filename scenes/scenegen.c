@@ -59,6 +59,15 @@ static int write_text(const char *path, const char *text) {
     return fclose(f) == 0 ? 0 : 1;
 }
 
+/* A generated scene: DIR/NAME.glb and its camera path DIR/NAME.path. */
+static int write_scene(sb_glb_scene *s, const char *dir, const char *name, const char *path_text) {
+    char p[4096];
+    snprintf(p, sizeof p, "%s/%s.glb", dir, name);
+    int rc = sb_glb_write(s, p);
+    snprintf(p, sizeof p, "%s/%s.path", dir, name);
+    return rc | write_text(p, path_text);
+}
+
 /* ---- the scenes ---- */
 
 static int gen_plane_box(const char *dir) {
@@ -66,18 +75,13 @@ static int gen_plane_box(const char *dir) {
     s.sun = sb_sun_dir(30, 50);
     sb_glb_box(sb_glb_new_mesh(&s, 0), -20, -0.5, -20, 20, 0, 20);
     sb_glb_box(sb_glb_new_mesh(&s, 1), -1, 0, -1, 1, 2, 1);
-    char p[4096];
-    snprintf(p, sizeof p, "%s/plane-box.glb", dir);
-    int rc = sb_glb_write(&s, p);
-    snprintf(p, sizeof p, "%s/plane-box.path", dir);
-    rc |= write_text(p,
-                     "# plane-box: a slow half orbit around the box\n"
-                     "fov 60\n"
-                     "look 0   0 6 12     0 0.5 0\n"
-                     "look 4   10 6 6     0 0.5 0\n"
-                     "look 8   12 7 -4    0 0.5 0\n"
-                     "look 12  4 9 -11    0 0.5 0\n");
-    return rc;
+    return write_scene(&s, dir, "plane-box",
+                       "# plane-box: a slow half orbit around the box\n"
+                       "fov 60\n"
+                       "look 0   0 6 12     0 0.5 0\n"
+                       "look 4   10 6 6     0 0.5 0\n"
+                       "look 8   12 7 -4    0 0.5 0\n"
+                       "look 12  4 9 -11    0 0.5 0\n");
 }
 
 /* plane-box with a lamp (a point light) beside the box, and the sun */
@@ -87,17 +91,12 @@ static int gen_plane_box_lamp(const char *dir) {
     sb_glb_box(sb_glb_new_mesh(&s, 0), -20, -0.5, -20, 20, 0, 20);
     sb_glb_box(sb_glb_new_mesh(&s, 1), -1, 0, -1, 1, 2, 1);
     s.lamps[s.nlamps++] = sb_v3_make(2.5, 3.5, 1.5);
-    char p[4096];
-    snprintf(p, sizeof p, "%s/plane-box-lamp.glb", dir);
-    int rc = sb_glb_write(&s, p);
-    snprintf(p, sizeof p, "%s/plane-box-lamp.path", dir);
-    rc |= write_text(p,
-                     "# plane-box-lamp: around the box, lit by the lamp\n"
-                     "fov 60\n"
-                     "look 0   -7 6 -6    0 0.5 0\n"
-                     "look 4   -8 5 3     0 0.5 0\n"
-                     "look 8   -3 7 -9    0 0.5 0\n");
-    return rc;
+    return write_scene(&s, dir, "plane-box-lamp",
+                       "# plane-box-lamp: around the box, lit by the lamp\n"
+                       "fov 60\n"
+                       "look 0   -7 6 -6    0 0.5 0\n"
+                       "look 4   -8 5 3     0 0.5 0\n"
+                       "look 8   -3 7 -9    0 0.5 0\n");
 }
 
 static int gen_desert(const char *dir) {
@@ -120,22 +119,17 @@ static int gen_desert(const char *dir) {
                 sb_glb_box(b, bx, ground, bz, bx + w, ground + 0.3 + h, bz + d);
             }
         }
-    char p[4096];
-    snprintf(p, sizeof p, "%s/desert.glb", dir);
-    int rc = sb_glb_write(&s, p);
-    snprintf(p, sizeof p, "%s/desert.path", dir);
-    rc |= write_text(p,
-                     "# desert: low along a street between blocks, then up to a wide view (50 s); the keys spaced so that\n"
-                     "# the spline neither dips under the terrain nor cuts a corner (shadowbench path desert desert)\n"
-                     "fov 60\n"
-                     "look 0    -175 5 -150    -175 5 -100\n"
-                     "look 10   -175 5 -50     -175 5 0\n"
-                     "look 18   -175 6 10      -175 6 60\n"
-                     "look 24   -175 14 30     -120 5 40\n"
-                     "look 32   -150 40 40     -60 3 30\n"
-                     "look 40   -40 40 60      50 0 0\n"
-                     "look 50   0 120 190      0 0 0\n");
-    return rc;
+    return write_scene(&s, dir, "desert",
+                       "# desert: low along a street between blocks, then up to a wide view (50 s); the keys spaced so that\n"
+                       "# the spline neither dips under the terrain nor cuts a corner (shadowbench path desert desert)\n"
+                       "fov 60\n"
+                       "look 0    -175 5 -150    -175 5 -100\n"
+                       "look 10   -175 5 -50     -175 5 0\n"
+                       "look 18   -175 6 10      -175 6 60\n"
+                       "look 24   -175 14 30     -120 5 40\n"
+                       "look 32   -150 40 40     -60 3 30\n"
+                       "look 40   -40 40 60      50 0 0\n"
+                       "look 50   0 120 190      0 0 0\n");
 }
 
 /* the towers' ground and skyscrapers (with setbacks), shared by the day and night scenes */
@@ -160,25 +154,22 @@ static void towers_buildings(sb_glb_scene *s) {
         }
 }
 
+/* towers' camera path (towers-draco has the same); streets run along x = -104 + 26k and z = -104 + 26k */
+static const char towers_path[] =
+    "# towers: down a narrow street between skyscrapers, then up it above the roofs (25 s)\n"
+    "fov 60\n"
+    "look 0    0 4 -120    0 4 -60\n"
+    "look 5    0 4 -60     0 5 0\n"
+    "look 10   0 5 0       0 8 60\n"
+    "look 14   0 30 50     0 15 90\n"
+    "look 19   0 170 90    0 20 0\n"
+    "look 25   120 200 200 0 0 0\n";
+
 static int gen_towers(const char *dir) {
     sb_glb_scene s = {0};
     s.sun = sb_sun_dir(200, 55);
     towers_buildings(&s);
-    char p[4096];
-    snprintf(p, sizeof p, "%s/towers.glb", dir);
-    int rc = sb_glb_write(&s, p);
-    snprintf(p, sizeof p, "%s/towers.path", dir);
-    /* streets run along x = -104 + 26k and z = -104 + 26k */
-    rc |= write_text(p,
-                     "# towers: down a narrow street between skyscrapers, then up it above the roofs (25 s)\n"
-                     "fov 60\n"
-                     "look 0    0 4 -120    0 4 -60\n"
-                     "look 5    0 4 -60     0 5 0\n"
-                     "look 10   0 5 0       0 8 60\n"
-                     "look 14   0 30 50     0 15 90\n"
-                     "look 19   0 170 90    0 20 0\n"
-                     "look 25   120 200 200 0 0 0\n");
-    return rc;
+    return write_scene(&s, dir, "towers", towers_path);
 }
 
 /* towers at night: no sun, street lamps along the path's street */
@@ -193,17 +184,12 @@ static int gen_towers_night(const char *dir) {
         sb_glb_box(posts, 1.6, 0, z - 0.1, 1.8, 5.5, z + 0.1);
         s.lamps[s.nlamps++] = sb_v3_make(1.2, 6, z);
     }
-    char p[4096];
-    snprintf(p, sizeof p, "%s/towers-night.glb", dir);
-    int rc = sb_glb_write(&s, p);
-    snprintf(p, sizeof p, "%s/towers-night.path", dir);
-    rc |= write_text(p,
-                     "# towers-night: down the lamp-lit street\n"
-                     "fov 60\n"
-                     "look 0    -1.5 3 -120   0 3 -60\n"
-                     "look 8    -1.5 3 -60    0 2 0\n"
-                     "look 16   -1.5 4 0      1 2 60\n");
-    return rc;
+    return write_scene(&s, dir, "towers-night",
+                       "# towers-night: down the lamp-lit street\n"
+                       "fov 60\n"
+                       "look 0    -1.5 3 -120   0 3 -60\n"
+                       "look 8    -1.5 3 -60    0 2 0\n"
+                       "look 16   -1.5 4 0      1 2 60\n");
 }
 
 /* a street lit by 64 lamps of range 7 in two rows, a post and a crate under each: the camera looks down the
@@ -221,18 +207,13 @@ static int gen_street_lamps(const char *dir) {
         s.lamp_range[s.nlamps] = 7;
         s.lamps[s.nlamps++] = sb_v3_make(x, 4, z);
     }
-    char p[4096];
-    snprintf(p, sizeof p, "%s/street-lamps.glb", dir);
-    int rc = sb_glb_write(&s, p);
-    snprintf(p, sizeof p, "%s/street-lamps.path", dir);
-    rc |= write_text(p,
-                     "# street-lamps: down the street between the two rows of lamps\n"
-                     "fov 60\n"
-                     "near 0.5\n"
-                     "far 220\n"
-                     "look 0   0 3 -6     0 1 40\n"
-                     "look 8   0 3 30     0 1 80\n");
-    return rc;
+    return write_scene(&s, dir, "street-lamps",
+                       "# street-lamps: down the street between the two rows of lamps\n"
+                       "fov 60\n"
+                       "near 0.5\n"
+                       "far 220\n"
+                       "look 0   0 3 -6     0 1 40\n"
+                       "look 8   0 3 30     0 1 80\n");
 }
 
 static int gen_overhangs(const char *dir) {
@@ -261,20 +242,15 @@ static int gen_overhangs(const char *dir) {
             if (j + 1 < n && rnd() < 0.4) /* bridge to the north neighbour */
                 sb_glb_box(m, cx - 1.5, h * 0.4, cz + 9, cx + 1.5, h * 0.4 + 1, cz + pitch - 9);
         }
-    char p[4096];
-    snprintf(p, sizeof p, "%s/overhangs.glb", dir);
-    int rc = sb_glb_write(&s, p);
-    snprintf(p, sizeof p, "%s/overhangs.path", dir);
-    rc |= write_text(p,
-                     "# overhangs: under the slabs and bridges, between the cores, then out to a far view (25 s)\n"
-                     "fov 60\n"
-                     "look 0    -220 3 0       -100 4 0\n"
-                     "look 6    -100 3 0       -40 6 20\n"
-                     "look 12   -40 4 20       20 8 60\n"
-                     "look 15   -40 10 40      0 10 80\n"
-                     "look 19   -30 70 60      0 10 0\n"
-                     "look 25   300 120 400    0 0 0\n");
-    return rc;
+    return write_scene(&s, dir, "overhangs",
+                       "# overhangs: under the slabs and bridges, between the cores, then out to a far view (25 s)\n"
+                       "fov 60\n"
+                       "look 0    -220 3 0       -100 4 0\n"
+                       "look 6    -100 3 0       -40 6 20\n"
+                       "look 12   -40 4 20       20 8 60\n"
+                       "look 15   -40 10 40      0 10 80\n"
+                       "look 19   -30 70 60      0 10 0\n"
+                       "look 25   300 120 400    0 0 0\n");
 }
 
 /* towers with every mesh Draco-compressed (conformance set; a build with Draco only) */
@@ -285,18 +261,7 @@ static int gen_towers_draco(const char *dir) {
     towers_buildings(&s);
     for (int i = 0; i < s.n; i++) s.meshes[i].draco = true;
     sb_glb_extension(&s, "KHR_draco_mesh_compression", true);
-    char p[4096], src[4096];
-    snprintf(p, sizeof p, "%s/towers-draco.glb", dir);
-    int rc = sb_glb_write(&s, p);
-    snprintf(src, sizeof src, "%s/towers.path", dir);
-    snprintf(p, sizeof p, "%s/towers-draco.path", dir);
-    FILE *in = fopen(src, "r"), *out = fopen(p, "w");
-    char line[512];
-    while (in && out && fgets(line, sizeof line, in)) fputs(line, out);
-    rc |= !in || !out;
-    if (in) fclose(in);
-    if (out) rc |= fclose(out) != 0;
-    return rc;
+    return write_scene(&s, dir, "towers-draco", towers_path);
 }
 
 /* movers: plane-box's slab with casters that move by node animation, as a file would carry them: a 2x2x2 box
@@ -336,16 +301,11 @@ static int gen_movers(const char *dir) {
                    "\"path\":\"translation\"}}],\"samplers\":[{\"input\":%d,\"output\":%d}]},{\"name\":\"turn\","
                    "\"channels\":[{\"sampler\":0,\"target\":{\"node\":%d,\"path\":\"rotation\"}}],\"samplers\":"
                    "[{\"input\":%d,\"output\":%d}]}]", slider, ast, asv, turner, att, atv);
-    char p[4096];
-    snprintf(p, sizeof p, "%s/movers.glb", dir);
-    int rc = sb_glb_write(&s, p);
-    snprintf(p, sizeof p, "%s/movers.path", dir);
-    rc |= write_text(p,
-                     "# movers: a still camera above the slider's track for the clips' 8 s\n"
-                     "fov 60\n"
-                     "look 0   0 16 -16    0 0 -3\n"
-                     "look 8   0 16 -16    0 0 -3\n");
-    return rc;
+    return write_scene(&s, dir, "movers",
+                       "# movers: a still camera above the slider's track for the clips' 8 s\n"
+                       "fov 60\n"
+                       "look 0   0 16 -16    0 0 -3\n"
+                       "look 8   0 16 -16    0 0 -3\n");
 }
 
 int main(int argc, char **argv) {
