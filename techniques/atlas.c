@@ -26,6 +26,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "lamp.h"
 #include "render.h"
 #include "shaders.h"
 
@@ -119,9 +120,6 @@ static bool atlas_supported(const sb_run_ctx *rc, const void *desc, sb_err *why)
     return sb_gpu_memory_fits(rc->gpu, atlas_shadow_bytes(rc->tech, desc), "atlas", "the shadow atlas", why);
 }
 
-static const double face_dir[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-static const double face_up[6][3] = {{0, -1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}, {0, -1, 0}, {0, -1, 0}};
-
 static void place_lamp(lamp *l, const sb_gpu *g, int which, int kind) {
     const sb_light *src = sb_scene_point_light(g->scene, which, NULL);
     l->light = which;
@@ -138,12 +136,7 @@ static void place_lamp(lamp *l, const sb_gpu *g, int which, int kind) {
                                   sb_m4_look_at(l->pos, sb_v3_add(l->pos, l->dir), up));
         return;
     }
-    sb_m4 proj = sb_m4_perspective(SB_PI / 2, 1, l->near, l->far);
-    for (int k = 0; k < 6; k++) {
-        sb_v3 dir = sb_v3_make(face_dir[k][0], face_dir[k][1], face_dir[k][2]);
-        sb_v3 up = sb_v3_make(face_up[k][0], face_up[k][1], face_up[k][2]);
-        l->face_vp[k] = sb_m4_mul(proj, sb_m4_look_at(l->pos, sb_v3_add(l->pos, dir), up));
-    }
+    sb_lamp_cube_faces(l->pos, l->near, l->far, l->face_vp);
 }
 
 /* A depth texture of the atlas's size and its framebuffer; false when incomplete. */

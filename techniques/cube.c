@@ -20,19 +20,11 @@ typedef struct {
     double planes[6][6][4];     /* each face's culling frustum */
 } cube_state;
 
-static const double face_dir[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-static const double face_up[6][3] = {{0, -1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}, {0, -1, 0}, {0, -1, 0}};
-
 /* The six faces' matrices and culling planes around the lamp. */
 static void face_frusta(sb_lamp_state *ls) {
     cube_state *s = (cube_state *)ls;
-    sb_m4 proj = sb_m4_perspective(SB_PI / 2, 1, ls->near, ls->far);
-    for (int f = 0; f < 6; f++) {
-        sb_v3 dir = sb_v3_make(face_dir[f][0], face_dir[f][1], face_dir[f][2]);
-        sb_v3 up = sb_v3_make(face_up[f][0], face_up[f][1], face_up[f][2]);
-        s->face_vp[f] = sb_m4_mul(proj, sb_m4_look_at(ls->lamp, sb_v3_add(ls->lamp, dir), up));
-        sb_frustum_planes(s->face_vp[f], s->planes[f]);
-    }
+    sb_lamp_cube_faces(ls->lamp, ls->near, ls->far, s->face_vp);
+    for (int f = 0; f < 6; f++) sb_frustum_planes(s->face_vp[f], s->planes[f]);
 }
 
 /* The depth pass's program, variant a (1: with the alpha test): per face,

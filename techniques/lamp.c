@@ -47,6 +47,16 @@ static bool make_targets(sb_lamp_state *s, const char *name, sb_err *err) {
     return true;
 }
 
+void sb_lamp_cube_faces(sb_v3 pos, double near, double far, sb_m4 vp[6]) {
+    static const double dir[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    static const double up[6][3] = {{0, -1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}, {0, -1, 0}, {0, -1, 0}};
+    sb_m4 proj = sb_m4_perspective(SB_PI / 2, 1, near, far);
+    for (int f = 0; f < 6; f++) {
+        sb_v3 d = sb_v3_make(dir[f][0], dir[f][1], dir[f][2]), u = sb_v3_make(up[f][0], up[f][1], up[f][2]);
+        vp[f] = sb_m4_mul(proj, sb_m4_look_at(pos, sb_v3_add(pos, d), u));
+    }
+}
+
 sb_lamp_state *sb_lamp_light(sb_lamp_state *s, int i) {
     return i ? (sb_lamp_state *)(s->others + (size_t)(i - 1) * s->size) : s;
 }
@@ -59,7 +69,6 @@ static bool place(sb_lamp_state *l, const sb_run_ctx *rc, int which, sb_err *err
     l->lamp = lamp->position;
     double diag = sb_v3_len(sb_v3_sub(g->scene->bounds.hi, g->scene->bounds.lo));
     l->far = lamp->range > 0 ? lamp->range : 2 * diag;
-    l->range = lamp->range > 0 ? lamp->range : 0;   /* it lights nothing beyond (shading and evaluation alike) */
     l->near = fmax(l->far * l->kind->near_share, l->kind->near_share * 1e-2);
     if (l->kind->setup) l->kind->setup(l);
     return make_targets(l, rc->tech->name, err);
@@ -132,9 +141,7 @@ static int render_maps(sb_lamp_state *l, sb_frame *f) {
 
 /* One light's camera pass: the first clears and lays the ambient, each further one adds its light. */
 static void shade(sb_lamp_state *l, sb_frame *f, bool first) {
-    sb_frame_shade_point(f, l->lamp);
-    f->shade_range = l->range;
-    sb_frame_shade_spot(f, l->source);
+    sb_frame_shade_lamp(f, l->source);
     glUseProgram(l->fp.prog);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(l->kind->target, l->tex);

@@ -66,10 +66,12 @@ struct sb_lamp_state {
     int count;
     size_t size;
     char *others;
-    double range;               /* the lamp's range: shaded and scored only within it (0: none) */
-    const sb_light *source;     /* the scene's light (a spot's cone: shaded and scored only inside it) */
+    const sb_light *source;     /* the scene's light: shaded and scored only within its range and a spot's cone */
 };
 
+/* The six faces of a cube around pos, in GL's cube-map order and orientation (+X -X +Y -Y +Z -Z): each face's
+ * view-projection, 90 degrees from near to far (cube.c's maps, the atlas's tiles). */
+void sb_lamp_cube_faces(sb_v3 pos, double near, double far, sb_m4 vp[6]);
 /* The i-th light's state of a technique's (0: itself). */
 sb_lamp_state *sb_lamp_light(sb_lamp_state *s, int i);
 

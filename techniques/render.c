@@ -539,19 +539,28 @@ void sb_frame_shade_point(sb_frame *f, sb_v3 pos) {
     f->shade_light[3] = 1;
 }
 
-void sb_frame_shade_light_of(sb_frame *f, int idx) {
-    const sb_gpu *g = f->gpu;
-    const sb_light *lamp = idx == SB_LIGHT_SUN ? NULL : sb_scene_point_light(g->scene, idx, NULL);
-    if (lamp) sb_frame_shade_point(f, lamp->position);
-    else f->shade_light[0] = g->sun.x, f->shade_light[1] = g->sun.y, f->shade_light[2] = g->sun.z, f->shade_light[3] = 0;
-    f->shade_range = lamp && lamp->range > 0 ? lamp->range : 0;
-    sb_frame_shade_spot(f, lamp);
-}
-
-void sb_frame_shade_spot(sb_frame *f, const sb_light *lamp) {
+/* The frame's spot cone from a lamp (none for a point light or NULL, the sun). */
+static void shade_spot(sb_frame *f, const sb_light *lamp) {
     bool spot = lamp && lamp->type == SB_LIGHT_SPOT && lamp->cone > 0;
     f->shade_spot[0] = spot ? lamp->direction.x : 0, f->shade_spot[1] = spot ? lamp->direction.y : 0;
     f->shade_spot[2] = spot ? lamp->direction.z : 0, f->shade_spot[3] = spot ? 1 - cos(lamp->cone) : 0;
+}
+
+void sb_frame_shade_lamp(sb_frame *f, const sb_light *lamp) {
+    sb_frame_shade_point(f, lamp->position);
+    f->shade_range = lamp->range > 0 ? lamp->range : 0;
+    shade_spot(f, lamp);
+}
+
+void sb_frame_shade_light_of(sb_frame *f, int idx) {
+    const sb_gpu *g = f->gpu;
+    if (idx != SB_LIGHT_SUN) {
+        sb_frame_shade_lamp(f, sb_scene_point_light(g->scene, idx, NULL));
+        return;
+    }
+    f->shade_light[0] = g->sun.x, f->shade_light[1] = g->sun.y, f->shade_light[2] = g->sun.z, f->shade_light[3] = 0;
+    f->shade_range = 0;
+    shade_spot(f, NULL);
 }
 
 void sb_stage_begin(sb_frame *f, sb_stage s) {

@@ -213,8 +213,8 @@ static inline void sb_frame_light_range(const sb_frame *f, int count, int *first
     *first = f->eval_light ? f->eval_light - 1 : 0;
     *end = f->eval_light ? f->eval_light : count;
 }
-/* The frame's spot cone from a lamp (none for a point light, NULL, or the sun). */
-void sb_frame_shade_spot(sb_frame *f, const sb_light *lamp);
+/* Makes the frame lit by a lamp: sb_frame_shade_point at its place, its range and a spot's cone too. */
+void sb_frame_shade_lamp(sb_frame *f, const sb_light *lamp);
 /* Makes the frame lit by one light (SB_LIGHT_SUN or a lamp's index), its range and a spot's cone too. */
 void sb_frame_shade_light_of(sb_frame *f, int idx);
 /* Makes the frame lit by a point light at pos: call it before the shadow
