@@ -75,12 +75,12 @@ bool sb_session_attach(sb_session *s, const sb_run_opts *o, sb_scene *scene, sb_
  * and written when the scene closes, so reruns into the same OUT and
  * --resume cast no ray already cast. */
 void sb_session_keep_reference(sb_session *s, const char *results_dir);
-/* Frees the scene, path and what was made for them but keeps the context (next scene of a batch). */
 /* The shadow storage a run of rs holds on this session's scene: its parameters' (sb_spec_shadow_bytes), a map set a
  * lamp where it keeps one each (--lights). */
 double sb_session_shadow_bytes(const sb_session *s, const sb_run_spec *rs);
 /* A batch's runs of another --lights (NULL: none): read against the open scene; false with the reason. */
 bool sb_session_set_lights(sb_session *s, const char *spec, sb_err *err);
+/* Frees the scene, path and what was made for them but keeps the context (next scene of a batch). */
 void sb_session_close_scene(sb_session *s);
 void sb_session_close(sb_session *s);
 /* Writes DIR/meta ("key: value" lines): the command, shadowbench's version and

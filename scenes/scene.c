@@ -908,7 +908,6 @@ void sb_scene_repose_prim(sb_scene *s, uint32_t first, uint32_t count, const dou
     }
 }
 
-
 void sb_scene_info(const sb_scene *s, FILE *out) {
     const sb_scene_features *f = &s->features;
     uint32_t closed = 0;

@@ -139,11 +139,10 @@ static void raycast_frame(void *state, sb_frame *f) {
     sb_stage_begin(f, SB_STAGE_FINAL);
     for (int i = first; i < end; i++) {   /* the first clears and lays the ambient, each further one adds its light */
         shade(s, f, i);
-        glBindTexture(GL_TEXTURE_2D, s->tex);
-        if (i > first) glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, w, h, GL_RED, GL_UNSIGNED_BYTE, s->vis + (size_t)(i - first) * np);
         glUseProgram(s->fp.prog);
         glActiveTexture(GL_TEXTURE0);
         glBindTexture(GL_TEXTURE_2D, s->tex);
+        if (i > first) glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, w, h, GL_RED, GL_UNSIGNED_BYTE, s->vis + (size_t)(i - first) * np);
         glUniform1i(s->u_rays, 0);
         if (i == first) sb_final_pass(f, &s->fp, true);
         else sb_final_pass_add(f, &s->fp);
