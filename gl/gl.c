@@ -35,6 +35,13 @@ static GLuint compile(GLenum type, const char *label, const char *defines, bool 
         sb_fail(err, "%s: %d shader parts, at most 14", label, n);
         return 0;
     }
+    /* the scene's vertices (a vec3 at location 0) reach a vertex stage only through sb_world (common.glsl): a
+       stage that reads them without it draws shared geometry at its first placement (tiled levels) */
+    for (int i = 0; type == GL_VERTEX_SHADER && i < n; i++)
+        if (strstr(parts[i], "layout(location = 0) in vec3") && !strstr(parts[i], "sb_world(")) {
+            sb_fail(err, "%s: its vertex shader reads the scene's vertices without sb_world (common.glsl)", label);
+            return 0;
+        }
     src[k++] = "#version 430 core\n";
     src[k++] = defines ? defines : "";
     src[k++] = type == GL_VERTEX_SHADER ? (to_gs ? "#define SB_VERTEX\n#define SB_TO_GS\n" : "#define SB_VERTEX\n")

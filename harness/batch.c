@@ -232,13 +232,22 @@ static bool check_lights(parse *ps) {
     sb_batch *b = ps->b;
     for (int l = 0; l < ps->nlines; l++) {
         sb_run_opts ro = line_opts(&b->opts, &ps->lines[l]);
-        for (int i = 0; ro.lights && i < b->nscenes; i++) {
+        for (int i = 0; i < b->nscenes; i++) {
             sb_light_set set;
             sb_err e;
             const sb_scene *sc = &b->scenes[i].scene;
-            if (line_applies(&ps->lines[l], b->scenes[i].name) &&
-                !sb_scene_light_set(sc, ro.lights, sc->has_sun || ro.sun_override, &set, &e))
+            if (!line_applies(&ps->lines[l], b->scenes[i].name)) continue;
+            if (ro.lights && !sb_scene_light_set(sc, ro.lights, sc->has_sun || ro.sun_override, &set, &e))
                 return sb_fail(ps->err, "%s:%d: scene %s: %s", ps->file, ps->lines[l].line, b->scenes[i].name, e.msg);
+            for (int k = 0; k < ps->lines[l].nspecs; k++) {   /* a spec's light=K: a lamp the scene has, not beside --lights */
+                sb_run_spec *rs = NULL;
+                int nr = 0;
+                bool ok = sb_spec_expand(ps->lines[l].specs[k], NULL, &rs, &nr, &e);
+                for (int r = 0; ok && r < nr; r++) ok = sb_spec_lights_check(sc, &rs[r], ro.lights, &e);
+                free(rs);
+                if (!ok)
+                    return sb_fail(ps->err, "%s:%d: scene %s: %s", ps->file, ps->lines[l].line, b->scenes[i].name, e.msg);
+            }
         }
     }
     return true;
@@ -258,16 +267,33 @@ static void expand_matrix(parse *ps) {
                 b->runs = sb_xrealloc(b->runs, (size_t)(b->nruns + nr) * sizeof *b->runs);
                 for (int r = 0; r < nr; r++) {
                     sb_batch_run *br = &b->runs[b->nruns];
-                    br->index = b->nruns++;
+                    br->index = b->nruns;
                     br->scene = i;
                     br->spec = rs[r];
                     sb_run_opts ro = line_opts(&b->opts, &ps->lines[l]);
                     br->sun_size = ro.sun_size, br->lamp_radius = ro.lamp_radius, br->ref_samples = ro.ref_samples;
+                    if (ro.lights) {   /* checked against the scene: its one name (the same set, the same run id) */
+                        sb_light_set set;
+                        sb_err e;
+                        if (sb_scene_light_set(&sc->scene, ro.lights, sc->scene.has_sun || ro.sun_override, &set, &e))
+                            ro.lights = sb_lights_name(&sc->scene, &set);
+                    }
                     br->lights = ro.lights;
                     sb_run_spec as_run = rs[r];
                     sb_spec_light_size(&as_run, ro.sun_size);
                     sb_run_id(sc->scene.content_hash, sc->path.content_hash, &ro, &as_run, br->run_id);
                     br->cost = run_cost(b, sc, &rs[r]);
+                    int twin = -1;   /* the same run again (a spec repeated, a grid naming a value twice): once */
+                    for (int e = 0; e < b->nruns && twin < 0; e++)
+                        if (!strcmp(b->runs[e].run_id, br->run_id)) twin = e;
+                    if (twin < 0) {
+                        b->nruns++;
+                        continue;
+                    }
+                    char params[1024];
+                    sb_params_canonical(&rs[r].params, params, sizeof params);
+                    sb_log("note: %s:%d: %s:%s on %s is run %d of the matrix already (run_id %s): run once", ps->file,
+                           ps->lines[l].line, rs[r].tech->name, params, sc->name, twin, br->run_id);
                 }
                 free(rs);
             }
@@ -367,11 +393,12 @@ void sb_batch_shard(const sb_batch *b, int shard, int nshards, bool *selected) {
 /* ---- running a batch ---- */
 
 static bool write_meta(const sb_batch_cmd *cmd, const char *dir, const sb_session *s, const sb_batch *b,
-                       int selected, sb_err *err) {
-    char extra[4200], seed[32] = "";
+                       int selected, const char *identity, sb_err *err) {
+    char extra[12288], seed[32] = "";
     if (b->opts.order == SB_ORDER_SHUFFLE) snprintf(seed, sizeof seed, "%llu", (unsigned long long)b->opts.seed);
-    snprintf(extra, sizeof extra, "batch: %s\nruns: %d of %d%s%s\norder: %s\nseed: %s\n", b->file, selected, b->nruns,
-             cmd->shard ? ", shard " : "", cmd->shard ? cmd->shard : "", sb_order_name(b->opts.order), seed);
+    snprintf(extra, sizeof extra, "batch: %s\nruns: %d of %d%s%s\norder: %s\nseed: %s\n%s", b->file, selected, b->nruns,
+             cmd->shard ? ", shard " : "", cmd->shard ? cmd->shard : "", sb_order_name(b->opts.order), seed,
+             identity);
     return sb_session_write_meta(s, dir, cmd->command_line, cmd->version, cmd->commit, extra, err);
 }
 
@@ -386,6 +413,37 @@ static void print_dry_run(const sb_batch *b, const bool *selected, int nsel, boo
                b->scenes[r->scene].path_label, r->spec.tech->name, params, r->cost);
     }
     fprintf(stderr, "%d run(s)%s of %d in the matrix of %s\n", nsel, sharded ? " in this shard" : "", b->nruns, b->file);
+}
+
+bool sb_resume_check(const char *dir, const char *identity, const char *const *ids, int n, sb_err *err) {
+    char path[4400];
+    snprintf(path, sizeof path, "%s/meta", dir);
+    char *meta = sb_read_file(path, NULL, NULL), what[2400], command[1200] = "";
+    for (const char *p = meta; p && *p; p = strchr(p, '\n') ? strchr(p, '\n') + 1 : NULL)
+        if (!strncmp(p, "command: ", 9)) snprintf(command, sizeof command, " (%.*s)", (int)strcspn(p + 9, "\n"), p + 9);
+    bool differs = meta && sb_set_identity_differs(meta, identity, what, sizeof what);
+    free(meta);
+    if (differs)
+        return sb_fail(err, "--resume %s: %s: resume a set with the command that made it%s, or leave --resume out "
+                            "for a set of its own", dir, what, command);
+    /* a set from before its meta said what made it: its runs must all be this command's */
+    snprintf(path, sizeof path, "%s/summary.csv", dir);
+    sb_table old;
+    sb_err e;
+    if (access(path, F_OK) != 0 || !sb_table_load(&old, path, &e)) return true;   /* no run recorded yet */
+    int foreign = 0, first = -1;
+    for (int r = 0; r < old.nrows; r++) {
+        bool mine = false;
+        for (int i = 0; i < n && !mine; i++) mine = ids[i] && !strcmp(ids[i], sb_table_get(&old, r, "run_id"));
+        if (!mine && !foreign++) first = r;
+    }
+    bool ok = !foreign ||
+              sb_fail(err, "--resume %s: its summary.csv holds %d run(s) this command does not make (run_id %s: %s %s): "
+                           "resume a set with the command that made it%s, or leave --resume out for a set of its own",
+                      dir, foreign, sb_table_get(&old, first, "run_id"), sb_table_get(&old, first, "technique"),
+                      sb_table_get(&old, first, "params"), command);
+    sb_table_free(&old);
+    return ok;
 }
 
 /* Resume: keeps the runs of the old summary that are complete (a summary row
@@ -412,9 +470,15 @@ int sb_summary_keep_complete(sb_summary *sum, const char *dir, const char *const
     return kept;
 }
 
-static void keep_complete_runs(const sb_batch *b, const char *dir, const bool *selected, bool *done, sb_summary *sum) {
+/* The selected runs' ids (NULL for the others), for the resume's check and its keep. */
+static const char **selected_ids(const sb_batch *b, const bool *selected) {
     const char **ids = sb_xcalloc((size_t)(b->nruns ? b->nruns : 1), sizeof *ids);
     for (int i = 0; i < b->nruns; i++) ids[i] = selected[i] ? b->runs[i].run_id : NULL;
+    return ids;
+}
+
+static void keep_complete_runs(const sb_batch *b, const char *dir, const bool *selected, bool *done, sb_summary *sum) {
+    const char **ids = selected_ids(b, selected);
     sb_summary_keep_complete(sum, dir, ids, b->nruns, done);
     free(ids);
 }
@@ -578,6 +642,23 @@ int sb_batch_main(const sb_batch_cmd *cmd) {
         print_dry_run(&b, selected, nsel, cmd->shard != NULL);
         goto out;
     }
+    /* what the set is: the command's options and words, and the batch file's bytes (an edited file: another set) */
+    char identity[8192];
+    size_t flen = 0;
+    char *ftext = sb_read_file(cmd->file, &flen, NULL);
+    snprintf(identity, sizeof identity, "%sset: batch-file %016llx\n", cmd->identity ? cmd->identity : "",
+             (unsigned long long)sb_fnv1a(SB_FNV_SEED, ftext ? ftext : "", flen));
+    free(ftext);
+    if (cmd->resume) {
+        const char **ids = selected_ids(&b, selected);
+        bool ok = sb_resume_check(cmd->resume, identity, ids, b.nruns, &err);
+        free(ids);
+        if (!ok) {
+            fprintf(stderr, "shadowbench: %s\n", err.msg);
+            rc = SB_EXIT_BAD_INPUT;
+            goto out;
+        }
+    }
     char dir[4096], sum_path[4200];
     if (!results_dir(cmd, &b, dir, sizeof dir, &err)) {
         fprintf(stderr, "shadowbench: %s\n", err.msg);
@@ -594,7 +675,7 @@ int sb_batch_main(const sb_batch_cmd *cmd) {
         rc = SB_EXIT_FAILED;
         goto out;
     }
-    if (!write_meta(cmd, dir, &s, &b, nsel, &err) || !sb_columns_write(dir, &err))
+    if (!write_meta(cmd, dir, &s, &b, nsel, identity, &err) || !sb_columns_write(dir, &err))
         fprintf(stderr, "shadowbench: %s\n", err.msg);
     snprintf(sum_path, sizeof sum_path, "%s/summary.csv", dir);
     sb_summary sum;

@@ -67,6 +67,10 @@ void sb_batch_shard(const sb_batch *b, int shard, int nshards, bool *selected);
 /* Resume: the rows of sum's file (DIR/summary.csv) for runs ids[i] (NULL:
  * not wanted) that are complete (a row and, unless skipped, the committed
  * per-frame CSV) are kept in sum as they were and marked done. Returns how many. */
+/* Whether DIR may be resumed by this command: its meta's "set: " lines against `identity` (the first that differs
+ * is refused, naming the option and both values), and every run of its summary among ids[0..n) (NULL entries
+ * skipped): false with one line to say, before anything is written. */
+bool sb_resume_check(const char *dir, const char *identity, const char *const *ids, int n, sb_err *err);
 int sb_summary_keep_complete(sb_summary *sum, const char *dir, const char *const *ids, int n, bool *done);
 
 /* `shadowbench batch`: what the command line gave. */
@@ -77,6 +81,7 @@ typedef struct sb_batch_cmd {
     const char *out, *resume, *shard;   /* --out, --resume DIR, --shard I/N (NULL: not given) */
     bool dry_run;
     const char *command_line, *version, *commit;   /* for the meta file */
+    const char *identity;               /* the command's "set: " lines (sb_cli_set_identity): --resume's check */
 } sb_batch_cmd;
 
 /* Loads, shards and runs the batch (or prints it with dry_run): every scene

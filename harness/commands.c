@@ -326,6 +326,38 @@ static int run_into(const sb_cli *c, sb_session *s, const char *dir, const sb_ru
     return rc;
 }
 
+/* The runs against the open scene, before anything is written: a spec's light=K (a lamp the scene has, not beside
+ * --lights), a run given twice (dropped with a note: a run_id names one row), and --resume of another command
+ * (refused). */
+static bool check_runs(const sb_cli *c, sb_session *s, sb_run_spec *runs, int *nruns, const char *identity,
+                       sb_err *err) {
+    for (int i = 0; i < *nruns; i++)
+        if (!sb_spec_lights_check(&s->scene, &runs[i], s->opts.lights, err)) return false;
+    char (*idbuf)[17] = sb_xmalloc(sizeof *idbuf * (size_t)(*nruns ? *nruns : 1));
+    const char **ids = sb_xmalloc(sizeof *ids * (size_t)(*nruns ? *nruns : 1));
+    int n = 0;
+    for (int i = 0; i < *nruns; i++) {
+        sb_session_run_id(s, &runs[i], idbuf[n]);
+        int twin = -1;
+        for (int k = 0; k < n && twin < 0; k++)
+            if (!strcmp(idbuf[k], idbuf[n])) twin = k;
+        if (twin >= 0) {
+            char params[1024];
+            sb_params_canonical(&runs[i].params, params, sizeof params);
+            sb_log("note: %s:%s is given twice (run_id %s): run once", runs[i].tech->name, params, idbuf[n]);
+            continue;
+        }
+        runs[n] = runs[i];
+        ids[n] = idbuf[n];
+        n++;
+    }
+    *nruns = n;
+    bool ok = !c->o.resume || sb_resume_check(c->o.resume, identity, ids, n, err);
+    free(ids);
+    free(idbuf);
+    return ok;
+}
+
 static int cmd_run(const sb_cli *c) {
     if (c->npos < 3) return bad_usage(c);
     sb_err err;
@@ -346,14 +378,20 @@ static int cmd_run(const sb_cli *c) {
         sb_session_close(&s);
         return rc;
     }
-    char dir[4096], cmdline[2048];
+    char dir[4096], cmdline[2048], identity[8192];
+    sb_cli_opts as_read = c->o;   /* --lights by the set's one name, read against the scene ("2,0" is "0,2") */
+    as_read.run.lights = s.opts.lights;
+    sb_cli_set_identity(&as_read, c->cmd, c->pos, c->npos, identity, sizeof identity);
     int rc;
-    if (!results_folder(c, dir, sizeof dir, &err)) {
+    if (!check_runs(c, &s, runs, &nruns, identity, &err)) {
+        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        rc = SB_EXIT_BAD_INPUT;   /* nothing written */
+    } else if (!results_folder(c, dir, sizeof dir, &err)) {
         fprintf(stderr, "shadowbench: %s\n", err.msg);
         rc = SB_EXIT_WRITE;   /* checked writable before: a write that failed since */
     } else {
         command_line(c, cmdline, sizeof cmdline);
-        if (!sb_session_write_meta(&s, dir, cmdline, c->version, c->commit, NULL, &err))
+        if (!sb_session_write_meta(&s, dir, cmdline, c->version, c->commit, identity, &err))
             fprintf(stderr, "shadowbench: %s\n", err.msg);
         sb_session_keep_reference(&s, dir);
         log_session(&s);
@@ -399,7 +437,9 @@ static int cmd_batch(const sb_cli *c) {
     sb_run_opts_defaults(&base);
     base.progress = c->o.run.progress;
     base.allow_external_uris = c->o.run.allow_external_uris;
-    sb_batch_cmd cmd = {.file = c->pos[0], .base = &base, .cli = &c->o,
+    char identity[8192];
+    sb_cli_set_identity(&c->o, c->cmd, NULL, 0, identity, sizeof identity);
+    sb_batch_cmd cmd = {.file = c->pos[0], .base = &base, .cli = &c->o, .identity = identity,
                         .out = c->o.out, .resume = c->o.resume, .shard = c->o.shard, .dry_run = c->o.dry_run,
                         .command_line = cmdline, .version = c->version, .commit = c->commit};
     return sb_batch_main(&cmd);

@@ -56,72 +56,72 @@ static bool check_anim(const char *v, const sb_cli_opts *o, sb_err *err) {
 
 const sb_option sb_options[] = {
     /* the context and timing */
-    {.name = "--backend", .kind = SB_OPT_CHOICE, .arg = "egl|osmesa", .def = "egl", .with = SB_CMDF_CONTEXT,
+    {.name = "--backend", .of_set = true, .kind = SB_OPT_CHOICE, .arg = "egl|osmesa", .def = "egl", .with = SB_CMDF_CONTEXT,
      .commands = SB_IN(SB_CMD_INFO), RUN_OPT, .identity = SB_ID_DIM, .id_slot = 3, .field = RUN(backend),
      .help = "GL context", .check = backend_built},
-    {.name = "--timing", .kind = SB_OPT_CHOICE, .arg = "auto|queries|sync", .def = "auto", .with = SB_CMDF_CONTEXT,
+    {.name = "--timing", .of_set = true, .kind = SB_OPT_CHOICE, .arg = "auto|queries|sync", .def = "auto", .with = SB_CMDF_CONTEXT,
      RUN_OPT, .field = RUN(timing), .help = "stage timing (auto: sync on software rasterizers)"},
-    {.name = "--submit", .kind = SB_OPT_CHOICE, .arg = "direct|indirect", .def = "direct", .with = SB_CMDF_MEASURE,
+    {.name = "--submit", .of_set = true, .kind = SB_OPT_CHOICE, .arg = "direct|indirect", .def = "direct", .with = SB_CMDF_MEASURE,
      RUN_OPT, .identity = SB_ID_NAMED, .field = RUN(submit),
      .help = "one GL call per draw, or one glMultiDrawElementsIndirect per pass and layer (draw_calls counts draws, "
              "api_calls the calls)"},
-    {.name = "--ring", .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 16, .def = "3", .with = SB_CMDF_CONTEXT, RUN_OPT,
+    {.name = "--ring", .of_set = true, .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 16, .def = "3", .with = SB_CMDF_CONTEXT, RUN_OPT,
      .field = RUN(ring), .help = "timer-query ring depth in frames"},
-    {.name = "--clocks", .kind = SB_OPT_CHOICE, .arg = "auto|lock|free", .def = "auto", .with = SB_CMDF_CONTEXT, RUN_OPT,
+    {.name = "--clocks", .of_set = true, .kind = SB_OPT_CHOICE, .arg = "auto|lock|free", .def = "auto", .with = SB_CMDF_CONTEXT, RUN_OPT,
      .field = RUN(clocks), .help = "lock the GPU clock for the invocation (NVML; auto: when permitted)"},
     {.name = "--gpu-memory", .kind = SB_OPT_BYTES, .arg = "SIZE", .min = 1, .max = 1e15,
      .def_help = "what the GL reports free, or on a software rasterizer the system memory available",
      .with = SB_CMDF_CONTEXT, RUN_OPT, .field = RUN(gpu_memory), .help = "GPU memory a run may allocate, e.g. 8G or 512M"},
     /* what is rendered */
-    {.name = "--frames", .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 1000000, .def = "60",
+    {.name = "--frames", .of_set = true, .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 1000000, .def = "60",
      .cmd_defs = OWN_DEFAULTS(OWN(SB_CMD_TUNE, "33"), OWN(SB_CMD_STRESS, "3")),
      .with = SB_CMDF_CONTEXT, .commands = SB_IN(SB_CMD_PATH), RUN_OPT, .identity = SB_ID_DIM, .id_slot = 0,
      .field = RUN(frames), .help = "frames sampled along the path"},
-    {.name = "--warmup", .kind = SB_OPT_INT, .arg = "auto|N", .max = 10000, .can_auto = true, .def = "auto",
+    {.name = "--warmup", .of_set = true, .kind = SB_OPT_INT, .arg = "auto|N", .max = 10000, .can_auto = true, .def = "auto",
      .def_help = "auto: until the GPU's times and clocks settle",
      .cmd_defs = OWN_DEFAULTS(OWN(SB_CMD_TUNE, "1"), OWN(SB_CMD_STRESS, "0")),
      .with = SB_CMDF_MEASURE, RUN_OPT, .field = RUN(warmup), .help = "warm-up frames, excluded"},
-    {.name = "--size", .kind = SB_OPT_SIZE, .arg = "WxH", .min = 1, .max = 16384, .def = "1280x720",
+    {.name = "--size", .of_set = true, .kind = SB_OPT_SIZE, .arg = "WxH", .min = 1, .max = 16384, .def = "1280x720",
      .cmd_defs = OWN_DEFAULTS(OWN(SB_CMD_STRESS, "320x180")), .with = SB_CMDF_CONTEXT,
      .commands = SB_IN(SB_CMD_PATH), RUN_OPT, .identity = SB_ID_DIM, .id_slot = 1, .field = RUN(width),
      .field2 = RUN(height), .help = "render size"},
-    {.name = "--sun", .kind = SB_OPT_ANGLES, .arg = "AZ,EL", .min = -90, .max = 90,
+    {.name = "--sun", .of_set = true, .kind = SB_OPT_ANGLES, .arg = "AZ,EL", .min = -90, .max = 90,
      .def_help = "the scene's first directional light, else 135,40", .with = SB_CMDF_MEASURE, RUN_OPT,
      .identity = SB_ID_GIVEN, .field = RUN(sun_az), .field2 = RUN(sun_el), .given_field = RUN(sun_override),
      .help = "sun azimuth and elevation in degrees"},
-    {.name = "--error-every", .kind = SB_OPT_INT, .arg = "K", .max = 1000000, .def = "10",
+    {.name = "--error-every", .of_set = true, .kind = SB_OPT_INT, .arg = "K", .max = 1000000, .def = "10",
      .cmd_defs = OWN_DEFAULTS(OWN(SB_CMD_TUNE, "1")), .with = SB_CMDF_MEASURE, RUN_OPT,
      .field = RUN(error_every),
      .help = "shadow error against the exact ray-cast reference on every K-th frame (0 off), untimed"},
-    {.name = "--sun-size", .kind = SB_OPT_NUM, .arg = "DEG", .max = 10, .def = "0", .def_help = "0, a sun of no size",
+    {.name = "--sun-size", .of_set = true, .kind = SB_OPT_NUM, .arg = "DEG", .max = 10, .def = "0", .def_help = "0, a sun of no size",
      .with = SB_CMDF_MEASURE, RUN_OPT, .line_option = true, .identity = SB_ID_LIGHT, .field = RUN(sun_size),
      .help = "the sun's angular diameter: the reference casts rays over its disc (soft shadows; the real sun: 0.53)"},
-    {.name = "--lamp-radius", .kind = SB_OPT_NUM, .arg = "M", .max = INFINITY, .def = "0", .def_help = "0, no size",
+    {.name = "--lamp-radius", .of_set = true, .kind = SB_OPT_NUM, .arg = "M", .max = INFINITY, .def = "0", .def_help = "0, no size",
      .with = SB_CMDF_MEASURE, RUN_OPT, .line_option = true, .identity = SB_ID_LIGHT, .field = RUN(lamp_radius),
      .help = "point and spot lights' radius in scene units: the reference casts rays over it"},
-    {.name = "--lights", .kind = SB_OPT_TEXT, .arg = "sun|lamps|all|LIST", .def = NULL,
+    {.name = "--lights", .of_set = true, .kind = SB_OPT_TEXT, .arg = "sun|lamps|all|LIST", .def = NULL,
      .def_help = "the light the technique shadows alone: the sun; light= of cube and dpsm", .with = SB_CMDF_MEASURE,
      RUN_OPT, .line_option = true, .identity = SB_ID_TEXT, .field = RUN(lights),
      .help = "the lights a run shadows and scores, each with its own shadows: every point and spot light (lamps), "
              "the sun and every lamp (all), or a list such as sun,0,3 (lamps by number in file order)"},
-    {.name = "--ref-samples", .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 4096, .def = "64",
+    {.name = "--ref-samples", .of_set = true, .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 4096, .def = "64",
      .with = SB_CMDF_MEASURE, RUN_OPT, .line_option = true, .identity = SB_ID_LIGHT, .field = RUN(ref_samples),
      .help = "rays over a sized light at a penumbra point (centre and rim decide the rest)"},
-    {.name = "--flicker-dt", .kind = SB_OPT_NUM, .arg = "S", .max = 10, .def = "0.0166667",
+    {.name = "--flicker-dt", .of_set = true, .kind = SB_OPT_NUM, .arg = "S", .max = 10, .def = "0.0166667",
      .def_help = "1/60 s, one display frame at 60 Hz",
      .cmd_defs = OWN_DEFAULTS({.cmd = SB_CMD_TUNE, .def = "0", .help = "0; 1/60 s when --max-flicker bounds the flicker"}),
      .with = SB_CMDF_MEASURE, RUN_OPT, .field = RUN(flicker_dt),
      .help = "path time from an evaluated frame to its twin, whose shadow maps look the frame's points up again "
              "(flicker_rate; 0 off)"},
-    {.name = "--images", .kind = SB_OPT_INT, .arg = "K", .max = 1000000, .def = "0", .with = SB_CMDF_MEASURE, RUN_OPT,
+    {.name = "--images", .of_set = true, .kind = SB_OPT_INT, .arg = "K", .max = 1000000, .def = "0", .with = SB_CMDF_MEASURE, RUN_OPT,
      .field = RUN(images), .help = "images of every K-th frame: colour, visibility, reference, error, cascades (0 none)",
      .check = images_built},
-    {.name = "--repeat", .kind = SB_OPT_INT, .arg = "K", .min = 1, .max = 1000, .def = "1", .with = SB_CMDF_MEASURE,
+    {.name = "--repeat", .of_set = true, .kind = SB_OPT_INT, .arg = "K", .min = 1, .max = 1000, .def = "1", .with = SB_CMDF_MEASURE,
      RUN_OPT, .field = RUN(repeat), .help = "run the path K times"},
-    {.name = "--target-ci", .kind = SB_OPT_NUM, .arg = "PCT", .max = 100, .open_min = true, .def_help = "off",
+    {.name = "--target-ci", .of_set = true, .kind = SB_OPT_NUM, .arg = "PCT", .max = 100, .open_min = true, .def_help = "off",
      .with = SB_CMDF_MEASURE, RUN_OPT, .field = RUN(target_ci),
      .help = "repeat the path until the 95% CI of mean gpu_ms is within PCT% of it"},
-    {.name = "--max-repeat", .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 1000, .def = "10",
+    {.name = "--max-repeat", .of_set = true, .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 1000, .def = "10",
      .with = SB_CMDF_MEASURE, RUN_OPT, .field = RUN(max_repeat), .help = "at most N repetitions for --target-ci"},
     {.name = "--order", .kind = SB_OPT_CHOICE, .arg = "matrix|interleave|shuffle", .def = "matrix",
      .cmd_defs = OWN_DEFAULTS(OWN(SB_CMD_TUNE, "shuffle")), .with = SB_CMDF_MATRIX, RUN_OPT,
@@ -143,16 +143,16 @@ const sb_option sb_options[] = {
     /* how scene files are read */
     {.name = "--allow-external-uris", .kind = SB_OPT_FLAG, .with = SB_CMDF_SCENES, RUN_OPT,
      .field = RUN(allow_external_uris), .help = "let glTF buffers and images be read from outside the scene's folder"},
-    {.name = "--blend-casters", .kind = SB_OPT_CHOICE, .arg = "mask|opaque|none", .def = "mask", .with = SB_CMDF_SCENES,
+    {.name = "--blend-casters", .of_set = true, .kind = SB_OPT_CHOICE, .arg = "mask|opaque|none", .def = "mask", .with = SB_CMDF_SCENES,
      RUN_OPT, .field = RUN(blend), .help = "glTF BLEND materials: alpha-tested at 0.5, opaque, or left out"},
-    {.name = "--pose", .kind = SB_OPT_NUM, .arg = "T", .min = -INFINITY, .max = INFINITY, .def_help = "the rest pose",
-     .with = SB_CMDF_SCENES, RUN_OPT, .field = RUN(pose_time), .given_field = RUN(pose),
+    {.name = "--pose", .of_set = true, .kind = SB_OPT_NUM, .arg = "T", .min = -INFINITY, .max = INFINITY, .def_help = "the rest pose",
+     .with = SB_CMDF_SCENES, RUN_OPT, .field = RUN(pose_time), .given_field = RUN(pose), .excludes = "--anim",
      .help = "nodes and skins at time T (seconds) of the file's first animation, frozen (no clip plays)"},
-    {.name = "--anim", .kind = SB_OPT_TEXT, .arg = "all|none|NAME[,NAME]", .def = "all", .with = SB_CMDF_SCENES, RUN_OPT,
+    {.name = "--anim", .of_set = true, .kind = SB_OPT_TEXT, .arg = "all|none|NAME[,NAME]", .def = "all", .with = SB_CMDF_SCENES, RUN_OPT,
      .field = RUN(anim), .check = check_anim,
      .help = "which of a file's animation clips play on the path's clock (each loops; with all, a node follows the "
              "first clip that animates it; none: the scene as today, frozen)"},
-    {.name = "--anim-speed", .kind = SB_OPT_NUM, .arg = "X", .min = 0, .open_min = true, .max = 1e6, .def = "1",
+    {.name = "--anim-speed", .of_set = true, .kind = SB_OPT_NUM, .arg = "X", .min = 0, .open_min = true, .max = 1e6, .def = "1",
      .with = SB_CMDF_SCENES, RUN_OPT, .field = RUN(anim_speed), .help = "clip seconds a second of the path's clock"},
     /* where results go, and what is said */
     {.name = "--out", .kind = SB_OPT_TEXT, .arg = "DIR", .def = "out",
@@ -165,7 +165,7 @@ const sb_option sb_options[] = {
     {.name = "--resume", .kind = SB_OPT_TEXT, .arg = "DIR",
      .commands = SB_IN(SB_CMD_RUN) | SB_IN(SB_CMD_BATCH) | SB_IN(SB_CMD_TUNE), .field = F(resume),
      .help = "keep DIR's complete runs and render the rest into it"},
-    {.name = "--shard", .kind = SB_OPT_TEXT, .arg = "I/N", .commands = SB_IN(SB_CMD_BATCH), .field = F(shard),
+    {.name = "--shard", .of_set = true, .kind = SB_OPT_TEXT, .arg = "I/N", .commands = SB_IN(SB_CMD_BATCH), .field = F(shard),
      .help = "render share I of N of the matrix (cost-balanced)"},
     {.name = "--strict-path", .kind = SB_OPT_FLAG, .with = SB_CMDF_MEASURE, .commands = SB_IN(SB_CMD_PATH), RUN_OPT,
      .field = RUN(strict_path),
@@ -753,6 +753,85 @@ void sb_run_id(uint64_t scene_hash, uint64_t path_hash, const sb_run_opts *o, co
     h = sb_fnv1a(h, params, strlen(params) + 1);
     h = identity_blocks(h, o);
     snprintf(out, 17, "%016llx", (unsigned long long)h);
+}
+
+/* ---- a results set's identity ---- */
+
+/* A row's value as text ("1280x720", "lamps", "auto"; "" for a text not given or a value given none). */
+static void value_text(const sb_option *opt, const sb_cli_opts *o, char *out, size_t len) {
+    const void *p = (const char *)o + opt->field;
+    out[0] = 0;
+    if (opt->given_field && !*(const bool *)((const char *)o + opt->given_field)) return;   /* not given: none */
+    switch (opt->kind) {
+    case SB_OPT_FLAG: snprintf(out, len, "%s", *(const bool *)p ? "on" : "off"); break;
+    case SB_OPT_INT:
+        if (opt->can_auto && *(const int *)p < 0) snprintf(out, len, "auto");
+        else snprintf(out, len, "%d", *(const int *)p);
+        break;
+    case SB_OPT_SEED: snprintf(out, len, "%llu", (unsigned long long)*(const uint64_t *)p); break;
+    case SB_OPT_CHOICE: choice_name(opt, *(const int *)p, out, len); break;
+    case SB_OPT_TEXT: snprintf(out, len, "%s", *(const char *const *)p ? *(const char *const *)p : ""); break;
+    case SB_OPT_SIZE: snprintf(out, len, "%dx%d", *(const int *)p, *(const int *)((const char *)o + opt->field2)); break;
+    case SB_OPT_ANGLES:
+        snprintf(out, len, "%.17g,%.17g", *(const double *)p, *(const double *)((const char *)o + opt->field2));
+        break;
+    default: snprintf(out, len, "%.17g", *(const double *)p);
+    }
+}
+
+void sb_cli_set_identity(const sb_cli_opts *o, const sb_command_def *cmd, const char *const *words, int nwords,
+                         char *out, size_t len) {
+    out[0] = 0;
+    size_t used = 0;
+    for (int i = 0; i < nwords && used < len; i++)
+        used += (size_t)snprintf(out + used, len - used, "set: word %d %s\n", i + 1, words[i]);
+    for (int i = 0; i < sb_option_count && used < len; i++) {
+        const sb_option *opt = &sb_options[i];
+        if (!opt->of_set || !sb_option_taken(opt, cmd)) continue;
+        char v[512];
+        value_text(opt, o, v, sizeof v);
+        used += (size_t)snprintf(out + used, len - used, "set: %s %s\n", opt->name, v);
+    }
+}
+
+/* The next line of a text after p (NULL at its end). */
+static const char *next_line(const char *p) {
+    const char *nl = strchr(p, '\n');
+    return nl && nl[1] ? nl + 1 : NULL;
+}
+
+/* The "set: " line of `lines` whose key is key[0..keylen), its value into out; false if none. */
+static bool set_line(const char *lines, const char *key, size_t keylen, char *out, size_t len) {
+    for (const char *p = lines; p && *p; p = next_line(p)) {
+        const char *k = p + 5;
+        if (strncmp(p, "set: ", 5) || strncmp(k, key, keylen) || (k[keylen] != ' ' && k[keylen] != '\n' && k[keylen]))
+            continue;
+        const char *v = k[keylen] == ' ' ? k + keylen + 1 : k + keylen;
+        snprintf(out, len, "%.*s", (int)strcspn(v, "\n"), v);
+        return true;
+    }
+    return false;
+}
+
+bool sb_set_identity_differs(const char *was, const char *now, char *what, size_t len) {
+    /* every key of either side: a word the set had and this command lacks is a difference too */
+    for (int side = 0; side < 2; side++)
+        for (const char *p = side ? was : now; p && *p; p = next_line(p)) {
+            if (strncmp(p, "set: ", 5)) continue;
+            const char *k = p + 5;
+            size_t keylen = !strncmp(k, "word ", 5) ? 5 + strcspn(k + 5, " \n") : strcspn(k, " \n");
+            char a[1024] = "", b[1024] = "";
+            bool had = set_line(was, k, keylen, a, sizeof a), has = set_line(now, k, keylen, b, sizeof b);
+            if ((!had || !has) && !strncmp(k, "--", 2)) continue;   /* an option one side's shadowbench did not have */
+            if (had && has && !strcmp(a, b)) continue;
+            char key[64];
+            snprintf(key, sizeof key, "%.*s", (int)keylen, k);
+            bool word = !strncmp(key, "word ", 5);
+            snprintf(what, len, "%s%s: the set was made with %s, this command gives %s", word ? "the command's " : "",
+                     key, had && *a ? a : "none", has && *b ? b : "none");
+            return true;
+        }
+    return false;
 }
 
 /* ---- the reference documents: docs/cli.md's and the man page's generated parts ---- */

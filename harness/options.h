@@ -143,6 +143,8 @@ typedef struct sb_option {
     const char *help;
     bool (*check)(const char *value, const sb_cli_opts *o, sb_err *err); /* what the range cannot say (NULL: none) */
     const char *excludes; /* an option that cannot be given with it (NULL: none) */
+    bool of_set; /* part of what a results set is: --resume of a command with another value is refused
+                    (sb_cli_set_identity) */
 } sb_option;
 
 extern const sb_option sb_options[];
@@ -176,6 +178,15 @@ void sb_cli_copy_given(sb_run_opts *to, const sb_cli_opts *from);
 void sb_cli_copy_line_options(sb_run_opts *to, const sb_cli_opts *from);
 /* "--sun-size, --lamp-radius and --ref-samples": the options a batch run line may carry. */
 void sb_line_options_text(char *out, size_t len);
+/* What makes a results set what it is, as "set: KEY VALUE" lines into out: the command's words (KEY "word 1", ...)
+ * and each row `cmd` takes that is of_set, with its value now (given or default: "--lights lamps", "--frames 60").
+ * A set's meta holds them; --resume compares them (sb_set_identity_differs). */
+void sb_cli_set_identity(const sb_cli_opts *o, const sb_command_def *cmd, const char *const *words, int nwords,
+                         char *out, size_t len);
+/* The first line of `now` whose KEY the set's `was` lines give another value (or lack while now has one): false
+ * when they agree; true with "KEY: the set was made with A; this command gives B" in what. Lines of `was` whose KEY
+ * `now` lacks are passed over (an option of an older or newer shadowbench). */
+bool sb_set_identity_differs(const char *was, const char *now, char *what, size_t len);
 /* The row of `name` that `cmd` takes (cmd NULL: any row of that name), or NULL. */
 const sb_option *sb_option_find(const char *name, const sb_command_def *cmd);
 

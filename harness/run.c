@@ -438,7 +438,7 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
         .scene = s->scene_name, .path = s->path_name,
         .technique = spec->tech->name, .params = r->params, .backend = sb_backend_name(o->backend),
         .renderer = s->ctx.renderer, .timing = sb_timing_name(s->timing), .clocks = s->clocks_mode, .status = SB_STATUS_OK,
-        .order = sb_order_name(o->order), .submit = sb_submit_name(o->submit), .seed = o->order == SB_ORDER_SHUFFLE ? o->seed : 0,
+        .order = sb_order_name(o->order), .submit = sb_submit_name(o->submit), .anim = s->scene.anim, .seed = o->order == SB_ORDER_SHUFFLE ? o->seed : 0,
         .reason = "", .frames = o->frames, .warmup = o->warmup, .width = o->width, .height = o->height,
         .target_ci = o->target_ci, .scene_triangles = sb_scene_triangles(&s->scene), .load_ms = s->scene.load_ms,
         .shadow_mb = sb_session_shadow_bytes(s, spec) / 1048576.0,

@@ -79,8 +79,10 @@ bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, con
         sb_path_free(&p);
         return false;
     }
+    const char *lights_name = o->lights ? sb_lights_name(&sc, &lights) : NULL;
     if (!sb_session_attach(s, o, &sc, &p, err)) return false;
     s->lights = lights;
+    s->opts.lights = lights_name;   /* one name a set: its run ids and its light column */
     base_name(scene, s->scene_name, sizeof s->scene_name);
     base_name(path, s->path_name, sizeof s->path_name);
     return true;
@@ -249,10 +251,36 @@ double sb_session_shadow_bytes(const sb_session *s, const sb_run_spec *rs) {
     return rs->tech->lights == SB_LIGHTS_LAMPS && s->lights.count ? bytes * s->lights.count : bytes;   /* a set each */
 }
 
+const char *sb_lights_name(const sb_scene *sc, const sb_light_set *set) {
+    char text[8 * SB_MAX_LIGHTS];
+    sb_light_set_text(sc, set, text, sizeof text);
+    return sb_intern(text);
+}
+
+bool sb_spec_lights_check(const sb_scene *sc, const sb_run_spec *rs, const char *lights, sb_err *err) {
+    int lamps = 0;
+    sb_scene_point_light(sc, 0, &lamps);
+    for (int i = 0; i < rs->params.count; i++) {
+        if (strcmp(rs->params.v[i].def->name, "light") || !rs->params.v[i].given) continue;
+        const char *k = rs->params.v[i].text, *t = rs->tech->name;
+        if (lights)
+            return sb_fail(err, "%s:light=%s with --lights %s: both say which lights the run shadows; give one of them", t,
+                           k, lights);
+        if (rs->params.v[i].num >= lamps)
+            return lamps ? sb_fail(err, "%s:light=%s: the scene has no lamp %s (its point and spot lights are 0..%d)", t, k,
+                                   k, lamps - 1)
+                         : sb_fail(err, "%s:light=%s: the scene has no point or spot light", t, k);
+    }
+    return true;
+}
+
 bool sb_session_set_lights(sb_session *s, const char *spec, sb_err *err) {
     s->opts.lights = spec;
     memset(&s->lights, 0, sizeof s->lights);
-    return !spec || sb_scene_light_set(&s->scene, spec, s->gpu.has_sun, &s->lights, err);
+    if (!spec) return true;
+    if (!sb_scene_light_set(&s->scene, spec, s->gpu.has_sun, &s->lights, err)) return false;
+    s->opts.lights = sb_lights_name(&s->scene, &s->lights);
+    return true;
 }
 
 /* ---- why a run cannot apply ---- */

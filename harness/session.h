@@ -80,6 +80,11 @@ void sb_session_keep_reference(sb_session *s, const char *results_dir);
 double sb_session_shadow_bytes(const sb_session *s, const sb_run_spec *rs);
 /* A batch's runs of another --lights (NULL: none): read against the open scene; false with the reason. */
 bool sb_session_set_lights(sb_session *s, const char *spec, sb_err *err);
+/* The set's one name (sb_light_set_text), interned: "+1", "01" and "1" are one set, one run id. */
+const char *sb_lights_name(const sb_scene *sc, const sb_light_set *set);
+/* A spec's light=K against the scene and --lights (NULL: not given): a lamp the scene lacks, or light= given beside
+ * --lights, is refused in one line (exit 2), never skipped or overruled in silence. */
+bool sb_spec_lights_check(const sb_scene *sc, const sb_run_spec *rs, const char *lights, sb_err *err);
 /* Frees the scene, path and what was made for them but keeps the context (next scene of a batch). */
 void sb_session_close_scene(sb_session *s);
 void sb_session_close(sb_session *s);

@@ -369,6 +369,9 @@ static const sb_run_col run_cols[] = {
     INFO("light", r_chars, light, "the reference light's size (--sun-size, --lamp-radius: \"sun 0.53 deg, 64 rays\") "
                                   "and the lights shadowed (--lights: \"lights lamps (6)\"); empty: the technique's "
                                   "one light, of no size"),
+    INFO("anim", r_str, anim, "what of a file's animation plays (--anim, --anim-speed): empty for a still file or "
+                              "every clip at speed 1, none for clips held still, else the clips (all, or their "
+                              "names) and \" xS\" at another speed; a series of its own"),
     INFO("backend", r_str, backend, "egl or osmesa"),
     INFO("renderer", r_str, renderer, "GL_RENDERER"),
     INFO("timing", r_str, timing, "queries or sync: the timing mode used"),

@@ -45,6 +45,7 @@ typedef struct sb_run_info {
     const char *clocks;         /* "free", "locked at N MHz" */
     const char *order;          /* --order */
     const char *submit;         /* --submit: "direct", "indirect" */
+    const char *anim;           /* what of the scene's clips plays (sb_scene.anim; NULL or "": the default) */
     uint64_t seed;              /* shuffle's seed (0: none) */
     const char *stable;         /* "yes", "no", "" (not measured) */
     char unstable_reason[512];
@@ -60,7 +61,7 @@ typedef struct sb_run_info {
     double ref_refit_ms;        /* a moving scene: the reference's refit to a pose, mean (NaN: none) */
     char warnings[512];         /* what the tool cannot stand behind in an ok run ("; "-separated, "" if nothing) */
     char auto_params[160];      /* values calibrated for "auto" parameters ("bias=0.5:normal=0.125"; "" if none) */
-    char light[96];             /* the light's size when it has one ("sun 0.53 deg, 64 rays"; "" a light of no size) */
+    char light[1200];           /* the light's size when it has one ("sun 0.53 deg, 64 rays"; "" a light of no size) */
 } sb_run_info;
 
 /* Adds a note to the run's warnings. */

@@ -63,6 +63,12 @@ void sb_compare_run_key(const sb_table *t, int r, char *out, size_t len) {
         size_t l = strlen(out);
         snprintf(out + l, len - l, "|%s", light);
     }
+    /* clips that play otherwise than the file says (another speed, some held still): another comparison */
+    const char *anim = sb_table_get(t, r, "anim");   /* "" in a set from before the column, and by default */
+    if (*anim) {
+        size_t l = strlen(out);
+        snprintf(out + l, len - l, "|anim=%s", anim);
+    }
     /* draws issued indirectly are another series of timings (direct, or a set from before the column: as before) */
     if (!strcmp(sb_table_get(t, r, "submit"), "indirect")) {
         size_t l = strlen(out);

@@ -23,8 +23,9 @@
 /* ---- series ---- */
 
 void sb_series_key(const sb_series *s, char *out, size_t len) {
-    snprintf(out, len, "%s|%s|%s|%s|%s|%s|%s%s%s%s", s->host, s->renderer, s->scene, s->path, s->size, s->technique,
-             s->params, s->light[0] ? "|" : "", s->light, s->indirect ? "|indirect" : "");
+    snprintf(out, len, "%s|%s|%s|%s|%s|%s|%s%s%s%s%s%s", s->host, s->renderer, s->scene, s->path, s->size, s->technique,
+             s->params, s->light[0] ? "|" : "", s->light, s->anim[0] ? "|anim=" : "", s->anim,
+             s->indirect ? "|indirect" : "");
 }
 
 /* Field k of a '|'-separated text into out; returns where the next field starts (NULL: none). */
@@ -45,6 +46,7 @@ void sb_series_parse(const char *key, sb_series *s) {
         char extra[sizeof s->light];
         p = next_field(p, extra, sizeof extra);
         if (!strcmp(extra, "indirect")) s->indirect = true;
+        else if (!strncmp(extra, "anim=", 5)) snprintf(s->anim, sizeof s->anim, "%.*s", (int)sizeof s->anim - 1, extra + 5);
         else snprintf(s->light, sizeof s->light, "%s", extra);
     }
 }
@@ -65,7 +67,8 @@ void sb_series_of_row(const sb_table *t, int r, const char *host, const char *re
 
 /* The parameters with what follows them in the key (the text a label's items come from). */
 static void params_text(const sb_series *s, char *out, size_t len) {
-    snprintf(out, len, "%s%s%s%s", s->params, s->light[0] ? "|" : "", s->light, s->indirect ? "|indirect" : "");
+    snprintf(out, len, "%s%s%s%s%s%s", s->params, s->light[0] ? "|" : "", s->light, s->anim[0] ? "|anim=" : "", s->anim,
+             s->indirect ? "|indirect" : "");
 }
 
 /* ---- a results set as a night ---- */
@@ -181,7 +184,7 @@ static bool store_run(sb_history *h, long long night, const set_in *s, int r, sb
     const sb_table *t = &s->t;
     sb_series se;
     sb_series_of_row(t, r, s->host, s->renderer, &se);
-    char key[4096], params[2048];
+    char key[4096], params[3072];
     sb_series_key(&se, key, sizeof key);
     params_text(&se, params, sizeof params);
     const char **names = sb_xmalloc(sizeof *names * (size_t)(t->cols ? t->cols : 1));

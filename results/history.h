@@ -19,7 +19,8 @@
 typedef struct sb_series {
     char host[256], renderer[256], scene[256], path[512], size[32], technique[64];
     char params[1024];          /* canonical, sorted: "filter=pcf3:res=2048" */
-    char light[160];            /* a light with a size ("sun 0.53 deg, 64 rays"; "": none) */
+    char light[1200];           /* a light with a size ("sun 0.53 deg, 64 rays"), lights ("lights lamps (6)"); "": none */
+    char anim[300];             /* what plays, where not the default (the anim column); "": the default */
     bool indirect;              /* --submit indirect */
 } sb_series;
 /* The key it is stored under. */

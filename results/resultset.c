@@ -8,6 +8,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "columns.h"
 #include "csv.h"
 #include "table.h"
 
@@ -128,7 +129,7 @@ static bool check_frames(const char *dir, const entry *e, int n, sb_err *err) {
     for (int r = 0; ok && r < t.nrows; r++) {
         long frames = 0, repeats = 1;
         const char *id = sb_table_get(&t, r, "run_id");
-        if (strcmp(sb_table_get(&t, r, "status"), "ok") || !sb_parse_int(sb_table_get(&t, r, "frames"), &frames)) continue;
+        if (sb_status_of(sb_table_get(&t, r, "status")) != SB_STATUS_OK || !sb_parse_int(sb_table_get(&t, r, "frames"), &frames)) continue;
         if (!sb_parse_int(sb_table_get(&t, r, "repeats"), &repeats)) repeats = 1;
         char name[300];
         snprintf(name, sizeof name, "%s.csv", id);

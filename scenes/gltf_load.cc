@@ -894,6 +894,8 @@ bool Loader::clips() {
     size_t nn = m.nodes.size();
     moves.assign(nn, 0);
     morphs.assign(nn, 0);
+    if (opts->anim == SB_ANIM_LIST && m.animations.empty())
+        return fail("/animations", std::string("--anim ") + opts->anim_clips + ": the file has no animation clip");
     if (opts->pose || opts->anim == SB_ANIM_NONE || m.animations.empty()) return true;
     auto clip_name = [&](size_t ai) { return m.animations[ai].name.empty() ? std::to_string(ai) : m.animations[ai].name; };
     std::vector<char> plays(m.animations.size(), opts->anim == SB_ANIM_ALL);
@@ -1546,6 +1548,7 @@ extern "C" bool sb_gltf_load(sb_scene *s, const char *path, const sb_scene_opts 
         }
         s->features.textures_skipped = (uint32_t)model.images.size() - s->features.textures_decoded;
         s->content_hash = hash;
+        s->features.clips = (uint32_t)model.animations.size();
         log_features(path, s, model, images);
         s->load_part_ms[SB_LOAD_FLATTEN] = sb_now_ms() - t1;
         return true;

@@ -805,8 +805,10 @@ bool sb_scene_light_set(const sb_scene *s, const char *spec, bool has_sun, sb_li
             return sb_fail(err, "--lights %s: expected sun, lamps, all, or sun and lamp numbers separated by commas", spec);
         memcpy(word, p, n);
         word[n] = 0;
-        char *end;
-        long k = strtol(word, &end, 10);
+        /* a lamp number is decimal digits alone ("01" is lamp 1; "+1" and " 1" are no number) */
+        char *end = word;
+        long k = -1;
+        if (word[0] >= '0' && word[0] <= '9') k = strtol(word, &end, 10);
         bool sun = !strcmp(word, "sun") || (!strcmp(word, "all") && has_sun), every = !strcmp(word, "lamps") || !strcmp(word, "all");
         if (!strcmp(word, "sun") && !has_sun)
             return sb_fail(err, "--lights %s: the scene has no sun (no directional light; --sun AZ,EL adds one)", spec);
@@ -828,7 +830,34 @@ bool sb_scene_light_set(const sb_scene *s, const char *spec, bool has_sun, sb_li
         if (p[-1] == ',' && !*p) return sb_fail(err, "--lights %s: a comma at the end", spec);
     }
     if (!out->count) return sb_fail(err, "--lights %s: no light chosen", spec);
+    /* one set, one order: the sun first, then the lamps by number (the same lights however they were listed) */
+    for (int i = 1; i < out->count; i++)
+        for (int j = i; j > 0 && out->idx[j - 1] > out->idx[j]; j--) {
+            int16_t t = out->idx[j];
+            out->idx[j] = out->idx[j - 1];
+            out->idx[j - 1] = t;
+        }
     return true;
+}
+
+void sb_light_set_text(const sb_scene *s, const sb_light_set *set, char *out, size_t len) {
+    int lamps = 0, have = 0;
+    bool sun = false;
+    sb_scene_point_light(s, 0, &lamps);
+    for (int i = 0; i < set->count; i++) {
+        if (set->idx[i] == SB_LIGHT_SUN) sun = true;
+        else have++;
+    }
+    out[0] = 0;
+    if (have == lamps && lamps > 0) {   /* every lamp (the set holds each at most once) */
+        snprintf(out, len, "%s", sun ? "all" : "lamps");
+        return;
+    }
+    for (int i = 0; i < set->count; i++) {
+        size_t l = strlen(out);
+        if (set->idx[i] == SB_LIGHT_SUN) snprintf(out + l, len - l, "%ssun", l ? "," : "");
+        else snprintf(out + l, len - l, "%s%d", l ? "," : "", set->idx[i]);
+    }
 }
 
 /* Frees *p unless it points into the mapped cache entry. */

@@ -89,6 +89,7 @@ typedef struct sb_scene_features {
     uint32_t prims, double_sided, mask, blend, textures_decoded, textures_skipped;
     uint32_t skinned, skins, instanced_nodes, instances, draco, quantized, sparse;
     uint32_t morph_ignored, vertex_alpha_ignored, undecodable_alpha;
+    uint32_t clips;         /* the file's animation clips, whether they play or not */
     bool posed;             /* skins and node animation at --pose T */
 } sb_scene_features;
 
@@ -195,6 +196,9 @@ typedef struct sb_scene {
     uint32_t moving_draws;       /* draws whose sb_draw.motion is not SB_DRAW_STILL */
     sb_aabb still_bounds;        /* the bounds of the draws that never move (relative to origin) */
     double pose_time;            /* the clip time the vertices hold (NAN: as loaded) */
+    char anim[288];              /* what plays, as a run's `anim` column says it: "" a still file, or every clip at
+                                    speed 1 (the default); "none" (a file's clips held still); the clips that play in
+                                    file order ("walk", "all") with " x3" at another --anim-speed */
     uint64_t pose_serial;        /* how many poses moved something (a changed serial: the geometry moved) */
 
     /* builder scratch, freed by sb_scene_finish */
@@ -230,6 +234,9 @@ typedef struct sb_light_set {
  * naming what the scene lacks and what it has, for a lamp it does not have, a sun where it has none (the run's
  * --sun counts as one: has_sun), an empty set, a word it does not know or a light named twice. */
 bool sb_scene_light_set(const sb_scene *s, const char *spec, bool has_sun, sb_light_set *out, sb_err *err);
+/* The set's one name, whatever words chose it: "sun", "lamps" (every lamp), "all" (the sun and every lamp) or the
+ * list, the sun first and the lamps by number ("sun,0,3"); what a run's identity and its `light` column hold. */
+void sb_light_set_text(const sb_scene *s, const sb_light_set *set, char *out, size_t len);
 
 /* Builder used by the glTF adapter: appends one primitive already transformed
  * to world space (double positions); vertices are re-based to the origin later. */

@@ -243,8 +243,13 @@ static bool load_file(sb_scene *s, const char *path, const sb_scene_opts *opts, 
             double speed;
         } a;
         memset(&a, 0, sizeof a);
-        a.mode = (int)s->opts.anim;
-        memcpy(a.clips, s->opts.anim_clips, sizeof a.clips);
+        sb_motion_stats ms = sb_motion_statistics(s->motion);
+        /* the clips by what plays, not by how they were named: every clip named is --anim all; "0" is "walk" */
+        a.mode = ms.clips == s->features.clips ? SB_ANIM_ALL : SB_ANIM_LIST;
+        for (uint32_t i = 0; a.mode == SB_ANIM_LIST && i < ms.clips; i++) {
+            size_t l = strlen(a.clips);
+            snprintf(a.clips + l, sizeof a.clips - l, "%s%s", i ? "," : "", sb_motion_clip(s->motion, i).name);
+        }
         a.speed = s->opts.anim_speed > 0 ? s->opts.anim_speed : 1;
         s->content_hash = sb_fnv1a(s->content_hash, &a, sizeof a);
     }
@@ -266,6 +271,26 @@ static bool real_folder(const char *path, char *out, size_t len) {
     if (!realpath(dir, real) || strlen(real) >= len) return false;
     memcpy(out, real, strlen(real) + 1);
     return true;
+}
+
+/* The scene's `anim` text: what plays (scene.h). */
+static void anim_text(sb_scene *s) {
+    s->anim[0] = 0;
+    double speed = s->opts.anim_speed > 0 ? s->opts.anim_speed : 1;
+    if (!s->features.clips || s->opts.pose) return;   /* a still file; --pose: in the content hash, no clip plays */
+    if (!s->motion) {
+        if (s->opts.anim == SB_ANIM_NONE) snprintf(s->anim, sizeof s->anim, "none");
+        return;
+    }
+    sb_motion_stats ms = sb_motion_statistics(s->motion);
+    if (ms.clips == s->features.clips && speed == 1) return;   /* the default: every clip as the file says */
+    if (ms.clips == s->features.clips) snprintf(s->anim, sizeof s->anim, "all");
+    for (uint32_t i = 0; ms.clips != s->features.clips && i < ms.clips; i++) {
+        size_t l = strlen(s->anim);
+        snprintf(s->anim + l, sizeof s->anim - l, "%s%s", i ? "," : "", sb_motion_clip(s->motion, i).name);
+    }
+    size_t l = strlen(s->anim);
+    if (speed != 1) snprintf(s->anim + l, sizeof s->anim - l, " x%g", speed);
 }
 
 bool sb_scene_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_err *err) {
@@ -292,5 +317,6 @@ bool sb_scene_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_
         if (cache) sb_scene_cache_put(key, ok && !s->motion ? write_entry : NULL, s);
     }
     if (ok) s->load_ms = sb_now_ms() - t0;
+    if (ok) anim_text(s);
     return ok;
 }

@@ -43,15 +43,7 @@ static bool depth_program(sb_lamp_state *s, int a, const char *defines, sb_err *
         const sb_shader_src st[] = {{GL_VERTEX_SHADER, vs, 1}, {GL_GEOMETRY_SHADER, gs, 1}, {GL_FRAGMENT_SHADER, fs, 1}};
         p = sb_gpu_link(label, defines, st, 3, err);
     } else {
-        static const char vs_src[] =
-            "layout(location = 0) in vec3 a_pos;\n"
-            "uniform mat4 u_face_vp[6];\n"
-            "void main() {\n"
-            "    gl_Layer = gl_InstanceID;\n"
-            "    gl_Position = u_face_vp[gl_InstanceID] * vec4(a_pos, 1.0);\n"
-            "    SB_ALPHA_VS();\n"
-            "}\n";
-        const char *vs[] = {vs_src};
+        const char *vs[] = {sb_shader_cube_layer_vs_vert};
         const sb_shader_src st[] = {{GL_VERTEX_SHADER, vs, 1}, {GL_FRAGMENT_SHADER, fs, 1}};
         char defs[256];
         snprintf(defs, sizeof defs, "#extension GL_ARB_shader_viewport_layer_array : require\n%s", defines ? defines : "");

@@ -207,11 +207,44 @@ static void test_lamp_between_copies(void **st) {
     same_figures(a, b, 0, 4, 320, 180);
 }
 
+/* Every technique in every draw path it has (per pass or layered by a geometry shader or by the vertex shader's
+ * gl_Layer; one GL call a draw or one indirect call a pass) on towers-night tiled 2 x 1, against its copies twin:
+ * a draw path that reads a shared draw's vertices without its transform (common.glsl's sb_world) draws the second
+ * tile's casters over the first's, and its error parts from the copies' by thousands of pixels. The lamp
+ * techniques shadow lamp 7, one of the second tile's. The instancing suite's figures are the conformance test of
+ * shared geometry: every technique and mode here, held to its copies twin. */
+static void test_every_mode_on_shared_geometry(void **st) {
+    (void)st;
+    char src[4096], a[4096], b[4096];
+    snprintf(src, sizeof src, "%s/towers-night.glb", g_tmp);
+    copy_bundled("towers-night.glb", src);
+    pair p;
+    tile_pair(src, "night", "2 1", &p);
+    assert_true(p.ns > 0);
+    assert_int_equal(p.nc, 0);
+    /* planar last: its receiver pass draws by scene triangle numbers, so it leaves nothing shared for the runs
+       after it (sb_gpu_share), which would then pass whatever their vertex stages do */
+    const char *specs = "sm pssm:layered=off,gs,vs,on sdsm:layered=off,gs,vs,on volumes lispsm tsm "
+                        "psm psm:cube=on:layered=off,gs,vs,on virtual raycast cube:light=7:layered=off,gs,vs,on "
+                        "dpsm:light=7 atlas:res=256 planar";
+    const char *submits[] = {"direct", "indirect"};
+    for (int k = 0; k < 2; k++) {
+        char run[8192], tag[64];
+        snprintf(run, sizeof run, "%s --sun 135,40 --submit %s", specs, submits[k]);
+        snprintf(tag, sizeof tag, "night-shared-%s", submits[k]);
+        render(p.shared, run, "160x90", tag, a, sizeof a);
+        snprintf(tag, sizeof tag, "night-copies-%s", submits[k]);
+        render(p.copies, run, "160x90", tag, b, sizeof b);
+        same_figures(a, b, 0, 4, 160, 90);
+    }
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_towers_turned),
         cmocka_unit_test(test_zdm2_open_moved),
         cmocka_unit_test(test_lamp_between_copies),
+        cmocka_unit_test(test_every_mode_on_shared_geometry),
     };
     return cmocka_run_group_tests_name("instancing", tests, setup, teardown);
 }
