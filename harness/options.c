@@ -814,6 +814,7 @@ static bool set_line(const char *lines, const char *key, size_t keylen, char *ou
 }
 
 bool sb_set_identity_differs(const char *was, const char *now, char *what, size_t len) {
+    if (!strstr(was, "\nset: ")) return false;   /* a set from before its meta said what made it: its runs decide */
     /* every key of either side: a word the set had and this command lacks is a difference too */
     for (int side = 0; side < 2; side++)
         for (const char *p = side ? was : now; p && *p; p = next_line(p)) {
