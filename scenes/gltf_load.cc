@@ -299,9 +299,28 @@ bool read_channel(Ctx &c, const tinygltf::Animation &an, const tinygltf::Animati
     skip->clear();
     if (ch.sampler < 0 || ch.sampler >= (int)an.samplers.size()) return c.fail(where, "sampler out of range");
     const auto &smp = an.samplers[ch.sampler];
+    if (smp.input >= 0 && smp.input < (int)c.m->accessors.size() &&
+        c.m->accessors[smp.input].componentType != TINYGLTF_COMPONENT_TYPE_FLOAT)
+        return c.fail(where + "/input", "key times must be floats (glTF 2.0: an animation sampler's input is FLOAT; "
+                                        "integers would be read as seconds)");
     if (!read_vec(c, smp.input, where + "/input", 1, dst.in)) return false;
     if (!read_accessor(c, smp.output, where + "/output", 0, dst.out) || !finite_all(c, where + "/output", dst.out, 1))
         return false;
+    for (size_t i = 0; i < dst.out.size(); i++)   // a key no pose can hold (the posed bound: Loader::anim_bound)
+        if (fabs(dst.out[i]) > SB_SCENE_MAX_COORD)
+        {
+            char what[160];
+            snprintf(what, sizeof what, "value %zu is %.3g, beyond %g, which the rasterizer and the reference hold", i,
+                     dst.out[i], SB_SCENE_MAX_COORD);
+            return c.fail(where + "/output", what);
+        }
+    for (size_t i = 0; i < dst.in.size(); i++)
+        if (fabs(dst.in[i]) > SB_SCENE_MAX_COORD)
+        {
+            char what[120];
+            snprintf(what, sizeof what, "key time %zu is %.3g s, beyond %g s", i, dst.in[i], SB_SCENE_MAX_COORD);
+            return c.fail(where + "/input", what);
+        }
     size_t k = dst.in.size();
     bool cubic = smp.interpolation == "CUBICSPLINE";
     if (k == 0 || dst.out.size() != (cubic ? 3 : 1) * k * (size_t)ncomp) {
@@ -314,6 +333,13 @@ bool read_channel(Ctx &c, const tinygltf::Animation &an, const tinygltf::Animati
             *skip = where + "/input: key times do not increase (key " + std::to_string(i) + "): left out";
             return true;
         }
+    for (size_t i = 0; ch.target_path == "rotation" && i < dst.out.size() / 4; i++) {   // values and tangents alike
+        const double *q = &dst.out[4 * i];
+        if (cubic && i % 3 != 1) continue;   // a tangent may be zero
+        if (sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]) < 1e-6)
+            return c.fail(where + "/output", "key " + std::to_string(cubic ? i / 3 : i) +
+                                                 " is a zero-length quaternion, which is no rotation");
+    }
     dst.s = {dst.in.data(), dst.out.data(), k, ncomp, ch.target_path == "rotation",
              cubic ? SB_INTERP_CUBIC : smp.interpolation == "STEP" ? SB_INTERP_STEP : SB_INTERP_LINEAR};
     return true;
@@ -677,12 +703,13 @@ struct Loader {
     bool prim(int node, int mesh, int pi, const std::vector<sb_m4> &instances);
     bool skin_moves(int si);
     bool triangles(const tinygltf::Primitive &p, const std::string &where, const PrimData &d, std::vector<uint32_t> &tris);
-    void emit(const PrimData &d, const std::vector<uint32_t> &tris, const sb_m4 *w, int node, uint32_t mat,
+    bool emit(const PrimData &d, const std::vector<uint32_t> &tris, const sb_m4 *w, int node, uint32_t mat,
               bool double_sided, const float color[4], int *closed_known, Decoded *shared = nullptr);
     void reserve();
     bool instances(int ni, std::vector<sb_m4> &out);
     bool light(int ni);
     bool emit_nodes();
+    bool anim_bound();
 };
 
 // The triangle list of a primitive (strips and fans unrolled), every index checked.
@@ -715,7 +742,7 @@ bool Loader::triangles(const tinygltf::Primitive &p, const std::string &where, c
 
 // Adds the primitive to the scene in world space: under w (NULL: already there, skinned).
 // closed_known: what is known of the primitive's closedness (0: nothing yet), updated after the first instance.
-void Loader::emit(const PrimData &d, const std::vector<uint32_t> &tris_in, const sb_m4 *w, int node, uint32_t mat,
+bool Loader::emit(const PrimData &d, const std::vector<uint32_t> &tris_in, const sb_m4 *w, int node, uint32_t mat,
                   bool double_sided, const float color[4], int *closed_known, Decoded *shared) {
     size_t nv = d.pos.size() / 3;
     const sb_m4 id = sb_m4_identity();
@@ -742,6 +769,14 @@ void Loader::emit(const PrimData &d, const std::vector<uint32_t> &tris_in, const
         }
         pos = wp.data(), nrm = wn.data();
     }
+    for (size_t i = 0; i < 3 * nv; i++)   // finite, and within what the rasterizer and the reference hold
+        if (!(fabs(pos[i]) <= SB_SCENE_MAX_COORD)) {
+            char what[200];
+            snprintf(what, sizeof what, "vertex %zu of its mesh lies at %.3g as placed (the node's transform, skin and "
+                     "morph weights applied), beyond %g, which the rasterizer and the reference hold", i / 3, pos[i],
+                     SB_SCENE_MAX_COORD);
+            return fail("/nodes/" + std::to_string(node), what);
+        }
     sb_prim_desc pd;
     memset(&pd, 0, sizeof pd);
     pd.positions = pos;
@@ -764,6 +799,7 @@ void Loader::emit(const PrimData &d, const std::vector<uint32_t> &tris_in, const
     if (shared && !shared->first_draw && !collapses && sb_m4_invert(placed, &shared->first_inv))
         shared->first_draw = s->draw_count;
     if (!collapses && !*closed_known && !double_sided) *closed_known = s->draws[s->draw_count - 1].closed ? 2 : 1;
+    return true;
 }
 
 // Room for every vertex, index and draw the scene's nodes will add (from the accessors' counts), so that the
@@ -856,7 +892,7 @@ bool Loader::prim(int node, int mesh, int pi, const std::vector<sb_m4> &inst) {
     if (skinned) { // a skinned mesh ignores its node's transform (and instancing)
         int unknown = 0;
         place.first = s->vertex_count;
-        emit(d, tris, nullptr, node, mat, ds, color, &unknown);
+        if (!emit(d, tris, nullptr, node, mat, ds, color, &unknown)) return false;
         if (moving || morphing) {
             place.skin = n.skin;
             place.count = s->vertex_count - place.first;
@@ -868,7 +904,8 @@ bool Loader::prim(int node, int mesh, int pi, const std::vector<sb_m4> &inst) {
     if ((moving || morphing) && !sb_m4_invert(world[node], &node_inv)) node_inv = sb_m4_identity();
     for (const sb_m4 &w : inst) {
         uint32_t first = s->vertex_count;
-        emit(d, tris, &w, node, mat, ds, color, &dec->closed_known, moving || morphing ? nullptr : dec.get());
+        if (!emit(d, tris, &w, node, mat, ds, color, &dec->closed_known, moving || morphing ? nullptr : dec.get()))
+            return false;
         if (!(moving || morphing)) continue;
         mo->places.push_back(place);
         MoPlace &pl = mo->places.back();
@@ -1021,6 +1058,10 @@ bool Loader::light(int ni) {
     memset(&l, 0, sizeof l);
     l.type = L.type == "directional" ? SB_LIGHT_DIRECTIONAL : L.type == "spot" ? SB_LIGHT_SPOT : SB_LIGHT_POINT;
     l.position = sb_m4_point(world[ni], sb_v3_make(0, 0, 0));
+    if (!(fabs(l.position.x) <= SB_SCENE_MAX_COORD && fabs(l.position.y) <= SB_SCENE_MAX_COORD &&
+          fabs(l.position.z) <= SB_SCENE_MAX_COORD))
+        return fail("/nodes/" + std::to_string(ni), "its light stands beyond 1e12 from the origin, which the "
+                                                    "rasterizer and the reference hold");
     l.direction = sb_v3_norm(sb_m4_dir(world[ni], sb_v3_make(0, 0, -1)));
     for (int k = 0; k < 3; k++) l.color[k] = k < (int)L.color.size() ? (float)L.color[k] : 1.0f;
     l.intensity = L.intensity;
@@ -1031,6 +1072,102 @@ bool Loader::light(int ni) {
     if (l.type == SB_LIGHT_DIRECTIONAL && !s->has_sun) {
         s->has_sun = true;
         s->sun = sb_v3_scale(l.direction, -1);
+    }
+    return true;
+}
+
+// The farthest any vertex of a moving placement can lie from the origin under every pose its clips can take,
+// bounded from the keys (never by playing them): a node maps |x| to at most s|x| + t, where s is the largest
+// scale its rest transform or a key gives (rotations keep lengths) and t the farthest translation, a cubic key
+// widened by its tangents' reach; down the hierarchy the bounds compose, a morphing mesh adds each target's
+// farthest delta times its weight's largest key, a skinned one takes its farthest joint times its weights' sum.
+// Past SB_SCENE_MAX_COORD the file is refused at load, naming the node (the rasterizer and the reference would
+// otherwise be handed what they cannot hold mid-run).
+bool Loader::anim_bound() {
+    if (!mo || mo->places.empty()) return true;
+    size_t nn = mo->parent.size();
+    auto norm3 = [](const double *v) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); };
+    auto mat_scale = [](const sb_m4 &m) {   // how far the upper 3x3 A stretches at most: sqrt of the largest row
+        double most = 0;                     // sum of |A^T A| (Gershgorin): exact for a rotation and scale
+        for (int i = 0; i < 3; i++) {
+            double row = 0;
+            for (int j = 0; j < 3; j++) {
+                double ata = 0;
+                for (int r = 0; r < 3; r++) ata += m.m[i * 4 + r] * m.m[j * 4 + r];
+                row += fabs(ata);
+            }
+            most = std::max(most, row);
+        }
+        return sqrt(most);
+    };
+    std::vector<double> sc(nn), tr(nn);
+    std::vector<std::vector<double>> wmax(nn);
+    for (size_t i = 0; i < nn; i++) {
+        const sb_trs &x = mo->rest[i];   // a TRS node stretches by its largest scale (its rotation keeps lengths)
+        sc[i] = mo->has_matrix[i] ? mat_scale(mo->rest_local[i])
+                                  : std::max({fabs(x.s[0]), fabs(x.s[1]), fabs(x.s[2])});
+        tr[i] = norm3(&mo->rest_local[i].m[12]);
+        wmax[i] = mo->rest_weights[i];
+        for (double &w : wmax[i]) w = fabs(w);
+    }
+    for (const MoChannel &mc : mo->channels) {
+        const Channel &ch = mc.ch;
+        size_t keys = ch.in.size(), nc = keys ? ch.out.size() / keys : 0;   // values a key (x3 with tangents)
+        bool cubic = ch.s.interp == SB_INTERP_CUBIC;
+        int ncomp = cubic ? (int)nc / 3 : (int)nc;
+        double dt = 0;
+        for (size_t k = 1; k < keys; k++) dt = std::max(dt, ch.in[k] - ch.in[k - 1]);
+        for (size_t k = 0; k < keys; k++)
+            for (int part = 0; part < (cubic ? 3 : 1); part++) {
+                const double *v = &ch.out[k * nc + (size_t)part * ncomp];
+                double reach = !cubic || part == 1 ? 1 : 0.15 * dt;   // Hermite: a tangent moves at most 4/27 dt
+                if (mc.path == PATH_T) tr[mc.node] = std::max(tr[mc.node], reach * norm3(v));
+                if (mc.path == PATH_S)
+                    sc[mc.node] = std::max(sc[mc.node], reach * std::max({fabs(v[0]), fabs(v[1]), fabs(v[2])}));
+                for (int w = 0; mc.path == PATH_W && w < ncomp && (size_t)w < wmax[mc.node].size(); w++)
+                    wmax[mc.node][w] = std::max(wmax[mc.node][w], reach * fabs(v[w]));
+            }
+    }
+    std::vector<double> sw(nn, 1), tw(nn, 0);
+    for (int ni : mo->topo) {
+        int p = mo->parent[ni];
+        sw[ni] = (p < 0 ? 1 : sw[p]) * sc[ni];
+        tw[ni] = (p < 0 ? 0 : tw[p]) + (p < 0 ? 1 : sw[p]) * tr[ni];
+    }
+    for (const MoPlace &pl : mo->places) {
+        const PrimData &b = pl.base;
+        double r = 0, wsum = 0;
+        for (size_t v = 0; v < b.pos.size() / 3; v++) r = std::max(r, norm3(&b.pos[3 * v]));
+        for (size_t t = 0; t < pl.dpos.size(); t++) {   // morph targets at their weights' largest keys
+            double far = 0;
+            for (size_t v = 0; v < pl.dpos[t].size() / 3; v++) far = std::max(far, norm3(&pl.dpos[t][3 * v]));
+            r += far * (pl.node >= 0 && t < wmax[pl.node].size() ? wmax[pl.node][t] : 0);
+        }
+        double bound;
+        if (pl.skin >= 0) {
+            for (size_t v = 0; v < b.pos.size() / 3; v++) {
+                double sum = 0;
+                for (int set = 0; set < b.skin_sets; set++)
+                    for (int k = 0; k < 4; k++) sum += fabs(b.weights[set][4 * v + k]);
+                wsum = std::max(wsum, sum);
+            }
+            double joint = 0;
+            const std::vector<int> &joints = mo->skin_joints[pl.skin];
+            for (size_t j = 0; j < joints.size(); j++) {
+                const sb_m4 &ibm = mo->skin_ibm[pl.skin][j];
+                joint = std::max(joint, sw[joints[j]] * (mat_scale(ibm) * r + norm3(&ibm.m[12])) + tw[joints[j]]);
+            }
+            bound = wsum * joint;
+        } else {
+            bound = sw[pl.node] * (mat_scale(pl.inst) * r + norm3(&pl.inst.m[12])) + tw[pl.node];
+        }
+        if (!(bound <= SB_SCENE_MAX_COORD)) {
+            char what[300];
+            snprintf(what, sizeof what, "as its clips can pose it (their keys' largest translations, scales and "
+                     "weights), a vertex of its mesh may lie %.3g from the origin, beyond %g, which the rasterizer and "
+                     "the reference hold", bound, SB_SCENE_MAX_COORD);
+            return fail("/nodes/" + std::to_string(pl.node), what);
+        }
     }
     return true;
 }
@@ -1541,7 +1678,7 @@ extern "C" bool sb_gltf_load(sb_scene *s, const char *path, const sb_scene_opts 
         std::unique_ptr<sb_motion> motion(L.mo);   // freed on every way out but the scene's
         if (!ok) return false;
         L.reserve();
-        if (!L.emit_nodes()) return false;
+        if (!L.emit_nodes() || !L.anim_bound()) return false;
         if (motion && !motion->places.empty()) {
             s->motion = motion.release();
             s->motion_free = sb_motion_free;

@@ -119,6 +119,11 @@ typedef struct sb_plane {
     uint32_t tri_count;
 } sb_plane;
 
+/* The farthest a vertex, a lamp or a key's value may lie from the origin (scene units): the reference's float
+ * BVH and the rasterizer hold positions well within it (their products stay finite), as the path files do. A
+ * file whose geometry reaches past it, as placed or as its clips can pose it, is refused at load. */
+#define SB_SCENE_MAX_COORD 1e12
+
 /* Which of a file's animations play (--anim). */
 typedef enum sb_anim_mode {
     SB_ANIM_ALL,                 /* the default: every clip of the file plays, as the file says */

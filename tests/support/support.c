@@ -210,7 +210,7 @@ bool eval_frame(sb_session *s, const char *spec, int i, int n, sb_error_metrics 
     return ok;
 }
 
-static void base64(const unsigned char *in, size_t n, char *out) {
+void test_base64(const unsigned char *in, size_t n, char *out) {
     static const char tbl[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     size_t o = 0;
     for (size_t i = 0; i < n; i += 3) {
@@ -230,7 +230,7 @@ bool gltf_tri_write(const char *path, const gltf_tri *t) {
     memcpy(buf, pos, sizeof pos);
     memcpy(buf + 36, idx, sizeof idx);
     char b64[80], data_uri[128];
-    base64(buf, sizeof buf, b64);
+    test_base64(buf, sizeof buf, b64);
     snprintf(data_uri, sizeof data_uri, "data:application/octet-stream;base64,%s", b64);
 #define OR(f, d) (t->f ? t->f : (d))
     FILE *f = fopen(path, "w");

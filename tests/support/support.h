@@ -70,6 +70,8 @@ typedef struct gltf_tri {
     const char *root_more;      /* more root members, with a leading comma: "" */
 } gltf_tri;
 
+/* n bytes as base64 into out (4 * ((n + 2) / 3) + 1 bytes), for a data: URI. */
+void test_base64(const unsigned char *in, size_t n, char *out);
 /* Writes the document to path; false if it cannot. */
 bool gltf_tri_write(const char *path, const gltf_tri *t);
 /* Loads path as a scene expecting a refusal whose one-line message holds

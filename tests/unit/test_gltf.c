@@ -606,6 +606,107 @@ static void test_syntax_in_a_file(void **st) {
     expect_scene_refused(f, ": /: 'asset' is missing");
 }
 
+/* ---- numbers of any size (SB_SCENE_MAX_COORD) ---- */
+
+/* A triangle with animations: its buffer holds the triangle (accessors 0, 1), key times 0 and 1 as floats (2)
+ * and as unsigned ints (7), two keys of `keys` as VEC3 (3), VEC4 (4) and SCALAR (5), and a morph target moving
+ * every vertex by `delta` in x (6). nodes, mesh_more (after the primitive's attributes) and root_more are JSON. */
+static void anim_file(const char *path, const char *nodes, const char *prim_more, const char *mesh_more,
+                      const float keys[8], float delta, const char *root_more) {
+    unsigned char buf[128] = {0};
+    const float pos[9] = {0, 0, 0, 1, 0, 0, 0, 0, 1}, times[2] = {0, 1}, d[9] = {delta, 0, 0, delta, 0, 0, delta, 0, 0};
+    const uint16_t idx[3] = {0, 1, 2};
+    const uint32_t utimes[2] = {0, 1};
+    memcpy(buf, pos, 36);
+    memcpy(buf + 36, idx, 6);
+    memcpy(buf + 44, times, 8);
+    memcpy(buf + 52, keys, 32);
+    memcpy(buf + 84, d, 36);
+    memcpy(buf + 120, utimes, 8);
+    char b64[200];
+    test_base64(buf, sizeof buf, b64);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fprintf(f,
+            "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[%s],"
+            "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"indices\":1%s}]%s}],"
+            "\"buffers\":[{\"byteLength\":128,\"uri\":\"data:application/octet-stream;base64,%s\"}],"
+            "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36},{\"buffer\":0,\"byteOffset\":36,\"byteLength\":6},"
+            "{\"buffer\":0,\"byteOffset\":44,\"byteLength\":8},{\"buffer\":0,\"byteOffset\":52,\"byteLength\":32},"
+            "{\"buffer\":0,\"byteOffset\":84,\"byteLength\":36},{\"buffer\":0,\"byteOffset\":120,\"byteLength\":8}],"
+            "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\","
+            "\"min\":[0,0,0],\"max\":[1,0,1]},"
+            "{\"bufferView\":1,\"componentType\":5123,\"count\":3,\"type\":\"SCALAR\"},"
+            "{\"bufferView\":2,\"componentType\":5126,\"count\":2,\"type\":\"SCALAR\",\"min\":[0],\"max\":[1]},"
+            "{\"bufferView\":3,\"componentType\":5126,\"count\":2,\"type\":\"VEC3\"},"
+            "{\"bufferView\":3,\"componentType\":5126,\"count\":2,\"type\":\"VEC4\"},"
+            "{\"bufferView\":3,\"componentType\":5126,\"count\":2,\"type\":\"SCALAR\"},"
+            "{\"bufferView\":4,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},"
+            "{\"bufferView\":5,\"componentType\":5125,\"count\":2,\"type\":\"SCALAR\"}]%s}\n",
+            nodes, prim_more, mesh_more, b64, root_more);
+    fclose(f);
+}
+
+/* One channel of node n: "path" from accessor `out` (key times from accessor `in`). */
+static const char *channel(int in, int out, int n, const char *path) {
+    static char buf[4][256];
+    static int k;
+    k = (k + 1) % 4;
+    snprintf(buf[k], sizeof buf[k], ",\"animations\":[{\"samplers\":[{\"input\":%d,\"output\":%d}],\"channels\":"
+             "[{\"sampler\":0,\"target\":{\"node\":%d,\"path\":\"%s\"}}]}]", in, out, n, path);
+    return buf[k];
+}
+
+static void test_numbers_of_any_size(void **st) {
+    (void)st;
+    const float small[8] = {0, 0, 0, 10, 0, 0, 0, 1}, huge[8] = {0, 0, 0, 1e25f, 0, 0, 0, 1};
+    const float scale[8] = {1, 1, 1, 1e5f, 1e5f, 1e5f, 0, 1}, zero_q[8] = {0, 0, 0, 1, 0, 0, 0, 0};
+    const float weight[8] = {0, 1e9f, 0, 0, 0, 0, 0, 0}, weight_huge[8] = {0, 1e25f, 0, 0, 0, 0, 0, 0};
+    const char *morph = ",\"targets\":[{\"POSITION\":6}]", *w0 = ",\"weights\":[0]";
+    const char *f = tmp_file("ok-anim.gltf");
+    /* the control: a translation of 10 loads and plays */
+    anim_file(f, "{\"mesh\":0}", "", "", small, 0, channel(2, 3, 0, "translation"));
+    sb_scene s;
+    sb_err err;
+    assert_true(sb_scene_load(&s, f, NULL, &err));
+    assert_true(sb_scene_moves(&s));
+    sb_scene_free(&s);
+    /* a node's scale of 1e25 (finite, valid JSON): refused at load with the node */
+    f = tmp_file("scale.gltf");
+    anim_file(f, "{\"mesh\":0,\"scale\":[1e25,1e25,1e25]}", "", "", small, 0, "");
+    expect_scene_refused(f, "/nodes/0: vertex 1 of its mesh lies at 1e+25 as placed");
+    /* a translation key of 1e25 */
+    f = tmp_file("key.gltf");
+    anim_file(f, "{\"mesh\":0}", "", "", huge, 0, channel(2, 3, 0, "translation"));
+    expect_scene_refused(f, "/animations/0/channels/0/output: value 3 is");
+    /* scale keys of 1e5 on three nested nodes: each key fits, the pose they make (1e15) does not */
+    f = tmp_file("chain.gltf");
+    anim_file(f, "{\"mesh\":0},{\"children\":[0]},{\"children\":[1]}", "", "", scale, 0,
+              ",\"animations\":[{\"samplers\":[{\"input\":2,\"output\":3}],\"channels\":["
+              "{\"sampler\":0,\"target\":{\"node\":0,\"path\":\"scale\"}},"
+              "{\"sampler\":0,\"target\":{\"node\":1,\"path\":\"scale\"}},"
+              "{\"sampler\":0,\"target\":{\"node\":2,\"path\":\"scale\"}}]}]");
+    /* the file's scene is node 0 only: make node 2 the root */
+    char cmd[600];
+    snprintf(cmd, sizeof cmd, "sed -i 's/\"nodes\":\\[0\\]}/\"nodes\":[2]}/' %s", f);
+    assert_int_equal(system(cmd), 0);
+    expect_scene_refused(f, "/nodes/0: as its clips can pose it");
+    /* a morph weight key of 1e25, and one of 1e9 on a target that moves a vertex 1e4 (1e13 as posed) */
+    f = tmp_file("weight.gltf");
+    anim_file(f, "{\"mesh\":0}", morph, w0, weight_huge, 1, channel(2, 5, 0, "weights"));
+    expect_scene_refused(f, "/animations/0/channels/0/output: value 1 is");
+    f = tmp_file("weight-pose.gltf");
+    anim_file(f, "{\"mesh\":0}", morph, w0, weight, 1e4f, channel(2, 5, 0, "weights"));
+    expect_scene_refused(f, "/nodes/0: as its clips can pose it");
+    /* key times as integers (glTF: an input is FLOAT), a zero-length rotation key */
+    f = tmp_file("uint-times.gltf");
+    anim_file(f, "{\"mesh\":0}", "", "", small, 0, channel(7, 3, 0, "translation"));
+    expect_scene_refused(f, "/animations/0/channels/0/input: key times must be floats");
+    f = tmp_file("zero-q.gltf");
+    anim_file(f, "{\"mesh\":0}", "", "", zero_q, 0, channel(2, 4, 0, "rotation"));
+    expect_scene_refused(f, "/animations/0/channels/0/output: key 1 is a zero-length quaternion");
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_json_exact_integers),  cmocka_unit_test(test_json_strings),
@@ -620,6 +721,7 @@ int main(void) {
         cmocka_unit_test(test_degenerate),           cmocka_unit_test(test_lights),
         cmocka_unit_test(test_syntax_in_a_file),     cmocka_unit_test(test_required_extensions),
         cmocka_unit_test(test_unused_parts_lenient),
+        cmocka_unit_test(test_numbers_of_any_size),
     };
     return cmocka_run_group_tests_name("gltf", tests, setup, teardown);
 }
