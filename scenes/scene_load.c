@@ -7,6 +7,7 @@
 #include "motion.h"
 
 #include <limits.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -223,6 +224,32 @@ bool sb_resolve_bundled(const char *name, const char *ext, char *out, size_t out
     return false;
 }
 
+/* A lamp's range held to what the scene holds: the farthest corner of the scene's box from the lamp (twice that
+ * where clips move things, which may leave the box as loaded). A range past it lights nothing more, but as a far
+ * plane it spends the depth maps' precision on empty space (1e38: every caster clipped), so a range of 1e38 and
+ * one of the scene's diagonal are the same lamp. Said once at load. */
+static void fit_ranges(sb_scene *s) {
+    int k = 0;
+    for (uint32_t i = 0; i < s->light_count; i++) {
+        sb_light *l = &s->lights[i];
+        if (l->type == SB_LIGHT_DIRECTIONAL) continue;
+        double reach = 0;
+        for (int c = 0; c < 8; c++) {
+            sb_v3 corner = sb_v3_make(c & 1 ? s->bounds.hi.x : s->bounds.lo.x, c & 2 ? s->bounds.hi.y : s->bounds.lo.y,
+                                      c & 4 ? s->bounds.hi.z : s->bounds.lo.z);
+            reach = fmax(reach, sb_v3_len(sb_v3_sub(corner, l->position)));
+        }
+        if (s->motion) reach *= 2;
+        if (l->range > reach && reach > 0) {
+            sb_log("%s: lamp %d: its range %g reaches past everything the scene holds: held to %.6g, the farthest "
+                   "point of the scene's box from it%s", s->file, k, l->range, reach, s->motion ? " (twice: clips move "
+                   "things)" : "");
+            l->range = reach;
+        }
+        k++;
+    }
+}
+
 /* The file read, its checks, tinygltf and the flattening: a load without the cache. */
 static bool load_file(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_err *err) {
     sb_scene_begin(s);
@@ -236,6 +263,7 @@ static bool load_file(sb_scene *s, const char *path, const sb_scene_opts *opts, 
         s->motion_free(s->motion);
         s->motion = NULL;
     }
+    fit_ranges(s);
     if (s->motion) {   /* clips that play make other figures than the still scene: other run ids */
         struct {
             int mode;

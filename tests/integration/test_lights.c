@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "glb.h"
 #include "session.h"
 #include "spec.h"
 #include "support.h"
@@ -406,6 +407,54 @@ static void test_bad_lights(void **st) {
                     "%s run towers-night towers-night cube --frames 1 --lights 1,1 --out %s/x", test_binary(), g_tmp);
 }
 
+/* A floor and a box under one lamp of the given range. */
+static void write_lamp_scene(const char *path, double range) {
+    sb_glb_scene s = {0};
+    s.no_sun = true;
+    s.lamps[0] = sb_v3_make(1.5, 3, 0.5);
+    s.lamp_range[0] = range;
+    s.nlamps = 1;
+    sb_glb_box(sb_glb_new_mesh(&s, 0), -6, -0.2, -6, 6, 0, 6);
+    sb_glb_box(sb_glb_new_mesh(&s, 0), -1, 0, -1, 1, 2, 1);
+    assert_int_equal(sb_glb_write(&s, path), 0);
+}
+
+/* A lamp whose range reaches past the scene (valid glTF: 1e38) is the same lamp as one whose range is the scene's
+ * diagonal: its range is held to the farthest corner of the scene's box, said once. Before, cube's far plane at
+ * 1e38 put its near plane past every caster (err 0.94). */
+static void test_range_past_the_scene(void **st) {
+    (void)st;
+    char far[4096], diag[4096], dirs[2][4096];
+    snprintf(far, sizeof far, "%s/range-far.glb", g_tmp);
+    snprintf(diag, sizeof diag, "%s/range-diag.glb", g_tmp);
+    write_lamp_scene(far, 1e38);
+    write_lamp_scene(diag, sqrt(12 * 12 + 2.2 * 2.2 + 12 * 12));   /* the box's diagonal */
+    const char *files[2] = {far, diag};
+    char out[16384];
+    bool noted = false;
+    for (int k = 0; k < 2; k++) {
+        int rc = run_logged(out, sizeof out, "%s run %s auto cube:res=512 dpsm:res=512 atlas:res=512 raycast --frames 2 "
+                            "--warmup 0 --size 160x90 --error-every 1 --out %s/range%d", test_binary(), files[k], g_tmp, k);
+        assert_int_equal(rc, 0);
+        if (k == 0) noted = strstr(out, "its range 1e+38 reaches past everything the scene holds: held to") != NULL;
+        snprintf(dirs[k], sizeof dirs[k], "%s", last_line_of(out));
+    }
+    sb_table a, b;
+    summary_table(dirs[0], &a);
+    summary_table(dirs[1], &b);
+    assert_int_equal(a.nrows, 4);
+    for (int r = 0; r < a.nrows; r++) {
+        double ea = cell(&a, r, "err_rate_mean"), eb = cell(&b, r, "err_rate_mean");
+        print_message("%s: err_rate %g (range 1e38), %g (range the diagonal)\n", sb_table_get(&a, r, "technique"), ea, eb);
+        assert_string_equal(sb_table_get(&a, r, "status"), "ok");
+        assert_true(isfinite(ea) && ea < 0.15);   /* dpsm: 0.086 at its seam; 1e38 unfitted: 0.94 */
+        assert_true(ea == eb);
+    }
+    sb_table_free(&a);
+    sb_table_free(&b);
+    assert_true(noted);   /* said once, at load */
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_every_lamp_of_towers_night),
@@ -417,6 +466,7 @@ int main(void) {
         cmocka_unit_test(test_tune_atlas_under_memory),
         cmocka_unit_test(test_spots),
         cmocka_unit_test(test_bad_lights),
+        cmocka_unit_test(test_range_past_the_scene),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
