@@ -764,6 +764,26 @@ static bool check_nodes(ck *c) {
         for (j = (int64_t)i; j >= 0 && state[j] == 1; j = c->parent[j]) state[j] = 2;
     }
     free(state);
+    /* each node's depth, in linear time (a walk up stops at a node whose depth is known, then the path is given
+       its depths): a chain deeper than SB_GLTF_MAX_DEPTH is refused, naming the limit */
+    int64_t *depth = sb_xmalloc(sizeof(int64_t) * (c->n[K_NODE] + 1)), *up = NULL;
+    size_t nup = 0, cap = 0;
+    for (uint64_t i = 0; i < c->n[K_NODE]; i++) depth[i] = -1;
+    for (uint64_t i = 0; ok && i < c->n[K_NODE]; i++) {
+        nup = 0;
+        int64_t j = (int64_t)i;
+        for (; j >= 0 && depth[j] < 0; j = c->parent[j]) {
+            if (nup == cap) up = sb_xrealloc(up, sizeof *up * (cap = cap ? 2 * cap : 64));
+            up[nup++] = j;
+        }
+        int64_t d = j >= 0 ? depth[j] : 0;   /* a root is 1 level deep */
+        for (size_t k = nup; k-- > 0;) depth[up[k]] = ++d;
+        if (depth[i] > SB_GLTF_MAX_DEPTH)
+            ok = fail(c, at_i("/nodes", i).s, "the node graph is %lld levels deep here, deeper than the %d levels "
+                                              "shadowbench reads", (long long)depth[i], SB_GLTF_MAX_DEPTH);
+    }
+    free(up);
+    free(depth);
     return ok;
 }
 
@@ -1079,6 +1099,19 @@ static bool check_node_mesh_rules(ck *c) {
  * 2.0, 3.7.3 skins): refused with the joint's path. */
 static bool check_skin_joints_in_scene(ck *c) {
     uint8_t *in = sb_xmalloc(c->n[K_NODE] + 1);
+    /* each node's root, found once in linear time (a chain of a million nodes: each walk ends where one before
+       did, and the path is given the root it found) */
+    int64_t *root = sb_xmalloc(sizeof(int64_t) * (c->n[K_NODE] + 1));
+    for (uint64_t i = 0; i < c->n[K_NODE]; i++) root[i] = -1;
+    for (uint64_t i = 0; i < c->n[K_NODE]; i++) {
+        int64_t j = (int64_t)i;
+        while (root[j] < 0 && c->parent[j] >= 0) j = c->parent[j];
+        int64_t r = root[j] >= 0 ? root[j] : j;
+        for (int64_t k = (int64_t)i; root[k] < 0; k = c->parent[k] >= 0 ? c->parent[k] : k) {
+            root[k] = r;
+            if (c->parent[k] < 0) break;
+        }
+    }
     bool ok = true;
     for (uint64_t sc = 0; ok && sc < c->n[K_SCENE]; sc++) {
         const sb_json *roots = sb_json_get(&c->arr[K_SCENE]->items[sc], "nodes");
@@ -1089,11 +1122,8 @@ static bool check_skin_joints_in_scene(ck *c) {
             sb_json_u64(&roots->items[k], &r);
             in[r] = 1;
         }
-        for (uint64_t i = 0; i < c->n[K_NODE]; i++) {
-            int64_t j = (int64_t)i;
-            while (c->parent[j] >= 0) j = c->parent[j];
-            if (in[j] == 1) in[i] = in[i] ? in[i] : 2;
-        }
+        for (uint64_t i = 0; i < c->n[K_NODE]; i++)
+            if (in[root[i]] == 1) in[i] = in[i] ? in[i] : 2;
         for (uint64_t i = 0; ok && i < c->n[K_NODE]; i++) {
             const sb_json *skin = in[i] ? sb_json_get(&c->arr[K_NODE]->items[i], "skin") : NULL;
             if (!skin) continue;
@@ -1110,6 +1140,7 @@ static bool check_skin_joints_in_scene(ck *c) {
             }
         }
     }
+    free(root);
     free(in);
     return ok;
 }

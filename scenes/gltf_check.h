@@ -20,6 +20,10 @@
 
 #include "json.h"
 
+/* The deepest node graph read (levels from a root): a chain deeper is refused, naming it. Each level is a node
+ * the glTF library holds whole (about a kilobyte): 100,000 levels load in 0.2 s, a million took 3.6 s. */
+#define SB_GLTF_MAX_DEPTH 100000
+
 typedef struct sb_gltf_check_desc {
     const char *file;           /* for messages */
     const char *base_dir;       /* the scene's folder: relative URIs resolve against it */
