@@ -415,7 +415,10 @@ struct Loader {
                     continue;
                 }
                 double v[64] = {0};
-                if (ncomp > 64) return fail(where, "more than 64 morph weights");
+                if (ncomp > 64) {   // as a clip that plays it: left out, said
+                    left_out(where + ": " + std::to_string(ncomp) + " morph weights, more than the 64 played: not applied");
+                    continue;
+                }
                 sb_anim_sample(&chan.s, opts->pose_time, v);
                 double *dst = ch.target_path == "translation" ? trs[ni].t : ch.target_path == "rotation" ? trs[ni].r
                             : ch.target_path == "scale" ? trs[ni].s : nullptr;
@@ -634,8 +637,12 @@ struct Loader {
                 auto it = p.targets[t].find(name);
                 if (it == p.targets[t].end()) continue;
                 std::vector<double> delta, &dst = name[0] == 'P' ? d.pos : d.nrm;
-                if (!read_vec(c, it->second, where + "/targets/" + std::to_string(t) + "/" + name, 3, delta)) return false;
-                if (delta.size() != dst.size()) continue; // NORMAL deltas without normals
+                std::string tp = where + "/targets/" + std::to_string(t) + "/" + name;
+                if (!read_vec(c, it->second, tp, 3, delta)) return false;
+                if (name[0] == 'N' && dst.empty()) continue;   // NORMAL deltas without normals: nothing to move
+                if (delta.size() != dst.size())
+                    return fail(tp, "count " + std::to_string(delta.size() / 3) + " differs from the primitive's " +
+                                        std::to_string(dst.size() / 3) + " vertices");
                 for (size_t i = 0; i < dst.size(); i++) dst[i] += w[t] * delta[i];
             }
         }
@@ -657,9 +664,20 @@ struct Loader {
             sb_m4 inv = sb_m4_identity();
             if (ibm.size() >= 16 * (j + 1))
                 for (int k = 0; k < 16; k++) inv.m[k] = ibm[16 * j + k];
+            if (det3(inv) == 0)   // it collapses every vertex the joint weighs onto a plane, a line or a point
+                return fail(sp + "/inverseBindMatrices", "matrix " + std::to_string(j) +
+                                                             " is not invertible (no bind pose maps to it)");
             jm[j] = sb_m4_mul(world[jn], inv);
         }
         size_t nv = d.pos.size() / 3;
+        for (size_t v = 0; v < nv; v++) {
+            double sum = 0;
+            for (int set = 0; set < d.skin_sets; set++)
+                for (int k = 0; k < 4; k++) sum += d.weights[set][4 * v + k];
+            if (!(fabs(sum) > 1e-6))   // glTF: a vertex's weights sum to 1; none at all would put it at the origin
+                return fail(where + "/attributes/WEIGHTS_0", "the weights of vertex " + std::to_string(v) +
+                                                                 " sum to 0 (glTF: to 1): it would collapse to the origin");
+        }
         for (size_t v = 0; v < nv; v++)
             for (int set = 0; set < d.skin_sets; set++)
                 for (int k = 0; k < 4; k++) {
@@ -692,8 +710,13 @@ struct Loader {
                 auto it = p.targets[t].find(name);
                 if (it == p.targets[t].end()) continue;
                 std::vector<double> &dst = name[0] == 'P' ? pl.dpos[t] : pl.dnrm[t];
-                if (!read_vec(c, it->second, where + "/targets/" + std::to_string(t) + "/" + name, 3, dst)) return false;
-                if (dst.size() != (name[0] == 'P' ? d.pos : d.nrm).size()) dst.clear();   // NORMAL deltas without normals
+                std::string tp = where + "/targets/" + std::to_string(t) + "/" + name;
+                if (!read_vec(c, it->second, tp, 3, dst)) return false;
+                const std::vector<double> &own = name[0] == 'P' ? d.pos : d.nrm;
+                if (name[0] == 'N' && own.empty()) dst.clear();   // NORMAL deltas without normals: nothing to move
+                else if (dst.size() != own.size())
+                    return fail(tp, "count " + std::to_string(dst.size() / 3) + " differs from the primitive's " +
+                                        std::to_string(own.size() / 3) + " vertices");
             }
         return true;
     }
@@ -981,9 +1004,14 @@ bool Loader::clips() {
                                            : ch.target_path == "scale" ? PATH_S : ch.target_path == "weights" ? PATH_W : -1;
             if (ni < 0 || ni >= (int)nn || path < 0) continue;   // a pointer channel: left out by the check, said
             int ncomp = path == PATH_R ? 4 : path == PATH_W ? (int)weights[ni].size() : 3;
-            if (ncomp == 0 || ncomp > 64 || !claimed.insert({ni, path}).second) continue;
-            MoChannel mc{(int)mm->clips.size(), ni, path, {}};
             std::string where = "/animations/" + std::to_string(ai) + "/channels/" + std::to_string(ci), skip;
+            if (ncomp > 64) {   // as --pose reads it: left out, said (never dropped in silence)
+                left_out(where + ": " + std::to_string(ncomp) + " morph weights, more than the 64 played: not applied");
+                mm->skipped++;
+                continue;
+            }
+            if (ncomp == 0 || !claimed.insert({ni, path}).second) continue;
+            MoChannel mc{(int)mm->clips.size(), ni, path, {}};
             if (!read_channel(c, an, ch, where, ncomp, mc.ch, &skip)) return false;
             if (!skip.empty()) {
                 left_out(skip);
@@ -1004,6 +1032,27 @@ bool Loader::clips() {
     }
     for (int ni : mm->topo)   // a node under a moving one moves
         if (parent[ni] >= 0 && moves[parent[ni]]) moves[ni] = 1;
+    // what the clips would move that the tool does not play: said, never silent
+    for (size_t ni = 0; ni < nn; ni++)
+        if (moves[ni] && m.nodes[ni].extensions.count("KHR_lights_punctual"))
+            left_out("/nodes/" + std::to_string(ni) + ": its light is moved by a clip; lights stay where the file "
+                     "places them (the shadows and the reference are of that place)");
+    for (const MoChannel &mc : mm->channels) {
+        if (mc.path != PATH_S) continue;
+        const sb_trs &r = mm->rest[mc.node];
+        bool rest_mirrors = r.s[0] * r.s[1] * r.s[2] < 0;
+        size_t keys = mc.ch.in.size(), nc = keys ? mc.ch.out.size() / keys : 0;
+        size_t at = mc.ch.s.interp == SB_INTERP_CUBIC ? 3 : 0;   // a cubic key's value follows its in-tangent
+        for (size_t k = 0; k < keys; k++) {
+            const double *v = &mc.ch.out[k * nc + at];
+            if ((v[0] * v[1] * v[2] < 0) != rest_mirrors) {
+                left_out("/nodes/" + std::to_string(mc.node) + ": a scale key (" + std::to_string(k) + ") mirrors it "
+                         "where its rest pose does not, or the other way: its triangles keep their rest pose's "
+                         "winding, so on those frames their other side faces out (single-sided: culled)");
+                break;
+            }
+        }
+    }
     for (char a : animated) mm->animated_nodes += a;
     mm->skin_joints.resize(m.skins.size());
     mm->skin_ibm.resize(m.skins.size());

@@ -611,9 +611,10 @@ static void test_syntax_in_a_file(void **st) {
 
 /* A triangle with animations: its buffer holds the triangle (accessors 0, 1), key times 0 and 1 as floats (2)
  * and as unsigned ints (7), two keys of `keys` as VEC3 (3), VEC4 (4) and SCALAR (5), and a morph target moving
- * every vertex by `delta` in x (6). nodes, mesh_more (after the primitive's attributes) and root_more are JSON. */
+ * every vertex by `delta` in x (6). nodes, prim_more (after the primitive's attributes), mesh_more, root_more and
+ * acc_more (accessors 8 and on) are JSON. */
 static void anim_file(const char *path, const char *nodes, const char *prim_more, const char *mesh_more,
-                      const float keys[8], float delta, const char *root_more) {
+                      const float keys[8], float delta, const char *root_more, const char *acc_more) {
     unsigned char buf[128] = {0};
     const float pos[9] = {0, 0, 0, 1, 0, 0, 0, 0, 1}, times[2] = {0, 1}, d[9] = {delta, 0, 0, delta, 0, 0, delta, 0, 0};
     const uint16_t idx[3] = {0, 1, 2};
@@ -643,8 +644,8 @@ static void anim_file(const char *path, const char *nodes, const char *prim_more
             "{\"bufferView\":3,\"componentType\":5126,\"count\":2,\"type\":\"VEC4\"},"
             "{\"bufferView\":3,\"componentType\":5126,\"count\":2,\"type\":\"SCALAR\"},"
             "{\"bufferView\":4,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},"
-            "{\"bufferView\":5,\"componentType\":5125,\"count\":2,\"type\":\"SCALAR\"}]%s}\n",
-            nodes, prim_more, mesh_more, b64, root_more);
+            "{\"bufferView\":5,\"componentType\":5125,\"count\":2,\"type\":\"SCALAR\"}%s]%s}\n",
+            nodes, prim_more, mesh_more, b64, acc_more, root_more);
     fclose(f);
 }
 
@@ -666,7 +667,7 @@ static void test_numbers_of_any_size(void **st) {
     const char *morph = ",\"targets\":[{\"POSITION\":6}]", *w0 = ",\"weights\":[0]";
     const char *f = tmp_file("ok-anim.gltf");
     /* the control: a translation of 10 loads and plays */
-    anim_file(f, "{\"mesh\":0}", "", "", small, 0, channel(2, 3, 0, "translation"));
+    anim_file(f, "{\"mesh\":0}", "", "", small, 0, channel(2, 3, 0, "translation"), "");
     sb_scene s;
     sb_err err;
     assert_true(sb_scene_load(&s, f, NULL, &err));
@@ -674,11 +675,11 @@ static void test_numbers_of_any_size(void **st) {
     sb_scene_free(&s);
     /* a node's scale of 1e25 (finite, valid JSON): refused at load with the node */
     f = tmp_file("scale.gltf");
-    anim_file(f, "{\"mesh\":0,\"scale\":[1e25,1e25,1e25]}", "", "", small, 0, "");
+    anim_file(f, "{\"mesh\":0,\"scale\":[1e25,1e25,1e25]}", "", "", small, 0, "", "");
     expect_scene_refused(f, "/nodes/0: vertex 1 of its mesh lies at 1e+25 as placed");
     /* a translation key of 1e25 */
     f = tmp_file("key.gltf");
-    anim_file(f, "{\"mesh\":0}", "", "", huge, 0, channel(2, 3, 0, "translation"));
+    anim_file(f, "{\"mesh\":0}", "", "", huge, 0, channel(2, 3, 0, "translation"), "");
     expect_scene_refused(f, "/animations/0/channels/0/output: value 3 is");
     /* scale keys of 1e5 on three nested nodes: each key fits, the pose they make (1e15) does not */
     f = tmp_file("chain.gltf");
@@ -686,7 +687,7 @@ static void test_numbers_of_any_size(void **st) {
               ",\"animations\":[{\"samplers\":[{\"input\":2,\"output\":3}],\"channels\":["
               "{\"sampler\":0,\"target\":{\"node\":0,\"path\":\"scale\"}},"
               "{\"sampler\":0,\"target\":{\"node\":1,\"path\":\"scale\"}},"
-              "{\"sampler\":0,\"target\":{\"node\":2,\"path\":\"scale\"}}]}]");
+              "{\"sampler\":0,\"target\":{\"node\":2,\"path\":\"scale\"}}]}]", "");
     /* the file's scene is node 0 only: make node 2 the root */
     char cmd[600];
     snprintf(cmd, sizeof cmd, "sed -i 's/\"nodes\":\\[0\\]}/\"nodes\":[2]}/' %s", f);
@@ -694,17 +695,17 @@ static void test_numbers_of_any_size(void **st) {
     expect_scene_refused(f, "/nodes/0: as its clips can pose it");
     /* a morph weight key of 1e25, and one of 1e9 on a target that moves a vertex 1e4 (1e13 as posed) */
     f = tmp_file("weight.gltf");
-    anim_file(f, "{\"mesh\":0}", morph, w0, weight_huge, 1, channel(2, 5, 0, "weights"));
+    anim_file(f, "{\"mesh\":0}", morph, w0, weight_huge, 1, channel(2, 5, 0, "weights"), "");
     expect_scene_refused(f, "/animations/0/channels/0/output: value 1 is");
     f = tmp_file("weight-pose.gltf");
-    anim_file(f, "{\"mesh\":0}", morph, w0, weight, 1e4f, channel(2, 5, 0, "weights"));
+    anim_file(f, "{\"mesh\":0}", morph, w0, weight, 1e4f, channel(2, 5, 0, "weights"), "");
     expect_scene_refused(f, "/nodes/0: as its clips can pose it");
     /* key times as integers (glTF: an input is FLOAT), a zero-length rotation key */
     f = tmp_file("uint-times.gltf");
-    anim_file(f, "{\"mesh\":0}", "", "", small, 0, channel(7, 3, 0, "translation"));
+    anim_file(f, "{\"mesh\":0}", "", "", small, 0, channel(7, 3, 0, "translation"), "");
     expect_scene_refused(f, "/animations/0/channels/0/input: key times must be floats");
     f = tmp_file("zero-q.gltf");
-    anim_file(f, "{\"mesh\":0}", "", "", zero_q, 0, channel(2, 4, 0, "rotation"));
+    anim_file(f, "{\"mesh\":0}", "", "", zero_q, 0, channel(2, 4, 0, "rotation"), "");
     expect_scene_refused(f, "/animations/0/channels/0/output: key 1 is a zero-length quaternion");
 }
 
@@ -738,6 +739,74 @@ static void test_deep_chains(void **st) {
     expect_scene_refused(f, "levels deep here, deeper than the 100000 levels shadowbench reads");
 }
 
+/* glTF animation semantics: refused with the place, or said (info and every run's warnings), never silent. */
+static void test_animation_semantics(void **st) {
+    (void)st;
+    const float scale[8] = {1, 1, 1, -1, 1, 1, 0, 1}, move[8] = {0, 0, 0, 1, 0, 0, 0, 1};
+    /* a morph target whose count is not the primitive's (accessor 3: two vertices of three) */
+    const char *f = tmp_file("morph-count.gltf");
+    anim_file(f, "{\"mesh\":0}", ",\"targets\":[{\"POSITION\":3}]", ",\"weights\":[0.5]", move, 0, "", "");
+    expect_scene_refused(f, "/meshes/0/primitives/0/targets/0/POSITION: count 2 differs from the primitive's 3 vertices");
+    /* 65 morph targets played by a clip: left out and said, as --pose says it */
+    char targets[2048] = ",\"targets\":[", weights[512] = ",\"weights\":[";
+    for (int t = 0; t < 65; t++) {
+        strcat(targets, t ? ",{\"POSITION\":6}" : "{\"POSITION\":6}");
+        strcat(weights, t ? ",0" : "0");
+    }
+    strcat(targets, "]");
+    strcat(weights, "]");
+    f = tmp_file("morph-65.gltf");
+    anim_file(f, "{\"mesh\":0}", targets, weights, move, 1, channel(2, 8, 0, "weights"),
+              ",{\"componentType\":5126,\"count\":130,\"type\":\"SCALAR\"}");
+    sb_scene s;
+    sb_err err;
+    assert_true(sb_scene_load(&s, f, NULL, &err));
+    print_message("unused: %s\n", s.unused);
+    assert_non_null(strstr(s.unused, "/animations/0/channels/0: 65 morph weights, more than the 64 played: not applied"));
+    sb_scene_free(&s);
+    sb_scene_opts po = {.pose = true, .pose_time = 0.5};
+    assert_true(sb_scene_load(&s, f, &po, &err));
+    assert_non_null(strstr(s.unused, "65 morph weights, more than the 64 played"));
+    sb_scene_free(&s);
+    /* a skinned vertex whose weights are all 0 (accessor 9: zeros), and a joint whose inverse bind matrix is 0 */
+    const char *skin_nodes = "{\"mesh\":0,\"skin\":0,\"children\":[1]},{}";
+    const char *skin_prim = ",\"attributes\":{\"POSITION\":0,\"JOINTS_0\":8,\"WEIGHTS_0\":9}";
+    const char *skin_acc = ",{\"componentType\":5121,\"count\":3,\"type\":\"VEC4\"},"
+                           "{\"componentType\":5126,\"count\":3,\"type\":\"VEC4\"},"
+                           "{\"componentType\":5126,\"count\":1,\"type\":\"MAT4\"}";
+    f = tmp_file("zero-weights.gltf");
+    anim_file(f, skin_nodes, skin_prim, "", move, 0, ",\"skins\":[{\"joints\":[1]}]", skin_acc);
+    /* the primitive names its attributes once: the skinned ones replace the triangle's own */
+    char cmd[600];
+    snprintf(cmd, sizeof cmd, "sed -i 's/\"attributes\":{\"POSITION\":0},\"indices\":1,/\"indices\":1,/' %s", f);
+    assert_int_equal(system(cmd), 0);
+    expect_scene_refused(f, "/attributes/WEIGHTS_0: the weights of vertex 0 sum to 0");
+    f = tmp_file("zero-ibm.gltf");
+    anim_file(f, skin_nodes, skin_prim, "", move, 0, ",\"skins\":[{\"joints\":[1],\"inverseBindMatrices\":10}]",
+              skin_acc);
+    snprintf(cmd, sizeof cmd, "sed -i 's/\"attributes\":{\"POSITION\":0},\"indices\":1,/\"indices\":1,/' %s", f);
+    assert_int_equal(system(cmd), 0);
+    expect_scene_refused(f, "/skins/0/inverseBindMatrices: matrix 0 is not invertible");
+    /* a scale key that mirrors the node: said (its winding is its rest pose's) */
+    f = tmp_file("mirror.gltf");
+    anim_file(f, "{\"mesh\":0}", "", "", scale, 0, channel(2, 3, 0, "scale"), "");
+    assert_true(sb_scene_load(&s, f, NULL, &err));
+    assert_non_null(strstr(s.unused, "/nodes/0: a scale key (1) mirrors it"));
+    sb_scene_free(&s);
+    /* a lamp on a node a clip moves: said (lights stay where the file places them) */
+    f = tmp_file("lamp-moves.gltf");
+    anim_file(f, "{\"mesh\":0,\"children\":[1]},{\"extensions\":{\"KHR_lights_punctual\":{\"light\":0}}}", "", "",
+              move, 0,
+              ",\"extensionsUsed\":[\"KHR_lights_punctual\"],\"extensions\":{\"KHR_lights_punctual\":{\"lights\":"
+              "[{\"type\":\"point\"}]}},\"animations\":[{\"samplers\":[{\"input\":2,\"output\":3}],\"channels\":"
+              "[{\"sampler\":0,\"target\":{\"node\":0,\"path\":\"translation\"}}]}]",
+              "");
+    assert_true(sb_scene_load(&s, f, NULL, &err));
+    print_message("unused: %s\n", s.unused);
+    assert_non_null(strstr(s.unused, "/nodes/1: its light is moved by a clip"));
+    sb_scene_free(&s);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_json_exact_integers),  cmocka_unit_test(test_json_strings),
@@ -754,6 +823,7 @@ int main(void) {
         cmocka_unit_test(test_unused_parts_lenient),
         cmocka_unit_test(test_numbers_of_any_size),
         cmocka_unit_test(test_deep_chains),
+        cmocka_unit_test(test_animation_semantics),
     };
     return cmocka_run_group_tests_name("gltf", tests, setup, teardown);
 }
