@@ -1,6 +1,8 @@
 /* history_store.c - the results history's SQLite file (history_store.h). */
 #include "history_store.h"
 
+#include "columns.h"
+
 #include <errno.h>
 #include <math.h>
 #include <sqlite3.h>
@@ -101,6 +103,12 @@ static bool make_parent(const char *path, sb_err *err) {
     return sb_mkdir_p(dir, err);
 }
 
+/* sb_status(TEXT): the typed status a summary's cell names (columns.h), so no query compares status names. */
+static void sql_status(sqlite3_context *ctx, int n, sqlite3_value **v) {
+    (void)n;
+    sqlite3_result_int(ctx, (int)sb_status_of((const char *)sqlite3_value_text(v[0])));
+}
+
 sb_history *sb_history_open(const char *path, bool write, sb_err *err) {
     sb_history *h = sb_xcalloc(1, sizeof *h);
     snprintf(h->path, sizeof h->path, "%s", path);
@@ -124,6 +132,10 @@ sb_history *sb_history_open(const char *path, bool write, sb_err *err) {
     int flags = write ? SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE : SQLITE_OPEN_READONLY;
     bool ok = sqlite3_open_v2(path, &h->db, flags, NULL) == SQLITE_OK || db_fail(h, err, "cannot open");
     if (ok) sqlite3_busy_timeout(h->db, 10000);
+    /* a run's status is read back as the typed status (sb_status_of), in SQL too: sb_status(r.status) */
+    ok = ok && (sqlite3_create_function(h->db, "sb_status", 1, SQLITE_UTF8 | SQLITE_DETERMINISTIC, NULL, sql_status,
+                                        NULL, NULL) == SQLITE_OK ||
+                db_fail(h, err, "cannot register sb_status"));
     /* a file that is not a database fails on its first read */
     ok = ok && exec(h, "SELECT count(*) FROM sqlite_master", err) && (write ? migrate(h, err) : check_version(h, err));
     if (!ok) {
@@ -272,12 +284,14 @@ static void read_night(sqlite3_stmt *st, sb_history_night *x) {
 int sb_history_nights(sb_history *h, sb_history_night **out, sb_err *err) {
     *out = NULL;
     sqlite3_stmt *st;
-    if (sqlite3_prepare_v2(h->db,
-                           "SELECT n.id, n.date, n.host, n.git_commit, n.renderer, n.version, n.header, n.meta, n.dir, "
-                           "count(r.id), sum(r.status = 'ok'), sum(r.status = 'failed'), sum(r.stable = 'no'), "
-                           "sum(r.warnings != '') FROM nights n LEFT JOIN runs r ON r.night = n.id GROUP BY n.id "
-                           "ORDER BY n.date, n.id",
-                           -1, &st, NULL) != SQLITE_OK)
+    char sql[1024];
+    snprintf(sql, sizeof sql,
+             "SELECT n.id, n.date, n.host, n.git_commit, n.renderer, n.version, n.header, n.meta, n.dir, "
+             "count(r.id), sum(sb_status(r.status) = %d), sum(sb_status(r.status) = %d), sum(r.stable = 'no'), "
+             "sum(r.warnings != '') FROM nights n LEFT JOIN runs r ON r.night = n.id GROUP BY n.id "
+             "ORDER BY n.date, n.id",
+             SB_STATUS_OK, SB_STATUS_FAILED);
+    if (sqlite3_prepare_v2(h->db, sql, -1, &st, NULL) != SQLITE_OK)
         return db_fail(h, err, "reading the nights"), -1;
     int n = 0;
     while (sqlite3_step(st) == SQLITE_ROW) {
@@ -361,12 +375,13 @@ int sb_history_points_of(sb_history *h, const char *series_key, const char *cent
                          sb_history_point **out, sb_err *err) {
     *out = NULL;
     const char *texts[] = {series_key, center, ci && ci[0] ? ci : "-"};
-    sqlite3_stmt *st = prepare_texts(h,
-                                     "SELECT r.night, n.date, r.stable, c.value, i.value, n.git_commit FROM runs r "
-                                     "JOIN nights n ON n.id = r.night JOIN metrics c ON c.run = r.id AND c.name = ?2 "
-                                     "LEFT JOIN metrics i ON i.run = r.id AND i.name = ?3 WHERE r.series = ?1 AND "
-                                     "r.status = 'ok' ORDER BY n.date, n.id",
-                                     texts, 3, err);
+    char sql[1024];
+    snprintf(sql, sizeof sql,
+             "SELECT r.night, n.date, r.stable, c.value, i.value, n.git_commit FROM runs r "
+             "JOIN nights n ON n.id = r.night JOIN metrics c ON c.run = r.id AND c.name = ?2 "
+             "LEFT JOIN metrics i ON i.run = r.id AND i.name = ?3 WHERE r.series = ?1 AND "
+             "sb_status(r.status) = %d ORDER BY n.date, n.id", SB_STATUS_OK);
+    sqlite3_stmt *st = prepare_texts(h, sql, texts, 3, err);
     if (!st) return -1;
     int n = 0;
     while (sqlite3_step(st) == SQLITE_ROW) {
@@ -381,13 +396,13 @@ bool sb_history_each_figure(sb_history *h, const char *center, const char *ci, c
                             void (*fn)(const char *series_key, const sb_history_point *p, void *arg), void *arg,
                             sb_err *err) {
     const char *texts[] = {center, ci && ci[0] ? ci : "-", since ? since : ""};
-    sqlite3_stmt *st = prepare_texts(h,
-                                     "SELECT r.series, r.night, n.date, r.stable, c.value, i.value, n.git_commit "
-                                     "FROM runs r JOIN nights n ON n.id = r.night "
-                                     "JOIN metrics c ON c.run = r.id AND c.name = ?1 "
-                                     "LEFT JOIN metrics i ON i.run = r.id AND i.name = ?2 "
-                                     "WHERE r.status = 'ok' AND n.date >= ?3 ORDER BY r.series, n.date, n.id",
-                                     texts, 3, err);
+    char sql[1024];
+    snprintf(sql, sizeof sql,
+             "SELECT r.series, r.night, n.date, r.stable, c.value, i.value, n.git_commit "
+             "FROM runs r JOIN nights n ON n.id = r.night JOIN metrics c ON c.run = r.id AND c.name = ?1 "
+             "LEFT JOIN metrics i ON i.run = r.id AND i.name = ?2 "
+             "WHERE sb_status(r.status) = %d AND n.date >= ?3 ORDER BY r.series, n.date, n.id", SB_STATUS_OK);
+    sqlite3_stmt *st = prepare_texts(h, sql, texts, 3, err);
     if (!st) return false;
     while (sqlite3_step(st) == SQLITE_ROW) {
         sb_history_point p;
