@@ -96,3 +96,35 @@ sb_stats sb_stats_compute(const double *v, int n) {
     free(c);
     return s;
 }
+
+sb_paired sb_paired_compute(const double *a, const double *b, int n) {
+    sb_paired p = {.ratio = NAN, .lo = -INFINITY, .hi = INFINITY, .ci = INFINITY};
+    double *x = sb_xmalloc(sizeof *x * (size_t)(n > 0 ? n : 1)), *d = sb_xmalloc(sizeof *d * (size_t)(n > 0 ? n : 1));
+    double sb = 0;
+    for (int i = 0; i < n; i++)
+        if (!isnan(a[i]) && !isnan(b[i])) x[p.n] = a[i], d[p.n++] = b[i] - a[i], sb += b[i];
+    if (p.n >= 1) {
+        sb_stats sx = sb_stats_compute(x, p.n), sd = sb_stats_compute(d, p.n);
+        p.a = sx.mean, p.b = sb / p.n, p.diff = sd.mean;
+        if (p.n >= 2) p.ci = sd.ci95;
+        if (sx.mean > 0) {
+            p.ratio = 1 + sd.mean / sx.mean;
+            if (p.n >= 2) p.lo = fmax(0, 1 + (sd.mean - sd.ci95) / sx.mean), p.hi = 1 + (sd.mean + sd.ci95) / sx.mean;
+        }
+    } else {
+        p.a = p.b = p.diff = NAN;
+    }
+    free(x);
+    free(d);
+    return p;
+}
+
+sb_pair_verdict sb_paired_verdict(const sb_paired *p, double share) {
+    if (p->lo > 1 + share) return SB_PAIR_HIGHER;
+    if (p->hi < 1 - share) return SB_PAIR_LOWER;
+    return SB_PAIR_TIE;
+}
+
+bool sb_paired_differs(const sb_paired *p, double threshold_pct) {
+    return fabs(p->diff) > p->ci && p->a != 0 && 100 * fabs(p->diff) / fabs(p->a) >= threshold_pct;
+}

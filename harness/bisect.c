@@ -223,6 +223,7 @@ static double measure(bisect *b, const commit *c, char *why, size_t wlen) {
 typedef struct paired {
     double diff, ci, good, cand;   /* mean difference cand - good, its 95% CI, the means */
     int n;
+    sb_paired whole;               /* the same, as stats.h computes and judges it */
 } paired;
 
 static bool pair_runs(bisect *b, const commit *cand, const commit *good, int pairs, double *dc, double *dg, int *n,
@@ -239,13 +240,8 @@ static bool pair_runs(bisect *b, const commit *cand, const commit *good, int pai
 }
 
 static paired summarize(const double *dc, const double *dg, int n) {
-    double d[4 * 100];
-    paired p = {.n = n};
-    for (int i = 0; i < n; i++) d[i] = dc[i] - dg[i], p.good += dg[i] / n, p.cand += dc[i] / n;
-    sb_stats s = sb_stats_compute(d, n);
-    p.diff = s.mean;
-    p.ci = n > 1 ? s.ci95 : INFINITY;
-    return p;
+    sb_paired s = sb_paired_compute(dg, dc, n);   /* the candidate against GOOD, pair by pair */
+    return (paired){.n = s.n, .good = s.a, .cand = s.b, .diff = s.diff, .ci = s.ci, .whole = s};
 }
 
 static void print_pair(const bisect *b, const paired *p) {
@@ -469,7 +465,7 @@ static int measure_ends(bisect *b, commit *c, int last, paired *whole, double *g
         printf("BAD against GOOD: ");
         print_pair(b, whole);
         printf("\n");
-        if (!(fabs(whole->diff) > whole->ci && 100 * fabs(whole->diff) / whole->good >= b->threshold)) {
+        if (!sb_paired_differs(&whole->whole, b->threshold)) {
             printf("GOOD and BAD do not differ beyond the noise: %+.4g %s ± %.2g (%+.1f %%; --threshold %g %%)\n",
                    whole->diff, b->mc.unit, whole->ci, 100 * whole->diff / whole->good, b->threshold);
             return SB_EXIT_FAILED;

@@ -364,27 +364,18 @@ static pairing compare(const tune *t, int rung, const cand *a, const cand *b) {
     frame_vals fa = load_frames(t, rung, a, time ? t->col.time : t->col.err);
     frame_vals fb = load_frames(t, rung, b, time ? t->col.time : t->col.err);
     pairing p = {.ratio = NAN, .lo = -INFINITY, .hi = INFINITY, .by_pass = time && fa.passes > 1 && fb.passes > 1};
-    int cap = (fa.n < fb.n ? fa.n : fb.n) + 1;
-    double *x = sb_xmalloc(sizeof *x * (size_t)cap), *d = sb_xmalloc(sizeof *d * (size_t)cap);
+    int cap = (fa.n < fb.n ? fa.n : fb.n) + 1, k = 0;
+    double *x = sb_xmalloc(sizeof *x * (size_t)cap), *y = sb_xmalloc(sizeof *y * (size_t)cap);
     if (p.by_pass) {
-        for (int k = 0; k < fa.passes && k < fb.passes; k++) {
-            double u = pass_median(&fa, k), w = pass_median(&fb, k);
-            if (!isnan(u) && !isnan(w)) x[p.n] = u, d[p.n++] = w - u;
-        }
+        for (int q = 0; q < fa.passes && q < fb.passes; q++) x[k] = pass_median(&fa, q), y[k++] = pass_median(&fb, q);
     } else {
         for (int i = 0; i < fa.n && i < fb.n; i++)   /* the same frame of the same pass: the same camera */
-            if (fa.pass[i] == 0 && fb.pass[i] == 0 && !isnan(fa.v[i]) && !isnan(fb.v[i]))
-                x[p.n] = fa.v[i], d[p.n++] = fb.v[i] - fa.v[i];
+            if (fa.pass[i] == 0 && fb.pass[i] == 0) x[k] = fa.v[i], y[k++] = fb.v[i];
     }
-    if (p.n >= 1) {
-        sb_stats sx = sb_stats_compute(x, p.n), sd = sb_stats_compute(d, p.n);
-        if (sx.mean > 0) {
-            p.ratio = 1 + sd.mean / sx.mean;
-            if (p.n >= 2) p.lo = fmax(0, 1 + (sd.mean - sd.ci95) / sx.mean), p.hi = 1 + (sd.mean + sd.ci95) / sx.mean;
-        }
-    }
+    sb_paired sp = sb_paired_compute(x, y, k);   /* NaN pairs skipped */
+    p.n = sp.n, p.ratio = sp.ratio, p.lo = sp.lo, p.hi = sp.hi;
     free(x);
-    free(d);
+    free(y);
     free_frames(&fa);
     free_frames(&fb);
     return p;
@@ -708,12 +699,14 @@ static verdict decide(tune *t, int rung) {
        its CI only says how the cameras of the path differ */
     const double share = t->cmd->max_err > 0 ? TIE_SHARE : 0;
     v.p = compare(t, rung, &t->c[v.chosen], &t->c[v.other]);
-    if (v.p.hi < 1 - share) {   /* the pairs say the other is clearly better: they outrank the pooled figure */
+    sb_paired pr = {.lo = v.p.lo, .hi = v.p.hi};
+    if (sb_paired_verdict(&pr, share) == SB_PAIR_LOWER) {   /* the pairs say the other is clearly better: they outrank the pooled figure */
         int o = v.other;
         v.other = v.chosen, v.chosen = o;
         v.p = compare(t, rung, &t->c[v.chosen], &t->c[v.other]);
     }
-    v.tie = !(v.p.lo > 1 + share);
+    pr = (sb_paired){.lo = v.p.lo, .hi = v.p.hi};
+    v.tie = sb_paired_verdict(&pr, share) != SB_PAIR_HIGHER;
     if (v.tie) {
         int pick = tiebreak(t, v.chosen, v.other, v.picked_on, sizeof v.picked_on);
         if (pick != v.chosen) {   /* the figures from the one picked */
