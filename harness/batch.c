@@ -426,6 +426,7 @@ bool sb_resume_check(const char *dir, const char *identity, const char *const *i
     if (differs)
         return sb_fail(err, "--resume %s: %s: resume a set with the command that made it%s, or leave --resume out "
                             "for a set of its own", dir, what, command);
+    if (n < 0) return true;   /* a folder of results sets (tune's rungs): the identity alone */
     /* a set from before its meta said what made it: its runs must all be this command's */
     snprintf(path, sizeof path, "%s/summary.csv", dir);
     sb_table old;

@@ -69,7 +69,8 @@ void sb_batch_shard(const sb_batch *b, int shard, int nshards, bool *selected);
  * per-frame CSV) are kept in sum as they were and marked done. Returns how many. */
 /* Whether DIR may be resumed by this command: its meta's "set: " lines against `identity` (the first that differs
  * is refused, naming the option and both values), and every run of its summary among ids[0..n) (NULL entries
- * skipped): false with one line to say, before anything is written. */
+ * skipped; n < 0: no summary to hold to, tune's folder of rungs): false with one line to say, before anything is
+ * written. */
 bool sb_resume_check(const char *dir, const char *identity, const char *const *ids, int n, sb_err *err);
 int sb_summary_keep_complete(sb_summary *sum, const char *dir, const char *const *ids, int n, bool *done);
 

@@ -426,6 +426,9 @@ static int cmd_tune(const sb_cli *c) {
                        .max_mb = c->o.max_mb, .budget_ms = c->o.budget_ms, .time_limit_s = c->o.time_limit_s,
                        .opts = &o, .out = c->o.out, .resume = c->o.resume};
     if (cmd.nspecs && cmd.techniques) return bad("tune: give SPECs or --techniques, not both%s", "");
+    char identity[8192];
+    sb_cli_set_identity(&c->o, c->cmd, c->pos, c->npos, identity, sizeof identity);
+    cmd.identity = identity;
     return sb_tune_main(&cmd);
 }
 

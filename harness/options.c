@@ -236,18 +236,18 @@ const sb_option sb_options[] = {
      .commands = SB_IN(SB_CMD_HISTORY_REGRESSIONS) | SB_IN(SB_CMD_HISTORY_CHECK), .field = F(noise_floor),
      .help = "the least night-to-night timing noise assumed"},
     /* tune */
-    {.name = "--max-err", .kind = SB_OPT_NUM, .arg = "E", .max = 1, .open_min = true, .commands = SB_IN(SB_CMD_TUNE),
+    {.name = "--max-err", .of_set = true, .kind = SB_OPT_NUM, .arg = "E", .max = 1, .open_min = true, .commands = SB_IN(SB_CMD_TUNE),
      .field = F(max_err), .help = "the cheapest settings whose err_rate stays within E"},
-    {.name = "--max-flicker", .kind = SB_OPT_NUM, .arg = "F", .max = 1, .open_min = true, .def_help = "none",
+    {.name = "--max-flicker", .of_set = true, .kind = SB_OPT_NUM, .arg = "F", .max = 1, .open_min = true, .def_help = "none",
      .commands = SB_IN(SB_CMD_TUNE), .field = F(max_flicker),
      .help = "and whose flicker_rate (twins --flicker-dt later) stays within F"},
-    {.name = "--max-mb", .kind = SB_OPT_NUM, .arg = "M", .max = INFINITY, .open_min = true, .def_help = "none",
+    {.name = "--max-mb", .of_set = true, .kind = SB_OPT_NUM, .arg = "M", .max = INFINITY, .open_min = true, .def_help = "none",
      .commands = SB_IN(SB_CMD_TUNE), .field = F(max_mb),
      .help = "and whose shadow storage (shadow_mb) stays within M MiB: settings over it are not rendered"},
-    {.name = "--budget-ms", .kind = SB_OPT_NUM, .arg = "B", .max = INFINITY, .open_min = true,
+    {.name = "--budget-ms", .of_set = true, .kind = SB_OPT_NUM, .arg = "B", .max = INFINITY, .open_min = true,
      .commands = SB_IN(SB_CMD_TUNE), .field = F(budget_ms),
      .help = "the most accurate settings whose frame time stays within B ms"},
-    {.name = "--techniques", .kind = SB_OPT_TEXT, .arg = "LIST", .def_help = "every technique with a shadow map",
+    {.name = "--techniques", .of_set = true, .kind = SB_OPT_TEXT, .arg = "LIST", .def_help = "every technique with a shadow map",
      .commands = SB_IN(SB_CMD_TUNE), .field = F(techniques), .help = "the techniques searched (comma list)"},
     {.name = "--time-limit", .kind = SB_OPT_DURATION, .arg = "D", .max = INFINITY, .open_min = true, .def_help = "none",
      .commands = SB_IN(SB_CMD_TUNE), .field = F(time_limit_s), .help = "stop the search after D (600, 90s, 10m, 1.5h)"},
@@ -773,9 +773,9 @@ static void value_text(const sb_option *opt, const sb_cli_opts *o, char *out, si
     case SB_OPT_TEXT: snprintf(out, len, "%s", *(const char *const *)p ? *(const char *const *)p : ""); break;
     case SB_OPT_SIZE: snprintf(out, len, "%dx%d", *(const int *)p, *(const int *)((const char *)o + opt->field2)); break;
     case SB_OPT_ANGLES:
-        snprintf(out, len, "%.17g,%.17g", *(const double *)p, *(const double *)((const char *)o + opt->field2));
+        snprintf(out, len, "%.15g,%.15g", *(const double *)p, *(const double *)((const char *)o + opt->field2));
         break;
-    default: snprintf(out, len, "%.17g", *(const double *)p);
+    default: snprintf(out, len, "%.15g", *(const double *)p);
     }
 }
 

@@ -1010,6 +1010,12 @@ int sb_tune_main(const sb_tune_cmd *cmd) {
     }
     if (cmd->resume) {
         snprintf(t.dir, sizeof t.dir, "%s", cmd->resume);
+        if (cmd->identity && !sb_resume_check(t.dir, cmd->identity, NULL, -1, &err)) {   /* nothing written */
+            fprintf(stderr, "shadowbench: %s\n", err.msg);
+            sb_session_close(&t.s);
+            free(t.c);
+            return SB_EXIT_BAD_INPUT;
+        }
     } else {
         char base[4200];
         snprintf(base, sizeof base, "%s/tune-%s", cmd->out, t.s.scene_name);
@@ -1019,6 +1025,14 @@ int sb_tune_main(const sb_tune_cmd *cmd) {
             free(t.c);
             return SB_EXIT_WRITE;   /* the results folder could not be made */
         }
+    }
+    if (cmd->identity) {   /* what the search is, for a resume to match (its rungs are results sets of their own) */
+        char path[4400], text[8400];
+        snprintf(path, sizeof path, "%s/meta", t.dir);
+        int n = snprintf(text, sizeof text, "command: tune %s\n%s", cmd->scene, cmd->identity);
+        sb_err we;
+        if (!sb_write_file_atomic(path, text, (size_t)(n < (int)sizeof text ? n : (int)sizeof text - 1), &we))
+            fprintf(stderr, "shadowbench: %s\n", we.msg);
     }
     sb_session_keep_reference(&t.s, t.dir);   /* OUT/tune-SCENE/.reference: reruns and --resume cast no ray twice */
     memory_bound(&t);

@@ -31,6 +31,8 @@ typedef struct sb_tune_cmd {
     double time_limit_s;                /* 0: none */
     const sb_run_opts *opts;            /* frames: the full measurement; seed: the plan's */
     const char *out, *resume;           /* results base folder; or a tune folder to resume */
+    const char *identity;               /* the command's "set: " lines (sb_cli_set_identity): the folder's `meta`,
+                                           and what --resume must match */
 } sb_tune_cmd;
 
 /* Runs the search and prints the recommendation, the Pareto front and a batch

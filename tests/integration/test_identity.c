@@ -79,6 +79,26 @@ static void test_resume_of_another_command(void **st) {
     free(manifest);
 }
 
+/* tune's folder knows its search: --resume with another bound is refused, nothing written. */
+static void test_resume_of_another_search(void **st) {
+    (void)st;
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s tune plane-box --max-err 0.05 --techniques sm --size 64x36 "
+                                "--frames 3 --quiet --out %s/tune", test_binary(), g_tmp),
+                     0);
+    char out[4096], dir[4096], cmd[512];
+    snprintf(cmd, sizeof cmd, "ls -d %s/tune/tune-plane-box/* | head -1", g_tmp);
+    assert_int_equal(run_capture(cmd, out, sizeof out), 0);
+    snprintf(dir, sizeof dir, "%s", last_line_of(out));
+    char *csv = slurp(dir, "tune.csv");
+    expect_cli_fail("--max-err: the set was made with 0.05, this command gives 0.02",
+                    "%s tune plane-box --max-err 0.02 --techniques sm --size 64x36 --frames 3 --quiet --resume %s",
+                    test_binary(), dir);
+    char *after = slurp(dir, "tune.csv");
+    assert_string_equal(after, csv);
+    free(after);
+    free(csv);
+}
+
 /* A set written before meta said what made it: its summary's runs decide. */
 static void test_resume_of_an_older_set(void **st) {
     (void)st;
@@ -219,6 +239,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_resume_of_another_command),
         cmocka_unit_test(test_resume_of_an_older_set),
+        cmocka_unit_test(test_resume_of_another_search),
         cmocka_unit_test(test_a_run_given_twice),
         cmocka_unit_test(test_lights_one_name_a_set),
         cmocka_unit_test(test_contradictions_refused),
