@@ -647,7 +647,7 @@ int sb_batch_main(const sb_batch_cmd *cmd) {
     char identity[8192];
     size_t flen = 0;
     char *ftext = sb_read_file(cmd->file, &flen, NULL);
-    snprintf(identity, sizeof identity, "%sset: batch-file %016llx\n", cmd->identity ? cmd->identity : "",
+    snprintf(identity, sizeof identity, "%sset: batch-file-checksum %016llx\n", cmd->identity ? cmd->identity : "",
              (unsigned long long)sb_fnv1a(SB_FNV_SEED, ftext ? ftext : "", flen));
     free(ftext);
     if (cmd->resume) {

@@ -970,6 +970,7 @@ bool Loader::clips() {
             while (ai < m.animations.size() && clip_name(ai) != name) ai++;
             if (ai == m.animations.size())
                 return fail("/animations", "--anim " + name + ": no clip of that name (its clips: " + all + ")");
+            if (plays[ai]) return fail("/animations", "--anim " + list + ": clip " + name + " named twice");
             plays[ai] = 1;
         }
     }

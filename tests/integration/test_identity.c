@@ -137,6 +137,15 @@ static void test_a_run_given_twice(void **st) {
     summary_table(last_line_of(g_out), &t);
     assert_int_equal(t.nrows, 1);
     sb_table_free(&t);
+    /* the batch file edited since: its set is another command's */
+    char set[4096];
+    snprintf(set, sizeof set, "%s", last_line_of(g_out));
+    f = fopen(bench, "a");
+    assert_non_null(f);
+    fprintf(f, "sm:res=1024\n");
+    fclose(f);
+    expect_cli_fail("batch-file-checksum: the set was made with", "%s batch %s --resume %s --quiet", test_binary(), bench,
+                    set);
 }
 
 /* The run_id of `run towers-night ... cube:res=256 EXTRA`. */
@@ -195,6 +204,9 @@ static void test_contradictions_refused(void **st) {
     expect_cli_fail("--anim and --pose: give one of them",
                     "%s run movers movers sm --frames 1 --size 64x36 --pose 1 --anim slide --quiet --out %s/x",
                     test_binary(), g_tmp);
+    expect_cli_fail("--anim slide,slide: clip slide named twice",
+                    "%s run movers movers sm --frames 1 --size 64x36 --anim slide,slide --quiet --out %s/x", test_binary(),
+                    g_tmp);
     expect_cli_fail("--anim slide: the file has no animation clip",
                     "%s run plane-box plane-box sm --frames 1 --size 64x36 --anim slide --quiet --out %s/x",
                     test_binary(), g_tmp);
