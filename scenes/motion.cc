@@ -8,11 +8,13 @@
 #include <algorithm>
 #include <atomic>
 #include <map>
+#include <memory>
 #include <thread>
 
 #include "motion_data.h"
 
 extern "C" {
+#include "blob.h"
 #include "motion.h"
 }
 
@@ -180,4 +182,163 @@ extern "C" void sb_motion_info(const sb_scene *s, FILE *out) {
         fprintf(out, "animation: %s\n", s->opts.pose ? "frozen at --pose" : s->opts.anim == SB_ANIM_NONE ?
                 "none played (--anim none)" : "nothing moves");
     }
+}
+
+// ---- the scene cache's copy (motion.h: sb_motion_write, sb_motion_read) ----
+
+namespace {
+
+template <class T> void put_vec(sb_wbuf *b, const std::vector<T> &v) {
+    sb_wbuf_put_u32(b, (uint32_t)v.size());
+    sb_wbuf_put_array(b, v.data(), v.size() * sizeof(T));
+}
+
+template <class T> bool take_vec(sb_rbuf *r, std::vector<T> &v) {
+    uint32_t n = sb_rbuf_take_u32(r);
+    const T *p = (const T *)sb_rbuf_take_array(r, n, sizeof(T));
+    if (!r->ok) return false;
+    v.assign(p, p + (p ? n : 0));
+    return true;
+}
+
+template <class T> void put_vecs(sb_wbuf *b, const std::vector<std::vector<T>> &v) {
+    sb_wbuf_put_u32(b, (uint32_t)v.size());
+    for (const auto &x : v) put_vec(b, x);
+}
+
+template <class T> bool take_vecs(sb_rbuf *r, std::vector<std::vector<T>> &v) {
+    uint32_t n = sb_rbuf_take_u32(r);
+    if (!r->ok || n > r->n - r->at) return r->ok = false;   // at least a length each
+    v.resize(n);
+    for (auto &x : v)
+        if (!take_vec(r, x)) return false;
+    return true;
+}
+
+void put_str(sb_wbuf *b, const std::string &s) {
+    sb_wbuf_put_u32(b, (uint32_t)s.size());
+    sb_wbuf_put(b, s.data(), s.size());
+}
+
+bool take_str(sb_rbuf *r, std::string &s) {
+    uint32_t n = sb_rbuf_take_u32(r);
+    const char *p = (const char *)sb_rbuf_take(r, n);
+    if (!r->ok) return false;
+    s.assign(p, n);
+    return true;
+}
+
+void put_prim(sb_wbuf *b, const sbm::PrimData &d) {
+    put_vec(b, d.pos), put_vec(b, d.nrm), put_vec(b, d.uv), put_vec(b, d.idx);
+    for (int k = 0; k < 2; k++) put_vec(b, d.joints[k]), put_vec(b, d.weights[k]);
+    uint32_t flags[3] = {d.have_n, d.have_uv, (uint32_t)d.skin_sets};
+    sb_wbuf_put(b, flags, sizeof flags);
+}
+
+bool take_prim(sb_rbuf *r, sbm::PrimData &d) {
+    bool ok = take_vec(r, d.pos) && take_vec(r, d.nrm) && take_vec(r, d.uv) && take_vec(r, d.idx);
+    for (int k = 0; ok && k < 2; k++) ok = take_vec(r, d.joints[k]) && take_vec(r, d.weights[k]);
+    const uint32_t *f = ok ? (const uint32_t *)sb_rbuf_take(r, 3 * sizeof(uint32_t)) : nullptr;
+    if (!f) return r->ok = false;
+    uint32_t flags[3];
+    memcpy(flags, f, sizeof flags);
+    d.have_n = flags[0] != 0, d.have_uv = flags[1] != 0, d.skin_sets = (int)flags[2];
+    return d.skin_sets <= 2 && d.pos.size() % 3 == 0 && (!d.have_n || d.nrm.size() == d.pos.size());
+}
+
+} // namespace
+
+extern "C" void sb_motion_write(const sb_motion *m, sb_wbuf *b) {
+    put_vec(b, m->parent), put_vec(b, m->topo), put_vec(b, m->rest), put_vec(b, m->has_matrix);
+    put_vec(b, m->rest_local), put_vecs(b, m->rest_weights);
+    sb_wbuf_put_u32(b, (uint32_t)m->channels.size());
+    for (const sbm::MoChannel &c : m->channels) {
+        int32_t head[6] = {c.clip, c.node, c.path, c.ch.s.ncomp, c.ch.s.rotation, (int32_t)c.ch.s.interp};
+        sb_wbuf_put(b, head, sizeof head);
+        put_vec(b, c.ch.in), put_vec(b, c.ch.out);
+    }
+    sb_wbuf_put_u32(b, (uint32_t)m->clips.size());
+    for (const sbm::MoClip &c : m->clips) {
+        put_str(b, c.name);
+        sb_wbuf_put(b, &c.duration, sizeof c.duration);
+        uint32_t counts[2] = {c.channels, c.nodes};
+        sb_wbuf_put(b, counts, sizeof counts);
+    }
+    sb_wbuf_put_u32(b, (uint32_t)m->places.size());
+    for (const sbm::MoPlace &p : m->places) {
+        int32_t head[5] = {p.node, p.skin, (int32_t)p.first, (int32_t)p.count, p.kind};
+        sb_wbuf_put(b, head, sizeof head);
+        sb_wbuf_put(b, &p.inst, sizeof p.inst);
+        put_prim(b, p.base), put_vecs(b, p.dpos), put_vecs(b, p.dnrm);
+    }
+    put_vecs(b, m->skin_joints), put_vecs(b, m->skin_ibm);
+    uint32_t counts[2] = {m->skipped, m->animated_nodes};
+    sb_wbuf_put(b, counts, sizeof counts);
+}
+
+extern "C" sb_motion *sb_motion_read(sb_rbuf *r, const sb_scene *s) {
+    std::unique_ptr<sb_motion> m(new sb_motion);
+    bool ok = take_vec(r, m->parent) && take_vec(r, m->topo) && take_vec(r, m->rest) && take_vec(r, m->has_matrix) &&
+              take_vec(r, m->rest_local) && take_vecs(r, m->rest_weights);
+    size_t nn = m->parent.size();
+    ok = ok && m->topo.size() == nn && m->rest.size() == nn && m->has_matrix.size() == nn &&
+         m->rest_local.size() == nn && m->rest_weights.size() == nn;
+    for (int p : m->parent) ok = ok && p >= -1 && p < (int)nn;
+    for (int t : m->topo) ok = ok && t >= 0 && t < (int)nn;
+    uint32_t nc = ok ? sb_rbuf_take_u32(r) : 0;
+    for (uint32_t i = 0; ok && r->ok && i < nc; i++) {
+        const int32_t *h = (const int32_t *)sb_rbuf_take(r, 6 * sizeof(int32_t));
+        if (!h) return nullptr;
+        int32_t head[6];
+        memcpy(head, h, sizeof head);
+        sbm::MoChannel c{head[0], head[1], head[2], {}};
+        ok = take_vec(r, c.ch.in) && take_vec(r, c.ch.out) && head[1] >= 0 && head[1] < (int)nn && head[0] >= 0 &&
+             head[3] > 0 && head[3] <= 64 && head[5] >= 0 && head[5] <= SB_INTERP_CUBIC && !c.ch.in.empty() &&
+             c.ch.out.size() == (head[5] == SB_INTERP_CUBIC ? 3 : 1) * c.ch.in.size() * (size_t)head[3];
+        if (!ok) break;
+        m->channels.push_back(std::move(c));
+        sbm::MoChannel &mc = m->channels.back();   // the sampler reads its own arrays
+        mc.ch.s = {mc.ch.in.data(), mc.ch.out.data(), mc.ch.in.size(), head[3], head[4] != 0, (sb_interp)head[5]};
+    }
+    uint32_t nclips = ok && r->ok ? sb_rbuf_take_u32(r) : 0;
+    for (uint32_t i = 0; ok && r->ok && i < nclips; i++) {
+        sbm::MoClip c;
+        const void *d = take_str(r, c.name) ? sb_rbuf_take(r, sizeof c.duration) : nullptr;
+        const void *k = d ? sb_rbuf_take(r, 2 * sizeof(uint32_t)) : nullptr;
+        if (!k) return nullptr;
+        memcpy(&c.duration, d, sizeof c.duration);
+        uint32_t counts[2];
+        memcpy(counts, k, sizeof counts);
+        c.channels = counts[0], c.nodes = counts[1];
+        m->clips.push_back(std::move(c));
+    }
+    for (const sbm::MoChannel &c : m->channels) ok = ok && c.clip < (int)m->clips.size();
+    uint32_t np = ok && r->ok ? sb_rbuf_take_u32(r) : 0;
+    for (uint32_t i = 0; ok && r->ok && i < np; i++) {
+        const int32_t *h = (const int32_t *)sb_rbuf_take(r, 5 * sizeof(int32_t));
+        const void *inst = h ? sb_rbuf_take(r, sizeof(sb_m4)) : nullptr;
+        if (!inst) return nullptr;
+        int32_t head[5];
+        memcpy(head, h, sizeof head);
+        sbm::MoPlace p;
+        p.node = head[0], p.skin = head[1], p.first = (uint32_t)head[2], p.count = (uint32_t)head[3];
+        p.kind = (uint8_t)head[4];
+        memcpy(&p.inst, inst, sizeof p.inst);
+        ok = take_prim(r, p.base) && take_vecs(r, p.dpos) && take_vecs(r, p.dnrm) && p.node >= 0 && p.node < (int)nn &&
+             (uint64_t)p.first + p.count <= s->vertex_count && p.base.pos.size() == 3 * (size_t)p.count;
+        if (ok) m->places.push_back(std::move(p));
+    }
+    ok = ok && r->ok && take_vecs(r, m->skin_joints) && take_vecs(r, m->skin_ibm) &&
+         m->skin_joints.size() == m->skin_ibm.size();
+    for (size_t k = 0; ok && k < m->skin_joints.size(); k++) {
+        ok = m->skin_joints[k].size() == m->skin_ibm[k].size();
+        for (int j : m->skin_joints[k]) ok = ok && j >= 0 && j < (int)nn;
+    }
+    for (const sbm::MoPlace &p : m->places) ok = ok && p.skin >= -1 && p.skin < (int)m->skin_joints.size();
+    const uint32_t *c = ok ? (const uint32_t *)sb_rbuf_take(r, 2 * sizeof(uint32_t)) : nullptr;
+    if (!c || !r->ok) return nullptr;
+    uint32_t counts[2];
+    memcpy(counts, c, sizeof counts);
+    m->skipped = counts[0], m->animated_nodes = counts[1];
+    return m.release();
 }

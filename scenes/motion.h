@@ -50,3 +50,12 @@ sb_motion_stats sb_motion_statistics(const sb_motion *m);
 /* The i-th clip played (i < stats.clips). */
 sb_clip_info sb_motion_clip(const sb_motion *m, uint32_t i);
 void sb_motion_free(sb_motion *m);
+
+/* The scene cache's copy (scene_load.c): everything posing needs (the node graph's rest pose, the clips'
+ * channels, every moving placement's rest data, the skins), written after the scene's arrays; read back against
+ * the scene it belongs to, NULL when the entry is short or does not hold together (then the file is read again).
+ * sb_motion_mark makes the draws' marks again once read. */
+struct sb_wbuf;
+struct sb_rbuf;
+void sb_motion_write(const sb_motion *m, struct sb_wbuf *b);
+sb_motion *sb_motion_read(struct sb_rbuf *r, const struct sb_scene *s);

@@ -25,6 +25,7 @@ typedef struct {
     sb_scene_features features;
     uint32_t vertex_count, index_count, draw_count, light_count, camera_count, material_count, texture_count,
         texel_count, alpha_tested_draws, single_sided_draws, nodes_drawn, plane_count, has_sun;
+    uint32_t has_motion;         /* the clips that play follow the arrays (sb_motion_write) */
     char degenerate[128];
     char unused[512];
     struct {
@@ -54,6 +55,7 @@ static void write_scene(sb_wbuf *b, const sb_scene *s) {
     c.nodes_drawn = s->nodes_drawn;
     c.plane_count = s->plane_count;
     c.has_sun = s->has_sun;
+    c.has_motion = s->motion != NULL;
     memcpy(c.degenerate, s->degenerate, sizeof c.degenerate);
     memcpy(c.unused, s->unused, sizeof c.unused);
     for (uint32_t i = 0; i < s->plane_count; i++) {
@@ -72,6 +74,7 @@ static void write_scene(sb_wbuf *b, const sb_scene *s) {
     sb_wbuf_put_array(b, s->textures, (size_t)s->texture_count * sizeof *s->textures);
     sb_wbuf_put_array(b, s->texels, s->texel_count);
     for (uint32_t i = 0; i < s->plane_count; i++) sb_wbuf_put_array(b, s->planes[i].tris, (size_t)s->planes[i].tri_count * 4);
+    if (s->motion) sb_motion_write(s->motion, b);
 }
 
 /* Fills a begun scene; false when the entry is short or inconsistent. */
@@ -121,6 +124,11 @@ static bool read_scene(sb_rbuf *r, sb_scene *s) {
         s->plane_count = i + 1;
     }
     s->planes_found = true;   /* the writer searched before it wrote */
+    if (c.has_motion && r->ok && s->vertices) {   /* the clips that play: posed from the rest pose held above */
+        s->motion = sb_motion_read(r, s);
+        if (!s->motion) return false;
+        s->motion_free = sb_motion_free;
+    }
     if (!r->ok || r->at != r->n || !s->materials || s->index_count % 3) return false;
     for (uint32_t i = 0; i < s->index_count; i++)
         if (s->indices[i] >= s->vertex_count) return false;
@@ -156,8 +164,10 @@ static uint64_t cache_key(const char *scene_dir, const sb_scene_opts *opts, cons
         int flags[4];
         double pose_time;
         char anim_clips[256];
+        double anim_speed;   /* in the content hash of a scene whose clips play (its entry holds that hash) */
     } k;
     memset(&k, 0, sizeof k);
+    k.anim_speed = o.anim_speed > 0 ? o.anim_speed : 1;
     k.flags[0] = o.allow_external_uris;
     k.flags[1] = (int)o.blend;
     k.flags[2] = o.pose;
@@ -188,6 +198,10 @@ static bool read_entry(sb_rbuf *r, void *map, size_t len, void *user) {
     t.file = sb_strdup(cl->path);
     if (cl->opts) t.opts = *cl->opts;
     t.from_cache = true;
+    if (t.motion && !sb_motion_mark(t.motion, &t)) {   /* the draws each placement poses, and what stays still */
+        sb_scene_free(&t);
+        return false;
+    }
     sb_scene_build_bvh(&t);
     *cl->s = t;
     return true;
@@ -341,8 +355,9 @@ bool sb_scene_load(sb_scene *s, const char *path, const sb_scene_opts *opts, sb_
         if (cache) sb_scene_cache_begin(scene_dir);
         ok = load_file(s, path, opts, err);
         if (cache && ok) sb_scene_find_planes(s);   /* an entry holds the planes, so a cached load never searches */
-        /* a scene whose clips play is not kept: an entry holds still geometry (and the key says which clips) */
-        if (cache) sb_scene_cache_put(key, ok && !s->motion ? write_entry : NULL, s);
+        /* a scene whose clips play is kept with them (its rest pose, channels, placements and skins; the key says
+           which clips and at what speed) */
+        if (cache) sb_scene_cache_put(key, ok && (!s->motion || isnan(s->pose_time)) ? write_entry : NULL, s);
     }
     if (ok) s->load_ms = sb_now_ms() - t0;
     if (ok) anim_text(s);

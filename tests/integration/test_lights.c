@@ -297,7 +297,7 @@ static void test_atlas_cache_with_movers(void **st) {
     rc = run_logged(out, sizeof out, "%s/scripts/add-lamps %s/movers.glb %s --count 0", getenv("SB_SOURCE_ROOT"),
                     getenv("SB_DATA_DIR"), scene);
     assert_int_equal(rc, 2);
-    assert_non_null(strstr(out, "add-lamps: --count 0: from 1 to 256"));
+    assert_non_null(strstr(out, "add-lamps: --count 0: expected a whole number from 1 to 256"));
 }
 
 /* A batch line's --lights: its runs shadow those lamps (a series of their own); a lamp a scene lacks is refused with

@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "json.h"
+#include "motion.h"
 #include "scene_load.h"
 #include "scene.h"
 #include "support.h"
@@ -349,7 +350,7 @@ static void test_tiled_level(void **st) {
     for (uint32_t d = 0; d < nine.draw_count; d++)
         if (nine.draws[d].proto != d) assert_true(sb_xform_translation_only(nine.draws[d].xform));
     sb_scene_free(&nine);
-    snprintf(cmd, sizeof cmd, "%s/scripts/tile-gltf %s %s 3 3 --turn > /dev/null", getenv("SB_SOURCE_ROOT"), src,
+    snprintf(cmd, sizeof cmd, "%s/scripts/tile-gltf %s %s 3 3 --turn --force > /dev/null", getenv("SB_SOURCE_ROOT"), src,
              tiled);
     assert_int_equal(system(cmd), 0);
     assert_true(sb_scene_load(&nine, tiled, NULL, &err));
@@ -468,12 +469,62 @@ static void test_missing_file(void **st) {
     expect_load_error("/nonexistent/x.glb", "/nonexistent/x.glb: cannot open");
 }
 
+/* An animated scene comes from the cache with its clips: the hit is a cached load, and posed at any time it holds
+ * the vertices, boxes and bounds of the file read afresh and posed alike (the skinned humanoid, the bundled movers'
+ * rigid clips); another --anim-speed is another entry (its run ids differ). */
+static void test_animated_scene_cache(void **st) {
+    (void)st;
+    char dir[64];
+    assert_int_equal(tmp_folder(dir, sizeof dir, "sbanimcache"), 0);
+    setenv("SB_SCENE_CACHE", dir, 1);
+    char movers[4096], human[4096];
+    assert_true(sb_resolve_bundled("movers", ".glb", movers, sizeof movers));
+    snprintf(human, sizeof human, "%s/godot_mannequiny/mannequiny.glb", getenv("SB_SHARED_SCENES"));
+    const char *files[2] = {movers, human};
+    for (int f = 0; f < 2; f++) {
+        if (access(files[f], R_OK) != 0) {
+            print_message("%s not present: left out\n", files[f]);
+            continue;
+        }
+        sb_scene a, b;
+        load_expect(files[f], false, &a);
+        load_expect(files[f], true, &b);
+        assert_true(sb_scene_moves(&a) && sb_scene_moves(&b));
+        assert_int_equal(a.moving_draws, b.moving_draws);
+        assert_true(a.content_hash == b.content_hash);
+        assert_string_equal(a.anim, b.anim);
+        for (int k = 0; k < 3; k++) {
+            double t = 0.37 + 1.9 * k;
+            assert_true(sb_scene_pose(&a, t));
+            assert_true(sb_scene_pose(&b, t));
+            assert_memory_equal(a.vertices, b.vertices, (size_t)a.vertex_count * SB_VERTEX_BYTES);
+            for (uint32_t i = 0; i < a.draw_count; i++) assert_memory_equal(&a.draws[i].box, &b.draws[i].box, sizeof(sb_aabb));
+            assert_memory_equal(&a.bounds, &b.bounds, sizeof a.bounds);
+        }
+        sb_scene_free(&a);
+        sb_scene_free(&b);
+    }
+    /* another speed is another entry: read, with its own content hash */
+    sb_scene_opts fast = {.anim_speed = 3};
+    sb_scene a, c;
+    sb_err err;
+    load_expect(movers, true, &a);
+    assert_true(sb_scene_load(&c, movers, &fast, &err));
+    assert_false(c.from_cache);
+    assert_true(a.content_hash != c.content_hash);
+    sb_scene_free(&a);
+    sb_scene_free(&c);
+    unsetenv("SB_SCENE_CACHE");
+    assert_int_equal(tmp_remove(dir), 0);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_plane_box), cmocka_unit_test(test_desert_size), cmocka_unit_test(test_truck_town),
         cmocka_unit_test(test_zdm2),      cmocka_unit_test(test_hallway),     cmocka_unit_test(test_bvh_cull_exact),
         cmocka_unit_test(test_missing_file),       cmocka_unit_test(test_closed_and_planes),
         cmocka_unit_test(test_scene_cache),        cmocka_unit_test(test_tiled_level),
+        cmocka_unit_test(test_animated_scene_cache),
         cmocka_unit_test(test_one_parse_a_load),
     };
     return cmocka_run_group_tests_name("scene", tests, NULL, NULL);
