@@ -228,8 +228,8 @@ bool take_str(sb_rbuf *r, std::string &s) {
     return true;
 }
 
-void put_prim(sb_wbuf *b, const sbm::PrimData &d) {
-    put_vec(b, d.pos), put_vec(b, d.nrm), put_vec(b, d.uv), put_vec(b, d.idx);
+void put_prim(sb_wbuf *b, const sbm::PrimData &d) {   // what posing reads: not the texture coordinates nor the indices
+    put_vec(b, d.pos), put_vec(b, d.nrm), put_vec(b, std::vector<double>()), put_vec(b, std::vector<uint32_t>());
     for (int k = 0; k < 2; k++) put_vec(b, d.joints[k]), put_vec(b, d.weights[k]);
     uint32_t flags[3] = {d.have_n, d.have_uv, (uint32_t)d.skin_sets};
     sb_wbuf_put(b, flags, sizeof flags);
