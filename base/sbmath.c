@@ -286,3 +286,20 @@ void sb_cube_planes(sb_v3 c, double r, double p[6][4]) {
     for (int i = 0; i < 6; i++)
         for (int k = 0; k < 4; k++) p[i][k] = box[i][k];
 }
+
+sb_aabb sb_aabb_transform(sb_m4 m, const sb_aabb *b) {
+    sb_v3 q = sb_m4_point(m, sb_aabb_corner(b, 0));
+    sb_aabb out = {q, q};
+    for (int k = 1; k < 8; k++) {
+        q = sb_m4_point(m, sb_aabb_corner(b, k));
+        out.lo = sb_v3_min(out.lo, q), out.hi = sb_v3_max(out.hi, q);
+    }
+    return out;
+}
+
+double sb_aabb_dist2(const sb_aabb *b, sb_v3 p) {
+    double e[3] = {p.x < b->lo.x ? b->lo.x - p.x : p.x > b->hi.x ? p.x - b->hi.x : 0,
+                   p.y < b->lo.y ? b->lo.y - p.y : p.y > b->hi.y ? p.y - b->hi.y : 0,
+                   p.z < b->lo.z ? b->lo.z - p.z : p.z > b->hi.z ? p.z - b->hi.z : 0};
+    return e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+}

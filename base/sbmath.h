@@ -65,6 +65,21 @@ sb_quat sb_quat_from_m4(sb_m4 m);                       /* rotation part, assume
 /* Orientation whose -Z axis looks along dir (glTF camera convention), +Y near up_hint. */
 sb_quat sb_quat_look(sb_v3 dir, sb_v3 up_hint);
 
+/* ---- boxes ---- */
+
+/* Corner k (0..7) of a box: bit 0 picks x's high end, bit 1 y's, bit 2 z's. */
+static inline sb_v3 sb_aabb_corner(const sb_aabb *b, int k) {
+    return sb_v3_make(k & 1 ? b->hi.x : b->lo.x, k & 2 ? b->hi.y : b->lo.y, k & 4 ? b->hi.z : b->lo.z);
+}
+/* The smallest box holding both. */
+static inline sb_aabb sb_aabb_union(sb_aabb a, sb_aabb b) {
+    return (sb_aabb){sb_v3_min(a.lo, b.lo), sb_v3_max(a.hi, b.hi)};
+}
+/* The box of the eight corners through m (sb_m4_point: projected where m projects). */
+sb_aabb sb_aabb_transform(sb_m4 m, const sb_aabb *b);
+/* The squared distance from p to the box (0 inside it). */
+double sb_aabb_dist2(const sb_aabb *b, sb_v3 p);
+
 /* Planes (inside: n·p + d >= 0) of the clip-space box of the matrix m (Gribb-Hartmann), normalised. */
 void sb_frustum_planes(sb_m4 m, double planes[6][4]);
 /* Planes of the axis-aligned cube of half-size r around c. */

@@ -359,8 +359,7 @@ static void shadow_range(const sb_session *s, double *near, double *far) {
         zf = fmax(zf, cam.zfar);
         sb_v3 eye = sb_v3_sub(cam.pos, sc->origin);
         for (int k = 0; k < 8; k++) {
-            sb_v3 q = sb_v3_make(k & 1 ? sc->bounds.hi.x : sc->bounds.lo.x, k & 2 ? sc->bounds.hi.y : sc->bounds.lo.y,
-                                 k & 4 ? sc->bounds.hi.z : sc->bounds.lo.z);
+            sb_v3 q = sb_aabb_corner(&sc->bounds, k);
             reach = fmax(reach, sb_v3_len(sb_v3_sub(q, eye)));
         }
     }

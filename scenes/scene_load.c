@@ -249,8 +249,7 @@ static void fit_ranges(sb_scene *s) {
         if (l->type == SB_LIGHT_DIRECTIONAL) continue;
         double reach = 0;
         for (int c = 0; c < 8; c++) {
-            sb_v3 corner = sb_v3_make(c & 1 ? s->bounds.hi.x : s->bounds.lo.x, c & 2 ? s->bounds.hi.y : s->bounds.lo.y,
-                                      c & 4 ? s->bounds.hi.z : s->bounds.lo.z);
+            sb_v3 corner = sb_aabb_corner(&s->bounds, c);
             reach = fmax(reach, sb_v3_len(sb_v3_sub(corner, l->position)));
         }
         if (s->motion) reach *= 2;

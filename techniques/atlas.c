@@ -301,21 +301,16 @@ static void face_rect(const lamp *l, int k, int *x, int *y) {
 
 /* ---- the tiles ---- */
 
+/* Whether a box reaches into the lamp's range. */
+static bool in_range(const sb_aabb *b, const void *region) {
+    const lamp *l = region;
+    return sb_aabb_dist2(b, l->pos) <= l->range * l->range;
+}
+
 /* Whether a moved caster's box, before or after the move, reaches into the lamp's range. */
 static bool mover_reaches(const lamp *l, const sb_frame *f) {
     if (l->range <= 0) return f->moved_count > 0;
-    const sb_scene *sc = f->gpu->scene;
-    for (uint32_t i = 0; i < 2 * f->moved_count; i++) {
-        const sb_aabb *b = i % 2 ? &sc->draws[f->moved[i / 2]].box : &f->moved_from[i / 2];
-        double d2 = 0, p[3] = {l->pos.x, l->pos.y, l->pos.z}, lo[3] = {b->lo.x, b->lo.y, b->lo.z},
-               hi[3] = {b->hi.x, b->hi.y, b->hi.z};
-        for (int k = 0; k < 3; k++) {
-            double e = p[k] < lo[k] ? lo[k] - p[k] : p[k] > hi[k] ? p[k] - hi[k] : 0;
-            d2 += e * e;
-        }
-        if (d2 <= l->range * l->range) return true;
-    }
-    return false;
+    return sb_frame_moved_meets(f, in_range, l);
 }
 
 /* Every kept lamp a moved caster reaches forgets its tiles: every frame, for every lamp, whether or not the frame

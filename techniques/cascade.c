@@ -234,8 +234,7 @@ void sb_csm_fit_slice(const sb_csm *c, const sb_frame *f, double zn, double zf, 
     sb_v3 eye = sb_v3_sub(f->cam.pos, s->origin);
     double dmin = 1e300, dmax = -1e300;
     for (int k = 0; k < 8 && !c->d.stable; k++) {   /* stable: the slice as the fixed range cuts it, whole */
-        sb_v3 q = sb_v3_make(k & 1 ? s->bounds.hi.x : s->bounds.lo.x, k & 2 ? s->bounds.hi.y : s->bounds.lo.y,
-                             k & 4 ? s->bounds.hi.z : s->bounds.lo.z);
+        sb_v3 q = sb_aabb_corner(&s->bounds, k);
         double d = sb_v3_dot(sb_v3_sub(q, eye), f->cam.forward);
         dmin = fmin(dmin, d);
         dmax = fmax(dmax, d);
@@ -333,25 +332,17 @@ static float slope_factor(const sb_csm *c) {
 /* Whether a box (origin-relative) reaches into a layer's light volume: its window across, anywhere from the
  * light to the far plane along (depth clamp keeps casters toward the light). The fit is orthographic wherever a
  * cache is kept (stable=on, no warp). */
-static bool box_in_layer(const float vp[16], const sb_aabb *b) {
-    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-    for (int k = 0; k < 8; k++) {
-        double p[3] = {k & 1 ? b->hi.x : b->lo.x, k & 2 ? b->hi.y : b->lo.y, k & 4 ? b->hi.z : b->lo.z};
-        for (int r = 0; r < 3; r++) {
-            double v = vp[r] * p[0] + vp[4 + r] * p[1] + vp[8 + r] * p[2] + vp[12 + r];
-            lo[r] = fmin(lo[r], v), hi[r] = fmax(hi[r], v);
-        }
-    }
-    return hi[0] >= -1 && lo[0] <= 1 && hi[1] >= -1 && lo[1] <= 1 && lo[2] <= 1;
+static bool box_in_layer(const sb_aabb *b, const void *region) {
+    const float *vp = region;
+    sb_m4 m;
+    for (int i = 0; i < 16; i++) m.m[i] = vp[i];
+    sb_aabb c = sb_aabb_transform(m, b);   /* an orthographic fit: w is 1 */
+    return c.hi.x >= -1 && c.lo.x <= 1 && c.hi.y >= -1 && c.lo.y <= 1 && c.lo.z <= 1;
 }
 
 /* Whether a caster moved into, out of or within layer k since the last frame (its box before or after). */
 static bool moved_into(const sb_csm *c, const sb_frame *f, int k) {
-    const sb_scene *s = f->gpu->scene;
-    for (uint32_t i = 0; i < f->moved_count; i++)
-        if (box_in_layer(c->cpu.light_vp[k], &f->moved_from[i]) || box_in_layer(c->cpu.light_vp[k], &s->draws[f->moved[i]].box))
-            return true;
-    return false;
+    return sb_frame_moved_meets(f, box_in_layer, c->cpu.light_vp[k]);
 }
 
 void sb_csm_render(sb_csm *c, sb_frame *f) {

@@ -34,7 +34,7 @@ static void box_in_light(sb_m4 view, const sb_aabb *b, sb_v3 *lo, sb_v3 *hi) {
     *lo = sb_v3_make(1e300, 1e300, 1e300);
     *hi = sb_v3_make(-1e300, -1e300, -1e300);
     for (int k = 0; k < 8; k++) {
-        sb_v3 q = sb_v3_make(k & 1 ? b->hi.x : b->lo.x, k & 2 ? b->hi.y : b->lo.y, k & 4 ? b->hi.z : b->lo.z);
+        sb_v3 q = sb_aabb_corner(b, k);
         sb_v3 l = sb_m4_point(view, q);
         *lo = sb_v3_min(*lo, l);
         *hi = sb_v3_max(*hi, l);
@@ -252,8 +252,7 @@ void sb_light_fit_lispsm(const sb_scene *s, sb_v3 sun, sb_v3 eye, sb_v3 forward,
     }
     sb_v3 slo = {1e300, 1e300, 1e300}, shi = {-1e300, -1e300, -1e300};
     for (int k = 0; k < 8; k++) {
-        sb_v3 q = sb_m4_point(lv, sb_v3_make(k & 1 ? s->bounds.hi.x : s->bounds.lo.x, k & 2 ? s->bounds.hi.y : s->bounds.lo.y,
-                                             k & 4 ? s->bounds.hi.z : s->bounds.lo.z));
+        sb_v3 q = sb_m4_point(lv, sb_aabb_corner(&s->bounds, k));
         slo = sb_v3_min(slo, q);
         shi = sb_v3_max(shi, q);
     }
@@ -631,8 +630,7 @@ static sb_m4 psm_camera(const sb_scene *s, const sb_camera *cam, const sb_psm_de
     if (d->behind == SB_PSM_SHIFT) { /* every caster in front of the moved camera */
         double cmin = 1e300;
         for (int k = 0; k < 8; k++) {
-            sb_v3 q = sb_v3_make(k & 1 ? s->bounds.hi.x : s->bounds.lo.x, k & 2 ? s->bounds.hi.y : s->bounds.lo.y,
-                                 k & 4 ? s->bounds.hi.z : s->bounds.lo.z);
+            sb_v3 q = sb_aabb_corner(&s->bounds, k);
             cmin = fmin(cmin, sb_v3_dot(sb_v3_sub(q, eye), fwd));
         }
         shift = fmax(0, 1e-3 * *f1 - cmin);

@@ -830,3 +830,10 @@ void sb_final_pass_stencil(sb_frame *f, const sb_final_prog *fp, GLint u_lit, GL
     sb_final_draw(f, fp, true);     /* the same draws again, without clearing */
     glDisable(GL_STENCIL_TEST);
 }
+
+bool sb_frame_moved_meets(const sb_frame *f, bool (*meets)(const sb_aabb *box, const void *region), const void *region) {
+    const sb_scene *s = f->gpu->scene;
+    for (uint32_t i = 0; i < f->moved_count; i++)
+        if (meets(&f->moved_from[i], region) || meets(&s->draws[f->moved[i]].box, region)) return true;
+    return false;
+}

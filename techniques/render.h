@@ -132,6 +132,11 @@ typedef struct sb_frame {
     int eval_light;
 } sb_frame;
 
+/* Whether a caster that moved since the technique's previous frame meets a region, before or after its move:
+ * meets(box, region) for each moved draw's old and new box (origin-relative). The one test every cache of moved
+ * casters asks (cascades' layers, virtual pages, the atlas's lamps), each with its own region. */
+bool sb_frame_moved_meets(const sb_frame *f, bool (*meets)(const sb_aabb *box, const void *region), const void *region);
+
 bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *scene, int width, int height, sb_v3 sun,
                  sb_err *err);
 /* The bytes sb_gpu_init uploads for a scene (its vertex and index buffers, a shared primitive once, and the

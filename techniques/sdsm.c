@@ -235,8 +235,7 @@ static void gpu_splits(sdsm_state *s, sb_frame *f) {
     sb_v3 lo = {1e300, 1e300, 1e300}, hi = {-1e300, -1e300, -1e300};
     for (int k = 0; k < 8; k++) {
         const sb_aabb *b = &g->scene->bounds;
-        sb_v3 q = sb_m4_point(light_view, sb_v3_make(k & 1 ? b->hi.x : b->lo.x, k & 2 ? b->hi.y : b->lo.y,
-                                                      k & 4 ? b->hi.z : b->lo.z));
+        sb_v3 q = sb_m4_point(light_view, sb_aabb_corner(b, k));
         lo = sb_v3_min(lo, q);
         hi = sb_v3_max(hi, q);
     }

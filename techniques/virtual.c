@@ -241,8 +241,7 @@ static void fit_clipmap(virtual_state *s, const sb_frame *f) {
     s->lview = sb_light_view(g->sun);
     sb_v3 lo = {1e300, 1e300, 1e300}, hi = {-1e300, -1e300, -1e300};
     for (int k = 0; k < 8; k++) {
-        sb_v3 q = sb_m4_point(s->lview, sb_v3_make(k & 1 ? b->hi.x : b->lo.x, k & 2 ? b->hi.y : b->lo.y,
-                                                    k & 4 ? b->hi.z : b->lo.z));
+        sb_v3 q = sb_m4_point(s->lview, sb_aabb_corner(b, k));
         lo = sb_v3_min(lo, q);
         hi = sb_v3_max(hi, q);
     }
@@ -452,38 +451,38 @@ static void render_page(virtual_state *s, sb_frame *f, page_key k, int i, int ca
 
 /* The light-space window of a box (origin-relative): its x and y across the light's view. */
 static void light_rect(const virtual_state *s, const sb_aabb *b, double r[4]) {
-    r[0] = r[1] = 1e300, r[2] = r[3] = -1e300;
-    for (int k = 0; k < 8; k++) {
-        sb_v3 q = sb_m4_point(s->lview, sb_v3_make(k & 1 ? b->hi.x : b->lo.x, k & 2 ? b->hi.y : b->lo.y,
-                                                    k & 4 ? b->hi.z : b->lo.z));
-        r[0] = fmin(r[0], q.x), r[1] = fmin(r[1], q.y), r[2] = fmax(r[2], q.x), r[3] = fmax(r[3], q.y);
-    }
+    sb_aabb l = sb_aabb_transform(s->lview, b);
+    r[0] = l.lo.x, r[1] = l.lo.y, r[2] = l.hi.x, r[3] = l.hi.y;
+}
+
+/* A page's window and the state that places boxes in the light's view: what a moved caster may meet. */
+typedef struct page_region {
+    const virtual_state *s;
+    double rect[4];
+} page_region;
+
+static bool box_meets_page(const sb_aabb *b, const void *region) {
+    const page_region *pr = region;
+    double r[4];
+    light_rect(pr->s, b, r);
+    return rects_meet(r, pr->rect);
 }
 
 /* Casters that moved since the last frame: every kept page whose window (with its border) a moved caster's
  * light-space box overlaps, before or after the move, is dropped (UE5's rule; depth does not matter: a page's
  * view spans the scene's depth). Returns how many. */
 static int invalidate_moved(virtual_state *s, const sb_frame *f) {
-    const sb_scene *sc = f->gpu->scene;
-    double (*rects)[4] = sb_xmalloc(sizeof *rects * 2 * (f->moved_count + 1));
-    for (uint32_t i = 0; i < f->moved_count; i++) {
-        light_rect(s, &f->moved_from[i], rects[2 * i]);
-        light_rect(s, &sc->draws[f->moved[i]].box, rects[2 * i + 1]);
-    }
     int dropped = 0;
     for (int i = 0; i < s->p.slots; i++) {
         page_key k = s->slot_key[i];
         if (k.level < 0) continue;
-        double pr[4];
-        page_rect(s, k, pr);
-        for (uint32_t j = 0; j < 2 * f->moved_count; j++)
-            if (rects_meet(rects[j], pr)) {
-                s->slot_key[i].level = -1, s->slot_used[i] = -1;
-                dropped++;
-                break;
-            }
+        page_region pr = {.s = s};
+        page_rect(s, k, pr.rect);
+        if (sb_frame_moved_meets(f, box_meets_page, &pr)) {
+            s->slot_key[i].level = -1, s->slot_used[i] = -1;
+            dropped++;
+        }
     }
-    free(rects);
     return dropped;
 }
 
