@@ -560,12 +560,12 @@ static int cmp_double(const void *a, const void *b) {
  * 1.56x on those frames here, its means outside the CIs). */
 static void test_reference_background(void **st) {
     (void)st;
-    /* timing: enough rays (desert at 1280x720, every frame, one thread) that the background is still
+    /* timing: enough rays (desert at 960x540, every frame, one thread) that the background is still
        casting while the timed frames render. off, on, off: the run with it against the mean of its
        neighbours without; up to three tries, as another tenant's load on a shared machine moves either */
-    const char *tcmd = "(%s run desert desert sm:res=1024 --frames 12 --size 1280x720 --error-every 1 --warmup 2 "
+    const char *tcmd = "(%s run desert desert sm:res=1024 --frames 10 --size 960x540 --error-every 1 --warmup 2 "
                        "--threads 1 --progress --overlap %s --out %s/%s 2>%s/%s.log)";
-    enum { N = 12 };
+    enum { N = 10 };
     bool ok = false;
     int overlapped_too_little = 0, judged = 0;
     for (int attempt = 1; attempt <= 3 && !ok; attempt++) {
