@@ -207,14 +207,15 @@ int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FIL
                 regressed ? "REGRESSED" : worse ? "worse, within noise" : "ok");
         }
     }
-    if (o->format == SB_OUTPUT_TEXT)
+    if (o->format == SB_OUTPUT_TEXT && matched)   /* none matched: the one line below says it */
         fprintf(out, "%d run(s) matched, %d regression(s) beyond %.3g%%, %d timing(s) UNSTABLE\n", matched, regressions,
                 o->threshold_pct, shaky);
     if (unstable) *unstable = shaky;
     sb_table_free(&A);
     sb_table_free(&B);
     if (matched == 0) {
-        sb_fail(err, "no runs of %s match %s (same scene, path, technique and parameters)", next, base);
+        sb_fail(err, "no runs of %s match %s (same scene, path, technique, parameters, light and animation)", next,
+                base);
         return -1;
     }
     return regressions;
