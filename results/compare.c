@@ -368,6 +368,11 @@ static bool is_pair(const sb_table *t, int ra, int rb, const char *key, const ch
     if (strcmp(sb_table_get(t, ra, "scene"), sb_table_get(t, rb, "scene")) ||
         strcmp(sb_table_get(t, ra, "path"), sb_table_get(t, rb, "path")))
         return false;
+    /* runs of other lights (a section of the set with --lights or a sized light) or of another animation are
+       another comparison, never a pair ("" in a set from before the columns: as before) */
+    if (strcmp(sb_table_get(t, ra, "light"), sb_table_get(t, rb, "light")) ||
+        strcmp(sb_table_get(t, ra, "anim"), sb_table_get(t, rb, "anim")))
+        return false;
     if (!strcmp(key, "technique")) {
         /* techniques whose parameters mean different things (pssm's res is a cascade's, virtual's a page grid's)
            pair by what each side names: technique=pssm:res=2048:layered=off,virtual:cache=on */

@@ -246,6 +246,25 @@ static void test_what_plays_is_a_series(void **st) {
     assert_non_null(strstr(g_out, "1 run(s) matched"));
 }
 
+/* compare --pair (and the report's pairs) never pair runs of other lights: a set with a --lights section beside
+ * the plain runs pairs only the runs of one light. */
+static void test_pairs_keep_their_lights(void **st) {
+    (void)st;
+    char bench[4200];
+    snprintf(bench, sizeof bench, "%s/pairs.bench", g_tmp);
+    FILE *f = fopen(bench, "w");
+    assert_non_null(f);
+    fprintf(f, "scene night towers-night towers-night\npath towers-night towers-night\n"
+               "defaults --frames 2 --warmup 0 --size 64x36 --error-every 0\ncube:res=256:layered=off\n"
+               "cube:res=256:layered=on --lights 0,1\ncube:res=256:layered=on\n");
+    fclose(f);
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s batch %s --out %s/pairs --quiet", test_binary(), bench, g_tmp), 0);
+    char set[4096];
+    snprintf(set, sizeof set, "%s", last_line_of(g_out));
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s compare %s --pair layered=off,on", test_binary(), set), 0);
+    assert_non_null(strstr(g_out, "1 pair(s) layered=on against layered=off"));
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_resume_of_another_command),
@@ -255,6 +274,7 @@ int main(void) {
         cmocka_unit_test(test_lights_one_name_a_set),
         cmocka_unit_test(test_contradictions_refused),
         cmocka_unit_test(test_what_plays_is_a_series),
+        cmocka_unit_test(test_pairs_keep_their_lights),
     };
     return cmocka_run_group_tests_name("identity", tests, setup, teardown);
 }
