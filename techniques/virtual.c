@@ -455,34 +455,34 @@ static void light_rect(const virtual_state *s, const sb_aabb *b, double r[4]) {
     r[0] = l.lo.x, r[1] = l.lo.y, r[2] = l.hi.x, r[3] = l.hi.y;
 }
 
-/* A page's window and the state that places boxes in the light's view: what a moved caster may meet. */
-typedef struct page_region {
-    const virtual_state *s;
-    double rect[4];
-} page_region;
 
-static bool box_meets_page(const sb_aabb *b, const void *region) {
-    const page_region *pr = region;
-    double r[4];
-    light_rect(pr->s, b, r);
-    return rects_meet(r, pr->rect);
-}
 
 /* Casters that moved since the last frame: every kept page whose window (with its border) a moved caster's
  * light-space box overlaps, before or after the move, is dropped (UE5's rule; depth does not matter: a page's
  * view spans the scene's depth). Returns how many. */
 static int invalidate_moved(virtual_state *s, const sb_frame *f) {
+    /* each moved box's window once a frame (before and after its move), then every kept page against them: with
+       hundreds of movers, placing the boxes again for each page would be the frame's CPU time */
+    const sb_scene *sc = f->gpu->scene;
+    double (*rects)[4] = sb_xmalloc(sizeof *rects * 2 * (f->moved_count + 1));
+    for (uint32_t i = 0; i < f->moved_count; i++) {
+        light_rect(s, &f->moved_from[i], rects[2 * i]);
+        light_rect(s, &sc->draws[f->moved[i]].box, rects[2 * i + 1]);
+    }
     int dropped = 0;
     for (int i = 0; i < s->p.slots; i++) {
         page_key k = s->slot_key[i];
         if (k.level < 0) continue;
-        page_region pr = {.s = s};
-        page_rect(s, k, pr.rect);
-        if (sb_frame_moved_meets(f, box_meets_page, &pr)) {
-            s->slot_key[i].level = -1, s->slot_used[i] = -1;
-            dropped++;
-        }
+        double pr[4];
+        page_rect(s, k, pr);
+        for (uint32_t j = 0; j < 2 * f->moved_count; j++)
+            if (rects_meet(rects[j], pr)) {
+                s->slot_key[i].level = -1, s->slot_used[i] = -1;
+                dropped++;
+                break;
+            }
     }
+    free(rects);
     return dropped;
 }
 
