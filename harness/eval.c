@@ -31,9 +31,11 @@ void sb_eval_buf_free(sb_eval_buf *b) {
 }
 
 /* Renders path frame pf of n (after `replay` earlier ones) with the
- * evaluation targets bound and reads them back; view points into b. */
+ * evaluation targets bound and reads them back (aux unless b holds this
+ * frame's already: a further light of --lights; pos always, whose w is the
+ * light's own texel density); view points into b. */
 static void render_targets(sb_session *s, sb_instance *in, int pf, int n, int replay, int *seq, sb_eval_buf *b,
-                           sb_frame *f, bool vis, sb_m4 *inv, sb_eval_view *view, int light) {
+                           sb_frame *f, bool vis, sb_m4 *inv, sb_eval_view *view, int light, bool have_aux) {
     sb_timer timer;
     sb_timer_init(&timer, SB_TIMING_SYNC, 1, 1);
     for (int k = replay; k >= 0; k--) {
@@ -50,11 +52,11 @@ static void render_targets(sb_session *s, sb_instance *in, int pf, int n, int re
     sb_timer_free(&timer);
     if (in->tech->collect) in->tech->collect(in->state, f->seq, &f->counters);
     if (vis) sb_gpu_readback(&s->gpu, NULL, b->vis, b->rgba);
-    sb_gpu_readback_eval(&s->gpu, b->pos, b->aux);
+    sb_gpu_readback_eval(&s->gpu, b->pos, have_aux ? NULL : b->aux);
     bool have_inv = sb_m4_invert(f->view_proj, inv);
     *view = (sb_eval_view){b->w, b->h, b->pos, b->aux, sb_v3_sub(f->cam.pos, s->scene.origin), have_inv ? inv : NULL,
                            f->shade_light, f->shade_range, {f->shade_spot[0], f->shade_spot[1], f->shade_spot[2],
-                           f->shade_spot[3]}};
+                           f->shade_spot[3]}, NULL};
 }
 
 /* Whether the instance keeps maps or pages across frames while the scene moves: what the stale check is for. */
@@ -90,12 +92,16 @@ static double stale_share(sb_session *s, sb_instance *in, int *seq, const sb_eva
     return n ? (double)differ / n : NAN;
 }
 
-/* One light's evaluation (light: 1 + its place in the run's --lights; 0: the run's one light). */
+/* One light's evaluation (light: 1 + its place in the run's --lights; 0: the run's one light; last: the set's
+ * last, whose targets the images show). The camera's geometry is every light's: the first light's aux and the
+ * key of its pixels serve the rest. */
 static bool eval_light(sb_session *s, sb_instance *in, int pf, int n, int replay, int *seq, sb_eval_buf *b, sb_frame *f,
-                       sb_error_metrics *m, int light, sb_err *err) {
+                       sb_error_metrics *m, int light, bool last, sb_err *err) {
     sb_m4 inv;
     sb_eval_view view;
-    render_targets(s, in, pf, n, replay, seq, b, f, true, &inv, &view, light);
+    render_targets(s, in, pf, n, replay, seq, b, f, true, &inv, &view, light, light > 1 && !last);
+    if (light == 1) sb_eval_view_pixels_key(&view, b->pixels_key);
+    if (light >= 1) view.pixels_key = b->pixels_key;
     if (light > 1) view.inv_view_proj = NULL;   /* the camera's geometry check: once, with the first light */
     const sb_reference *ref = sb_session_reference(s, err);   /* refit to the frame's pose */
     if (!ref) return false;
@@ -108,14 +114,14 @@ static bool eval_light(sb_session *s, sb_instance *in, int pf, int n, int replay
 bool sb_eval_frame(sb_session *s, sb_instance *in, int pf, int n, int replay, int *seq, sb_eval_buf *b, sb_frame *f,
                    sb_error_metrics *m, sb_err *err) {
     const sb_light_set *set = in->rc.lights;
-    if (!set) return eval_light(s, in, pf, n, replay, seq, b, f, m, 0, err);
+    if (!set) return eval_light(s, in, pf, n, replay, seq, b, f, m, 0, true, err);
     /* --lights: each light of the set scored on its own (pixels it lights, rays to it), the figures over every
        (pixel, light) pair; b->vis and b->ref hold the last light's, images show the frame lit by every light */
     size_t np = (size_t)b->w * b->h;
     uint16_t *lit = sb_xcalloc(np, sizeof *lit);
     for (int i = 0; i < set->count; i++) {
         sb_error_metrics e;
-        if (!eval_light(s, in, pf, n, replay, seq, b, f, &e, i + 1, err)) {
+        if (!eval_light(s, in, pf, n, replay, seq, b, f, &e, i + 1, i + 1 == set->count, err)) {
             free(lit);
             return false;
         }
@@ -218,7 +224,7 @@ bool sb_eval_background(sb_session *s, sb_err *err) {
         sb_frame f;
         sb_m4 inv;
         sb_eval_view view;
-        render_targets(s, &in, pf, o->frames, 0, &seq, &b, &f, false, &inv, &view, 0);
+        render_targets(s, &in, pf, o->frames, 0, &seq, &b, &f, false, &inv, &view, 0, false);
         if (sb_ref_background_add(s->ref_cache, &view) < 0) break; /* as much as it may hold */
     }
     sb_eval_buf_free(&b);

@@ -13,6 +13,7 @@ typedef struct sb_eval_buf {
     unsigned char *rgba;        /* colour, when asked for (images) */
     unsigned char *ref;         /* the reference: 255 lit, 0 shadowed, 128 not evaluated */
     float *pos, *aux;           /* origin-relative position + texels per pixel; normal + cascade */
+    uint64_t pixels_key[2];     /* --lights: sb_eval_view_pixels_key of the frame's targets, from its first light */
     /* the flicker twin's (made on first use): its lookup's visibility and
        positions, its own depth; flicker (rgb, when rgba is asked for): the
        points that flipped, black where nothing was compared */

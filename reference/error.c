@@ -319,7 +319,25 @@ void sb_ref_cache_free(sb_ref_cache *c) {
     free(c);
 }
 
-/* Two independent 64-bit hashes of what determines the reference's answers. */
+void sb_eval_view_pixels_key(const sb_eval_view *v, uint64_t key[2]) {
+    uint64_t h1 = 0x243f6a8885a308d3ULL, h2 = 0x13198a2e03707344ULL;
+    size_t n = (size_t)v->w * v->h;
+    for (size_t i = 0; i < n; i++) {
+        uint32_t w[6];
+        memcpy(w, v->pos + 4 * i, 12); /* xyz: the position; w (texels per pixel) is the technique's */
+        memcpy(w + 3, v->aux + 4 * i, 12);
+        uint64_t a = (uint64_t)w[0] | (uint64_t)w[1] << 32, b = (uint64_t)w[2] | (uint64_t)w[3] << 32,
+                 c = (uint64_t)w[4] | (uint64_t)w[5] << 32;
+        h1 = ((h1 ^ a) * 0x9fb21c651e98df25ULL ^ b) * 0xc2b2ae3d27d4eb4fULL ^ c;
+        h1 = h1 << 29 | h1 >> 35;
+        h2 = (h2 + a * 0x165667b19e3779f9ULL) ^ (b + (c << 7 | c >> 57));
+        h2 = (h2 << 31 | h2 >> 33) * 0x27d4eb2f165667c5ULL;
+    }
+    key[0] = h1, key[1] = h2;
+}
+
+/* Two independent 64-bit hashes of what determines the reference's answers: the view's camera, light and
+ * pose, then its pixels' (sb_eval_view_pixels_key, or the view's pixels_key where its caller has it). */
 static void view_key(const sb_reference *r, const sb_eval_view *v, uint64_t key[2]) {
     uint64_t h1 = 0x9e3779b97f4a7c15ULL ^ (uint64_t)v->w << 32 ^ (uint64_t)v->h, h2 = sb_mix64(h1 + 1);
     if (r && r->pose_key) h1 ^= r->pose_key, h2 = sb_mix64(h2 ^ h1);   /* a moving scene: the pose decides too */
@@ -350,18 +368,10 @@ static void view_key(const sb_reference *r, const sb_eval_view *v, uint64_t key[
         h1 = (h1 ^ w) * 0x100000001b3ULL;
         h2 = sb_mix64(h2 ^ w);
     }
-    size_t n = (size_t)v->w * v->h;
-    for (size_t i = 0; i < n; i++) {
-        uint32_t w[6];
-        memcpy(w, v->pos + 4 * i, 12); /* xyz: the position; w (texels per pixel) is the technique's */
-        memcpy(w + 3, v->aux + 4 * i, 12);
-        uint64_t a = (uint64_t)w[0] | (uint64_t)w[1] << 32, b = (uint64_t)w[2] | (uint64_t)w[3] << 32,
-                 c = (uint64_t)w[4] | (uint64_t)w[5] << 32;
-        h1 = ((h1 ^ a) * 0x9fb21c651e98df25ULL ^ b) * 0xc2b2ae3d27d4eb4fULL ^ c;
-        h1 = h1 << 29 | h1 >> 35;
-        h2 = (h2 + a * 0x165667b19e3779f9ULL) ^ (b + (c << 7 | c >> 57));
-        h2 = (h2 << 31 | h2 >> 33) * 0x27d4eb2f165667c5ULL;
-    }
+    uint64_t px[2];
+    if (v->pixels_key) px[0] = v->pixels_key[0], px[1] = v->pixels_key[1];
+    else sb_eval_view_pixels_key(v, px);
+    h1 = sb_mix64(h1 ^ px[0]), h2 = sb_mix64(h2 ^ px[1]);
     key[0] = sb_mix64(h1);
     key[1] = sb_mix64(h2 ^ key[0]);
 }
@@ -401,7 +411,7 @@ static ref_entry *cache_put(sb_ref_cache *c, const uint64_t key[2], int m, const
 
 /* ---- kept across processes ---- */
 
-static const char ref_magic[8] = {'S', 'B', 'R', 'E', 'F', '0', '0', '1'};
+static const char ref_magic[8] = {'S', 'B', 'R', 'E', 'F', '0', '0', '2'};   /* 002: keys hash the pixels apart */
 
 bool sb_ref_cache_dirty(sb_ref_cache *c) {
     if (!c) return false;
@@ -625,7 +635,7 @@ static void *background(void *arg) {
         }
         j->casting = true;
         pthread_mutex_unlock(&c->mu);
-        sb_eval_view v = {j->w, j->h, j->pos, j->aux, j->eye, j->have_inv ? &j->inv : NULL, j->light, 0, {0, 0, 0, 0}};
+        sb_eval_view v = {j->w, j->h, j->pos, j->aux, j->eye, j->have_inv ? &j->inv : NULL, j->light, 0, {0, 0, 0, 0}, NULL};
         sb_ref_point *pts;
         int *pix, m = view_points(c->r, &v, &pts, &pix);
         unsigned char *ref = sb_xmalloc((size_t)(m > 0 ? m : 1));

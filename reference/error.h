@@ -111,7 +111,12 @@ struct sb_eval_view {
     double range;                      /* a lamp's range; points beyond it are not evaluated (0: none) */
     double spot[4];                    /* a spot light: the way it shines (unit) and 1 - cos of its outer cone;
                                           points outside the cone are not evaluated (all 0: none) */
+    const uint64_t *pixels_key;        /* sb_eval_view_pixels_key of pos and aux, where the caller has it (NULL:
+                                          computed): the lights of one --lights frame share the targets */
 };
+
+/* Two 64-bit hashes of the view's pos and aux (xyz of each): part of the key of the reference's answers. */
+void sb_eval_view_pixels_key(const sb_eval_view *v, uint64_t key[2]);
 
 /* The points the reference casts from (pts and pix: w*h capacity; pix[k] is
  * the pixel of pts[k]): every pixel that is not sky, faces the light and lies within its range and cone, from

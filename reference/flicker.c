@@ -18,7 +18,7 @@ double sb_split_jitter(const sb_counters *a, const sb_counters *b) {
 static unsigned char *recast(const sb_reference *r, const sb_flicker_view *v, int threads) {
     if (!v->scene_moved && !memcmp(v->light, v->twin_light, 4 * sizeof *v->light)) return NULL;
     const size_t np = (size_t)v->w * v->h;
-    sb_eval_view view = {v->w, v->h, v->pos, v->aux, v->eye, NULL, v->twin_light, 0, {0, 0, 0, 0}};   /* no geometry check */
+    sb_eval_view view = {v->w, v->h, v->pos, v->aux, v->eye, NULL, v->twin_light, 0, {0, 0, 0, 0}, NULL};   /* no geometry check */
     sb_ref_point *pts = sb_xmalloc(sizeof *pts * np);
     int *pix = sb_xmalloc(sizeof(int) * np);
     unsigned char *hit = sb_xmalloc(np), *out = sb_xmalloc(np);

@@ -125,7 +125,7 @@ static void raycast_frame(void *state, sb_frame *f) {
         shade(s, f, i);
         unsigned char *vis = s->vis + (size_t)(i - first) * np;
         sb_eval_view view = {w, h, s->pos, s->aux, sb_frame_eye(f), NULL, f->shade_light, f->shade_range,
-                             {f->shade_spot[0], f->shade_spot[1], f->shade_spot[2], f->shade_spot[3]}};
+                             {f->shade_spot[0], f->shade_spot[1], f->shade_spot[2], f->shade_spot[3]}, NULL};
         int m = sb_ref_points(s->ref, &view, s->pts, s->pix);
         memset(vis, 255, np);
         sb_reference_visibility_view(s->ref, f->shade_light, s->pts, s->pix, m, w, h, s->hits, s->threads);

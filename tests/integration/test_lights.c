@@ -7,6 +7,8 @@
  * - Each lamp's shadows are its own: on street-lamps (lamps of range 7), one
  *   lamp moved changes only pixels within its range (before or after), for the
  *   per-light cube maps and for raycast.
+ * - A --lights run's figures are its lights' own: frame by frame, cube's over lamps 0 and 1 are the pixel-weighted
+ *   figures of the two one-lamp runs (each light's targets and reference key, not the first light's).
  * - A light the scene lacks, or a word --lights does not know: exit 2, one line. */
 #include <math.h>
 #include <setjmp.h>
@@ -100,6 +102,45 @@ static void test_every_lamp_of_towers_night(void **st) {
     assert_true(isnan(cell(&one, single, "lights_px_mean")));   /* one light: not a figure of several */
     sb_table_free(&all);
     sb_table_free(&one);
+}
+
+/* The set's figures over two lamps, from the one-lamp runs' (each frame: pixels add, shares weight by them). */
+static void test_set_is_its_lights(void **st) {
+    (void)st;
+    char out[16384], dir[512];
+    const char *common = "--frames 2 --warmup 0 --size 256x144 --error-every 1 --quiet";
+    int rc = run_logged(out, sizeof out, "%s run towers-night towers-night cube:res=512 --lights 0,1 %s --out %s/set",
+                        test_binary(), common, g_tmp);
+    assert_int_equal(rc, 0);
+    snprintf(dir, sizeof dir, "%s", last_line_of(out));
+    rc = run_logged(out, sizeof out, "%s run towers-night towers-night cube:res=512:light=0,1 %s --out %s/singles",
+                    test_binary(), common, g_tmp);
+    assert_int_equal(rc, 0);
+    sb_table set, singles, fs, f0, f1;
+    summary_table(dir, &set);
+    summary_table(last_line_of(out), &singles);
+    frames_table(dir, &set, 0, &fs);
+    frames_table(last_line_of(out), &singles, 0, &f0);
+    frames_table(last_line_of(out), &singles, 1, &f1);
+    assert_int_equal(fs.nrows, 2);
+    for (int f = 0; f < 2; f++) {
+        double p0 = cell(&f0, f, "eval_pixels"), p1 = cell(&f1, f, "eval_pixels"), ps = cell(&fs, f, "eval_pixels");
+        assert_true(p0 > 0 && p1 > 0);
+        assert_true(ps == p0 + p1);
+        const char *shares[] = {"err_rate", "res_err_mean"};
+        for (int k = 0; k < 2; k++) {
+            double want = (cell(&f0, f, shares[k]) * p0 + cell(&f1, f, shares[k]) * p1) / (p0 + p1);
+            double got = cell(&fs, f, shares[k]);
+            print_message("frame %d %s: set %g, from the lamps %g\n", f, shares[k], got, want);
+            if (isnan(want)) assert_true(isnan(got));   /* lamps' maps give no texel density: none either way */
+            else assert_true(fabs(got - want) <= 1e-5 * fabs(want) + 1e-9);
+        }
+    }
+    sb_table_free(&f1);
+    sb_table_free(&f0);
+    sb_table_free(&fs);
+    sb_table_free(&singles);
+    sb_table_free(&set);
 }
 
 /* Renders frame 0 of street-lamps with the technique shadowing lamps 0 and 1: colour, and positions. */
@@ -458,6 +499,7 @@ static void test_range_past_the_scene(void **st) {
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_every_lamp_of_towers_night),
+        cmocka_unit_test(test_set_is_its_lights),
         cmocka_unit_test(test_moved_lamp_changes_only_its_pixels),
         cmocka_unit_test(test_atlas_under_budget),
         cmocka_unit_test(test_atlas_cache_still),
