@@ -423,15 +423,9 @@ static void atlas_frame(void *state, sb_frame *f) {
     if (f->bypass_cache && !s->fresh_fbo) make_atlas(s, &s->fresh_tex, &s->fresh_fbo);
     GLuint atlas = f->bypass_cache ? s->fresh_tex : s->tex;
     glBindFramebuffer(GL_FRAMEBUFFER, f->bypass_cache ? s->fresh_fbo : s->fbo);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    glDepthMask(GL_TRUE);
+    sb_shadow_depth_state((float)d->slope);
     glDisable(GL_CULL_FACE);
     glEnable(GL_SCISSOR_TEST);
-    if (d->slope != 0) {
-        glEnable(GL_POLYGON_OFFSET_FILL);
-        glPolygonOffset((float)d->slope, 0.0f);
-    }
     glBindVertexArray(f->gpu->vao);
     for (int k = 0; k < n; k++) {
         lamp *l = &s->lamps[s->order[k]];

@@ -352,9 +352,7 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
     glBindBufferBase(GL_UNIFORM_BUFFER, 0, c->block);
     glBindFramebuffer(GL_FRAMEBUFFER, c->fbo_all);
     glViewport(0, 0, d->res, d->res);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    glDepthMask(GL_TRUE);
+    sb_shadow_depth_state(d->slope != 0 ? slope_factor(c) : 0);
     /* cache=on: a layer still holding what this frame's fit would draw (the same light view-projection, bit for
        bit: the same snapped window and light) is kept, not drawn again, unless a caster moved into, out of or
        within its light volume since the last frame (its box before or after the move overlaps it: UE5's rule);
@@ -386,10 +384,6 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
         glClear(GL_DEPTH_BUFFER_BIT);
     }
     if (!c->no_clamp) glEnable(GL_DEPTH_CLAMP);   /* casters toward the light stay, at depth 0 */
-    if (d->slope != 0) {
-        glEnable(GL_POLYGON_OFFSET_FILL);
-        glPolygonOffset(slope_factor(c), 0.0f);
-    }
     glBindVertexArray(g->vao);
     int rendered = 0;
     for (int k = 0; k < c->count; k++) rendered += c->active[k];

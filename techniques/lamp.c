@@ -164,14 +164,8 @@ void sb_lamp_technique_frame(void *state, sb_frame *f) {
     int first, end;
     sb_frame_light_range(f, s->count, &first, &end);
     sb_stage_begin(f, SB_STAGE_CASCADE);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    glDepthMask(GL_TRUE);
+    sb_shadow_depth_state((float)s->d->slope);
     glDisable(GL_CULL_FACE);
-    if (s->d->slope != 0) {
-        glEnable(GL_POLYGON_OFFSET_FILL);
-        glPolygonOffset((float)s->d->slope, 0.0f);
-    }
     glBindVertexArray(f->gpu->vao);
     int rendered = 0;
     for (int i = first; i < end; i++) rendered += render_maps(sb_lamp_light(s, i), f);

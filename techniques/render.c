@@ -653,6 +653,16 @@ void sb_set_camera_uniforms(const sb_frame *f, GLint u_view, GLint u_proj) {
 }
 
 /* The camera's render target with depth testing and back-face culling. */
+void sb_shadow_depth_state(float slope) {
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    if (slope != 0) {
+        glEnable(GL_POLYGON_OFFSET_FILL);
+        glPolygonOffset(slope, 0.0f);
+    }
+}
+
 static void bind_camera_target(const sb_gpu *g, GLenum depth_func, bool depth_write) {
     glBindFramebuffer(GL_FRAMEBUFFER, g->fbo);
     glViewport(0, 0, g->width, g->height);

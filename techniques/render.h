@@ -212,6 +212,9 @@ bool sb_lamp_supported(const sb_gpu *g, int light, const char *technique, sb_err
  * cube when cube is true): within GL_MAX_CUBE_MAP_TEXTURE_SIZE or
  * GL_MAX_TEXTURE_SIZE and within the GPU memory (sb_gpu_memory_fits). */
 bool sb_lamp_maps_fit(const sb_gpu *g, const char *technique, int res, double bytes, bool cube, sb_err *why);
+/* A shadow pass's depth state: the depth test (less) and writes on, and the slope-scaled offset (the
+ * glPolygonOffset factor; 0: none) on where given. The pass turns GL_POLYGON_OFFSET_FILL off at its end. */
+void sb_shadow_depth_state(float slope);
 /* The lights [*first, *end) of a set of `count` a frame draws: all of them, or the one an evaluation pass scores
  * (sb_frame.eval_light). */
 static inline void sb_frame_light_range(const sb_frame *f, int count, int *first, int *end) {

@@ -496,14 +496,8 @@ typedef struct pool_tally {
 static void pages_begin(virtual_state *s, const sb_frame *f) {
     glBindFramebuffer(GL_FRAMEBUFFER, s->fbo);
     glEnable(GL_SCISSOR_TEST);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    glDepthMask(GL_TRUE);
+    sb_shadow_depth_state((float)s->d.slope);
     glEnable(GL_DEPTH_CLAMP);   /* casters toward the light stay, at depth 0 */
-    if (s->d.slope != 0) {
-        glEnable(GL_POLYGON_OFFSET_FILL);
-        glPolygonOffset((float)s->d.slope, 0.0f);
-    }
     glBindVertexArray(f->gpu->vao);
 }
 
