@@ -14,7 +14,9 @@
 #include "bisect.h"
 #include "columns.h"
 #include "compare.h"
+#include "flip.h"
 #include "history.h"
+#include "image.h"
 #include "pathcheck.h"
 #include "resultset.h"
 #include "run.h"
@@ -637,6 +639,56 @@ static int cmd_report(const sb_cli *c) {
 }
 
 /* `help [COMMAND]`: --help's text, or the command line's reference as markdown or roff. */
+/* ---- flip ---- */
+
+/* An image of the two: read, every value a number in [0, 1] (LDR-FLIP compares displayed images); false: said. */
+static bool flip_input(const char *path, int *w, int *h, float **rgb, sb_err *err) {
+    if (!sb_image_read_rgb(path, w, h, rgb, err)) return false;
+    for (size_t i = 0; i < 3 * (size_t)*w * *h; i++) {
+        float v = (*rgb)[i];
+        if (v >= 0 && v <= 1) continue;
+        size_t p = i / 3;
+        sb_fail(err, "%s: pixel (%zu, %zu) holds %g: LDR-FLIP compares displayed images, every value in [0, 1]", path,
+                p % (size_t)*w, p / (size_t)*w, v);
+        free(*rgb);
+        *rgb = NULL;
+        return false;
+    }
+    return true;
+}
+
+static int cmd_flip(const sb_cli *c) {
+    if (c->npos != 2) return bad_usage(c);
+    sb_err err;
+    int w[2], h[2];
+    float *img[2] = {NULL, NULL};
+    for (int i = 0; i < 2; i++)
+        if (!flip_input(c->pos[i], &w[i], &h[i], &img[i], &err)) {
+            free(img[0]);
+            return bad_file(&err);
+        }
+    if (w[0] != w[1] || h[0] != h[1]) {
+        fprintf(stderr, "shadowbench: %s is %dx%d but %s is %dx%d: FLIP compares images of one size\n", c->pos[0],
+                w[0], h[0], c->pos[1], w[1], h[1]);
+        free(img[0]), free(img[1]);
+        return SB_EXIT_BAD_INPUT;
+    }
+    size_t n = (size_t)w[0] * h[0];
+    float *map = c->o.map ? sb_xmalloc(sizeof(float) * n) : NULL;
+    sb_flip_stats st = sb_flip(img[0], img[1], w[0], h[0], c->o.ppd, map);
+    free(img[0]), free(img[1]);
+    printf("mean %.6f\np95 %.6f\nmax %.6f\n", st.mean, st.p95, st.max);
+    if (!map) return SB_EXIT_OK;
+    unsigned char *grey = sb_xmalloc(n);
+    for (int y = 0; y < h[0]; y++)   /* read top row first; written from rows given bottom-up (image.h) */
+        for (int x = 0; x < w[0]; x++)
+            grey[(size_t)(h[0] - 1 - y) * w[0] + x] = (unsigned char)lroundf(255 * map[(size_t)y * w[0] + x]);
+    bool ok = sb_image_write_u8(c->o.map, w[0], h[0], 1, grey, &err);
+    free(grey);
+    free(map);
+    return ok ? SB_EXIT_OK : bad_file(&err);
+}
+
 static int cmd_help(const sb_cli *c) {
     int w = 0;
     const sb_command_def *cmd = NULL;
@@ -699,6 +751,10 @@ const sb_command_def sb_commands[SB_CMD_COUNT] = {
      SB_CMDF_ANY | SB_CMDF_TAIL, cmd_bisect},
     {SB_CMD_REPORT, "report", "report [DIR | --history FILE] [--out SITE]", "a static site to open in a browser",
      SB_CMDF_ANY, cmd_report},
+    {SB_CMD_FLIP, "flip", "flip REFERENCE.png TEST.png [--ppd N] [--map FILE.png]",
+     "LDR-FLIP of two images (the perceptual difference a viewer sees between them): the mean, 95th percentile "
+     "and largest per-pixel error; --map writes the per-pixel error",
+     SB_CMDF_ANY, cmd_flip},
     {SB_CMD_TECHNIQUES, "techniques", "techniques [--format text|markdown]", "list techniques and their parameters",
      SB_CMDF_ANY, cmd_techniques},
     {SB_CMD_COLUMNS, "columns", "columns [--format csv|markdown]", "the CSV columns (per frame and per run)",

@@ -36,6 +36,7 @@ typedef enum sb_command {
     SB_CMD_HISTORY_CHECK,
     SB_CMD_BISECT,
     SB_CMD_REPORT,
+    SB_CMD_FLIP,
     SB_CMD_TECHNIQUES,
     SB_CMD_COLUMNS,
     SB_CMD_INFO,
@@ -103,10 +104,10 @@ typedef struct sb_cli_opts {
                                   field is at offset 0 (0: none) */
     sb_run_opts run; /* the run options: run, batch, tune, stress (and the scene
                         options of info and path) */
-    const char *out, *resume, *shard, *metrics, *pair, *techniques, *history, *since, *series, *workdir;
+    const char *out, *resume, *shard, *metrics, *pair, *techniques, *history, *since, *series, *workdir, *map;
     int format; /* --format: an sb_output_format */
     int recent, pairs, nights;
-    double noise_floor, threshold, max_err, max_flicker, max_mb, budget_ms, time_limit_s;
+    double noise_floor, threshold, max_err, max_flicker, max_mb, budget_ms, time_limit_s, ppd;
     bool dry_run, quiet, verbose, accept, yes;
 } sb_cli_opts;
 

@@ -16,6 +16,9 @@ const char *sb_images_unavailable_reason(void);
 bool sb_image_write_u8(const char *path, int w, int h, int channels, const unsigned char *pixels, sb_err *err);
 /* channels 1..4 of floats (EXR for float data) */
 bool sb_image_write_f32(const char *path, int w, int h, int channels, const float *pixels, sb_err *err);
+/* Reads an image as w x h RGB floats (*rgb malloc'd, top row first; a PNG's values sRGB-encoded in [0, 1], an
+ * EXR's as stored): false with one line naming the file where it cannot. */
+bool sb_image_read_rgb(const char *path, int *w, int *h, float **rgb, sb_err *err);
 
 /* The images of one evaluated frame, DIR/<run_id>_fNNNN_<kind>.<ext>:
  * color.png, vis.png (technique visibility), ref.png (reference: white lit,

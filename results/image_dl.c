@@ -14,6 +14,7 @@
 #include "image_module.h"
 
 static sb_image_module_fn g_write;
+static sb_image_module_read_fn g_read;
 static bool g_tried;
 static char g_why[SB_ERR_LEN];
 
@@ -41,7 +42,11 @@ static void open_module(void) {
         return;
     }
     *(void **)&g_write = dlsym(h, SB_IMAGE_MODULE_SYMBOL);
-    if (!g_write) snprintf(g_why, sizeof g_why, "%.400s has no %s", path, SB_IMAGE_MODULE_SYMBOL);
+    *(void **)&g_read = dlsym(h, SB_IMAGE_MODULE_READ_SYMBOL);
+    if (!g_write || !g_read) {
+        snprintf(g_why, sizeof g_why, "%.400s has no %s", path, g_write ? SB_IMAGE_MODULE_READ_SYMBOL : SB_IMAGE_MODULE_SYMBOL);
+        g_write = NULL;
+    }
 }
 
 bool sb_images_available(void) {
@@ -67,4 +72,12 @@ bool sb_image_write_u8(const char *path, int w, int h, int channels, const unsig
 
 bool sb_image_write_f32(const char *path, int w, int h, int channels, const float *pixels, sb_err *err) {
     return write_image(path, w, h, channels, 1, pixels, err);
+}
+
+bool sb_image_read_rgb(const char *path, int *w, int *h, float **rgb, sb_err *err) {
+    *rgb = NULL;
+    if (!sb_images_available()) return sb_fail(err, "%s: %s", path, g_why);
+    char msg[SB_ERR_LEN] = "";
+    if (g_read(path, w, h, rgb, msg, sizeof msg)) return true;
+    return sb_fail(err, "%s", msg);
 }

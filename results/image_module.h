@@ -14,3 +14,10 @@
  * temporary name renamed when complete. false with a message in err. */
 typedef bool (*sb_image_module_fn)(const char *path, int w, int h, int channels, int is_float, const void *pixels,
                                    char *err, size_t err_len);
+
+/* Reads an image (PNG 8 or 16 bits, EXR, ...) as RGB floats, top row first: stored integers to [0, 1] as they
+ * are (sRGB-encoded for a PNG), one channel repeated to three, alpha dropped. *pixels is malloc'd (the caller
+ * frees it). false with a message naming the file in err. */
+#define SB_IMAGE_MODULE_READ_ENTRY sb_image_module_read
+#define SB_IMAGE_MODULE_READ_SYMBOL "sb_image_module_read"
+typedef bool (*sb_image_module_read_fn)(const char *path, int *w, int *h, float **pixels, char *err, size_t err_len);

@@ -18,3 +18,9 @@ bool sb_image_write_f32(const char *path, int w, int h, int channels, const floa
     (void)w, (void)h, (void)channels, (void)pixels;
     return sb_fail(err, "%s: " NO_IMAGES, path);
 }
+
+bool sb_image_read_rgb(const char *path, int *w, int *h, float **rgb, sb_err *err) {
+    (void)w, (void)h;
+    *rgb = NULL;
+    return sb_fail(err, "%s: " NO_IMAGES, path);
+}

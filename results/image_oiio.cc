@@ -7,6 +7,7 @@
 
 #include <cstdarg>
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <string>
 
@@ -61,6 +62,31 @@ bool write_to(const char *path, int w, int h, int channels, OIIO::TypeDesc type,
 }
 
 } // namespace
+
+extern "C" bool SB_IMAGE_MODULE_READ_ENTRY(const char *path, int *w, int *h, float **pixels, char *err, size_t err_len) {
+    sb_err e{err, err_len};
+    *pixels = nullptr;
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) return sb_fail(&e, "%s: cannot read: %s", path, OIIO::geterror().c_str());
+    const OIIO::ImageSpec &spec = in->spec();
+    int nc = spec.nchannels;
+    if (spec.width <= 0 || spec.height <= 0 || nc < 1 || spec.depth > 1) {
+        in->close();
+        return sb_fail(&e, "%s: not a 2D image (%dx%d, %d channels)", path, spec.width, spec.height, nc);
+    }
+    std::unique_ptr<float[]> all(new float[(size_t)spec.width * spec.height * nc]);
+    bool ok = in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, all.get());
+    std::string why = ok ? "" : in->geterror();
+    in->close();
+    if (!ok) return sb_fail(&e, "%s: %s", path, why.c_str());
+    size_t n = (size_t)spec.width * spec.height;
+    float *rgb = static_cast<float *>(std::malloc(sizeof(float) * 3 * (n ? n : 1)));
+    if (!rgb) return sb_fail(&e, "%s: out of memory", path);
+    for (size_t i = 0; i < n; i++)
+        for (int c = 0; c < 3; c++) rgb[3 * i + c] = all[i * nc + (nc >= 3 ? c : 0)];
+    *w = spec.width, *h = spec.height, *pixels = rgb;
+    return true;
+}
 
 extern "C" bool SB_IMAGE_MODULE_ENTRY(const char *path, int w, int h, int channels, int is_float, const void *pixels,
                                       char *err, size_t err_len) {
