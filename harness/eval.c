@@ -5,6 +5,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "flip.h"
+
 void sb_eval_buf_init(sb_eval_buf *b, const sb_gpu *g, bool rgba) {
     memset(b, 0, sizeof *b);
     b->w = g->width;
@@ -27,6 +29,10 @@ void sb_eval_buf_free(sb_eval_buf *b) {
     free(b->flicker);
     free(b->twin_pos);
     free(b->twin_depth);
+    free(b->base);
+    free(b->shaded);
+    free(b->shaded_ref);
+    free(b->flip);
     memset(b, 0, sizeof *b);
 }
 
@@ -92,6 +98,31 @@ static double stale_share(sb_session *s, sb_instance *in, int *seq, const sb_eva
     return n ? (double)differ / n : NAN;
 }
 
+/* The shaded frame, engines' way with this tool's lights: base colour x (ambient 0.3 + 0.7 N.L x visibility),
+ * once with the technique's visibility and once with the reference's (where the reference scores no pixel, sky
+ * or facing away, the technique's), sRGB-encoded for display; no tone map: 0.3 + 0.7 N.L is at most 1. Then
+ * their LDR-FLIP at the default viewing condition. b->base: the frame's, read before anything else drew. */
+static void shade_and_flip(sb_eval_buf *b, sb_error_metrics *m) {
+    const size_t n = (size_t)b->w * b->h;
+    if (!b->shaded) {
+        b->shaded = sb_xmalloc(sizeof(float) * 3 * n);
+        b->shaded_ref = sb_xmalloc(sizeof(float) * 3 * n);
+        b->flip = sb_xmalloc(sizeof(float) * n);
+    }
+    for (size_t i = 0; i < n; i++) {
+        const unsigned char *p = b->base + 4 * i;
+        double nl = p[3] / 255.0, vt = b->vis[i] / 255.0, vr = b->ref[i] == 128 ? vt : b->ref[i] / 255.0;
+        for (int c = 0; c < 3; c++) {
+            double a = p[c] / 255.0;
+            b->shaded[3 * i + c] = sb_srgb_encode((float)(a * (0.3 + 0.7 * nl * vt)));
+            b->shaded_ref[3 * i + c] = sb_srgb_encode((float)(a * (0.3 + 0.7 * nl * vr)));
+        }
+    }
+    sb_flip_stats st = sb_flip(b->shaded_ref, b->shaded, b->w, b->h, 0, b->flip);
+    m->flip_mean = st.mean, m->flip_p95 = st.p95;
+    b->flip_drawn = true;
+}
+
 /* One light's evaluation (light: 1 + its place in the run's --lights; 0: the run's one light; last: the set's
  * last, whose targets the images show). The camera's geometry is every light's: the first light's aux and the
  * key of its pixels serve the rest. */
@@ -100,6 +131,11 @@ static bool eval_light(sb_session *s, sb_instance *in, int pf, int n, int replay
     sb_m4 inv;
     sb_eval_view view;
     render_targets(s, in, pf, n, replay, seq, b, f, true, &inv, &view, light, light > 1 && !last);
+    const bool flip = s->opts.flip && light == 0;   /* --lights: not over several lights (docs/error.md) */
+    if (flip) {   /* now: the stale check draws again */
+        if (!b->base) b->base = sb_xmalloc(4 * (size_t)b->w * b->h);
+        sb_gpu_readback_base(&s->gpu, b->base);
+    }
     if (light == 1) sb_eval_view_pixels_key(&view, b->pixels_key);
     if (light >= 1) view.pixels_key = b->pixels_key;
     if (light > 1) view.inv_view_proj = NULL;   /* the camera's geometry check: once, with the first light */
@@ -108,6 +144,9 @@ static bool eval_light(sb_session *s, sb_instance *in, int pf, int n, int replay
     sb_evaluate_frame(ref, s->ref_cache, &view, b->vis, b->ref, m, s->opts.threads);
     m->stale_px = caches_in_motion(s, in) ? stale_share(s, in, seq, b, f) : NAN;
     m->lights_px = NAN;
+    m->flip_mean = m->flip_p95 = NAN;
+    b->flip_drawn = false;
+    if (flip) shade_and_flip(b, m);
     return sb_gl_check("evaluation pass", err);
 }
 

@@ -20,6 +20,11 @@ typedef struct sb_eval_buf {
     unsigned char *twin_vis, *flicker;
     float *twin_pos, *twin_depth;
     bool flicker_drawn;         /* flicker holds this frame's */
+    /* --flip (made on first use): the base target (colour, N.L), the frame shaded with the technique's visibility
+       and with the reference's (sRGB-encoded RGB floats) and their FLIP map */
+    unsigned char *base;
+    float *shaded, *shaded_ref, *flip;
+    bool flip_drawn;            /* they hold this frame's */
 } sb_eval_buf;
 
 void sb_eval_buf_init(sb_eval_buf *b, const sb_gpu *g, bool rgba);

@@ -123,6 +123,9 @@ const sb_option sb_options[] = {
      .of_set = true,
      .field = RUN(images), .help = "images of every K-th frame: colour, visibility, reference, error, cascades (0 none)",
      .check = images_built},
+    {.name = "--flip", .kind = SB_OPT_FLAG, .with = SB_CMDF_MEASURE, RUN_OPT, .of_set = true, .field = RUN(flip),
+     .help = "score each evaluated frame's shaded colour against the reference's with LDR-FLIP (flip_mean, flip_p95; "
+             "with --images, the shaded frames and the FLIP map)"},
     {.name = "--repeat", .kind = SB_OPT_INT, .arg = "K", .min = 1, .max = 1000, .def = "1", .with = SB_CMDF_MEASURE,
      .of_set = true, RUN_OPT, .field = RUN(repeat), .help = "run the path K times"},
     {.name = "--target-ci", .kind = SB_OPT_NUM, .arg = "PCT", .max = 100, .open_min = true, .def_help = "off",

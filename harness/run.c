@@ -67,7 +67,9 @@ static bool evaluate(sb_session *s, sb_instance *in, int seq, const char *out_di
         }
         if (ok && s->opts.images > 0 && pf % s->opts.images == 0)
             ok = sb_images_write_frame(dir, run_id, pf, b.w, b.h, b.rgba, b.vis, b.ref, b.pos, b.aux, err) &&
-                 (!b.flicker_drawn || sb_images_write_flicker(dir, run_id, pf, b.w, b.h, b.flicker, err));
+                 (!b.flicker_drawn || sb_images_write_flicker(dir, run_id, pf, b.w, b.h, b.flicker, err)) &&
+                 (!b.flip_drawn ||
+                  sb_images_write_shaded(dir, run_id, pf, b.w, b.h, b.shaded, b.shaded_ref, b.flip, err));
     }
     sb_eval_buf_free(&b);
     return ok;

@@ -53,6 +53,7 @@ typedef struct sb_run_opts {
     double gpu_memory;          /* --gpu-memory: bytes a run may allocate on the GPU (0: what the context says) */
     bool allow_external_uris;   /* glTF buffers and images may be read from outside the scene's folder */
     bool strict_path;           /* --strict-path: a path whose cameras the check flags is refused (pathcheck.h) */
+    bool flip;                  /* --flip: evaluated frames' shaded colour scored with LDR-FLIP (eval.c) */
     sb_blend_policy blend;      /* --blend-casters mask|opaque|none (default mask) */
     bool pose;                  /* --pose T: the scene at time T of its first animation */
     double pose_time;

@@ -44,6 +44,10 @@ typedef struct sb_error_metrics {
     /* --lights: the mean number of the run's lights evaluated at a pixel that at least one of them lights (NaN:
      * one light, as without --lights) */
     double lights_px;
+    /* --flip: LDR-FLIP of the frame shaded with the technique's visibility against it shaded with the reference's
+     * (base colour x (0.3 + 0.7 N.L x visibility), sRGB-encoded), mean and 95th percentile over every pixel (NaN:
+     * not asked, or --lights) */
+    double flip_mean, flip_p95;
     uint64_t rays;                     /* reference rays cast for this frame (0: the answers were reused) */
     double ray_ms;                     /* time in the reference for this frame (casting, or finding the answers) */
     bool reused;                       /* the reference's answers came from the cache */

@@ -56,3 +56,25 @@ bool sb_images_write_flicker(const char *dir, const char *run_id, int frame, int
     snprintf(path, sizeof path, "%s/%s_f%04d_flicker.png", dir, run_id, frame);
     return sb_image_write_u8(path, w, h, 3, rgb, err);
 }
+
+/* --flip: RUN_fNNNN_shaded.png (the technique's), _shaded_ref.png (the reference's): sRGB RGB floats; _flip.png,
+ * the per-pixel FLIP in grey (black 0, white 1). Rows bottom-up as every image here. */
+bool sb_images_write_shaded(const char *dir, const char *run_id, int frame, int w, int h, const float *shaded,
+                            const float *shaded_ref, const float *flip, sb_err *err) {
+    size_t n = (size_t)w * h;
+    unsigned char *px = sb_xmalloc(3 * n);
+    char path[4600];
+    bool ok = true;
+    const float *rgb[2] = {shaded, shaded_ref};
+    const char *kind[2] = {"shaded", "shaded_ref"};
+    for (int k = 0; ok && k < 2; k++) {
+        for (size_t i = 0; i < 3 * n; i++) px[i] = (unsigned char)lroundf(255 * fminf(fmaxf(rgb[k][i], 0), 1));
+        snprintf(path, sizeof path, "%s/%s_f%04d_%s.png", dir, run_id, frame, kind[k]);
+        ok = sb_image_write_u8(path, w, h, 3, px, err);
+    }
+    for (size_t i = 0; ok && i < n; i++) px[i] = (unsigned char)lroundf(255 * fminf(fmaxf(flip[i], 0), 1));
+    snprintf(path, sizeof path, "%s/%s_f%04d_flip.png", dir, run_id, frame);
+    ok = ok && sb_image_write_u8(path, w, h, 1, px, err);
+    free(px);
+    return ok;
+}

@@ -414,12 +414,14 @@ bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int
     g->depth_tex = make_tex(GL_DEPTH32F_STENCIL8, w, h);   /* stencil: shadow volumes */
     g->pos_tex = make_tex(GL_RGBA32F, w, h);
     g->aux_tex = make_tex(GL_RGBA32F, w, h);
+    g->base_tex = make_tex(GL_RGBA8, w, h);
     glGenFramebuffers(1, &g->fbo);
     glBindFramebuffer(GL_FRAMEBUFFER, g->fbo);
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, g->color_tex, 0);
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, g->vis_tex, 0);
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT2, GL_TEXTURE_2D, g->pos_tex, 0);
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT3, GL_TEXTURE_2D, g->aux_tex, 0);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT4, GL_TEXTURE_2D, g->base_tex, 0);
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_TEXTURE_2D, g->depth_tex, 0);
     const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
     glDrawBuffers(2, bufs);
@@ -454,7 +456,7 @@ void sb_gpu_free(sb_gpu *g) {
     for (int a = 0; a < 2; a++)
         if (g->zpass_prog[a]) glDeleteProgram(g->zpass_prog[a]);
     if (g->fbo) glDeleteFramebuffers(1, &g->fbo);
-    GLuint tex[] = {g->color_tex, g->vis_tex, g->depth_tex, g->pos_tex, g->aux_tex};
+    GLuint tex[] = {g->color_tex, g->vis_tex, g->depth_tex, g->pos_tex, g->aux_tex, g->base_tex};
     for (size_t i = 0; i < SB_COUNT(tex); i++) /* nothing to delete (nor a GL) when the session never opened */
         if (tex[i]) glDeleteTextures(1, &tex[i]);
     GLuint bufs[] = {g->vbo, g->color_buf, g->mask_buf, g->indirect_buf, g->xform_buf};
@@ -699,11 +701,12 @@ void sb_zpass(sb_frame *f) {
     glDisable(GL_CULL_FACE);
 }
 
-/* Timed frames draw colour alone; the evaluation pass all four targets. */
+/* Timed frames draw colour alone; the evaluation pass all five targets. */
 static void final_targets(const sb_frame *f, GLenum depth_func, bool depth_write) {
     bind_camera_target(f->gpu, depth_func, depth_write);
-    const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3};
-    glDrawBuffers(f->eval ? 4 : 1, bufs);
+    const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3,
+                           GL_COLOR_ATTACHMENT4};
+    glDrawBuffers(f->eval ? 5 : 1, bufs);
 }
 
 static void draw_scene(sb_frame *f, const sb_final_prog *fp, GLenum depth_func, bool depth_write);
@@ -717,6 +720,7 @@ static void camera_pass(sb_frame *f, const sb_final_prog *fp, GLenum depth_func,
         glClearBufferfv(GL_COLOR, 1, one);
         glClearBufferfv(GL_COLOR, 2, none);
         glClearBufferfv(GL_COLOR, 3, none);
+        glClearBufferfv(GL_COLOR, 4, sky);   /* the sky's colour, N.L 1: unshadowed by anything */
     }
     if (clear_depth) glClear(GL_DEPTH_BUFFER_BIT);
     draw_scene(f, fp, depth_func, depth_write);
@@ -809,6 +813,15 @@ sb_v3 sb_frame_unproject(const sb_frame *f, double x, double y, double d) {
     if (!sb_m4_invert(f->view_proj, &inv)) return sb_v3_make(NAN, NAN, NAN);
     sb_v3 ndc = sb_v3_make(2 * (x + 0.5) / f->gpu->width - 1, 2 * (y + 0.5) / f->gpu->height - 1, 2 * d - 1);
     return sb_v3_add(sb_m4_point(inv, ndc), f->gpu->scene->origin);
+}
+
+void sb_gpu_readback_base(const sb_gpu *g, unsigned char *rgba) {
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, g->fbo);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadBuffer(GL_COLOR_ATTACHMENT4);
+    glReadPixels(0, 0, g->width, g->height, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
 }
 
 void sb_gpu_readback_eval(const sb_gpu *g, float *pos, float *aux) {

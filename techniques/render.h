@@ -47,6 +47,7 @@ typedef struct sb_gpu {
     GLuint vao, vbo, ibo;
     GLuint fbo, color_tex, vis_tex, depth_tex;
     GLuint pos_tex, aux_tex;            /* evaluation targets (position, normal + cascade) */
+    GLuint base_tex;                    /* evaluation target: base colour and the scored light's N.L (RGBA8) */
     GLuint zpass_prog[2];               /* camera depth-only program (same vertex shader as the final pass):
                                            without and (alpha-tested draws only) with the alpha test */
     GLint zpass_u_view[2], zpass_u_proj[2];
@@ -244,5 +245,8 @@ void sb_count_draw(sb_frame *f, uint64_t triangles, int instances);
 void sb_gpu_readback(const sb_gpu *g, float *depth, unsigned char *vis, unsigned char *rgba);
 /* Reads the evaluation targets (4 floats a pixel each; either may be NULL). */
 void sb_gpu_readback_eval(const sb_gpu *g, float *pos, float *aux);
+/* The evaluation pass's base target: per pixel the base colour and N.L of the light it scores (the sky: its
+ * colour and 1), 4 bytes, rows bottom-up. */
+void sb_gpu_readback_base(const sb_gpu *g, unsigned char *rgba);
 /* World-space (absolute, double) point of pixel (x, y) at window depth d. */
 sb_v3 sb_frame_unproject(const sb_frame *f, double x, double y, double d);

@@ -2,7 +2,8 @@
 // defines sb_visibility(): 1 lit ... 0 shadowed. Timed frames write the shaded
 // colour alone, as an engine's pass would; the evaluation variant (SB_EVAL,
 // untimed) also writes the visibility, unshaded, that error metrics and
-// images read, and the position and normal targets.
+// images read, the position and normal targets, and the base colour with the
+// direct light's N.L factor (the shaded frame the perceptual error compares).
 in vec3 v_pos;
 in vec3 v_nrm;
 in float v_view_z;
@@ -15,6 +16,7 @@ layout(location = 0) out vec4 o_color;
 layout(location = 1) out float o_vis;
 layout(location = 2) out vec4 o_pos;   // origin-relative position, shadow texels per pixel
 layout(location = 3) out vec4 o_aux;   // geometric normal (facing the viewer), cascade index
+layout(location = 4) out vec4 o_base;  // base colour, and N.L of the light scored (range and cone applied)
 #endif
 void main() {
     SB_ALPHA_TEST();
@@ -22,7 +24,7 @@ void main() {
 #ifdef SB_LIGHT_LOOP
     // every lamp in one pass (the atlas): the technique's GLSL gives sb_light_count(), sb_light_at(i) (xyz the
     // lamp, w its range, 0: none), sb_light_cone(i) and sb_visibility_at(i, p, n). An evaluation pass holds the one lamp it scores.
-    float lit = 0.0, vis = 1.0;
+    float lit = 0.0, vis = 1.0, nl = 0.0;
     for (int i = 0; i < sb_light_count(); i++) {
         vec4 l = sb_light_at(i);
         vec3 d = l.xyz - v_pos;
@@ -30,6 +32,7 @@ void main() {
         vec4 cone = sb_light_cone(i);   // a spot: the way it shines, 1 - cos of its cone (w 0: none)
         if ((l.w > 0.0 && dist > l.w) || ndl <= 0.0 || (cone.w > 0.0 && dot(-d / dist, cone.xyz) < 1.0 - cone.w)) continue;
         vis = sb_visibility_at(i, v_pos, n);
+        nl = ndl;
         lit += 0.7 * ndl * vis;
     }
     o_color = vec4(v_color.rgb * (0.3 + lit), 1.0);
@@ -40,7 +43,8 @@ void main() {
     if (u_shade_light.w > 0.5 && u_shade_spot.w > 0.0 &&
         dot(normalize(v_pos - u_shade_light.xyz), u_shade_spot.xyz) < 1.0 - u_shade_spot.w) ndl = 0.0;
     float vis = sb_visibility(v_pos, n, v_view_z);
-    o_color = vec4(v_color.rgb * ((1.0 - u_shade_more.y) * 0.3 + 0.7 * max(ndl, 0.0) * vis), 1.0);
+    float nl = max(ndl, 0.0);
+    o_color = vec4(v_color.rgb * ((1.0 - u_shade_more.y) * 0.3 + 0.7 * nl * vis), 1.0);
 #endif
 #ifdef SB_EVAL
     o_vis = vis;
@@ -48,5 +52,6 @@ void main() {
     if (dot(ng, n) < 0.0) ng = -ng;
     o_pos = vec4(v_pos, sb_out_texel_px);
     o_aux = vec4(ng, sb_out_cascade);
+    o_base = vec4(v_color.rgb, nl);
 #endif
 }

@@ -5,7 +5,14 @@
  * - Moved by 1, 2 and 4 pixels: the mean grows with the move, and each printed figure is the one sb_flip gives
  *   on the same two files read in this process (the command reads, checks and scores, nothing else).
  * - --map writes the per-pixel error at the frame's size, its brightest pixel the largest error.
- * - Two sizes, a file that is not there, a value outside [0, 1] (an EXR), a missing argument: one line, exit 2. */
+ * - Two sizes, a file that is not there, a value outside [0, 1] (an EXR), a missing argument: one line, exit 2.
+ *
+ * --flip on plane-box (the box under a sun 50 degrees up):
+ * - the reference's shaded frame is base colour x (0.3 + 0.7 N.L x visibility): on the floor (N up, the same base
+ *   colour everywhere) a lit pixel over a shadowed one is (0.3 + 0.7 sin 50 deg) / 0.3 in linear light, per channel;
+ * - raycast's shaded frame is the reference's, pixel for pixel, and its flip_mean exactly 0; a 128-texel map's is
+ *   above a 2048-texel one's, which is above 0;
+ * - without --flip the runs keep their ids and every figure, and the FLIP columns are empty. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -19,6 +26,7 @@
 #include "flip.h"
 #include "image.h"
 #include "support.h"
+#include "table.h"
 
 SB_TEST_SCRATCH("sbflip")
 
@@ -141,7 +149,79 @@ static void test_bad_input(void **st) {
     free(f);
 }
 
+static double cell(const sb_table *t, int r, const char *col) {
+    const char *v = sb_table_get(t, r, col);
+    return v && *v ? atof(v) : NAN;
+}
+
+static void image_of(const char *dir, const char *run_id, const char *kind, float **rgb) {
+    char path[1024];
+    int w, h;
+    sb_err err;
+    snprintf(path, sizeof path, "%s/images/%s_f0000_%s.png", dir, run_id, kind);
+    assert_true(sb_image_read_rgb(path, &w, &h, rgb, &err));
+    assert_int_equal(w, 160);
+    assert_int_equal(h, 90);
+}
+
+static void test_shaded_frames(void **st) {
+    (void)st;
+    if (!sb_images_available()) {
+        print_message("skipped: %s\n", sb_images_unavailable_reason());
+        skip();
+    }
+    char out[8192], dir[512];
+    const char *specs = "raycast sm:res=128 sm:res=2048";
+    const char *opts = "--frames 1 --warmup 0 --size 160x90 --error-every 1 --quiet";
+    int rc = run_logged(out, sizeof out, "%s run plane-box plane-box %s %s --flip --images 1 --out %s/flip",
+                        test_binary(), specs, opts, g_tmp);
+    assert_int_equal(rc, 0);
+    snprintf(dir, sizeof dir, "%s", last_line_of(out));
+    rc = run_logged(out, sizeof out, "%s run plane-box plane-box %s %s --out %s/plain", test_binary(), specs, opts, g_tmp);
+    assert_int_equal(rc, 0);
+    sb_table with, without;
+    summary_table(dir, &with);
+    summary_table(last_line_of(out), &without);
+    assert_int_equal(with.nrows, 3);
+    for (int r = 0; r < 3; r++) {
+        assert_string_equal(sb_table_get(&with, r, "run_id"), sb_table_get(&without, r, "run_id"));
+        assert_string_equal(sb_table_get(&with, r, "err_rate_mean"), sb_table_get(&without, r, "err_rate_mean"));
+        assert_true(isnan(cell(&without, r, "flip_mean_mean")));
+    }
+    double ray = cell(&with, 0, "flip_mean_mean"), coarse = cell(&with, 1, "flip_mean_mean"),
+           fine = cell(&with, 2, "flip_mean_mean");
+    print_message("flip_mean: raycast %g, sm 128 %g, sm 2048 %g (err_rate %g, %g, %g)\n", ray, coarse, fine,
+                  cell(&with, 0, "err_rate_mean"), cell(&with, 1, "err_rate_mean"), cell(&with, 2, "err_rate_mean"));
+    assert_true(ray == 0);
+    assert_true(coarse > fine && fine > 0);
+    /* the reference's shaded frame by hand: the floor lit and in the box's shadow */
+    const char *id = sb_table_get(&with, 0, "run_id");
+    float *ref, *shaded_ref, *shaded;
+    image_of(dir, id, "ref", &ref);
+    image_of(dir, id, "shaded_ref", &shaded_ref);
+    image_of(dir, id, "shaded", &shaded);
+    for (int i = 0; i < 3 * 160 * 90; i++) assert_true(shaded[i] == shaded_ref[i]);   /* raycast: exact */
+    int lit = 89 * 160 + 2, dark = -1;   /* the bottom row is floor near the camera, in the sun */
+    for (int i = 0; i < 160 * 90 && dark < 0; i++)
+        if (ref[3 * i] == 0) dark = i;   /* black in ref.png: shadowed, and only the floor is */
+    assert_true(ref[3 * lit] == 1 && dark >= 0);
+    double want = (0.3 + 0.7 * sin(50 * 3.14159265358979 / 180)) / 0.3;
+    for (int c = 0; c < 3; c++) {
+        double l = sb_srgb_decode(shaded_ref[3 * lit + c]), d = sb_srgb_decode(shaded_ref[3 * dark + c]);
+        print_message("channel %d: lit %.4f, shadowed %.4f, ratio %.4f (by hand %.4f)\n", c, l, d, l / d, want);
+        assert_true(fabs(l / d - want) < 0.03 * want);
+    }
+    free(ref), free(shaded_ref), free(shaded);
+    /* the map is there too */
+    float *map;
+    image_of(dir, sb_table_get(&with, 1, "run_id"), "flip", &map);
+    free(map);
+    sb_table_free(&with);
+    sb_table_free(&without);
+}
+
 int main(void) {
-    const struct CMUnitTest tests[] = {cmocka_unit_test(test_against_itself_and_moved), cmocka_unit_test(test_bad_input)};
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_against_itself_and_moved), cmocka_unit_test(test_bad_input),
+                                       cmocka_unit_test(test_shaded_frames)};
     return cmocka_run_group_tests_name("perceptual", tests, render_frame, teardown);
 }
