@@ -414,6 +414,7 @@ static int cmd_tune(const sb_cli *c) {
         sb_run_opts_defaults(&general);
         o.flicker_dt = general.flicker_dt;
     }
+    if (c->o.max_flip > 0) o.flip = true;   /* a FLIP bound scores the shaded frames */
     sb_run_opts_finish(&o);
     /* the second word is the path unless it names a technique */
     int first_spec = 1;
@@ -424,7 +425,8 @@ static int cmd_tune(const sb_cli *c) {
         if (!sb_technique_find(name)) path = c->pos[1], first_spec = 2;
     }
     sb_tune_cmd cmd = {.scene = c->pos[0], .path = path, .specs = c->pos + first_spec, .nspecs = c->npos - first_spec,
-                       .techniques = c->o.techniques, .max_err = c->o.max_err, .max_flicker = c->o.max_flicker,
+                       .techniques = c->o.techniques, .max_err = c->o.max_err,
+                       .max_side = {c->o.max_flicker, c->o.max_flip},
                        .max_mb = c->o.max_mb, .budget_ms = c->o.budget_ms, .time_limit_s = c->o.time_limit_s,
                        .opts = &o, .out = c->o.out, .resume = c->o.resume};
     if (cmd.nspecs && cmd.techniques) return bad("tune: give SPECs or --techniques, not both%s", "");

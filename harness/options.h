@@ -107,7 +107,7 @@ typedef struct sb_cli_opts {
     const char *out, *resume, *shard, *metrics, *pair, *techniques, *history, *since, *series, *workdir, *map;
     int format; /* --format: an sb_output_format */
     int recent, pairs, nights;
-    double noise_floor, threshold, max_err, max_flicker, max_mb, budget_ms, time_limit_s, ppd;
+    double noise_floor, threshold, max_err, max_flicker, max_flip, max_mb, budget_ms, time_limit_s, ppd;
     bool dry_run, quiet, verbose, accept, yes;
 } sb_cli_opts;
 

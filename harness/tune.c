@@ -58,7 +58,7 @@ typedef struct cand {
     bool skipped, failed;
     char reason[512];
     double time_ms, time_ci, err, err_ci;   /* at its highest rung: gpu_ms median and CI, err_rate mean and CI */
-    double flicker;             /* flicker_rate mean there (NaN: not measured) */
+    double side[SB_TUNE_SIDES]; /* flicker_rate and flip_mean means there (NaN: not measured) */
     int frames;                 /* timed frames of that measurement */
     bool front, chosen;
     double ratio, ratio_lo, ratio_hi;   /* a finalist: its objective over the chosen one's, paired, and its 95% CI */
@@ -86,8 +86,9 @@ typedef struct verdict {
 
 /* The summary columns tune reads and the names it prints, from the column table's roles (columns.h). */
 typedef struct tune_cols {
-    char time_min[96], time_median[96], time_ci[96], err_mean[96], err_ci[96], flicker_mean[96];
-    const char *time, *err, *flicker, *memory;
+    char time_min[96], time_median[96], time_ci[96], err_mean[96], err_ci[96];
+    char side_mean[SB_TUNE_SIDES][96];   /* the side bounds' columns (sb_tune_cmd.max_side) */
+    const char *time, *err, *side[SB_TUNE_SIDES], *memory;
 } tune_cols;
 
 static void tune_cols_init(tune_cols *c) {
@@ -96,10 +97,13 @@ static void tune_cols_init(tune_cols *c) {
     sb_columns_role_stat(SB_ROLE_TIME, SB_STAT_CI95, c->time_ci, sizeof c->time_ci);
     sb_columns_role_stat(SB_ROLE_ERROR, SB_STAT_MEAN, c->err_mean, sizeof c->err_mean);
     sb_columns_role_stat(SB_ROLE_ERROR, SB_STAT_CI95, c->err_ci, sizeof c->err_ci);
-    sb_columns_role_stat(SB_ROLE_FLICKER, SB_STAT_MEAN, c->flicker_mean, sizeof c->flicker_mean);
+    const sb_col_role side[SB_TUNE_SIDES] = {SB_ROLE_FLICKER, SB_ROLE_PERCEPTUAL};
+    for (int k = 0; k < SB_TUNE_SIDES; k++) {
+        sb_columns_role_stat(side[k], SB_STAT_MEAN, c->side_mean[k], sizeof c->side_mean[k]);
+        c->side[k] = sb_columns_role(side[k]);
+    }
     c->time = sb_columns_role(SB_ROLE_TIME);
     c->err = sb_columns_role(SB_ROLE_ERROR);
-    c->flicker = sb_columns_role(SB_ROLE_FLICKER);
     c->memory = sb_columns_role(SB_ROLE_MEMORY);
 }
 
@@ -259,14 +263,17 @@ static void bounds_text(const tune *t, char *out, size_t len) {
     const sb_tune_cmd *cmd = t->cmd;
     snprintf(out, len, "%s at most %g", cmd->max_err > 0 ? t->col.err : t->col.time, bound_of(t));
     size_t l = strlen(out);
-    if (cmd->max_flicker > 0) l += (size_t)snprintf(out + l, len - l, ", %s at most %g", t->col.flicker, cmd->max_flicker);
+    for (int k = 0; k < SB_TUNE_SIDES && l < len; k++)
+        if (cmd->max_side[k] > 0) l += (size_t)snprintf(out + l, len - l, ", %s at most %g", t->col.side[k], cmd->max_side[k]);
     if (cmd->max_mb > 0 && l < len) snprintf(out + l, len - l, ", %s at most %g", t->col.memory, cmd->max_mb);
 }
 
-/* The flicker bound, with a slack (a share of it): met when there is none, or the candidate's flicker_rate is
- * within it (a technique that measures no flicker cannot be vouched for). */
-static bool flicker_ok(const tune *t, const cand *c, double slack) {
-    return t->cmd->max_flicker <= 0 || (!isnan(c->flicker) && c->flicker <= t->cmd->max_flicker * (1 + slack));
+/* The side bounds (flicker, FLIP), with a slack (a share of each): met when there are none, or the candidate's
+ * figure is within each (a technique that measures no such figure cannot be vouched for). */
+static bool sides_ok(const tune *t, const cand *c, double slack) {
+    for (int k = 0; k < SB_TUNE_SIDES; k++)
+        if (t->cmd->max_side[k] > 0 && !(c->side[k] <= t->cmd->max_side[k] * (1 + slack))) return false;
+    return true;
 }
 
 static bool measured_at(const cand *c, int rung) { return c->rung == rung && !c->skipped && !c->failed; }
@@ -295,7 +302,8 @@ static void read_rung(tune *t, int rung, const char *sum_path) {
             c->time_ci = sb_parse_double(sb_table_get(&tb, r, t->col.time_ci), &v) ? v : NAN;
             c->err = sb_parse_double(sb_table_get(&tb, r, t->col.err_mean), &v) ? v : NAN;
             c->err_ci = sb_parse_double(sb_table_get(&tb, r, t->col.err_ci), &v) ? v : NAN;
-            c->flicker = sb_parse_double(sb_table_get(&tb, r, t->col.flicker_mean), &v) ? v : NAN;
+            for (int k = 0; k < SB_TUNE_SIDES; k++)
+                c->side[k] = sb_parse_double(sb_table_get(&tb, r, t->col.side_mean[k]), &v) ? v : NAN;
             long fr = 0, wu = 0, rep = 1;
             sb_parse_int(sb_table_get(&tb, r, "frames"), &fr);
             sb_parse_int(sb_table_get(&tb, r, "warmup"), &wu);
@@ -557,10 +565,10 @@ static void promote(tune *t, int rung, int keep, int extra, double margin) {
             c->alive = false;
             continue;
         }
-        bool maybe = constraint_of(t, c) <= b * (1 + margin) && flicker_ok(t, c, margin);
+        bool maybe = constraint_of(t, c) <= b * (1 + margin) && sides_ok(t, c, margin);
         rk[m++] = (rank){maybe ? 0 : INT_MAX, maybe ? objective_of(t, c) : constraint_of(t, c), i};
-        within[i] = constraint_of(t, c) <= b && flicker_ok(t, c, 0);
-        if (constraint_of(t, c) <= b * (1 - margin / 2) && flicker_ok(t, c, -margin / 2) &&
+        within[i] = constraint_of(t, c) <= b && sides_ok(t, c, 0);
+        if (constraint_of(t, c) <= b * (1 - margin / 2) && sides_ok(t, c, -margin / 2) &&
             (best_clear < 0 || objective_of(t, c) < objective_of(t, &t->c[best_clear])))
             best_clear = i;
     }
@@ -635,7 +643,7 @@ static int choose(tune *t, int rung) {
     for (int i = 0; i < t->n; i++) {
         const cand *c = &t->c[i];
         if (!measured_at(c, rung) || isnan(c->err) || isnan(c->time_ms) || constraint_of(t, c) > b ||
-            !flicker_ok(t, c, 0))
+            !sides_ok(t, c, 0))
             continue;
         if (best < 0 || objective_of(t, c) < objective_of(t, &t->c[best])) best = i;
     }
@@ -690,7 +698,7 @@ static verdict decide(tune *t, int rung) {
     for (int i = 0; i < t->n; i++) {   /* the runner-up: the next best that meets the bound */
         const cand *c = &t->c[i];
         if (i == v.chosen || !measured_at(c, rung) || isnan(c->err) || isnan(c->time_ms) || constraint_of(t, c) > b ||
-            !flicker_ok(t, c, 0))
+            !sides_ok(t, c, 0))
             continue;
         if (v.other < 0 || objective_of(t, c) < objective_of(t, &t->c[v.other])) v.other = i;
     }
@@ -724,7 +732,7 @@ static int runner_up(const tune *t, int chosen) {
     for (int i = 0; i < t->n; i++) {
         const cand *c = &t->c[i];
         if (i == chosen || !usable(c) || c->rung >= t->nrungs - 1 || constraint_of(t, c) > bound_of(t) ||
-            !flicker_ok(t, c, 0))
+            !sides_ok(t, c, 0))
             continue;
         if (best < 0 || objective_of(t, c) < objective_of(t, &t->c[best])) best = i;
     }
@@ -786,7 +794,8 @@ static bool write_csv(const tune *t, sb_err *err) {
     sb_csv csv = {0};
     const char *const head[] = {"candidate", "technique", "spec", "rung", "frames", "status", "reason",
                                 t->col.time_median, t->col.time_ci, t->col.err_mean, t->col.err_ci,
-                                t->col.flicker_mean, "front", "recommended", "ratio_to_recommended",
+                                t->col.side_mean[SB_TUNE_FLICKER], t->col.side_mean[SB_TUNE_FLIP], "front",
+                                "recommended", "ratio_to_recommended",
                                 "ratio_ci_low", "ratio_ci_high", "run_id"};
     for (size_t k = 0; k < SB_COUNT(head); k++) sb_csv_str(&csv, head[k]);
     sb_csv_end_row(&csv);
@@ -806,7 +815,8 @@ static bool write_csv(const tune *t, sb_err *err) {
         sb_csv_num(&csv, c->time_ci);
         sb_csv_num(&csv, c->err);
         sb_csv_num(&csv, c->err_ci);
-        sb_csv_num(&csv, c->flicker);
+        sb_csv_num(&csv, c->side[SB_TUNE_FLICKER]);
+        sb_csv_num(&csv, c->side[SB_TUNE_FLIP]);
         sb_csv_str(&csv, c->front ? "yes" : "no");
         sb_csv_str(&csv, c->chosen ? "yes" : "no");
         sb_csv_num(&csv, c->ratio);
@@ -941,7 +951,8 @@ static void print_report(const tune *t, const verdict *v) {
         printf("%s: %s\n  %s\n  %s median %.3g (95%% CI of the mean +-%.2g), %s %.4g (+-%.2g), %d frames x %d pass(es)\n",
                met ? "recommended" : "nothing met the bound; closest", c->label, say, t->col.time, c->time_ms,
                c->time_ci, t->col.err, c->err, c->err_ci, c->frames, c->rung >= t->nrungs - 1 ? t->final_reps : 1);
-        if (cmd->max_flicker > 0) printf("  %s %.4g\n", t->col.flicker, c->flicker);
+        for (int k = 0; k < SB_TUNE_SIDES; k++)
+            if (cmd->max_side[k] > 0) printf("  %s %.4g\n", t->col.side[k], c->side[k]);
     } else {
         printf("no candidate could be measured\n");
     }

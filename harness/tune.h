@@ -20,13 +20,17 @@
 #pragma once
 #include "run.h"
 
+enum { SB_TUNE_FLICKER, SB_TUNE_FLIP, SB_TUNE_SIDES };
+
 typedef struct sb_tune_cmd {
     const char *scene, *path;           /* path NULL: auto */
     const char *const *specs;           /* the grid as specs (NULL: the default axes) */
     int nspecs;
     const char *techniques;             /* --techniques a,b,c (NULL: all but none and raycast) */
     double max_err, budget_ms;          /* exactly one > 0 */
-    double max_flicker;                 /* > 0: a setting also keeps its mean flicker_rate within it */
+    /* > 0: a setting also keeps the mean of a side figure within it: [SB_TUNE_FLICKER] flicker_rate (--max-flicker),
+       [SB_TUNE_FLIP] flip_mean (--max-flip) */
+    double max_side[2];
     double max_mb;                      /* > 0: a setting's shadow storage (shadow_mb) stays within it, MiB */
     double time_limit_s;                /* 0: none */
     const sb_run_opts *opts;            /* frames: the full measurement; seed: the plan's */

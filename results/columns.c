@@ -227,9 +227,11 @@ static const sb_frame_col frame_cols[] = {
     ERROR("lights_px", lights_px, "lights", SB_STAT_MEAN, 0,
           "--lights: mean number of the run's lights that light an evaluated pixel (in range, facing it; empty: one "
           "light)"),
-    ERROR("flip_mean", flip_mean, "FLIP", ERR_STATS, 0,
-          "--flip: mean LDR-FLIP (0 none .. 1) of the frame shaded with the technique's visibility against it shaded "
-          "with the reference's, over every pixel: the shadow error as a viewer sees it (empty: not asked, --lights)"),
+    {.name = "flip_mean", .get = f_error, .arg = offsetof(sb_error_metrics, flip_mean), .unit = "FLIP",
+     .stats = ERR_STATS, .role = SB_ROLE_PERCEPTUAL,
+     .doc = "--flip: mean LDR-FLIP (0 none .. 1) of the frame shaded with the technique's visibility against it "
+            "shaded with the reference's, over every pixel: the shadow error as a viewer sees it (empty: not asked, "
+            "--lights)"},
     ERROR("flip_p95", flip_p95, "FLIP", ERR_STATS, 0, "--flip: 95th percentile of that per-pixel FLIP"),
     ERROR("geom_mismatch", geom_mismatch, "share", 0, 0,
           "share of sampled pixels where a camera ray's first hit is not the rasterized surface (one geometry?)"),

@@ -124,6 +124,7 @@ typedef enum sb_col_role {
     SB_ROLE_ERROR,              /* the shadow error against the reference (err_rate) */
     SB_ROLE_FLICKER,            /* the flicker of the twins (flicker_rate) */
     SB_ROLE_MEMORY,             /* the shadow storage a run holds (shadow_mb) */
+    SB_ROLE_PERCEPTUAL,         /* the error as a viewer sees it (flip_mean, with --flip) */
     SB_ROLE_COUNT
 } sb_col_role;
 

@@ -12,7 +12,9 @@
  *   colour everywhere) a lit pixel over a shadowed one is (0.3 + 0.7 sin 50 deg) / 0.3 in linear light, per channel;
  * - raycast's shaded frame is the reference's, pixel for pixel, and its flip_mean exactly 0; a 128-texel map's is
  *   above a 2048-texel one's, which is above 0;
- * - without --flip the runs keep their ids and every figure, and the FLIP columns are empty. */
+ * - without --flip the runs keep their ids and every figure, and the FLIP columns are empty;
+ * - tune --max-flip: the cheapest map whose flip_mean stays within the bound (a 128-texel map's is above it, a
+ *   1024-texel one's below), and nothing for a bound none can meet. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -220,8 +222,28 @@ static void test_shaded_frames(void **st) {
     sb_table_free(&without);
 }
 
+static void test_tune_max_flip(void **st) {
+    (void)st;
+    if (!sb_images_available()) skip();   /* not needed for FLIP itself, but the runs above set the scene */
+    char out[16384];
+    int rc = run_logged(out, sizeof out, "%s tune plane-box plane-box 'sm:res=128,1024' --max-err 0.05 --max-flip 0.0004 "
+                        "--frames 3 --size 160x90 --quiet --out %s/tune", test_binary(), g_tmp);
+    assert_int_equal(rc, 0);
+    assert_non_null(strstr(out, "flip_mean at most 0.0004"));
+    const char *rec = strstr(out, "recommended: ");
+    assert_non_null(rec);
+    char line[256];
+    snprintf(line, sizeof line, "%.*s", (int)strcspn(rec, "\n"), rec);
+    print_message("%s\n", line);
+    assert_non_null(strstr(line, "res=1024"));
+    rc = run_logged(out, sizeof out, "%s tune plane-box plane-box 'sm:res=128' --max-err 0.05 --max-flip 0.000000001 "
+                    "--frames 3 --size 160x90 --quiet --out %s/tune", test_binary(), g_tmp);
+    assert_int_equal(rc, 1);
+    assert_non_null(strstr(out, "nothing met the bound"));
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_against_itself_and_moved), cmocka_unit_test(test_bad_input),
-                                       cmocka_unit_test(test_shaded_frames)};
+                                       cmocka_unit_test(test_shaded_frames), cmocka_unit_test(test_tune_max_flip)};
     return cmocka_run_group_tests_name("perceptual", tests, render_frame, teardown);
 }
