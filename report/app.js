@@ -447,19 +447,26 @@ var SB = (function () {
     if (!imgs.length) is.appendChild(el("p", { text: "None: the run was made without --images." }));
     var byFrame = {};
     imgs.forEach(function (n) { var f = n.slice(id.length + 2, id.length + 6); (byFrame[f] = byFrame[f] || []).push(n); });
-    var order = ["color", "vis", "ref", "error", "cascades", "flicker"];
+    /* the raw targets; then, with --flip, the frame as a player sees it beside the reference's and their FLIP map */
+    var rows = [{ kinds: ["color", "vis", "ref", "error", "cascades", "flicker"] },
+                { kinds: ["shaded", "shaded_ref", "flip"], title: "As a player sees it (--flip)",
+                  caption: { shaded: "shaded: the technique", shaded_ref: "shaded: the reference", flip: "FLIP (white: 1)" } }];
     Object.keys(byFrame).sort().forEach(function (f) {
-      var row = el("div", { "class": "imgrow" });
-      order.forEach(function (k) {
-        var n = byFrame[f].filter(function (x) { return x.indexOf("_" + k + ".png") > 0; })[0];
-        if (!n) return;
-        var img = el("img", { src: "images/" + night.id + "/" + n, alt: k + " of frame " + f, loading: "eager" });
-        img.onload = function () { if (img.naturalWidth > 0) document.body.dataset.imagesLoaded = String(+(document.body.dataset.imagesLoaded || 0) + 1); };
-        img.onerror = function () { errors.push("image " + n + " did not load"); mark(); };
-        row.appendChild(el("figure", {}, [img, el("figcaption", { text: k })]));
-      });
       is.appendChild(el("h3", { text: "frame " + (+f) }));
-      is.appendChild(row);
+      rows.forEach(function (r) {
+        var row = el("div", { "class": "imgrow" });
+        r.kinds.forEach(function (k) {
+          var n = byFrame[f].filter(function (x) { return x.indexOf("_" + k + ".png") > 0; })[0];
+          if (!n) return;
+          var img = el("img", { src: "images/" + night.id + "/" + n, alt: k + " of frame " + f, loading: "eager" });
+          img.onload = function () { if (img.naturalWidth > 0) document.body.dataset.imagesLoaded = String(+(document.body.dataset.imagesLoaded || 0) + 1); };
+          img.onerror = function () { errors.push("image " + n + " did not load"); mark(); };
+          row.appendChild(el("figure", {}, [img, el("figcaption", { text: (r.caption && r.caption[k]) || k })]));
+        });
+        if (!row.childNodes.length) return;
+        if (r.title) is.appendChild(el("h4", { text: r.title }));
+        is.appendChild(row);
+      });
     });
     m.appendChild(is);
     done();
