@@ -506,8 +506,8 @@ bool sb_gpu_memory_fits(const sb_gpu *g, double bytes, const char *who, const ch
     char source[96];
     double free_bytes = sb_context_memory_free(g->ctx, source, sizeof source);
     if (free_bytes <= 0) return true;   /* unknown: a failed allocation then fails the run with the GL error */
-    /* the camera targets: colour RGBA8, visibility R8, depth-stencil 32F+8, position and normal RGBA32F */
-    double targets = (double)g->width * g->height * (4 + 1 + 8 + 16 + 16);
+    /* the camera targets: colour RGBA8, visibility R8, depth-stencil 32F+8, position and normal RGBA32F, base RGBA8 */
+    double targets = (double)g->width * g->height * (4 + 1 + 8 + 16 + 16 + 4);
     if (bytes + targets <= free_bytes) return true;
     char need[32], have[32];
     human_bytes(bytes, need, sizeof need);
