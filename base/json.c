@@ -457,13 +457,16 @@ void sb_jw_str(sb_jw *w, const char *s) {
     jw_string(w, s);
 }
 
-void sb_jw_num(sb_jw *w, double v) {
+static void jw_number(sb_jw *w, double v, int digits) {
     char b[40];
     if (!isfinite(v)) snprintf(b, sizeof b, "null");
-    else snprintf(b, sizeof b, "%.6g", v);
+    else snprintf(b, sizeof b, "%.*g", digits, v);
     jw_sep(w);
     jw_put(w, b, strlen(b));
 }
+
+void sb_jw_num(sb_jw *w, double v) { jw_number(w, v, 6); }
+void sb_jw_num_exact(sb_jw *w, double v) { jw_number(w, v, 17); }
 
 void sb_jw_bool(sb_jw *w, bool b) {
     jw_sep(w);

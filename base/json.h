@@ -85,6 +85,7 @@ void sb_jw_end_arr(sb_jw *w);
 void sb_jw_key(sb_jw *w, const char *key);
 void sb_jw_str(sb_jw *w, const char *s);    /* NULL: "" */
 void sb_jw_num(sb_jw *w, double v);         /* %.6g */
+void sb_jw_num_exact(sb_jw *w, double v);   /* %.17g: reads back as the same double */
 void sb_jw_bool(sb_jw *w, bool b);
 void sb_jw_null(sb_jw *w);
 /* "key": value in one call. */

@@ -41,6 +41,7 @@ typedef enum sb_command {
     SB_CMD_COLUMNS,
     SB_CMD_INFO,
     SB_CMD_PATH,
+    SB_CMD_CAMERAS,
     SB_CMD_HELP,
     SB_CMD_COUNT
 } sb_command;
@@ -108,7 +109,7 @@ typedef struct sb_cli_opts {
     int format; /* --format: an sb_output_format */
     int recent, pairs, nights;
     double noise_floor, threshold, max_err, max_flicker, max_flip, max_mb, budget_ms, time_limit_s, ppd;
-    bool dry_run, quiet, verbose, accept, yes;
+    bool dry_run, quiet, verbose, accept, yes, twins;
 } sb_cli_opts;
 
 /* A command's own default of a row (a list ends with def NULL). */
