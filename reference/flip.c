@@ -226,41 +226,33 @@ static float *to_ycxcz(const spaces *s, const float *img, int w, int h) {
     return out;
 }
 
-void sb_flip_color(const float *ref, const float *test, int w, int h, double ppd, float *out) {
-    if (ppd <= 0) ppd = SB_FLIP_PPD_DEFAULT;
-    spaces s;
-    spaces_init(&s);
+/* The colour difference of two images already in YCxCz. */
+static void color_diff(const spaces *s, const float *ya, const float *yb, int w, int h, double ppd, float *out) {
     kernel k[4];
     color_kernels(ppd, k);
     size_t n = (size_t)w * h;
     double *la = sb_xmalloc(sizeof(double) * 3 * n), *lb = sb_xmalloc(sizeof(double) * 3 * n);
-    float *ya = to_ycxcz(&s, ref, w, h), *yb = to_ycxcz(&s, test, w, h);
-    filtered_lab(&s, ya, w, h, k, la);
-    filtered_lab(&s, yb, w, h, k, lb);
+    filtered_lab(s, ya, w, h, k, la);
+    filtered_lab(s, yb, w, h, k, lb);
     /* the largest difference there is: green against blue */
     double g[3], b[3];
-    rgb_to_hunt_lab(&s, (double[3]){0, 1, 0}, g);
-    rgb_to_hunt_lab(&s, (double[3]){0, 0, 1}, b);
+    rgb_to_hunt_lab(s, (double[3]){0, 1, 0}, g);
+    rgb_to_hunt_lab(s, (double[3]){0, 0, 1}, b);
     const double cmax = pow(hyab(g, b), QC), knee = PC * cmax;
     for (size_t i = 0; i < n; i++) {
         double d = pow(hyab(la + 3 * i, lb + 3 * i), QC);
         out[i] = (float)(d < knee ? d * PT / knee : PT + (d - knee) / (cmax - knee) * (1 - PT));
     }
-    free(ya);
-    free(yb);
     free(la);
     free(lb);
     kernels_free(k, 4);
 }
 
-void sb_flip_features(const float *ref, const float *test, int w, int h, double ppd, float *out) {
-    if (ppd <= 0) ppd = SB_FLIP_PPD_DEFAULT;
-    spaces s;
-    spaces_init(&s);
+/* The feature difference of two images already in YCxCz. */
+static void feature_diff(const float *ya, const float *yb, int w, int h, double ppd, float *out) {
     kernel k[3];
     feature_kernels(ppd, k);
     size_t n = (size_t)w * h;
-    float *ya = to_ycxcz(&s, ref, w, h), *yb = to_ycxcz(&s, test, w, h);
     float *ea = sb_xmalloc(sizeof(float) * 2 * n), *eb = sb_xmalloc(sizeof(float) * 2 * n);
     features(ya, w, h, k, ea);
     features(yb, w, h, k, eb);
@@ -268,18 +260,38 @@ void sb_flip_features(const float *ref, const float *test, int w, int h, double 
         double d = fmax(fabs(ea[2 * i] - eb[2 * i]), fabs(ea[2 * i + 1] - eb[2 * i + 1]));
         out[i] = (float)pow(d / sqrt(2.0), QF);
     }
-    free(ya);
-    free(yb);
     free(ea);
     free(eb);
     kernels_free(k, 3);
 }
 
+/* Both images to YCxCz once, then the pipelines asked for (the public ones, and sb_flip both at once). */
+typedef enum { PIPE_COLOR = 1, PIPE_FEATURES = 2 } pipes;
+
+static void run_pipes(const float *ref, const float *test, int w, int h, double ppd, unsigned which, float *color,
+                      float *feat) {
+    if (ppd <= 0) ppd = SB_FLIP_PPD_DEFAULT;
+    spaces s;
+    spaces_init(&s);
+    float *ya = to_ycxcz(&s, ref, w, h), *yb = to_ycxcz(&s, test, w, h);
+    if (which & PIPE_COLOR) color_diff(&s, ya, yb, w, h, ppd, color);
+    if (which & PIPE_FEATURES) feature_diff(ya, yb, w, h, ppd, feat);
+    free(ya);
+    free(yb);
+}
+
+void sb_flip_color(const float *ref, const float *test, int w, int h, double ppd, float *out) {
+    run_pipes(ref, test, w, h, ppd, PIPE_COLOR, out, NULL);
+}
+
+void sb_flip_features(const float *ref, const float *test, int w, int h, double ppd, float *out) {
+    run_pipes(ref, test, w, h, ppd, PIPE_FEATURES, NULL, out);
+}
+
 sb_flip_stats sb_flip(const float *ref, const float *test, int w, int h, double ppd, float *map) {
     size_t n = (size_t)w * h;
     float *c = sb_xmalloc(sizeof(float) * (n ? n : 1)), *f = sb_xmalloc(sizeof(float) * (n ? n : 1));
-    sb_flip_color(ref, test, w, h, ppd, c);
-    sb_flip_features(ref, test, w, h, ppd, f);
+    run_pipes(ref, test, w, h, ppd, PIPE_COLOR | PIPE_FEATURES, c, f);
     double *e = sb_xmalloc(sizeof(double) * (n ? n : 1)), sum = 0, max = 0;
     for (size_t i = 0; i < n; i++) {
         e[i] = pow(c[i], 1 - f[i]);
