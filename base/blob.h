@@ -20,6 +20,8 @@ void sb_wbuf_put_u32(sb_wbuf *b, uint32_t v);
 /* Pads to SB_BLOB_ALIGN, then the n bytes. */
 void sb_wbuf_put_array(sb_wbuf *b, const void *data, size_t n);
 void sb_wbuf_free(sb_wbuf *b);
+/* n bytes as base64 (RFC 4648, padded) into out, which holds 4 * ((n + 2) / 3) + 1 chars; NUL-terminated. */
+void sb_base64(const unsigned char *in, size_t n, char *out);
 
 typedef struct sb_rbuf {
     const unsigned char *p;

@@ -12,12 +12,12 @@
 
 #include "batch.h"
 #include "bisect.h"
+#include "cameras.h"
 #include "columns.h"
 #include "compare.h"
 #include "flip.h"
 #include "history.h"
 #include "image.h"
-#include "json.h"
 #include "pathcheck.h"
 #include "resultset.h"
 #include "run.h"
@@ -250,128 +250,23 @@ static int cmd_path(const sb_cli *c) {
 
 /* ---- cameras ---- */
 
-static void jw_vec(sb_jw *j, const char *key, sb_v3 v) {
-    sb_jw_key(j, key);
-    sb_jw_arr(j);
-    sb_jw_num_exact(j, v.x), sb_jw_num_exact(j, v.y), sb_jw_num_exact(j, v.z);
-    sb_jw_end_arr(j);
-}
-
-static void jw_mat(sb_jw *j, const char *key, sb_m4 m) {
-    sb_jw_key(j, key);
-    sb_jw_arr(j);
-    for (int k = 0; k < 16; k++) sb_jw_num_exact(j, m.m[k]);
-    sb_jw_end_arr(j);
-}
-
-/* One camera as the tool renders it, in world space (sb_frame_setup with the scene's origin put back). */
-static void jw_camera(sb_jw *j, const sb_camera *cam, double t, int w, int h) {
-    jw_vec(j, "position", cam->pos);
-    jw_vec(j, "target", sb_v3_add(cam->pos, cam->forward));
-    jw_vec(j, "up", cam->up);
-    sb_jw_key(j, "rotation");
-    sb_jw_arr(j);
-    sb_jw_num_exact(j, cam->rot.x), sb_jw_num_exact(j, cam->rot.y), sb_jw_num_exact(j, cam->rot.z), sb_jw_num_exact(j, cam->rot.w);
-    sb_jw_end_arr(j);
-    sb_jw_key(j, "t"), sb_jw_num_exact(j, t);
-    sb_jw_key(j, "yfov"), sb_jw_num_exact(j, cam->fov_deg * SB_PI / 180);
-    sb_jw_key(j, "fov_deg"), sb_jw_num_exact(j, cam->fov_deg);
-    sb_jw_key(j, "aspect"), sb_jw_num_exact(j, cam->aspect);
-    sb_jw_key(j, "near"), sb_jw_num_exact(j, cam->znear);
-    sb_jw_key(j, "far"), sb_jw_num_exact(j, cam->zfar);
-    jw_mat(j, "view", sb_m4_view(cam->pos, cam->right, cam->up, cam->forward));
-    jw_mat(j, "projection", sb_m4_perspective(cam->fov_deg * SB_PI / 180, cam->aspect, cam->znear, cam->zfar));
-    sb_jw_key(j, "viewport");
-    sb_jw_arr(j);
-    sb_jw_num(j, 0), sb_jw_num(j, 0), sb_jw_num(j, w), sb_jw_num(j, h);
-    sb_jw_end_arr(j);
-}
-
-/* The lights a run of these options shades: the sun (the scene's, or --sun) and every point and spot light. */
-static void jw_lights(sb_jw *j, const sb_cli *c, const sb_scene *scene) {
-    const sb_run_opts *o = &c->o.run;
-    sb_jw_key(j, "sun");
-    if (scene->has_sun || o->sun_override) {
-        sb_jw_obj(j);
-        jw_vec(j, "direction", o->sun_override ? sb_sun_dir(o->sun_az, o->sun_el) : scene->sun);
-        sb_jw_knum(j, "size_deg", o->sun_size);
-        sb_jw_end_obj(j);
-    } else {
-        sb_jw_null(j);
-    }
-    sb_jw_key(j, "lamps");
-    sb_jw_arr(j);
-    int count = 0;
-    sb_scene_point_light(scene, 0, &count);
-    for (int k = 0; k < count; k++) {
-        const sb_light *l = sb_scene_point_light(scene, k, NULL);
-        sb_jw_obj(j);
-        sb_jw_knum(j, "index", k);
-        sb_jw_kstr(j, "type", l->type == SB_LIGHT_SPOT ? "spot" : "point");
-        jw_vec(j, "position", sb_v3_add(l->position, scene->origin));
-        sb_jw_key(j, "range"), sb_jw_num_exact(j, l->range > 0 ? l->range : 0);
-        if (l->type == SB_LIGHT_SPOT) {
-            jw_vec(j, "direction", l->direction);
-            sb_jw_key(j, "cone"), sb_jw_num_exact(j, l->cone);
-        }
-        sb_jw_end_obj(j);
-    }
-    sb_jw_end_arr(j);
-}
-
-static const char cameras_conventions[] =
-    "right-handed, +Y up, world units of the scene; a camera looks along its -Z (glTF's); rotation is that "
-    "camera's orientation as a unit quaternion (x, y, z, w); matrices are column-major (element [col * 4 + row], "
-    "as glTF and OpenGL store them): view takes world to view space, projection view to OpenGL clip space (z in "
-    "[-w, w]; depth 0 at near, 1 at far after the viewport transform); yfov is vertical, in radians; viewport is "
-    "x, y, width, height in pixels, y up from the bottom row";
-
 static int cmd_cameras(const sb_cli *c) {
     if (c->npos != 2) return bad_usage(c);
-    const sb_run_opts *o = &c->o.run;
     sb_err err;
     sb_scene scene;
-    sb_scene_opts so = sb_run_scene_opts(o);
+    sb_scene_opts so = sb_run_scene_opts(&c->o.run);
     if (!sb_scene_load(&scene, c->pos[0], &so, &err)) return bad_file(&err);
     sb_path p;
     if (!sb_path_load(&p, c->pos[1], &scene, &err)) {
         sb_scene_free(&scene);
         return bad_file(&err);
     }
-    const int n = o->frames, w = o->width, h = o->height;
-    const double aspect = (double)w / h, dt = o->flicker_dt;
-    sb_jw j = {0};
-    sb_jw_obj(&j);
-    sb_jw_kstr(&j, "scene", c->pos[0]);
-    sb_jw_kstr(&j, "path", c->pos[1]);
-    sb_jw_knum(&j, "frames", n);
-    sb_jw_knum(&j, "width", w);
-    sb_jw_knum(&j, "height", h);
-    sb_jw_kstr(&j, "conventions", cameras_conventions);
-    jw_lights(&j, c, &scene);
-    sb_jw_key(&j, "cameras");
-    sb_jw_arr(&j);
-    for (int i = 0; i < n; i++) {
-        double t = sb_path_progress(i, n) * sb_path_duration(&p);
-        sb_camera cam = sb_path_camera(&p, i, n, aspect, &scene);
-        sb_jw_obj(&j);
-        sb_jw_knum(&j, "frame", i);
-        sb_jw_key(&j, "progress"), sb_jw_num_exact(&j, sb_path_progress(i, n));
-        jw_camera(&j, &cam, t, w, h);
-        if (c->o.twins && dt > 0) {   /* as the evaluation draws it (eval.c) */
-            sb_camera tw = sb_path_camera_at(&p, t + dt, aspect, &scene);
-            sb_jw_key(&j, "twin");
-            sb_jw_obj(&j);
-            jw_camera(&j, &tw, t + dt, w, h);
-            sb_jw_end_obj(&j);
-        }
-        sb_jw_end_obj(&j);
-    }
-    sb_jw_end_arr(&j);
-    sb_jw_end_obj(&j);
-    fputs(j.buf, stdout);
+    sb_cameras_req req = {.scene_name = c->pos[0], .path_name = c->pos[1], .scene = &scene, .path = &p,
+                          .opts = &c->o.run, .twins = c->o.twins, .format = (sb_cameras_format)c->o.format};
+    char *doc = sb_cameras_document(&req);
+    fputs(doc, stdout);
     fputc('\n', stdout);
-    sb_jw_free(&j);
+    free(doc);
     sb_path_free(&p);
     sb_scene_free(&scene);
     return SB_EXIT_OK;
@@ -895,9 +790,10 @@ const sb_command_def sb_commands[SB_CMD_COUNT] = {
      SB_CMDF_ANY | SB_CMDF_SCENES, cmd_info},
     {SB_CMD_PATH, "path", "path PATH [SCENE] [--frames N]", "print the sampled cameras as CSV",
      SB_CMDF_ANY | SB_CMDF_SCENES, cmd_path},
-    {SB_CMD_CAMERAS, "cameras", "cameras SCENE PATH [--frames N] [--size WxH] [--twins]",
+    {SB_CMD_CAMERAS, "cameras", "cameras SCENE PATH [--frames N] [--size WxH] [--twins] [--format json|gltf]",
      "every frame's camera exactly as a run renders it (position, target, up, field of view, near, far, view and "
-     "projection matrices, viewport) and the scene's lights, as JSON: another renderer draws the same frames",
+     "projection matrices, viewport) and the scene's lights, as JSON, or as a glTF of an animated camera and the "
+     "lights that an engine imports: another renderer draws the same frames",
      SB_CMDF_ANY | SB_CMDF_SCENES, cmd_cameras},
     {SB_CMD_HELP, "help", "help [COMMAND] [--format text|markdown|man]",
      "every command and option (COMMAND: its options), or the reference docs/cli.md and the man page hold",

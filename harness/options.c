@@ -1,5 +1,6 @@
 /* options.c - the option table and the one parser, help writer and run
  * identity that read it (options.h). */
+#include "cameras.h"
 #include "options.h"
 
 #include <math.h>
@@ -44,6 +45,7 @@ static const int compare_formats[] = {SB_OUTPUT_TEXT, SB_OUTPUT_CSV, SB_OUTPUT_M
 static const int history_formats[] = {SB_OUTPUT_TEXT, SB_OUTPUT_CSV};
 static const int columns_formats[] = {SB_OUTPUT_CSV, SB_OUTPUT_MARKDOWN};
 static const int doc_formats[] = {SB_DOC_TEXT, SB_DOC_MARKDOWN, SB_DOC_MAN};
+static const int cameras_formats[] = {SB_CAMERAS_JSON, SB_CAMERAS_GLTF};
 
 /* --anim: all, none, or clip names (which the file must have: said when it loads) without empty ones. */
 static bool check_anim(const char *v, const sb_cli_opts *o, sb_err *err) {
@@ -187,6 +189,9 @@ const sb_option sb_options[] = {
      .field = RUN(strict_path),
      .help = "refuse a path whose cameras stand inside closed geometry, under a surface facing up or nearer a "
              "surface than the near plane (checked whenever the error is; exit 2)"},
+    {.name = "--format", .kind = SB_OPT_CHOICE, .arg = "json|gltf", .values = cameras_formats, .def = "json",
+     .commands = SB_IN(SB_CMD_CAMERAS), .field = F(format),
+     .help = "JSON (every camera's matrices, for a script) or glTF 2.0 (an animated camera and the lights, for an engine)"},
     {.name = "--twins", .kind = SB_OPT_FLAG, .commands = SB_IN(SB_CMD_CAMERAS), .field = F(twins),
      .help = "each frame's flicker twin too: its camera --flicker-dt of path time later"},
     {.name = "--dry-run", .kind = SB_OPT_FLAG, .commands = SB_IN(SB_CMD_BATCH), .field = F(dry_run),

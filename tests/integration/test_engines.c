@@ -8,6 +8,9 @@
  *   figures, digit for digit (without flicker twins: a twin is another camera, between the keys).
  * - The lights: plane-box's sun (azimuth 30, elevation 50), plane-box-lamp's lamp at (2.5, 3.5, 1.5); twins a
  *   display frame (--flicker-dt) later.
+ * - As glTF (--format gltf): the tool's own glTF camera path (FILE#camera=0) samples the file back to the same
+ *   cameras (float precision), the sun's node shines along -sun, the lamp's node stands at the lamp; a twin
+ *   camera node with --twins.
  * - A path that is not there: one line, exit 2. */
 #include <math.h>
 #include <setjmp.h>
@@ -177,6 +180,63 @@ static void test_rerendered(void **st) {
     sb_table_free(&tb);
 }
 
+/* The columns of `path` CSV rows: px..qw (3..9), fov (10). */
+static int csv_rows(char *text, double rows[][16], int max) {
+    int n = 0;
+    char *s1, *line = strtok_r(text, "\n", &s1);
+    for (int row = 0; line && n < max; row++, line = strtok_r(NULL, "\n", &s1)) {
+        if (row == 0) continue;
+        int k = 0;
+        for (char *s2, *t = strtok_r(line, ",", &s2); t && k < 16; t = strtok_r(NULL, ",", &s2)) rows[n][k++] = atof(t);
+        n++;
+    }
+    return n;
+}
+
+static void test_gltf(void **st) {
+    (void)st;
+    char cmd[1024], file[512], a[8192], b[8192];
+    snprintf(file, sizeof file, "%s/cameras.gltf", g_tmp);
+    snprintf(cmd, sizeof cmd, "%s cameras plane-box-lamp plane-box-lamp --frames 4 --size 160x90 --twins --format gltf > %s",
+             test_binary(), file);
+    assert_int_equal(system(cmd), 0);
+    snprintf(cmd, sizeof cmd, "%s path plane-box-lamp plane-box-lamp --frames 4 --size 160x90", test_binary());
+    assert_int_equal(run_capture(cmd, a, sizeof a), 0);
+    snprintf(cmd, sizeof cmd, "%s path '%s#camera=0' plane-box-lamp --frames 4 --size 160x90", test_binary(), file);
+    assert_int_equal(run_capture(cmd, b, sizeof b), 0);
+    double ra[8][16], rb[8][16];
+    int na = csv_rows(a, ra, 8), nb = csv_rows(b, rb, 8);
+    assert_int_equal(na, 4);
+    assert_int_equal(nb, 4);
+    for (int i = 0; i < 4; i++) {
+        double dot = 0;
+        for (int k = 3; k < 6; k++) assert_true(fabs(ra[i][k] - rb[i][k]) < 1e-5 * (1 + fabs(ra[i][k])));
+        for (int k = 6; k < 10; k++) dot += ra[i][k] * rb[i][k];
+        assert_true(fabs(fabs(dot) - 1) < 1e-6);   /* q and -q are one rotation */
+        assert_true(ra[i][10] == rb[i][10]);   /* field of view */
+    }
+    /* its nodes: the two cameras, the sun shining along -sun, the lamp */
+    FILE *f = fopen(file, "rb");
+    assert_non_null(f);
+    size_t len = fread(b, 1, sizeof b - 1, f);
+    fclose(f);
+    b[len] = 0;
+    sb_json_doc doc;
+    sb_err err;
+    assert_true(sb_json_parse(&doc, file, b, len, &err));
+    const sb_json *nodes = sb_json_get(doc.root, "nodes");
+    assert_int_equal(nodes->count, 4);
+    assert_string_equal(sb_json_get(&nodes->items[1], "name")->text, "camera twin");
+    double q[4], t[3];
+    vec(&nodes->items[2], "rotation", q, 4);
+    sb_v3 along = sb_quat_rotate((sb_quat){q[0], q[1], q[2], q[3]}, sb_v3_make(0, 0, -1)), sun = sb_sun_dir(30, 50);
+    print_message("sun node shines along %g %g %g (-sun: %g %g %g)\n", along.x, along.y, along.z, -sun.x, -sun.y, -sun.z);
+    assert_true(sb_v3_len(sb_v3_add(along, sun)) < 1e-6);
+    vec(&nodes->items[3], "translation", t, 3);
+    assert_true(fabs(t[0] - 2.5) < 1e-6 && fabs(t[1] - 3.5) < 1e-6 && fabs(t[2] - 1.5) < 1e-6);
+    sb_json_free(&doc);
+}
+
 static void test_bad_input(void **st) {
     (void)st;
     expect_cli_fail("no-such.path", "%s cameras plane-box %s/no-such.path", test_binary(), g_tmp);
@@ -185,6 +245,6 @@ static void test_bad_input(void **st) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_conventions), cmocka_unit_test(test_rerendered),
-                                       cmocka_unit_test(test_bad_input)};
+                                       cmocka_unit_test(test_gltf), cmocka_unit_test(test_bad_input)};
     return cmocka_run_group_tests_name("engines", tests, setup, teardown);
 }

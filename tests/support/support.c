@@ -1,6 +1,7 @@
 #include "scene_load.h"
 #include "support.h"
 
+#include "blob.h"
 #include "eval.h"
 #include "table.h"
 
@@ -210,18 +211,7 @@ bool eval_frame(sb_session *s, const char *spec, int i, int n, sb_error_metrics 
     return ok;
 }
 
-void test_base64(const unsigned char *in, size_t n, char *out) {
-    static const char tbl[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    size_t o = 0;
-    for (size_t i = 0; i < n; i += 3) {
-        uint32_t v = (uint32_t)in[i] << 16 | (i + 1 < n ? (uint32_t)in[i + 1] << 8 : 0) | (i + 2 < n ? in[i + 2] : 0);
-        out[o++] = tbl[v >> 18 & 63];
-        out[o++] = tbl[v >> 12 & 63];
-        out[o++] = i + 1 < n ? tbl[v >> 6 & 63] : '=';
-        out[o++] = i + 2 < n ? tbl[v & 63] : '=';
-    }
-    out[o] = 0;
-}
+void test_base64(const unsigned char *in, size_t n, char *out) { sb_base64(in, n, out); }
 
 bool gltf_tri_write(const char *path, const gltf_tri *t) {
     unsigned char buf[44] = {0};
