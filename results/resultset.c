@@ -3,6 +3,7 @@
 
 #include <dirent.h>
 #include <errno.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -97,10 +98,30 @@ bool sb_resultset_seal(const char *dir, sb_err *err) {
     return ok;
 }
 
-void sb_resultset_unseal(const char *dir) {
+/* NAME.PID.tmp: the PID, or -1 for any other name. */
+static long tmp_writer(const char *name) {
+    size_t l = strlen(name);
+    if (l < 6 || strcmp(name + l - 4, ".tmp")) return -1;
+    const char *end = name + l - 4, *p = end;
+    while (p > name && p[-1] >= '0' && p[-1] <= '9') p--;
+    if (p == end || p == name || p[-1] != '.') return -1;
+    return strtol(p, NULL, 10);
+}
+
+int sb_resultset_unseal(const char *dir) {
     char path[4400];
     snprintf(path, sizeof path, "%s/%s", dir, SB_MANIFEST_NAME);
     unlink(path);
+    DIR *d = opendir(dir);
+    int removed = 0;
+    for (struct dirent *e; d && (e = readdir(d));) {
+        long pid = tmp_writer(e->d_name);
+        if (pid <= 0 || (kill((pid_t)pid, 0) == 0 || errno != ESRCH)) continue;   /* its writer may still be at it */
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        removed += unlink(path) == 0;
+    }
+    if (d) closedir(d);
+    return removed;
 }
 
 /* One listed file against the folder. */

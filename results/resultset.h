@@ -20,8 +20,9 @@
 /* Writes DIR/manifest for the files now in DIR (hidden files and temporaries
  * left out). */
 bool sb_resultset_seal(const char *dir, sb_err *err);
-/* Removes DIR/manifest: the set is about to change (a resume). */
-void sb_resultset_unseal(const char *dir);
+/* Removes DIR/manifest: the set is about to change (a resume). Also removes the temporaries a killed writer
+ * left (NAME.PID.tmp of a process that is gone: sb_write_file_atomic's, cut short by kill -9); returns how many. */
+int sb_resultset_unseal(const char *dir);
 /* Checks DIR against its manifest (see above); true when whole, or when it
  * has no manifest (noted once on stderr). */
 bool sb_resultset_verify(const char *dir, sb_err *err);
