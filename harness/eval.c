@@ -98,7 +98,8 @@ static double stale_share(sb_session *s, sb_instance *in, int *seq, const sb_eva
     return n ? (double)differ / n : NAN;
 }
 
-/* The shaded frame, engines' way with this tool's lights: base colour x (ambient 0.3 + 0.7 N.L x visibility),
+/* The shaded frame, engines' way with this tool's lights: base colour x (ambient + direct N.L x visibility, as the
+ * camera pass: SB_SHADE_AMBIENT, SB_SHADE_DIRECT),
  * once with the technique's visibility and once with the reference's (where the reference scores no pixel, sky
  * or facing away, the technique's), sRGB-encoded for display; no tone map: 0.3 + 0.7 N.L is at most 1. Then
  * their LDR-FLIP at the default viewing condition. b->base: the frame's, read before anything else drew. */
@@ -114,8 +115,8 @@ static void shade_and_flip(sb_eval_buf *b, sb_error_metrics *m) {
         double nl = p[3] / 255.0, vt = b->vis[i] / 255.0, vr = b->ref[i] == 128 ? vt : b->ref[i] / 255.0;
         for (int c = 0; c < 3; c++) {
             double a = p[c] / 255.0;
-            b->shaded[3 * i + c] = sb_srgb_encode((float)(a * (0.3 + 0.7 * nl * vt)));
-            b->shaded_ref[3 * i + c] = sb_srgb_encode((float)(a * (0.3 + 0.7 * nl * vr)));
+            b->shaded[3 * i + c] = sb_srgb_encode((float)(a * (SB_SHADE_AMBIENT + SB_SHADE_DIRECT * nl * vt)));
+            b->shaded_ref[3 * i + c] = sb_srgb_encode((float)(a * (SB_SHADE_AMBIENT + SB_SHADE_DIRECT * nl * vr)));
         }
     }
     sb_flip_stats st = sb_flip(b->shaded_ref, b->shaded, b->w, b->h, 0, b->flip);

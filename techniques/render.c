@@ -25,8 +25,8 @@ static bool final_variant(sb_final_prog *fp, int i, const sb_gpu *g, const char 
     for (int k = 0; k < nvis && n < 7; k++) fs[n++] = vis_parts[k];
     fs[n++] = sb_shader_final_frag;
     char defs[1024];
-    snprintf(defs, sizeof defs, "%s%s%s", eval ? "#define SB_EVAL\n" : "", alpha ? "" : sb_opaque_define(g),
-             defines ? defines : "");
+    snprintf(defs, sizeof defs, "#define SB_AMBIENT %.17g\n#define SB_DIRECT %.17g\n%s%s%s", SB_SHADE_AMBIENT,
+             SB_SHADE_DIRECT, eval ? "#define SB_EVAL\n" : "", alpha ? "" : sb_opaque_define(g), defines ? defines : "");
     char name[160];
     snprintf(name, sizeof name, "%s%s%s", label, eval ? " (evaluation)" : "", alpha ? " (alpha-tested draws)" : "");
     sb_final_variant *v = &fp->v[i];

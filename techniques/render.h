@@ -245,6 +245,10 @@ void sb_count_draw(sb_frame *f, uint64_t triangles, int instances);
 void sb_gpu_readback(const sb_gpu *g, float *depth, unsigned char *vis, unsigned char *rgba);
 /* Reads the evaluation targets (4 floats a pixel each; either may be NULL). */
 void sb_gpu_readback_eval(const sb_gpu *g, float *pos, float *aux);
+/* The camera pass's light (final.frag, and the shaded frames of --flip, eval.c): base colour x (ambient + direct
+ * x N.L x visibility); at most 1, so no tone map. */
+#define SB_SHADE_AMBIENT 0.3
+#define SB_SHADE_DIRECT 0.7
 /* The evaluation pass's base target: per pixel the base colour and N.L of the light it scores (the sky: its
  * colour and 1), 4 bytes, rows bottom-up. */
 void sb_gpu_readback_base(const sb_gpu *g, unsigned char *rgba);

@@ -33,9 +33,9 @@ void main() {
         if ((l.w > 0.0 && dist > l.w) || ndl <= 0.0 || (cone.w > 0.0 && dot(-d / dist, cone.xyz) < 1.0 - cone.w)) continue;
         vis = sb_visibility_at(i, v_pos, n);
         nl = ndl;
-        lit += 0.7 * ndl * vis;
+        lit += SB_DIRECT * ndl * vis;
     }
-    o_color = vec4(v_color.rgb * (0.3 + lit), 1.0);
+    o_color = vec4(v_color.rgb * (SB_AMBIENT + lit), 1.0);
 #else
     vec3 L = u_shade_light.w > 0.5 ? normalize(u_shade_light.xyz - v_pos) : u_shade_light.xyz;
     float ndl = dot(n, L);
@@ -44,7 +44,7 @@ void main() {
         dot(normalize(v_pos - u_shade_light.xyz), u_shade_spot.xyz) < 1.0 - u_shade_spot.w) ndl = 0.0;
     float vis = sb_visibility(v_pos, n, v_view_z);
     float nl = max(ndl, 0.0);
-    o_color = vec4(v_color.rgb * ((1.0 - u_shade_more.y) * 0.3 + 0.7 * nl * vis), 1.0);
+    o_color = vec4(v_color.rgb * ((1.0 - u_shade_more.y) * SB_AMBIENT + SB_DIRECT * nl * vis), 1.0);
 #endif
 #ifdef SB_EVAL
     o_vis = vis;
