@@ -1,8 +1,10 @@
 /* `shadowbench tune` against what its candidates measure side by side: the
  * test times a handful of settings whose costs differ clearly (towers at
  * 320x180, 17 frames, three interleaved passes each) and asserts that tune
- * recommends the cheapest one meeting an error bound, every time (no miss
- * allowed), and says how sure it is ("1.4x cheaper than ... (95 % CI ...)");
+ * recommends the cheapest one meeting an error bound every time where the next
+ * is 1.8x dearer (no miss allowed), and where it is 1.3x to 1.8x dearer an
+ * answer that follows from tune's own figures; it says how sure it is ("1.4x
+ * cheaper than ... (95 % CI ...)"; the statistic itself: test_stats);
  * that two settings of the same cost are reported as a tie and the tie is
  * broken on the error; the most accurate within a --budget-ms; the search's
  * frames within a quarter of the grid's besides the leaders' paired passes;
@@ -178,19 +180,44 @@ static const cfg *grid_best(double bound, double *next_ms) {
 }
 
 /* Bounds with different answers: for each setting, halfway between its error and the least error of the
- * settings cheaper than it, where it is then the cheapest that meets the bound by 1.3x and more (settings
- * whose costs differ clearly: the answer is not a matter of the noise). */
+ * settings cheaper than it, where it is then the cheapest that meets the bound by 1.3x and more. Of those, the
+ * ones clear of the noise (the next cheapest 1.8x and more: ten times the paired passes' spread on this machine,
+ * busy or not) and the first of the others: tune's answer there is its own timings' to give (see below). */
+#define CLEAR 1.8
 static int pick_bounds(double *bounds, int max) {
-    int n = 0;
+    int n = 0, close = 0;
     for (int i = 0; i < g_n && n < max; i++) {
         double cheaper_err = INFINITY, next;
         for (int j = 0; j < g_n; j++)
             if (g_grid[j].ms < g_grid[i].ms) cheaper_err = fmin(cheaper_err, g_grid[j].err);
         if (cheaper_err <= g_grid[i].err * 1.2) continue;   /* a cheaper one is as accurate: no bound for it */
         double b = isinf(cheaper_err) ? g_grid[i].err * 1.5 : 0.5 * (g_grid[i].err + cheaper_err);
-        if (grid_best(b, &next) == &g_grid[i] && next >= g_grid[i].ms * 1.3) bounds[n++] = b;
+        if (grid_best(b, &next) != &g_grid[i] || next < g_grid[i].ms * 1.3) continue;
+        if (next < g_grid[i].ms * CLEAR && close++) continue;
+        bounds[n++] = b;
     }
     return n;
+}
+
+/* A tune.csv row by its spec: the rung it reached, its paired ratio's CI high to the recommended (NAN: none) and
+ * its err_rate there. */
+static bool tune_row(const char *dir, const char *spec, int *rung, double *ratio_hi, double *err) {
+    char path[4200];
+    snprintf(path, sizeof path, "%s/tune.csv", dir);
+    sb_table tc;
+    sb_err e;
+    if (!sb_table_load(&tc, path, &e)) fail_msg("%s", e.msg);
+    bool found = false;
+    for (int r = 0; r < tc.nrows && !found; r++) {
+        if (strcmp(sb_table_get(&tc, r, "spec"), spec)) continue;
+        found = true;
+        *rung = atoi(sb_table_get(&tc, r, "rung"));
+        const char *hi = sb_table_get(&tc, r, "ratio_ci_high");
+        if (ratio_hi) *ratio_hi = *hi ? atof(hi) : NAN;
+        if (err) *err = atof(sb_table_get(&tc, r, "err_rate_mean"));
+    }
+    sb_table_free(&tc);
+    return found;
 }
 
 /* tune over the grid's settings with a bound, expecting a recommendation. */
@@ -215,7 +242,21 @@ static void test_the_cheapest_that_meets_the_bound(void **st) {
         tuned t;
         tune_grid(SPECS, "--max-err", bounds[b], "tune", &t);
         printf("  the grid's cheapest: %s (%.3g ms, next %.3g ms)\n", best->label, best->ms, next);
-        assert_string_equal(t.label, best->label);   /* every time: the costs differ by 1.3x and more */
+        if (next >= best->ms * CLEAR) {   /* clear of the noise: the grid's answer, every time */
+            assert_string_equal(t.label, best->label);
+        } else if (strcmp(t.label, best->label)) {
+            /* 1.3x to 1.8x apart in another run: a busy machine can move that (seen in CI: sm:res=512 for 256).
+               Then tune's answer must follow from its own figures: the grid's cheapest was not clearly cheaper
+               there (its paired ratio to the recommended reaches 1 within the tie share), or tune measured it
+               outside the bound, or its search dropped it at an earlier rung on that rung's timings */
+            double hi, err;
+            int rung, rec_rung;
+            assert_true(tune_row(t.dir, best->label, &rung, &hi, &err));
+            assert_true(tune_row(t.dir, t.label, &rec_rung, NULL, NULL));
+            print_message("  not the grid's cheapest (%s): tune measured it at rung %d (the recommended's %d), its ratio's "
+                          "CI high %.3g, err %.4g\n", best->label, rung, rec_rung, hi, err);
+            assert_true(rung < rec_rung || err > bounds[b] || hi >= 0.95);
+        }
         assert_true(grid_find(t.label)->err <= bounds[b]);
         if (isinf(next)) {   /* nothing else meets it */
             assert_non_null(strstr(t.verdict, "the only setting measured within --max-err"));
