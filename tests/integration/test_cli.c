@@ -801,7 +801,7 @@ static void test_gpu_memory_refused(void **st) {
     sb_table_free(&t);
 }
 
-/* Results into a full filesystem (a 40 KiB tmpfs, mounted in a user
+/* Results into a full filesystem (a 28 KiB tmpfs, mounted in a user
  * namespace): a batch, then a run, exit 4, naming a file and the OS error;
  * nothing half-written is left under a final name; after the filesystem
  * grows, batch --resume and run --resume complete the set, and its rows are
@@ -816,14 +816,14 @@ static void test_full_disk(void **st) {
     char bench[300];
     snprintf(bench, sizeof bench, "%s/tiny.bench", g_tmp);
     FILE *f = fopen(bench, "w");
-    fputs("scene towers towers\npath towers towers\ndefaults --frames 40 --warmup 0 --error-every 10 --size 320x180\n"
+    fputs("scene towers towers\npath towers towers\ndefaults --frames 8 --warmup 0 --error-every 4 --size 160x90\n"
           "sm\npssm\nsdsm\n", f);
     fclose(f);
     /* the clean set, on the real disk */
     char clean[4096];
     run_dir(clean, sizeof clean, "%s batch %s --out %s/clean --quiet", test_binary(), bench, g_tmp);
     /* into the tiny one: fails with 4; then more room and --resume; the listing and rows come back out */
-    int rc = sh("unshare -rm sh -c 'D=%s/disk; mkdir -p $D && mount -t tmpfs -o size=40k tmpfs $D && "
+    int rc = sh("unshare -rm sh -c 'D=%s/disk; mkdir -p $D && mount -t tmpfs -o size=28k tmpfs $D && "
                 "%s batch %s --out $D --quiet > %s/dir.txt; echo first=$?; "
                 "mount -o remount,size=64m $D && %s batch %s --resume $(tail -n 1 %s/dir.txt) --quiet; echo second=$?; "
                 "find $D -name \"*.tmp\" | sed s/^/LEFT-BEHIND:/; cp $(tail -n 1 %s/dir.txt)/summary.csv %s/resumed.csv'",
@@ -857,10 +857,10 @@ static void test_full_disk(void **st) {
     sb_table_free(&b);
 
     /* a run the same way: exit 4 into the tiny one, then run --resume with room completes it */
-    rc = sh("unshare -rm sh -c 'D=%s/rdisk; mkdir -p $D && mount -t tmpfs -o size=40k tmpfs $D && "
-            "%s run towers towers sm pssm sdsm --frames 40 --warmup 0 --error-every 10 --size 320x180 --out $D --quiet "
-            "> %s/rdir.txt; echo first=$?; mount -o remount,size=64m $D && %s run towers towers sm pssm sdsm --frames 40 "
-            "--warmup 0 --error-every 10 --size 320x180 --quiet --resume $(tail -n 1 %s/rdir.txt); echo second=$?; "
+    rc = sh("unshare -rm sh -c 'D=%s/rdisk; mkdir -p $D && mount -t tmpfs -o size=28k tmpfs $D && "
+            "%s run towers towers sm pssm sdsm --frames 8 --warmup 0 --error-every 4 --size 160x90 --out $D --quiet "
+            "> %s/rdir.txt; echo first=$?; mount -o remount,size=64m $D && %s run towers towers sm pssm sdsm --frames 8 "
+            "--warmup 0 --error-every 4 --size 160x90 --quiet --resume $(tail -n 1 %s/rdir.txt); echo second=$?; "
             "find $D -name \"*.tmp\" | sed s/^/LEFT-BEHIND:/; cp $(tail -n 1 %s/rdir.txt)/summary.csv %s/rresumed.csv'",
             g_tmp, test_binary(), g_tmp, test_binary(), g_tmp, g_tmp, g_tmp);
     print_message("%s\n", g_out);
