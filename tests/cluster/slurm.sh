@@ -50,7 +50,8 @@ munged -f --socket="$T/munge/sock" --key-file="$T/key/munge.key" --pid-file="$T/
 host=$(hostname -s)
 port=$((20000 + $$ % 20000))
 mem=$(($(awk '/MemTotal/ {print $2}' /proc/meminfo) / 2048))
-# cred_expire: Slurm holds a requeued job this long (default 120 s) before it may start again
+# cred_expire: Slurm holds a requeued job this long (default 120 s) before it may start again; sched_interval:
+# then the main scheduler's next pass starts it (default every 60 s: the requeued task waited 10 to 26 s)
 cat >"$T/slurm.conf" <<CONF
 ClusterName=sbtest
 SlurmctldHost=$host
@@ -71,6 +72,7 @@ SelectType=select/cons_tres
 SelectTypeParameters=CR_Core
 ReturnToService=2
 JobRequeue=1
+SchedulerParameters=sched_interval=1
 MinJobAge=600
 StateSaveLocation=$T/state
 SlurmdSpoolDir=$T/spool
