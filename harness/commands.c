@@ -13,6 +13,7 @@
 #include "batch.h"
 #include "bisect.h"
 #include "cameras.h"
+#include "score.h"
 #include "columns.h"
 #include "compare.h"
 #include "flip.h"
@@ -429,6 +430,92 @@ static int cmd_run(const sb_cli *c) {
     return rc;
 }
 
+/* ---- score: another renderer's frames ---- */
+
+/* The frames score reads are there (each scored frame's visibility and mask), and the first is of the run's size:
+ * checked before anything is written. */
+static bool score_files(const sb_score_src *src, const sb_run_opts *o, sb_err *err) {
+    char path[2200];
+    for (int pf = 0; pf < o->frames; pf += o->error_every)
+        for (int k = 0; k < 2; k++) {
+            sb_score_file(src, k ? src->mask : src->pattern, pf, path, sizeof path);
+            if (access(path, R_OK) != 0)
+                return sb_fail(err, "%s: frame %d of %d: %s (--frames %d --error-every %d)", path, pf, o->frames,
+                               strerror(errno), o->frames, o->error_every);
+        }
+    int w, h;
+    float *rgb;
+    sb_score_file(src, src->pattern, 0, path, sizeof path);
+    if (!sb_image_read_rgb(path, &w, &h, &rgb, err)) return false;
+    free(rgb);
+    if (w != o->width || h != o->height)
+        return sb_fail(err, "%s: %dx%d, the run's --size is %dx%d (the size the cameras were exported at)", path, w, h,
+                       o->width, o->height);
+    return true;
+}
+
+static int cmd_score(const sb_cli *c) {
+    if (c->npos != 3) return bad_usage(c);
+    sb_err err;
+    if (!c->o.mask)
+        return bad("score: --mask FILE is needed: the renderer's mask of the pixels it drew is how score checks that "
+                   "its cameras are the exported ones%s", "");
+    if (c->o.run.error_every <= 0) return bad("score: --error-every 0 scores nothing%s", "");
+    char name[256];
+    const char *dir = c->pos[2], *base = strrchr(dir, '/');
+    snprintf(name, sizeof name, "%s", base && base[1] ? base + 1 : dir);
+    if (!base || !base[1]) {   /* "frames/" names frames */
+        size_t l = strlen(name);
+        while (l > 1 && name[l - 1] == '/') name[--l] = 0;
+        const char *b = strrchr(name, '/');
+        if (b) memmove(name, b + 1, strlen(b));
+    }
+    sb_score_src src = {.dir = dir, .pattern = c->o.pattern, .mask = c->o.mask,
+                        .renderer = c->o.renderer ? c->o.renderer : name,
+                        .params = c->o.renderer_params ? c->o.renderer_params : ""};
+    struct stat st;
+    if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)) return bad("score: %s: no such folder of frames", dir);
+    if (!sb_score_pattern_ok(src.pattern, &err) || !sb_score_pattern_ok(src.mask, &err))
+        return bad("score: %s", err.msg);
+    if (!sb_images_available()) return bad("score: reading the frames needs images: %s", sb_images_unavailable_reason());
+    sb_run_opts o = c->o.run;
+    o.warmup = 0;
+    sb_run_opts_finish(&o);
+    if (!score_files(&src, &o, &err)) return bad_file(&err);
+    sb_session s;
+    memset(&s, 0, sizeof s);
+    if (!sb_session_open(&s, &o, c->pos[0], c->pos[1], &err)) {
+        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        int rc = s.files_refused ? SB_EXIT_BAD_INPUT : SB_EXIT_FAILED;
+        sb_session_close(&s);
+        return rc;
+    }
+    s.score = &src;
+    /* the tool's own frames without shadows: what the renderer's visibility replaces (score.h) */
+    sb_run_spec spec;
+    sb_spec_defaults(&spec, sb_technique_with(SB_TRAIT_NO_SHADOWS));
+    char out[4096], cmdline[2048], identity[8192];
+    sb_cli_set_identity(&c->o, c->cmd, c->pos, c->npos, identity, sizeof identity);
+    int rc;
+    if (!results_folder(c, out, sizeof out, &err)) {
+        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        rc = SB_EXIT_WRITE;
+    } else {
+        command_line(c, cmdline, sizeof cmdline);
+        if (!sb_session_write_meta(&s, out, cmdline, c->version, c->commit, identity, &err))
+            fprintf(stderr, "shadowbench: %s\n", err.msg);
+        sb_session_keep_reference(&s, out);
+        log_session(&s);
+        rc = run_into(c, &s, out, &spec, 1);
+        if (src.refused) {   /* bad input: said even with --quiet (the run's reason holds it too) */
+            fprintf(stderr, "shadowbench: score: %s\n", src.why);
+            rc = SB_EXIT_BAD_INPUT;
+        }
+    }
+    sb_session_close(&s);
+    return rc;
+}
+
 /* ---- tune, batch, stress ---- */
 
 static int cmd_tune(const sb_cli *c) {
@@ -795,6 +882,13 @@ const sb_command_def sb_commands[SB_CMD_COUNT] = {
      "projection matrices, viewport) and the scene's lights, as JSON, or as a glTF of an animated camera and the "
      "lights that an engine imports: another renderer draws the same frames",
      SB_CMDF_ANY | SB_CMDF_SCENES, cmd_cameras},
+    {SB_CMD_SCORE, "score",
+     "score SCENE PATH DIR --mask FILE [--pattern FILE] [--renderer NAME] [--params TEXT] [--frames N] [--size WxH] "
+     "[--sun AZ,EL]",
+     "another renderer's frames (its visibility and the mask of what it drew, on the cameras `cameras` exported) "
+     "scored against the exact reference like a technique's run: a results set whose technique is the renderer; "
+     "a frame whose mask does not line up with the scene is refused",
+     SB_CMDF_ANY | SB_CMDF_CONTEXT | SB_CMDF_SCENES | SB_CMDF_INTERRUPT | SB_CMDF_RESULTS, cmd_score},
     {SB_CMD_HELP, "help", "help [COMMAND] [--format text|markdown|man]",
      "every command and option (COMMAND: its options), or the reference docs/cli.md and the man page hold",
      SB_CMDF_ANY, cmd_help},

@@ -42,6 +42,7 @@ typedef enum sb_command {
     SB_CMD_INFO,
     SB_CMD_PATH,
     SB_CMD_CAMERAS,
+    SB_CMD_SCORE,
     SB_CMD_HELP,
     SB_CMD_COUNT
 } sb_command;
@@ -106,6 +107,7 @@ typedef struct sb_cli_opts {
     sb_run_opts run; /* the run options: run, batch, tune, stress (and the scene
                         options of info and path) */
     const char *out, *resume, *shard, *metrics, *pair, *techniques, *history, *since, *series, *workdir, *map;
+    const char *pattern, *mask, *renderer, *renderer_params;   /* score */
     int format; /* --format: an sb_output_format */
     int recent, pairs, nights;
     double noise_floor, threshold, max_err, max_flicker, max_flip, max_mb, budget_ms, time_limit_s, ppd;

@@ -1,6 +1,7 @@
 /* run.c - the timed frame loop: a run's passes, its evaluation and its rows. */
 #include "run.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -12,6 +13,7 @@
 #include "image.h"
 #include "reference.h"
 #include "columns.h"
+#include "score.h"
 #include "stability.h"
 #include "stats.h"
 
@@ -21,6 +23,12 @@ void sb_session_run_id(const sb_session *s, const sb_run_spec *spec, char out[17
     sb_run_spec as_run = *spec;   /* the id of the run sb_run_begin makes of it */
     sb_spec_light_size(&as_run, s->opts.sun_size);
     sb_run_id(s->scene.content_hash, s->path.content_hash, &s->opts, &as_run, out);
+    if (s->score) {   /* another renderer's frames: its name and settings are the run */
+        uint64_t h = sb_fnv1a(0xcbf29ce484222325ull, out, 16);
+        h = sb_fnv1a(h, s->score->renderer, strlen(s->score->renderer) + 1);
+        h = sb_fnv1a(h, s->score->params, strlen(s->score->params) + 1);
+        snprintf(out, 17, "%016llx", (unsigned long long)h);
+    }
 }
 
 static void progress_line(const sb_session *s, int index, int total, const char *tech, int frame, int frames,
@@ -102,6 +110,9 @@ struct sb_run {
     double t_run;
     sb_err err;
 };
+
+/* The stages a run's rows time: none for a scored renderer's frames. */
+static unsigned run_stages(const sb_run *r) { return r->s->score ? 0 : r->spec->tech->stages; }
 
 static bool fail_run(sb_run *r, const char *fmt, const char *what) {
     char copy[sizeof r->err.msg];   /* `what` is often r->err.msg itself: formatting it into itself lost it */
@@ -261,8 +272,25 @@ static bool measured_frames(sb_run *r, int rep, int index, int total) {
     return true;
 }
 
+/* `score`: another renderer's frames, nothing timed here: the path's frames recorded as scored (no timings or
+ * counts), the evaluation pass to fill their errors. */
+static bool scored_frames(sb_run *r) {
+    const int N = r->s->opts.frames;
+    for (int j = 0; j < N; j++) {
+        sb_frame_rec *rec = &r->recs[j];
+        rec->frame = j;
+        rec->progress = sb_path_progress(j, N);
+        rec->scored = true;
+        rec->start_s = rec->gpu_clock_mhz = rec->cpu_ms = rec->wall_ms = rec->anim_ms = NAN;
+    }
+    r->done = N;
+    r->repeats = 1;
+    return true;
+}
+
 bool sb_run_pass(sb_run *r, int index, int total) {
     if (r->failed || r->finished) return false;
+    if (r->s->score) return scored_frames(r);
     const sb_run_opts *o = &r->s->opts;
     bool first = r->repeats == 0;
     if (!ensure_instance(r)) return false;
@@ -276,7 +304,7 @@ bool sb_run_pass(sb_run *r, int index, int total) {
     if (!ok) return false;
     if (o->error_every == 0) { /* nothing fills these rows later: they can go out now */
         for (; r->written < r->done; r->written++)
-            sb_columns_frame_row(&r->rows, &r->recs[r->written], &r->timer.times[r->written], r->spec->tech->stages);
+            sb_columns_frame_row(&r->rows, &r->recs[r->written], &r->timer.times[r->written], run_stages(r));
         if (!sb_csv_file_write(&r->cf, &r->rows, &r->err)) return fail_run(r, "%s", r->err.msg);
     }
     return true;
@@ -395,7 +423,7 @@ static bool finish_run(sb_run *r) {
         }
     }
     for (; r->written < r->done; r->written++)
-        sb_columns_frame_row(&r->rows, &r->recs[r->written], &r->timer.times[r->written], r->spec->tech->stages);
+        sb_columns_frame_row(&r->rows, &r->recs[r->written], &r->timer.times[r->written], run_stages(r));
     if (!sb_csv_file_write(&r->cf, &r->rows, &r->err) || !sb_gl_check(r->spec->tech->name, &r->err) ||
         !sb_csv_file_commit(&r->cf, &r->err))
         return fail_run(r, "%s", r->err.msg);
@@ -415,7 +443,7 @@ static bool finish_run(sb_run *r) {
     if (r->s->scene.unused[0])   /* what the file holds and the run does not draw: every run of the scene says it */
         sb_run_warn(&r->info, "the scene file holds parts nothing draws, left out: %s", r->s->scene.unused);
     check_geometry(r);
-    judge_stability(r);
+    if (!r->s->score) judge_stability(r);   /* a scored renderer's frames: nothing timed to judge */
     return true;
 }
 
@@ -446,6 +474,13 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
         .shadow_mb = sb_session_shadow_bytes(s, spec) / 1048576.0,
         .calib_ms_before = NAN, .calib_ms_after = NAN, .eval_s = NAN, .ref_refit_ms = NAN, .stable = "", .unstable_reason = "",
     };
+    if (s->score) {   /* the renderer's name and settings; the tool drew none of its frames and holds none of its maps */
+        r->info.technique = s->score->renderer;
+        r->info.params = s->score->params;
+        r->info.renderer = s->score->renderer;
+        r->info.timing = "";
+        r->info.shadow_mb = NAN;
+    }
     if (o->sun_size > 0 || o->lamp_radius > 0) {
         char sun[40] = "", lamp[40] = "";
         if (o->sun_size > 0) snprintf(sun, sizeof sun, "sun %g deg, ", o->sun_size);
@@ -495,7 +530,7 @@ bool sb_run_end(sb_run *r) {
         r->info.reason = r->err.msg;
     }
     bool measured = ok && r->info.status == SB_STATUS_OK;
-    sb_summary_add_outcome(r->sum, &r->info, r->spec->tech->stages, measured ? r->recs : NULL, r->timer.times,
+    sb_summary_add_outcome(r->sum, &r->info, run_stages(r), measured ? r->recs : NULL, r->timer.times,
                            r->done);
     sb_csv_free(&r->rows);
     free(r->recs);

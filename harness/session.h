@@ -48,6 +48,7 @@ typedef struct sb_session {
     char clocks_mode[64];       /* what the summary's clocks column says */
     bool files_refused;         /* sb_session_open failed on the scene or path file (bad input), not on the GL */
     int attempt;                /* the attempt the runs begun now are (0, 1: the first; --rerun-unstable) */
+    struct sb_score_src *score; /* `score`: the runs are another renderer's frames (score.h); NULL otherwise */
 } sb_session;
 
 /* Above these shares a run's warnings say its error figures cannot be trusted

@@ -476,11 +476,20 @@ void sb_columns_frame_header(sb_csv *c) {
     sb_csv_end_row(c);
 }
 
+/* A frame's cell: a scored frame (another renderer's, `score`) has its place on the path and its error figures,
+ * nothing the tool would have timed or counted drawing it. */
+static sb_cell frame_cell(const sb_frame_col *col, const sb_frame_row *r) {
+    if (r->rec->scored && col->get != f_error && col->get != f_eval_pixels &&
+        (!col->name || (strcmp(col->name, "frame") && strcmp(col->name, "repeat") && strcmp(col->name, "progress"))))
+        return empty();
+    return col->get(r, col->arg);
+}
+
 void sb_columns_frame_row(sb_csv *c, const sb_frame_rec *r, const sb_stage_times *t, unsigned stages) {
     const sb_frame_row row = {r, t, stages};
     int n;
     const sb_frame_col *cols = sb_frame_cols(&n);
-    for (int k = 0; k < n; k++) put(c, cols[k].get(&row, cols[k].arg));
+    for (int k = 0; k < n; k++) put(c, frame_cell(&cols[k], &row));
     sb_csv_end_row(c);
 }
 
@@ -519,7 +528,7 @@ void sb_columns_summary_row(sb_csv *c, const sb_run_info *info, unsigned stages,
         const sb_frame_col *fc = frame_col(col->name);
         for (int i = 0; i < n; i++) {
             const sb_frame_row fr = {&recs[i], &times[i], stages};
-            sb_cell cell = fc->get(&fr, fc->arg);
+            sb_cell cell = frame_cell(fc, &fr);
             v[i] = cell.kind == SB_CELL_INT || cell.kind == SB_CELL_NUM ? cell.num : NAN;
         }
         sb_stats st = sb_stats_compute(v, n);

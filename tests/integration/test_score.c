@@ -1,0 +1,221 @@
+/* `score SCENE PATH DIR`: another renderer's frames against the exact reference.
+ *
+ * - three.js (examples/engines: its own shadow map, in headless Chromium) draws plane-box's exported cameras;
+ *   score takes its frames as a results set whose technique is three.js: status ok, no timings, the mask lined
+ *   up with the scene (geom_mismatch under 0.1 %), an error a 2048 map of a box on a plane makes (under 1 % of
+ *   the pixels), and that error equal, within 1 %, to the same frames counted by hand against the reference a
+ *   run of the tool draws (--images: its ref.png, lit white, shadowed black, grey not scored).
+ * - A wrong camera is refused, exit 2, saying what was found: the projection mirrored left to right ("mirrored"),
+ *   the field of view a degree wider ("not the exported one").
+ * - compare --pair of the scored renderer against sm on the same cameras prints both side by side.
+ * - Bad input, each one line and exit 2 before anything is written: no --mask, a pattern without %d, a missing
+ *   frame, another size, an unreadable image, --lights (the sun's shadows alone), a folder that is not there. */
+#define _DEFAULT_SOURCE
+#include <libgen.h>
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "image.h"
+#include "support.h"
+#include "table.h"
+
+SB_TEST_SCRATCH("sbscore")
+
+static char g_out[1 << 16];
+
+#define FRAMES 4
+#define SIZE "320x180"
+#define W 320
+#define H 180
+
+/* The bundled scene file beside the binary. */
+static void bundled(const char *name, char *out, size_t len) {
+    char bin[4096];
+    snprintf(bin, sizeof bin, "%s", test_binary());
+    snprintf(out, len, "%s/%s", dirname(bin), name);
+}
+
+/* Whether the example can run here (chromium and three from npm: scripts/setup installs both). */
+static bool example_here(void) {
+    char three[4200];
+    snprintf(three, sizeof three, "%s/examples/engines/node_modules/three/build/three.module.js", getenv("SB_SOURCE_ROOT"));
+    if (access(three, R_OK) != 0 || run_capture("command -v chromium", g_out, sizeof g_out) != 0) {
+        print_message("no chromium or no three.js (scripts/setup installs them): skipped\n");
+        return false;
+    }
+    return true;
+}
+
+/* cameras of plane-box into DIR/NAME.json, changed by a line of Python (`cams` the document) when edit is given;
+ * then three.js draws them into DIR/NAME/. */
+static void three_frames(const char *name, const char *edit) {
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s cameras plane-box plane-box --frames %d --size " SIZE " > %s/%s.json",
+                                test_binary(), FRAMES, g_tmp, name), 0);
+    if (edit)
+        assert_int_equal(run_logged(g_out, sizeof g_out, "python3 -c 'import json, math; p = \"%s/%s.json\"; "
+                                    "cams = json.load(open(p)); %s; json.dump(cams, open(p, \"w\"))'",
+                                    g_tmp, name, edit), 0);
+    char glb[4200];
+    bundled("plane-box.glb", glb, sizeof glb);
+    assert_int_equal(run_logged(g_out, sizeof g_out, "python3 %s/examples/engines/render.py %s/%s.json %s %s/%s",
+                                getenv("SB_SOURCE_ROOT"), g_tmp, name, glb, g_tmp, name), 0);
+}
+
+static int score(const char *name, const char *extra) {
+    return run_logged(g_out, sizeof g_out, "%s score plane-box plane-box %s/%s --mask 'mask_%%04d.png' --frames %d "
+                      "--size " SIZE " --quiet --out %s/scored-%s %s", test_binary(), g_tmp, name, FRAMES, g_tmp, name,
+                      extra);
+}
+
+/* One channel of an image read through the image module (rows top-down). */
+static float *grey(const char *path) {
+    int w, h;
+    float *rgb;
+    sb_err err;
+    if (!sb_image_read_rgb(path, &w, &h, &rgb, &err)) fail_msg("%s", err.msg);
+    assert_int_equal(w, W);
+    assert_int_equal(h, H);
+    return rgb;   /* r, g, b a pixel: the red one serves */
+}
+
+static void test_three_scored(void **st) {
+    (void)st;
+    if (!example_here()) skip();
+    three_frames("three", NULL);
+    assert_int_equal(score("three", "--renderer three.js --params map=2048:type=basic"), 0);
+    char scored[4096];
+    snprintf(scored, sizeof scored, "%s", last_line_of(g_out));
+    sb_table t;
+    summary_table(scored, &t);
+    assert_int_equal(t.nrows, 1);
+    assert_string_equal(sb_table_get(&t, 0, "technique"), "three.js");
+    assert_string_equal(sb_table_get(&t, 0, "params"), "map=2048:type=basic");
+    assert_string_equal(sb_table_get(&t, 0, "status"), "ok");
+    assert_string_equal(sb_table_get(&t, 0, "gpu_ms_median"), "");   /* nothing of it was timed here */
+    assert_string_equal(sb_table_get(&t, 0, "draw_calls_mean"), "");
+    const double geom = atof(sb_table_get(&t, 0, "geom_mismatch")), err = atof(sb_table_get(&t, 0, "err_rate_mean"));
+    print_message("three.js on plane-box: err_rate %.6g, geom_mismatch %.3g\n", err, geom);
+    assert_true(geom < 1e-3);
+    assert_true(err > 0 && err < 0.01);   /* a box's shadow on a plane, a 2048 map: its outline's pixels */
+
+    /* by hand: the tool's reference images of the same cameras, the renderer's frames against them */
+    sb_table r;
+    char ref_dir[4096];
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s run plane-box plane-box none --frames %d --size " SIZE " --error-every 1 "
+                                "--images 1 --warmup 0 --quiet --out %s/ref", test_binary(), FRAMES, g_tmp), 0);
+    snprintf(ref_dir, sizeof ref_dir, "%s", last_line_of(g_out));
+    summary_table(ref_dir, &r);
+    double sum = 0;
+    for (int f = 0; f < FRAMES; f++) {
+        char path[4300];
+        snprintf(path, sizeof path, "%s/images/%s_f%04d_ref.png", ref_dir, sb_table_get(&r, 0, "run_id"), f);
+        float *ref = grey(path);
+        snprintf(path, sizeof path, "%s/three/vis_%04d.png", g_tmp, f);
+        float *vis = grey(path);
+        long n = 0, wrong = 0;
+        for (int i = 0; i < W * H; i++) {
+            float v = ref[3 * i];
+            if (v > 0.25f && v < 0.75f) continue;   /* grey: not scored (sky, facing away) */
+            n++;
+            wrong += (v >= 0.5f) != (vis[3 * i] >= 0.5f);
+        }
+        free(ref);
+        free(vis);
+        print_message("  frame %d by hand: %ld of %ld pixels wrong\n", f, wrong, n);
+        sum += (double)wrong / n;
+    }
+    print_message("by hand: err_rate %.6g\n", sum / FRAMES);
+    assert_true(fabs(sum / FRAMES - err) <= 0.01 * err);
+    sb_table_free(&r);
+
+    /* side by side with a technique of the tool on the same cameras: one set, compare --pair */
+    char tool[4096];
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s run plane-box plane-box sm --frames %d --size " SIZE " --error-every 1 "
+                                "--warmup 0 --quiet --out %s/tool", test_binary(), FRAMES, g_tmp), 0);
+    snprintf(tool, sizeof tool, "%s", last_line_of(g_out));
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s merge %s %s --out %s/both", test_binary(), scored, tool, g_tmp), 0);
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s compare %s/both --pair technique=three.js,sm", test_binary(), g_tmp), 0);
+    assert_non_null(strstr(g_out, "three.js err_rate"));
+    assert_non_null(strstr(g_out, "sm err_rate"));
+    assert_non_null(strstr(g_out, "sm gpu_ms"));
+    assert_non_null(strstr(g_out, "1 pair(s)"));
+    sb_table_free(&t);
+}
+
+static void test_wrong_camera_refused(void **st) {
+    (void)st;
+    if (!example_here()) skip();
+    /* the projection's x negated: what a camera of the other handedness draws */
+    three_frames("mirrored", "[c[\"projection\"].__setitem__(0, -c[\"projection\"][0]) for c in cams[\"cameras\"]]");
+    assert_int_equal(score("mirrored", ""), 2);
+    assert_non_null(strstr(g_out, "mask_0"));
+    assert_non_null(strstr(g_out, "mirrored left to right"));
+    /* the field of view a degree wider */
+    three_frames("fov", "[c[\"projection\"].__setitem__(k, c[\"projection\"][k] / math.tan((c[\"yfov\"] + math.radians(1)) "
+                        "/ 2) * math.tan(c[\"yfov\"] / 2)) for c in cams[\"cameras\"] for k in (0, 5)]");
+    assert_int_equal(score("fov", ""), 2);
+    assert_non_null(strstr(g_out, "not the exported one"));
+}
+
+/* Frames 0..n-1 of a w x h renderer that drew every pixel white, into DIR/NAME/. */
+static void white_frames(const char *name, int n, int w, int h) {
+    char dir[4200], path[4300];
+    snprintf(dir, sizeof dir, "%s/%s", g_tmp, name);
+    assert_int_equal(run_logged(g_out, sizeof g_out, "mkdir -p %s", dir), 0);
+    unsigned char *px = malloc((size_t)w * h);
+    memset(px, 255, (size_t)w * h);
+    sb_err err;
+    for (int f = 0; f < n; f++)
+        for (int k = 0; k < 2; k++) {
+            snprintf(path, sizeof path, "%s/%s_%04d.png", dir, k ? "mask" : "vis", f);
+            if (!sb_image_write_u8(path, w, h, 1, px, &err)) fail_msg("%s", err.msg);
+        }
+    free(px);
+}
+
+static void test_bad_input(void **st) {
+    (void)st;
+    const char *bin = test_binary();
+    white_frames("white", 2, W, H);
+    const char *common = "--frames 2 --size " SIZE;
+    expect_cli_fail("--mask FILE is needed", "%s score plane-box plane-box %s/white %s", bin, g_tmp, common);
+    expect_cli_fail("needs one %d", "%s score plane-box plane-box %s/white --mask mask.png %s", bin, g_tmp, common);
+    expect_cli_fail("not '%s'", "%s score plane-box plane-box %s/white --mask 'mask_%%s.png' %s", bin, g_tmp, common);
+    expect_cli_fail("frame 2 of 3", "%s score plane-box plane-box %s/white --mask 'mask_%%04d.png' --frames 3 --size " SIZE,
+                    bin, g_tmp);
+    expect_cli_fail("320x180, the run's --size is 160x90",
+                    "%s score plane-box plane-box %s/white --mask 'mask_%%04d.png' --frames 2 --size 160x90", bin, g_tmp);
+    expect_cli_fail("--lights is not an option of score", "%s score plane-box plane-box %s/white --mask 'mask_%%04d.png' %s --lights lamps",
+                    bin, g_tmp, common);
+    expect_cli_fail("no such folder of frames", "%s score plane-box plane-box %s/nowhere --mask 'mask_%%04d.png' %s", bin,
+                    g_tmp, common);
+    /* a file that is no image where frame 0's visibility should be */
+    white_frames("broken", 2, W, H);
+    assert_int_equal(run_logged(g_out, sizeof g_out, "echo not a png > %s/broken/vis_0000.png", g_tmp), 0);
+    expect_cli_fail("broken/vis_0000.png", "%s score plane-box plane-box %s/broken --mask 'mask_%%04d.png' %s", bin, g_tmp,
+                    common);
+    /* white everywhere: the sky is not geometry, so the mask does not line up: refused after the frame was drawn */
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s score plane-box plane-box %s/white --mask 'mask_%%04d.png' %s "
+                                "--quiet --out %s/refused", bin, g_tmp, common, g_tmp), 2);
+    assert_non_null(strstr(g_out, "white/mask_0000.png: frame 0: the mask and the tool's geometry differ at"));
+    /* its results set says it too: the run failed, the reason its row's */
+    sb_table t;
+    summary_table(last_line_of(g_out), &t);
+    assert_string_equal(sb_table_get(&t, 0, "status"), "failed");
+    assert_non_null(strstr(sb_table_get(&t, 0, "reason"), "differ at"));
+    sb_table_free(&t);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_bad_input), cmocka_unit_test(test_three_scored),
+                                       cmocka_unit_test(test_wrong_camera_refused)};
+    return cmocka_run_group_tests_name("score", tests, setup, teardown);
+}
