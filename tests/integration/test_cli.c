@@ -18,7 +18,7 @@
 #include "support.h"
 #include "table.h"
 
-static char g_out[16384];
+static char g_out[1 << 16];
 
 #define sh(...) run_logged(g_out, sizeof g_out, __VA_ARGS__)
 
