@@ -154,6 +154,7 @@ static bool eval_light(sb_session *s, sb_instance *in, int pf, int n, int replay
     m->stale_px = caches_in_motion(s, in) ? stale_share(s, in, seq, b, f) : NAN;
     m->lights_px = NAN;
     m->flip_mean = m->flip_p95 = NAN;
+    m->taa_flip_mean = m->taa_flicker_rate = NAN;   /* sb_eval_taa's, with --taa on */
     b->flip_drawn = false;
     if (flip) shade_and_flip(b, m);
     return sb_gl_check("evaluation pass", err);

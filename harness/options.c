@@ -126,7 +126,8 @@ const sb_option sb_options[] = {
      .with = SB_CMDF_MEASURE, .commands = SB_IN(SB_CMD_CAMERAS), RUN_OPT, .field = RUN(flicker_dt),
      .help = "path time from an evaluated frame to its twin, whose shadow maps look the frame's points up again "
              "(flicker_rate; 0 off)"},
-    {.name = "--images", .kind = SB_OPT_INT, .arg = "K", .max = 1000000, .def = "0", .with = SB_CMDF_MEASURE, RUN_OPT,
+    {.name = "--images", .kind = SB_OPT_INT, .arg = "K", .max = 1000000, .def = "0", .with = SB_CMDF_MEASURE,
+     .commands = SB_IN(SB_CMD_SCORE), RUN_OPT,
      .of_set = true,
      .field = RUN(images), .help = "images of every K-th frame: colour, visibility, reference, error, cascades (0 none)",
      .check = images_built},
@@ -134,6 +135,11 @@ const sb_option sb_options[] = {
      .of_set = true, .field = RUN(flip),
      .help = "score each evaluated frame's shaded colour against the reference's with LDR-FLIP (flip_mean, flip_p95; "
              "with --images, the shaded frames and the FLIP map)"},
+    {.name = "--taa", .kind = SB_OPT_CHOICE, .arg = "off|on", .def = "off", .with = SB_CMDF_MEASURE, RUN_OPT,
+     .of_set = true, .identity = SB_ID_NAMED, .field = RUN(taa),
+     .help = "resolve each evaluated frame through temporal anti-aliasing too (8 jittered display frames before it, "
+             "reprojected, clamped, blended): taa_flip_mean and taa_flicker_rate, the error and flicker a player "
+             "sees"},
     {.name = "--repeat", .kind = SB_OPT_INT, .arg = "K", .min = 1, .max = 1000, .def = "1", .with = SB_CMDF_MEASURE,
      .of_set = true, RUN_OPT, .field = RUN(repeat), .help = "run the path K times"},
     {.name = "--target-ci", .kind = SB_OPT_NUM, .arg = "PCT", .max = 100, .open_min = true, .def_help = "off",

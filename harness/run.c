@@ -10,6 +10,7 @@
 #include "autobias.h"
 #include "options.h"
 #include "eval.h"
+#include "taa.h"
 #include "image.h"
 #include "reference.h"
 #include "columns.h"
@@ -58,6 +59,7 @@ static bool evaluate(sb_session *s, sb_instance *in, int seq, const char *out_di
     if (s->opts.images > 0 && !sb_mkdir_p(dir, err)) return false;
     sb_eval_buf b;
     sb_eval_buf_init(&b, &s->gpu, s->opts.images > 0);
+    sb_taa_buf *taa = NULL;   /* --taa on */
     bool ok = true;
     for (int pf = 0; ok && pf < n; pf++) {
         if (!eval_frame_wanted(&s->opts, pf)) continue;
@@ -69,7 +71,8 @@ static bool evaluate(sb_session *s, sb_instance *in, int seq, const char *out_di
         sb_frame f;
         sb_frame_rec *r = &recs[pf];
         ok = sb_eval_frame(s, in, pf, n, sb_instance_history(in), &seq, &b, &f, &r->err, err) &&
-             sb_eval_flicker(s, in, pf, n, &seq, &b, &f, &r->err, err);
+             sb_eval_flicker(s, in, pf, n, &seq, &b, &f, &r->err, err) &&
+             sb_eval_taa(s, in, pf, n, &seq, &taa, b.w, b.h, &r->err, err);
         if (ok && s->opts.error_every > 0 && pf % s->opts.error_every == 0) {
             r->evaluated = true;
         }
@@ -80,6 +83,7 @@ static bool evaluate(sb_session *s, sb_instance *in, int seq, const char *out_di
                   sb_images_write_shaded(dir, run_id, pf, b.w, b.h, b.shaded, b.shaded_ref, b.flip, err));
     }
     sb_eval_buf_free(&b);
+    sb_taa_buf_free(taa);
     return ok;
 }
 
@@ -138,7 +142,7 @@ static bool ensure_instance(sb_run *r) {
     int frames = (o->warmup < 0 ? SB_WARMUP_AUTO_CAP : o->warmup) + o->frames * (r->keep_instance ? r->capacity / o->frames : 1);
     /* and the evaluation pass's: per evaluated frame, the frames it replays (sdsm: at most its latency, 2),
        the frame and its flicker twin (what a technique keeps per frame, sdsm's splits, covers them too) */
-    for (int pf = 0; pf < o->frames; pf++) frames += eval_frame_wanted(o, pf) ? 4 : 0;
+    for (int pf = 0; pf < o->frames; pf++) frames += eval_frame_wanted(o, pf) ? 4 + (o->taa ? SB_TAA_FRAMES + 1 : 0) : 0;
     if (!r->calibrated) { /* once per run, before its first frame */
         if (!sb_autobias_choose(r->s, r->spec, &r->used, r->info.auto_params, sizeof r->info.auto_params, NULL, &r->err))
             return fail_run(r, "auto offsets: %s", r->err.msg);
@@ -327,42 +331,15 @@ static void check_shadows_drawn(sb_run *r) {
     sb_run_warn(&r->info, "no shadow-casting triangle was drawn in any frame (nothing in view casts toward the light)");
 }
 
-/* A virtual map whose pool could not hold every page a frame needed drew some pixels from another level than
- * theirs: said, with the shortfall. */
-static void check_pool(sb_run *r) {
-    int frames = 0, worst = 0, need = 0;
-    for (int i = 0; i < r->done; i++) {
-        const sb_counters *k = &r->recs[i].counters;
-        if (!k->paged || !k->pool_overflow) continue;
-        frames++;
-        if (k->pool_overflow > worst) worst = k->pool_overflow, need = k->pages_needed;
-    }
-    if (frames)
-        sb_run_warn(&r->info, "pool_overflow: the page pool was short of up to %d of %d needed pages in %d of %d frames "
-                    "(their pixels used the page one level coarser): a larger pool= holds them", worst, need, frames,
-                    r->done);
-}
-
-/* A lamp atlas that could not give every lamp in view the tiles its policy asked for: said, with exact counts. */
-static void check_atlas(sb_run *r) {
-    int frames = 0, dropped = 0, down = 0, lamps = 0;
-    for (int i = 0; i < r->done; i++) {
-        const sb_counters *k = &r->recs[i].counters;
-        if (!k->atlas || !(k->lights_dropped || k->lights_downscaled)) continue;
-        frames++;
-        if (k->lights_dropped > dropped) dropped = k->lights_dropped;
-        if (k->lights_downscaled > down) down = k->lights_downscaled;
-        int inview = k->lights_shadowed + k->lights_dropped;
-        if (inview > lamps) lamps = inview;
-    }
-    if (!frames) return;
-    char what[128];
-    if (dropped && down)
-        snprintf(what, sizeof what, "up to %d lamp(s) dropped (lit without shadows) and up to %d downscaled", dropped, down);
-    else if (dropped) snprintf(what, sizeof what, "up to %d lamp(s) dropped (lit without shadows)", dropped);
-    else snprintf(what, sizeof what, "up to %d lamp(s) downscaled", down);
-    sb_run_warn(&r->info, "atlas: %s, of up to %d in view, in %d of %d frames: a larger size= (or max_lights=) holds them",
-                what, lamps, frames, r->done);
+/* The technique's own warnings (sb_technique.warn), from the measured frames' counters. */
+static void technique_warnings(sb_run *r) {
+    if (!r->spec->tech->warn || !r->done) return;
+    sb_counters *frames = sb_xmalloc(sizeof *frames * (size_t)r->done);
+    for (int i = 0; i < r->done; i++) frames[i] = r->recs[i].counters;
+    char line[sizeof r->info.warnings] = "";
+    r->spec->tech->warn(frames, r->done, line, sizeof line);
+    free(frames);
+    if (line[0]) sb_run_warn(&r->info, "%s", line);
 }
 
 /* When the evaluation cannot stand behind its figures: rays and rasterizer
@@ -428,8 +405,7 @@ static bool finish_run(sb_run *r) {
         !sb_csv_file_commit(&r->cf, &r->err))
         return fail_run(r, "%s", r->err.msg);
     check_shadows_drawn(r);
-    check_pool(r);
-    check_atlas(r);
+    technique_warnings(r);
     if (r->s->path_note[0])   /* the path check's flagged frames: their figures are the geometry check's doubt */
         sb_run_warn(&r->info, "the path's cameras: %s", r->s->path_note);
     /* a size for a light the run does not shade is no size at all: said, not ignored in silence */

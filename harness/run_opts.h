@@ -54,6 +54,7 @@ typedef struct sb_run_opts {
     bool allow_external_uris;   /* glTF buffers and images may be read from outside the scene's folder */
     bool strict_path;           /* --strict-path: a path whose cameras the check flags is refused (pathcheck.h) */
     bool flip;                  /* --flip: evaluated frames' shaded colour scored with LDR-FLIP (eval.c) */
+    int taa;                    /* --taa on|off (1, 0): evaluated frames resolved through TAA too (taa.h) */
     sb_blend_policy blend;      /* --blend-casters mask|opaque|none (default mask) */
     bool pose;                  /* --pose T: the scene at time T of its first animation */
     double pose_time;

@@ -448,9 +448,15 @@ static void motion_since(const sb_session *s, sb_instance *in, sb_frame *f) {
 
 void sb_render_camera(sb_session *s, sb_instance *in, sb_frame *f, const sb_camera *cam, int seq, sb_timer *timer,
                       bool eval) {
+    sb_render_camera_jittered(s, in, f, cam, seq, timer, eval, 0, 0);
+}
+
+void sb_render_camera_jittered(sb_session *s, sb_instance *in, sb_frame *f, const sb_camera *cam, int seq,
+                               sb_timer *timer, bool eval, double jx, double jy) {
     f->timer = timer;
     f->seq = seq;
     sb_frame_setup(f, &s->gpu, cam);
+    if (jx != 0 || jy != 0) sb_frame_jitter(f, jx, jy);
     f->scratch = s->scratch;
     f->cmds = s->cmds;
     f->eval = eval;

@@ -128,6 +128,10 @@ int sb_instance_history(const sb_instance *in);
 /* Renders frame i of n of the path as the run's seq-th frame, timed by timer. */
 void sb_render_frame(sb_session *s, sb_instance *in, sb_frame *f, int i, int n, int seq, struct sb_timer *timer);
 /* Renders an explicit camera (tests, stress cases); eval binds the evaluation targets. */
+/* The same with the image shifted by (jx, jy) pixels (TAA's sub-pixel jitter, taa.h): the projection moves, the
+ * shadow maps' fit follows the jittered frustum as an engine's does. */
+void sb_render_camera_jittered(sb_session *s, sb_instance *in, sb_frame *f, const sb_camera *cam, int seq,
+                               struct sb_timer *timer, bool eval, double jx, double jy);
 void sb_render_camera(sb_session *s, sb_instance *in, sb_frame *f, const sb_camera *cam, int seq,
                       struct sb_timer *timer, bool eval);
 /* Why a technique (with parameters p; NULL: its defaults) cannot run on this

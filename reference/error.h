@@ -48,6 +48,10 @@ typedef struct sb_error_metrics {
      * (base colour x (0.3 + 0.7 N.L x visibility), sRGB-encoded), mean and 95th percentile over every pixel (NaN:
      * not asked, or --lights) */
     double flip_mean, flip_p95;
+    /* --taa on (harness/taa.h): the frame resolved through TAA, shaded with the technique's visibility, against the
+     * same with the reference's: LDR-FLIP mean; and the share of its points whose resolved shadow changes at the
+     * twin while the reference's does not (NaN: --taa off, --lights) */
+    double taa_flip_mean, taa_flicker_rate;
     uint64_t rays;                     /* reference rays cast for this frame (0: the answers were reused) */
     double ray_ms;                     /* time in the reference for this frame (casting, or finding the answers) */
     bool reused;                       /* the reference's answers came from the cache */

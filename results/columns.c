@@ -233,6 +233,12 @@ static const sb_frame_col frame_cols[] = {
             "shaded with the reference's, over every pixel: the shadow error as a viewer sees it (empty: not asked, "
             "--lights)"},
     ERROR("flip_p95", flip_p95, "FLIP", ERR_STATS, 0, "--flip: 95th percentile of that per-pixel FLIP"),
+    ERROR("taa_flip_mean", taa_flip_mean, "FLIP", ERR_STATS, 0,
+          "--taa on: mean LDR-FLIP of the frame resolved through TAA (jittered, reprojected, clamped, blended over 8 "
+          "display frames) shaded with the technique's visibility, against the same resolved with the reference's"),
+    ERROR("taa_flicker_rate", taa_flicker_rate, "share", ERR_STATS, 0,
+          "--taa on: share of the evaluated points the twin sees again whose resolved shadow changes at the twin "
+          "while the reference's does not (flicker a player sees through TAA)"),
     ERROR("geom_mismatch", geom_mismatch, "share", 0, 0,
           "share of sampled pixels where a camera ray's first hit is not the rasterized surface (one geometry?)"),
     ERROR("err_floor", err_floor, "share", 0, 0,

@@ -490,6 +490,28 @@ static void atlas_destroy(void *state) {
     free(s->records);
 }
 
+/* An atlas that could not give every lamp in view the tiles its policy asked for: said, with exact counts. */
+static void atlas_warn(const sb_counters *frames, int n, char *out, size_t len) {
+    int short_frames = 0, dropped = 0, down = 0, lamps = 0;
+    for (int i = 0; i < n; i++) {
+        const sb_counters *k = &frames[i];
+        if (!k->atlas || !(k->lights_dropped || k->lights_downscaled)) continue;
+        short_frames++;
+        if (k->lights_dropped > dropped) dropped = k->lights_dropped;
+        if (k->lights_downscaled > down) down = k->lights_downscaled;
+        int inview = k->lights_shadowed + k->lights_dropped;
+        if (inview > lamps) lamps = inview;
+    }
+    if (!short_frames) return;
+    char what[128];
+    if (dropped && down)
+        snprintf(what, sizeof what, "up to %d lamp(s) dropped (lit without shadows) and up to %d downscaled", dropped, down);
+    else if (dropped) snprintf(what, sizeof what, "up to %d lamp(s) dropped (lit without shadows)", dropped);
+    else snprintf(what, sizeof what, "up to %d lamp(s) downscaled", down);
+    snprintf(out, len, "atlas: %s, of up to %d in view, in %d of %d frames: a larger size= (or max_lights=) holds them",
+             what, lamps, short_frames, n);
+}
+
 const sb_technique sb_technique_atlas = {
     .name = "atlas",
     .summary = "every lamp's shadows in one depth atlas, tiles sized by policy within a budget (HDRP's atlas)",
@@ -505,5 +527,6 @@ const sb_technique sb_technique_atlas = {
     .shadow_bytes = atlas_shadow_bytes,
     .create = atlas_create,
     .frame = atlas_frame,
+    .warn = atlas_warn,
     .destroy = atlas_destroy,
 };

@@ -497,6 +497,14 @@ void sb_frame_setup(sb_frame *f, const sb_gpu *g, const sb_camera *cam) {
     f->shade_light[3] = 0;
 }
 
+void sb_frame_jitter(sb_frame *f, double jx, double jy) {
+    /* clip x += ndc offset x w, and w = -z_view: the projection's z column takes the offset */
+    f->proj.m[8] -= 2 * jx / f->gpu->width;
+    f->proj.m[9] -= 2 * jy / f->gpu->height;
+    f->view_proj = sb_m4_mul(f->proj, f->view);
+    sb_frustum_planes(f->view_proj, f->frustum);
+}
+
 static void human_bytes(double b, char *out, size_t len) {
     if (b >= 1073741824.0) snprintf(out, len, "%.1f GiB", b / 1073741824.0);
     else snprintf(out, len, "%.0f MiB", b / 1048576.0);

@@ -170,6 +170,8 @@ void sb_final_prog_free(sb_final_prog *fp);
 
 /* Sets the frame's camera, matrices and planes, counters to zero and the shaded light to the sun. */
 void sb_frame_setup(sb_frame *f, const sb_gpu *g, const sb_camera *cam);
+/* After sb_frame_setup: the image shifted by (jx, jy) pixels (TAA's jitter): proj, view_proj and the frustum. */
+void sb_frame_jitter(sb_frame *f, double jx, double jy);
 void sb_stage_begin(sb_frame *f, sb_stage s);
 void sb_stage_end(sb_frame *f, sb_stage s);
 /* Draws every camera-visible draw into the render target with fp (already

@@ -149,6 +149,10 @@ typedef struct sb_technique {
     /* fills counters known only after the run (read back from the GPU once,
        outside the timed frames); seq is the frame's run sequence index */
     void (*collect)(void *state, int seq, sb_counters *out);
+    /* (optional, no GL) after a run: what the technique cannot stand behind in its figures, read from the
+       measured frames' counters (n of them); a line into out ("" : nothing), which the run's warnings column
+       holds. The run loop knows no technique's counters: a technique with a warning of its own says it here */
+    void (*warn)(const sb_counters *frames, int n, char *out, size_t len);
     void (*destroy)(void *state);
     const void *impl;               /* data of a shared implementation (a cascade technique's split scheme) */
 } sb_technique;

@@ -729,6 +729,21 @@ static void virtual_destroy(void *state) {
     memset(s, 0, sizeof *s);
 }
 
+/* A pool that could not hold every page a frame needed drew some pixels from another level than theirs: said, with
+ * the shortfall. */
+static void virtual_warn(const sb_counters *frames, int n, char *out, size_t len) {
+    int short_frames = 0, worst = 0, need = 0;
+    for (int i = 0; i < n; i++) {
+        const sb_counters *k = &frames[i];
+        if (!k->paged || !k->pool_overflow) continue;
+        short_frames++;
+        if (k->pool_overflow > worst) worst = k->pool_overflow, need = k->pages_needed;
+    }
+    if (short_frames)
+        snprintf(out, len, "pool_overflow: the page pool was short of up to %d of %d needed pages in %d of %d frames "
+                 "(their pixels used the page one level coarser): a larger pool= holds them", worst, need, short_frames, n);
+}
+
 const sb_technique sb_technique_virtual = {
     .name = "virtual",
     .summary = "virtual shadow maps: a clipmap of page-cached virtual maps, pages drawn where pixels need them",
@@ -744,5 +759,6 @@ const sb_technique sb_technique_virtual = {
     .shadow_bytes = virtual_shadow_bytes,
     .create = virtual_create,
     .frame = virtual_frame,
+    .warn = virtual_warn,
     .destroy = virtual_destroy,
 };

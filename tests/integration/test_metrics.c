@@ -21,7 +21,7 @@ static int setup(void **st) {
     if (tmp_folder(g_tmp, sizeof g_tmp, "sbmetric")) return -1;
     /* a small set: a technique without maps and one with, every frame evaluated (and scored with FLIP) */
     if (run_logged(g_out, sizeof g_out, "%s run plane-box plane-box none sm:res=256 sdsm:res=256 volumes raycast virtual:pool=8 --frames 3 --size 96x54 "
-                   "--error-every 1 --flip --warmup 0 --out %s/r --quiet", test_binary(), g_tmp) != 0)
+                   "--error-every 1 --flip --taa on --warmup 0 --out %s/r --quiet", test_binary(), g_tmp) != 0)
         return -1;
     char *nl = strrchr(g_out, '\n');
     if (nl && nl > g_out) *nl = 0;
