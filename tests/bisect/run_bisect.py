@@ -122,7 +122,7 @@ check(m and int(m.group(1)) <= bound and int(m.group(2)) <= bound, "err_rate: re
 
 # a timing: paired, interleaved
 p = bisect(good, c[n], "--metric", "final_ms", "--repeat", "3", "--", "run", "plane-box", "plane-box", "sm",
-           "--frames", "20", "--size", "640x360", "--error-every", "0")
+           "--frames", "10", "--size", "640x360", "--error-every", "0")
 check(p.returncode == 0, "final_ms: exit 0")
 check(("first bad commit: %s shadow maps: pcss by default" % c[7]) in p.stdout, "final_ms: commit 7 named")
 steps = re.findall(r"final_ms [\d.e+-]+ against GOOD [\d.e+-]+: ([+-][\d.e+-]+) ms ± ([\d.e+-]+) \(([+-][\d.]+) %\) "

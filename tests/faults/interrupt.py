@@ -2,7 +2,7 @@
 """Ctrl-C and SIGTERM during a batch: an orderly stop, then a resume.
 
 A small batch (three runs on towers, error evaluated) is stopped by SIGINT at
-a random moment, 8 times (the last two by SIGTERM), each time resumed into
+a random moment, 6 times (the last two by SIGTERM), each time resumed into
 the same folder with `batch --resume`. After every stop:
   - the exit status is 130 (SIGINT) or 143 (SIGTERM), or 0 when the signal
     came after the batch's last frame;
@@ -31,7 +31,7 @@ import time
 BIN, BUILD = sys.argv[1:3]
 WORK = os.path.join(BUILD, "test-interrupt")
 failures = []
-TRIES = 8   # stops of the batch, the last two by SIGTERM
+TRIES = 6   # stops of the batch, the last two by SIGTERM
 
 
 def check(cond, what):
@@ -128,7 +128,7 @@ def main():
           "run --resume completes it (exit %d), rows equal the clean batch's, timings aside %s" % (p.returncode, diff[:4]))
 
     # `tune` stops the same way: the outputs from what was measured, and its own --resume completes the search
-    cmd = [BIN, "tune", "towers", "auto", "sm:res=256,512,1024,2048", "pssm:res=512,1024:cascades=2,4", "--frames", "13",
+    cmd = [BIN, "tune", "towers", "auto", "sm:res=256,512,1024", "pssm:res=512:cascades=2,4", "--frames", "9",
            "--size", "320x180", "--max-err", "0.5", "--seed", "3", "--quiet"]
     t0 = time.time()
     p = subprocess.run(cmd + ["--out", os.path.join(WORK, "tune-whole")], capture_output=True, text=True)

@@ -24,7 +24,7 @@ import time
 
 BIN, BUILD = sys.argv[1:3]
 WORK = os.path.join(BUILD, "test-history-kill")
-TRIES = 24
+TRIES = 16
 BIG = 2000
 
 
@@ -128,8 +128,8 @@ def main():
                 failures += 1
     print("%d tries, %d killed during the add (%d inside its transaction), %d found the set in, %d failed"
           % (TRIES, cut, in_tx, after, failures))
-    if cut < 10 or in_tx < 5:
-        print("FAIL: fewer than 10 kills landed during an add, or fewer than 5 inside its transaction")
+    if cut < 6 or in_tx < 3:   # seen with 24 tries: 20 and 15; with 12: 6 and 4
+        print("FAIL: fewer than 6 kills landed during an add, or fewer than 3 inside its transaction")
         failures += 1
     return 1 if failures else 0
 

@@ -562,13 +562,14 @@ static void test_reference_background(void **st) {
     (void)st;
     /* timing: enough rays (desert at 960x540, every frame, one thread) that the background is still
        casting while the timed frames render. off, on, off: the run with it against the mean of its
-       neighbours without; up to three tries, as another tenant's load on a shared machine moves either */
+       neighbours without; up to two tries, as another tenant's load on a shared machine moves either (at 640x360
+       the background ends before a third of the timed frames: never judged) */
     const char *tcmd = "(%s run desert desert sm:res=1024 --frames 10 --size 960x540 --error-every 1 --warmup 2 "
                        "--threads 1 --progress --overlap %s --out %s/%s 2>%s/%s.log)";
     enum { N = 10 };
     bool ok = false;
     int overlapped_too_little = 0, judged = 0;
-    for (int attempt = 1; attempt <= 3 && !ok; attempt++) {
+    for (int attempt = 1; attempt <= 2 && !ok; attempt++) {
         double ms[3][N], start[3][N], mean[3], ci[3], during = 0, timed = 0;
         for (int k = 0; k < 3; k++) {
             const bool on = k == 1;
@@ -620,7 +621,7 @@ static void test_reference_background(void **st) {
            The one end-to-end timing check of --overlap: its bound (the overlapped frames 1.5x their neighbours'
            median) is twice the drift a shared machine shows between the runs without (up to a quarter); a
            machine too busy to judge on (the runs without disagree, or the background done before the frames)
-           skips it, saying so, three times over: a neighbour's load is no fault of the tool's. */
+           skips it, saying so, twice over: a neighbour's load is no fault of the tool's. */
         if (!quiet) continue;
         judged++;
         ok = median < 1.5;

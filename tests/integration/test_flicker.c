@@ -74,7 +74,8 @@ static void test_pan(void **st) {
 
 /* The tool's own auto path fits near and far to the scene every frame: the stable fit's range is the run's
  * (its shadow distance), so stable=on flickers at most a fifth of stable=off's rate on any path, and its splits
- * never move (split_jitter 0; the fov does not change). On towers and desert, sm and pssm. */
+ * never move (split_jitter 0; the fov does not change). On towers' auto path and a dolly, sm and pssm (desert's
+ * auto path held the same; left out for the suite's time). */
 /* The far plane of each frame of a path (`shadowbench path`): how far apart its least and largest are. */
 static double far_spread(const char *scene, const char *path, int frames) {
     assert_int_equal(run_logged(g_out, sizeof g_out, "%s path %s %s --frames %d 2>/dev/null", test_binary(), path, scene,
@@ -95,10 +96,10 @@ static double far_spread(const char *scene, const char *path, int frames) {
 
 static void test_stable_on_any_path(void **st) {
     (void)st;
-    /* the auto path on two scenes (its far follows the scene), and a dolly whose far grows on purpose */
-    const char *scenes[] = {"towers", "desert", "towers"};
-    const char *paths[] = {"auto", "auto", test_data("towers-dolly.path")};
-    for (int k = 0; k < 3; k++) {
+    /* the auto path (its far follows the scene), and a dolly whose far grows on purpose */
+    const char *scenes[] = {"towers", "towers"};
+    const char *paths[] = {"auto", test_data("towers-dolly.path")};
+    for (int k = 0; k < 2; k++) {
         sb_table t;
         double spread = far_spread(scenes[k], paths[k], 7);
         printf("%s along %s: the far plane spans %.3gx over 7 frames\n", scenes[k], paths[k], spread);
@@ -112,12 +113,12 @@ static void test_stable_on_any_path(void **st) {
             double off = cell(&t, techs[i], "stable=off", "flicker_rate_mean"),
                    on = cell(&t, techs[i], "stable=on", "flicker_rate_mean");
             printf("%s %s %s: flicker_rate stable=off %.6g, on %.6g; split_jitter off %.6g, on %.6g\n", scenes[k],
-                   k == 2 ? "dolly" : "auto", techs[i], off, on, cell(&t, techs[i], "stable=off", "split_jitter_mean"),
+                   k == 1 ? "dolly" : "auto", techs[i], off, on, cell(&t, techs[i], "stable=off", "split_jitter_mean"),
                    cell(&t, techs[i], "stable=on", "split_jitter_mean"));
             assert_true(on <= off / 5);
             /* sm stable=off does not flicker on the dolly at all (0 at 320x180 and 640x360: its one map's texels
                grow slowly there); everywhere else the case shows stable=on below a fifth of a real figure */
-            if (k < 2 || i == 1) assert_true(off > 0);
+            if (k < 1 || i == 1) assert_true(off > 0);
             assert_true(cell(&t, techs[i], "stable=on", "split_jitter_mean") == 0);
             assert_true(cell(&t, techs[i], "stable=off", "split_jitter_mean") > 0);   /* the path's far does move */
         }
