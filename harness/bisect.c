@@ -124,7 +124,9 @@ static int bad_input(const char *fmt, ...) {
 /* Builds c (its binary kept in work/bin/SHA): false when it does not build. */
 static bool build(bisect *b, commit *c) {
     char bin_dir[2200], log[2200];
-    snprintf(bin_dir, sizeof bin_dir, "%s/bin/%s", b->work, c->sha);
+    const char *type = b->cmd->build_type ? b->cmd->build_type : "release";
+    const bool release = !strcmp(type, "release");   /* another type's binaries and build folder are its own */
+    snprintf(bin_dir, sizeof bin_dir, "%s/bin/%s%s%s", b->work, c->sha, release ? "" : ".", release ? "" : type);
     snprintf(c->bin, sizeof c->bin, "%s/shadowbench", bin_dir);
     snprintf(log, sizeof log, "%s/logs/%.12s.build.log", b->work, c->sha);
     if (access(c->bin, X_OK) == 0) return true;   /* built by an earlier bisect */
@@ -136,20 +138,23 @@ static bool build(bisect *b, commit *c) {
     char *co[] = {"git", "checkout", "--quiet", "--force", "--detach", c->sha, NULL};
     bool ok = spawn(co, b->tree, log, NULL, 0) == 0;
     char ninja_file[2200];
-    snprintf(ninja_file, sizeof ninja_file, "%s/build-bisect/build.ninja", b->tree);
+    char build_dir[64], buildtype[64];
+    snprintf(build_dir, sizeof build_dir, "build-bisect%s%s", release ? "" : "-", release ? "" : type);
+    snprintf(buildtype, sizeof buildtype, "--buildtype=%s", type);
+    snprintf(ninja_file, sizeof ninja_file, "%s/%s/build.ninja", b->tree, build_dir);
     if (ok && access(ninja_file, F_OK) != 0) {
-        /* a release build without the tests and the image stack, which a run needs neither of; a commit
-           older than those options is configured without them */
-        char *setup[] = {"meson", "setup", "build-bisect", "--buildtype=release", "-Dtests=false", "-Dimages=disabled", NULL};
-        char *plain[] = {"meson", "setup", "build-bisect", "--buildtype=release", NULL};
+        /* a build (release unless --build-type) without the tests and the image stack, which a run needs
+           neither of; a commit older than those options is configured without them */
+        char *setup[] = {"meson", "setup", build_dir, buildtype, "-Dtests=false", "-Dimages=disabled", NULL};
+        char *plain[] = {"meson", "setup", build_dir, buildtype, NULL};
         ok = spawn(setup, b->tree, log, NULL, 0) == 0 || spawn(plain, b->tree, log, NULL, 0) == 0;
     }
-    char *ninja[] = {"ninja", "-C", "build-bisect", NULL};
+    char *ninja[] = {"ninja", "-C", build_dir, NULL};
     if (ok) ok = spawn(ninja, b->tree, log, NULL, 0) == 0;
     /* the binary and the bundled scenes it finds beside itself (a commit may change how they are made) */
     sb_err err;
     char built[2200], from[2600], to[2600];
-    snprintf(built, sizeof built, "%s/build-bisect", b->tree);
+    snprintf(built, sizeof built, "%s/%s", b->tree, build_dir);
     DIR *d = ok ? opendir(built) : NULL;
     ok = d && sb_mkdir_p(bin_dir, &err);
     for (struct dirent *e; ok && (e = readdir(d));) {

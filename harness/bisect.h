@@ -30,6 +30,7 @@ typedef struct sb_bisect_cmd {
     int repeat;                 /* timings: paired runs a step (0: 5) */
     double threshold_pct;       /* timings: the least change that counts (0: 5) */
     const char *workdir;        /* NULL: <git common dir>/shadowbench-bisect */
+    const char *build_type;     /* meson's buildtype of the scratch builds (NULL: release) */
     const char *history, *series; /* --history FILE --series TEXT: the newest regression of that series' metric */
 } sb_bisect_cmd;
 

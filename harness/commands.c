@@ -735,7 +735,9 @@ static int cmd_bisect(const sb_cli *c) {
     sb_bisect_cmd b = {.good = c->o.history ? NULL : c->pos[0], .bad = c->o.history ? NULL : c->pos[1],
                        .run_argv = c->tail, .run_argc = c->ntail, .run_cmd = &sb_commands[SB_CMD_RUN],
                        .metric = sb_cli_given(&c->o, "--metric") ? c->o.metrics : NULL, .repeat = c->o.pairs,
-                       .threshold_pct = c->o.threshold, .workdir = c->o.workdir, .history = c->o.history,
+                       .threshold_pct = c->o.threshold, .workdir = c->o.workdir,
+                       .build_type = (const char *const[]){"release", "debugoptimized", "debug", "plain"}[c->o.build_type],
+                       .history = c->o.history,
                        .series = c->o.series};
     return sb_bisect_main(&b);
 }
@@ -857,7 +859,7 @@ const sb_command_def sb_commands[SB_CMD_COUNT] = {
     {SB_CMD_HISTORY_CHECK, "history check", "history check DIR [--nights N] [--metric M,...] [--noise-floor PCT]",
      "a results set against its series' newest nights (exit 1 beyond their band)", SB_CMDF_ANY, cmd_history_check},
     {SB_CMD_BISECT, "bisect",
-     "bisect GOOD BAD [--metric M] [--repeat K] [--threshold PCT] [--workdir DIR] -- run SCENE PATH SPEC "
+     "bisect GOOD BAD [--metric M] [--repeat K] [--threshold PCT] [--workdir DIR] [--build-type T] -- run SCENE PATH SPEC "
      "[run options]\n"
      "bisect --history FILE --series TEXT --metric M [-- run options]",
      "the first commit that changes a run's metric: built in a scratch worktree, measured against "

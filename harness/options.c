@@ -257,6 +257,10 @@ const sb_option sb_options[] = {
     {.name = "--nights", .kind = SB_OPT_INT, .arg = "N", .min = 3, .max = 1000, .def = "10",
      .commands = SB_IN(SB_CMD_HISTORY_CHECK), .field = F(nights),
      .help = "how many of each series' newest nights make its band"},
+    {.name = "--build-type", .kind = SB_OPT_CHOICE, .arg = "release|debugoptimized|debug|plain", .def = "release",
+     .commands = SB_IN(SB_CMD_BISECT), .field = F(build_type),
+     .help = "meson's build type of the scratch builds: debug and plain build in half the time, and their harness "
+             "is slower (a GPU-time metric's change is the same; a CPU-side one's, cpu_ms, is not the release build's)"},
     {.name = "--workdir", .kind = SB_OPT_TEXT, .arg = "DIR", .def_help = "shadowbench-bisect in the git directory",
      .commands = SB_IN(SB_CMD_BISECT), .field = F(workdir),
      .help = "the scratch worktree, its build and every binary built (kept for the next bisect)"},

@@ -108,6 +108,7 @@ typedef struct sb_cli_opts {
                         options of info and path) */
     const char *out, *resume, *shard, *metrics, *pair, *techniques, *history, *since, *series, *workdir, *map;
     const char *pattern, *mask, *renderer, *renderer_params;   /* score */
+    int build_type;             /* bisect --build-type: an index of sb_build_types */
     int format; /* --format: an sb_output_format */
     int recent, pairs, nights;
     double noise_floor, threshold, max_err, max_flicker, max_flip, max_mb, budget_ms, time_limit_s, ppd;
