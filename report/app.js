@@ -432,6 +432,9 @@ var SB = (function () {
     });
     var cs = el("section", { id: "frames" }, [el("h2", { text: "Frames" })]);
     if (!fr.length) cs.appendChild(el("p", { text: "No per-frame figures (the run did not measure frames)." }));
+    else if (!stages.length && fr.every(function (f) { return f[at("draw_calls")] === null; }))   /* score's frames */
+      cs.appendChild(el("p", { text: "Nothing timed or counted here: the frames are another renderer's, scored against " +
+        "the reference by shadowbench score. Its errors are in the night's table." }));
     else {
       var x = function (f, i) { return i; };
       chart(cs, fr.map(function (f, i) { return [x(f, i)].concat(stages.map(function (s) { return f[at(s)] === null ? 0 : f[at(s)]; })); }),

@@ -7,7 +7,8 @@
  *   run of the tool draws (--images: its ref.png, lit white, shadowed black, grey not scored).
  * - A wrong camera is refused, exit 2, saying what was found: the projection mirrored left to right ("mirrored"),
  *   the field of view a degree wider ("not the exported one").
- * - compare --pair of the scored renderer against sm on the same cameras prints both side by side.
+ * - compare --pair of the scored renderer against sm on the same cameras prints both side by side; the report's
+ *   run page of the scored set draws no empty timing chart and says why (headless Chromium).
  * - Bad input, each one line and exit 2 before anything is written: no --mask, a pattern without %d, a missing
  *   frame, another size, an unreadable image, --lights (the sun's shadows alone), a folder that is not there. */
 #define _DEFAULT_SOURCE
@@ -147,6 +148,15 @@ static void test_three_scored(void **st) {
     assert_non_null(strstr(g_out, "sm err_rate"));
     assert_non_null(strstr(g_out, "sm gpu_ms"));
     assert_non_null(strstr(g_out, "1 pair(s)"));
+    /* the report's run page, as a person sees it: no empty timing charts, a line that says why */
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s report %s --out %s/site", test_binary(), scored, g_tmp), 0);
+    assert_int_equal(run_logged(g_out, sizeof g_out, "chromium --headless --no-sandbox --disable-gpu "
+                                "--allow-file-access-from-files --virtual-time-budget=10000 --dump-dom "
+                                "'file://%s/site/run.html?n=1&r=%s' 2>/dev/null", g_tmp, sb_table_get(&t, 0, "run_id")), 0);
+    assert_non_null(strstr(g_out, "data-ready=\"yes\""));
+    assert_non_null(strstr(g_out, "data-errors=\"0\""));
+    assert_non_null(strstr(g_out, "data-charts=\"0\""));
+    assert_non_null(strstr(g_out, "the frames are another renderer's"));
     sb_table_free(&t);
 }
 
