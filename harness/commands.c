@@ -461,15 +461,12 @@ static int cmd_score(const sb_cli *c) {
         return bad("score: --mask FILE is needed: the renderer's mask of the pixels it drew is how score checks that "
                    "its cameras are the exported ones%s", "");
     if (c->o.run.error_every <= 0) return bad("score: --error-every 0 scores nothing%s", "");
-    char name[256];
-    const char *dir = c->pos[2], *base = strrchr(dir, '/');
-    snprintf(name, sizeof name, "%s", base && base[1] ? base + 1 : dir);
-    if (!base || !base[1]) {   /* "frames/" names frames */
-        size_t l = strlen(name);
-        while (l > 1 && name[l - 1] == '/') name[--l] = 0;
-        const char *b = strrchr(name, '/');
-        if (b) memmove(name, b + 1, strlen(b));
-    }
+    char name[256];   /* DIR's last part ("out/frames/" names frames) */
+    const char *dir = c->pos[2];
+    snprintf(name, sizeof name, "%s", dir);
+    for (size_t l = strlen(name); l > 1 && name[l - 1] == '/';) name[--l] = 0;
+    const char *base = strrchr(name, '/');
+    if (base && base[1]) memmove(name, base + 1, strlen(base));
     sb_score_src src = {.dir = dir, .pattern = c->o.pattern, .mask = c->o.mask,
                         .renderer = c->o.renderer ? c->o.renderer : name,
                         .params = c->o.renderer_params ? c->o.renderer_params : ""};

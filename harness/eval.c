@@ -112,12 +112,11 @@ static void shade_and_flip(sb_eval_buf *b, sb_error_metrics *m) {
         b->flip = sb_xmalloc(sizeof(float) * n);
     }
     for (size_t i = 0; i < n; i++) {
-        const unsigned char *p = b->base + 4 * i;
-        double nl = p[3] / 255.0, vt = b->vis[i] / 255.0, vr = b->ref[i] == 128 ? vt : b->ref[i] / 255.0;
+        sb_eval_shade(b->base + 4 * i, b->vis[i] / 255.0, b->shaded + 3 * i);
+        sb_eval_shade(b->base + 4 * i, sb_eval_ref_vis(b->ref[i], b->vis[i]), b->shaded_ref + 3 * i);
         for (int c = 0; c < 3; c++) {
-            double a = p[c] / 255.0;
-            b->shaded[3 * i + c] = sb_srgb_encode((float)(a * (SB_SHADE_AMBIENT + SB_SHADE_DIRECT * nl * vt)));
-            b->shaded_ref[3 * i + c] = sb_srgb_encode((float)(a * (SB_SHADE_AMBIENT + SB_SHADE_DIRECT * nl * vr)));
+            b->shaded[3 * i + c] = sb_srgb_encode(b->shaded[3 * i + c]);
+            b->shaded_ref[3 * i + c] = sb_srgb_encode(b->shaded_ref[3 * i + c]);
         }
     }
     sb_flip_stats st = sb_flip(b->shaded_ref, b->shaded, b->w, b->h, 0, b->flip);

@@ -27,6 +27,16 @@ typedef struct sb_eval_buf {
     bool flip_drawn;            /* they hold this frame's */
 } sb_eval_buf;
 
+/* The reference's visibility of a pixel, for shading: its own where it scores the pixel, else the technique's. */
+static inline double sb_eval_ref_vis(unsigned char ref, unsigned char vis) { return (ref == 128 ? vis : ref) / 255.0; }
+
+/* A pixel lit the way the camera pass lights it, base colour x (ambient + direct N.L x visibility), in linear light,
+ * from the base target (colour, N.L in alpha): --flip's and --taa's shaded frames. */
+static inline void sb_eval_shade(const unsigned char base[4], double vis, float out[3]) {
+    const double light = SB_SHADE_AMBIENT + SB_SHADE_DIRECT * (base[3] / 255.0) * vis;
+    for (int c = 0; c < 3; c++) out[c] = (float)(base[c] / 255.0 * light);
+}
+
 void sb_eval_buf_init(sb_eval_buf *b, const sb_gpu *g, bool rgba);
 void sb_eval_buf_free(sb_eval_buf *b);
 

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "image.h"
+#include "render.h"
 
 bool sb_score_pattern_ok(const char *pattern, sb_err *err) {
     int conversions = 0;
@@ -63,8 +64,7 @@ static long disagree(const float *mask, const float *aux, int w, int h, bool mir
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++) {
             int mx = mirror_x ? w - 1 - x : x, my = mirror_y ? h - 1 - y : y;
-            const float *a = aux + 4 * ((size_t)y * w + x);   /* a normal where geometry was drawn, else 0 */
-            bool drawn = mask[(size_t)my * w + mx] >= 0.5f, geometry = a[0] * a[0] + a[1] * a[1] + a[2] * a[2] > 0.25f;
+            bool drawn = mask[(size_t)my * w + mx] >= 0.5f, geometry = sb_eval_has_geometry(aux, (size_t)y * w + x);
             n += drawn != geometry;
         }
     return n;

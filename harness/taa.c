@@ -68,11 +68,6 @@ static struct sb_taa_buf *taa_buf(int w, int h) {
     return t;
 }
 
-static bool geometry(const float *aux, size_t i) {
-    const float *a = aux + 4 * i;
-    return a[0] * a[0] + a[1] * a[1] + a[2] * a[2] > 0.25f;
-}
-
 /* Origin-relative point p through a view-projection to pixel coordinates (x right, y up from the bottom row, pixel
  * centres at integers); false behind the camera. */
 static bool to_pixel(const sb_m4 *vp, const float *p, int w, int h, double *sx, double *sy) {
@@ -100,7 +95,7 @@ static void resolve(struct sb_taa_buf *t, int cur, int q_index) {
             memcpy(o, C + 3 * i, sizeof(float) * 3);
             t->out_vis[i] = V[i];
             double sx, sy;
-            if (!q->have || !geometry(t->aux, i) || !to_pixel(&t->prev_vp, t->pos + 4 * i, w, h, &sx, &sy) || sx < 0 ||
+            if (!q->have || !sb_eval_has_geometry(t->aux, i) || !to_pixel(&t->prev_vp, t->pos + 4 * i, w, h, &sx, &sy) || sx < 0 ||
                 sy < 0 || sx > w - 1 || sy > h - 1)
                 continue;
             /* the history, bilinear */
@@ -151,13 +146,11 @@ static bool take(sb_session *s, struct sb_taa_buf *t, const sb_frame *g, int q, 
     memset(&e, 0, sizeof e);
     sb_evaluate_frame(ref, s->ref_cache, &view, t->vis, t->ref, &e, s->opts.threads);
     const size_t np = (size_t)t->w * t->h;
-    for (size_t i = 0; i < np; i++) {   /* as --flip shades (eval.c): base x (ambient + direct N.L x visibility) */
-        const unsigned char *p = t->base + 4 * i;
-        double nl = p[3] / 255.0, v[2] = {t->vis[i] / 255.0, t->ref[i] == 128 ? t->vis[i] / 255.0 : t->ref[i] / 255.0};
+    for (size_t i = 0; i < np; i++) {   /* as --flip shades */
+        const double v[2] = {t->vis[i] / 255.0, sb_eval_ref_vis(t->ref[i], t->vis[i])};
         for (int k = 0; k < 2; k++) {
             t->cur_vis[k][i] = (float)v[k];
-            for (int c = 0; c < 3; c++)
-                t->cur_rgb[k][3 * i + c] = (float)(p[c] / 255.0 * (SB_SHADE_AMBIENT + SB_SHADE_DIRECT * nl * v[k]));
+            sb_eval_shade(t->base + 4 * i, v[k], t->cur_rgb[k] + 3 * i);
         }
     }
     resolve(t, 0, q);

@@ -247,6 +247,12 @@ void sb_count_draw(sb_frame *f, uint64_t triangles, int instances);
 void sb_gpu_readback(const sb_gpu *g, float *depth, unsigned char *vis, unsigned char *rgba);
 /* Reads the evaluation targets (4 floats a pixel each; either may be NULL). */
 void sb_gpu_readback_eval(const sb_gpu *g, float *pos, float *aux);
+/* Whether the evaluation targets hold geometry at pixel i (aux: a normal there; cleared to 0 where nothing drew). */
+static inline bool sb_eval_has_geometry(const float *aux, size_t i) {
+    const float *a = aux + 4 * i;
+    return a[0] * a[0] + a[1] * a[1] + a[2] * a[2] > 0.25f;
+}
+
 /* The camera pass's light (final.frag, and the shaded frames of --flip, eval.c): base colour x (ambient + direct
  * x N.L x visibility); at most 1, so no tone map. */
 #define SB_SHADE_AMBIENT 0.3
