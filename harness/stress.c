@@ -340,8 +340,12 @@ static int stress_specs(const sb_run_opts *opts, const char *only, const char *c
     }
     /* SB_STRESS_KEEP=1 keeps each case's .glb and .path, to rerun a failing case with `run --images` */
     bool keep = getenv("SB_STRESS_KEEP") != NULL;
-    char dir[] = "/tmp/shadowbench-stress-XXXXXX";
-    if (!mkdtemp(dir)) return sb_fail(err, "cannot create a temporary folder for the stress scenes"), -1;
+    /* in $TMPDIR where set (a cluster node's scratch), else /tmp */
+    const char *tmp = getenv("TMPDIR");
+    if (!tmp || !*tmp) tmp = "/tmp";
+    char dir[4096];
+    snprintf(dir, sizeof dir, "%s/shadowbench-stress-XXXXXX", tmp);
+    if (!mkdtemp(dir)) return sb_fail(err, "cannot create a temporary folder for the stress scenes in %s", tmp), -1;
     sb_session s;
     memset(&s, 0, sizeof s);
     if (!sb_context_create(&s.ctx, opts->backend, err)) return -1;
@@ -354,7 +358,7 @@ static int stress_specs(const sb_run_opts *opts, const char *only, const char *c
     for (size_t ci = 0; ci < SB_COUNT(cases) && !sb_interrupted(); ci++) {
         const stress_case *c = &cases[ci];
         if (only && !strstr(c->name, only) && strcmp(c->name, "base")) continue;
-        char scene[256], path[256];
+        char scene[4200], path[4200];
         snprintf(scene, sizeof scene, "%s/%s.glb", dir, c->name);
         snprintf(path, sizeof path, "%s/%s.path", dir, c->name);
         sb_run_opts o = *opts;

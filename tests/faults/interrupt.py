@@ -62,9 +62,9 @@ def whole(dir_):
     return bad
 
 
-def stopped(cmd, after, sig=signal.SIGINT):
+def stopped(cmd, after, sig=signal.SIGINT, env=None):
     """Runs cmd, sends it sig `after` seconds in, and waits: (exit status, stdout, stderr)."""
-    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
     time.sleep(after)
     p.send_signal(sig)
     so, se = p.communicate(timeout=120)
@@ -150,9 +150,11 @@ def main():
           "none interrupted" % (p.returncode, len(a), len(b)))
 
     # `stress` stops between its rows: the rows so far, said so, and its temporary scenes removed
-    before = set(glob.glob("/tmp/shadowbench-stress-*"))
-    rc, so, se = stopped([BIN, "stress"], 3)
-    left = set(glob.glob("/tmp/shadowbench-stress-*")) - before
+    # (in a TMPDIR of its own: a `stress` test running beside this one leaves its scenes in /tmp meanwhile)
+    tmp = os.path.join(WORK, "tmp")
+    os.makedirs(tmp)
+    rc, so, se = stopped([BIN, "stress"], 3, env=dict(os.environ, TMPDIR=tmp))
+    left = set(glob.glob(os.path.join(tmp, "*")))
     rows_ = [l for l in so.splitlines() if l.split()[2:3] in (["ok"], ["FAIL"])]
     check(rc == 130 and "interrupted by SIGINT" in so and rows_ and not left,
           "stress: SIGINT -> exit %d, %d row(s) kept, temporary scenes left %s" % (rc, len(rows_), sorted(left)))

@@ -53,7 +53,16 @@ static void test_battery_can_fail(void **st) {
     assert_non_null(strstr(g_out, "2 failure(s)"));
 }
 
+/* The cases' scenes go to $TMPDIR where it is set (a cluster node's scratch): one that cannot be written is
+ * named in one line, exit 2, before anything is rendered. */
+static void test_tmpdir(void **st) {
+    (void)st;
+    expect_cli_exit(2, "for the stress scenes in /nonexistent-sb-tmp", "TMPDIR=/nonexistent-sb-tmp %s stress base sm",
+                    test_binary());
+}
+
 int main(void) {
-    const struct CMUnitTest tests[] = {cmocka_unit_test(test_battery_passes), cmocka_unit_test(test_battery_can_fail)};
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_battery_passes), cmocka_unit_test(test_battery_can_fail),
+                                       cmocka_unit_test(test_tmpdir)};
     return cmocka_run_group_tests_name("stress", tests, NULL, NULL);
 }
