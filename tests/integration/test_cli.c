@@ -885,19 +885,27 @@ static void test_full_disk(void **st) {
     sb_table_free(&b);
 }
 
-int main(void) {
+/* Two groups, two tests of the suite (tests/meson.build): `cli-timed` (argument "timed"), the checks that rest
+ * on the timings of live runs, runs alone; `cli`, the rest, beside other tests. */
+int main(int argc, char **argv) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_run_writes_csv),   cmocka_unit_test(test_gltf_camera_path),
         cmocka_unit_test(test_unused_parts_said),
         cmocka_unit_test(test_builtin_paths),    cmocka_unit_test(test_skip_reasons),
         cmocka_unit_test(test_usage_and_threads),
         cmocka_unit_test(test_clocks_modes),
-        cmocka_unit_test(test_stability_verdict_on_llvmpipe),
-        cmocka_unit_test(test_backends_same_draw_calls), cmocka_unit_test(test_query_timing),
-        cmocka_unit_test(test_repeats_and_target_ci), cmocka_unit_test(test_run_order),
-        cmocka_unit_test(test_reference_shared), cmocka_unit_test(test_reference_background),
+        cmocka_unit_test(test_backends_same_draw_calls),
+        cmocka_unit_test(test_run_order),
+        cmocka_unit_test(test_reference_shared),
         cmocka_unit_test(test_auto_offsets),
         cmocka_unit_test(test_gpu_memory_refused), cmocka_unit_test(test_full_disk),
     };
+    /* a run left alone is stable, one loaded halfway is not; query timings; repeats until a CI; the reference's
+       background overlapping the timed frames */
+    const struct CMUnitTest timed[] = {
+        cmocka_unit_test(test_stability_verdict_on_llvmpipe), cmocka_unit_test(test_query_timing),
+        cmocka_unit_test(test_repeats_and_target_ci), cmocka_unit_test(test_reference_background),
+    };
+    if (argc > 1 && !strcmp(argv[1], "timed")) return cmocka_run_group_tests_name("cli-timed", timed, setup, teardown);
     return cmocka_run_group_tests_name("cli", tests, setup, teardown);
 }

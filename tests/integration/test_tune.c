@@ -443,13 +443,25 @@ static void test_bad_input(void **st) {
     expect_cli_fail("no such results folder", "%s tune towers auto sm --max-err 0.1 --resume /nonexistent/x", bin);
 }
 
-int main(void) {
+/* Two groups, two tests of the suite (tests/meson.build): `tune` (its labels against its own grid, the tie, the
+ * budget: the timings of live runs) runs alone; `tune-search` (argument "search": bad input, the seed's plan, a
+ * search stopped by its time limit and resumed, which hold whatever the timings) beside other tests, with no grid. */
+static int setup_scratch(void **st) {
+    (void)st;
+    return tmp_folder(g_tmp, sizeof g_tmp, "sbtune");
+}
+
+int main(int argc, char **argv) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_the_cheapest_that_meets_the_bound),
         cmocka_unit_test(test_a_tie_is_a_tie),
-        cmocka_unit_test(test_time_limit_resume_and_seed),
         cmocka_unit_test(test_budget),
     };
-    return cmocka_run_group_tests(tests, setup, teardown);
+    const struct CMUnitTest search[] = {
+        cmocka_unit_test(test_bad_input),
+        cmocka_unit_test(test_time_limit_resume_and_seed),
+    };
+    if (argc > 1 && !strcmp(argv[1], "search"))
+        return cmocka_run_group_tests_name("tune-search", search, setup_scratch, teardown);
+    return cmocka_run_group_tests_name("tune", tests, setup, teardown);
 }
