@@ -11,6 +11,7 @@ typedef enum sb_stage {
     SB_STAGE_FINAL,     /* camera pass with shadow lookup */
     SB_STAGE_VOLUMES,   /* stencil shadow volumes */
     SB_STAGE_RAYS,      /* CPU ray casting */
+    SB_STAGE_CLUSTERS,  /* lamps found by cluster: the light grid built and sent (atlas grid=on) */
     SB_STAGE_COUNT
 } sb_stage;
 
@@ -18,6 +19,46 @@ typedef enum sb_stage {
 extern const char *const sb_stage_names[SB_STAGE_COUNT];
 
 #define SB_MAX_CASCADES 8
+
+/* Statistics a series is summarised by (the summary's columns; results/stats). */
+enum {
+    SB_STAT_MEAN = 1u << 0, SB_STAT_MEDIAN = 1u << 1, SB_STAT_P95 = 1u << 2, SB_STAT_P99 = 1u << 3,
+    SB_STAT_STD = 1u << 4, SB_STAT_CI95 = 1u << 5, SB_STAT_MIN = 1u << 6, SB_STAT_MAX = 1u << 7,
+    SB_STATS_TIMING = 0x3f,
+};
+#define SB_STAT_COUNT 8
+
+/* A column's flags. The SB_USE_ bits make a column a default metric of a
+ * command: which ones `compare`, `compare --pair`, `history regressions` and
+ * the report's trend charts use when no --metric says. */
+enum {
+    SB_COL_STAGE_TIME = 1u << 0,    /* a per-frame stage time (<stage>_ms): plots stack these */
+    SB_USE_COMPARE = 1u << 1,       /* compare BASE NEW */
+    SB_USE_PAIR = 1u << 2,          /* compare --pair, the report's pair tables */
+    SB_USE_HISTORY = 1u << 3,       /* history regressions */
+    SB_USE_REPORT = 1u << 4,        /* the report's trend charts */
+    SB_LOWER_WORSE = 1u << 5,       /* a metric that gets worse as it falls (default: as it rises) */
+    SB_USE_NIGHT = 1u << 6,         /* the report's night table (a series: its centre statistic) */
+};
+
+/* How a technique's own counter takes a second count in one frame (another cascade's, another light's). */
+typedef enum sb_counter_merge { SB_MERGE_SUM, SB_MERGE_MAX } sb_counter_merge;
+
+/* A counter a technique declares of its own (sb_technique.counters, in the technique's file): a per-frame column
+ * of its name, empty in the rows of every technique that does not declare it, summarised by `stats`. The column
+ * table (results/columns.c), the frame record and the run loop know it only by this row; two techniques that
+ * count the same thing share one row (the cascade machinery's, sb_csm_counters). */
+typedef struct sb_counter_def {
+    const char *name;
+    const char *unit;           /* "count": a whole number; else a number ("share") */
+    sb_counter_merge merge;
+    unsigned stats;             /* SB_STAT_* of the summary (0: the frame column alone) */
+    unsigned flags;             /* SB_USE_*, SB_LOWER_WORSE */
+    bool moving;                /* counted only where the scene's clips play (empty in a still scene's rows) */
+    const char *doc;
+} sb_counter_def;
+
+#define SB_MAX_OWN_COUNTERS 8
 
 /* What a frame submitted, counted as it happens (technique-side counters). */
 typedef struct sb_counters {
@@ -28,22 +69,31 @@ typedef struct sb_counters {
     uint64_t triangles, shadow_triangles;           /* triangles x instances submitted */
     int cascades_rendered, cascades_skipped;
     int cascades_cached;            /* cache=on: active cascades kept from an earlier frame, not drawn again */
-    bool paged;                                     /* a virtual shadow map: the page counters below are its */
-    int pages_needed, pages_rendered, pages_cached; /* pages the pixels needed; drawn this frame; kept from before */
-    int pool_overflow;                              /* needed pages the pool had no slot for */
-    int pages_stand_in;                             /* coarser pages drawn or kept in place of those (in rendered,
-                                                       cached): rendered + cached - stand_in + overflow = needed */
     int warp_fallbacks;                             /* warped maps (psm, lispsm, tsm) that used the uniform fit */
     bool moving;                                    /* the scene's clips play: the motion counters below hold */
     int casters_moved;                              /* draws whose box changed since the technique's last frame */
-    int cascades_invalidated;                       /* cache=on: kept maps drawn again for a moved caster */
-    int pages_invalidated;                          /* virtual cache=on: kept pages dropped for a moved caster */
-    int pages_dynamic;                              /* virtual split=on: pages the moving casters were drawn over */
-    bool atlas;                                     /* a shadow atlas of lamps: the counters below are its */
-    int lights_shadowed;                            /* lamps with tiles this frame */
-    int lights_dropped;                             /* lamps in view left unshadowed: max_lights, or no room */
-    int lights_downscaled;                          /* lamps whose tiles are smaller than they asked for (no room) */
-    double atlas_occupancy;                         /* share of the atlas its tiles cover */
     int split_count;                                /* cascades whose far split is known this frame */
     double splits[SB_MAX_CASCADES];                 /* view-space far distance of each cascade */
+    /* the frame's technique's own counters (its sb_technique.counters; the harness sets the table before the
+       frame) and their values, in the table's order */
+    const sb_counter_def *own_defs;
+    int own_count;
+    double own[SB_MAX_OWN_COUNTERS];
 } sb_counters;
+
+/* Counts v into the own counter `def` as its row merges; a row the frame's technique does not declare is not
+ * counted. */
+static inline void sb_count(sb_counters *c, const sb_counter_def *def, double v) {
+    for (int k = 0; k < c->own_count; k++)
+        if (&c->own_defs[k] == def) {
+            if (def->merge == SB_MERGE_SUM) c->own[k] += v;
+            else if (v > c->own[k]) c->own[k] = v;
+            return;
+        }
+}
+/* The value of own counter `def` in a frame's counters; false where the frame's technique does not declare it. */
+static inline bool sb_counted(const sb_counters *c, const sb_counter_def *def, double *v) {
+    for (int k = 0; k < c->own_count; k++)
+        if (&c->own_defs[k] == def) return *v = c->own[k], true;
+    return false;
+}

@@ -456,6 +456,8 @@ void sb_render_camera_jittered(sb_session *s, sb_instance *in, sb_frame *f, cons
     f->timer = timer;
     f->seq = seq;
     sb_frame_setup(f, &s->gpu, cam);
+    f->counters.own_defs = in->tech->counters;   /* the technique's own counters (sb_technique.counters) */
+    f->counters.own_count = in->tech->counter_count;
     if (jx != 0 || jy != 0) sb_frame_jitter(f, jx, jy);
     f->scratch = s->scratch;
     f->cmds = s->cmds;

@@ -3,13 +3,16 @@
  * an empty field, not 0. */
 #include "columns.h"
 
+#include <math.h>
 #include <stdarg.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "clocks.h"
 #include "stats.h"
 #include "table.h"
+#include "technique.h"
 
 const char *const sb_stat_names[SB_STAT_COUNT] = {"mean", "median", "p95", "p99", "std", "ci95", "min", "max"};
 
@@ -50,29 +53,23 @@ static sb_cell f_u64(const sb_frame_row *r, int off) { return integer((long long
 static sb_cell f_maps(const sb_frame_row *r, int off) {
     return has(r->stages, SB_STAGE_CASCADE) ? integer(COUNTER(r, off, int)) : empty();
 }
-/* a virtual shadow map's page counter: empty for every other technique */
-static sb_cell f_pages(const sb_frame_row *r, int off) {
-    return r->rec->counters.paged ? integer(COUNTER(r, off, int)) : empty();
-}
-
-/* a shadow atlas's counter: empty for every other technique */
-static sb_cell f_atlas(const sb_frame_row *r, int off) {
-    return r->rec->counters.atlas ? integer(COUNTER(r, off, int)) : empty();
-}
-static sb_cell f_atlas_share(const sb_frame_row *r, int off) {
-    return r->rec->counters.atlas ? number(COUNTER(r, off, double)) : empty();
-}
-
-/* a motion counter: empty where nothing moves (and for the cache counters, a technique without that cache) */
+/* a motion counter: empty where nothing moves */
 static sb_cell f_motion(const sb_frame_row *r, int off) {
     return r->rec->counters.moving ? integer(COUNTER(r, off, int)) : empty();
 }
-static sb_cell f_motion_maps(const sb_frame_row *r, int off) {
-    return r->rec->counters.moving && has(r->stages, SB_STAGE_CASCADE) && !r->rec->counters.paged
-               ? integer(COUNTER(r, off, int)) : empty();
-}
-static sb_cell f_motion_pages(const sb_frame_row *r, int off) {
-    return r->rec->counters.moving && r->rec->counters.paged ? integer(COUNTER(r, off, int)) : empty();
+/* A technique's own counter (sb_technique.counters): arg is its place in own_cols; empty in the rows of a technique
+ * that does not declare it (and where a row counted only in motion finds nothing moving). */
+#define SB_MAX_OWN_COLS 64
+static const sb_counter_def *own_cols[SB_MAX_OWN_COLS];
+static sb_cell f_own(const sb_frame_row *r, int arg) {
+    const sb_counters *c = &r->rec->counters;
+    for (int k = 0; k < c->own_count; k++) {
+        const sb_counter_def *d = &c->own_defs[k];
+        if (d != own_cols[arg] && strcmp(d->name, own_cols[arg]->name)) continue;
+        if (d->moving && !c->moving) return empty();
+        return d->unit && !strcmp(d->unit, "count") ? integer(llround(c->own[k])) : number(c->own[k]);
+    }
+    return empty();
 }
 static sb_cell f_anim_ms(const sb_frame_row *r, int a) { (void)a; return number(r->rec->anim_ms); }
 
@@ -113,7 +110,7 @@ static sb_cell f_error(const sb_frame_row *r, int off) {
 #define ERROR(n, field, u, st, fl, d) METRIC(n, f_error, offsetof(sb_error_metrics, field), u, st, fl, d)
 #define SPLIT(k) COL("split_" #k, f_split, k - 1, "view-space far distance of cascade " #k " this frame")
 #define ALL_USES (SB_USE_COMPARE | SB_USE_HISTORY | SB_USE_REPORT)
-/* a counter of sb_counters: its field, and the getter that reads its type (f_u32, f_u64, f_maps, f_pages) */
+/* a counter of sb_counters: its field, and the getter that reads its type (f_u32, f_u64, f_maps, f_motion) */
 #define COUNT(n, g, field, st, fl, d) METRIC(n, g, offsetof(sb_counters, field), "count", st, fl, d)
 #define ERR_STATS (SB_STAT_MEAN | SB_STAT_P95)
 
@@ -140,43 +137,20 @@ static const sb_frame_col frame_cols[] = {
     COUNT("cascades_skipped", f_maps, cascades_skipped, SB_STAT_MEAN, 0, "shadow maps skipped for want of receivers"),
     COUNT("cascades_cached", f_maps, cascades_cached, SB_STAT_MEAN, 0,
           "shadow maps kept from an earlier frame, not rendered again (cache=on: the same snapped window and light)"),
-    COUNT("lights_shadowed", f_atlas, lights_shadowed, SB_STAT_MEAN, 0,
-          "atlas: lamps with tiles this frame (empty: no atlas)"),
-    COUNT("lights_dropped", f_atlas, lights_dropped, SB_STAT_MEAN | SB_STAT_MAX, SB_USE_COMPARE,
-          "atlas: lamps lighting the view left without shadows (beyond max_lights, or no room at the smallest tile)"),
-    COUNT("lights_downscaled", f_atlas, lights_downscaled, SB_STAT_MEAN | SB_STAT_MAX, 0,
-          "atlas: lamps whose tiles are smaller than their policy asked for, for want of room"),
-    METRIC("atlas_occupancy", f_atlas_share, offsetof(sb_counters, atlas_occupancy), "share", SB_STAT_MEAN, 0,
-           "atlas: share of the atlas its tiles cover this frame"),
-    COUNT("pages_needed", f_pages, pages_needed, SB_STAT_MEAN, 0,
-          "virtual: pages the frame's visible pixels need (empty: no virtual map)"),
-    COUNT("pages_rendered", f_pages, pages_rendered, SB_STAT_MEAN, 0,
-          "virtual: needed pages drawn this frame (not in the pool, or cache=off)"),
-    COUNT("pages_cached", f_pages, pages_cached, SB_STAT_MEAN, SB_LOWER_WORSE,
-          "virtual: needed pages kept from an earlier frame (the same level, place and light)"),
-    COUNT("pool_overflow", f_pages, pool_overflow, SB_STAT_MEAN | SB_STAT_MAX, 0,
-          "virtual: needed pages the pool had no slot for, given up (their pixels use the page one level coarser)"),
-    COUNT("pages_stand_in", f_pages, pages_stand_in, SB_STAT_MEAN, 0,
-          "virtual: coarser pages drawn or kept in place of pages given up (counted in pages_rendered and "
-          "pages_cached: rendered + cached - stand_in + pool_overflow = needed)"),
     COUNT("warp_fallbacks", f_maps, warp_fallbacks, SB_STAT_MEAN, 0, "warped maps that fell back to the uniform fit"),
     COUNT("casters_moved", f_motion, casters_moved, SB_STAT_MEAN, 0,
           "draws whose box changed since the technique's previous frame (empty: nothing in the scene moves)"),
-    COUNT("cascades_invalidated", f_motion_maps, cascades_invalidated, SB_STAT_MEAN, 0,
-          "cache=on: kept shadow maps drawn again because a moved caster's box, before or after the move, overlaps "
-          "their light volume (empty: nothing moves, or no maps)"),
-    COUNT("pages_invalidated", f_motion_pages, pages_invalidated, SB_STAT_MEAN, 0,
-          "virtual cache=on: kept pages dropped because a moved caster's light-space box, before or after the "
-          "move, overlaps them (empty: nothing moves, or no virtual map)"),
-    COUNT("pages_dynamic", f_motion_pages, pages_dynamic, SB_STAT_MEAN, 0,
-          "virtual split=on: pages a moving caster's light-space box overlaps, copied from the kept still page with the "
-          "moving casters drawn over the copy this frame (0 without split)"),
+    /* here: every technique's own counters, in the order of the technique list (sb_frame_cols) */
+    {.name = NULL, .get = f_own},
     STAGE_MS(SB_STAGE_ZPASS, 0, "camera depth pre-pass"),
     STAGE_MS(SB_STAGE_MINMAX, 0, "depth reduction"),
     STAGE_MS(SB_STAGE_CASCADE, ALL_USES | SB_USE_NIGHT, "all shadow-map rendering"),
     STAGE_MS(SB_STAGE_FINAL, ALL_USES | SB_USE_NIGHT, "camera pass with the shadow lookup"),
     STAGE_MS(SB_STAGE_VOLUMES, 0, "stencil shadow volumes (and planar casters)"),
     STAGE_MS(SB_STAGE_RAYS, 0, "CPU ray casting (raycast)"),
+    STAGE_MS(SB_STAGE_CLUSTERS, 0,
+             "lamps found by cluster: the light grid (each screen tile and depth slice's lamps) built on the CPU and "
+             "sent (atlas grid=on)"),
     {.name = "gpu_ms", .get = f_gpu_ms, .unit = "ms", .stats = SB_STATS_TIMING | SB_STAT_MIN, .role = SB_ROLE_TIME,
      .flags = ALL_USES | SB_USE_PAIR | SB_USE_NIGHT, .doc = "sum of the stage times"},
     METRIC("anim_ms", f_anim_ms, 0, "ms", SB_STATS_TIMING, 0,
@@ -246,18 +220,48 @@ static const sb_frame_col frame_cols[] = {
 };
 
 /* The frame table with the stage rows named from sb_stage_names ("<stage>_ms"), made once. */
+/* A technique with more counters of its own than a frame holds (SB_MAX_OWN_COUNTERS), or more in all than the
+ * table: the build's own mistake, found by any test that writes a frame. */
+static void too_many(const char *tech) {
+    fprintf(stderr, "shadowbench: %s: more counters of its own than SB_MAX_OWN_COUNTERS (%d) or the column table "
+            "holds (%d in all)\n", tech, SB_MAX_OWN_COUNTERS, SB_MAX_OWN_COLS);
+    abort();
+}
+
 const sb_frame_col *sb_frame_cols(int *count) {
-    static sb_frame_col cols[SB_COUNT(frame_cols)];
+    static sb_frame_col cols[SB_COUNT(frame_cols) + SB_MAX_OWN_COLS];
     static char stage_names[SB_STAGE_COUNT][32];
-    if (!cols[0].name)
+    static int n;
+    if (!n)
         for (size_t k = 0; k < SB_COUNT(frame_cols); k++) {
-            cols[k] = frame_cols[k];
-            if (cols[k].flags & SB_COL_STAGE_TIME) {
-                snprintf(stage_names[cols[k].arg], sizeof stage_names[0], "%s_ms", sb_stage_names[cols[k].arg]);
-                cols[k].name = stage_names[cols[k].arg];
+            if (frame_cols[k].get == f_own) {   /* every technique's own counters, each name once */
+                int owned = 0;
+                for (int t = 0; t < sb_technique_count(); t++) {
+                    const sb_technique *tech = sb_technique_at(t);
+                    if (tech->counter_count > SB_MAX_OWN_COUNTERS) too_many(tech->name);
+                    for (int c = 0; c < tech->counter_count; c++) {
+                        const sb_counter_def *d = &tech->counters[c];
+                        bool seen = false;
+                        for (int o = 0; o < owned && !seen; o++) seen = !strcmp(own_cols[o]->name, d->name);
+                        for (int o = 0; o < n && !seen; o++) seen = !strcmp(cols[o].name, d->name);
+                        if (seen) continue;
+                        if (owned == SB_MAX_OWN_COLS) too_many(tech->name);
+                        own_cols[owned] = d;
+                        cols[n++] = (sb_frame_col){.name = d->name, .get = f_own, .arg = owned, .unit = d->unit,
+                                                   .stats = d->stats, .flags = d->flags, .doc = d->doc};
+                        owned++;
+                    }
+                }
+                continue;
             }
+            cols[n] = frame_cols[k];
+            if (cols[n].flags & SB_COL_STAGE_TIME) {
+                snprintf(stage_names[cols[n].arg], sizeof stage_names[0], "%s_ms", sb_stage_names[cols[n].arg]);
+                cols[n].name = stage_names[cols[n].arg];
+            }
+            n++;
         }
-    *count = (int)SB_COUNT(frame_cols);
+    *count = n;
     return cols;
 }
 
@@ -440,7 +444,7 @@ static const sb_run_col run_cols[] = {
 };
 
 const sb_run_col *sb_run_cols(int *count) {
-    static sb_run_col cols[SB_COUNT(run_cols) + SB_COUNT(frame_cols)];
+    static sb_run_col cols[SB_COUNT(run_cols) + SB_COUNT(frame_cols) + SB_MAX_OWN_COLS];
     static int n;
     int nf;
     const sb_frame_col *fcols = sb_frame_cols(&nf);

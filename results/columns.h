@@ -94,27 +94,9 @@ typedef struct sb_run_row {
     unsigned stages;
 } sb_run_row;
 
-/* Statistics a series is summarised by (sb_stats). */
-enum {
-    SB_STAT_MEAN = 1u << 0, SB_STAT_MEDIAN = 1u << 1, SB_STAT_P95 = 1u << 2, SB_STAT_P99 = 1u << 3,
-    SB_STAT_STD = 1u << 4, SB_STAT_CI95 = 1u << 5, SB_STAT_MIN = 1u << 6, SB_STAT_MAX = 1u << 7,
-    SB_STATS_TIMING = 0x3f,
-};
-#define SB_STAT_COUNT 8
+/* The statistics (SB_STAT_*) and a column's flags (SB_COL_STAGE_TIME, SB_USE_*, SB_LOWER_WORSE) are stage.h's: a
+ * technique's own counters (sb_counter_def) declare theirs with them. */
 extern const char *const sb_stat_names[SB_STAT_COUNT];   /* "mean", "median", ... in bit order */
-
-/* A column's flags. The SB_USE_ bits make a column a default metric of a
- * command: which ones `compare`, `compare --pair`, `history regressions` and
- * the report's trend charts use when no --metric says. */
-enum {
-    SB_COL_STAGE_TIME = 1u << 0,    /* a per-frame stage time (<stage>_ms): plots stack these */
-    SB_USE_COMPARE = 1u << 1,       /* compare BASE NEW */
-    SB_USE_PAIR = 1u << 2,          /* compare --pair, the report's pair tables */
-    SB_USE_HISTORY = 1u << 3,       /* history regressions */
-    SB_USE_REPORT = 1u << 4,        /* the report's trend charts */
-    SB_LOWER_WORSE = 1u << 5,       /* a metric that gets worse as it falls (default: as it rises) */
-    SB_USE_NIGHT = 1u << 6,         /* the report's night table (a series: its centre statistic) */
-};
 
 /* What a column stands for, where a consumer needs one figure of a kind
  * (tune's time and error, the report's fronts and memory budget): the one

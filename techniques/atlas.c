@@ -27,6 +27,7 @@
 #include <string.h>
 
 #include "lamp.h"
+#include "lightgrid.h"
 #include "render.h"
 #include "shaders.h"
 
@@ -34,7 +35,7 @@
 #define LREC 36          /* texels of a lamp's record (vis_atlas.glsl's SB_LREC) */
 
 typedef struct atlas_desc {
-    int size, res, kind, max_lights, policy, cache, filter;
+    int size, res, kind, max_lights, policy, cache, filter, grid;
     double bias, slope, normal;
 } atlas_desc;
 
@@ -57,9 +58,30 @@ static const sb_param_def atlas_params[] = {
                "keep a lamp's tiles while its place in the atlas holds, it has not moved and no moved caster reaches "
                "into its range", .role = SB_PARAM_CACHE),
     SB_PARAM_E(atlas_desc, filter, hw, "none|hw", "shadow filter", .tune = "none,hw"),
+    SB_PARAM_E_LATE(atlas_desc, grid, on, "off|on",
+                    "find each pixel's lamps by cluster (a light list per screen tile and depth slice, built each "
+                    "frame: the clusters stage) instead of looping over every lamp in view"),
     SB_PARAM_FA(atlas_desc, bias, 1.5, 0, 100, "constant bias, in texels of the tile at the point's distance"),
     SB_PARAM_FA(atlas_desc, slope, 2, 0, 100, "slope-scaled bias (glPolygonOffset factor)"),
     SB_PARAM_FA(atlas_desc, normal, 1, 0, 100, "normal offset, in texels"),
+};
+
+/* Its counters: what the lamps in view got this frame. */
+enum { C_SHADOWED, C_DROPPED, C_DOWNSCALED, C_OCCUPANCY, C_GRID, C_COUNT };
+static const sb_counter_def atlas_counters[C_COUNT] = {
+    [C_SHADOWED] = {.name = "lights_shadowed", .unit = "count", .stats = SB_STAT_MEAN,
+                    .doc = "atlas: lamps with tiles this frame (empty: no atlas)"},
+    [C_DROPPED] = {.name = "lights_dropped", .unit = "count", .stats = SB_STAT_MEAN | SB_STAT_MAX,
+                   .flags = SB_USE_COMPARE,
+                   .doc = "atlas: lamps lighting the view left without shadows (beyond max_lights, or no room at the "
+                          "smallest tile)"},
+    [C_DOWNSCALED] = {.name = "lights_downscaled", .unit = "count", .stats = SB_STAT_MEAN | SB_STAT_MAX,
+                      .doc = "atlas: lamps whose tiles are smaller than their policy asked for, for want of room"},
+    [C_OCCUPANCY] = {.name = "atlas_occupancy", .unit = "share", .stats = SB_STAT_MEAN,
+                     .doc = "atlas: share of the atlas its tiles cover this frame"},
+    [C_GRID] = {.name = "grid_items", .unit = "count", .stats = SB_STAT_MEAN,
+                .doc = "atlas grid=on: lamp-cluster pairs the frame's light grid lists (a cluster: a 32-pixel tile "
+                       "and a depth slice; empty with grid=off)"},
 };
 
 /* One lamp this run shadows: where it is, and its tiles now and when last drawn. */
@@ -93,6 +115,9 @@ typedef struct atlas_state {
     sb_final_prog fp;
     GLint u_atlas, u_lights, u_count, u_bias, u_normal;
     float *records;             /* count * LREC * 4 floats */
+    sb_lightgrid grid;          /* grid=on: the lamps of each cluster, indices into this frame's records */
+    sb_v3 *shown_pos;           /* this frame's records' lamps and ranges (the grid's input) */
+    double *shown_range;
 } atlas_state;
 
 static bool pow2(int v) { return v > 0 && (v & (v - 1)) == 0; }
@@ -158,6 +183,9 @@ static bool atlas_create(void *state, const sb_run_ctx *rc, const void *desc, sb
     s->lamps = sb_xcalloc((size_t)s->count, sizeof *s->lamps);
     s->order = sb_xcalloc((size_t)s->count, sizeof *s->order);
     s->records = sb_xcalloc((size_t)s->count * LREC * 4, sizeof(float));
+    s->shown_pos = sb_xcalloc((size_t)s->count, sizeof *s->shown_pos);
+    s->shown_range = sb_xcalloc((size_t)s->count, sizeof *s->shown_range);
+    if (s->d->grid) sb_lightgrid_init(&s->grid, g->width, g->height);
     for (int i = 0; i < s->count; i++) place_lamp(&s->lamps[i], g, rc->lights->idx[i], s->d->kind);
     if (!make_atlas(s, &s->tex, &s->fbo)) return sb_fail(err, "atlas:size=%d: the atlas's framebuffer is incomplete", s->d->size);
     glGenBuffers(1, &s->buf);
@@ -182,8 +210,11 @@ static bool atlas_create(void *state, const sb_run_ctx *rc, const void *desc, sb
     for (int i = 0; i < s->count; i++) spots |= s->lamps[i].faces == 1;
     char defines[160];
     snprintf(defines, sizeof defines, "#define SB_LIGHT_LOOP\n#define SB_FILTER %d\n#define SB_ATLAS_DPSM %d\n"
-             "#define SB_ATLAS_SPOTS %d\n", s->d->filter, s->d->kind == KIND_DPSM, spots);
-    if (!sb_final_prog_create(&s->fp, g, "atlas", sb_shader_vis_atlas_glsl, defines, err)) return false;
+             "#define SB_ATLAS_SPOTS %d\n%s", s->d->filter, s->d->kind == KIND_DPSM, spots,
+             s->d->grid ? "#define SB_LIGHT_GRID\n" : "");
+    const char *parts[] = {sb_shader_lightgrid_glsl, sb_shader_vis_atlas_glsl};
+    if (!sb_final_prog_create_parts(&s->fp, g, "atlas", parts + !s->d->grid, 2 - !s->d->grid, defines, err))
+        return false;
     const char *names[] = {"u_atlas", "u_lights", "u_count", "u_bias", "u_normal"};
     GLint *locs[] = {&s->u_atlas, &s->u_lights, &s->u_count, &s->u_bias, &s->u_normal};
     for (size_t i = 0; i < SB_COUNT(names); i++) *locs[i] = glGetUniformLocation(s->fp.prog, names[i]);
@@ -283,11 +314,10 @@ static int allocate(atlas_state *s, sb_frame *f) {
         z += (uint64_t)cells(l, l->tile);
     }
     free(place);
-    f->counters.atlas = true;
-    f->counters.lights_shadowed = n;
-    f->counters.lights_dropped = in_view - n;
-    f->counters.lights_downscaled = downscaled;
-    f->counters.atlas_occupancy = (double)z / capacity;
+    sb_count(&f->counters, &atlas_counters[C_SHADOWED], n);
+    sb_count(&f->counters, &atlas_counters[C_DROPPED], in_view - n);
+    sb_count(&f->counters, &atlas_counters[C_DOWNSCALED], downscaled);
+    sb_count(&f->counters, &atlas_counters[C_OCCUPANCY], (double)z / capacity);
     return n;
 }
 
@@ -450,11 +480,21 @@ static void atlas_frame(void *state, sb_frame *f) {
     /* the records of the lamps whose range reaches the view (those without tiles lit) */
     int shown = 0;
     for (int i = 0; i < s->count; i++)
-        if ((only < 0 || i == only) && s->lamps[i].importance > 0)
+        if ((only < 0 || i == only) && s->lamps[i].importance > 0) {
+            s->shown_pos[shown] = s->lamps[i].pos, s->shown_range[shown] = s->lamps[i].range;
             write_record(s, &s->lamps[i], s->records + (size_t)shown++ * LREC * 4);
+        }
     glBindBuffer(GL_TEXTURE_BUFFER, s->buf);
     if (shown) glBufferSubData(GL_TEXTURE_BUFFER, 0, (GLsizeiptr)shown * LREC * 16, s->records);
     sb_stage_end(f, SB_STAGE_CASCADE);
+
+    /* grid=on: each cluster's lamps among those records, as the camera pass will see them */
+    if (d->grid) {
+        sb_stage_begin(f, SB_STAGE_CLUSTERS);
+        uint32_t items = sb_lightgrid_build(&s->grid, f, s->shown_pos, s->shown_range, shown);
+        sb_count(&f->counters, &atlas_counters[C_GRID], items);
+        sb_stage_end(f, SB_STAGE_CLUSTERS);
+    }
 
     sb_stage_begin(f, SB_STAGE_FINAL);
     if (only >= 0) sb_frame_shade_light_of(f, s->lamps[only].light);   /* what the evaluation scores */
@@ -466,6 +506,7 @@ static void atlas_frame(void *state, sb_frame *f) {
     glBindTexture(GL_TEXTURE_BUFFER, s->buf_tex);
     glUniform1i(s->u_lights, 1);
     glActiveTexture(GL_TEXTURE0);
+    if (d->grid) sb_lightgrid_bind(&s->grid, s->fp.prog, 2);
     glUniform1i(s->u_count, shown);
     glUniform1f(s->u_bias, (float)d->bias);
     glUniform1f(s->u_normal, (float)d->normal);
@@ -484,6 +525,9 @@ static void atlas_destroy(void *state) {
     if (s->fresh_fbo) glDeleteFramebuffers(1, &s->fresh_fbo);
     if (s->fresh_tex) glDeleteTextures(1, &s->fresh_tex);
     if (s->buf_tex) glDeleteTextures(1, &s->buf_tex);
+    sb_lightgrid_free(&s->grid);
+    free(s->shown_pos);
+    free(s->shown_range);
     if (s->buf) glDeleteBuffers(1, &s->buf);
     free(s->lamps);
     free(s->order);
@@ -494,12 +538,13 @@ static void atlas_destroy(void *state) {
 static void atlas_warn(const sb_counters *frames, int n, char *out, size_t len) {
     int short_frames = 0, dropped = 0, down = 0, lamps = 0;
     for (int i = 0; i < n; i++) {
-        const sb_counters *k = &frames[i];
-        if (!k->atlas || !(k->lights_dropped || k->lights_downscaled)) continue;
+        double c[C_COUNT] = {0};
+        for (int k = 0; k < C_COUNT; k++) sb_counted(&frames[i], &atlas_counters[k], &c[k]);
+        if (!(c[C_DROPPED] || c[C_DOWNSCALED])) continue;
         short_frames++;
-        if (k->lights_dropped > dropped) dropped = k->lights_dropped;
-        if (k->lights_downscaled > down) down = k->lights_downscaled;
-        int inview = k->lights_shadowed + k->lights_dropped;
+        if (c[C_DROPPED] > dropped) dropped = (int)c[C_DROPPED];
+        if (c[C_DOWNSCALED] > down) down = (int)c[C_DOWNSCALED];
+        int inview = (int)(c[C_SHADOWED] + c[C_DROPPED]);
         if (inview > lamps) lamps = inview;
     }
     if (!short_frames) return;
@@ -518,7 +563,7 @@ const sb_technique sb_technique_atlas = {
     .params = atlas_params,
     .param_count = (int)SB_COUNT(atlas_params),
     .desc_size = sizeof(atlas_desc),
-    .stages = SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_FINAL),
+    .stages = SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_CLUSTERS) | SB_STAGE_BIT(SB_STAGE_FINAL),
     .needs = SB_NEEDS_POINT_LIGHT,
     .lights = SB_LIGHTS_EVERY_LAMP,
     .state_size = sizeof(atlas_state),
@@ -527,6 +572,8 @@ const sb_technique sb_technique_atlas = {
     .shadow_bytes = atlas_shadow_bytes,
     .create = atlas_create,
     .frame = atlas_frame,
+    .counters = atlas_counters,
+    .counter_count = C_COUNT,
     .warn = atlas_warn,
     .destroy = atlas_destroy,
 };

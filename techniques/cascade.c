@@ -16,6 +16,12 @@ void sb_split_distances(double lambda, int m, double n, double f, double *out) {
     out[m] = f;
 }
 
+const sb_counter_def sb_csm_counters[SB_CSM_COUNTER_COUNT] = {
+    {.name = "cascades_invalidated", .unit = "count", .stats = SB_STAT_MEAN, .moving = true,
+     .doc = "cache=on: kept shadow maps drawn again because a moved caster's box, before or after the move, overlaps "
+            "their light volume (empty: nothing moves, or no cascades)"},
+};
+
 bool sb_csm_check(const sb_csm_desc *d, const char *name, sb_err *err) {
     if (d->warp && d->stable)
         return sb_fail(err, "%sstable=on cannot be combined with a perspective warp (a warped map follows the camera)",
@@ -371,7 +377,7 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
         memcpy(c->cached_vp[k], c->cpu.light_vp[k], sizeof c->cached_vp[k]);
         c->cached[k] = d->cache && !f->bypass_cache;
     }
-    f->counters.cascades_invalidated = invalidated;
+    sb_count(&f->counters, &sb_csm_counters[0], invalidated);
     /* cleared: every layer at once (fbo_all), or with the cache each layer drawn again */
     for (int k = 0; k < (d->cache ? c->count : 1); k++) {
         if (d->cache && !(todo & (1u << k))) continue;

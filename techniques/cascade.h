@@ -181,6 +181,12 @@ typedef struct sb_csm_state {
     const void *desc;           /* the instance's parameter struct (alive until destroy) */
 } sb_csm_state;
 
+/* The cascade machinery's own counters (sb_technique.counters of every technique drawing through sb_csm_render):
+ * cascades_invalidated. SB_CSM_COUNTERS names them in a technique's descriptor. */
+#define SB_CSM_COUNTER_COUNT 1
+extern const sb_counter_def sb_csm_counters[SB_CSM_COUNTER_COUNT];
+#define SB_CSM_COUNTERS .counters = sb_csm_counters, .counter_count = SB_CSM_COUNTER_COUNT
+
 /* A cascade technique: name, summary, parameter table, parameter struct
  * type, its defaults, and the split scheme; then more of its fields (.stress = ...). */
 #define SB_CSM_TECHNIQUE(NAME, SUMMARY, PARAMS, DESC_T, DEFAULTS, SPLITS, ...)                                 \
@@ -191,6 +197,6 @@ typedef struct sb_csm_state {
         .state_size = sizeof(sb_csm_state), .check = sb_csm_technique_check,                                   \
         .supported = sb_csm_technique_supported, .shadow_bytes = sb_csm_technique_shadow_bytes,                \
         .create = sb_csm_technique_create,                                                                     \
-        .frame = sb_csm_technique_frame, .destroy = sb_csm_technique_destroy,                                  \
+        .frame = sb_csm_technique_frame, .destroy = sb_csm_technique_destroy, SB_CSM_COUNTERS,                 \
         .impl = &(const sb_csm_kind){SPLITS}, __VA_ARGS__                                                      \
     }

@@ -1,6 +1,8 @@
 /* lamp.c - the point-light techniques' shared machinery (lamp.h). */
 #include "lamp.h"
 
+#include "lightgrid.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -153,8 +155,28 @@ static void shade(sb_lamp_state *l, sb_frame *f, bool first) {
     glUniform1f(l->u_bias, (float)l->d->bias);
     glUniform1f(l->u_normal, (float)l->d->normal);
     if (l->kind->lookup) l->kind->lookup(l);
-    if (first) sb_final_pass(f, &l->fp, false);
-    else sb_final_pass_add(f, &l->fp);
+    if (first) {
+        sb_final_pass(f, &l->fp, false);
+        return;
+    }
+    /* a further lamp adds nothing beyond its range: a timed frame's pass is cut to the pixels its footprint
+       covers (lightgrid.h) and its draws to the box of its range, so a pixel pays for the lamps that reach it (an
+       evaluation pass writes its targets whole) */
+    sb_lamp_footprint fp = {0};
+    double range = l->source ? l->source->range : 0;
+    bool cut = !f->eval && range > 0;
+    if (cut && !sb_lamp_footprint_of(f, l->lamp, range, &fp)) return;   /* out of view: nothing to add */
+    if (cut) {
+        glEnable(GL_SCISSOR_TEST);
+        glScissor(fp.x0, fp.y0, fp.x1 - fp.x0, fp.y1 - fp.y0);
+        sb_cube_planes(l->lamp, range, f->pass_box);
+        f->pass_box_count = 6;
+    }
+    sb_final_pass_add(f, &l->fp);
+    if (cut) {
+        glDisable(GL_SCISSOR_TEST);
+        f->pass_box_count = 0;
+    }
 }
 
 void sb_lamp_technique_frame(void *state, sb_frame *f) {

@@ -114,5 +114,6 @@ const sb_technique sb_technique_psm = {
     .shadow_bytes = psm_shadow_bytes,
     .create = psm_create,
     .frame = psm_frame,
+    SB_CSM_COUNTERS,
     .destroy = sb_csm_technique_destroy,   /* the state starts with its sb_csm */
 };

@@ -762,8 +762,10 @@ static void draw_scene(sb_frame *f, const sb_final_prog *fp, GLenum depth_func, 
     const sb_gpu *g = f->gpu;
     final_targets(f, depth_func, depth_write);
     glBindVertexArray(g->vao);
-    const double(*planes)[4] = (const double(*)[4])(f->look ? f->look->frustum : f->frustum);
-    uint32_t n = sb_scene_collect(g->scene, planes, 6, f->scratch);
+    double planes[12][4];
+    memcpy(planes, f->look ? f->look->frustum : f->frustum, sizeof(double[6][4]));
+    memcpy(planes + 6, f->pass_box, sizeof f->pass_box);
+    uint32_t n = sb_scene_collect(g->scene, (const double(*)[4])planes, 6 + f->pass_box_count, f->scratch);
     bool culling = true;
     float depth_view[16];
     sb_m4_to_float(f->view, depth_view);

@@ -111,6 +111,9 @@ typedef struct sb_frame {
     double shade_range;                 /* the shaded lamp's range, beyond which it lights nothing (0: none) */
     double shade_spot[4];               /* a shaded spot light: the way it shines and 1 - cos of its cone (0: none) */
     bool shade_add;                     /* --lights: a camera pass adding one more light to the colour (no ambient) */
+    int pass_box_count;                 /* 6: the camera pass's draws also culled to pass_box (an added lamp's range,
+                                           beyond which it adds nothing); 0: none */
+    double pass_box[6][4];
     uint32_t *scratch;                  /* draw_count entries, for culling results */
     uint32_t *cmds;                     /* --submit indirect: the pass's pending commands, 5 words each (at most
                                            draw_count: a pass issues each draw once between flushes) */

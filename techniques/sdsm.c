@@ -386,5 +386,6 @@ const sb_technique sb_technique_sdsm = {
     .create = sdsm_create,
     .frame = sdsm_frame,
     .collect = sdsm_collect,
+    SB_CSM_COUNTERS,
     .destroy = sdsm_destroy,
 };

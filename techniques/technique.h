@@ -14,7 +14,8 @@
  *              the timed frames.
  * Whatever it does, its final pass writes one screen-space visibility target
  * (1 lit ... 0 shadowed) beside colour; the error metrics and images read
- * that. To add one: write techniques/NAME.c exporting `const sb_technique
+ * that. Counters and warnings of its own are rows and a hook in its file
+ * (counters, warn): nothing else knows them by name. To add one: write techniques/NAME.c exporting `const sb_technique
  * sb_technique_NAME` and add NAME to the list in techniques/meson.build. */
 #pragma once
 #include <stdbool.h>
@@ -146,6 +147,11 @@ typedef struct sb_technique {
     void (*unload)(void *data);
     bool (*create)(void *state, const struct sb_run_ctx *rc, const void *desc, sb_err *err);
     void (*frame)(void *state, struct sb_frame *f);
+    /* (optional) its own counters, at most SB_MAX_OWN_COUNTERS: a frame column each, empty in every other
+       technique's rows, summarised as each row says (sb_counter_def, stage.h); its frame counts them with
+       sb_count(&f->counters, &ROW, v) and its warn hook reads them back with sb_counted */
+    const sb_counter_def *counters;
+    int counter_count;
     /* fills counters known only after the run (read back from the GPU once,
        outside the timed frames); seq is the frame's run sequence index */
     void (*collect)(void *state, int seq, sb_counters *out);

@@ -58,6 +58,30 @@ static const sb_param_def virtual_params[] = {
                     "dynamic cache)"),
 };
 
+/* Its counters (columns of their own: a partition of the pages needed, drawn or kept for themselves or given up;
+ * the stand-ins drawn or kept in their place counted apart, inside rendered and cached). */
+enum { C_NEEDED, C_RENDERED, C_CACHED, C_OVERFLOW, C_STAND_IN, C_INVALIDATED, C_DYNAMIC, C_COUNT };
+static const sb_counter_def virtual_counters[C_COUNT] = {
+    [C_NEEDED] = {.name = "pages_needed", .unit = "count", .stats = SB_STAT_MEAN,
+                  .doc = "virtual: pages the frame's visible pixels need (empty: no virtual map)"},
+    [C_RENDERED] = {.name = "pages_rendered", .unit = "count", .stats = SB_STAT_MEAN,
+                    .doc = "virtual: needed pages drawn this frame (not in the pool, or cache=off)"},
+    [C_CACHED] = {.name = "pages_cached", .unit = "count", .stats = SB_STAT_MEAN, .flags = SB_LOWER_WORSE,
+                  .doc = "virtual: needed pages kept from an earlier frame (the same level, place and light)"},
+    [C_OVERFLOW] = {.name = "pool_overflow", .unit = "count", .stats = SB_STAT_MEAN | SB_STAT_MAX,
+                    .doc = "virtual: needed pages the pool had no slot for, given up (their pixels use the page one "
+                           "level coarser)"},
+    [C_STAND_IN] = {.name = "pages_stand_in", .unit = "count", .stats = SB_STAT_MEAN,
+                    .doc = "virtual: coarser pages drawn or kept in place of pages given up (counted in "
+                           "pages_rendered and pages_cached: rendered + cached - stand_in + pool_overflow = needed)"},
+    [C_INVALIDATED] = {.name = "pages_invalidated", .unit = "count", .stats = SB_STAT_MEAN, .moving = true,
+                       .doc = "virtual cache=on: kept pages dropped because a moved caster's light-space box, before "
+                              "or after the move, overlaps them (empty: nothing moves, or no virtual map)"},
+    [C_DYNAMIC] = {.name = "pages_dynamic", .unit = "count", .stats = SB_STAT_MEAN, .moving = true,
+                   .doc = "virtual split=on: pages a moving caster's light-space box overlaps, copied from the kept "
+                          "still page with the moving casters drawn over the copy this frame (0 without split)"},
+};
+
 /* The pool's layout, from the parameters alone (the GPU-memory check, shadow_mb and create share it). */
 typedef struct pool_layout {
     int pages;                  /* per side of a level: res / page */
@@ -656,7 +680,8 @@ static void virtual_frame(void *state, sb_frame *f) {
     /* split=on keeps pages of the still casters: a moving one never invalidates them, it is drawn over copies */
     const bool split = s->d.split && !f->bypass_cache && sb_scene_moves(g->scene);
     if (!s->d.cache) invalidate(s);
-    else if (f->moved_count && !split && !f->bypass_cache) f->counters.pages_invalidated = invalidate_moved(s, f);
+    else if (f->moved_count && !split && !f->bypass_cache)
+        sb_count(&f->counters, &virtual_counters[C_INVALIDATED], invalidate_moved(s, f));
     place_windows(s, f);
     mark_pages(s, f);
     int needed = 0, P = s->p.pages;
@@ -671,17 +696,12 @@ static void virtual_frame(void *state, sb_frame *f) {
     int held = needed, given_up = coarsen_to_fit(s, &held);
     pool_tally t = {0};
     update_pool(s, f, held, split ? CASTERS_STILL : CASTERS_ALL, &t);
-    if (split) f->counters.pages_dynamic = overlay_moving(s, f, held);
+    if (split) sb_count(&f->counters, &virtual_counters[C_DYNAMIC], overlay_moving(s, f, held));
     if (f->bypass_cache) redraw_in_place(s, f, held);
     upload_table(s);
-    /* a partition of the pages needed: drawn or kept for themselves, or given up (pool_overflow); the stand-ins
-       drawn or kept in their place are counted apart, inside pages_rendered and pages_cached */
-    f->counters.paged = true;
-    f->counters.pages_needed = needed;
-    f->counters.pages_rendered = t.drawn;
-    f->counters.pages_cached = held - t.drawn - t.left_out;
-    f->counters.pages_stand_in = t.stand_ins;
-    f->counters.pool_overflow = given_up + t.left_out_own;
+    const double counts[] = {[C_NEEDED] = needed, [C_RENDERED] = t.drawn, [C_CACHED] = held - t.drawn - t.left_out,
+                             [C_OVERFLOW] = given_up + t.left_out_own, [C_STAND_IN] = t.stand_ins};
+    for (int k = C_NEEDED; k <= C_STAND_IN; k++) sb_count(&f->counters, &virtual_counters[k], counts[k]);
     sb_stage_end(f, SB_STAGE_CASCADE);
 
     sb_stage_begin(f, SB_STAGE_FINAL);
@@ -734,10 +754,11 @@ static void virtual_destroy(void *state) {
 static void virtual_warn(const sb_counters *frames, int n, char *out, size_t len) {
     int short_frames = 0, worst = 0, need = 0;
     for (int i = 0; i < n; i++) {
-        const sb_counters *k = &frames[i];
-        if (!k->paged || !k->pool_overflow) continue;
+        double over = 0, needed = 0;
+        if (!sb_counted(&frames[i], &virtual_counters[C_OVERFLOW], &over) || !over) continue;
+        sb_counted(&frames[i], &virtual_counters[C_NEEDED], &needed);
         short_frames++;
-        if (k->pool_overflow > worst) worst = k->pool_overflow, need = k->pages_needed;
+        if (over > worst) worst = (int)over, need = (int)needed;
     }
     if (short_frames)
         snprintf(out, len, "pool_overflow: the page pool was short of up to %d of %d needed pages in %d of %d frames "
@@ -759,6 +780,8 @@ const sb_technique sb_technique_virtual = {
     .shadow_bytes = virtual_shadow_bytes,
     .create = virtual_create,
     .frame = virtual_frame,
+    .counters = virtual_counters,
+    .counter_count = C_COUNT,
     .warn = virtual_warn,
     .destroy = virtual_destroy,
 };

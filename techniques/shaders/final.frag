@@ -25,7 +25,14 @@ void main() {
     // every lamp in one pass (the atlas): the technique's GLSL gives sb_light_count(), sb_light_at(i) (xyz the
     // lamp, w its range, 0: none), sb_light_cone(i) and sb_visibility_at(i, p, n). An evaluation pass holds the one lamp it scores.
     float lit = 0.0, vis = 1.0, nl = 0.0;
+#ifdef SB_LIGHT_GRID
+    // the lamps of the pixel's cluster (lightgrid.glsl), in the records' order, not every lamp in view
+    uvec2 cell = sb_grid_cell(v_pos);
+    for (uint j = 0u; j < cell.y; j++) {
+        int i = sb_grid_light(cell.x + j);
+#else
     for (int i = 0; i < sb_light_count(); i++) {
+#endif
         vec4 l = sb_light_at(i);
         vec3 d = l.xyz - v_pos;
         float dist = length(d), ndl = dot(n, d / max(dist, 1e-20));

@@ -214,6 +214,76 @@ static void test_moved_lamp_changes_only_its_pixels(void **st) {
     moved_lamp("raycast");
 }
 
+/* The colour of frame 0 as a timed frame draws it (timed: a further lamp's pass cut to its footprint and range) or
+ * as an evaluation pass shading every light of the set draws it (every pass whole). */
+static void colour_of(sb_session *s, const char *technique, bool timed, unsigned char *rgba) {
+    sb_err err;
+    sb_run_spec *runs = NULL;
+    int n = 0;
+    assert_true(sb_spec_expand(technique, NULL, &runs, &n, &err));
+    sb_instance in;
+    if (!sb_instance_create(&in, s, &runs[0], 1, &err)) fail_msg("%s", err.msg);
+    sb_timer t;
+    sb_timer_init(&t, SB_TIMING_SYNC, 1, 1);
+    sb_timer_frame_begin(&t, 0);
+    sb_frame f;
+    memset(&f, 0, sizeof f);
+    if (timed) sb_render_frame(s, &in, &f, 0, 1, 0, &t);
+    else render_frame_eval(s, &in, &f, 0, 1, 0, &t);
+    sb_gpu_readback(&s->gpu, NULL, NULL, rgba);
+    sb_timer_free(&t);
+    sb_instance_destroy(&in);
+    free(runs);
+}
+
+/* Pixels of two colour images that differ, and by how much at most (8-bit channels). */
+static int differing(const unsigned char *a, const unsigned char *b, int np, int *most) {
+    int n = 0;
+    *most = 0;
+    for (int i = 0; i < np; i++) {
+        int d = 0;
+        for (int c = 0; c < 3; c++) d = abs(a[4 * i + c] - b[4 * i + c]) > d ? abs(a[4 * i + c] - b[4 * i + c]) : d;
+        n += d > 0;
+        *most = d > *most ? d : *most;
+    }
+    return n;
+}
+
+/* Lamps found by cluster change no pixel: on street-lamps with 24 lamps (range 7), the atlas's camera pass with
+ * grid=on (each pixel loops over its cluster's lamps) draws grid=off's image (every lamp in view), and the per-light
+ * cube's timed frame, whose further lamps' passes are cut to their footprints and ranges, draws the image of its
+ * uncut passes. Each cut or grid that missed a lamp where it lights would darken whole patches of pixels. */
+static void test_lamps_by_cluster(void **st) {
+    (void)st;
+    sb_session s;
+    sb_err err;
+    const int w = 320, h = 180, np = w * h;
+    assert_true(test_open(&s, "street-lamps", "street-lamps", w, h, &err));
+    char set[200] = "";
+    for (int i = 0; i < 24; i++) snprintf(set + strlen(set), sizeof set - strlen(set), "%s%d", i ? "," : "", i);
+    assert_true(sb_scene_light_set(&s.scene, set, false, &s.lights, &err));
+    unsigned char *a = malloc(4 * (size_t)np), *b = malloc(4 * (size_t)np);
+    int most = 0, n;
+    colour_of(&s, "atlas:res=128:grid=on", false, a);
+    colour_of(&s, "atlas:res=128:grid=off", false, b);
+    n = differing(a, b, np, &most);
+    print_message("atlas grid=on against grid=off: %d pixels differ, by at most %d\n", n, most);
+    assert_int_equal(n, 0);
+    colour_of(&s, "atlas:res=128:grid=on", true, b);   /* the timed frame draws the grid's image too */
+    n = differing(a, b, np, &most);
+    print_message("atlas grid=on, timed against evaluated: %d pixels differ, by at most %d\n", n, most);
+    assert_true(n <= np / 1000 && most <= 1);
+    colour_of(&s, "cube:res=128", false, a);
+    colour_of(&s, "cube:res=128", true, b);
+    n = differing(a, b, np, &most);
+    print_message("cube, further lamps cut to their footprints against whole: %d pixels differ, by at most %d\n", n,
+                  most);
+    assert_true(n <= np / 1000 && most <= 1);
+    free(a);
+    free(b);
+    sb_session_close(&s);
+}
+
 /* An atlas too small for street-lamps' 64 lamps, or capped below them: the exact counts in the warning, per-frame
  * columns that agree, a finite error; policy=screen beats fixed at the same size (near lamps get the texels). */
 static void test_atlas_under_budget(void **st) {
@@ -501,6 +571,7 @@ int main(void) {
         cmocka_unit_test(test_every_lamp_of_towers_night),
         cmocka_unit_test(test_set_is_its_lights),
         cmocka_unit_test(test_moved_lamp_changes_only_its_pixels),
+        cmocka_unit_test(test_lamps_by_cluster),
         cmocka_unit_test(test_atlas_under_budget),
         cmocka_unit_test(test_atlas_cache_still),
         cmocka_unit_test(test_atlas_cache_with_movers),

@@ -81,7 +81,7 @@ static void test_every_metric_everywhere(void **st) {
             for (size_t k = 0; k < sizeof still / sizeof *still; k++) motion += !strcmp(m, still[k]);
             /* the figures of several lamps and of the atlas: none on plane-box's one sun (test_lights has them) */
             const char *lamps[] = {"lights_px", "lights_shadowed", "lights_dropped", "lights_downscaled",
-                                   "atlas_occupancy"};
+                                   "atlas_occupancy", "grid_items", "clusters_ms"};
             for (size_t k = 0; k < sizeof lamps / sizeof *lamps; k++) many += !strcmp(m, lamps[k]);
         }
         measured += strstr(g_out, want) != NULL;
@@ -90,7 +90,7 @@ static void test_every_metric_everywhere(void **st) {
         assert_int_equal(rc, 0);
     }
     assert_int_equal(motion, 7);
-    assert_int_equal(many, 5);
+    assert_int_equal(many, 7);
     assert_true(measured >= n - 4 - motion - many);   /* llvmpipe has no clock; warp_fallbacks... are 0, which is a row */
     /* a name that is a column but not a number is no metric */
     assert_int_equal(run_logged(g_out, sizeof g_out, "%s compare %s %s --metric renderer", test_binary(), g_dir, g_dir),

@@ -104,6 +104,15 @@ static void test_moving_camera_draws_fewer_than_it_needs(void **st) {
 }
 
 /* Through the API: the same frame twice (still), under a new sun (every page again), and again (none). */
+
+/* A frame's own counter of its technique by name (virtual declares its page counters in its own file); fails the
+ * test where the frame's technique does not declare it. */
+static long own(const sb_counters *c, const char *name) {
+    for (int k = 0; k < c->own_count; k++)
+        if (!strcmp(c->own_defs[k].name, name)) return lround(c->own[k]);
+    fail_msg("the frame holds no counter %s", name);
+    return 0;
+}
 static void test_moved_sun_draws_every_page(void **st) {
     (void)st;
     sb_session s;
@@ -131,19 +140,18 @@ static void test_moved_sun_draws_every_page(void **st) {
         if (out[k]) sb_gpu_readback(&s.gpu, NULL, out[k], NULL);
         sb_timer_free(&t);
         c[k] = f.counters;
-        print_message("frame %d: needed %d, rendered %d, cached %d\n", k, c[k].pages_needed, c[k].pages_rendered,
-                      c[k].pages_cached);
-        assert_true(c[k].paged);
-        assert_int_equal(c[k].pool_overflow, 0);
+        print_message("frame %d: needed %ld, rendered %ld, cached %ld\n", k, own(&c[k], "pages_needed"),
+                      own(&c[k], "pages_rendered"), own(&c[k], "pages_cached"));
+        assert_int_equal(own(&c[k], "pool_overflow"), 0);
     }
-    assert_true(c[0].pages_needed > 0);
-    assert_int_equal(c[0].pages_rendered, c[0].pages_needed);
-    assert_int_equal(c[1].pages_rendered, 0);
-    assert_int_equal(c[1].pages_cached, c[1].pages_needed);
+    assert_true(own(&c[0], "pages_needed") > 0);
+    assert_int_equal(own(&c[0], "pages_rendered"), own(&c[0], "pages_needed"));
+    assert_int_equal(own(&c[1], "pages_rendered"), 0);
+    assert_int_equal(own(&c[1], "pages_cached"), own(&c[1], "pages_needed"));
     assert_memory_equal(v0, v1, npx);                                   /* kept pages: the same shadows, bit for bit */
-    assert_int_equal(c[2].pages_rendered, c[2].pages_needed);           /* a new sun: everything again */
-    assert_int_equal(c[2].pages_cached, 0);
-    assert_int_equal(c[3].pages_rendered, 0);
+    assert_int_equal(own(&c[2], "pages_rendered"), own(&c[2], "pages_needed"));   /* a new sun: everything again */
+    assert_int_equal(own(&c[2], "pages_cached"), 0);
+    assert_int_equal(own(&c[3], "pages_rendered"), 0);
     long moved = 0;
     for (int i = 0; i < npx; i++) moved += abs((int)v0[i] - (int)v2[i]) > 64;
     print_message("%ld of %d pixels changed their shadow with the sun\n", moved, npx);

@@ -12,6 +12,7 @@
 
 #include "csv.h"
 #include "columns.h"
+#include "technique.h"
 #include "support.h"
 
 static void test_quoting(void **st) {
@@ -93,8 +94,122 @@ static void test_columns_documented(void **st) {
     free(gen);
 }
 
+/* The cell of column `name` in a frame row written by the column table (header and row in one buffer). */
+static void frame_cell_of(const sb_frame_rec *rec, const char *name, char *out, size_t len) {
+    sb_csv c = {0};
+    sb_columns_frame_header(&c);
+    sb_stage_times t;
+    memset(&t, 0, sizeof t);
+    sb_columns_frame_row(&c, rec, &t, SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_FINAL));
+    char *row = strchr(c.buf, '\n') + 1;
+    int want = -1, k = 0;
+    for (char *h = c.buf; h < row - 1; k++) {
+        size_t n = strcspn(h, ",\n");
+        if (n == strlen(name) && !strncmp(h, name, n)) want = k;
+        h += n + 1;
+    }
+    assert_true(want >= 0);
+    for (int i = 0; i < want; i++) row = strchr(row, ',') + 1;
+    snprintf(out, len, "%.*s", (int)strcspn(row, ",\n"), row);
+    sb_csv_free(&c);
+}
+
+/* A technique's own counters (sb_technique.counters) are columns because it declares them: each row of each
+ * technique's table is a frame column of its name (once, though techniques share it) with its unit and statistics,
+ * and a series of the summary; a frame of that technique fills it, as the row merges; a frame of another technique,
+ * and a still scene's frame for a row counted only in motion, leave it empty. */
+static void test_own_counters(void **st) {
+    (void)st;
+    int nf, nr, declared = 0;
+    const sb_frame_col *fc = sb_frame_cols(&nf);
+    const sb_run_col *rc = sb_run_cols(&nr);
+    for (int t = 0; t < sb_technique_count(); t++) {
+        const sb_technique *tech = sb_technique_at(t);
+        assert_true(tech->counter_count <= SB_MAX_OWN_COUNTERS);
+        for (int c = 0; c < tech->counter_count; c++, declared++) {
+            const sb_counter_def *d = &tech->counters[c];
+            int found = 0;
+            for (int k = 0; k < nf; k++)
+                if (!strcmp(fc[k].name, d->name)) {
+                    found++;
+                    assert_string_equal(fc[k].unit, d->unit);
+                    assert_int_equal(fc[k].stats, d->stats);
+                    assert_int_equal(fc[k].flags, d->flags);
+                }
+            if (found != 1) print_error("%s's counter %s: %d column(s)\n", tech->name, d->name, found);
+            assert_int_equal(found, 1);
+            bool series = false;
+            for (int k = 0; k < nr; k++) series |= !rc[k].get && !strcmp(rc[k].name, d->name);
+            assert_true(series == (d->stats != 0));
+        }
+    }
+    assert_true(declared >= 11);   /* virtual's seven, the atlas's four, the cascade machinery's (shared) */
+
+    const sb_technique *atlas = sb_technique_find("atlas"), *virt = sb_technique_find("virtual");
+    assert_non_null(atlas);
+    assert_non_null(virt);
+    sb_frame_rec rec;
+    memset(&rec, 0, sizeof rec);
+    rec.counters.own_defs = atlas->counters;
+    rec.counters.own_count = atlas->counter_count;
+    const sb_counter_def *shadowed = NULL, *occupancy = NULL, *dropped = NULL;
+    for (int c = 0; c < atlas->counter_count; c++) {
+        const sb_counter_def *d = &atlas->counters[c];
+        if (!strcmp(d->name, "lights_shadowed")) shadowed = d;
+        if (!strcmp(d->name, "atlas_occupancy")) occupancy = d;
+        if (!strcmp(d->name, "lights_dropped")) dropped = d;
+    }
+    assert_non_null(shadowed);
+    assert_non_null(occupancy);
+    assert_non_null(dropped);
+    sb_count(&rec.counters, shadowed, 3);
+    sb_count(&rec.counters, occupancy, 0.25);
+    sb_count(&rec.counters, &virt->counters[0], 99);   /* not the frame's technique's: not counted */
+    char cell[64];
+    frame_cell_of(&rec, "lights_shadowed", cell, sizeof cell);
+    assert_string_equal(cell, "3");
+    frame_cell_of(&rec, "atlas_occupancy", cell, sizeof cell);
+    assert_float_equal(atof(cell), 0.25, 1e-12);
+    frame_cell_of(&rec, "lights_dropped", cell, sizeof cell);
+    assert_string_equal(cell, "0");
+    frame_cell_of(&rec, virt->counters[0].name, cell, sizeof cell);   /* another technique's column: empty */
+    assert_string_equal(cell, "");
+    double v = 0;
+    assert_false(sb_counted(&rec.counters, &virt->counters[0], &v));
+    assert_true(sb_counted(&rec.counters, shadowed, &v));
+    assert_float_equal(v, 3, 0);
+
+    /* merging: a sum adds a second count, a max keeps the larger */
+    static const sb_counter_def mine[] = {{.name = "a", .unit = "count", .merge = SB_MERGE_SUM},
+                                          {.name = "b", .unit = "count", .merge = SB_MERGE_MAX}};
+    sb_counters k;
+    memset(&k, 0, sizeof k);
+    k.own_defs = mine;
+    k.own_count = 2;
+    sb_count(&k, &mine[0], 2), sb_count(&k, &mine[0], 3), sb_count(&k, &mine[1], 5), sb_count(&k, &mine[1], 4);
+    assert_float_equal(k.own[0], 5, 0);
+    assert_float_equal(k.own[1], 5, 0);
+
+    /* a row counted only in motion (the virtual map's pages_invalidated): empty in a still scene's frame, a figure
+       in a moving one's */
+    const sb_counter_def *inval = NULL;
+    for (int c = 0; c < virt->counter_count; c++)
+        if (virt->counters[c].moving) inval = &virt->counters[c];
+    assert_non_null(inval);
+    memset(&rec, 0, sizeof rec);
+    rec.counters.own_defs = virt->counters;
+    rec.counters.own_count = virt->counter_count;
+    sb_count(&rec.counters, inval, 2);
+    frame_cell_of(&rec, inval->name, cell, sizeof cell);
+    assert_string_equal(cell, "");
+    rec.counters.moving = true;
+    frame_cell_of(&rec, inval->name, cell, sizeof cell);
+    assert_string_equal(cell, "2");
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_columns_documented),cmocka_unit_test(test_quoting), cmocka_unit_test(test_atomic_file)};
+        cmocka_unit_test(test_columns_documented), cmocka_unit_test(test_own_counters), cmocka_unit_test(test_quoting),
+        cmocka_unit_test(test_atomic_file)};
     return cmocka_run_group_tests_name("csv", tests, NULL, NULL);
 }
