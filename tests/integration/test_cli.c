@@ -562,14 +562,15 @@ static void test_reference_background(void **st) {
     (void)st;
     /* timing: enough rays (desert at 960x540, every frame, one thread) that the background is still
        casting while the timed frames render. off, on, off: the run with it against the mean of its
-       neighbours without; up to two tries, as another tenant's load on a shared machine moves either (at 640x360
-       the background ends before a third of the timed frames: never judged) */
+       neighbours without; one try (at 640x360 the background ends before a third of the timed frames: never
+       judged). A second one, where the background had cast too little, judged nothing more on a busy machine: the
+       background runs at idle priority, and a neighbour's load starves it again (seen: 41 s for two skips) */
     const char *tcmd = "(%s run desert desert sm:res=1024 --frames 10 --size 960x540 --error-every 1 --warmup 2 "
                        "--threads 1 --progress --overlap %s --out %s/%s 2>%s/%s.log)";
     enum { N = 10 };
     bool ok = false;
     int overlapped_too_little = 0, judged = 0;
-    for (int attempt = 1; attempt <= 2 && !ok; attempt++) {
+    for (int attempt = 1; attempt <= 1 && !ok; attempt++) {
         double ms[3][N], start[3][N], mean[3], ci[3], during = 0, timed = 0;
         for (int k = 0; k < 3; k++) {
             const bool on = k == 1;
@@ -621,9 +622,7 @@ static void test_reference_background(void **st) {
            The one end-to-end timing check of --overlap: its bound (the overlapped frames 1.5x their neighbours'
            median) is twice the drift a shared machine shows between the runs without (up to a quarter); a
            machine too busy to judge on (the runs without disagree, or the background done before the frames)
-           skips it, saying so: a neighbour's load is no fault of the tool's. A second try only where the
-           background ended too early; a machine too noisy once stays so (a busy neighbour took two more runs'
-           time for the same skip) */
+           skips it, saying so: a neighbour's load is no fault of the tool's */
         if (!quiet) break;
         judged++;
         ok = median < 1.5;
