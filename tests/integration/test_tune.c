@@ -262,7 +262,9 @@ static void test_the_cheapest_that_meets_the_bound(void **st) {
             assert_non_null(strstr(t.verdict, "the only setting measured within --max-err"));
         } else {             /* how much cheaper, and how sure: the runner-up's paired ratio, its CI said */
             assert_true(grid_find(t.other)->err <= bounds[b]);   /* the runner-up within the bound too */
-            assert_non_null(strstr(t.verdict, "(95 % CI "));
+            /* "x cheaper than B (95 % CI ...)" or, a tie, "ties with B (its gpu_ms ...x of this one's, 95 % CI ...)"
+               (the tie's text failed an assertion written for the other's parenthesis: seen in a calm run) */
+            assert_non_null(strstr(t.verdict, "95 % CI "));
             assert_non_null(strstr(t.verdict, "paired passes), both within --max-err"));
             /* clear of a tie, or (a machine whose load moved the passes: the statistic's verdict on live timings
                is the machine's mood, and is tested on numbers in test_stats) a tie broken on memory, which keeps
