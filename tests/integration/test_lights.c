@@ -143,8 +143,10 @@ static void test_set_is_its_lights(void **st) {
     sb_table_free(&set);
 }
 
-/* Renders frame 0 of street-lamps with the technique shadowing lamps 0 and 1: colour, and positions. */
-static void render_two_lamps(sb_session *s, const char *technique, unsigned char *rgba, float *pos, float *aux) {
+/* Renders frame 0 with the technique over the session's lights: its colour as a timed frame draws it (timed: a
+ * further lamp's pass cut to its footprint and range) or as an evaluation pass shading every light of the set
+ * draws it (every pass whole), and then (pos, aux not NULL) the evaluation's positions and normals. */
+static void colour_of(sb_session *s, const char *technique, bool timed, unsigned char *rgba, float *pos, float *aux) {
     sb_err err;
     sb_run_spec *runs = NULL;
     int n = 0;
@@ -156,9 +158,10 @@ static void render_two_lamps(sb_session *s, const char *technique, unsigned char
     sb_timer_frame_begin(&t, 0);
     sb_frame f;
     memset(&f, 0, sizeof f);
-    render_frame_eval(s, &in, &f, 0, 1, 0, &t);   /* every light of the set: the colour a timed frame draws */
+    if (timed) sb_render_frame(s, &in, &f, 0, 1, 0, &t);
+    else render_frame_eval(s, &in, &f, 0, 1, 0, &t);   /* every light of the set: the colour a timed frame draws */
     sb_gpu_readback(&s->gpu, NULL, NULL, rgba);
-    sb_gpu_readback_eval(&s->gpu, pos, aux);
+    if (pos) sb_gpu_readback_eval(&s->gpu, pos, aux);
     sb_timer_free(&t);
     sb_instance_destroy(&in);
     free(runs);
@@ -176,12 +179,12 @@ static void moved_lamp(const char *technique) {
     assert_true(sb_scene_light_set(&s.scene, "0,1", false, &s.lights, &err));
     unsigned char *a = malloc(4 * (size_t)np), *b = malloc(4 * (size_t)np);
     float *pos = malloc(sizeof(float) * 4 * np), *aux = malloc(sizeof(float) * 4 * np);
-    render_two_lamps(&s, technique, a, pos, aux);
+    colour_of(&s, technique, false, a, pos, aux);
     sb_light *lamp1 = (sb_light *)sb_scene_point_light(&s.scene, 1, NULL);
     sb_v3 before = lamp1->position, after = sb_v3_add(before, sb_v3_make(0, 0, 2.5));
     double range = lamp1->range;
     lamp1->position = after;
-    render_two_lamps(&s, technique, b, pos, aux);
+    colour_of(&s, technique, false, b, pos, aux);
     int differ = 0, outside = 0, lit0 = 0, ground = 0;
     sb_v3 lamp0 = sb_scene_point_light(&s.scene, 0, NULL)->position;
     for (int i = 0; i < np; i++) {
@@ -214,28 +217,6 @@ static void test_moved_lamp_changes_only_its_pixels(void **st) {
     moved_lamp("raycast");
 }
 
-/* The colour of frame 0 as a timed frame draws it (timed: a further lamp's pass cut to its footprint and range) or
- * as an evaluation pass shading every light of the set draws it (every pass whole). */
-static void colour_of(sb_session *s, const char *technique, bool timed, unsigned char *rgba) {
-    sb_err err;
-    sb_run_spec *runs = NULL;
-    int n = 0;
-    assert_true(sb_spec_expand(technique, NULL, &runs, &n, &err));
-    sb_instance in;
-    if (!sb_instance_create(&in, s, &runs[0], 1, &err)) fail_msg("%s", err.msg);
-    sb_timer t;
-    sb_timer_init(&t, SB_TIMING_SYNC, 1, 1);
-    sb_timer_frame_begin(&t, 0);
-    sb_frame f;
-    memset(&f, 0, sizeof f);
-    if (timed) sb_render_frame(s, &in, &f, 0, 1, 0, &t);
-    else render_frame_eval(s, &in, &f, 0, 1, 0, &t);
-    sb_gpu_readback(&s->gpu, NULL, NULL, rgba);
-    sb_timer_free(&t);
-    sb_instance_destroy(&in);
-    free(runs);
-}
-
 /* Pixels of two colour images that differ, and by how much at most (8-bit channels). */
 static int differing(const unsigned char *a, const unsigned char *b, int np, int *most) {
     int n = 0;
@@ -264,17 +245,17 @@ static void test_lamps_by_cluster(void **st) {
     assert_true(sb_scene_light_set(&s.scene, set, false, &s.lights, &err));
     unsigned char *a = malloc(4 * (size_t)np), *b = malloc(4 * (size_t)np);
     int most = 0, n;
-    colour_of(&s, "atlas:res=128:grid=on", false, a);
-    colour_of(&s, "atlas:res=128:grid=off", false, b);
+    colour_of(&s, "atlas:res=128:grid=on", false, a, NULL, NULL);
+    colour_of(&s, "atlas:res=128:grid=off", false, b, NULL, NULL);
     n = differing(a, b, np, &most);
     print_message("atlas grid=on against grid=off: %d pixels differ, by at most %d\n", n, most);
     assert_int_equal(n, 0);
-    colour_of(&s, "atlas:res=128:grid=on", true, b);   /* the timed frame draws the grid's image too */
+    colour_of(&s, "atlas:res=128:grid=on", true, b, NULL, NULL);   /* the timed frame draws the grid's image too */
     n = differing(a, b, np, &most);
     print_message("atlas grid=on, timed against evaluated: %d pixels differ, by at most %d\n", n, most);
     assert_true(n <= np / 1000 && most <= 1);
-    colour_of(&s, "cube:res=128", false, a);
-    colour_of(&s, "cube:res=128", true, b);
+    colour_of(&s, "cube:res=128", false, a, NULL, NULL);
+    colour_of(&s, "cube:res=128", true, b, NULL, NULL);
     n = differing(a, b, np, &most);
     print_message("cube, further lamps cut to their footprints against whole: %d pixels differ, by at most %d\n", n,
                   most);
