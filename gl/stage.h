@@ -81,19 +81,23 @@ typedef struct sb_counters {
     double own[SB_MAX_OWN_COUNTERS];
 } sb_counters;
 
+/* The place of own counter `def` among the frame's technique's (-1: it does not declare it). */
+static inline int sb_counter_at(const sb_counters *c, const sb_counter_def *def) {
+    for (int k = 0; k < c->own_count; k++)
+        if (&c->own_defs[k] == def) return k;
+    return -1;
+}
 /* Counts v into the own counter `def` as its row merges; a row the frame's technique does not declare is not
  * counted. */
 static inline void sb_count(sb_counters *c, const sb_counter_def *def, double v) {
-    for (int k = 0; k < c->own_count; k++)
-        if (&c->own_defs[k] == def) {
-            if (def->merge == SB_MERGE_SUM) c->own[k] += v;
-            else if (v > c->own[k]) c->own[k] = v;
-            return;
-        }
+    int k = sb_counter_at(c, def);
+    if (k < 0) return;
+    if (def->merge == SB_MERGE_SUM) c->own[k] += v;
+    else if (v > c->own[k]) c->own[k] = v;
 }
 /* The value of own counter `def` in a frame's counters; false where the frame's technique does not declare it. */
 static inline bool sb_counted(const sb_counters *c, const sb_counter_def *def, double *v) {
-    for (int k = 0; k < c->own_count; k++)
-        if (&c->own_defs[k] == def) return *v = c->own[k], true;
-    return false;
+    int k = sb_counter_at(c, def);
+    if (k >= 0) *v = c->own[k];
+    return k >= 0;
 }

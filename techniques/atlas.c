@@ -218,6 +218,7 @@ static bool atlas_create(void *state, const sb_run_ctx *rc, const void *desc, sb
     const char *names[] = {"u_atlas", "u_lights", "u_count", "u_bias", "u_normal"};
     GLint *locs[] = {&s->u_atlas, &s->u_lights, &s->u_count, &s->u_bias, &s->u_normal};
     for (size_t i = 0; i < SB_COUNT(names); i++) *locs[i] = glGetUniformLocation(s->fp.prog, names[i]);
+    if (s->d->grid) sb_lightgrid_locate(&s->grid, s->fp.prog);
     return sb_gl_check("atlas", err);
 }
 
@@ -506,7 +507,7 @@ static void atlas_frame(void *state, sb_frame *f) {
     glBindTexture(GL_TEXTURE_BUFFER, s->buf_tex);
     glUniform1i(s->u_lights, 1);
     glActiveTexture(GL_TEXTURE0);
-    if (d->grid) sb_lightgrid_bind(&s->grid, s->fp.prog, 2);
+    if (d->grid) sb_lightgrid_bind(&s->grid, 2);
     glUniform1i(s->u_count, shown);
     glUniform1f(s->u_bias, (float)d->bias);
     glUniform1f(s->u_normal, (float)d->normal);

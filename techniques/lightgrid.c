@@ -11,12 +11,18 @@ static void pass_camera(const sb_frame *f, sb_m4 *view, sb_m4 *proj) {
     *proj = f->look ? f->look->proj : f->proj;
 }
 
+/* The near and far planes of a GL perspective projection, from its matrix. */
+static void planes_of(const sb_m4 *proj, double *near, double *far) {
+    *near = proj->m[14] / (proj->m[10] - 1);
+    *far = proj->m[14] / (proj->m[10] + 1);
+}
+
 bool sb_lamp_footprint_of(const sb_frame *f, sb_v3 pos, double range, sb_lamp_footprint *out) {
     sb_m4 view, proj;
     pass_camera(f, &view, &proj);
     const int w = f->gpu->width, h = f->gpu->height;
-    /* the planes of a GL perspective projection, from its matrix */
-    const double near = proj.m[14] / (proj.m[10] - 1), far = proj.m[14] / (proj.m[10] + 1);
+    double near, far;
+    planes_of(&proj, &near, &far);
     *out = (sb_lamp_footprint){0, 0, w, h, near, far};
     if (range <= 0) return true;
     sb_v3 c = sb_m4_point(view, pos);   /* view space: the camera looks down -z */
@@ -56,6 +62,8 @@ void sb_lightgrid_free(sb_lightgrid *g) {
     }
     free(g->heads);
     free(g->items);
+    free(g->fp);
+    free(g->seen);
     memset(g, 0, sizeof *g);
 }
 
@@ -89,12 +97,17 @@ uint32_t sb_lightgrid_fill(sb_lightgrid *g, const sb_frame *f, const sb_v3 *pos,
     sb_m4 view, proj;
     pass_camera(f, &view, &proj);
     for (int k = 0; k < 4; k++) g->zrow[k] = view.m[4 * k + 2];   /* a point's view z: the view's third row */
-    g->near = proj.m[14] / (proj.m[10] - 1), g->far = proj.m[14] / (proj.m[10] + 1);
+    planes_of(&proj, &g->near, &g->far);
     const size_t cells = (size_t)g->tx * g->ty * g->slices;
     memset(g->heads, 0, cells * 2 * sizeof *g->heads);
     /* twice over the lamps: each cluster's count, then (after the running sum) its lamps, in the order given */
-    sb_lamp_footprint *fp = sb_xmalloc(sizeof *fp * (size_t)(n ? n : 1));
-    bool *seen = sb_xmalloc(sizeof *seen * (size_t)(n ? n : 1));
+    if (n > g->lamp_cap) {   /* the lamps' footprints: grown, kept across frames */
+        g->lamp_cap = n;
+        g->fp = sb_xrealloc(g->fp, sizeof *g->fp * (size_t)n);
+        g->seen = sb_xrealloc(g->seen, sizeof *g->seen * (size_t)n);
+    }
+    sb_lamp_footprint *fp = g->fp;
+    bool *seen = g->seen;
     for (int pass = 0; pass < 2; pass++) {
         for (int i = 0; i < n; i++) {
             if (!pass) seen[i] = sb_lamp_footprint_of(f, pos[i], range[i], &fp[i]);
@@ -123,8 +136,6 @@ uint32_t sb_lightgrid_fill(sb_lightgrid *g, const sb_frame *f, const sb_v3 *pos,
         }
         g->item_count = total;
     }
-    free(fp);
-    free(seen);
     return g->item_count;
 }
 
@@ -135,18 +146,22 @@ uint32_t sb_lightgrid_build(sb_lightgrid *g, const sb_frame *f, const sb_v3 *pos
     return items;
 }
 
-void sb_lightgrid_bind(const sb_lightgrid *g, GLuint prog, int unit) {
+void sb_lightgrid_locate(sb_lightgrid *g, GLuint prog) {
+    static const char *const names[SB_GRID_UNIFORMS] = {"u_grid_heads", "u_grid_items", "u_grid", "u_grid_zrow",
+                                                         "u_grid_near"};
+    for (int k = 0; k < SB_GRID_UNIFORMS; k++) g->u[k] = glGetUniformLocation(prog, names[k]);
+}
+
+void sb_lightgrid_bind(const sb_lightgrid *g, int unit) {
     glActiveTexture(GL_TEXTURE0 + (GLenum)unit);
     glBindTexture(GL_TEXTURE_BUFFER, g->tex[0]);
     glActiveTexture(GL_TEXTURE0 + (GLenum)unit + 1);
     glBindTexture(GL_TEXTURE_BUFFER, g->tex[1]);
     glActiveTexture(GL_TEXTURE0);
-    glUniform1i(glGetUniformLocation(prog, "u_grid_heads"), unit);
-    glUniform1i(glGetUniformLocation(prog, "u_grid_items"), unit + 1);
+    glUniform1i(g->u[0], unit);
+    glUniform1i(g->u[1], unit + 1);
     /* tile pixels, tiles across, tiles down, slices per log unit of depth past the near plane */
-    glUniform4f(glGetUniformLocation(prog, "u_grid"), (float)SB_GRID_TILE, (float)g->tx, (float)g->ty,
-                (float)(g->slices / log(g->far / g->near)));
-    glUniform4f(glGetUniformLocation(prog, "u_grid_zrow"), (float)g->zrow[0], (float)g->zrow[1], (float)g->zrow[2],
-                (float)g->zrow[3]);
-    glUniform2f(glGetUniformLocation(prog, "u_grid_near"), (float)g->near, (float)g->slices);
+    glUniform4f(g->u[2], (float)SB_GRID_TILE, (float)g->tx, (float)g->ty, (float)(g->slices / log(g->far / g->near)));
+    glUniform4f(g->u[3], (float)g->zrow[0], (float)g->zrow[1], (float)g->zrow[2], (float)g->zrow[3]);
+    glUniform2f(g->u[4], (float)g->near, (float)g->slices);
 }

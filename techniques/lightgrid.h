@@ -23,6 +23,8 @@
 #define SB_GRID_TILE 32
 #define SB_GRID_SLICES 16
 
+#define SB_GRID_UNIFORMS 5
+
 typedef struct sb_lightgrid {
     int tx, ty, slices;         /* tiles across and down; depth slices */
     double near, far;           /* the slices' span: the pass camera's planes, this frame */
@@ -33,6 +35,10 @@ typedef struct sb_lightgrid {
     uint32_t item_count;        /* this frame's */
     GLuint buf[2], tex[2];      /* [heads, items] */
     size_t gl_cap[2];           /* bytes the GL buffers hold */
+    struct sb_lamp_footprint *fp;   /* scratch, a footprint a lamp (lamp_cap of them), kept across frames */
+    bool *seen;
+    int lamp_cap;
+    GLint u[SB_GRID_UNIFORMS];  /* the camera pass's grid uniforms (sb_lightgrid_locate) */
 } sb_lightgrid;
 
 /* A lamp's footprint in the camera a frame's pass draws from (the look's for a flicker twin): the pixels its
@@ -55,5 +61,7 @@ uint32_t sb_lightgrid_build(sb_lightgrid *g, const sb_frame *f, const sb_v3 *pos
 /* The cluster (its first item and count in g->heads) holding the pixel at (px, py) whose view depth is depth: the
  * camera pass's rule (lightgrid.glsl), for tests. */
 const uint32_t *sb_lightgrid_cell(const sb_lightgrid *g, double px, double py, double depth);
-/* Binds the lists to texture units `unit` and unit + 1 and sets the grid's uniforms of the bound program prog. */
-void sb_lightgrid_bind(const sb_lightgrid *g, GLuint prog, int unit);
+/* Finds the grid's uniforms in the camera pass's program (once, when it is made). */
+void sb_lightgrid_locate(sb_lightgrid *g, GLuint prog);
+/* Binds the lists to texture units `unit` and unit + 1 and sets the grid's uniforms of the bound program. */
+void sb_lightgrid_bind(const sb_lightgrid *g, int unit);
