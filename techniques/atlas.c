@@ -81,7 +81,7 @@ static const sb_counter_def atlas_counters[C_COUNT] = {
                      .doc = "atlas: share of the atlas its tiles cover this frame"},
     [C_GRID] = {.name = "grid_items", .unit = "count", .stats = SB_STAT_MEAN,
                 .doc = "atlas grid=on: lamp-cluster pairs the frame's light grid lists (a cluster: a 32-pixel tile "
-                       "and a depth slice; empty with grid=off)"},
+                       "and a depth slice; 0 with grid=off)"},
 };
 
 /* One lamp this run shadows: where it is, and its tiles now and when last drawn. */
