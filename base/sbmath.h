@@ -38,6 +38,7 @@ static inline sb_v3 sb_v3_min(sb_v3 a, sb_v3 b) {
 static inline sb_v3 sb_v3_max(sb_v3 a, sb_v3 b) {
     return (sb_v3){fmax(a.x, b.x), fmax(a.y, b.y), fmax(a.z, b.z)};
 }
+static inline sb_v3 sb_v3_abs(sb_v3 a) { return (sb_v3){fabs(a.x), fabs(a.y), fabs(a.z)}; }
 static inline bool sb_v3_finite(sb_v3 a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
 
 sb_m4 sb_m4_identity(void);

@@ -12,6 +12,7 @@ typedef enum sb_stage {
     SB_STAGE_VOLUMES,   /* stencil shadow volumes */
     SB_STAGE_RAYS,      /* CPU ray casting */
     SB_STAGE_CLUSTERS,  /* lamps found by cluster: the light grid built and sent (atlas grid=on) */
+    SB_STAGE_POSE,      /* a moving scene's posing pass: its moving vertices posed by the GPU (pose.c) */
     SB_STAGE_COUNT
 } sb_stage;
 

@@ -8,7 +8,7 @@
 #include "gl.h"
 
 const char *const sb_stage_names[SB_STAGE_COUNT] = {"zpass", "minmax", "cascade", "final", "volumes", "rays",
-                                                             "clusters"};
+                                                             "clusters", "pose"};
 
 const char *sb_timing_name(sb_timing_mode m) {
     return m == SB_TIMING_QUERIES ? "queries" : m == SB_TIMING_SYNC ? "sync" : "auto";

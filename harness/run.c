@@ -116,7 +116,10 @@ struct sb_run {
 };
 
 /* The stages a run's rows time: none for a scored renderer's frames. */
-static unsigned run_stages(const sb_run *r) { return r->s->score ? 0 : r->spec->tech->stages; }
+/* The stages a run's frames may time: its technique's, and the posing pass where the GPU poses a moving scene. */
+static unsigned run_stages(const sb_run *r) {
+    return r->s->score ? 0 : r->spec->tech->stages | (r->s->gpu.pose ? SB_STAGE_BIT(SB_STAGE_POSE) : 0);
+}
 
 static bool fail_run(sb_run *r, const char *fmt, const char *what) {
     char copy[sizeof r->err.msg];   /* `what` is often r->err.msg itself: formatting it into itself lost it */

@@ -462,6 +462,11 @@ void sb_render_camera_jittered(sb_session *s, sb_instance *in, sb_frame *f, cons
     f->scratch = s->scratch;
     f->cmds = s->cmds;
     f->eval = eval;
+    if (sb_gpu_pose_pending(&s->gpu)) {   /* the pose's GPU pass, in the first frame drawn at it */
+        sb_stage_begin(f, SB_STAGE_POSE);
+        sb_gpu_pose_run(&s->gpu);
+        sb_stage_end(f, SB_STAGE_POSE);
+    }
     if (sb_scene_moves(&s->scene)) {
         motion_since(s, in, f);
         if ((in->tech->needs & SB_NEEDS_REFERENCE) && s->ref) sb_reference_update(s->ref);   /* raycast's rays */

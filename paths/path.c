@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "gltf_load.h"
+#include "motion.h"
 #include "scene_load.h"
 
 /* An animated glTF camera as a path: a key at every time its node's animations key. */
@@ -154,6 +155,7 @@ static void camera_axes(sb_camera *c);
  * of those rays starting inside a closed surface, and the centre ray free for
  * a share of the scene. */
 static bool view_clear(const sb_scene *s, sb_v3 pos, sb_v3 fwd, double diag) {
+    sb_scene_sync_vertices(s);   /* the triangles at the pose the scene holds */
     sb_v3 o = sb_v3_sub(pos, s->origin);
     for (int k = 0; k < 14; k++) {
         sb_v3 d = k < 6 ? sb_v3_make(k == 0 ? 1 : k == 1 ? -1 : 0, k == 2 ? 1 : k == 3 ? -1 : 0, k == 4 ? 1 : k == 5 ? -1 : 0)

@@ -2,6 +2,7 @@
  * technique is measured against, and `raycast`) and first hits of camera rays
  * (the evaluation's check that rays and rasterizer see one geometry). */
 #include "reference.h"
+#include "motion.h"
 
 #include <embree3/rtcore.h>
 #include <math.h>
@@ -178,6 +179,7 @@ void sb_reference_update(sb_reference *r) {
     const sb_scene *s = r->src;
     if (!r->moving_count || r->pose_serial == s->pose_serial) return;
     double t0 = sb_now_ms();
+    sb_scene_sync_vertices(s);   /* the CPU's vertices at the pose (the GPU poses its own copy) */
     for (uint32_t i = 0; i < r->moving_count; i++) {
         RTCGeometry g = rtcGetGeometry((RTCScene)r->scene, r->moving_geoms[i]);
         rtcUpdateGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0);

@@ -151,11 +151,15 @@ static const sb_frame_col frame_cols[] = {
     STAGE_MS(SB_STAGE_CLUSTERS, 0,
              "lamps found by cluster: the light grid (each screen tile and depth slice's lamps) built on the CPU and "
              "sent (atlas grid=on)"),
+    STAGE_MS(SB_STAGE_POSE, 0,
+             "the posing pass: a moving scene's skinned, morphing and rigid vertices posed by the GPU once a pose, in "
+             "the first frame drawn at it (empty: nothing moves, or the CPU poses every placement)"),
     {.name = "gpu_ms", .get = f_gpu_ms, .unit = "ms", .stats = SB_STATS_TIMING | SB_STAT_MIN, .role = SB_ROLE_TIME,
      .flags = ALL_USES | SB_USE_PAIR | SB_USE_NIGHT, .doc = "sum of the stage times"},
     METRIC("anim_ms", f_anim_ms, 0, "ms", SB_STATS_TIMING, 0,
-           "posing the scene's moving draws at the frame's time and sending their vertices to the GPU, on the CPU "
-           "(not in gpu_ms; empty: nothing moves)"),
+           "posing the scene at the frame's time on the CPU: the nodes, the moving draws' boxes and the culling "
+           "tree, the joints' matrices sent (and the vertices of the placements the GPU leaves to the CPU); the "
+           "GPU's posing pass is pose_ms (not in gpu_ms; empty: nothing moves)"),
     METRIC("cpu_ms", f_cpu_ms, 0, "ms", SB_STATS_TIMING, 0, "frame wall time not spent waiting for the GPU"),
     METRIC("wall_ms", f_wall_ms, 0, "ms", SB_STATS_TIMING, 0, "frame wall time"),
     METRIC("cpu_wait_ms", f_cpu_wait_ms, 0, "ms", SB_STAT_MEAN, 0,

@@ -45,6 +45,99 @@ void motion_nodes(sb_motion &m, double t) {
         sb_m4 local = m.anim[ni] || !m.has_matrix[ni] ? sb_trs_matrix(&m.trs[ni]) : m.rest_local[ni];
         m.world[ni] = m.parent[ni] < 0 ? local : sb_m4_mul(m.world[m.parent[ni]], local);
     }
+    m.nodes_t = t;
+}
+
+// A skinned placement's joint j's matrix (world x inverse bind), and a rigid one's (node x instance).
+sb_m4 joint_matrix(const sb_motion &m, const sbm::MoPlace &p, size_t j) {
+    return sb_m4_mul(m.world[m.skin_joints[p.skin][j]], m.skin_ibm[p.skin][j]);
+}
+sb_m4 rigid_matrix(const sb_motion &m, const sbm::MoPlace &p) { return sb_m4_mul(m.world[p.node], p.inst); }
+
+const sb_aabb EMPTY_BOX = {{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
+
+void grow(sb_aabb &b, sb_v3 p) { b.lo = sb_v3_min(b.lo, p), b.hi = sb_v3_max(b.hi, p); }
+
+// Each placement's bounds that follow the joints, once: per draw, the box in the mesh's own space of the vertices
+// each joint weighs (a rigid placement's: one box), and whether a vertex no joint weighs lies there. A skinned
+// vertex is sum_j w_j M_j v / sum_j w_j (sb_m4_point divides by the summed matrix's w): with no weight negative,
+// a mean of points each inside its joint's carried box, so inside their union; a placement with a negative weight,
+// or without normals (the CPU makes its face normals), stays with the CPU and its exact boxes.
+void motion_bounds_prepare(sb_motion &m, const sb_scene *s) {
+    for (sbm::MoPlace &p : m.places) {
+        const sbm::PrimData &b = p.base;
+        p.gpu = b.have_n;
+        for (int set = 0; set < b.skin_sets; set++)
+            for (double w : b.weights[set]) p.gpu = p.gpu && w >= 0;
+        p.tbox.assign(p.dpos.size(), EMPTY_BOX);
+        for (size_t t = 0; t < p.dpos.size(); t++) {
+            grow(p.tbox[t], sb_v3_make(0, 0, 0));   // a vertex the target leaves out: no delta
+            for (size_t i = 0; i + 2 < p.dpos[t].size(); i += 3)
+                grow(p.tbox[t], sb_v3_make(p.dpos[t][i], p.dpos[t][i + 1], p.dpos[t][i + 2]));
+        }
+        size_t nj = p.skin >= 0 ? m.skin_joints[p.skin].size() : 0;
+        std::vector<int> slot(nj + 1);
+        p.dbox.assign(p.draws.size(), {});
+        p.at_zero.assign(p.draws.size(), 0);
+        for (size_t k = 0; k < p.draws.size(); k++) {
+            const sb_draw &dr = s->draws[p.draws[k]];
+            std::fill(slot.begin(), slot.end(), -1);
+            std::vector<sbm::JointBox> &boxes = p.dbox[k];
+            for (uint32_t i = 0; i < dr.index_count; i++) {
+                uint32_t v = s->indices[dr.first_index + i] - p.first;
+                if (v >= p.count) continue;
+                sb_v3 q = sb_v3_make(b.pos[3 * v], b.pos[3 * v + 1], b.pos[3 * v + 2]);
+                double sum = 0;
+                for (int set = 0; set < (p.skin >= 0 ? b.skin_sets : 0); set++)
+                    for (int c = 0; c < 4; c++) {
+                        double w = b.weights[set][4 * v + c];
+                        size_t j = (size_t)b.joints[set][4 * v + c];
+                        if (w == 0 || j >= nj) continue;
+                        sum += w;
+                        if (slot[j] < 0) slot[j] = (int)boxes.size(), boxes.push_back({(int)j, EMPTY_BOX});
+                        grow(boxes[slot[j]].box, q);
+                    }
+                if (p.skin < 0) {
+                    if (slot[nj] < 0) slot[nj] = (int)boxes.size(), boxes.push_back({-1, EMPTY_BOX});
+                    grow(boxes[slot[nj]].box, q);
+                } else if (sum == 0) {
+                    p.at_zero[k] = 1;
+                }
+            }
+        }
+    }
+    m.bounds_ready = true;
+}
+
+// The moving draws' boxes at the pose motion_nodes made, from the bounds that follow the joints: each joint's box
+// widened by the morph targets at their weights (each target's box of deltas, scaled: a sum of boxes) and carried
+// by its matrix, joined over the draw's joints; relative to the scene's origin and a millionth wider, for the
+// float rounding of the vertices the GPU writes.
+void motion_bound(const sb_motion &m, sb_scene *s) {
+    for (const sbm::MoPlace &p : m.places) {
+        if (!p.gpu) continue;
+        const std::vector<double> &w = m.weights[p.node];
+        sb_v3 elo = sb_v3_make(0, 0, 0), ehi = elo;
+        for (size_t t = 0; t < p.tbox.size() && t < w.size(); t++) {
+            if (w[t] == 0) continue;
+            sb_v3 a = sb_v3_scale(p.tbox[t].lo, w[t]), b = sb_v3_scale(p.tbox[t].hi, w[t]);
+            elo = sb_v3_add(elo, sb_v3_min(a, b)), ehi = sb_v3_add(ehi, sb_v3_max(a, b));
+        }
+        sb_m4 rigid = p.skin < 0 ? rigid_matrix(m, p) : sb_m4_identity();
+        for (size_t k = 0; k < p.draws.size(); k++) {
+            sb_aabb u = EMPTY_BOX;
+            for (const sbm::JointBox &jb : p.dbox[k]) {
+                sb_aabb b = {sb_v3_add(jb.box.lo, elo), sb_v3_add(jb.box.hi, ehi)};
+                u = sb_aabb_union(u, sb_aabb_transform(jb.joint < 0 ? rigid : joint_matrix(m, p, (size_t)jb.joint), &b));
+            }
+            if (p.at_zero[k]) grow(u, sb_v3_make(0, 0, 0));
+            u.lo = sb_v3_sub(u.lo, s->origin), u.hi = sb_v3_sub(u.hi, s->origin);
+            sb_v3 ext = sb_v3_sub(u.hi, u.lo), mag = sb_v3_max(sb_v3_abs(u.lo), sb_v3_abs(u.hi));
+            double pad = 1e-6 * (sb_v3_len(ext) + sb_v3_len(mag)) + 1e-30;
+            u.lo = sb_v3_sub(u.lo, sb_v3_make(pad, pad, pad)), u.hi = sb_v3_add(u.hi, sb_v3_make(pad, pad, pad));
+            s->draws[p.draws[k]].box = u;
+        }
+    }
 }
 
 // One placement at the pose motion_nodes made: its morph targets at its node's weights, then its skin or its
@@ -55,7 +148,7 @@ struct Scratch {
     std::vector<sb_m4> jm;
 };
 
-void motion_place(const sb_motion &m, Scratch &x, sb_scene *s, const sbm::MoPlace &p) {
+void motion_place(const sb_motion &m, Scratch &x, sb_scene *s, const sbm::MoPlace &p, bool boxes) {
     x.pos = p.base.pos;
     x.nrm = p.base.nrm;
     const std::vector<double> &w = m.weights[p.node];
@@ -65,12 +158,11 @@ void motion_place(const sb_motion &m, Scratch &x, sb_scene *s, const sbm::MoPlac
         for (size_t i = 0; i < p.dnrm[t].size() && i < x.nrm.size(); i++) x.nrm[i] += w[t] * p.dnrm[t][i];
     }
     if (p.skin >= 0) {
-        const std::vector<int> &joints = m.skin_joints[p.skin];
-        x.jm.resize(joints.size());
-        for (size_t j = 0; j < joints.size(); j++) x.jm[j] = sb_m4_mul(m.world[joints[j]], m.skin_ibm[p.skin][j]);
+        x.jm.resize(m.skin_joints[p.skin].size());
+        for (size_t j = 0; j < x.jm.size(); j++) x.jm[j] = joint_matrix(m, p, j);
         sbm::skin_vertices(x.jm, p.base, x.pos, x.nrm);
     } else {
-        sb_m4 w4 = sb_m4_mul(m.world[p.node], p.inst), nm = sbm::normal_matrix(w4);
+        sb_m4 w4 = rigid_matrix(m, p), nm = sbm::normal_matrix(w4);
         for (size_t v = 0; v < x.pos.size() / 3; v++) {
             sb_v3 q = sb_m4_point(w4, sb_v3_make(x.pos[3 * v], x.pos[3 * v + 1], x.pos[3 * v + 2]));
             x.pos[3 * v] = q.x, x.pos[3 * v + 1] = q.y, x.pos[3 * v + 2] = q.z;
@@ -80,28 +172,37 @@ void motion_place(const sb_motion &m, Scratch &x, sb_scene *s, const sbm::MoPlac
         }
     }
     sb_scene_repose_prim(s, p.first, p.count, x.pos.data(), p.base.have_n ? x.nrm.data() : nullptr, p.draws.data(),
-                         (uint32_t)p.draws.size());
+                         (uint32_t)p.draws.size(), boxes);
 }
 
-} // namespace
+enum Which { ALL_EXACT, CPU_ONLY, GPU_ONES };   // every placement with exact boxes; those the GPU cannot pose; the others
 
 // The placements are posed on every core (each writes vertices and boxes of its own): 64 skinned characters are
 // 60 % of a frame on one core of this machine (docs/measurements.md, Moving casters).
-extern "C" uint32_t sb_motion_pose(sb_motion *m, sb_scene *s, double t) {
-    motion_nodes(*m, t);
-    size_t n = m->places.size();
+uint32_t pose_places(sb_motion *m, sb_scene *s, Which which) {
+    std::vector<const sbm::MoPlace *> todo;
+    for (const sbm::MoPlace &p : m->places)
+        if (which == ALL_EXACT || (which == CPU_ONLY) != p.gpu) todo.push_back(&p);
+    size_t n = todo.size();
     unsigned cores = std::max(1u, std::thread::hardware_concurrency());
     size_t threads = std::min<size_t>(std::min<size_t>(cores, 16), n);
     std::atomic<size_t> next(0);
     auto work = [&]() {
         Scratch x;
-        for (size_t i; (i = next.fetch_add(1)) < n;) motion_place(*m, x, s, m->places[i]);
+        for (size_t i; (i = next.fetch_add(1)) < n;) motion_place(*m, x, s, *todo[i], which != GPU_ONES);
     };
     std::vector<std::thread> pool;
     for (size_t k = 1; k < threads; k++) pool.emplace_back(work);
-    work();
+    if (n) work();
     for (std::thread &th : pool) th.join();
     return (uint32_t)n;
+}
+
+} // namespace
+
+extern "C" uint32_t sb_motion_pose(sb_motion *m, sb_scene *s, double t) {
+    motion_nodes(*m, t);
+    return pose_places(m, s, ALL_EXACT);
 }
 
 extern "C" uint32_t sb_motion_mark(sb_motion *m, sb_scene *s) {
@@ -148,7 +249,11 @@ extern "C" void sb_motion_free(sb_motion *m) { delete m; }
 
 extern "C" bool sb_scene_pose(sb_scene *s, double t) {
     if (!sb_scene_moves(s) || s->pose_time == t) return false;
-    sb_motion_pose(s->motion, s, t);
+    sb_motion *m = s->motion;
+    if (!m->bounds_ready) motion_bounds_prepare(*m, s);
+    motion_nodes(*m, t);
+    pose_places(m, s, CPU_ONLY);   // the placements the GPU cannot pose: vertices and exact boxes, as ever
+    motion_bound(*m, s);
     s->pose_time = t;
     s->pose_serial++;
     sb_aabb b = s->still_bounds;
@@ -160,6 +265,96 @@ extern "C" bool sb_scene_pose(sb_scene *s, double t) {
     s->bounds = b;
     sb_scene_refit_bvh(s);   /* the load's tree over the draws' boxes as they are now */
     return true;
+}
+
+extern "C" void sb_scene_sync_vertices(const sb_scene *s) {
+    if (!sb_scene_moves(s) || s->motion->vertices_serial == s->pose_serial) return;
+    sb_motion *m = s->motion;
+    if (!(m->nodes_t == s->pose_time)) motion_nodes(*m, s->pose_time);
+    // the vertices are the CPU's copy of the pose the scene holds (its boxes stay sb_scene_pose's): writing them
+    // changes nothing a const reader of the scene relies on but them
+    pose_places(m, const_cast<sb_scene *>(s), GPU_ONES);
+    m->vertices_serial = s->pose_serial;
+    m->cpu_poses++;
+}
+
+extern "C" uint64_t sb_scene_cpu_poses(const sb_scene *s) { return s->motion ? s->motion->cpu_poses : 0; }
+
+extern "C" const sb_pose_data *sb_motion_gpu_data(const sb_scene *s) {
+    if (!sb_scene_moves(s)) return nullptr;
+    sb_motion &m = *s->motion;
+    if (!m.bounds_ready) motion_bounds_prepare(m, s);
+    if (!m.gpu.place_count) {
+        m.gpu_places.clear(), m.gpu_rest.clear(), m.gpu_morph.clear(), m.gpu_draw.clear();
+        uint32_t palette = 0, weights = 0, morph_rows = 0;
+        for (const sbm::MoPlace &p : m.places) {
+            if (!p.gpu || p.draws.empty()) continue;
+            const sbm::PrimData &b = p.base;
+            sb_pose_place g = {};
+            g.first = p.first, g.count = p.count;
+            g.rest_first = (uint32_t)(m.gpu_rest.size() / SB_POSE_REST_FLOATS);
+            g.palette_first = palette;
+            g.joints = p.skin >= 0 ? (uint32_t)m.skin_joints[p.skin].size() : 0;
+            palette += g.joints ? g.joints : 1;
+            g.targets = (uint32_t)p.dpos.size();
+            g.morph_first = morph_rows;
+            g.weights_first = weights;
+            weights += g.targets;
+            morph_rows += g.targets * p.count;
+            uint32_t id = (uint32_t)m.gpu_places.size();
+            for (uint32_t v = 0; v < p.count; v++) {
+                float row[SB_POSE_REST_FLOATS] = {0};
+                for (int c = 0; c < 3; c++) row[c] = (float)b.pos[3 * v + c], row[4 + c] = (float)b.nrm[3 * v + c];
+                memcpy(&row[3], &id, 4);
+                for (int set = 0; set < (g.joints ? b.skin_sets : 0); set++)
+                    for (int c = 0; c < 4; c++) {
+                        uint32_t j = (uint32_t)b.joints[set][4 * v + c];
+                        memcpy(&row[8 + 4 * set + c], &j, 4);
+                        row[16 + 4 * set + c] = (float)b.weights[set][4 * v + c];
+                    }
+                m.gpu_rest.insert(m.gpu_rest.end(), row, row + SB_POSE_REST_FLOATS);
+            }
+            for (uint32_t t = 0; t < g.targets; t++)
+                for (uint32_t v = 0; v < p.count; v++) {
+                    float row[SB_POSE_MORPH_FLOATS] = {0};
+                    for (int c = 0; c < 3; c++) {
+                        size_t i = 3 * (size_t)v + c;
+                        row[c] = i < p.dpos[t].size() ? (float)p.dpos[t][i] : 0;
+                        row[4 + c] = t < p.dnrm.size() && i < p.dnrm[t].size() ? (float)p.dnrm[t][i] : 0;
+                    }
+                    m.gpu_morph.insert(m.gpu_morph.end(), row, row + SB_POSE_MORPH_FLOATS);
+                }
+            m.gpu_places.push_back(g);
+            m.gpu_draw.push_back(p.draws[0]);
+        }
+        m.gpu.place_count = (uint32_t)m.gpu_places.size();
+        m.gpu.rest_count = (uint32_t)(m.gpu_rest.size() / SB_POSE_REST_FLOATS);
+        m.gpu.morph_count = morph_rows;
+        m.gpu.palette_count = palette;
+        m.gpu.weight_count = weights;
+        m.gpu.places = m.gpu_places.data();
+        m.gpu.place_draw = m.gpu_draw.data();
+        m.gpu.rest = m.gpu_rest.data();
+        m.gpu.morph = m.gpu_morph.data();
+    }
+    return m.gpu.place_count ? &m.gpu : nullptr;
+}
+
+extern "C" void sb_motion_gpu_frame(const sb_scene *s, float *palette, float *weights) {
+    sb_motion &m = *s->motion;
+    if (!(m.nodes_t == s->pose_time)) motion_nodes(m, s->pose_time);
+    size_t k = 0;
+    for (const sbm::MoPlace &p : m.places) {
+        if (!p.gpu || p.draws.empty()) continue;
+        const sb_pose_place &g = m.gpu_places[k++];
+        for (uint32_t j = 0; j < (g.joints ? g.joints : 1); j++) {
+            sb_m4 a = g.joints ? joint_matrix(m, p, j) : rigid_matrix(m, p);
+            a.m[12] -= s->origin.x, a.m[13] -= s->origin.y, a.m[14] -= s->origin.z;   // relative to the origin
+            for (int e = 0; e < 16; e++) palette[16 * (size_t)(g.palette_first + j) + e] = (float)a.m[e];
+        }
+        const std::vector<double> &w = m.weights[p.node];
+        for (uint32_t t = 0; t < g.targets; t++) weights[g.weights_first + t] = t < w.size() ? (float)w[t] : 0;
+    }
 }
 
 extern "C" void sb_motion_info(const sb_scene *s, FILE *out) {

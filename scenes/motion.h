@@ -13,6 +13,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "pose_data.h"
+
 struct sb_scene;
 typedef struct sb_motion sb_motion;
 
@@ -33,9 +35,28 @@ typedef struct sb_motion_stats {
 
 #include <stdio.h>
 
-/* Poses the scene at clip time t: the moving draws' vertices and boxes, the scene's bounds and its BVH. False
- * when nothing moves or the scene already holds that time. */
+/* Poses the scene at clip time t: the nodes, the moving draws' boxes (bounds that follow the joints: each
+ * joint's share of a draw's vertices, boxed once in the mesh's space and carried by the joint's matrix, so the
+ * box holds every vertex the pose can put there), the scene's bounds and its BVH. The vertices of the
+ * placements the GPU poses (sb_pose_data) are left where they were: the GPU's posing pass moves its own copy,
+ * and sb_scene_sync_vertices moves the CPU's for the code that reads it. A placement the GPU cannot pose (no
+ * normals in the file: its face normals are the CPU's; a negative skin weight: no box holds it) is posed here
+ * as before, its boxes exact. False when nothing moves or the scene already holds that time. */
 bool sb_scene_pose(struct sb_scene *s, double t);
+/* The CPU's vertices at the scene's pose (sb_scene_pose), posed now if they hold another: for whatever reads
+ * them (the reference's refit on evaluated frames, raycast, the light-facing order of open single-sided draws,
+ * psm's nearest receiver, volumes' silhouettes, a path's checks). The boxes are left as sb_scene_pose made
+ * them. A const scene may be synced: the vertices are a copy of its pose, not a part of it. */
+void sb_scene_sync_vertices(const struct sb_scene *s);
+/* How many times the CPU's vertices were posed (sb_scene_sync_vertices and the CPU-only placements' poses
+ * excepted): what a run's evaluated frames and CPU readers cost. */
+uint64_t sb_scene_cpu_poses(const struct sb_scene *s);
+
+/* The GPU's posing data of a moving scene (NULL: nothing the GPU poses). */
+const sb_pose_data *sb_motion_gpu_data(const struct sb_scene *s);
+/* The pose's matrices (column-major, 16 floats each, relative to the scene's origin: palette_count of them) and
+ * morph weights (weight_count), at the time the scene holds. */
+void sb_motion_gpu_frame(const struct sb_scene *s, float *palette, float *weights);
 /* The animation lines of `shadowbench info SCENE`: the clips that play, what moves and how. */
 void sb_motion_info(const struct sb_scene *s, FILE *out);
 

@@ -6,11 +6,13 @@
 #ifndef __cplusplus
 #error "motion_data.h is C++ (gltf_load.cc and motion.cc)"
 #endif
+#include <cmath>
 #include <string>
 #include <vector>
 
 extern "C" {
 #include "anim.h"
+#include "pose_data.h"
 #include "scene.h"
 }
 
@@ -75,6 +77,12 @@ struct MoClip {
     uint32_t channels = 0, nodes = 0;
 };
 
+// The box, in the mesh's own space, of the vertices of one draw a joint moves (joint -1: a rigid placement's).
+struct JointBox {
+    int joint;
+    sb_aabb box;
+};
+
 // A primitive placement that moves: what posing it again needs.
 struct MoPlace {
     int node = -1, skin = -1;                       // skin: its joints pose it (the node's transform is ignored)
@@ -84,6 +92,11 @@ struct MoPlace {
     uint32_t first = 0, count = 0;                  // its vertices in the scene
     std::vector<uint32_t> draws;                    // its draws once the scene is finished (sb_motion_mark)
     uint8_t kind = SB_DRAW_RIGID;
+    // bounds that follow the joints (motion.cc, motion_bounds): made at the first pose, never cached
+    bool gpu = false;                               // the GPU poses it (normals in the file, no negative weight)
+    std::vector<std::vector<JointBox>> dbox;        // per draw: each joint's share of its vertices (rigid: one)
+    std::vector<char> at_zero;                      // per draw: a vertex no joint weighs (posed at the world's 0)
+    std::vector<sb_aabb> tbox;                      // per morph target: the box of its position deltas
 };
 
 } // namespace sbm
@@ -106,4 +119,13 @@ struct sb_motion {
     std::vector<char> anim;
     std::vector<sb_m4> world;
     std::vector<std::vector<double>> weights;
+    double nodes_t = NAN;                           // the clip time world and weights hold (NAN: none yet)
+    bool bounds_ready = false;                      // every placement's dbox made (motion_bounds_prepare)
+    // the scene's vertices on the CPU (sb_scene_sync_vertices): the pose serial they hold, and how often posed
+    uint64_t vertices_serial = 0;
+    uint64_t cpu_poses = 0;
+    sb_pose_data gpu = {};                          // what the GPU's posing pass reads (sb_motion_gpu_data)
+    std::vector<sb_pose_place> gpu_places;
+    std::vector<float> gpu_rest, gpu_morph;
+    std::vector<uint32_t> gpu_draw;
 };

@@ -899,7 +899,7 @@ static sb_aabb draw_box_now(const sb_scene *s, const sb_draw *d) {
 }
 
 void sb_scene_repose_prim(sb_scene *s, uint32_t first, uint32_t count, const double *pos, const double *nrm,
-                          const uint32_t *draws, uint32_t ndraws) {
+                          const uint32_t *draws, uint32_t ndraws, bool boxes) {
     for (uint32_t v = 0; v < count; v++) {
         float *o = sb_vertex(s, first + v);
         const double *p = pos + 3 * (size_t)v;
@@ -928,7 +928,7 @@ void sb_scene_repose_prim(sb_scene *s, uint32_t first, uint32_t count, const dou
                 o[3] += (float)n.x, o[4] += (float)n.y, o[5] += (float)n.z;
             }
         }
-        dr->box = draw_box_now(s, dr);
+        if (boxes) dr->box = draw_box_now(s, dr);
     }
     for (uint32_t v = 0; !nrm && v < count; v++) {
         float *o = sb_vertex(s, first + v);

@@ -200,7 +200,7 @@ typedef struct sb_scene {
     void (*motion_free)(struct sb_motion *);   /* how sb_scene_free frees it (the motion module's) */
     uint32_t moving_draws;       /* draws whose sb_draw.motion is not SB_DRAW_STILL */
     sb_aabb still_bounds;        /* the bounds of the draws that never move (relative to origin) */
-    double pose_time;            /* the clip time the vertices hold (NAN: as loaded) */
+    double pose_time;            /* the clip time the pose holds (NAN: as loaded); the CPU's vertices: motion.h */
     char anim[288];              /* what plays, as a run's `anim` column says it: "" a still file, or every clip at
                                     speed 1 (the default); "none" (a file's clips held still); the clips that play in
                                     file order ("walk", "all") with " x3" at another --anim-speed */
@@ -292,9 +292,10 @@ bool sb_scene_finish(sb_scene *s, sb_err *err);
 /* Whether the scene's clips move anything (motion.h poses it). */
 static inline bool sb_scene_moves(const sb_scene *s) { return s->motion && s->moving_draws; }
 /* The posing step of one primitive: writes its vertices [first, first + count) from world positions and
- * normals (NULL: face normals, as at load) and the boxes of its draws (the ndraws of draws: its chunks). */
+ * normals (NULL: face normals, as at load) and, with boxes, the exact boxes of its draws (the ndraws of draws:
+ * its chunks; without, they keep the bounds that follow the joints, motion.h). */
 void sb_scene_repose_prim(sb_scene *s, uint32_t first, uint32_t count, const double *pos, const double *nrm,
-                          const uint32_t *draws, uint32_t ndraws);
+                          const uint32_t *draws, uint32_t ndraws, bool boxes);
 
 /* Culling: visits every draw whose AABB is not fully outside any of the planes
  * (plane: n·p + d >= 0 is inside). Exact AABB-vs-plane tests over the BVH. */
@@ -307,5 +308,6 @@ void sb_scene_build_bvh(sb_scene *s);
 void sb_scene_refit_bvh(sb_scene *s);
 /* The nearest triangle (either side) the ray o + t d meets, t in (0, tmax)
  * (origin-relative; d need not be unit): its t, or INFINITY. *backface (may
- * be NULL): it is the inside of a closed single-sided surface (o is inside it). */
+ * be NULL): it is the inside of a closed single-sided surface (o is inside it). The CPU's vertices as they are:
+ * in a moving scene, motion.h's sb_scene_sync_vertices first. */
 double sb_scene_raycast(const sb_scene *s, sb_v3 o, sb_v3 d, double tmax, bool *backface);

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "motion.h"
 #include "shaders.h"
 #include "timing.h"
 
@@ -160,7 +161,17 @@ double sb_gpu_scene_bytes(const sb_scene *s) {
 }
 
 /* (Re)fills the vertex, index and per-draw transform buffers for sharing `mode`. */
+static void upload_geometry_as(const sb_gpu *g, int mode);
+
+/* (Re)fills the buffers, then poses the moving vertices again where the GPU poses them: the upload sent the
+ * CPU's copy, which may hold an older pose. */
 static void upload_geometry(const sb_gpu *g, int mode) {
+    upload_geometry_as(g, mode);
+    sb_gpu_pose_remap(g);
+    sb_gpu_pose_run(g);
+}
+
+static void upload_geometry_as(const sb_gpu *g, int mode) {
     const sb_scene *s = g->scene;
     struct sb_gpu_geom *gm = g->geom;
     gm->mode = mode;
@@ -289,6 +300,11 @@ static void arrange_for(const sb_gpu *g, const double light[4]) {
     const sb_scene *s = g->scene;
     const struct sb_gpu_geom *gm = g->geom;
     const uint32_t *orig = gm->orig ? gm->orig : s->indices;   /* the GPU's numbering, as uploaded */
+    for (uint32_t d = 0; d < s->draw_count; d++)   /* which way an open moving draw faces: the CPU's pose */
+        if (s->draws[d].motion != SB_DRAW_STILL && !s->draws[d].double_sided && !s->draws[d].closed) {
+            sb_scene_sync_vertices(s);
+            break;
+        }
     uint32_t *rest = sb_xmalloc(sizeof(uint32_t) * 3 * SB_CHUNK_TRIS);
     for (uint32_t d = 0; d < s->draw_count; d++) {
         const sb_draw *dr = &s->draws[d];
@@ -332,17 +348,23 @@ static void facing_reset(const sb_gpu *g) {
 void sb_gpu_update_motion(const sb_gpu *g) {
     const sb_scene *s = g->scene;
     const struct sb_gpu_geom *gm = g->geom;
+    if (!g->pose) sb_scene_sync_vertices(s);   /* no posing pass: the CPU poses every placement */
     glBindBuffer(GL_ARRAY_BUFFER, g->vbo);
     uint32_t done = UINT32_MAX;   /* a primitive's chunks name the same vertices: the last one sent */
     for (uint32_t d = 0; d < s->draw_count; d++) {
         const sb_draw *dr = &s->draws[d];
-        if (dr->motion == SB_DRAW_STILL || dr->first_vertex == done || gm->vbase[d] == UINT32_MAX) continue;
+        if (dr->motion == SB_DRAW_STILL || dr->first_vertex == done || gm->vbase[d] == UINT32_MAX ||
+            !sb_gpu_pose_leaves(g, d))
+            continue;
         glBufferSubData(GL_ARRAY_BUFFER, (GLintptr)gm->vbase[d] * SB_VERTEX_BYTES,
                         (GLsizeiptr)dr->vertex_count * SB_VERTEX_BYTES, sb_vertex(s, dr->first_vertex));
         done = dr->first_vertex;
     }
+    sb_gpu_pose_due(g);   /* the GPU poses its vertices in the next frame drawn (sb_render_camera) */
     if (g->facing) g->facing->valid = false;   /* an open moving draw faces the light otherwise now */
 }
+
+uint32_t sb_gpu_draw_vertex_base(const sb_gpu *g, uint32_t d) { return g->geom->vbase[d]; }
 
 void sb_gpu_share(const sb_gpu *g, bool planar) {
     int mode = planar ? SHARE_NONE : SHARE_WHOLE;
@@ -445,6 +467,10 @@ bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int
         g->zpass_u_view[a] = glGetUniformLocation(g->zpass_prog[a], "u_view");
         g->zpass_u_proj[a] = glGetUniformLocation(g->zpass_prog[a], "u_proj");
     }
+    if (!sb_gpu_pose_init(g, err)) {   /* a moving scene's posing pass */
+        sb_gpu_free(g);
+        return false;
+    }
     if (!sb_gl_check("creating GPU resources", err)) {
         sb_gpu_free(g);
         return false;
@@ -467,6 +493,7 @@ void sb_gpu_free(sb_gpu *g) {
     if (g->mat_ssbo) glDeleteBuffers(1, &g->mat_ssbo);
     if (g->texel_buf) glDeleteBuffers(1, &g->texel_buf);
     if (g->texel_tex) glDeleteTextures(1, &g->texel_tex);
+    sb_gpu_pose_free(g);
     if (g->facing) {
         free(g->facing->count);
         free(g->facing->indices);

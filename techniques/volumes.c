@@ -20,6 +20,7 @@
 #include "render.h"
 #include "reference.h"
 #include "shaders.h"
+#include "motion.h"
 
 typedef struct volumes_desc {
     int mode;
@@ -200,6 +201,7 @@ static bool volumes_load(const sb_gpu *g, void **data, sb_err *err) {
     const sb_scene *sc = g->scene;
     volumes_geo *geo = sb_xcalloc(1, sizeof *geo);
     *data = geo;
+    sb_scene_sync_vertices(sc);   /* the silhouettes of the pose the scene holds */
     uint32_t ntri = sc->index_count / 3, *wid = weld(sc);
     uint8_t *lit = sb_xcalloc(ntri ? ntri : 1, 1);
     for (uint32_t t = 0; t < ntri; t++) {

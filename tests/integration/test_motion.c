@@ -186,6 +186,8 @@ static void test_caches_invalidate_what_moved(void **st) {
         long active = drawn + kept;
         printf("pssm frame %d: casters_moved %ld, cascades drawn %ld (invalidated %ld), kept %ld\n", r, moved, drawn,
                inval, kept);
+        /* every frame is drawn at a pose of its own: the GPU's posing pass is timed in it, as a stage */
+        assert_true(*sb_table_get(&p, r, "pose_ms") && atof(sb_table_get(&p, r, "pose_ms")) >= 0);
         /* a still camera: a cascade is drawn again only for a caster that moved into its volume */
         assert_int_equal(drawn, inval);
         if (moved) assert_true(inval > 0);
@@ -231,34 +233,61 @@ static void test_caches_invalidate_what_moved(void **st) {
     assert_non_null(strstr(g_out, ",virtual,"));
 }
 
-/* The GPU's copy of every moving vertex against the CPU's, at a few clip times; and that they moved. */
+/* The GPU's posing pass against the CPU's pose, at a few clip times: every moving vertex's position within float
+ * rounding (16 float epsilons of the scene's size) and its normal within 1e-5; each moving draw's box (the bounds that follow the joints)
+ * holds its vertices as posed, and is no more than twice the exact box across; the pose alone poses nothing on
+ * the CPU (its copy waits for a reader), a reader poses it once; and the vertices moved. */
 static void gpu_equals_cpu(const char *file, const char *anim) {
     sb_session s;
     sb_err err;
     if (!open_scene(&s, file, "orbit", 64, 36, 4, anim, &err)) fail_msg("%s", err.msg);
     assert_true(sb_scene_moves(&s.scene));
     assert_int_equal(s.scene.instance_draws, 0);   /* the vertex buffer is the scene's array, in order */
+    assert_non_null(s.gpu.pose);                   /* the GPU poses */
     const sb_scene *sc = &s.scene;
     float *before = sb_xmalloc((size_t)sc->vertex_count * SB_VERTEX_BYTES);
     float *gpu = sb_xmalloc((size_t)sc->vertex_count * SB_VERTEX_BYTES);
     memcpy(before, sc->vertices, (size_t)sc->vertex_count * SB_VERTEX_BYTES);
     const double times[] = {0.1, 0.37, 1.3};
     for (int k = 0; k < 3; k++) {
+        uint64_t cpu0 = sb_scene_cpu_poses(sc);
         sb_session_pose(&s, times[k]);
+        assert_true(sb_gpu_pose_run(&s.gpu));   /* as the next frame drawn would */
+        assert_int_equal(sb_scene_cpu_poses(sc), cpu0);   /* the pose alone: the GPU's */
         glBindBuffer(GL_ARRAY_BUFFER, s.gpu.vbo);
         glGetBufferSubData(GL_ARRAY_BUFFER, 0, (GLsizeiptr)sc->vertex_count * SB_VERTEX_BYTES, gpu);
-        long compared = 0, moved = 0;
+        sb_scene_sync_vertices(sc);
+        sb_scene_sync_vertices(sc);
+        assert_int_equal(sb_scene_cpu_poses(sc), cpu0 + 1);   /* a reader's: once a pose */
+        double size = sb_v3_len(sb_v3_sub(sc->bounds.hi, sc->bounds.lo)), dpos = 0, dnrm = 0, loose = 0;
+        long compared = 0, moved = 0, outside = 0;
         for (uint32_t d = 0; d < sc->draw_count; d++) {
             const sb_draw *dr = &sc->draws[d];
             if (dr->motion == SB_DRAW_STILL) continue;
-            size_t off = (size_t)dr->first_vertex * SB_VERTEX_FLOATS, len = (size_t)dr->vertex_count * SB_VERTEX_FLOATS;
-            assert_memory_equal(gpu + off, sc->vertices + off, len * sizeof(float));
-            compared += dr->vertex_count;
-            for (size_t i = 0; i < len; i += SB_VERTEX_FLOATS) moved += memcmp(before + off + i, sc->vertices + off + i, 12) != 0;
+            for (uint32_t v = dr->first_vertex; v < dr->first_vertex + dr->vertex_count; v++) {
+                const float *g = gpu + (size_t)v * SB_VERTEX_FLOATS, *c = sb_vertex(sc, v);
+                for (int e = 0; e < 3; e++) dpos = fmax(dpos, fabs(g[e] - c[e])), dnrm = fmax(dnrm, fabs(g[3 + e] - c[3 + e]));
+                moved += memcmp(before + (size_t)v * SB_VERTEX_FLOATS, c, 12) != 0;
+                compared++;
+            }
+            sb_aabb exact = {{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
+            for (uint32_t i = 0; i < dr->index_count; i++) {
+                const float *c = sb_vertex(sc, sc->indices[dr->first_index + i]);
+                sb_v3 p = sb_v3_make(c[0], c[1], c[2]);
+                outside += p.x < dr->box.lo.x || p.y < dr->box.lo.y || p.z < dr->box.lo.z || p.x > dr->box.hi.x ||
+                           p.y > dr->box.hi.y || p.z > dr->box.hi.z;
+                exact.lo = sb_v3_min(exact.lo, p), exact.hi = sb_v3_max(exact.hi, p);
+            }
+            loose = fmax(loose, sb_v3_len(sb_v3_sub(dr->box.hi, dr->box.lo)) / sb_v3_len(sb_v3_sub(exact.hi, exact.lo)));
         }
-        printf("%s at %.2f s: %ld moving vertices on the GPU as on the CPU, %ld of them away from the load's pose\n",
-               file, times[k], compared, moved);
+        printf("%s at %.2f s: %ld moving vertices, %ld of them away from the load's pose; the GPU's within %.3g of the "
+               "CPU's (%.3g of the scene's %.3g), normals within %.3g; %ld outside their draw's box, the loosest box "
+               "%.2fx the exact one across\n", file, times[k], compared, moved, dpos, dpos / size, size, dnrm, outside, loose);
         assert_true(compared > 0 && moved > 0);
+        assert_true(dpos <= 2e-6 * size);   /* 16 float epsilons */
+        assert_true(dnrm <= 1e-5);
+        assert_int_equal(outside, 0);
+        assert_true(loose >= 1 && loose <= 2);
     }
     free(before);
     free(gpu);
