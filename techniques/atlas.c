@@ -150,8 +150,7 @@ static void place_lamp(lamp *l, const sb_gpu *g, int which, int kind) {
     l->light = which;
     l->pos = src->position;
     l->range = src->range > 0 ? src->range : 0;
-    l->far = l->range > 0 ? l->range : 2 * sb_v3_len(sb_v3_sub(g->scene->bounds.hi, g->scene->bounds.lo));
-    l->near = fmax(l->far * 1e-4, 1e-6);   /* as cube's (dpsm's paraboloids store the distance, linear in it) */
+    sb_lamp_clip(src, g->scene, 1e-4, &l->near, &l->far);   /* as cube's (dpsm's paraboloids store the distance) */
     l->cone = src->type == SB_LIGHT_SPOT ? src->cone : 0;
     l->dir = src->direction;
     l->faces = l->cone > 0 && l->cone <= SB_PI / 4 ? 1 : kind == KIND_DPSM ? 2 : 6;
@@ -369,8 +368,6 @@ static void forget_under(atlas_state *s, const lamp *l) {
 }
 
 /* The lamp's frame of dpsm.c: x = +X, y = +Z, z = -Y (the front hemisphere looks down), column-major. */
-static const float lamp_frame[9] = {1, 0, 0, 0, 0, -1, 0, 1, 0};
-
 /* Sets tile k's uniforms on the depth program of variant a. */
 static void set_tile(const atlas_state *s, const lamp *l, int a, int k) {
     bool paraboloid = l->faces == 2;
@@ -381,11 +378,7 @@ static void set_tile(const atlas_state *s, const lamp *l, int a, int k) {
         glUniformMatrix4fv(u[0], 1, GL_FALSE, m);
         return;
     }
-    glUniform3f(u[0], (float)l->pos.x, (float)l->pos.y, (float)l->pos.z);
-    glUniformMatrix3fv(u[1], 1, GL_FALSE, lamp_frame);
-    glUniform1f(u[2], k ? -1.0f : 1.0f);
-    glUniform1f(u[3], (float)l->near);
-    glUniform1f(u[4], (float)l->far);
+    sb_lamp_paraboloid_uniforms(u, l->pos, l->near, l->far, k ? -1.0f : 1.0f);
 }
 
 /* Draws one lamp's tiles (casters culled per cube face, or to its range for the paraboloids); returns how many

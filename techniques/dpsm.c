@@ -15,9 +15,6 @@ static const sb_param_def dpsm_params[] = {
 
 /* The lamp's frame: x = +X, y = +Z, z = -Y (the front hemisphere looks down), as a column-major mat3 whose
  * columns are the images of x, y and z. */
-static const float lamp_frame[9] = {1, 0, 0, 0, 0, -1, 0, 1, 0};
-
-enum { U_LAMP, U_FRAME, U_SIDE, U_NEAR, U_FAR };
 
 static bool depth_program(sb_lamp_state *s, int a, const char *defines, sb_err *err) {
     const char *vs[] = {sb_shader_dpsm_vert}, *fs[] = {sb_shader_depth_frag};
@@ -31,12 +28,7 @@ static bool depth_program(sb_lamp_state *s, int a, const char *defines, sb_err *
 
 /* arg: the hemisphere, 1 front or -1 back */
 static void set_side(const sb_lamp_state *s, int a, const void *arg) {
-    const GLint *u = s->pass[a].u;
-    glUniform3f(u[U_LAMP], (float)s->lamp.x, (float)s->lamp.y, (float)s->lamp.z);
-    glUniformMatrix3fv(u[U_FRAME], 1, GL_FALSE, lamp_frame);
-    glUniform1f(u[U_NEAR], (float)s->near);
-    glUniform1f(u[U_FAR], (float)s->far);
-    glUniform1f(u[U_SIDE], *(const float *)arg);
+    sb_lamp_paraboloid_uniforms(s->pass[a].u, s->lamp, s->near, s->far, *(const float *)arg);
 }
 
 static int render(sb_lamp_state *s, sb_frame *f) {
@@ -52,7 +44,7 @@ static int render(sb_lamp_state *s, sb_frame *f) {
 }
 
 static void lookup(const sb_lamp_state *s) {
-    glUniformMatrix3fv(s->u_lookup[0], 1, GL_FALSE, lamp_frame);
+    glUniformMatrix3fv(s->u_lookup[0], 1, GL_FALSE, sb_lamp_paraboloid_frame);
 }
 
 static const sb_lamp_kind dpsm_kind = {

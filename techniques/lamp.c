@@ -59,6 +59,22 @@ void sb_lamp_cube_faces(sb_v3 pos, double near, double far, sb_m4 vp[6]) {
     }
 }
 
+void sb_lamp_clip(const sb_light *src, const sb_scene *s, double near_share, double *near, double *far) {
+    double diag = sb_v3_len(sb_v3_sub(s->bounds.hi, s->bounds.lo));
+    *far = src->range > 0 ? src->range : 2 * diag;
+    *near = fmax(*far * near_share, near_share * 1e-2);
+}
+
+const float sb_lamp_paraboloid_frame[9] = {1, 0, 0, 0, 0, -1, 0, 1, 0};
+
+void sb_lamp_paraboloid_uniforms(const GLint u[5], sb_v3 lamp, double near, double far, float side) {
+    glUniform3f(u[0], (float)lamp.x, (float)lamp.y, (float)lamp.z);
+    glUniformMatrix3fv(u[1], 1, GL_FALSE, sb_lamp_paraboloid_frame);
+    glUniform1f(u[2], side);
+    glUniform1f(u[3], (float)near);
+    glUniform1f(u[4], (float)far);
+}
+
 sb_lamp_state *sb_lamp_light(sb_lamp_state *s, int i) {
     return i ? (sb_lamp_state *)(s->others + (size_t)(i - 1) * s->size) : s;
 }
@@ -69,9 +85,7 @@ static bool place(sb_lamp_state *l, const sb_run_ctx *rc, int which, sb_err *err
     const sb_light *lamp = sb_scene_point_light(g->scene, which, NULL);
     l->source = lamp;
     l->lamp = lamp->position;
-    double diag = sb_v3_len(sb_v3_sub(g->scene->bounds.hi, g->scene->bounds.lo));
-    l->far = lamp->range > 0 ? lamp->range : 2 * diag;
-    l->near = fmax(l->far * l->kind->near_share, l->kind->near_share * 1e-2);
+    sb_lamp_clip(lamp, g->scene, l->kind->near_share, &l->near, &l->far);
     if (l->kind->setup) l->kind->setup(l);
     return make_targets(l, rc->tech->name, err);
 }

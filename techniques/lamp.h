@@ -69,6 +69,15 @@ struct sb_lamp_state {
     const sb_light *source;     /* the scene's light: shaded and scored only within its range and a spot's cone */
 };
 
+/* A lamp's clip range: far its range (a lamp of no range: twice the scene's size), near a share of far (at least
+ * a hundredth of the share, in scene units): cube's and dpsm's maps, the atlas's tiles. */
+void sb_lamp_clip(const sb_light *src, const sb_scene *s, double near_share, double *near, double *far);
+/* The paraboloids' frame (dpsm.vert's u_frame: the lamp's +Y is the front hemisphere's axis) and a paraboloid
+ * depth pass's uniforms: u holds the locations of u_lamp, u_frame, u_side, u_near and u_far; side 1 the front
+ * hemisphere, -1 the back (dpsm's maps, the atlas's paraboloid tiles). */
+extern const float sb_lamp_paraboloid_frame[9];
+void sb_lamp_paraboloid_uniforms(const GLint u[5], sb_v3 lamp, double near, double far, float side);
+
 /* The six faces of a cube around pos, in GL's cube-map order and orientation (+X -X +Y -Y +Z -Z): each face's
  * view-projection, 90 degrees from near to far (cube.c's maps, the atlas's tiles). */
 void sb_lamp_cube_faces(sb_v3 pos, double near, double far, sb_m4 vp[6]);
