@@ -273,9 +273,9 @@ extern "C" void sb_scene_sync_vertices(const sb_scene *s) {
     if (!(m->nodes_t == s->pose_time)) motion_nodes(*m, s->pose_time);
     // the vertices are the CPU's copy of the pose the scene holds (its boxes stay sb_scene_pose's): writing them
     // changes nothing a const reader of the scene relies on but them
-    pose_places(m, const_cast<sb_scene *>(s), GPU_ONES);
+    uint32_t posed = pose_places(m, const_cast<sb_scene *>(s), GPU_ONES);
     m->vertices_serial = s->pose_serial;
-    m->cpu_poses++;
+    m->cpu_poses += posed > 0;
 }
 
 extern "C" uint64_t sb_scene_cpu_poses(const sb_scene *s) { return s->motion ? s->motion->cpu_poses : 0; }
