@@ -426,8 +426,9 @@ static const sb_run_col run_cols[] = {
     INFO_METRIC("eval_s", r_num, eval_s, "s",
                 "wall time of the untimed evaluation pass: its frames, their flicker twins, the reference"),
     INFO_METRIC("ref_refit_ms", r_num, ref_refit_ms, "ms",
-                "a moving scene: the reference's refit of its moving draws to a frame's pose, mean over the evaluation "
-                "pass (empty: nothing moves)"),
+                "a moving scene: the reference's refit of its moving draws to a frame's pose (the CPU's copy of the "
+                "vertices posed first, where the GPU posed the frame's), mean over the evaluation pass (empty: nothing "
+                "moves)"),
     RUN_METRIC("harness_share", r_harness_share, 0, "share", "share of the run's wall time outside rendered frames"),
     RUN("throttle_reasons", r_throttle, 0, "clock event (throttle) reasons seen in the measured frames (NVML)"),
     RUN("error_frames", r_error_frames, 0, "frames evaluated against the reference"),
