@@ -132,9 +132,13 @@ void *sb_map_file(const char *path, size_t *size, bool writable) {
     struct stat st;
     void *p = NULL;
     if (fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0) {
-        p = mmap(NULL, (size_t)st.st_size, PROT_READ | (writable ? PROT_WRITE : 0), MAP_PRIVATE | MAP_POPULATE, fd, 0);
+        /* a writable private mapping is not populated: populating it would copy every page (the kernel breaks
+           copy-on-write for each), where a reader writes a few (a moving scene's posed vertices) */
+        p = mmap(NULL, (size_t)st.st_size, PROT_READ | (writable ? PROT_WRITE : 0),
+                 MAP_PRIVATE | (writable ? 0 : MAP_POPULATE), fd, 0);
         if (p == MAP_FAILED) p = NULL;
         else *size = (size_t)st.st_size;
+        if (p && writable) madvise(p, (size_t)st.st_size, MADV_WILLNEED);
     }
     close(fd);
     return p;

@@ -1185,7 +1185,7 @@ bool Loader::anim_bound() {
         tw[ni] = (p < 0 ? 0 : tw[p]) + (p < 0 ? 1 : sw[p]) * tr[ni];
     }
     for (const MoPlace &pl : mo->places) {
-        const PrimData &b = pl.base;
+        const sbm::RestData &b = pl.base;
         double r = 0, wsum = 0;
         for (size_t v = 0; v < b.pos.size() / 3; v++) r = std::max(r, norm3(&b.pos[3 * v]));
         for (size_t t = 0; t < pl.dpos.size(); t++) {   // morph targets at their weights' largest keys

@@ -65,7 +65,7 @@ void grow(sb_aabb &b, sb_v3 p) { b.lo = sb_v3_min(b.lo, p), b.hi = sb_v3_max(b.h
 // or without normals (the CPU makes its face normals), stays with the CPU and its exact boxes.
 void motion_bounds_prepare(sb_motion &m, const sb_scene *s) {
     for (sbm::MoPlace &p : m.places) {
-        const sbm::PrimData &b = p.base;
+        const sbm::RestData &b = p.base;
         p.gpu = b.have_n;
         for (int set = 0; set < b.skin_sets; set++)
             for (double w : b.weights[set]) p.gpu = p.gpu && w >= 0;
@@ -149,8 +149,8 @@ struct Scratch {
 };
 
 void motion_place(const sb_motion &m, Scratch &x, sb_scene *s, const sbm::MoPlace &p, bool boxes) {
-    x.pos = p.base.pos;
-    x.nrm = p.base.nrm;
+    x.pos.assign(p.base.pos.begin(), p.base.pos.end());
+    x.nrm.assign(p.base.nrm.begin(), p.base.nrm.end());
     const std::vector<double> &w = m.weights[p.node];
     for (size_t t = 0; t < p.dpos.size() && t < w.size(); t++) {
         if (w[t] == 0) continue;
@@ -289,7 +289,7 @@ extern "C" const sb_pose_data *sb_motion_gpu_data(const sb_scene *s) {
         uint32_t palette = 0, weights = 0, morph_rows = 0;
         for (const sbm::MoPlace &p : m.places) {
             if (!p.gpu || p.draws.empty()) continue;
-            const sbm::PrimData &b = p.base;
+            const sbm::RestData &b = p.base;
             sb_pose_place g = {};
             g.first = p.first, g.count = p.count;
             g.rest_first = (uint32_t)(m.gpu_rest.size() / SB_POSE_REST_FLOATS);
@@ -423,21 +423,37 @@ bool take_str(sb_rbuf *r, std::string &s) {
     return true;
 }
 
-void put_prim(sb_wbuf *b, const sbm::PrimData &d) {   // what posing reads: not the texture coordinates nor the indices
-    put_vec(b, d.pos), put_vec(b, d.nrm), put_vec(b, std::vector<double>()), put_vec(b, std::vector<uint32_t>());
-    for (int k = 0; k < 2; k++) put_vec(b, d.joints[k]), put_vec(b, d.weights[k]);
-    uint32_t flags[3] = {d.have_n, d.have_uv, (uint32_t)d.skin_sets};
+void put_doubles(sb_wbuf *b, const sbm::Doubles &v) {
+    sb_wbuf_put_u32(b, (uint32_t)v.size());
+    sb_wbuf_put_array(b, v.data(), v.size() * sizeof(double));
+}
+
+// A view of the entry's array (aligned as written), for as long as the scene keeps the entry mapped.
+bool take_doubles(sb_rbuf *r, sbm::Doubles &v) {
+    uint32_t n = sb_rbuf_take_u32(r);
+    const double *p = (const double *)sb_rbuf_take_array(r, n, sizeof(double));
+    if (!r->ok) return false;
+    v.view(p, p ? n : 0);
+    return true;
+}
+
+void put_prim(sb_wbuf *b, const sbm::RestData &d) {   // what posing reads: not the texture coordinates nor the indices
+    put_doubles(b, d.pos), put_doubles(b, d.nrm), put_vec(b, std::vector<double>()), put_vec(b, std::vector<uint32_t>());
+    for (int k = 0; k < 2; k++) put_doubles(b, d.joints[k]), put_doubles(b, d.weights[k]);
+    uint32_t flags[3] = {d.have_n, 0, (uint32_t)d.skin_sets};   // the second: have_uv once, unread
     sb_wbuf_put(b, flags, sizeof flags);
 }
 
-bool take_prim(sb_rbuf *r, sbm::PrimData &d) {
-    bool ok = take_vec(r, d.pos) && take_vec(r, d.nrm) && take_vec(r, d.uv) && take_vec(r, d.idx);
-    for (int k = 0; ok && k < 2; k++) ok = take_vec(r, d.joints[k]) && take_vec(r, d.weights[k]);
+bool take_prim(sb_rbuf *r, sbm::RestData &d) {
+    std::vector<double> uv;   // written empty
+    std::vector<uint32_t> idx;
+    bool ok = take_doubles(r, d.pos) && take_doubles(r, d.nrm) && take_vec(r, uv) && take_vec(r, idx);
+    for (int k = 0; ok && k < 2; k++) ok = take_doubles(r, d.joints[k]) && take_doubles(r, d.weights[k]);
     const uint32_t *f = ok ? (const uint32_t *)sb_rbuf_take(r, 3 * sizeof(uint32_t)) : nullptr;
     if (!f) return r->ok = false;
     uint32_t flags[3];
     memcpy(flags, f, sizeof flags);
-    d.have_n = flags[0] != 0, d.have_uv = flags[1] != 0, d.skin_sets = (int)flags[2];
+    d.have_n = flags[0] != 0, d.skin_sets = (int)flags[2];
     return d.skin_sets <= 2 && d.pos.size() % 3 == 0 && (!d.have_n || d.nrm.size() == d.pos.size());
 }
 

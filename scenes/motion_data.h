@@ -42,10 +42,43 @@ inline sb_m4 normal_matrix(const sb_m4 &w) {
     return nm;
 }
 
+// An array of doubles a moving placement's rest data holds: its own (a file read), or a view of the scene cache's
+// entry, which stays mapped as long as the scene (a cached load copies none of it).
+class Doubles {
+  public:
+    Doubles() = default;
+    Doubles(const std::vector<double> &v) : own_(v) {}
+    void view(const double *p, size_t n) { own_.clear(), view_ = p, n_ = n; }
+    const double *data() const { return view_ ? view_ : own_.data(); }
+    size_t size() const { return view_ ? n_ : own_.size(); }
+    bool empty() const { return size() == 0; }
+    const double &operator[](size_t i) const { return data()[i]; }
+    const double *begin() const { return data(); }
+    const double *end() const { return data() + size(); }
+
+  private:
+    std::vector<double> own_;
+    const double *view_ = nullptr;
+    size_t n_ = 0;
+};
+
+// What posing reads of a primitive's vertex data: positions, normals and skin (not the texture coordinates or
+// the indices).
+struct RestData {
+    Doubles pos, nrm, joints[2], weights[2];
+    bool have_n = false;
+    int skin_sets = 0;
+    RestData() = default;
+    RestData(const PrimData &d)
+        : pos(d.pos), nrm(d.nrm), joints{d.joints[0], d.joints[1]}, weights{d.weights[0], d.weights[1]},
+          have_n(d.have_n), skin_sets(d.skin_sets) {}
+};
+
 // The skinned positions and normals of a primitive's vertices: each by its joints' matrices (world x inverse
-// bind), weighted. The joints were checked against the skin where the primitive was first read.
-inline void skin_vertices(const std::vector<sb_m4> &jm, const PrimData &d, std::vector<double> &pos,
-                          std::vector<double> &nrm) {
+// bind), weighted. The joints were checked against the skin where the primitive was first read. D: PrimData
+// (at load) or RestData (posing again).
+template <class D>
+inline void skin_vertices(const std::vector<sb_m4> &jm, const D &d, std::vector<double> &pos, std::vector<double> &nrm) {
     size_t nv = pos.size() / 3;
     for (size_t v = 0; v < nv; v++) {
         sb_m4 sum = {{0}};
@@ -87,7 +120,7 @@ struct JointBox {
 struct MoPlace {
     int node = -1, skin = -1;                       // skin: its joints pose it (the node's transform is ignored)
     sb_m4 inst = sb_m4_identity();                  // an EXT_mesh_gpu_instancing instance, relative to the node
-    PrimData base;                                  // object space, before morph targets and skin
+    RestData base;                                  // object space, before morph targets and skin
     std::vector<std::vector<double>> dpos, dnrm;    // the morph targets' deltas (empty: none)
     uint32_t first = 0, count = 0;                  // its vertices in the scene
     std::vector<uint32_t> draws;                    // its draws once the scene is finished (sb_motion_mark)
