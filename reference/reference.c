@@ -195,6 +195,7 @@ void sb_reference_update(sb_reference *r) {
 bool sb_reference_build(sb_reference *r, const sb_scene *s, sb_err *err) {
     memset(r, 0, sizeof *r);
     double t0 = sb_now_ms();
+    sb_scene_sync_vertices(s);   /* its triangles as the scene is posed now (the GPU may have posed it since) */
     RTCDevice dev = rtcNewDevice(NULL);
     if (!dev) return sb_fail(err, "embree: cannot create a device (error %d)", (int)rtcGetDeviceError(NULL));
     r->src = s;
