@@ -291,6 +291,13 @@ static void gpu_equals_cpu(const char *file, const char *anim, bool by_gpu) {
         assert_int_equal(outside, 0);
         assert_true(by_gpu ? loose >= 1 && loose <= 2 : loose == 1);
     }
+    /* a reference built after the GPU posed the scene is built from the pose (the CPU's copy posed first) */
+    sb_session_pose(&s, 2.1);
+    uint64_t cpu0 = sb_scene_cpu_poses(sc);
+    sb_reference r;
+    assert_true(sb_reference_build(&r, sc, &err));
+    assert_int_equal(sb_scene_cpu_poses(sc), cpu0 + by_gpu);
+    sb_reference_free(&r);
     free(before);
     free(gpu);
     sb_session_close(&s);
