@@ -33,10 +33,23 @@ typedef struct sb_gpu_pose {
     sb_pose_place *places_gpu;    /* the places with the vertex buffer's numbering */
     pose_chunk *chunks;
     uint32_t chunk_count;
+    GLint64 block;                /* the largest storage block a dispatch binds (block_bytes, at init) */
+    uint32_t dispatch_rows;       /* rest rows a dispatch poses at most */
+    uint32_t dispatches;          /* the last pose's (a test reads it: sb_gpu_pose_dispatches) */
     uint8_t *cpu_draw;            /* per draw: a moving draw the CPU poses (sent from the scene's vertices) */
     bool mapped;                  /* places_gpu and chunks hold the vertex buffer's numbering as uploaded */
     bool pending;                 /* a pose not yet run (sb_gpu_update_motion) */
 } sb_gpu_pose;
+
+/* The largest storage block a dispatch binds: the GL's, or less where SB_POSE_BLOCK_BYTES says (a test seam: the
+ * chunked dispatches a GPU with small blocks takes, on a scene of a character). */
+static GLint64 block_bytes(void) {
+    GLint64 block = 0;
+    glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &block);
+    const char *cap = getenv("SB_POSE_BLOCK_BYTES");
+    long long c = cap ? atoll(cap) : 0;
+    return c > 0 && c < block ? (GLint64)c : block;
+}
 
 static GLuint storage(const void *data, size_t bytes) {
     GLuint b;
@@ -50,12 +63,11 @@ bool sb_gpu_pose_init(sb_gpu *g, sb_err *err) {
     const sb_scene *s = g->scene;
     const sb_pose_data *d = sb_motion_gpu_data(s);
     if (!d) return true;
-    GLint64 block = 0;
-    glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &block);
+    GLint64 block = block_bytes();
     size_t morph_bytes = (size_t)d->morph_count * SB_POSE_MORPH_FLOATS * 4, palette_bytes = (size_t)d->palette_count * 64,
            largest = 0;
     for (uint32_t i = 0; i < d->place_count; i++) {
-        size_t b = (size_t)d->places[i].count * SB_POSE_REST_FLOATS * 4 + 4096;   /* its rows, aligned */
+        size_t b = (size_t)d->places[i].count * SB_VERTEX_BYTES + 4096;   /* its vertices, an aligned range */
         largest = b > largest ? b : largest;
     }
     if ((GLint64)morph_bytes > block || (GLint64)palette_bytes > block || (GLint64)largest > block ||
@@ -72,6 +84,7 @@ bool sb_gpu_pose_init(sb_gpu *g, sb_err *err) {
     sb_gpu_pose *p = sb_xcalloc(1, sizeof *p);
     p->data = d;
     p->prog = prog;
+    p->block = block;
     p->u_rows = glGetUniformLocation(prog, "u_rows");
     p->u_row0 = glGetUniformLocation(prog, "u_row0");
     p->u_rest_base = glGetUniformLocation(prog, "u_rest_base");
@@ -107,9 +120,8 @@ static void pose_map(const sb_gpu *g) {
     sb_gpu_pose *p = g->pose;
     const sb_pose_data *d = p->data;
     const sb_scene *s = g->scene;
-    GLint64 block = 0;
+    GLint64 block = p->block;
     GLint align = 1;
-    glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &block);
     glGetIntegerv(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &align);
     if (align < 4) align = 4;
     block -= (GLint64)align + (GLint64)p->rows_aligned * SB_POSE_REST_FLOATS * 4;   /* room for aligned starts */
@@ -131,9 +143,8 @@ static void pose_map(const sb_gpu *g) {
             uint64_t nhi = hi > (uint64_t)(q->first + q->count) * SB_VERTEX_BYTES ? hi
                                                                                   : (uint64_t)(q->first + q->count) * SB_VERTEX_BYTES;
             nlo -= nlo % (uint64_t)align;
-            uint64_t rows = (uint64_t)q->rest_first + q->count - c.rest0;
-            if (j > i && ((int64_t)(nhi - nlo) > block || (int64_t)(rows * SB_POSE_REST_FLOATS * 4) > block)) break;
-            lo = nlo, hi = nhi, c.rows = (uint32_t)rows;
+            if (j > i && (int64_t)(nhi - nlo) > block) break;
+            lo = nlo, hi = nhi, c.rows = q->rest_first + q->count - c.rest0;
         }
         c.place1 = j;
         c.vtx_off = (GLintptr)lo;
@@ -141,6 +152,9 @@ static void pose_map(const sb_gpu *g) {
         p->chunks[p->chunk_count++] = c;
         i = j;
     }
+    /* each dispatch's rest rows: a block's worth at most (its range starts aligned), and the groups one allows */
+    uint64_t fit = (uint64_t)block / (SB_POSE_REST_FLOATS * 4);
+    p->dispatch_rows = (uint32_t)(fit < (uint64_t)POSE_MAX_GROUPS * POSE_GROUP ? fit : (uint64_t)POSE_MAX_GROUPS * POSE_GROUP);
     p->mapped = true;
 }
 
@@ -168,6 +182,7 @@ bool sb_gpu_pose_run(const sb_gpu *g) {
         glBindBuffer(GL_SHADER_STORAGE_BUFFER, p->weights);
         glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, (GLsizeiptr)d->weight_count * 4, p->weights_cpu);
     }
+    p->dispatches = 0;
     glUseProgram(p->prog);
     glUniform3f(p->u_origin, (float)s->origin.x, (float)s->origin.y, (float)s->origin.z);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 8, p->places);
@@ -180,7 +195,7 @@ bool sb_gpu_pose_run(const sb_gpu *g) {
         glUniform1ui(p->u_vertex_base, (GLuint)(c->vtx_off / 4));
         for (uint32_t done = 0; done < c->rows;) {
             uint32_t rows = c->rows - done;
-            if (rows > POSE_MAX_GROUPS * POSE_GROUP) rows = POSE_MAX_GROUPS * POSE_GROUP;
+            if (rows > p->dispatch_rows) rows = p->dispatch_rows;
             uint32_t r0 = c->rest0 + done, rb = r0 - r0 % p->rows_aligned;   /* the bound range starts aligned */
             glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 9, p->rest, (GLintptr)rb * SB_POSE_REST_FLOATS * 4,
                               (GLsizeiptr)(r0 + rows - rb) * SB_POSE_REST_FLOATS * 4);
@@ -188,12 +203,18 @@ bool sb_gpu_pose_run(const sb_gpu *g) {
             glUniform1ui(p->u_row0, r0 - rb);
             glUniform1ui(p->u_rows, r0 + rows - rb);
             glDispatchCompute((rows + POSE_GROUP - 1) / POSE_GROUP, 1, 1);
+            p->dispatches++;
             done += rows;
         }
     }
     glMemoryBarrier(GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
     glUseProgram(0);
     return true;
+}
+
+void sb_gpu_pose_dispatches(const sb_gpu *g, uint32_t *chunks, uint32_t *dispatches) {
+    *chunks = g->pose ? g->pose->chunk_count : 0;
+    *dispatches = g->pose ? g->pose->dispatches : 0;
 }
 
 bool sb_gpu_pose_leaves(const sb_gpu *g, uint32_t d) { return !g->pose || g->pose->cpu_draw[d]; }

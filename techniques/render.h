@@ -171,6 +171,8 @@ void sb_gpu_pose_due(const sb_gpu *g);
 bool sb_gpu_pose_pending(const sb_gpu *g);
 bool sb_gpu_pose_run(const sb_gpu *g);
 void sb_gpu_pose_remap(const sb_gpu *g);
+/* The last pose's runs of placements (each a range of the vertex buffer) and dispatches (tests). */
+void sb_gpu_pose_dispatches(const sb_gpu *g, uint32_t *chunks, uint32_t *dispatches);
 /* Whether the CPU poses moving draw d (no pass, or a placement the pass leaves): its vertices are sent. */
 bool sb_gpu_pose_leaves(const sb_gpu *g, uint32_t d);
 void sb_gpu_pose_free(sb_gpu *g);

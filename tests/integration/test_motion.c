@@ -238,11 +238,17 @@ static void test_caches_invalidate_what_moved(void **st) {
  * holds its vertices as posed, and is no more than twice the exact box across; the pose alone poses nothing on
  * the CPU (its copy waits for a reader), a reader poses it once; and the vertices moved. by_gpu false: a file
  * whose moving placements the GPU leaves to the CPU (no normals): no pass, the CPU's vertices sent at each pose
- * (bit for bit), their boxes exact. */
-static void gpu_equals_cpu(const char *file, const char *anim, bool by_gpu) {
+ * (bit for bit), their boxes exact. block (bytes, 0: the GL's): storage blocks that small (SB_POSE_BLOCK_BYTES), so
+ * that the pass poses in several runs of placements, each in several dispatches, as a GPU with small blocks would. */
+static void gpu_equals_cpu(const char *file, const char *anim, bool by_gpu, long block) {
     sb_session s;
     sb_err err;
-    if (!open_scene(&s, file, "orbit", 64, 36, 4, anim, &err)) fail_msg("%s", err.msg);
+    char cap[32];
+    snprintf(cap, sizeof cap, "%ld", block);
+    if (block) setenv("SB_POSE_BLOCK_BYTES", cap, 1);
+    bool opened = open_scene(&s, file, "orbit", 64, 36, 4, anim, &err);
+    unsetenv("SB_POSE_BLOCK_BYTES");
+    if (!opened) fail_msg("%s", err.msg);
     assert_true(sb_scene_moves(&s.scene));
     assert_int_equal(s.scene.instance_draws, 0);   /* the vertex buffer is the scene's array, in order */
     assert_true((s.gpu.pose != NULL) == by_gpu);   /* the GPU poses, or leaves every placement to the CPU */
@@ -255,6 +261,10 @@ static void gpu_equals_cpu(const char *file, const char *anim, bool by_gpu) {
         uint64_t cpu0 = sb_scene_cpu_poses(sc);
         sb_session_pose(&s, times[k]);
         assert_true(sb_gpu_pose_run(&s.gpu) == by_gpu);   /* as the next frame drawn would */
+        uint32_t chunks, dispatches;
+        sb_gpu_pose_dispatches(&s.gpu, &chunks, &dispatches);
+        if (block) assert_true(chunks >= 2 && dispatches > chunks);   /* split as small blocks ask */
+        else assert_true(chunks == by_gpu && dispatches == by_gpu);
         assert_int_equal(sb_scene_cpu_poses(sc), cpu0);   /* the pose alone: the GPU's (or the CPU-only ones') */
         glBindBuffer(GL_ARRAY_BUFFER, s.gpu.vbo);
         glGetBufferSubData(GL_ARRAY_BUFFER, 0, (GLsizeiptr)sc->vertex_count * SB_VERTEX_BYTES, gpu);
@@ -282,6 +292,7 @@ static void gpu_equals_cpu(const char *file, const char *anim, bool by_gpu) {
             }
             loose = fmax(loose, sb_v3_len(sb_v3_sub(dr->box.hi, dr->box.lo)) / sb_v3_len(sb_v3_sub(exact.hi, exact.lo)));
         }
+        printf("(%u run(s) of placements, %u dispatch(es)) ", chunks, dispatches);
         printf("%s at %.2f s: %ld moving vertices, %ld of them away from the load's pose; the GPU's within %.3g of the "
                "CPU's (%.3g of the scene's %.3g), normals within %.3g; %ld outside their draw's box, the loosest box "
                "%.2fx the exact one across\n", file, times[k], compared, moved, dpos, dpos / size, size, dnrm, outside, loose);
@@ -314,7 +325,8 @@ static void test_real_animated_files(void **st) {
             print_message("%s: not here, left out\n", path);
             continue;
         }
-        gpu_equals_cpu(path, files[i][1], true);
+        gpu_equals_cpu(path, files[i][1], true, 0);
+        if (i == 0) gpu_equals_cpu(path, files[i][1], true, 400000);   /* its 3 placements: 2 runs, 4 dispatches */
         /* raster and rays agree on every evaluated frame, and raycast is the reference */
         assert_int_equal(sh("%s run %s orbit sm raycast --anim %s --frames 5 --size 256x144 --error-every 1 --quiet "
                             "--out %s/real", test_binary(), path, files[i][1], g_tmp), 0);
@@ -398,8 +410,8 @@ static void test_placements_the_gpu_leaves(void **st) {
     assert_int_equal(fwrite(b, 1, len, f), len);
     fclose(f);
     free(b);
-    gpu_equals_cpu(to, NULL, false);
-    gpu_equals_cpu(src, NULL, true);   /* the same file with its normals: the GPU's */
+    gpu_equals_cpu(to, NULL, false, 0);
+    gpu_equals_cpu(src, NULL, true, 0);   /* the same file with its normals: the GPU's */
 }
 
 static void test_anim_none_is_the_still_file(void **st) {
