@@ -175,21 +175,21 @@ void motion_place(const sb_motion &m, Scratch &x, sb_scene *s, const sbm::MoPlac
                          (uint32_t)p.draws.size(), boxes);
 }
 
-enum Which { ALL_EXACT, CPU_ONLY, GPU_ONES };   // every placement with exact boxes; those the GPU cannot pose; the others
-
 // The placements are posed on every core (each writes vertices and boxes of its own): 64 skinned characters are
 // 60 % of a frame on one core of this machine (docs/measurements.md, Moving casters).
-uint32_t pose_places(sb_motion *m, sb_scene *s, Which which) {
+// gpu_ones: the placements the GPU poses (their vertices only: their boxes follow the joints); else those it
+// cannot pose (vertices and exact boxes).
+uint32_t pose_places(sb_motion *m, sb_scene *s, bool gpu_ones) {
     std::vector<const sbm::MoPlace *> todo;
     for (const sbm::MoPlace &p : m->places)
-        if (which == ALL_EXACT || (which == CPU_ONLY) != p.gpu) todo.push_back(&p);
+        if (p.gpu == gpu_ones) todo.push_back(&p);
     size_t n = todo.size();
     unsigned cores = std::max(1u, std::thread::hardware_concurrency());
     size_t threads = std::min<size_t>(std::min<size_t>(cores, 16), n);
     std::atomic<size_t> next(0);
     auto work = [&]() {
         Scratch x;
-        for (size_t i; (i = next.fetch_add(1)) < n;) motion_place(*m, x, s, *todo[i], which != GPU_ONES);
+        for (size_t i; (i = next.fetch_add(1)) < n;) motion_place(*m, x, s, *todo[i], !gpu_ones);
     };
     std::vector<std::thread> pool;
     for (size_t k = 1; k < threads; k++) pool.emplace_back(work);
@@ -199,11 +199,6 @@ uint32_t pose_places(sb_motion *m, sb_scene *s, Which which) {
 }
 
 } // namespace
-
-extern "C" uint32_t sb_motion_pose(sb_motion *m, sb_scene *s, double t) {
-    motion_nodes(*m, t);
-    return pose_places(m, s, ALL_EXACT);
-}
 
 extern "C" uint32_t sb_motion_mark(sb_motion *m, sb_scene *s) {
     std::map<uint32_t, sbm::MoPlace *> place;   // a placement's first vertex -> it
@@ -252,7 +247,7 @@ extern "C" bool sb_scene_pose(sb_scene *s, double t) {
     sb_motion *m = s->motion;
     if (!m->bounds_ready) motion_bounds_prepare(*m, s);
     motion_nodes(*m, t);
-    pose_places(m, s, CPU_ONLY);   // the placements the GPU cannot pose: vertices and exact boxes, as ever
+    pose_places(m, s, false);   // the placements the GPU cannot pose: vertices and exact boxes, as ever
     motion_bound(*m, s);
     s->pose_time = t;
     s->pose_serial++;
@@ -273,7 +268,7 @@ extern "C" void sb_scene_sync_vertices(const sb_scene *s) {
     if (!(m->nodes_t == s->pose_time)) motion_nodes(*m, s->pose_time);
     // the vertices are the CPU's copy of the pose the scene holds (its boxes stay sb_scene_pose's): writing them
     // changes nothing a const reader of the scene relies on but them
-    uint32_t posed = pose_places(m, const_cast<sb_scene *>(s), GPU_ONES);
+    uint32_t posed = pose_places(m, const_cast<sb_scene *>(s), true);
     m->vertices_serial = s->pose_serial;
     m->cpu_poses += posed > 0;
 }

@@ -60,10 +60,6 @@ void sb_motion_gpu_frame(const struct sb_scene *s, float *palette, float *weight
 /* The animation lines of `shadowbench info SCENE`: the clips that play, what moves and how. */
 void sb_motion_info(const struct sb_scene *s, FILE *out);
 
-/* Poses every moving primitive of s at clip time t (seconds; each clip
- * loops over its duration) and writes its vertices (sb_scene_repose_prim).
- * Returns the placements posed. */
-uint32_t sb_motion_pose(sb_motion *m, struct sb_scene *s, double t);
 /* Marks the scene's draws by how they move (sb_draw.motion) once the scene is
  * finished (its draws chunked); returns how many move. */
 uint32_t sb_motion_mark(sb_motion *m, struct sb_scene *s);

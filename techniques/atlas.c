@@ -367,7 +367,6 @@ static void forget_under(atlas_state *s, const lamp *l) {
     }
 }
 
-/* The lamp's frame of dpsm.c: x = +X, y = +Z, z = -Y (the front hemisphere looks down), column-major. */
 /* Sets tile k's uniforms on the depth program of variant a. */
 static void set_tile(const atlas_state *s, const lamp *l, int a, int k) {
     bool paraboloid = l->faces == 2;

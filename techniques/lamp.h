@@ -72,7 +72,8 @@ struct sb_lamp_state {
 /* A lamp's clip range: far its range (a lamp of no range: twice the scene's size), near a share of far (at least
  * a hundredth of the share, in scene units): cube's and dpsm's maps, the atlas's tiles. */
 void sb_lamp_clip(const sb_light *src, const sb_scene *s, double near_share, double *near, double *far);
-/* The paraboloids' frame (dpsm.vert's u_frame: the lamp's +Y is the front hemisphere's axis) and a paraboloid
+/* The paraboloids' frame (dpsm.vert's u_frame, column-major: x = +X, y = +Z, z = -Y, so the front hemisphere
+ * looks down) and a paraboloid
  * depth pass's uniforms: u holds the locations of u_lamp, u_frame, u_side, u_near and u_far; side 1 the front
  * hemisphere, -1 the back (dpsm's maps, the atlas's paraboloid tiles). */
 extern const float sb_lamp_paraboloid_frame[9];

@@ -500,13 +500,9 @@ static double nearest_receiver(const sb_scene *s, const double (*planes)[4], sb_
                                uint32_t n) {
     qsort(near, n, sizeof *near, by_depth);
     double best = 1e300;
-    for (uint32_t k = 0; k < n; k++)   /* a moving draw's triangles as posed: the CPU's copy */
-        if (s->draws[near[k].draw].motion != SB_DRAW_STILL) {
-            sb_scene_sync_vertices(s);
-            break;
-        }
     for (uint32_t k = 0; k < n && near[k].depth < best; k++) {
         const sb_draw *dr = &s->draws[near[k].draw];
+        if (dr->motion != SB_DRAW_STILL) sb_scene_sync_vertices(s);   /* its triangles as posed: the CPU's copy */
         for (uint32_t i = 0; i + 2 < dr->index_count; i += 3) {
             sb_v3 poly[2][16];
             for (int v = 0; v < 3; v++) {

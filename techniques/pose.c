@@ -18,8 +18,7 @@
 #define POSE_MAX_GROUPS 65535u
 
 typedef struct pose_chunk {
-    uint32_t place0, place1;      /* its placements */
-    uint32_t rest0, rows;         /* its rest rows */
+    uint32_t rest0, rows;         /* its placements' rest rows */
     GLintptr vtx_off;             /* the bound range of the vertex buffer, aligned */
     GLsizeiptr vtx_len;
 } pose_chunk;
@@ -28,7 +27,8 @@ typedef struct sb_gpu_pose {
     const sb_pose_data *data;
     GLuint prog, places, rest, morph, palette, weights;
     GLint u_rows, u_row0, u_rest_base, u_vertex_base, u_origin;
-    uint32_t rows_aligned;        /* rest rows a whole number of the storage offset alignment */
+    GLint align;                  /* the storage buffers' offset alignment */
+    uint32_t rows_aligned;        /* rest rows a whole number of it */
     float *palette_cpu, *weights_cpu;
     sb_pose_place *places_gpu;    /* the places with the vertex buffer's numbering */
     pose_chunk *chunks;
@@ -90,10 +90,10 @@ bool sb_gpu_pose_init(sb_gpu *g, sb_err *err) {
     p->u_rest_base = glGetUniformLocation(prog, "u_rest_base");
     p->u_vertex_base = glGetUniformLocation(prog, "u_vertex_base");
     p->u_origin = glGetUniformLocation(prog, "u_origin");
-    GLint align = 4;
-    glGetIntegerv(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &align);
+    glGetIntegerv(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &p->align);
+    if (p->align < 4) p->align = 4;
     p->rows_aligned = 1;
-    while ((p->rows_aligned * SB_POSE_REST_FLOATS * 4) % (uint32_t)(align > 0 ? align : 4)) p->rows_aligned++;
+    while ((p->rows_aligned * SB_POSE_REST_FLOATS * 4) % (uint32_t)p->align) p->rows_aligned++;
     p->places_gpu = sb_xmalloc(sizeof(sb_pose_place) * d->place_count);
     p->places = storage(NULL, sizeof(sb_pose_place) * d->place_count);
     p->rest = storage(d->rest, (size_t)d->rest_count * SB_POSE_REST_FLOATS * 4);
@@ -120,11 +120,9 @@ static void pose_map(const sb_gpu *g) {
     sb_gpu_pose *p = g->pose;
     const sb_pose_data *d = p->data;
     const sb_scene *s = g->scene;
-    GLint64 block = p->block;
-    GLint align = 1;
-    glGetIntegerv(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &align);
-    if (align < 4) align = 4;
-    block -= (GLint64)align + (GLint64)p->rows_aligned * SB_POSE_REST_FLOATS * 4;   /* room for aligned starts */
+    const GLint align = p->align;
+    /* room for aligned starts */
+    const GLint64 block = p->block - align - (GLint64)p->rows_aligned * SB_POSE_REST_FLOATS * 4;
     for (uint32_t i = 0; i < d->place_count; i++) {
         p->places_gpu[i] = d->places[i];
         uint32_t dr = d->place_draw[i];
@@ -134,7 +132,7 @@ static void pose_map(const sb_gpu *g) {
     glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, (GLsizeiptr)(sizeof(sb_pose_place) * d->place_count), p->places_gpu);
     p->chunk_count = 0;
     for (uint32_t i = 0; i < d->place_count;) {
-        pose_chunk c = {.place0 = i, .rest0 = d->places[i].rest_first};
+        pose_chunk c = {.rest0 = d->places[i].rest_first};
         uint64_t lo = UINT64_MAX, hi = 0;
         uint32_t j = i;
         for (; j < d->place_count; j++) {
@@ -146,7 +144,6 @@ static void pose_map(const sb_gpu *g) {
             if (j > i && (int64_t)(nhi - nlo) > block) break;
             lo = nlo, hi = nhi, c.rows = q->rest_first + q->count - c.rest0;
         }
-        c.place1 = j;
         c.vtx_off = (GLintptr)lo;
         c.vtx_len = (GLsizeiptr)(hi - lo);
         p->chunks[p->chunk_count++] = c;

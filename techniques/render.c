@@ -161,16 +161,6 @@ double sb_gpu_scene_bytes(const sb_scene *s) {
 }
 
 /* (Re)fills the vertex, index and per-draw transform buffers for sharing `mode`. */
-static void upload_geometry_as(const sb_gpu *g, int mode);
-
-/* (Re)fills the buffers, then poses the moving vertices again where the GPU poses them: the upload sent the
- * CPU's copy, which may hold an older pose. */
-static void upload_geometry(const sb_gpu *g, int mode) {
-    upload_geometry_as(g, mode);
-    sb_gpu_pose_remap(g);
-    sb_gpu_pose_run(g);
-}
-
 static void upload_geometry_as(const sb_gpu *g, int mode) {
     const sb_scene *s = g->scene;
     struct sb_gpu_geom *gm = g->geom;
@@ -228,6 +218,14 @@ static void upload_geometry_as(const sb_gpu *g, int mode) {
     glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)at * sizeof(uint32_t), ib, GL_STATIC_DRAW);
     free(vb);
     gm->orig = ib;
+}
+
+/* upload_geometry_as, then the moving vertices posed again where the GPU poses them: the upload sent the CPU's
+ * copy, which may hold an older pose. */
+static void upload_geometry(const sb_gpu *g, int mode) {
+    upload_geometry_as(g, mode);
+    sb_gpu_pose_remap(g);
+    sb_gpu_pose_run(g);
 }
 
 /* Materials as alpha.glsl's SbMaterial and the texels as an R8UI buffer texture. */
@@ -300,16 +298,12 @@ static void arrange_for(const sb_gpu *g, const double light[4]) {
     const sb_scene *s = g->scene;
     const struct sb_gpu_geom *gm = g->geom;
     const uint32_t *orig = gm->orig ? gm->orig : s->indices;   /* the GPU's numbering, as uploaded */
-    for (uint32_t d = 0; d < s->draw_count; d++)   /* which way an open moving draw faces: the CPU's pose */
-        if (s->draws[d].motion != SB_DRAW_STILL && !s->draws[d].double_sided && !s->draws[d].closed) {
-            sb_scene_sync_vertices(s);
-            break;
-        }
     uint32_t *rest = sb_xmalloc(sizeof(uint32_t) * 3 * SB_CHUNK_TRIS);
     for (uint32_t d = 0; d < s->draw_count; d++) {
         const sb_draw *dr = &s->draws[d];
         fc->count[d] = dr->index_count / 3;
         if (dr->double_sided || dr->closed || shares(s, d, gm->mode)) continue;
+        if (dr->motion != SB_DRAW_STILL) sb_scene_sync_vertices(s);   /* which way it faces: the CPU's pose */
         /* which way a triangle faces from the scene's own (world) vertices; what moves is its GPU copy */
         const uint32_t *flat = s->indices + dr->first_index, *src = orig + gm->first[d];
         uint32_t *dst = fc->indices + gm->first[d], n = dr->index_count / 3, front = 0, back = 0;

@@ -17,10 +17,10 @@
 #include <string.h>
 
 
+#include "motion.h"
 #include "render.h"
 #include "reference.h"
 #include "shaders.h"
-#include "motion.h"
 
 typedef struct volumes_desc {
     int mode;
