@@ -68,3 +68,52 @@ bool sb_stability(const sb_stability_in *in, char *why, size_t len) {
             100 * rel);
     return why[0] == 0;
 }
+
+/* One line's fields (at most 4 + SB_REPLAY_REPS), split at blanks; the count, or -1 past the most. */
+static int split_fields(const char *line, size_t n, char f[][64]) {
+    int k = 0;
+    for (size_t i = 0; i < n;) {
+        while (i < n && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) i++;
+        if (i == n || line[i] == '#') break;
+        size_t b = i;
+        while (i < n && line[i] != ' ' && line[i] != '\t' && line[i] != '\r' && line[i] != '#') i++;
+        if (k == 4 + SB_REPLAY_REPS || i - b >= 64) return -1;
+        memcpy(f[k], line + b, i - b);
+        f[k++][i - b] = 0;
+    }
+    return k;
+}
+
+int sb_stability_replay_find(const char *text, const char *technique, int attempt, sb_stability_replay *out,
+                             char *why, size_t len) {
+    int lineno = 0, found = 0;
+    for (const char *p = text; *p;) {
+        const char *nl = strchr(p, '\n');
+        size_t n = nl ? (size_t)(nl - p) : strlen(p);
+        lineno++;
+        char f[4 + SB_REPLAY_REPS][64];
+        int k = split_fields(p, n, f);
+        p += n + (nl != NULL);
+        if (k == 0) continue;
+        if (k < 5) {   /* -1: too many fields or one too long */
+            snprintf(why, len, "line %d: expected technique attempt calib_before calib_after ms_1 [... ms_%d]", lineno,
+                     SB_REPLAY_REPS);
+            return -1;
+        }
+        long a = 0;
+        sb_stability_replay r = {.nreps = k - 4};
+        bool ok = (!strcmp(f[1], "*") || (sb_parse_int(f[1], &a) && a >= 1)) && sb_parse_double(f[2], &r.calib_before) &&
+                  sb_parse_double(f[3], &r.calib_after) && r.calib_before > 0 && r.calib_after > 0;
+        for (int i = 0; ok && i < r.nreps; i++) ok = sb_parse_double(f[4 + i], &r.rep_ms[i]) && r.rep_ms[i] > 0;
+        if (!ok) {
+            snprintf(why, len, "line %d: the attempt must be * or 1 and on, the probe and frame times positive numbers",
+                     lineno);
+            return -1;
+        }
+        if (!found && (!strcmp(f[0], "*") || !strcmp(f[0], technique)) && (!strcmp(f[1], "*") || a == attempt)) {
+            *out = r;
+            found = 1;   /* the rest read on: a typo anywhere in the file fails every run, not only some */
+        }
+    }
+    return found;
+}

@@ -33,3 +33,22 @@ typedef struct sb_stability_in {
 
 /* True when stable; otherwise false with the reasons ("; "-separated) in why. */
 bool sb_stability(const sb_stability_in *in, char *why, size_t len);
+
+/* A test seam: timings for the verdict replayed from a file (SB_REPLAY_TIMINGS
+ * names it), so a test of what the verdict starts (a run flagged, run again,
+ * recovered or not) decides on given numbers, not on the machine's load.
+ * Each line: technique attempt calib_before calib_after ms_1 [ms_2 ...] --
+ * `*` for any technique or attempt, every frame of repetition K taking ms_K
+ * (the last one for the repetitions beyond), `#` a comment; the first line
+ * that matches wins. */
+#define SB_REPLAY_REPS 8
+typedef struct sb_stability_replay {
+    double calib_before, calib_after;
+    double rep_ms[SB_REPLAY_REPS];
+    int nreps;
+} sb_stability_replay;
+
+/* 1: text's line for (technique, attempt) in *out; 0: none matches; -1: a
+ * malformed line anywhere in text, why says which ("line N: ..."). */
+int sb_stability_replay_find(const char *text, const char *technique, int attempt, sb_stability_replay *out,
+                             char *why, size_t len);

@@ -177,9 +177,46 @@ static void test_paired_verdicts(void **st) {
     assert_true(fabs(p.ratio - 26.1 / 20.2) < 1e-12);
 }
 
+/* The replay seam's file (SB_REPLAY_TIMINGS): the first matching line wins, `*` matches any technique or attempt,
+ * comments and blank lines are skipped, and a malformed line anywhere is an error naming it. */
+static void test_stability_replay(void **st) {
+    (void)st;
+    const char *text = "# technique attempt before after ms...\n"
+                       "\n"
+                       "pssm 1 6 6.5 10 20   # disturbed once\n"
+                       "pssm * 6 6 10 10\n"
+                       "* 2 1 2 3\n";
+    sb_stability_replay r;
+    char why[200] = "";
+    assert_int_equal(sb_stability_replay_find(text, "pssm", 1, &r, why, sizeof why), 1);
+    assert_true(r.calib_before == 6 && r.calib_after == 6.5 && r.nreps == 2 && r.rep_ms[0] == 10 && r.rep_ms[1] == 20);
+    assert_int_equal(sb_stability_replay_find(text, "pssm", 3, &r, why, sizeof why), 1);
+    assert_true(r.nreps == 2 && r.rep_ms[1] == 10);
+    assert_int_equal(sb_stability_replay_find(text, "sm", 2, &r, why, sizeof why), 1);
+    assert_true(r.calib_before == 1 && r.calib_after == 2 && r.nreps == 1 && r.rep_ms[0] == 3);
+    assert_int_equal(sb_stability_replay_find(text, "sm", 1, &r, why, sizeof why), 0);
+    assert_int_equal(sb_stability_replay_find("", "sm", 1, &r, why, sizeof why), 0);
+    static const char *const bad[][2] = {
+        {"sm 1 6 6\n", "line 1: expected technique attempt"},                       /* no frame time */
+        {"sm 1 6 6 1 2 3 4 5 6 7 8 9\n", "line 1: expected technique attempt"},     /* 9 repetitions */
+        {"sm 0 6 6 10\n", "line 1: the attempt must be * or 1 and on"},
+        {"sm 1 6 -6 10\n", "line 1: the attempt must be * or 1 and on"},
+        {"sm 1 6 6 1O\n", "line 1: the attempt must be * or 1 and on"},
+        {"sm 1 6 6 10\n\nsm x 6 6 10\n", "line 3: "},                             /* after the match too */
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        why[0] = 0;
+        assert_int_equal(sb_stability_replay_find(bad[i][0], "sm", 1, &r, why, sizeof why), -1);
+        print_message("%s", why);
+        print_message("\n");
+        assert_non_null(strstr(why, bad[i][1]));
+    }
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_known_values), cmocka_unit_test(test_t_quantiles),
                                        cmocka_unit_test(test_stability_verdict),
+                                       cmocka_unit_test(test_stability_replay),
                                        cmocka_unit_test(test_percentile_select),
                                        cmocka_unit_test(test_paired_verdicts)};
     return cmocka_run_group_tests_name("stats", tests, NULL, NULL);
