@@ -103,8 +103,10 @@ int sb_stability_replay_find(const char *text, const char *technique, int attemp
         long a = 0;
         sb_stability_replay r = {.nreps = k - 4};
         bool ok = (!strcmp(f[1], "*") || (sb_parse_int(f[1], &a) && a >= 1)) && sb_parse_double(f[2], &r.calib_before) &&
-                  sb_parse_double(f[3], &r.calib_after) && r.calib_before > 0 && r.calib_after > 0;
-        for (int i = 0; ok && i < r.nreps; i++) ok = sb_parse_double(f[4 + i], &r.rep_ms[i]) && r.rep_ms[i] > 0;
+                  sb_parse_double(f[3], &r.calib_after) && r.calib_before > 0 && r.calib_after > 0 &&
+                  isfinite(r.calib_before) && isfinite(r.calib_after);
+        for (int i = 0; ok && i < r.nreps; i++)
+            ok = sb_parse_double(f[4 + i], &r.rep_ms[i]) && r.rep_ms[i] > 0 && isfinite(r.rep_ms[i]);
         if (!ok) {
             snprintf(why, len, "line %d: the attempt must be * or 1 and on, the probe and frame times positive numbers",
                      lineno);

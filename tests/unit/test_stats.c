@@ -202,6 +202,7 @@ static void test_stability_replay(void **st) {
         {"sm 0 6 6 10\n", "line 1: the attempt must be * or 1 and on"},
         {"sm 1 6 -6 10\n", "line 1: the attempt must be * or 1 and on"},
         {"sm 1 6 6 1O\n", "line 1: the attempt must be * or 1 and on"},
+        {"sm 1 6 6 inf\n", "line 1: the attempt must be * or 1 and on"},
         {"sm 1 6 6 10\n\nsm x 6 6 10\n", "line 3: "},                             /* after the match too */
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
