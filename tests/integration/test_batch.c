@@ -451,8 +451,9 @@ static void test_unstable_run_again(void **st) {
     char dir[4096];
     snprintf(dir, sizeof dir, "%s", last_line_of(g_out));
     int at2 = 0, at3 = 0;   /* one line a run run again */
-    for (const char *q = g_out; (q = strstr(q, "1 unstable run(s) run again (attempt ")) != NULL; q++)
-        at2 += q[37] == '2', at3 += q[37] == '3';
+    static const char again[] = "1 unstable run(s) run again (attempt ";
+    for (const char *q = g_out; (q = strstr(q, again)) != NULL; q++)
+        at2 += q[sizeof again - 1] == '2', at3 += q[sizeof again - 1] == '3';
     assert_int_equal(at2, 2);
     assert_int_equal(at3, 1);
     assert_non_null(strstr(g_out, "2 run(s): 2 ok (1 unstable), 0 failed, 0 skipped; 2 unstable run(s) run again, "
