@@ -297,6 +297,19 @@ sb_aabb sb_aabb_transform(sb_m4 m, const sb_aabb *b) {
     return out;
 }
 
+sb_aabb sb_aabb_transform_affine(sb_m4 m, const sb_aabb *b) {
+    const double *a = m.m;
+    if (a[3] != 0 || a[7] != 0 || a[11] != 0 || a[15] != 1) return sb_aabb_transform(m, b);
+    double c[3] = {0.5 * (b->lo.x + b->hi.x), 0.5 * (b->lo.y + b->hi.y), 0.5 * (b->lo.z + b->hi.z)};
+    double h[3] = {0.5 * (b->hi.x - b->lo.x), 0.5 * (b->hi.y - b->lo.y), 0.5 * (b->hi.z - b->lo.z)};
+    double oc[3], oh[3];
+    for (int r = 0; r < 3; r++) {
+        oc[r] = a[12 + r] + a[r] * c[0] + a[4 + r] * c[1] + a[8 + r] * c[2];
+        oh[r] = fabs(a[r]) * h[0] + fabs(a[4 + r]) * h[1] + fabs(a[8 + r]) * h[2];
+    }
+    return (sb_aabb){{oc[0] - oh[0], oc[1] - oh[1], oc[2] - oh[2]}, {oc[0] + oh[0], oc[1] + oh[1], oc[2] + oh[2]}};
+}
+
 double sb_aabb_dist2(const sb_aabb *b, sb_v3 p) {
     double e[3] = {p.x < b->lo.x ? b->lo.x - p.x : p.x > b->hi.x ? p.x - b->hi.x : 0,
                    p.y < b->lo.y ? b->lo.y - p.y : p.y > b->hi.y ? p.y - b->hi.y : 0,

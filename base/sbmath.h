@@ -78,6 +78,9 @@ static inline sb_aabb sb_aabb_union(sb_aabb a, sb_aabb b) {
 }
 /* The box of the eight corners through m (sb_m4_point: projected where m projects). */
 sb_aabb sb_aabb_transform(sb_m4 m, const sb_aabb *b);
+/* The same box through an affine m (last row 0 0 0 1; else sb_aabb_transform), from the box's centre and half-size
+ * (Arvo 1990): equal but for rounding, a fraction of the cost; for boxes remade every frame (the moving draws'). */
+sb_aabb sb_aabb_transform_affine(sb_m4 m, const sb_aabb *b);
 /* The squared distance from p to the box (0 inside it). */
 double sb_aabb_dist2(const sb_aabb *b, sb_v3 p);
 

@@ -234,7 +234,7 @@ static void light_node(sb_jw *j, const char *name, int light, const sb_v3 *pos, 
 static void gltf_document(const sb_cameras_req *r, sb_jw *j) {
     const sb_run_opts *o = r->opts;
     const int n = o->frames, cams = has_twins(r) ? 2 : 1, lamps = lamp_count(r->scene);
-    sb_v3 sun;
+    sb_v3 sun = {0, 0, 0};   /* read only with have_sun (release builds cannot see that) */
     const bool have_sun = sun_of(r, &sun);
     gbuf g = {0};
     float *times = sb_xmalloc(sizeof(float) * (size_t)n), *pos = sb_xmalloc(sizeof(float) * 3 * (size_t)n),

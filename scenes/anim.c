@@ -53,8 +53,11 @@ void sb_anim_sample(const sb_anim_sampler *s, double t, double *out) {
 }
 
 sb_m4 sb_trs_matrix(const sb_trs *x) {
-    sb_m4 t = sb_m4_translate(sb_v3_make(x->t[0], x->t[1], x->t[2]));
-    sb_m4 r = sb_quat_to_m4(sb_quat_norm((sb_quat){x->r[0], x->r[1], x->r[2], x->r[3]}));
-    sb_m4 s = sb_m4_scale(sb_v3_make(x->s[0], x->s[1], x->s[2]));
-    return sb_m4_mul(t, sb_m4_mul(r, s));
+    /* T * R * S written out: the rotation's columns scaled, the translation the last column (the same numbers as the
+       products: their other terms are exact zeros and ones) */
+    sb_m4 m = sb_quat_to_m4(sb_quat_norm((sb_quat){x->r[0], x->r[1], x->r[2], x->r[3]}));
+    for (int c = 0; c < 3; c++)
+        for (int row = 0; row < 3; row++) m.m[c * 4 + row] *= x->s[c];
+    m.m[12] = x->t[0], m.m[13] = x->t[1], m.m[14] = x->t[2];
+    return m;
 }

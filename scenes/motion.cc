@@ -9,6 +9,9 @@
 #include <atomic>
 #include <map>
 #include <memory>
+#include <condition_variable>
+#include <functional>
+#include <mutex>
 #include <thread>
 
 #include "motion_data.h"
@@ -20,30 +23,185 @@ extern "C" {
 
 namespace {
 
-// The nodes' world transforms at clip time t: each clip's channels sampled at t modulo its duration.
-void motion_nodes(sb_motion &m, double t) {
+// One channel at clip time t, into the node's transform or weights.
+void sample_channel(sb_motion &m, sbm::MoChannel &c, double t) {
+    const sbm::MoClip &cl = m.clips[c.clip];
+    double ct = cl.duration > 0 ? fmod(t, cl.duration) : 0;
+    if (ct < 0) ct += cl.duration;
+    double v[64];
+    sb_anim_sample(&c.ch.s, ct, v);
+    if (c.path == sbm::PATH_W) {
+        m.weights[c.node].assign(v, v + c.ch.s.ncomp);
+        return;
+    }
+    double *dst = c.path == sbm::PATH_T ? m.trs[c.node].t : c.path == sbm::PATH_R ? m.trs[c.node].r : m.trs[c.node].s;
+    memcpy(dst, v, sizeof(double) * (c.path == sbm::PATH_R ? 4 : 3));
+}
+
+// A moving node's world transform (its parent's made first).
+void world_of(sb_motion &m, int ni) {
+    sb_m4 local = m.anim[ni] || !m.has_matrix[ni] ? sb_trs_matrix(&m.trs[ni]) : m.rest_local[ni];
+    m.world[ni] = m.parent[ni] < 0 ? local : sb_m4_mul(m.world[m.parent[ni]], local);
+}
+
+// Once: the rest pose (every clip's channels play at each pose, each writing the same field of the same node, so
+// the rest stays where none writes), which nodes move (a channel's or under one) and the still ones' world
+// matrices, made here only.
+void motion_prepare_nodes(sb_motion &m) {
     size_t n = m.parent.size();
     m.trs = m.rest;
-    m.anim.assign(n, 0);
     m.weights = m.rest_weights;
-    for (sbm::MoChannel &c : m.channels) {
-        const sbm::MoClip &cl = m.clips[c.clip];
-        double ct = cl.duration > 0 ? fmod(t, cl.duration) : 0;
-        if (ct < 0) ct += cl.duration;
-        double v[64] = {0};
-        sb_anim_sample(&c.ch.s, ct, v);
-        if (c.path == sbm::PATH_W) {
-            m.weights[c.node].assign(v, v + c.ch.s.ncomp);
-            continue;
-        }
-        double *dst = c.path == sbm::PATH_T ? m.trs[c.node].t : c.path == sbm::PATH_R ? m.trs[c.node].r : m.trs[c.node].s;
-        memcpy(dst, v, sizeof(double) * (c.path == sbm::PATH_R ? 4 : 3));
-        m.anim[c.node] = 1;
-    }
+    m.anim.assign(n, 0);
+    for (const sbm::MoChannel &c : m.channels)
+        if (c.path != sbm::PATH_W) m.anim[c.node] = 1;
+    m.moving.assign(n, 0);
     m.world.resize(n);
     for (int ni : m.topo) {
-        sb_m4 local = m.anim[ni] || !m.has_matrix[ni] ? sb_trs_matrix(&m.trs[ni]) : m.rest_local[ni];
-        m.world[ni] = m.parent[ni] < 0 ? local : sb_m4_mul(m.world[m.parent[ni]], local);
+        m.moving[ni] = m.anim[ni] || (m.parent[ni] >= 0 && m.moving[m.parent[ni]]);
+        world_of(m, ni);
+    }
+}
+
+} // namespace
+
+namespace sbm {
+// A few threads kept for the poses' work, asleep between them (nothing of theirs runs in a timed frame): run(n, f)
+// calls f(0..n-1) on n of them (the caller is 0) and returns when all have.
+class Workers {
+public:
+    explicit Workers(unsigned extra) {
+        for (unsigned i = 0; i < extra; i++) th_.emplace_back([this, i] { loop(i + 1); });
+    }
+    ~Workers() {
+        {
+            std::lock_guard<std::mutex> l(mu_);
+            quit_ = true;
+        }
+        wake_.notify_all();
+        for (std::thread &t : th_) t.join();
+    }
+    unsigned size() const { return (unsigned)th_.size() + 1; }
+    void run(unsigned n, const std::function<void(unsigned)> &f) {
+        n = std::max(1u, std::min(n, size()));
+        if (n > 1) {
+            std::lock_guard<std::mutex> l(mu_);
+            job_ = &f, want_ = n, busy_ = n - 1, gen_++;
+        }
+        if (n > 1) wake_.notify_all();
+        f(0);
+        if (n == 1) return;
+        std::unique_lock<std::mutex> l(mu_);
+        done_.wait(l, [this] { return busy_ == 0; });
+    }
+
+private:
+    void loop(unsigned me) {
+        uint64_t seen = 0;
+        std::unique_lock<std::mutex> l(mu_);
+        for (;;) {
+            wake_.wait(l, [&] { return quit_ || gen_ != seen; });
+            if (quit_) return;
+            seen = gen_;
+            if (me >= want_) continue;   // a job for fewer threads than there are
+            const std::function<void(unsigned)> *f = job_;
+            l.unlock();
+            (*f)(me);
+            l.lock();
+            if (--busy_ == 0) done_.notify_one();
+        }
+    }
+    std::vector<std::thread> th_;
+    std::mutex mu_;
+    std::condition_variable wake_, done_;
+    const std::function<void(unsigned)> *job_ = nullptr;
+    unsigned want_ = 0, busy_ = 0;
+    uint64_t gen_ = 0;
+    bool quit_ = false;
+};
+} // namespace sbm
+
+namespace {
+
+// Once (after motion_bounds_prepare): the pose's work in groups that share no node, so that each group is one
+// thread's: a group is a top moving node (moving, its parent not), its channels, the moving nodes under it and the
+// GPU-posed placements that read only its nodes (or still ones). What reads two groups, or a node that only a
+// weights channel moves, is done alone: those channels before the groups, those placements after them.
+void motion_prepare_groups(sb_motion &m) {
+    size_t n = m.parent.size();
+    std::vector<int> group(n, -1);
+    m.groups.clear();
+    for (int ni : m.topo) {
+        if (!m.moving[ni]) continue;
+        int p = m.parent[ni];
+        if (p >= 0 && m.moving[p]) {
+            group[ni] = group[p];
+        } else {
+            group[ni] = (int)m.groups.size();
+            m.groups.emplace_back();
+        }
+        m.groups[group[ni]].nodes.push_back(ni);
+    }
+    std::vector<char> weighted(n, 0);   // a weights channel writes it
+    m.lone_channels.clear(), m.lone_places.clear();
+    for (size_t c = 0; c < m.channels.size(); c++) {
+        int ni = m.channels[c].node;
+        if (m.channels[c].path == sbm::PATH_W) weighted[ni] = 1;
+        if (group[ni] >= 0) m.groups[group[ni]].channels.push_back((uint32_t)c);
+        else m.lone_channels.push_back((uint32_t)c);
+    }
+    for (size_t k = 0; k < m.places.size(); k++) {
+        const sbm::MoPlace &p = m.places[k];
+        if (!p.gpu) continue;
+        int g = -2;   // -2: none read yet; -1: two groups, or a node only weights move
+        auto reads = [&](int ni) {
+            int h = group[ni] >= 0 ? group[ni] : weighted[ni] ? -1 : -2;
+            if (h == -2 || g == -1) return;
+            g = g == -2 || g == h ? h : -1;
+        };
+        reads(p.node);
+        if (p.skin >= 0)
+            for (int j : m.skin_joints[p.skin]) reads(j);
+        if (g >= 0) m.groups[g].places.push_back((uint32_t)k);
+        else m.lone_places.push_back((uint32_t)k);
+    }
+    m.groups_ready = true;
+}
+
+void bound_place(const sb_motion &m, const sbm::MoPlace &p, sb_scene *s, std::vector<sb_m4> &jm);
+
+// The nodes' world transforms at clip time t, each clip's channels sampled at t modulo its duration; with s, the
+// GPU-posed placements' boxes too (motion_bound). The groups go to the motion's threads, a few groups each.
+void motion_nodes(sb_motion &m, double t, sb_scene *s = nullptr) {
+    if (m.moving.size() != m.parent.size()) motion_prepare_nodes(m);
+    if (s && !m.groups_ready) motion_prepare_groups(m);
+    for (uint32_t c : m.lone_channels) sample_channel(m, m.channels[c], t);
+    if (!m.groups_ready) {   // no boxes asked for yet: the channels and nodes in order
+        for (sbm::MoChannel &c : m.channels) sample_channel(m, c, t);
+        for (int ni : m.topo)
+            if (m.moving[ni]) world_of(m, ni);
+        m.nodes_t = t;
+        return;
+    }
+    unsigned cores = std::max(1u, std::min(16u, std::thread::hardware_concurrency()));
+    if (!m.workers && cores > 1 && m.groups.size() > 1) m.workers = new sbm::Workers(cores - 1);
+    std::atomic<size_t> next(0);
+    const size_t count = m.groups.size(), grain = 2;   // groups a thread takes at a time
+    auto work = [&](unsigned) {
+        std::vector<sb_m4> jm;
+        for (size_t i; (i = next.fetch_add(grain)) < count;)
+            for (size_t k = i; k < std::min(count, i + grain); k++) {
+                const sb_motion::Group &g = m.groups[k];
+                for (uint32_t c : g.channels) sample_channel(m, m.channels[c], t);
+                for (int ni : g.nodes) world_of(m, ni);
+                if (s)
+                    for (uint32_t p : g.places) bound_place(m, m.places[p], s, jm);
+            }
+    };
+    if (m.workers) m.workers->run((unsigned)((count + grain - 1) / grain), work);
+    else work(0);
+    if (s) {
+        std::vector<sb_m4> jm;
+        for (uint32_t p : m.lone_places) bound_place(m, m.places[p], s, jm);
     }
     m.nodes_t = t;
 }
@@ -113,30 +271,30 @@ void motion_bounds_prepare(sb_motion &m, const sb_scene *s) {
 // widened by the morph targets at their weights (each target's box of deltas, scaled: a sum of boxes) and carried
 // by its matrix, joined over the draw's joints; relative to the scene's origin and a millionth wider, for the
 // float rounding of the vertices the GPU writes.
-void motion_bound(const sb_motion &m, sb_scene *s) {
-    for (const sbm::MoPlace &p : m.places) {
-        if (!p.gpu) continue;
-        const std::vector<double> &w = m.weights[p.node];
-        sb_v3 elo = sb_v3_make(0, 0, 0), ehi = elo;
-        for (size_t t = 0; t < p.tbox.size() && t < w.size(); t++) {
-            if (w[t] == 0) continue;
-            sb_v3 a = sb_v3_scale(p.tbox[t].lo, w[t]), b = sb_v3_scale(p.tbox[t].hi, w[t]);
-            elo = sb_v3_add(elo, sb_v3_min(a, b)), ehi = sb_v3_add(ehi, sb_v3_max(a, b));
+// One placement's draws' boxes (jm: scratch for its joints' matrices).
+void bound_place(const sb_motion &m, const sbm::MoPlace &p, sb_scene *s, std::vector<sb_m4> &jm) {
+    const std::vector<double> &w = m.weights[p.node];
+    sb_v3 elo = sb_v3_make(0, 0, 0), ehi = elo;
+    for (size_t t = 0; t < p.tbox.size() && t < w.size(); t++) {
+        if (w[t] == 0) continue;
+        sb_v3 a = sb_v3_scale(p.tbox[t].lo, w[t]), b = sb_v3_scale(p.tbox[t].hi, w[t]);
+        elo = sb_v3_add(elo, sb_v3_min(a, b)), ehi = sb_v3_add(ehi, sb_v3_max(a, b));
+    }
+    sb_m4 rigid = p.skin < 0 ? rigid_matrix(m, p) : sb_m4_identity();
+    jm.resize(p.skin >= 0 ? m.skin_joints[p.skin].size() : 0);
+    for (size_t j = 0; j < jm.size(); j++) jm[j] = joint_matrix(m, p, j);   // once a joint, not once a draw
+    for (size_t k = 0; k < p.draws.size(); k++) {
+        sb_aabb u = EMPTY_BOX;
+        for (const sbm::JointBox &jb : p.dbox[k]) {
+            sb_aabb b = {sb_v3_add(jb.box.lo, elo), sb_v3_add(jb.box.hi, ehi)};
+            u = sb_aabb_union(u, sb_aabb_transform_affine(jb.joint < 0 ? rigid : jm[(size_t)jb.joint], &b));
         }
-        sb_m4 rigid = p.skin < 0 ? rigid_matrix(m, p) : sb_m4_identity();
-        for (size_t k = 0; k < p.draws.size(); k++) {
-            sb_aabb u = EMPTY_BOX;
-            for (const sbm::JointBox &jb : p.dbox[k]) {
-                sb_aabb b = {sb_v3_add(jb.box.lo, elo), sb_v3_add(jb.box.hi, ehi)};
-                u = sb_aabb_union(u, sb_aabb_transform(jb.joint < 0 ? rigid : joint_matrix(m, p, (size_t)jb.joint), &b));
-            }
-            if (p.at_zero[k]) grow(u, sb_v3_make(0, 0, 0));
-            u.lo = sb_v3_sub(u.lo, s->origin), u.hi = sb_v3_sub(u.hi, s->origin);
-            sb_v3 ext = sb_v3_sub(u.hi, u.lo), mag = sb_v3_max(sb_v3_abs(u.lo), sb_v3_abs(u.hi));
-            double pad = 1e-6 * (sb_v3_len(ext) + sb_v3_len(mag)) + 1e-30;
-            u.lo = sb_v3_sub(u.lo, sb_v3_make(pad, pad, pad)), u.hi = sb_v3_add(u.hi, sb_v3_make(pad, pad, pad));
-            s->draws[p.draws[k]].box = u;
-        }
+        if (p.at_zero[k]) grow(u, sb_v3_make(0, 0, 0));
+        u.lo = sb_v3_sub(u.lo, s->origin), u.hi = sb_v3_sub(u.hi, s->origin);
+        sb_v3 ext = sb_v3_sub(u.hi, u.lo), mag = sb_v3_max(sb_v3_abs(u.lo), sb_v3_abs(u.hi));
+        double pad = 1e-6 * (sb_v3_len(ext) + sb_v3_len(mag)) + 1e-30;
+        u.lo = sb_v3_sub(u.lo, sb_v3_make(pad, pad, pad)), u.hi = sb_v3_add(u.hi, sb_v3_make(pad, pad, pad));
+        s->draws[p.draws[k]].box = u;
     }
 }
 
@@ -226,6 +384,8 @@ extern "C" sb_motion_stats sb_motion_statistics(const sb_motion *m) {
     st.channels = (uint32_t)m->channels.size();
     st.skipped = m->skipped;
     st.animated_nodes = m->animated_nodes;
+    st.pose_groups = (uint32_t)m->groups.size();
+    st.lone_places = (uint32_t)m->lone_places.size();
     for (const sbm::MoPlace &p : m->places) {
         if (p.skin >= 0) st.skinned_prims++;
         else if (p.kind == SB_DRAW_DEFORMING) st.morphing_prims++;
@@ -239,16 +399,18 @@ extern "C" sb_clip_info sb_motion_clip(const sb_motion *m, uint32_t i) {
     return sb_clip_info{c.name.c_str(), c.duration, c.channels, c.nodes};
 }
 
-extern "C" void sb_motion_free(sb_motion *m) { delete m; }
+extern "C" void sb_motion_free(sb_motion *m) {
+    if (m) delete m->workers;
+    delete m;
+}
 
 
 extern "C" bool sb_scene_pose(sb_scene *s, double t) {
     if (!sb_scene_moves(s) || s->pose_time == t) return false;
     sb_motion *m = s->motion;
     if (!m->bounds_ready) motion_bounds_prepare(*m, s);
-    motion_nodes(*m, t);
+    motion_nodes(*m, t, s);   // and the boxes that follow the joints of the placements the GPU poses
     pose_places(m, s, false);   // the placements the GPU cannot pose: vertices and exact boxes, as ever
-    motion_bound(*m, s);
     s->pose_time = t;
     s->pose_serial++;
     sb_aabb b = s->still_bounds;

@@ -31,6 +31,9 @@ typedef struct sb_motion_stats {
     uint32_t clips, channels, skipped;      /* clips and channels played; channels left out (warnings) */
     uint32_t animated_nodes;                /* nodes a played channel targets */
     uint32_t rigid_prims, skinned_prims, morphing_prims;   /* primitive placements that move, by kind */
+    /* after the first pose: its work's groups that share no node (a thread's each, a few at a time), and the
+       GPU-posed placements that read two groups (bounded after them, alone) */
+    uint32_t pose_groups, lone_places;
 } sb_motion_stats;
 
 #include <stdio.h>

@@ -132,6 +132,8 @@ struct MoPlace {
     std::vector<sb_aabb> tbox;                      // per morph target: the box of its position deltas
 };
 
+class Workers;   // motion.cc: the threads a pose's groups share
+
 } // namespace sbm
 
 // The clips that play (motion.h): the node graph's rest pose, the channels, the moving placements.
@@ -149,11 +151,20 @@ struct sb_motion {
     uint32_t skipped = 0, animated_nodes = 0;
     // the nodes at the pose (motion_nodes), read by every placement's posing
     std::vector<sb_trs> trs;
-    std::vector<char> anim;
+    std::vector<char> anim, moving;                 // a channel moves it; it or a node above it is moved
     std::vector<sb_m4> world;
     std::vector<std::vector<double>> weights;
     double nodes_t = NAN;                           // the clip time world and weights hold (NAN: none yet)
     bool bounds_ready = false;                      // every placement's dbox made (motion_bounds_prepare)
+    // the pose's work in groups that share no node (motion.cc, motion_prepare_groups), and the threads it runs on
+    struct Group {
+        std::vector<uint32_t> channels, places;
+        std::vector<int> nodes;                     // in topological order
+    };
+    std::vector<Group> groups;
+    std::vector<uint32_t> lone_channels, lone_places;
+    bool groups_ready = false;
+    sbm::Workers *workers = nullptr;                // sb_motion_free ends them
     // the scene's vertices on the CPU (sb_scene_sync_vertices): the pose serial they hold, and how often posed
     uint64_t vertices_serial = 0;
     uint64_t cpu_poses = 0;

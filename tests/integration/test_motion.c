@@ -240,7 +240,7 @@ static void test_caches_invalidate_what_moved(void **st) {
  * whose moving placements the GPU leaves to the CPU (no normals): no pass, the CPU's vertices sent at each pose
  * (bit for bit), their boxes exact. block (bytes, 0: the GL's): storage blocks that small (SB_POSE_BLOCK_BYTES), so
  * that the pass poses in several runs of placements, each in several dispatches, as a GPU with small blocks would. */
-static void gpu_equals_cpu(const char *file, const char *anim, bool by_gpu, long block) {
+static void gpu_equals_cpu(const char *file, const char *anim, bool by_gpu, long block, uint32_t groups) {
     sb_session s;
     sb_err err;
     char cap[32];
@@ -260,6 +260,9 @@ static void gpu_equals_cpu(const char *file, const char *anim, bool by_gpu, long
     for (int k = 0; k < 3; k++) {
         uint64_t cpu0 = sb_scene_cpu_poses(sc);
         sb_session_pose(&s, times[k]);
+        sb_motion_stats ms = sb_motion_statistics(sc->motion);
+        if (groups) assert_int_equal(ms.pose_groups, groups);   /* the pose's work in that many threads' shares */
+        if (groups) assert_int_equal(ms.lone_places, 0);
         assert_true(sb_gpu_pose_run(&s.gpu) == by_gpu);   /* as the next frame drawn would */
         uint32_t chunks, dispatches;
         sb_gpu_pose_dispatches(&s.gpu, &chunks, &dispatches);
@@ -325,8 +328,15 @@ static void test_real_animated_files(void **st) {
             print_message("%s: not here, left out\n", path);
             continue;
         }
-        gpu_equals_cpu(path, files[i][1], true, 0);
-        if (i == 0) gpu_equals_cpu(path, files[i][1], true, 400000);   /* its 3 placements: 2 runs, 4 dispatches */
+        gpu_equals_cpu(path, files[i][1], true, 0, 0);
+        if (i == 0) gpu_equals_cpu(path, files[i][1], true, 400000, 0);   /* its 3 placements: 2 runs, 4 dispatches */
+        if (i == 0) {   /* three walkers (scripts/place-movers): a group each, posed and boxed on threads of their own */
+            char three[4096];
+            snprintf(three, sizeof three, "%s/movers-3.glb", g_tmp);
+            assert_int_equal(sh("python3 %s/scripts/place-movers %s/plane-box.glb %s 3 %s --clip %s --force",
+                                getenv("SB_SOURCE_ROOT"), getenv("SB_DATA_DIR"), path, three, files[i][1]), 0);
+            gpu_equals_cpu(three, "all", true, 0, 3);
+        }
         /* raster and rays agree on every evaluated frame, and raycast is the reference */
         assert_int_equal(sh("%s run %s orbit sm raycast --anim %s --frames 5 --size 256x144 --error-every 1 --quiet "
                             "--out %s/real", test_binary(), path, files[i][1], g_tmp), 0);
@@ -410,8 +420,8 @@ static void test_placements_the_gpu_leaves(void **st) {
     assert_int_equal(fwrite(b, 1, len, f), len);
     fclose(f);
     free(b);
-    gpu_equals_cpu(to, NULL, false, 0);
-    gpu_equals_cpu(src, NULL, true, 0);   /* the same file with its normals: the GPU's */
+    gpu_equals_cpu(to, NULL, false, 0, 0);
+    gpu_equals_cpu(src, NULL, true, 0, 0);   /* the same file with its normals: the GPU's */
 }
 
 static void test_anim_none_is_the_still_file(void **st) {
