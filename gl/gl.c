@@ -99,12 +99,7 @@ GLuint sb_gpu_program(const char *label, const char *defines, const char *const 
     return sb_gpu_link(label, defines, st, 2, err);
 }
 
-GLuint sb_shadow_texture(GLenum target, GLenum format, int width, int height, int layers, bool linear) {
-    GLuint tex;
-    glGenTextures(1, &tex);
-    glBindTexture(target, tex);
-    if (target == GL_TEXTURE_2D_ARRAY) glTexStorage3D(target, 1, format, width, height, layers);
-    else glTexStorage2D(target, 1, format, width, height);
+void sb_shadow_texture_params(GLenum target, bool linear) {
     GLint filt = linear ? GL_LINEAR : GL_NEAREST;
     glTexParameteri(target, GL_TEXTURE_MIN_FILTER, filt);
     glTexParameteri(target, GL_TEXTURE_MAG_FILTER, filt);
@@ -112,6 +107,16 @@ GLuint sb_shadow_texture(GLenum target, GLenum format, int width, int height, in
     glTexParameteri(target, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
     glTexParameteri(target, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
     glTexParameteri(target, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+}
+
+GLuint sb_shadow_texture(GLenum target, GLenum format, int width, int height, int layers, bool linear) {
+    GLuint tex;
+    glGenTextures(1, &tex);
+    glBindTexture(target, tex);
+    if (target == GL_TEXTURE_2D_ARRAY || target == GL_TEXTURE_CUBE_MAP_ARRAY)
+        glTexStorage3D(target, 1, format, width, height, layers);
+    else glTexStorage2D(target, 1, format, width, height);
+    sb_shadow_texture_params(target, linear);
     return tex;
 }
 

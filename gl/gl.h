@@ -54,8 +54,12 @@ bool sb_gl_allocates(GLenum format, int width, int height, int layers, int *laye
 /* Bytes a texel of a sized internal format takes (the depth and colour formats the shadow maps use; 4 else). */
 int sb_gl_texel_bytes(GLenum format);
 /* A depth texture with hardware comparison (LEQUAL), clamped to its edge: GL_TEXTURE_2D_ARRAY of width x height
- * with `layers` layers, GL_TEXTURE_CUBE_MAP or GL_TEXTURE_2D (layers ignored). */
+ * with `layers` layers, GL_TEXTURE_CUBE_MAP_ARRAY of layers / 6 cubes, GL_TEXTURE_CUBE_MAP or GL_TEXTURE_2D (layers
+ * ignored); immutable, so that views of its layers can be made (glTextureView). */
 GLuint sb_shadow_texture(GLenum target, GLenum format, int width, int height, int layers, bool linear);
+/* A shadow texture's sampling state (the bound one of target): depth compare, clamped, bilinear where linear (a view
+ * of one made by sb_shadow_texture gets its own). */
+void sb_shadow_texture_params(GLenum target, bool linear);
 
 /* Layered shadow rendering (cascades, cube faces): per layer, routed by a
  * geometry shader, by gl_Layer from the vertex shader, or the best available. */

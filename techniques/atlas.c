@@ -79,9 +79,7 @@ static const sb_counter_def atlas_counters[C_COUNT] = {
                       .doc = "atlas: lamps whose tiles are smaller than their policy asked for, for want of room"},
     [C_OCCUPANCY] = {.name = "atlas_occupancy", .unit = "share", .stats = SB_STAT_MEAN,
                      .doc = "atlas: share of the atlas its tiles cover this frame"},
-    [C_GRID] = {.name = "grid_items", .unit = "count", .stats = SB_STAT_MEAN,
-                .doc = "atlas grid=on: lamp-cluster pairs the frame's light grid lists (a cluster: a 32-pixel tile "
-                       "and a depth slice; 0 with grid=off)"},
+    [C_GRID] = SB_GRID_ITEMS_COUNTER,
 };
 
 /* One lamp this run shadows: where it is, and its tiles now and when last drawn. */

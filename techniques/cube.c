@@ -12,6 +12,7 @@ static const sb_param_def cube_params[] = {
     SB_LAMP_PARAMS("cube face resolution"),
     SB_PARAM_E(sb_lamp_desc, filter, hw, "none|hw|pcf", "shadow filter", .tune = "none,hw,pcf3"),
     SB_PARAM_E(sb_lamp_desc, layered, off, "off|gs|vs|on", "six passes, or one layered pass"),
+    SB_LAMP_GRID_PARAM,
 };
 
 typedef struct {

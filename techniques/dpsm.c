@@ -11,6 +11,7 @@
 static const sb_param_def dpsm_params[] = {
     SB_LAMP_PARAMS("resolution of each paraboloid map"),
     SB_PARAM_E(sb_lamp_desc, filter, hw, "none|hw", "shadow filter", .tune = "none,hw,pcf3"),
+    SB_LAMP_GRID_PARAM,
 };
 
 /* The lamp's frame: x = +X, y = +Z, z = -Y (the front hemisphere looks down), as a column-major mat3 whose
@@ -43,9 +44,7 @@ static int render(sb_lamp_state *s, sb_frame *f) {
     return n ? 2 : 0;
 }
 
-static void lookup(const sb_lamp_state *s) {
-    glUniformMatrix3fv(s->u_lookup[0], 1, GL_FALSE, sb_lamp_paraboloid_frame);
-}
+static void lookup(const GLint u[4]) { glUniformMatrix3fv(u[0], 1, GL_FALSE, sb_lamp_paraboloid_frame); }
 
 static const sb_lamp_kind dpsm_kind = {
     .target = GL_TEXTURE_2D_ARRAY, .maps = 2, .near_share = 1e-5, .vis_glsl = sb_shader_vis_dpsm_glsl,

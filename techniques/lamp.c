@@ -1,11 +1,20 @@
 /* lamp.c - the point-light techniques' shared machinery (lamp.h). */
 #include "lamp.h"
 
-#include "lightgrid.h"
+#include "shaders.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+const sb_counter_def sb_lamp_counters[1] = {SB_GRID_ITEMS_COUNTER};
+
+/* grid=on with more than one light: the lamps' maps in one texture, their pass through the light grid */
+static bool one_pass(const sb_lamp_desc *d, int count) { return d->grid && count > 1; }
+
+static GLenum array_target(const sb_lamp_kind *k) {
+    return k->target == GL_TEXTURE_CUBE_MAP ? GL_TEXTURE_CUBE_MAP_ARRAY : GL_TEXTURE_2D_ARRAY;
+}
 
 double sb_lamp_technique_shadow_bytes(const sb_technique *t, const void *desc) {
     const sb_lamp_kind *k = t->impl;
@@ -20,13 +29,29 @@ bool sb_lamp_technique_supported(const sb_run_ctx *rc, const void *desc, sb_err 
     if (!rc->lights && !sb_lamp_supported(rc->gpu, d->light, name, why)) return false;   /* --lights: read at load */
     if (k->layered && !sb_layered_supported(rc->gpu->ctx, d->layered, name, why)) return false;
     int count = rc->lights ? rc->lights->count : 1;   /* a map set a light */
-    return sb_lamp_maps_fit(rc->gpu, name, d->res, count * sb_lamp_technique_shadow_bytes(rc->tech, desc),
-                            k->target == GL_TEXTURE_CUBE_MAP, why);
+    if (!sb_lamp_maps_fit(rc->gpu, name, d->res, count * sb_lamp_technique_shadow_bytes(rc->tech, desc),
+                          k->target == GL_TEXTURE_CUBE_MAP, why))
+        return false;
+    int fit = 0;
+    if (one_pass(d, count) && !sb_gl_allocates(GL_DEPTH_COMPONENT32F, d->res, d->res, count * k->maps, &fit))
+        return sb_fail(why, "%s:res=%d:grid=on: the %d lamps' %d maps in one texture exceed what %s allocates (%d "
+                       "layers); grid=off keeps a texture a lamp", name, d->res, count, count * k->maps,
+                       rc->gpu->ctx->renderer, fit);
+    return true;
 }
 
-static bool make_targets(sb_lamp_state *s, const char *name, sb_err *err) {
+/* Its maps: a texture of its own, or a view of its layers of the lamps' one texture (array). */
+static bool make_targets(sb_lamp_state *s, GLuint array, const char *name, sb_err *err) {
     const sb_lamp_kind *k = s->kind;
-    s->tex = sb_shadow_texture(k->target, GL_DEPTH_COMPONENT32F, s->d->res, s->d->res, k->maps, s->d->filter != 0);
+    if (array) {
+        glGenTextures(1, &s->tex);
+        glTextureView(s->tex, k->target, array, GL_DEPTH_COMPONENT32F, 0, 1, (GLuint)(s->index * k->maps),
+                      (GLuint)k->maps);
+        glBindTexture(k->target, s->tex);
+        sb_shadow_texture_params(k->target, s->d->filter != 0);
+    } else {
+        s->tex = sb_shadow_texture(k->target, GL_DEPTH_COMPONENT32F, s->d->res, s->d->res, k->maps, s->d->filter != 0);
+    }
     glGenFramebuffers(1, &s->fbo_all);
     glBindFramebuffer(GL_FRAMEBUFFER, s->fbo_all);
     glFramebufferTexture(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, s->tex, 0);
@@ -80,14 +105,57 @@ sb_lamp_state *sb_lamp_light(sb_lamp_state *s, int i) {
 }
 
 /* Light i's lamp, clip range and maps (the kind's per-lamp setup too). */
-static bool place(sb_lamp_state *l, const sb_run_ctx *rc, int which, sb_err *err) {
+static bool place(sb_lamp_state *l, const sb_run_ctx *rc, int which, GLuint array, sb_err *err) {
     const sb_gpu *g = rc->gpu;
     const sb_light *lamp = sb_scene_point_light(g->scene, which, NULL);
     l->source = lamp;
     l->lamp = lamp->position;
     sb_lamp_clip(lamp, g->scene, l->kind->near_share, &l->near, &l->far);
     if (l->kind->setup) l->kind->setup(l);
-    return make_targets(l, rc->tech->name, err);
+    return make_targets(l, array, rc->tech->name, err);
+}
+
+/* grid=on: the lamps' records (vis_lamps.glsl), the grid's input and the pass that reads them. */
+static bool make_loop(sb_lamp_state *s, const sb_run_ctx *rc, sb_err *err) {
+    const sb_gpu *g = rc->gpu;
+    enum { REC = 3 };
+    float *rec = sb_xcalloc((size_t)s->count * REC * 4, sizeof(float));
+    s->grid_pos = sb_xmalloc(sizeof *s->grid_pos * (size_t)s->count);
+    s->grid_range = sb_xmalloc(sizeof *s->grid_range * (size_t)s->count);
+    for (int i = 0; i < s->count; i++) {
+        const sb_lamp_state *l = sb_lamp_light(s, i);
+        const sb_light *src = l->source;
+        double range = src->range > 0 ? src->range : 0;
+        float *r = rec + (size_t)i * REC * 4;
+        r[0] = (float)l->lamp.x, r[1] = (float)l->lamp.y, r[2] = (float)l->lamp.z, r[3] = (float)range;
+        r[4] = (float)l->near, r[5] = (float)l->far, r[6] = (float)s->d->res;
+        if (src->type == SB_LIGHT_SPOT && src->cone > 0)
+            r[8] = (float)src->direction.x, r[9] = (float)src->direction.y, r[10] = (float)src->direction.z,
+            r[11] = (float)(1 - cos(src->cone));
+        s->grid_pos[i] = l->lamp, s->grid_range[i] = range;
+    }
+    glGenBuffers(1, &s->rec_buf);
+    glBindBuffer(GL_TEXTURE_BUFFER, s->rec_buf);
+    glBufferData(GL_TEXTURE_BUFFER, (GLsizeiptr)((size_t)s->count * REC * 16), rec, GL_STATIC_DRAW);
+    glGenTextures(1, &s->rec_tex);
+    glBindTexture(GL_TEXTURE_BUFFER, s->rec_tex);
+    glTexBuffer(GL_TEXTURE_BUFFER, GL_RGBA32F, s->rec_buf);
+    free(rec);
+    s->grid = sb_xcalloc(1, sizeof *s->grid);
+    sb_lightgrid_init(s->grid, g->width, g->height);
+    char defines[96];
+    snprintf(defines, sizeof defines, "#define SB_LIGHT_LOOP\n#define SB_LIGHT_GRID\n#define SB_FILTER %d\n", s->d->filter);
+    const char *parts[] = {sb_shader_lightgrid_glsl, sb_shader_vis_lamps_glsl, s->kind->vis_glsl};
+    char label[64];
+    snprintf(label, sizeof label, "%s (every lamp)", rc->tech->name);
+    if (!sb_final_prog_create_parts(&s->loop_fp, g, label, parts, 3, defines, err)) return false;
+    const char *names[] = {"u_map", "u_lights", "u_bias", "u_normal"};
+    for (int i = 0; i < 4; i++) s->u_loop[i] = glGetUniformLocation(s->loop_fp.prog, names[i]);
+    for (int i = 0; i < 4; i++)
+        s->u_loop_lookup[i] =
+            s->kind->lookup_uniforms[i] ? glGetUniformLocation(s->loop_fp.prog, s->kind->lookup_uniforms[i]) : -1;
+    sb_lightgrid_locate(s->grid, s->loop_fp.prog);
+    return true;
 }
 
 bool sb_lamp_technique_create(void *state, const sb_run_ctx *rc, const void *desc, sb_err *err) {
@@ -100,13 +168,18 @@ bool sb_lamp_technique_create(void *state, const sb_run_ctx *rc, const void *des
     s->count = rc->lights ? rc->lights->count : 1;
     s->size = rc->tech->state_size;
     if (s->count > 1) s->others = sb_xcalloc((size_t)s->count - 1, s->size);
+    if (one_pass(s->d, s->count))
+        s->array = sb_shadow_texture(array_target(s->kind), GL_DEPTH_COMPONENT32F, s->d->res, s->d->res,
+                                     s->count * s->kind->maps, s->d->filter != 0);
     for (int i = 0; i < s->count; i++) {
         sb_lamp_state *l = sb_lamp_light(s, i);
         l->kind = s->kind;
         l->d = s->d;
         l->layered = s->layered;
-        if (!place(l, rc, rc->lights ? rc->lights->idx[i] : s->d->light, err)) return false;
+        l->index = i;
+        if (!place(l, rc, rc->lights ? rc->lights->idx[i] : s->d->light, s->array, err)) return false;
     }
+    if (s->array && !make_loop(s, rc, err)) return false;
     for (int a = 0; a < (g->scene->alpha_tested_draws ? 2 : 1); a++)
         if (!s->kind->program(s, a, a ? NULL : sb_opaque_define(g), err)) return false;
     char defines[64];
@@ -168,7 +241,7 @@ static void shade(sb_lamp_state *l, sb_frame *f, bool first) {
     glUniform1f(l->u_res, (float)l->d->res);
     glUniform1f(l->u_bias, (float)l->d->bias);
     glUniform1f(l->u_normal, (float)l->d->normal);
-    if (l->kind->lookup) l->kind->lookup(l);
+    if (l->kind->lookup) l->kind->lookup(l->u_lookup);
     if (first) {
         sb_final_pass(f, &l->fp, false);
         return;
@@ -193,6 +266,23 @@ static void shade(sb_lamp_state *l, sb_frame *f, bool first) {
     }
 }
 
+/* grid=on: every lamp's light in one camera pass, each pixel looping over its cluster's lamps. */
+static void shade_all(sb_lamp_state *s, sb_frame *f) {
+    glUseProgram(s->loop_fp.prog);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(array_target(s->kind), s->array);
+    glUniform1i(s->u_loop[0], 0);
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_BUFFER, s->rec_tex);
+    glUniform1i(s->u_loop[1], 1);
+    glActiveTexture(GL_TEXTURE0);
+    sb_lightgrid_bind(s->grid, 2);
+    glUniform1f(s->u_loop[2], (float)s->d->bias);
+    glUniform1f(s->u_loop[3], (float)s->d->normal);
+    if (s->kind->lookup) s->kind->lookup(s->u_loop_lookup);
+    sb_final_pass(f, &s->loop_fp, false);
+}
+
 void sb_lamp_technique_frame(void *state, sb_frame *f) {
     sb_lamp_state *s = state;
     const sb_lamp_kind *k = s->kind;
@@ -210,6 +300,18 @@ void sb_lamp_technique_frame(void *state, sb_frame *f) {
     f->counters.cascades_skipped = k->maps * (end - first) - rendered;
     sb_stage_end(f, SB_STAGE_CASCADE);
 
+    /* grid=on, a timed frame: every lamp in one pass through the grid (an evaluation pass adds the lamps one by
+       one, uncut: the per-light way the test holds this one's image to) */
+    if (s->array && !f->eval) {
+        sb_stage_begin(f, SB_STAGE_CLUSTERS);
+        uint32_t items = sb_lightgrid_build(s->grid, f, s->grid_pos, s->grid_range, s->count);
+        sb_count(&f->counters, &sb_lamp_counters[0], items);
+        sb_stage_end(f, SB_STAGE_CLUSTERS);
+        sb_stage_begin(f, SB_STAGE_FINAL);
+        shade_all(s, f);
+        sb_stage_end(f, SB_STAGE_FINAL);
+        return;
+    }
     sb_stage_begin(f, SB_STAGE_FINAL);
     for (int i = first; i < end; i++) shade(sb_lamp_light(s, i), f, i == first);
     sb_stage_end(f, SB_STAGE_FINAL);
@@ -226,7 +328,15 @@ void sb_lamp_technique_destroy(void *state) {
     for (int i = 1; s->others && i < s->count; i++) free_maps(sb_lamp_light(s, i));
     free(s->others);
     sb_final_prog_free(&s->fp);
+    sb_final_prog_free(&s->loop_fp);
+    if (s->grid) sb_lightgrid_free(s->grid);
+    free(s->grid);
+    free(s->grid_pos);
+    free(s->grid_range);
+    if (s->rec_tex) glDeleteTextures(1, &s->rec_tex);
+    if (s->rec_buf) glDeleteBuffers(1, &s->rec_buf);
     for (int a = 0; a < 2; a++)
         if (s->pass[a].prog) glDeleteProgram(s->pass[a].prog);
     free_maps(s);
+    if (s->array) glDeleteTextures(1, &s->array);
 }

@@ -6,14 +6,18 @@
  * parameter table (SB_LAMP_PARAMS and its own rows) and an sb_lamp_kind: how
  * it lays out and renders its maps and which lookup reads them, put together
  * by SB_LAMP_TECHNIQUE (cube.c, dpsm.c). With --lights it shadows every lamp
- * named, a map set each, and adds each lamp's light in a camera pass of its own
- * (the naive way an atlas is measured against). */
+ * named, a map set each: with grid=on (the default) every lamp's maps are
+ * layers of one texture and one camera pass finds each pixel's lamps by cluster
+ * (lightgrid.h), as the atlas's does; with grid=off each lamp adds its light in
+ * a camera pass of its own, cut to its footprint. */
 #pragma once
+#include "lightgrid.h"
 #include "render.h"
 
 /* Every lamp setting; a lamp technique's parameters are rows of this struct. */
 typedef struct sb_lamp_desc {
     int res, light, filter, layered;   /* layered: only where the kind has it (SB_LAYERED_*) */
+    int grid;                          /* with --lights: one pass through the light grid (1) or a pass a lamp */
     double bias, slope, normal;
 } sb_lamp_desc;
 
@@ -24,6 +28,16 @@ typedef struct sb_lamp_desc {
         SB_PARAM_FA(sb_lamp_desc, bias, 1.5, 0, 100, "constant bias, in texels at the point's distance"),          \
         SB_PARAM_FA(sb_lamp_desc, slope, 2, 0, 100, "slope-scaled bias (glPolygonOffset factor)"),                 \
         SB_PARAM_FA(sb_lamp_desc, normal, 1, 0, 100, "normal offset, in texels")
+
+/* The grid= row, last of a lamp technique's table (added after series began: written only when off). */
+#define SB_LAMP_GRID_PARAM                                                                                          \
+    SB_PARAM_E_LATE(sb_lamp_desc, grid, on, "off|on",                                                               \
+                    "with --lights: every lamp's maps layers of one texture, read by one camera pass that finds "   \
+                    "each pixel's lamps by cluster (the clusters stage); off: a camera pass a lamp, cut to its "    \
+                    "footprint")
+
+/* Its counter: the light grid's lamp-cluster pairs (the atlas's column of that name). */
+extern const sb_counter_def sb_lamp_counters[1];
 
 typedef struct sb_lamp_state sb_lamp_state;
 
@@ -44,7 +58,7 @@ typedef struct sb_lamp_kind {
     /* optional: the lookup's own uniforms, beyond the shared ones: their names (located at create into
        s->u_lookup), and what sets them each frame (its program bound) */
     const char *lookup_uniforms[4];
-    void (*lookup)(const sb_lamp_state *s);
+    void (*lookup)(const GLint u[4]);
 } sb_lamp_kind;
 
 struct sb_lamp_state {
@@ -67,6 +81,17 @@ struct sb_lamp_state {
     size_t size;
     char *others;
     const sb_light *source;     /* the scene's light: shaded and scored only within its range and a spot's cone */
+    int index;                  /* its place among the lights (its layers in `array`) */
+    /* grid=on with more than one light (the first light's state holds it): every light's maps as layers of one
+       texture, each light's tex a view of its own; the lamps' records (vis_lamps.glsl), the light grid, and the
+       camera pass that reads them */
+    GLuint array, rec_buf, rec_tex;
+    sb_final_prog loop_fp;
+    GLint u_loop[4];            /* u_map, u_lights, u_bias, u_normal */
+    GLint u_loop_lookup[4];
+    sb_lightgrid *grid;
+    sb_v3 *grid_pos;
+    double *grid_range;
 };
 
 /* A lamp's clip range: far its range (a lamp of no range: twice the scene's size), near a share of far (at least
@@ -102,7 +127,9 @@ void sb_lamp_technique_destroy(void *state);
 #define SB_LAMP_TECHNIQUE(NAME, SUMMARY, PARAMS, STATE_T, KIND)                                                    \
     {                                                                                                              \
         .name = NAME, .summary = SUMMARY, .params = PARAMS, .param_count = (int)SB_COUNT(PARAMS),                  \
-        .desc_size = sizeof(sb_lamp_desc), .stages = SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_FINAL), \
+        .desc_size = sizeof(sb_lamp_desc),                                                                         \
+        .stages = SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_CLUSTERS) | SB_STAGE_BIT(SB_STAGE_FINAL),   \
+        .counters = sb_lamp_counters, .counter_count = 1,                                                           \
         .needs = SB_NEEDS_POINT_LIGHT, .lights = SB_LIGHTS_LAMPS, .state_size = sizeof(STATE_T), .supported = sb_lamp_technique_supported,    \
         .shadow_bytes = sb_lamp_technique_shadow_bytes,                                                            \
         .create = sb_lamp_technique_create, .frame = sb_lamp_technique_frame,                                      \

@@ -25,6 +25,12 @@
 
 #define SB_GRID_UNIFORMS 5
 
+/* The counter of a technique with a light grid (its own counters' row; one column for all of them). */
+#define SB_GRID_ITEMS_COUNTER                                                                                       \
+    {.name = "grid_items", .unit = "count", .stats = SB_STAT_MEAN,                                                  \
+     .doc = "grid=on (atlas; cube and dpsm with --lights): lamp-cluster pairs the frame's light grid lists (a "     \
+            "cluster: a 32-pixel tile and a depth slice; 0 with grid=off or one lamp)"}
+
 typedef struct sb_lightgrid {
     int tx, ty, slices;         /* tiles across and down; depth slices */
     double near, far;           /* the slices' span: the pass camera's planes, this frame */

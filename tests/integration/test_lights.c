@@ -95,8 +95,17 @@ static void test_every_lamp_of_towers_night(void **st) {
     assert_non_null(strstr(sb_table_get(&sun, pssm, "reason"), "pssm shadows the sun alone; --lights all names a lamp"));
     assert_string_equal(sb_table_get(&sun, row_of(&sun, "raycast", "lights all (2)"), "status"), "ok");
     sb_table_free(&sun);
-    /* a map set a lamp; the same technique without --lights is another run (and series) */
+    /* the per-light techniques' lamps found by cluster (grid=on): the light grid is a stage of their frame and lists
+       each lamp in view at least once; one lamp has no grid to build */
     int single = row_of(&one, "cube", "");
+    for (int r = 0; r < 2; r++) {
+        int row = r ? dpsm : cube;
+        print_message("%s: clusters_ms %g, grid_items %g\n", sb_table_get(&all, row, "technique"),
+                      cell(&all, row, "clusters_ms_median"), cell(&all, row, "grid_items_mean"));
+        assert_true(cell(&all, row, "clusters_ms_median") > 0 && cell(&all, row, "grid_items_mean") >= 1);
+    }
+    assert_true(isnan(cell(&one, single, "clusters_ms_median")) && !(cell(&one, single, "grid_items_mean") > 0));
+    /* a map set a lamp; the same technique without --lights is another run (and series) */
     assert_true(fabs(cell(&all, cube, "shadow_mb") - 6 * cell(&one, single, "shadow_mb")) < 1e-9);
     assert_string_not_equal(sb_table_get(&all, cube, "run_id"), sb_table_get(&one, single, "run_id"));
     assert_true(isnan(cell(&one, single, "lights_px_mean")));   /* one light: not a figure of several */
@@ -230,20 +239,52 @@ static int differing(const unsigned char *a, const unsigned char *b, int np, int
     return n;
 }
 
+/* A per-light technique's timed frame with grid=on (one pass through the light grid, every lamp's maps layers of one
+ * texture) against its evaluated frame with every lamp (a pass a lamp, uncut, each lamp's maps a view of its layers):
+ * the evaluated passes add 8-bit colours lamp by lamp where the one pass sums them first, so a pixel a lamp reaches may
+ * differ by one level of rounding, and none may differ by more; a pixel no lamp's range reaches not at all. A lamp the
+ * grid missed, or a lookup in another lamp's layers, would differ by tens of levels over whole patches. */
+static void one_pass_matches(sb_session *s, const char *spec, int lamps, const unsigned char *eval,
+                             const unsigned char *timed, const float *pos, const float *aux, int np) {
+    int differ = 0, most = 0, beyond = 0, reached = 0;
+    for (int i = 0; i < np; i++) {
+        const float *n = aux + 4 * (size_t)i;
+        bool sky = n[0] * n[0] + n[1] * n[1] + n[2] * n[2] < 0.25;
+        bool in = false;
+        for (int k = 0; k < lamps && !sky && !in; k++) {
+            const sb_light *l = sb_scene_point_light(&s->scene, k, NULL);
+            in = dist(pos + 4 * (size_t)i, l->position) <= l->range * 1.001;
+        }
+        reached += in;
+        int d = 0;
+        for (int c = 0; c < 3; c++) d = abs(eval[4 * i + c] - timed[4 * i + c]) > d ? abs(eval[4 * i + c] - timed[4 * i + c]) : d;
+        differ += d > 0, beyond += d > 0 && !in;
+        most = d > most ? d : most;
+    }
+    print_message("%s, one pass through the grid against a pass a lamp: %d pixels differ (%d of them beyond every "
+                  "lamp's range), by at most %d; %d pixels in a lamp's range\n", spec, differ, beyond, most, reached);
+    assert_true(reached > np / 10);
+    assert_int_equal(beyond, 0);
+    assert_true(most <= 1);
+}
+
 /* Lamps found by cluster change no pixel: on street-lamps with 24 lamps (range 7), the atlas's camera pass with
- * grid=on (each pixel loops over its cluster's lamps) draws grid=off's image (every lamp in view), and the per-light
- * cube's timed frame, whose further lamps' passes are cut to their footprints and ranges, draws the image of its
- * uncut passes. Each cut or grid that missed a lamp where it lights would darken whole patches of pixels. */
+ * grid=on (each pixel loops over its cluster's lamps) draws grid=off's image (every lamp in view); the per-light
+ * cube's and dpsm's one pass (grid=on) draws their per-light passes' image but for rounding (one_pass_matches), and
+ * cube's timed frame with grid=off, whose further lamps' passes are cut to their footprints and ranges, draws the
+ * image of its uncut passes. Each cut or grid that missed a lamp where it lights would darken whole patches of
+ * pixels. */
 static void test_lamps_by_cluster(void **st) {
     (void)st;
     sb_session s;
     sb_err err;
-    const int w = 320, h = 180, np = w * h;
+    const int w = 320, h = 180, np = w * h, lamps = 24;
     assert_true(test_open(&s, "street-lamps", "street-lamps", w, h, &err));
     char set[200] = "";
-    for (int i = 0; i < 24; i++) snprintf(set + strlen(set), sizeof set - strlen(set), "%s%d", i ? "," : "", i);
+    for (int i = 0; i < lamps; i++) snprintf(set + strlen(set), sizeof set - strlen(set), "%s%d", i ? "," : "", i);
     assert_true(sb_scene_light_set(&s.scene, set, false, &s.lights, &err));
     unsigned char *a = malloc(4 * (size_t)np), *b = malloc(4 * (size_t)np);
+    float *pos = malloc(sizeof(float) * 4 * np), *aux = malloc(sizeof(float) * 4 * np);
     int most = 0, n;
     colour_of(&s, "atlas:res=128:grid=on", false, a, NULL, NULL);
     colour_of(&s, "atlas:res=128:grid=off", false, b, NULL, NULL);
@@ -254,14 +295,22 @@ static void test_lamps_by_cluster(void **st) {
     n = differing(a, b, np, &most);
     print_message("atlas grid=on, timed against evaluated: %d pixels differ, by at most %d\n", n, most);
     assert_true(n <= np / 1000 && most <= 1);
-    colour_of(&s, "cube:res=128", false, a, NULL, NULL);
-    colour_of(&s, "cube:res=128", true, b, NULL, NULL);
+    static const char *const one_pass[] = {"cube:res=128", "cube:res=128:filter=pcf", "dpsm:res=128"};
+    for (size_t k = 0; k < SB_COUNT(one_pass); k++) {
+        colour_of(&s, one_pass[k], false, a, pos, aux);
+        colour_of(&s, one_pass[k], true, b, NULL, NULL);
+        one_pass_matches(&s, one_pass[k], lamps, a, b, pos, aux, np);
+    }
+    colour_of(&s, "cube:res=128:grid=off", false, a, NULL, NULL);
+    colour_of(&s, "cube:res=128:grid=off", true, b, NULL, NULL);
     n = differing(a, b, np, &most);
-    print_message("cube, further lamps cut to their footprints against whole: %d pixels differ, by at most %d\n", n,
-                  most);
+    print_message("cube grid=off, further lamps cut to their footprints against whole: %d pixels differ, by at most "
+                  "%d\n", n, most);
     assert_true(n <= np / 1000 && most <= 1);
     free(a);
     free(b);
+    free(pos);
+    free(aux);
     sb_session_close(&s);
 }
 
