@@ -143,6 +143,14 @@ static bool allocates(GLenum format, int width, int height, int layers) {
 }
 
 bool sb_gl_allocates(GLenum format, int width, int height, int layers, int *layers_fit) {
+    GLint max_layers = 0;
+    glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &max_layers);
+    if (max_layers > 0 && layers > max_layers) {
+        int fit = 0;
+        *layers_fit = sb_gl_allocates(format, width, height, max_layers, &fit) ? max_layers : fit;
+        return false;
+    }
+    if ((double)width * height * layers * sb_gl_texel_bytes(format) <= 1073741824.0) return true;
     if (allocates(format, width, height, layers)) return true;
     int lo = 0, hi = layers;   /* lo allocates (0: none tried), hi does not */
     while (hi - lo > 1) {

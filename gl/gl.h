@@ -46,10 +46,12 @@ bool sb_gl_links_make(sb_gl_links *l, GLuint from, GLuint to);
 void sb_gl_links_copy(const sb_gl_links *l, GLuint from, GLuint to);
 
 /* Whether the GL allocates a texture array of these dimensions and format:
- * one is made with glTexStorage3D, checked for GL_OUT_OF_MEMORY, and deleted
- * (a renderer's total memory is the GPU-memory check's; this is its limit on
- * one texture, which llvmpipe, for one, puts at 2 GiB). When it does not,
- * *layers_fit says how many layers of that size it did allocate. */
+ * no more layers than GL_MAX_ARRAY_TEXTURE_LAYERS, and past 1 GiB (no
+ * renderer here refuses less) one is made with glTexStorage3D, checked for
+ * GL_OUT_OF_MEMORY, and deleted (a renderer's total memory is the GPU-memory
+ * check's; this is its limit on one texture, which llvmpipe, for one, puts at
+ * 2 GiB). When it does not, *layers_fit says how many layers of that size it
+ * allocates. */
 bool sb_gl_allocates(GLenum format, int width, int height, int layers, int *layers_fit);
 /* Bytes a texel of a sized internal format takes (the depth and colour formats the shadow maps use; 4 else). */
 int sb_gl_texel_bytes(GLenum format);

@@ -168,40 +168,41 @@ void motion_prepare_groups(sb_motion &m) {
 }
 
 void bound_place(const sb_motion &m, const sbm::MoPlace &p, sb_scene *s, std::vector<sb_m4> &jm);
+void motion_bounds_prepare(sb_motion &m, const sb_scene *s);
 
-// The nodes' world transforms at clip time t, each clip's channels sampled at t modulo its duration; with s, the
-// GPU-posed placements' boxes too (motion_bound). The groups go to the motion's threads, a few groups each.
-void motion_nodes(sb_motion &m, double t, sb_scene *s = nullptr) {
-    if (m.moving.size() != m.parent.size()) motion_prepare_nodes(m);
-    if (s && !m.groups_ready) motion_prepare_groups(m);
-    for (uint32_t c : m.lone_channels) sample_channel(m, m.channels[c], t);
-    if (!m.groups_ready) {   // no boxes asked for yet: the channels and nodes in order
-        for (sbm::MoChannel &c : m.channels) sample_channel(m, c, t);
-        for (int ni : m.topo)
-            if (m.moving[ni]) world_of(m, ni);
-        m.nodes_t = t;
-        return;
-    }
+// The motion's threads, made at their first use (none on a machine of one core), at most 16 with the caller's; f
+// on n of them (f(0) alone where there are none or n is 1).
+void in_parallel(sb_motion &m, unsigned n, const std::function<void(unsigned)> &f) {
     unsigned cores = std::max(1u, std::min(16u, std::thread::hardware_concurrency()));
-    if (!m.workers && cores > 1 && m.groups.size() > 1) m.workers = new sbm::Workers(cores - 1);
+    if (n > 1 && !m.workers && cores > 1) m.workers = new sbm::Workers(cores - 1);
+    if (n > 1 && m.workers) m.workers->run(n, f);
+    else f(0);
+}
+
+// The nodes' world transforms at clip time t, each clip's channels sampled at t modulo its duration; with boxes (s
+// itself, writable), the GPU-posed placements' boxes too (bound_place). The groups go to the motion's threads, a
+// few groups each.
+void motion_nodes(sb_motion &m, double t, const sb_scene *s, sb_scene *boxes) {
+    if (m.moving.size() != m.parent.size()) motion_prepare_nodes(m);
+    if (!m.bounds_ready) motion_bounds_prepare(m, s);
+    if (!m.groups_ready) motion_prepare_groups(m);
+    for (uint32_t c : m.lone_channels) sample_channel(m, m.channels[c], t);
     std::atomic<size_t> next(0);
     const size_t count = m.groups.size(), grain = 2;   // groups a thread takes at a time
-    auto work = [&](unsigned) {
+    in_parallel(m, (unsigned)((count + grain - 1) / grain), [&](unsigned) {
         std::vector<sb_m4> jm;
         for (size_t i; (i = next.fetch_add(grain)) < count;)
             for (size_t k = i; k < std::min(count, i + grain); k++) {
                 const sb_motion::Group &g = m.groups[k];
                 for (uint32_t c : g.channels) sample_channel(m, m.channels[c], t);
                 for (int ni : g.nodes) world_of(m, ni);
-                if (s)
-                    for (uint32_t p : g.places) bound_place(m, m.places[p], s, jm);
+                if (boxes)
+                    for (uint32_t p : g.places) bound_place(m, m.places[p], boxes, jm);
             }
-    };
-    if (m.workers) m.workers->run((unsigned)((count + grain - 1) / grain), work);
-    else work(0);
-    if (s) {
+    });
+    if (boxes) {
         std::vector<sb_m4> jm;
-        for (uint32_t p : m.lone_places) bound_place(m, m.places[p], s, jm);
+        for (uint32_t p : m.lone_places) bound_place(m, m.places[p], boxes, jm);
     }
     m.nodes_t = t;
 }
@@ -333,8 +334,8 @@ void motion_place(const sb_motion &m, Scratch &x, sb_scene *s, const sbm::MoPlac
                          (uint32_t)p.draws.size(), boxes);
 }
 
-// The placements are posed on every core (each writes vertices and boxes of its own): 64 skinned characters are
-// 60 % of a frame on one core of this machine (docs/measurements.md, Moving casters).
+// The placements are posed on the motion's threads (each writes vertices and boxes of its own): 64 skinned
+// characters are 60 % of a frame on one core of this machine (docs/measurements.md, Moving casters).
 // gpu_ones: the placements the GPU poses (their vertices only: their boxes follow the joints); else those it
 // cannot pose (vertices and exact boxes).
 uint32_t pose_places(sb_motion *m, sb_scene *s, bool gpu_ones) {
@@ -342,17 +343,11 @@ uint32_t pose_places(sb_motion *m, sb_scene *s, bool gpu_ones) {
     for (const sbm::MoPlace &p : m->places)
         if (p.gpu == gpu_ones) todo.push_back(&p);
     size_t n = todo.size();
-    unsigned cores = std::max(1u, std::thread::hardware_concurrency());
-    size_t threads = std::min<size_t>(std::min<size_t>(cores, 16), n);
     std::atomic<size_t> next(0);
-    auto work = [&]() {
+    in_parallel(*m, (unsigned)std::min<size_t>(n, 16), [&](unsigned) {
         Scratch x;
         for (size_t i; (i = next.fetch_add(1)) < n;) motion_place(*m, x, s, *todo[i], !gpu_ones);
-    };
-    std::vector<std::thread> pool;
-    for (size_t k = 1; k < threads; k++) pool.emplace_back(work);
-    if (n) work();
-    for (std::thread &th : pool) th.join();
+    });
     return (uint32_t)n;
 }
 
@@ -408,8 +403,7 @@ extern "C" void sb_motion_free(sb_motion *m) {
 extern "C" bool sb_scene_pose(sb_scene *s, double t) {
     if (!sb_scene_moves(s) || s->pose_time == t) return false;
     sb_motion *m = s->motion;
-    if (!m->bounds_ready) motion_bounds_prepare(*m, s);
-    motion_nodes(*m, t, s);   // and the boxes that follow the joints of the placements the GPU poses
+    motion_nodes(*m, t, s, s);   // and the boxes that follow the joints of the placements the GPU poses
     pose_places(m, s, false);   // the placements the GPU cannot pose: vertices and exact boxes, as ever
     s->pose_time = t;
     s->pose_serial++;
@@ -427,7 +421,7 @@ extern "C" bool sb_scene_pose(sb_scene *s, double t) {
 extern "C" void sb_scene_sync_vertices(const sb_scene *s) {
     if (!sb_scene_moves(s) || s->motion->vertices_serial == s->pose_serial) return;
     sb_motion *m = s->motion;
-    if (!(m->nodes_t == s->pose_time)) motion_nodes(*m, s->pose_time);
+    if (!(m->nodes_t == s->pose_time)) motion_nodes(*m, s->pose_time, s, nullptr);
     // the vertices are the CPU's copy of the pose the scene holds (its boxes stay sb_scene_pose's): writing them
     // changes nothing a const reader of the scene relies on but them
     uint32_t posed = pose_places(m, const_cast<sb_scene *>(s), true);
@@ -499,7 +493,7 @@ extern "C" const sb_pose_data *sb_motion_gpu_data(const sb_scene *s) {
 
 extern "C" void sb_motion_gpu_frame(const sb_scene *s, float *palette, float *weights) {
     sb_motion &m = *s->motion;
-    if (!(m.nodes_t == s->pose_time)) motion_nodes(m, s->pose_time);
+    if (!(m.nodes_t == s->pose_time)) motion_nodes(m, s->pose_time, s, nullptr);
     size_t k = 0;
     for (const sbm::MoPlace &p : m.places) {
         if (!p.gpu || p.draws.empty()) continue;

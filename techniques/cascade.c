@@ -63,12 +63,12 @@ static const struct {
 } moments_format[] = {{0, ""}, {GL_RG32F, "rg32f"}, {GL_R32F, "r32f"}, {GL_RGBA32F, "rgba32f"}};
 
 /* One texture of the maps the GL would not allocate, found before anything renders: a skip naming its size and
- * what the GL did allocate. Only textures past 1 GiB are tried (no renderer here refuses less). */
+ * what the GL did allocate (sb_gl_allocates). */
 static bool texture_allocates(const sb_gpu *g, GLenum format, const char *what, const sb_csm_desc *d, const char *name,
                               sb_err *why) {
     double bytes = (double)d->res * d->res * d->cascades * sb_gl_texel_bytes(format);
     int fit = 0;
-    if (bytes <= 1073741824.0 || sb_gl_allocates(format, d->res, d->res, d->cascades, &fit)) return true;
+    if (sb_gl_allocates(format, d->res, d->res, d->cascades, &fit)) return true;
     return sb_fail(why, "%s:res=%d:cascades=%d: the GL (%s) does not allocate one %s texture of %dx%dx%d (%.1f GiB); "
                         "it allocates %d layer(s) of that size (%.1f GiB) in one texture: fewer cascades or a lower res "
                         "fit", name, d->res, d->cascades, g->ctx->renderer, what, d->res, d->res, d->cascades,

@@ -546,6 +546,19 @@ static void test_bad_lights(void **st) {
                     test_binary(), g_tmp);
     expect_cli_fail("--lights 1,1: a light named twice",
                     "%s run towers-night towers-night cube --frames 1 --lights 1,1 --out %s/x", test_binary(), g_tmp);
+    /* grid=on keeps every lamp's maps in one texture: 64 lamps' 384 cube faces of 1280^2 (2.3 GiB) are more than
+       llvmpipe allocates in one (2 GiB), said before anything renders, with the way out */
+    char out[8192];
+    assert_int_equal(run_logged(out, sizeof out, "%s run street-lamps street-lamps cube:res=1280 --lights lamps "
+                                "--frames 1 --warmup 0 --size 64x36 --error-every 0 --quiet --out %s/onetex",
+                                test_binary(), g_tmp), 0);
+    sb_table sum;
+    summary_table(last_line_of(out), &sum);
+    print_message("cube:res=1280 with 64 lamps: %s: %s\n", sb_table_get(&sum, 0, "status"), sb_table_get(&sum, 0, "reason"));
+    assert_string_equal(sb_table_get(&sum, 0, "status"), "skipped");
+    assert_non_null(strstr(sb_table_get(&sum, 0, "reason"), "the 64 lamps' 384 maps in one texture exceed what"));
+    assert_non_null(strstr(sb_table_get(&sum, 0, "reason"), "grid=off keeps a texture a lamp"));
+    sb_table_free(&sum);
 }
 
 /* A floor and a box under one lamp of the given range. */
