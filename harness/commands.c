@@ -25,6 +25,7 @@
 #include "scene_load.h"
 #include "site.h"
 #include "stress.h"
+#include "sweep.h"
 #include "table.h"
 #include "tune.h"
 
@@ -103,7 +104,22 @@ static int split_metrics(const char *list, char *buf, size_t len, const char **o
 
 /* ---- what the tool holds ---- */
 
+/* --pairwise SPEC...: each spec's covering set, a spec a line; the refused pairs on stderr. */
+static int techniques_pairwise(const sb_cli *c) {
+    if (!c->npos) return bad_usage(c);
+    for (int k = 0; k < c->npos; k++) {
+        sb_sweep sw;
+        sb_err err;
+        if (!sb_sweep_pairwise(c->pos[k], &sw, &err)) return bad("%s", err.msg);
+        for (int i = 0; i < sw.count; i++) printf("%s\n", sw.specs[i]);
+        for (int i = 0; i < sw.refused_count; i++) fprintf(stderr, "%s: refused: %s\n", c->pos[k], sw.refused[i]);
+        sb_sweep_free(&sw);
+    }
+    return fflush(stdout) == 0 && !ferror(stdout) ? SB_EXIT_OK : SB_EXIT_WRITE;
+}
+
 static int cmd_techniques(const sb_cli *c) {
+    if (c->o.pairwise) return techniques_pairwise(c);
     if (c->npos) return bad_usage(c);
     if (c->o.format == SB_DOC_MARKDOWN) {
         sb_techniques_markdown(stdout);
@@ -868,7 +884,7 @@ const sb_command_def sb_commands[SB_CMD_COUNT] = {
      "LDR-FLIP of two images (the perceptual difference a viewer sees between them): the mean, 95th percentile "
      "and largest per-pixel error; --map writes the per-pixel error",
      SB_CMDF_ANY, cmd_flip},
-    {SB_CMD_TECHNIQUES, "techniques", "techniques [--format text|markdown]", "list techniques and their parameters",
+    {SB_CMD_TECHNIQUES, "techniques", "techniques [--format text|markdown]\ntechniques --pairwise SPEC...", "list techniques and their parameters",
      SB_CMDF_ANY, cmd_techniques},
     {SB_CMD_COLUMNS, "columns", "columns [--format csv|markdown]", "the CSV columns (per frame and per run)",
      SB_CMDF_ANY, cmd_columns},

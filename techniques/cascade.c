@@ -254,7 +254,7 @@ void sb_csm_fit_slice(const sb_csm *c, const sb_frame *f, double zn, double zf, 
     const sb_csm_desc *d = &c->d;
     if (d->warp == SB_WARP_LISPSM)
         sb_light_fit_lispsm(s, f->gpu->sun, eye, f->cam.forward, zn, zf, corners, 8, d->res, d->min_angle, out);
-    else if (d->warp == SB_WARP_TSM) sb_light_fit_tsm(s, f->gpu->sun, corners, d->res, d->focus, out);
+    else if (d->warp == SB_WARP_TSM) sb_light_fit_tsm(s, f->gpu->sun, corners, d->res, d->focus, zn, zf, out);
     else if (d->stable) sb_light_fit_stable(s, f->gpu->sun, corners, 8, d->res, out);
     else sb_light_fit_points(s, f->gpu->sun, corners, 8, d->res, out);
 }

@@ -219,6 +219,9 @@ static void slice_planes(const sb_v3 c[8], double planes[6][4]) {
     }
 }
 
+static double slice_nearest_receiver(const sb_scene *s, const double (*planes)[4], const sb_v3 corners[8], sb_v3 eye,
+                                     sb_v3 fwd);
+
 void sb_light_fit_lispsm(const sb_scene *s, sb_v3 sun, sb_v3 eye, sb_v3 forward, double zn, double zf,
                          const sb_v3 *pts, int n, int res, double min_gamma_deg, sb_light_fit *out) {
     sun = sb_v3_norm(sun);
@@ -263,6 +266,11 @@ void sb_light_fit_lispsm(const sb_scene *s, sb_v3 sun, sb_v3 eye, sb_v3 forward,
     }
     double zmax = shi.z + 1e-4 * (shi.z - slo.z), zmin = blo.z;
     double d = bhi.y - blo.y;
+    /* n_opt from the nearest receiver the slice shows, not the camera's near plane: a slice whose nearest visible
+       surface is metres away (a camera above the ground, the view's first cascade) is warped as that surface
+       needs, not for a near plane nothing is at (Wimmer et al.'s z_n is the body's near) */
+    double zr = slice_nearest_receiver(s, (const double(*)[4])planes, pts, eye, forward);
+    if (zr < zf && zr > zn) zn = zr;
     double nopt = (zn + sqrt(zn * zf)) / sin_g;
     nopt = fmax(nopt, 1e-4 * d);
     /* the warp's centre: below the body along y, at the camera's x */
@@ -399,7 +407,8 @@ static void tsm_warp(sb_light_fit *out, const double H[9], const sb_v3 *pts) {
     out->warped = true;
 }
 
-void sb_light_fit_tsm(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int res, double focus, sb_light_fit *out) {
+void sb_light_fit_tsm(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int res, double focus, double zn, double zf,
+                      sb_light_fit *out) {
     sb_light_fit_points(s, sun, pts, 8, res, out);
     if (out->empty) return;
     /* the frustum's corners in the uniform map's [-1,1]^2, and the centre line from the near to the far end */
@@ -433,6 +442,15 @@ void sb_light_fit_tsm(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int res, d
     /* the 80% rule: the focus point (focus of the way from top to base) lands on the 80% line */
     double delta = focus * lambda, xi = -0.6;
     double eta = (lambda * delta + lambda * delta * xi) / (lambda - 2 * delta - lambda * xi);
+    /* never a stronger warp than the slice's perspective asks for: the vanishing point no nearer the top than
+       LiSPSM's n_opt = (zn + sqrt(zn zf)) / sin(gamma) is to the body, in the body's share of the line (a cascade
+       whose far end is twice its near gains little from a warp, and the 80% rule made for the whole view would
+       spend its far end's texels on its near end) */
+    sb_v3 axis = {0, 0, 0};
+    for (int i = 0; i < 4; i++) axis = sb_v3_add(axis, sb_v3_scale(sb_v3_sub(pts[4 + i], pts[i]), 0.25));
+    double along = sb_v3_len(axis), cos_g = along > 0 ? sb_v3_dot(axis, sb_v3_norm(sun)) / along : 1;
+    double sin_g = sqrt(fmax(0, 1 - cos_g * cos_g)), body = (zf - zn) * sin_g;
+    if (zn > 0 && zf > zn && sin_g > 1e-6 && body > 0) eta = fmax(eta, lambda * (zn + sqrt(zn * zf)) / sin_g / body);
     if (!(eta > 0) || !isfinite(eta) || !(lambda > 0)) {
         free(fp);
         return;
@@ -520,6 +538,19 @@ static double nearest_receiver(const sb_scene *s, const double (*planes)[4], sb_
         }
     }
     return best;
+}
+
+/* The nearest view depth of a front face inside the slice (planes, corners); 1e300 when it shows none. */
+static double slice_nearest_receiver(const sb_scene *s, const double (*planes)[4], const sb_v3 corners[8], sb_v3 eye,
+                                     sb_v3 fwd) {
+    draw_depth *near = sb_xmalloc(sizeof *near * (s->draw_count + 1));
+    point_list clipped = {0};
+    receiver_scan rs = {s, planes, corners, &clipped, eye, fwd, near, 0};
+    sb_scene_cull(s, planes, 6, scan_receiver, &rs);
+    double z = nearest_receiver(s, planes, eye, fwd, near, rs.near_count);
+    free(near);
+    free(clipped.p);
+    return z;
 }
 
 /* Light view in PPS as a linear map of homogeneous PPS points: x' = r·(x - l w),

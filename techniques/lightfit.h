@@ -33,9 +33,12 @@ void sb_light_fit_lispsm(const sb_scene *s, sb_v3 sun, sb_v3 eye, sb_v3 forward,
 /* TSM (Martin & Tan 2004): the uniform fit, then the view frustum's footprint
  * in the map enclosed by a trapezoid along the view's centre line (the
  * focus point at `focus` of the depth maps to 80% of the map) and the
- * trapezoid mapped to the square by a projective transform. pts: the slice's
- * 8 corners, near corners first. */
-void sb_light_fit_tsm(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int res, double focus, sb_light_fit *out);
+ * trapezoid mapped to the square by a projective transform; the warp is no
+ * stronger than LiSPSM's n_opt for the slice's view depths [zn, zf] asks for
+ * (a cascade's short slice is warped gently). pts: the slice's 8 corners,
+ * near corners first. */
+void sb_light_fit_tsm(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int res, double focus, double zn, double zf,
+                      sb_light_fit *out);
 /* Stable variant: a bounding sphere of the points (rotation-invariant size)
  * whose light-space window is snapped to whole texels (no shimmer). */
 void sb_light_fit_stable(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int n, int res, sb_light_fit *out);

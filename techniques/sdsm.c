@@ -271,6 +271,14 @@ static void cpu_splits(sdsm_state *s, sb_frame *f) {
     } else if (have) {
         double zmin = unorder(st.zmin), zmax = fmax(unorder(st.zmax), zmin * 1.0001);
         sdsm_partition(c->count, s->partition, zmin, zmax, f->cam.znear, f->cam.zfar, st.hist, splits);
+        if (s->latency > 0) {
+            /* statistics of an earlier frame: after a camera cut (or a sparse path) this view's pixels may lie
+               outside their [z_min, z_max], and a pixel no cascade covers would be lit. The first and last
+               cascades reach the view's near and far planes (the fit clips them to the scene), the partition's
+               inner splits stay the samples'. */
+            splits[0] = fmin(splits[0], f->cam.znear);
+            splits[c->count] = fmax(splits[c->count], f->cam.zfar);
+        }
     } else { /* before the first readback: the whole view, logarithmically */
         sb_split_distances(1.0, c->count, f->cam.znear, f->cam.zfar, splits);
     }

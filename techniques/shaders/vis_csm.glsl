@@ -22,8 +22,30 @@ const vec2 sb_disk[16] = vec2[](
     vec2(0.443, -0.975), vec2(0.537, -0.474), vec2(-0.265, -0.419), vec2(0.792, 0.191),
     vec2(-0.242, 0.997), vec2(-0.814, 0.914), vec2(0.200, 0.786), vec2(0.144, -0.141));
 
+// Receiver-plane depth (Isidoro 2006), from the geometric normal rather than screen derivatives: the
+// receiver's depth change per unit of map uv. A tap `off` texels away compares against the receiver's
+// plane there, not the centre's depth, so a kernel wider than a texel (pcf3, pcf5, poisson16, pcss) does
+// not shadow a sloped receiver with itself. Zero for warped maps (their depth is not linear in uv).
+vec2 sb_rp_grad = vec2(0.0);
+
 float sb_tap(vec3 c, float layer, vec2 off) {
-    return texture(u_shadow, vec4(c.xy + off * u_texel, layer, c.z));
+    vec2 duv = off * u_texel;
+    return texture(u_shadow, vec4(c.xy + duv, layer, c.z + dot(sb_rp_grad, duv)));
+}
+
+// The plane's depth gradient in an orthographic map k: two tangents of the receiver carried by the map's
+// linear part, solved for d(depth)/d(uv); bounded to a slope of 80 degrees (grazing receivers).
+vec2 sb_receiver_grad(int k, vec3 n, float texel) {
+    mat3 a = mat3(sb_shadow_mat[k]);
+    vec3 t1 = normalize(cross(n, abs(n.y) < 0.99 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0)));
+    vec3 j1 = a * t1, j2 = a * cross(n, t1);
+    mat2 m = mat2(j1.xy, j2.xy);
+    float det = determinant(m);
+    float cap = 5.67 * texel / (sb_cascade[k].w * u_texel.x);
+    if (abs(det) < 1e-20) return vec2(0.0);
+    vec2 g = transpose(inverse(m)) * vec2(j1.z, j2.z);
+    float len = length(g);
+    return len > cap ? g * (cap / len) : g;
 }
 
 // Filtered formats (SB_MAP_FORMAT 1 vsm, 2 esm, 3 msm): visibility from the blurred moments.
@@ -103,6 +125,9 @@ float sb_lookup(int k, vec3 p, vec3 n) {
     if (c.x < 0.0 || c.x > 1.0 || c.y < 0.0 || c.y > 1.0 || c.z > 1.0) return 1.0;
     if (!warped) c.z -= u_bias * texel / sb_cascade[k].w;
     float layer = float(k);
+#if SB_MAP_FORMAT == 0 && SB_FILTER >= 2
+    sb_rp_grad = warped ? vec2(0.0) : sb_receiver_grad(k, n, texel);
+#endif
 #if SB_MAP_FORMAT != 0
     return sb_filtered(c, layer);
 #elif SB_FILTER == 0 || SB_FILTER == 1
