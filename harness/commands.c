@@ -112,6 +112,7 @@ static int techniques_pairwise(const sb_cli *c) {
         sb_err err;
         if (!sb_sweep_pairwise(c->pos[k], &sw, &err)) return bad("%s", err.msg);
         for (int i = 0; i < sw.count; i++) printf("%s\n", sw.specs[i]);
+        fflush(stdout);   /* whole lines before the refusals, where both go to one pipe */
         for (int i = 0; i < sw.refused_count; i++) fprintf(stderr, "%s: refused: %s\n", c->pos[k], sw.refused[i]);
         sb_sweep_free(&sw);
     }

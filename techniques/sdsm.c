@@ -112,8 +112,15 @@ static bool sdsm_check(const void *desc, sb_err *err) {
     const sdsm_desc *d = desc;
     if (d->splits == SPLITS_GPU && d->csm.warp != SB_WARP_NONE)
         return sb_fail(err, "warp= needs splits=cpu (the GPU fits are not warped)");
+    if (d->csm.warp != SB_WARP_NONE && d->csm.format != SB_MAP_DEPTH)
+        return sb_fail(err, "warp= with a moment format is refused for sdsm (its CPU splits read a frame late: the "
+                            "warped, blurred moments had 5-8x the error of unwarped ones on towers; "
+                            "docs/techniques.md)");
     if (d->csm.cache && d->splits == SPLITS_GPU)
         return sb_fail(err, "cache=on needs splits=cpu (the GPU's fits are not seen before the maps are drawn)");
+    if (d->csm.stable && d->splits == SPLITS_GPU)
+        return sb_fail(err, "stable=on needs splits=cpu (the GPU's fits are tight boxes of this frame's samples, not "
+                            "snapped spheres)");
     if (d->tight && d->splits != SPLITS_GPU)
         return sb_fail(err, "tight=on needs splits=gpu (the sample bounds depend on this frame's partitions)");
     return sb_csm_check(&d->csm, "", err);
