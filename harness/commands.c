@@ -104,7 +104,7 @@ static int split_metrics(const char *list, char *buf, size_t len, const char **o
 
 /* ---- what the tool holds ---- */
 
-/* --pairwise SPEC...: each spec's covering set, a spec a line; the refused pairs on stderr. */
+/* --all-pairs SPEC...: each spec's covering set, a spec a line; the refused pairs on stderr. */
 static int techniques_pairwise(const sb_cli *c) {
     if (!c->npos) return bad_usage(c);
     for (int k = 0; k < c->npos; k++) {
@@ -120,7 +120,7 @@ static int techniques_pairwise(const sb_cli *c) {
 }
 
 static int cmd_techniques(const sb_cli *c) {
-    if (c->o.pairwise) return techniques_pairwise(c);
+    if (c->o.all_pairs) return techniques_pairwise(c);
     if (c->npos) return bad_usage(c);
     if (c->o.format == SB_DOC_MARKDOWN) {
         sb_techniques_markdown(stdout);
@@ -885,7 +885,7 @@ const sb_command_def sb_commands[SB_CMD_COUNT] = {
      "LDR-FLIP of two images (the perceptual difference a viewer sees between them): the mean, 95th percentile "
      "and largest per-pixel error; --map writes the per-pixel error",
      SB_CMDF_ANY, cmd_flip},
-    {SB_CMD_TECHNIQUES, "techniques", "techniques [--format text|markdown]\ntechniques --pairwise SPEC...", "list techniques and their parameters",
+    {SB_CMD_TECHNIQUES, "techniques", "techniques [--format text|markdown]\ntechniques --all-pairs SPEC...", "list techniques and their parameters",
      SB_CMDF_ANY, cmd_techniques},
     {SB_CMD_COLUMNS, "columns", "columns [--format csv|markdown]", "the CSV columns (per frame and per run)",
      SB_CMDF_ANY, cmd_columns},

@@ -204,7 +204,7 @@ const sb_option sb_options[] = {
      .help = "JSON (every camera's matrices, for a script) or glTF 2.0 (an animated camera and the lights, for an engine)"},
     {.name = "--twins", .kind = SB_OPT_FLAG, .commands = SB_IN(SB_CMD_CAMERAS), .field = F(twins),
      .help = "each frame's flicker twin too: its camera --flicker-dt of path time later"},
-    {.name = "--pairwise", .kind = SB_OPT_FLAG, .commands = SB_IN(SB_CMD_TECHNIQUES), .field = F(pairwise),
+    {.name = "--all-pairs", .kind = SB_OPT_FLAG, .commands = SB_IN(SB_CMD_TECHNIQUES), .field = F(all_pairs),
      .help = "print, for each SPEC, specs in which every pair of values of two of its enumerated parameters appears "
              "(the parameters SPEC gives held); pairs the technique refuses on stderr with the reason"},
     {.name = "--dry-run", .kind = SB_OPT_FLAG, .commands = SB_IN(SB_CMD_BATCH), .field = F(dry_run),

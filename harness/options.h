@@ -112,7 +112,7 @@ typedef struct sb_cli_opts {
     int format; /* --format: an sb_output_format */
     int recent, pairs, nights;
     double noise_floor, threshold, max_err, max_flicker, max_flip, max_mb, budget_ms, time_limit_s, ppd;
-    bool dry_run, quiet, verbose, accept, yes, twins, pairwise;
+    bool dry_run, quiet, verbose, accept, yes, twins, all_pairs;
 } sb_cli_opts;
 
 /* A command's own default of a row (a list ends with def NULL). */

@@ -199,7 +199,7 @@ bool sb_sweep_pairwise(const char *base, sb_sweep *out, sb_err *err) {
     if (!sb_spec_expand(base, NULL, &runs, &count, err)) return false;
     if (count != 1) {
         free(runs);
-        return sb_fail(err, "--pairwise %s: a base spec gives one value a parameter (it makes %d runs)", base, count);
+        return sb_fail(err, "--all-pairs %s: a base spec gives one value a parameter (it makes %d runs)", base, count);
     }
     sw_state *s = sb_xcalloc(1, sizeof *s);
     s->base = base;

@@ -2,7 +2,7 @@
  * of values of two of them (every value, for a technique with one) appears in
  * at least one spec the technique accepts, in far fewer specs than the full
  * product (pssm's 9 enumerated parameters: 27 specs for 3,456 combinations).
- * `shadowbench techniques --pairwise SPEC...` prints them; the conformance
+ * `shadowbench techniques --all-pairs SPEC...` prints them; the conformance
  * sweep (tests/integration/test_sweep.c) renders them and holds every frame's
  * error to its family's best.
  *

@@ -26,6 +26,9 @@ bool sb_csm_check(const sb_csm_desc *d, const char *name, sb_err *err) {
     if (d->warp && d->stable)
         return sb_fail(err, "%sstable=on cannot be combined with a perspective warp (a warped map follows the camera)",
                        name);
+    if (d->fit == SB_FIT_RECEIVERS && (d->warp == SB_WARP_TSM || d->stable))
+        return sb_fail(err, "%sfit=receivers cannot be combined with %s", name,
+                       d->stable ? "stable=on (the sphere is the fit)" : "warp=tsm (its trapezoid is the fit)");
     if (d->cache && !d->stable)
         return sb_fail(err, "%scache=on needs stable=on (an unstable fit moves every frame: nothing could be reused)",
                        name);
@@ -253,9 +256,11 @@ void sb_csm_fit_slice(const sb_csm *c, const sb_frame *f, double zn, double zf, 
     sb_frustum_corners(&f->cam, s->origin, zn, zf, corners);
     const sb_csm_desc *d = &c->d;
     if (d->warp == SB_WARP_LISPSM)
-        sb_light_fit_lispsm(s, f->gpu->sun, eye, f->cam.forward, zn, zf, corners, 8, d->res, d->min_angle, out);
+        sb_light_fit_lispsm(s, f->gpu->sun, eye, f->cam.forward, zn, zf, corners, 8, d->res, d->min_angle,
+                            d->fit == SB_FIT_RECEIVERS, out);
     else if (d->warp == SB_WARP_TSM) sb_light_fit_tsm(s, f->gpu->sun, corners, d->res, d->focus, zn, zf, out);
     else if (d->stable) sb_light_fit_stable(s, f->gpu->sun, corners, 8, d->res, out);
+    else if (d->fit == SB_FIT_RECEIVERS) sb_light_fit_receivers(s, f->gpu->sun, corners, d->res, out);
     else sb_light_fit_points(s, f->gpu->sun, corners, 8, d->res, out);
 }
 

@@ -12,6 +12,9 @@
 #include "lightfit.h"
 
 enum { SB_WARP_NONE, SB_WARP_LISPSM, SB_WARP_TSM };
+/* What a cascade's window is fitted to (fit=): the slice of the view (clipped to the scene's box), or the part of
+ * the slice where receivers are (the draws' boxes inside it), as Filament's and Unreal's fits are. */
+enum { SB_FIT_SLICE, SB_FIT_RECEIVERS };
 /* What a shadow map stores (format=): depth, or the moments of a filtered format. */
 enum { SB_MAP_DEPTH, SB_MAP_VSM, SB_MAP_ESM, SB_MAP_MSM };
 enum { SB_FILTER_NONE, SB_FILTER_HW, SB_FILTER_PCF3, SB_FILTER_PCF5, SB_FILTER_POISSON16, SB_FILTER_PCSS };
@@ -29,6 +32,7 @@ typedef struct sb_csm_desc {
     double focus;               /* TSM: share of the footprint mapped to 80% of the map */
     int perspective;            /* not a parameter: the maps may be perspective without a warp (PSM) */
     int cache;                  /* cached cascades: one whose snapped window did not change is not rendered again */
+    int fit;                    /* SB_FIT_*: a cascade's light-space window over its whole slice, or its receivers */
     double distance;            /* stable=on: the shadow range's far end (0: the run's, sb_run_ctx.shadow_far) */
 } sb_csm_desc;
 
@@ -66,7 +70,9 @@ typedef struct sb_csm_desc {
     SB_PARAM_E(sb_csm_desc, warp, none, "none|lispsm|tsm", "perspective warp of each cascade (LiSPSM, TSM)"),     \
     SB_PARAM_E_LATE(sb_csm_desc, cache, off, "off|on",                                                          \
                     "a cascade whose snapped window and light did not change, and into whose light volume no caster "  \
-                    "moved, is not rendered again (stable=on)", .role = SB_PARAM_CACHE)
+                    "moved, is not rendered again (stable=on)", .role = SB_PARAM_CACHE),                               \
+    SB_PARAM_E_LATE(sb_csm_desc, fit, slice, "slice|receivers",                                                 \
+                    "each cascade's window over its view slice, or over the receivers inside it (not stable, not tsm)")
 
 /* Split distances out[0..m] over [n, f]: practical = lambda*log + (1-lambda)*uniform. */
 void sb_split_distances(double lambda, int m, double n, double f, double *out);

@@ -27,9 +27,11 @@ void sb_light_fit_points(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int n, 
  * view direction's projection, with n_opt = (zn + sqrt(zn zf)) / sin(gamma)
  * (gamma: angle between view and light directions); below `min_gamma_deg`
  * it falls back to the uniform fit. pts: the slice's 8 corners; eye and
- * forward: the camera (origin-relative). */
+ * forward: the camera (origin-relative). n_opt's z_n is the nearest visible
+ * receiver in the slice; receivers: the body is the receivers' boxes inside
+ * the slice (fit=receivers), not the slice clipped to the scene's box. */
 void sb_light_fit_lispsm(const sb_scene *s, sb_v3 sun, sb_v3 eye, sb_v3 forward, double zn, double zf,
-                         const sb_v3 *pts, int n, int res, double min_gamma_deg, sb_light_fit *out);
+                         const sb_v3 *pts, int n, int res, double min_gamma_deg, bool receivers, sb_light_fit *out);
 /* TSM (Martin & Tan 2004): the uniform fit, then the view frustum's footprint
  * in the map enclosed by a trapezoid along the view's centre line (the
  * focus point at `focus` of the depth maps to 80% of the map) and the
@@ -39,6 +41,9 @@ void sb_light_fit_lispsm(const sb_scene *s, sb_v3 sun, sb_v3 eye, sb_v3 forward,
  * near corners first. */
 void sb_light_fit_tsm(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int res, double focus, double zn, double zf,
                       sb_light_fit *out);
+/* The fit of the receivers inside a view slice: the draws' boxes clipped to the slice (corners: near four, then
+ * far four), not the whole slice; the slice where it holds none. */
+void sb_light_fit_receivers(const sb_scene *s, sb_v3 sun, const sb_v3 corners[8], int res, sb_light_fit *out);
 /* Stable variant: a bounding sphere of the points (rotation-invariant size)
  * whose light-space window is snapped to whole texels (no shimmer). */
 void sb_light_fit_stable(const sb_scene *s, sb_v3 sun, const sb_v3 *pts, int n, int res, sb_light_fit *out);

@@ -121,6 +121,9 @@ static bool sdsm_check(const void *desc, sb_err *err) {
     if (d->csm.stable && d->splits == SPLITS_GPU)
         return sb_fail(err, "stable=on needs splits=cpu (the GPU's fits are tight boxes of this frame's samples, not "
                             "snapped spheres)");
+    if (d->csm.fit == SB_FIT_RECEIVERS && d->splits == SPLITS_GPU)
+        return sb_fail(err, "fit=receivers needs splits=cpu (the GPU fits its partitions itself: tight=on bounds "
+                            "them by their samples)");
     if (d->tight && d->splits != SPLITS_GPU)
         return sb_fail(err, "tight=on needs splits=gpu (the sample bounds depend on this frame's partitions)");
     return sb_csm_check(&d->csm, "", err);

@@ -89,7 +89,7 @@ typedef struct sb_param_def {
 #define SB_PARAM_E_LATE(T, f, def, choices, help, ...) \
     {SB_PARAM_ROW_(T, f, SB_PARAM_ENUM, def, 0, 0, choices, help), .late = true, __VA_ARGS__}
 
-#define SB_MAX_PARAMS 24
+#define SB_MAX_PARAMS 32
 
 /* Concrete values of one technique's parameters, in table order. */
 typedef struct sb_params {

@@ -1,6 +1,6 @@
 /* The conformance sweep: no combination of a technique's enumerated parameters
  * wrong in silence. Every technique's pairwise covering set (`techniques
- * --pairwise`: every pair of values of two enumerated parameters in at least
+ * --all-pairs`: every pair of values of two enumerated parameters in at least
  * one spec) is rendered along a bundled scene's path, every frame evaluated,
  * and each frame's err_rate is held to the best of its family on that frame:
  * the same technique (its warp=, splits=, filter=, layered= ... held to its
@@ -83,11 +83,11 @@ static int sweep_outliers(const sweep_run *runs, int n, const char *scene, char 
     return bad;
 }
 
-/* Every spec `techniques --pairwise BASE` prints, space-separated; the refused pairs printed. */
+/* Every spec `techniques --all-pairs BASE` prints, space-separated; the refused pairs printed. */
 static void pairwise_specs(const char *base, char *out, size_t len) {
     static char buf[1 << 16];
     char cmd[512];
-    snprintf(cmd, sizeof cmd, "%s techniques --pairwise %s", test_binary(), base);
+    snprintf(cmd, sizeof cmd, "%s techniques --all-pairs %s", test_binary(), base);
     assert_int_equal(run_capture(cmd, buf, sizeof buf), 0);
     fputs(buf, stdout);   /* the specs, and the pairs refused before rendering (the technique's check) */
     out[0] = 0;
@@ -205,7 +205,7 @@ static void test_pairwise_covers(void **state) {
     (void)state;
     static char buf[1 << 16];
     char cmd[512];
-    snprintf(cmd, sizeof cmd, "%s techniques --pairwise pssm:res=512 2>&1", test_binary());
+    snprintf(cmd, sizeof cmd, "%s techniques --all-pairs pssm:res=512 2>&1", test_binary());
     assert_int_equal(run_capture(cmd, buf, sizeof buf), 0);
     assert_non_null(strstr(buf, "refused: stable=on with warp=lispsm: stable=on cannot be combined"));
     const char *pairs[][2] = {{"filter=pcf5", "format=msm"}, {"layered=gs", "warp=tsm"},
@@ -224,9 +224,9 @@ static void test_pairwise_covers(void **state) {
     for (char *l = buf; (l = strstr(l, "pssm:res=512")) != NULL; l++) lines += l == buf || l[-1] == '\n';
     print_message("pssm: %d specs\n", lines);
     assert_in_range(lines, 24, 40);   /* 6 filters x 4 formats at least; the product is 3,456 */
-    expect_cli_fail("a base spec gives one value a parameter", "%s techniques --pairwise pssm:res=512,1024",
+    expect_cli_fail("a base spec gives one value a parameter", "%s techniques --all-pairs pssm:res=512,1024",
                     test_binary());
-    expect_cli_fail("unknown technique", "%s techniques --pairwise nosuch", test_binary());
+    expect_cli_fail("unknown technique", "%s techniques --all-pairs nosuch", test_binary());
 }
 
 static void test_sun(void **state) {

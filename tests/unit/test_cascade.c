@@ -237,7 +237,7 @@ static void test_lispsm_fallback(void **st) {
         for (int k = 0; k < 8; k++)
             pts[k] = sb_v3_make(k & 1 ? 20 : -20, k & 2 ? 10 : -5, k & 4 ? 30 : -30);
         sb_light_fit fit;
-        sb_light_fit_lispsm(&s, sun, sb_v3_make(0, 5, 0), fwd, 0.5, 200, pts, 8, 1024, 5, &fit);
+        sb_light_fit_lispsm(&s, sun, sb_v3_make(0, 5, 0), fwd, 0.5, 200, pts, 8, 1024, 5, false, &fit);
         double gamma = angles[i] > 90 ? 180 - angles[i] : angles[i];
         print_message("view at %5.1f deg from the light: %s (n_opt %.3g)\n", angles[i], fit.warped ? "warped" : "uniform",
                       fit.n_opt);
