@@ -8,6 +8,7 @@
  * refused with the technique's reason. */
 #include "sweep.h"
 
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -143,6 +144,88 @@ static void refusal(const sw_state *s, int *v, int i, int j, char *why, size_t l
     }
 }
 
+#define SW_ORDERS 4
+
+/* The k-th order of the axes: as declared, reversed, then shuffles of a fixed generator (the output is the same
+ * every time). */
+static void axis_order(int n, int k, int *order) {
+    for (int p = 0; p < n; p++) order[p] = k == 1 ? n - 1 - p : p;
+    uint32_t x = 2654435761u * (uint32_t)(k + 1);
+    for (int p = n - 1; k >= 2 && p > 0; p--) {
+        x = x * 1664525u + 1013904223u;
+        int q = (int)((x >> 8) % (uint32_t)(p + 1)), t = order[p];
+        order[p] = order[q], order[q] = t;
+    }
+}
+
+/* The pair (or value) held, every other axis given in `order` the value that covers the most open pairs with
+ * those given before it (a tie: the value the most pairs wait for, then the default). */
+static void greedy(sw_state *s, const int *order, int i, int a, int j, int b, int *v) {
+    bool set[SB_MAX_PARAMS] = {0};
+    for (int p = 0; p < s->naxes; p++) v[p] = s->ax[p].dflt;
+    v[i] = a, set[i] = true;
+    if (j >= 0) v[j] = b, set[j] = true;
+    for (int o = 0; o < s->naxes; o++) {
+        int p = order[o];
+        if (set[p]) continue;
+        /* the value of the most gain among those the technique accepts with the axes given so far (the rest at
+           their defaults); when it accepts none, the value of the most gain (a later axis may make it whole) */
+        int best = -1, best_gain = -1, best_open = -1, any = s->ax[p].dflt, any_gain = -1, any_open = -1;
+        for (int x = 0; x < s->ax[p].n; x++) {
+            int g = gain(s, v, set, p, x), op = open_pairs(s, p, x);
+            bool more = g > any_gain || (g == any_gain && op > any_open);
+            if (more) any = x, any_gain = g, any_open = op;
+            if (g < best_gain || (g == best_gain && op <= best_open)) continue;
+            v[p] = x;
+            if (accepted(s, v, NULL, 0)) best = x, best_gain = g, best_open = op;
+        }
+        v[p] = best >= 0 ? best : any, set[p] = true;
+    }
+}
+
+/* Open pairs (and values) a spec would cover. */
+static int new_pairs(sw_state *s, const int *v) {
+    int n = 0;
+    for (int p = 0; p < s->naxes; p++) {
+        n += !s->single[slot(p, v[p])];
+        for (int q = p + 1; q < s->naxes; q++) n += !*pair_at(s, p, v[p], q, v[q]);
+    }
+    return n;
+}
+
+/* v made acceptable by moving axes other than i and j, one at a time: an accepted move that covers the most open
+ * pairs ends it; else the move that answers the spec's reason (the technique then names another, or none) and
+ * keeps the most open pairs is taken, and the next reason asked, a few rounds at most. */
+static bool best_move(sw_state *s, int *v, int i, int j) {
+    char why[400], other[400];
+    for (int round = 0; round < 6; round++) {
+        if (accepted(s, v, why, sizeof why)) return true;
+        int ap = -1, ax = 0, an = -1, rp = -1, rx = 0, rn = -1;
+        for (int p = 0; p < s->naxes; p++) {
+            if (p == i || p == j) continue;
+            int keep = v[p];
+            for (int x = 0; x < s->ax[p].n; x++) {
+                if (x == keep) continue;
+                v[p] = x;
+                int n = new_pairs(s, v);
+                if (accepted(s, v, other, sizeof other)) {
+                    if (n > an) ap = p, ax = x, an = n;
+                } else if (strcmp(other, why) && n > rn) {
+                    rp = p, rx = x, rn = n;
+                }
+            }
+            v[p] = keep;
+        }
+        if (ap >= 0) {
+            v[ap] = ax;
+            return true;
+        }
+        if (rp < 0) return false;
+        v[rp] = rx;
+    }
+    return accepted(s, v, NULL, 0);
+}
+
 static void cover(sw_state *s, const int *v) {
     for (int p = 0; p < s->naxes; p++) {
         s->single[slot(p, v[p])] = true;
@@ -215,25 +298,27 @@ bool sb_sweep_pairwise(const char *base, sb_sweep *out, sb_err *err) {
         cover(s, v);
     }
     while (ok && open_target(s, &i, &a, &j, &b)) {
-        bool set[SB_MAX_PARAMS] = {0};
-        for (int p = 0; p < s->naxes; p++) v[p] = s->ax[p].dflt;
-        v[i] = a, set[i] = true;
-        if (j >= 0) v[j] = b, set[j] = true;
-        for (int p = 0; p < s->naxes; p++) {
-            if (set[p]) continue;
-            int best = s->ax[p].dflt, best_gain = gain(s, v, set, p, best), best_open = open_pairs(s, p, best);
-            for (int x = 0; x < s->ax[p].n; x++) {
-                int g = gain(s, v, set, p, x), o = open_pairs(s, p, x);
-                if (g > best_gain || (g == best_gain && o > best_open)) best = x, best_gain = g, best_open = o;
-            }
-            v[p] = best, set[p] = true;
+        /* candidates from several orders of the axes (the first value given decides the others' gains), each
+           made acceptable; the one that covers the most open pairs is kept */
+        int best_v[SB_MAX_PARAMS], best_new = -1;
+        for (int k = 0; k < SW_ORDERS; k++) {
+            int order[SB_MAX_PARAMS], c[SB_MAX_PARAMS];
+            axis_order(s->naxes, k, order);
+            greedy(s, order, i, a, j, b, c);
+            if (!best_move(s, c, i, j) && !repair(s, c, i, j)) continue;
+            int fresh = new_pairs(s, c);
+            if (fresh > best_new) best_new = fresh, memcpy(best_v, c, sizeof c);
         }
-        if (repair(s, v, i, j)) {
+        if (best_new >= 0) {
+            memcpy(v, best_v, sizeof best_v);
             spec_text(s, v, text, sizeof text);
             push(&out->specs, &out->count, text);
             cover(s, v);
             continue;
         }
+        for (int p = 0; p < s->naxes; p++) v[p] = s->ax[p].dflt;
+        v[i] = a;
+        if (j >= 0) v[j] = b;
         /* no accepted spec holds the pair: refused, with the reason of the defaults around it */
         char why[400];
         for (int p = 0; p < s->naxes; p++) v[p] = (p == i || p == j) ? v[p] : s->ax[p].dflt;

@@ -106,7 +106,7 @@ static int sweep_scene(const char *scene, const char *specs, const char *extra, 
     char out[256];
     snprintf(out, sizeof out, "%s/%s", g_tmp, scene);
     assert_int_equal(run_logged(g_log, sizeof g_log,
-                                "%s run %s %s %s --frames %d --size 96x54 --error-every 1 --warmup 0 --flicker-dt 0 "
+                                "%s run %s %s %s --frames %d --error-every 1 --warmup 0 --flicker-dt 0 "
                                 "--yes --quiet %s --out %s",
                                 test_binary(), scene, scene, specs, frames, extra, out),
                      0);
@@ -221,7 +221,8 @@ static void test_pairwise_covers(void **state) {
         if (!found) fail_msg("no spec holds %s with %s:\n%s", pairs[i][0], pairs[i][1], buf);
     }
     int lines = 0;
-    for (char *l = buf; (l = strstr(l, "pssm:res=512")) != NULL; l++) lines += l == buf || l[-1] == '\n';
+    for (char *l = buf; (l = strstr(l, "pssm:res=512")) != NULL; l++)
+        lines += (l == buf || l[-1] == '\n') && strncmp(l + 12, ": refused:", 10);
     print_message("pssm: %d specs\n", lines);
     assert_in_range(lines, 24, 40);   /* 6 filters x 4 formats at least; the product is 3,456 */
     expect_cli_fail("a base spec gives one value a parameter", "%s techniques --all-pairs pssm:res=512,1024",
@@ -231,12 +232,35 @@ static void test_pairwise_covers(void **state) {
 
 static void test_sun(void **state) {
     (void)state;
-    sweep("towers", "sm:res=1024 lispsm:res=1024 tsm:res=1024 psm:res=1024 pssm:res=1024 sdsm:res=1024", "", 3);
+    sweep("towers", "sm:res=1024 lispsm:res=1024 tsm:res=1024 psm:res=1024 pssm:res=1024 sdsm:res=1024", "--size 96x54", 3);
 }
 
 static void test_lamps(void **state) {
     (void)state;
-    sweep("street-lamps", "cube:res=256 dpsm:res=256 atlas:res=256", "--lights lamps", 2);
+    sweep("street-lamps", "cube:res=256 dpsm:res=256 atlas:res=256", "--size 96x54 --lights lamps", 2);
+}
+
+/* LiSPSM per cascade as the literature intends: pssm:warp=lispsm no worse than pssm on average along each bundled
+ * sun scene's path, and no frame over 1.5x pssm's beyond 0.0005 (29 pixels at 320x180: a frame where both are a
+ * handful of pixels decides nothing). Broken on purpose (n_opt / 20) it fails on towers, frame 4: 0.00777 against
+ * 0.00297. */
+static void test_lispsm_rule(void **state) {
+    (void)state;
+    const char *scenes[] = {"towers", "desert", "plane-box", "overhangs", "movers"};
+    for (size_t i = 0; i < sizeof scenes / sizeof scenes[0]; i++) {
+        static sweep_run runs[4];
+        int n = sweep_scene(scenes[i], "pssm pssm:warp=lispsm", "--size 320x180", 6, runs, 0);
+        assert_int_equal(n, 2);
+        double sum[2] = {0, 0};
+        for (int f = 0; f < 6; f++) {
+            sum[0] += runs[0].err[f], sum[1] += runs[1].err[f];
+            if (runs[1].err[f] > 1.5 * runs[0].err[f] + 0.0005)
+                fail_msg("%s frame %d: pssm:warp=lispsm err_rate %.5f, pssm %.5f", scenes[i], f, runs[1].err[f],
+                         runs[0].err[f]);
+        }
+        print_message("%s: pssm:warp=lispsm mean err_rate %.5f, pssm %.5f\n", scenes[i], sum[1] / 6, sum[0] / 6);
+        if (sum[1] > sum[0]) fail_msg("%s: pssm:warp=lispsm is worse on average", scenes[i]);
+    }
 }
 
 static int setup(void **state) {
@@ -255,6 +279,7 @@ int main(void) {
         cmocka_unit_test(test_pairwise_covers),
         cmocka_unit_test(test_sun),
         cmocka_unit_test(test_lamps),
+        cmocka_unit_test(test_lispsm_rule),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
