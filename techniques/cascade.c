@@ -22,6 +22,10 @@ const sb_counter_def sb_csm_counters[SB_CSM_COUNTER_COUNT] = {
             "their light volume (empty: nothing moves, or no cascades)"},
 };
 
+bool sb_csm_fits_receivers(const sb_csm_desc *d) {
+    return d->fit == SB_FIT_RECEIVERS || (d->fit == SB_FIT_AUTO && !d->stable && d->warp != SB_WARP_TSM);
+}
+
 bool sb_csm_check(const sb_csm_desc *d, const char *name, sb_err *err) {
     if (d->warp && d->stable)
         return sb_fail(err, "%sstable=on cannot be combined with a perspective warp (a warped map follows the camera)",
@@ -257,10 +261,10 @@ void sb_csm_fit_slice(const sb_csm *c, const sb_frame *f, double zn, double zf, 
     const sb_csm_desc *d = &c->d;
     if (d->warp == SB_WARP_LISPSM)
         sb_light_fit_lispsm(s, f->gpu->sun, eye, f->cam.forward, zn, zf, corners, 8, d->res, d->min_angle,
-                            d->fit == SB_FIT_RECEIVERS, out);
+                            sb_csm_fits_receivers(d), out);
     else if (d->warp == SB_WARP_TSM) sb_light_fit_tsm(s, f->gpu->sun, corners, d->res, d->focus, zn, zf, out);
     else if (d->stable) sb_light_fit_stable(s, f->gpu->sun, corners, 8, d->res, out);
-    else if (d->fit == SB_FIT_RECEIVERS) sb_light_fit_receivers(s, f->gpu->sun, corners, d->res, out);
+    else if (sb_csm_fits_receivers(d)) sb_light_fit_receivers(s, f->gpu->sun, corners, d->res, out);
     else sb_light_fit_points(s, f->gpu->sun, corners, 8, d->res, out);
 }
 

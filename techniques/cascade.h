@@ -13,8 +13,10 @@
 
 enum { SB_WARP_NONE, SB_WARP_LISPSM, SB_WARP_TSM };
 /* What a cascade's window is fitted to (fit=): the slice of the view (clipped to the scene's box), or the part of
- * the slice where receivers are (the draws' boxes inside it), as Filament's and Unreal's fits are. */
-enum { SB_FIT_SLICE, SB_FIT_RECEIVERS };
+ * the slice where receivers are (the draws' boxes inside it), as Filament's and Unreal's fits are; auto (pssm's
+ * and sdsm's default): the receivers unless a sphere (stable=on) or a trapezoid (warp=tsm) is the fit. The
+ * techniques without the parameter (sm, lispsm, tsm) keep 0, the slice. */
+enum { SB_FIT_SLICE, SB_FIT_RECEIVERS, SB_FIT_AUTO };
 /* What a shadow map stores (format=): depth, or the moments of a filtered format. */
 enum { SB_MAP_DEPTH, SB_MAP_VSM, SB_MAP_ESM, SB_MAP_MSM };
 enum { SB_FILTER_NONE, SB_FILTER_HW, SB_FILTER_PCF3, SB_FILTER_PCF5, SB_FILTER_POISSON16, SB_FILTER_PCSS };
@@ -35,6 +37,9 @@ typedef struct sb_csm_desc {
     int fit;                    /* SB_FIT_*: a cascade's light-space window over its whole slice, or its receivers */
     double distance;            /* stable=on: the shadow range's far end (0: the run's, sb_run_ctx.shadow_far) */
 } sb_csm_desc;
+
+/* Whether the cascades of d are fitted to their receivers (fit=receivers, or auto where it applies). */
+bool sb_csm_fits_receivers(const sb_csm_desc *d);
 
 /* The defaults of the fields a technique's table may not have. */
 #define SB_CSM_DESC_DEFAULTS .cascades = 1, .min_angle = 5, .focus = 0.3
@@ -71,8 +76,9 @@ typedef struct sb_csm_desc {
     SB_PARAM_E_LATE(sb_csm_desc, cache, off, "off|on",                                                          \
                     "a cascade whose snapped window and light did not change, and into whose light volume no caster "  \
                     "moved, is not rendered again (stable=on)", .role = SB_PARAM_CACHE),                               \
-    SB_PARAM_E_LATE(sb_csm_desc, fit, slice, "slice|receivers",                                                 \
-                    "each cascade's window over its view slice, or over the receivers inside it (not stable, not tsm)")
+    SB_PARAM_E_LATE(sb_csm_desc, fit, auto, "slice|receivers|auto",                                             \
+                    "each cascade's window over its view slice, or over the receivers inside it (not with stable=on "  \
+                    "nor warp=tsm); auto: the receivers where neither is asked")
 
 /* Split distances out[0..m] over [n, f]: practical = lambda*log + (1-lambda)*uniform. */
 void sb_split_distances(double lambda, int m, double n, double f, double *out);
