@@ -116,6 +116,9 @@ static bool sdsm_check(const void *desc, sb_err *err) {
         return sb_fail(err, "warp= with a moment format is refused for sdsm (its CPU splits read a frame late: the "
                             "warped, blurred moments had 5-8x the error of unwarped ones on towers; "
                             "docs/techniques.md)");
+    if (d->csm.format == SB_MAP_ESM && d->splits == SPLITS_GPU)
+        return sb_fail(err, "format=esm needs splits=cpu (the GPU's fits span the scene's whole light depth, over which "
+                            "exp(c z) leaks: 5.4x splits=cpu's error on towers; docs/techniques.md)");
     if (d->csm.cache && d->splits == SPLITS_GPU)
         return sb_fail(err, "cache=on needs splits=cpu (the GPU's fits are not seen before the maps are drawn)");
     if (d->csm.stable && d->splits == SPLITS_GPU)

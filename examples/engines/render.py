@@ -1,7 +1,11 @@
 #!/usr/bin/env python3
-"""Renders exported cameras with three.js's shadow map in headless Chromium.
+"""Renders exported cameras with an engine's own shadows in headless Chromium.
 
-    render.py CAMERAS.json SCENE.glb OUT [--map 2048] [--type basic|pcf] [--bias -0.0005]
+    render.py CAMERAS.json SCENE.glb OUT [--engine three|babylon] [--map 2048] [--type basic|pcf] [--bias B]
+                                         [--cascades 4] [--lambda 0.5]
+
+three: three.js's shadow map over the whole scene (--type, --bias: -0.0005 when not given);
+babylon: Babylon.js's cascaded shadow generator (--cascades, --lambda; --bias: its default when not given).
 
 CAMERAS.json is `shadowbench cameras SCENE PATH --frames N --size WxH`'s
 document, SCENE.glb the scene file. OUT gets vis_NNNN.png (white lit, black
@@ -27,6 +31,9 @@ import tempfile
 import threading
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+# engine: its page, and a file of its npm package that must be there
+ENGINES = {"three": ("three-shadows.html", "three/build/three.module.js"),
+           "babylon": ("babylon-shadows.html", "babylonjs/babylon.js")}
 
 
 def main():
@@ -34,26 +41,34 @@ def main():
     ap.add_argument("cameras")
     ap.add_argument("scene")
     ap.add_argument("out")
+    ap.add_argument("--engine", choices=sorted(ENGINES), default="three")
     ap.add_argument("--map", type=int, default=2048)
     ap.add_argument("--type", choices=["basic", "pcf"], default="basic")
-    ap.add_argument("--bias", type=float, default=-0.0005)
+    ap.add_argument("--bias", type=float)
+    ap.add_argument("--cascades", type=int, default=4)
+    ap.add_argument("--lambda", dest="lam", type=float, default=0.5)
     ap.add_argument("--chromium", default=shutil.which("chromium") or "chromium")
     a = ap.parse_args()
-    three = os.path.join(HERE, "node_modules", "three", "build", "three.module.js")
-    for path, what in [(a.cameras, "cameras"), (a.scene, "scene"), (three, "three (scripts/setup installs it)")]:
+    page, module = ENGINES[a.engine]
+    module = os.path.join(HERE, "node_modules", module)
+    for path, what in [(a.cameras, "cameras"), (a.scene, "scene"), (module, a.engine + " (scripts/setup installs it)")]:
         if not os.path.exists(path):
             _bad("%s: no such file (%s)" % (path, what))
+    if a.bias is None and a.engine == "three":
+        a.bias = -0.0005
     root = tempfile.mkdtemp(prefix="sbthree")
     try:
-        shutil.copy(os.path.join(HERE, "three-shadows.html"), root)
+        shutil.copy(os.path.join(HERE, page), root)
         os.symlink(os.path.join(HERE, "node_modules"), os.path.join(root, "node_modules"))
         shutil.copy(a.cameras, os.path.join(root, "cameras.json"))
         shutil.copy(a.scene, os.path.join(root, "scene.glb"))
         handler = functools.partial(Quiet, directory=root)
         server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
         threading.Thread(target=server.serve_forever, daemon=True).start()
-        url = "http://127.0.0.1:%d/three-shadows.html?cameras=cameras.json&scene=scene.glb&map=%d&type=%s&bias=%g" % (
-            server.server_address[1], a.map, a.type, a.bias)
+        url = "http://127.0.0.1:%d/%s?cameras=cameras.json&scene=scene.glb&map=%d&type=%s&cascades=%d&lambda=%g" % (
+            server.server_address[1], page, a.map, a.type, a.cascades, a.lam)
+        if a.bias is not None:
+            url += "&bias=%g" % a.bias
         p = subprocess.run([a.chromium, "--headless", "--no-sandbox", "--use-angle=swiftshader",
                             "--enable-unsafe-swiftshader", "--virtual-time-budget=120000", "--dump-dom", url],
                            capture_output=True, text=True, timeout=300)
@@ -77,8 +92,8 @@ def main():
             with open(path + ".tmp", "wb") as fh:
                 fh.write(base64.b64decode(data))
             os.replace(path + ".tmp", path)
-    print("%s: %d frame(s) into %s (map %d, %s, bias %g)" % (doc["renderer"], len(doc["frames"]), a.out, a.map,
-                                                             a.type, a.bias))
+    what = doc.get("settings") or "%s, bias %g" % (a.type, a.bias)
+    print("%s: %d frame(s) into %s (map %d, %s)" % (doc["renderer"], len(doc["frames"]), a.out, a.map, what))
 
 
 def _bad(line):
