@@ -59,6 +59,7 @@ def main():
     root = tempfile.mkdtemp(prefix="sbthree")
     try:
         shutil.copy(os.path.join(HERE, page), root)
+        shutil.copy(os.path.join(HERE, "frames.js"), root)
         os.symlink(os.path.join(HERE, "node_modules"), os.path.join(root, "node_modules"))
         shutil.copy(a.cameras, os.path.join(root, "cameras.json"))
         shutil.copy(a.scene, os.path.join(root, "scene.glb"))
