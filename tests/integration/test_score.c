@@ -87,6 +87,22 @@ static float *grey(const char *path) {
     return rgb;   /* r, g, b a pixel: the red one serves */
 }
 
+/* The set `score` just printed (into dir): one run of the renderer, status ok, nothing of it timed, its mask lined
+ * up with the scene (geom_mismatch under 0.1 %); its err_rate_mean. */
+static double scored_run(char *dir, size_t len, const char *renderer, sb_table *t) {
+    snprintf(dir, len, "%s", last_line_of(g_out));
+    summary_table(dir, t);
+    assert_int_equal(t->nrows, 1);
+    assert_string_equal(sb_table_get(t, 0, "technique"), renderer);
+    assert_string_equal(sb_table_get(t, 0, "status"), "ok");
+    assert_string_equal(sb_table_get(t, 0, "gpu_ms_median"), "");   /* nothing of it was timed here */
+    assert_string_equal(sb_table_get(t, 0, "draw_calls_mean"), "");
+    const double geom = atof(sb_table_get(t, 0, "geom_mismatch")), err = atof(sb_table_get(t, 0, "err_rate_mean"));
+    print_message("%s on plane-box: err_rate %.6g, geom_mismatch %.3g\n", renderer, err, geom);
+    assert_true(geom < 1e-3);
+    return err;
+}
+
 /* Babylon.js's cascaded shadow generator (examples/engines/babylon-shadows.html) on the same cameras, at a bias
  * that clears its acne here (its default, 5e-5, shadows the lit plane with itself: about 0.4 of the pixels): scored
  * like three.js's, its mask lined up with the scene, its error that of a box's outline. */
@@ -104,15 +120,8 @@ static void test_babylon_scored(void **st) {
     assert_non_null(strstr(g_out, "Babylon.js"));
     assert_int_equal(score("bab", "--renderer Babylon.js --params map=1024:cascades=4:bias=0.002"), 0);
     char scored[4096];
-    snprintf(scored, sizeof scored, "%s", last_line_of(g_out));
     sb_table t;
-    summary_table(scored, &t);
-    assert_int_equal(t.nrows, 1);
-    assert_string_equal(sb_table_get(&t, 0, "technique"), "Babylon.js");
-    assert_string_equal(sb_table_get(&t, 0, "status"), "ok");
-    const double geom = atof(sb_table_get(&t, 0, "geom_mismatch")), err = atof(sb_table_get(&t, 0, "err_rate_mean"));
-    print_message("Babylon.js on plane-box: err_rate %.6g, geom_mismatch %.3g\n", err, geom);
-    assert_true(geom < 1e-3);
+    const double err = scored_run(scored, sizeof scored, "Babylon.js", &t);
     assert_true(err < 0.01);
     sb_table_free(&t);
 }
@@ -123,18 +132,9 @@ static void test_three_scored(void **st) {
     three_frames("three", NULL);
     assert_int_equal(score("three", "--renderer three.js --params map=2048:type=basic"), 0);
     char scored[4096];
-    snprintf(scored, sizeof scored, "%s", last_line_of(g_out));
     sb_table t;
-    summary_table(scored, &t);
-    assert_int_equal(t.nrows, 1);
-    assert_string_equal(sb_table_get(&t, 0, "technique"), "three.js");
+    const double err = scored_run(scored, sizeof scored, "three.js", &t);
     assert_string_equal(sb_table_get(&t, 0, "params"), "map=2048:type=basic");
-    assert_string_equal(sb_table_get(&t, 0, "status"), "ok");
-    assert_string_equal(sb_table_get(&t, 0, "gpu_ms_median"), "");   /* nothing of it was timed here */
-    assert_string_equal(sb_table_get(&t, 0, "draw_calls_mean"), "");
-    const double geom = atof(sb_table_get(&t, 0, "geom_mismatch")), err = atof(sb_table_get(&t, 0, "err_rate_mean"));
-    print_message("three.js on plane-box: err_rate %.6g, geom_mismatch %.3g\n", err, geom);
-    assert_true(geom < 1e-3);
     assert_true(err > 0 && err < 0.01);   /* a box's shadow on a plane, a 2048 map: its outline's pixels */
 
     /* by hand: the tool's reference images of the same cameras, the renderer's frames against them */
