@@ -414,3 +414,8 @@ const sb_exit_status sb_exit_statuses[] = {
     {SB_EXIT_SIGNAL + 15, "terminated", "SIGTERM stopped it in order, as SIGINT"},
 };
 const int sb_exit_status_count = (int)SB_COUNT(sb_exit_statuses);
+
+bool sb_same_file(const char *a, const char *b) {
+    struct stat sa, sb;
+    return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}

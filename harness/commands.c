@@ -790,6 +790,23 @@ static bool flip_input(const char *path, int *w, int *h, float **rgb, sb_err *er
 static int cmd_flip(const sb_cli *c) {
     if (c->npos != 2) return bad_usage(c);
     sb_err err;
+    if (c->o.map) {   /* the map's folder before any work: a missing one is named, not the temporary file */
+        char dir[4096];
+        snprintf(dir, sizeof dir, "%s", c->o.map);
+        char *slash = strrchr(dir, '/');
+        if (slash) *(slash == dir ? slash + 1 : slash) = 0;
+        struct stat st;
+        if (slash && (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode))) {
+            fprintf(stderr, "shadowbench: flip: --map %s: no such folder %s\n", c->o.map, dir);
+            return SB_EXIT_BAD_INPUT;
+        }
+    }
+    for (int i = 0; c->o.map && i < 2; i++)   /* the map over an input would replace the image it measured */
+        if (sb_same_file(c->o.map, c->pos[i])) {
+            fprintf(stderr, "shadowbench: flip: --map %s is the input %s: it would be written over (give the map a "
+                            "file of its own)\n", c->o.map, c->pos[i]);
+            return SB_EXIT_BAD_INPUT;
+        }
     int w[2], h[2];
     float *img[2] = {NULL, NULL};
     for (int i = 0; i < 2; i++)
@@ -816,7 +833,8 @@ static int cmd_flip(const sb_cli *c) {
     bool ok = sb_image_write_u8(c->o.map, w[0], h[0], 1, grey, &err);
     free(grey);
     free(map);
-    return ok ? SB_EXIT_OK : bad_file(&err);
+    if (!ok) fprintf(stderr, "shadowbench: %s\n", err.msg);
+    return ok ? SB_EXIT_OK : SB_EXIT_WRITE;   /* the inputs were good: the write failed */
 }
 
 static int cmd_help(const sb_cli *c) {

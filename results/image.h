@@ -17,7 +17,10 @@ bool sb_image_write_u8(const char *path, int w, int h, int channels, const unsig
 /* channels 1..4 of floats (EXR for float data) */
 bool sb_image_write_f32(const char *path, int w, int h, int channels, const float *pixels, sb_err *err);
 /* Reads an image as w x h RGB floats (*rgb malloc'd, top row first; a PNG's values sRGB-encoded in [0, 1], an
- * EXR's as stored): false with one line naming the file where it cannot. */
+ * EXR's as stored; a grey image's one channel in all three; an alpha channel ignored, never multiplied in): false
+ * with one line naming the file where it cannot. Only a regular file is read (a device, FIFO or folder is refused
+ * before it is opened), at most SB_IMAGE_MAX_PIXELS of image_module.h (checked on the header, before anything is allocated), and a
+ * NaN or infinite value is refused with its pixel. */
 bool sb_image_read_rgb(const char *path, int *w, int *h, float **rgb, sb_err *err);
 
 /* The images of one evaluated frame, DIR/<run_id>_fNNNN_<kind>.<ext>:

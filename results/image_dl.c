@@ -4,10 +4,13 @@
  * OpenImageIO stack (process start: see README, Building). */
 #define _GNU_SOURCE
 #include <dlfcn.h>
+#include <errno.h>
 #include <limits.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "image.h"
@@ -76,8 +79,25 @@ bool sb_image_write_f32(const char *path, int w, int h, int channels, const floa
 
 bool sb_image_read_rgb(const char *path, int *w, int *h, float **rgb, sb_err *err) {
     *rgb = NULL;
+    /* a regular file only (followed through links): a device or a FIFO would be read for ever, a folder is no
+       image; named before anything is opened */
+    struct stat st;
+    if (stat(path, &st) != 0) return sb_fail(err, "%s: %s", path, strerror(errno));
+    if (!S_ISREG(st.st_mode))
+        return sb_fail(err, "%s: not a regular file (%s): images are read from files", path,
+                       S_ISDIR(st.st_mode) ? "a folder" : S_ISFIFO(st.st_mode) ? "a FIFO" : "a device or socket");
     if (!sb_images_available()) return sb_fail(err, "%s: %s", path, g_why);
     char msg[SB_ERR_LEN] = "";
-    if (g_read(path, w, h, rgb, msg, sizeof msg)) return true;
-    return sb_fail(err, "%s", msg);
+    if (!g_read(path, w, h, rgb, msg, sizeof msg)) return sb_fail(err, "%s", msg);
+    /* NaN and infinity are no visibility nor colour: refused with the pixel (x from the left, y from the top) */
+    for (size_t i = 0; i < (size_t)*w * *h * 3; i++)
+        if (!isfinite((*rgb)[i])) {
+            size_t px = i / 3;
+            sb_fail(err, "%s: pixel (%zu, %zu) channel %zu is %s", path, px % (size_t)*w, px / (size_t)*w, i % 3,
+                    isnan((*rgb)[i]) ? "NaN" : "infinite");
+            free(*rgb);
+            *rgb = NULL;
+            return false;
+        }
+    return true;
 }

@@ -21,3 +21,7 @@ typedef bool (*sb_image_module_fn)(const char *path, int w, int h, int channels,
 #define SB_IMAGE_MODULE_READ_ENTRY sb_image_module_read
 #define SB_IMAGE_MODULE_READ_SYMBOL "sb_image_module_read"
 typedef bool (*sb_image_module_read_fn)(const char *path, int *w, int *h, float **pixels, char *err, size_t err_len);
+
+/* The most pixels an image read from outside may claim (16384 x 16384), checked on its header before anything is
+ * allocated. */
+#define SB_IMAGE_MAX_PIXELS (16384.0 * 16384.0)

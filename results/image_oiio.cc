@@ -9,7 +9,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
+#include <new>
 #include <string>
+
+#include <sys/stat.h>
 
 #include "image_module.h"
 
@@ -31,12 +34,25 @@ bool sb_fail(sb_err *err, const char *fmt, ...) {
 bool write_to(const char *path, int w, int h, int channels, OIIO::TypeDesc type, const void *pixels, size_t elem,
               sb_err *err);
 
+// OpenImageIO's message on one line (it may hold several)
+std::string one_line(std::string m) {
+    while (!m.empty() && (m.back() == '\n' || m.back() == ' ')) m.pop_back();
+    for (char &ch : m)
+        if (ch == '\n' || ch == '\r') ch = ';';
+    return m;
+}
+
 // Written under a temporary name with the same extension (OIIO picks the
 // format by it), then renamed: a killed run leaves no half-written image.
 bool write(const char *path, int w, int h, int channels, OIIO::TypeDesc type, const void *pixels, size_t elem,
            sb_err *err) {
     std::string final_path(path), tmp(path);
     size_t dot = final_path.find_last_of('.'), slash = final_path.find_last_of('/');
+    /* the target's folder first: a missing one is named, not the temporary file it stopped */
+    std::string folder = slash == std::string::npos ? "." : slash == 0 ? "/" : final_path.substr(0, slash);
+    struct stat st;
+    if (stat(folder.c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
+        return sb_fail(err, "%s: no such folder %s", path, folder.c_str());
     if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) dot = final_path.size();
     tmp.insert(dot, ".tmp");
     bool ok = write_to(tmp.c_str(), w, h, channels, type, pixels, elem, err);
@@ -50,12 +66,12 @@ bool write_to(const char *path, int w, int h, int channels, OIIO::TypeDesc type,
     auto out = OIIO::ImageOutput::create(path);
     if (!out) return sb_fail(err, "%s: no image writer for this extension (%s)", path, OIIO::geterror().c_str());
     OIIO::ImageSpec spec(w, h, channels, type);
-    if (!out->open(path, spec)) return sb_fail(err, "%s: %s", path, out->geterror().c_str());
+    if (!out->open(path, spec)) return sb_fail(err, "%s: %s", path, one_line(out->geterror()).c_str());
     // GL rows are bottom-up: start at the last row and step backwards
     const char *last = static_cast<const char *>(pixels) + (size_t)(h - 1) * w * channels * elem;
     OIIO::stride_t ystride = -(OIIO::stride_t)((size_t)w * channels * elem);
     bool ok = out->write_image(type, last, OIIO::AutoStride, ystride);
-    std::string e = ok ? "" : out->geterror();
+    std::string e = ok ? "" : one_line(out->geterror());
     out->close();
     if (!ok) return sb_fail(err, "%s: %s", path, e.c_str());
     return true;
@@ -66,17 +82,29 @@ bool write_to(const char *path, int w, int h, int channels, OIIO::TypeDesc type,
 extern "C" bool SB_IMAGE_MODULE_READ_ENTRY(const char *path, int *w, int *h, float **pixels, char *err, size_t err_len) {
     sb_err e{err, err_len};
     *pixels = nullptr;
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) return sb_fail(&e, "%s: cannot read: %s", path, OIIO::geterror().c_str());
+    OIIO::ImageSpec hints;
+    hints.attribute("oiio:UnassociatedAlpha", 1);   /* values as stored: an alpha channel is never multiplied in */
+    auto in = OIIO::ImageInput::open(path, &hints);
+    if (!in) return sb_fail(&e, "%s: cannot read: %s", path, one_line(OIIO::geterror()).c_str());
     const OIIO::ImageSpec &spec = in->spec();
     int nc = spec.nchannels;
     if (spec.width <= 0 || spec.height <= 0 || nc < 1 || spec.depth > 1) {
         in->close();
         return sb_fail(&e, "%s: not a 2D image (%dx%d, %d channels)", path, spec.width, spec.height, nc);
     }
-    std::unique_ptr<float[]> all(new float[(size_t)spec.width * spec.height * nc]);
+    /* the header's size against the limit before anything is allocated (a header may claim what no data backs) */
+    if ((double)spec.width * spec.height > SB_IMAGE_MAX_PIXELS || nc > 16) {
+        in->close();
+        return sb_fail(&e, "%s: %dx%d with %d channels: more than the %.0f pixels (16384 x 16384) and 16 channels "
+                       "an image may have here", path, spec.width, spec.height, nc, (double)SB_IMAGE_MAX_PIXELS);
+    }
+    std::unique_ptr<float[]> all(new (std::nothrow) float[(size_t)spec.width * spec.height * nc]);
+    if (!all) {
+        in->close();
+        return sb_fail(&e, "%s: out of memory for %dx%d", path, spec.width, spec.height);
+    }
     bool ok = in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, all.get());
-    std::string why = ok ? "" : in->geterror();
+    std::string why = ok ? "" : one_line(in->geterror());
     in->close();
     if (!ok) return sb_fail(&e, "%s: %s", path, why.c_str());
     size_t n = (size_t)spec.width * spec.height;

@@ -254,8 +254,74 @@ static void test_bad_input(void **st) {
     sb_table_free(&t);
 }
 
+/* The one reader of images from outside (sb_image_read_rgb: score's frames, flip's images): a device behind a
+ * link, a header that claims more pixels than any data behind it, NaN, each one line with exit 2 and nothing
+ * allocated or spun on; an alpha channel read as stored, never multiplied in. */
+static void test_image_reader(void **st) {
+    (void)st;
+    const char *bin = test_binary(), *common = "--frames 2 --size " SIZE;
+    /* a visibility frame that is a link to /dev/zero: refused at once, named (it spun for ever, SIGTERM or not) */
+    white_frames("device", 2, W, H);
+    assert_int_equal(run_logged(g_out, sizeof g_out, "ln -sf /dev/zero %s/device/vis_0000.png", g_tmp), 0);
+    expect_cli_fail("device/vis_0000.png: not a regular file (a device or socket)",
+                    "timeout 20 %s score plane-box plane-box %s/device --mask 'mask_%%04d.png' %s", bin, g_tmp, common);
+    expect_cli_fail("not a regular file (a folder)", "%s flip %s/device %s/device/mask_0000.png", bin, g_tmp, g_tmp);
+    /* a PNG header claiming 60000 x 60000 with no data: refused on its header (it aborted on std::bad_alloc) */
+    assert_int_equal(run_logged(g_out, sizeof g_out,
+                                "python3 -c 'import struct, zlib, sys; h = struct.pack(\">IIBBBBB\", 60000, 60000, 8, 0, 0, 0, 0); "
+                                "c = lambda t, d: struct.pack(\">I\", len(d)) + t + d + struct.pack(\">I\", zlib.crc32(t + d)); "
+                                "open(sys.argv[1], \"wb\").write(b\"\\x89PNG\\r\\n\\x1a\\n\" + c(b\"IHDR\", h) + c(b\"IDAT\", zlib.compress(bytes(64))) + c(b\"IEND\", b\"\"))' "
+                                "%s/huge.png", g_tmp), 0);
+    expect_cli_fail("huge.png: 60000x60000 with 1 channels: more than the 268435456 pixels",
+                    "%s flip %s/huge.png %s/huge.png", bin, g_tmp, g_tmp);
+    /* NaN in a float image: refused with its pixel (score read it as shadow: err_rate 0.0027 -> 0.50) */
+    char nan_path[4200], ok_path[4200];
+    snprintf(nan_path, sizeof nan_path, "%s/nan.exr", g_tmp);
+    snprintf(ok_path, sizeof ok_path, "%s/ok.exr", g_tmp);
+    float px[4 * 3 * 2];
+    for (int i = 0; i < 4 * 3 * 2; i++) px[i] = 0.5f;
+    sb_err err;
+    assert_true(sb_image_write_f32(ok_path, 4, 2, 3, px, &err));
+    px[3 * 6 + 1] = NAN;   /* written bottom-up: row 1 from the bottom is the top row, pixel 2 of it */
+    assert_true(sb_image_write_f32(nan_path, 4, 2, 3, px, &err));
+    expect_cli_fail("nan.exr: pixel (2, 0) channel 1 is NaN", "%s flip %s %s", bin, ok_path, nan_path);
+    /* flip's map over one of its inputs, by any spelling (it replaced the input and exited 0): refused, the input
+       kept; a map into a folder that is not there: the folder named */
+    char before[64], after[64];
+    assert_int_equal(run_logged(g_out, sizeof g_out, "cksum < %s/white/vis_0000.png", g_tmp), 0);
+    snprintf(before, sizeof before, "%.63s", g_out);
+    assert_int_equal(run_logged(g_out, sizeof g_out, "ln -f %s/white/vis_0000.png %s/hard.png && ln -sf "
+                                "white/vis_0000.png %s/soft.png", g_tmp, g_tmp, g_tmp), 0);
+    const char *spellings[] = {"%s/white/vis_0000.png", "%s/white/../white/./vis_0000.png", "%s/hard.png", "%s/soft.png"};
+    for (int i = 0; i < 4; i++) {
+        char target[4300];
+        snprintf(target, sizeof target, spellings[i], g_tmp);
+        expect_cli_fail("it would be written over", "%s flip %s/white/vis_0000.png %s/white/vis_0001.png --map %s", bin,
+                        g_tmp, g_tmp, target);
+    }
+    assert_int_equal(run_logged(g_out, sizeof g_out, "cksum < %s/white/vis_0000.png", g_tmp), 0);
+    snprintf(after, sizeof after, "%.63s", g_out);
+    assert_string_equal(before, after);
+    char nodir[4200];
+    snprintf(nodir, sizeof nodir, "--map %s/nodir/m.png: no such folder %s/nodir", g_tmp, g_tmp);
+    expect_cli_fail(nodir, "%s flip %s/white/vis_0000.png %s/white/vis_0001.png --map %s/nodir/m.png", bin, g_tmp,
+                    g_tmp, g_tmp);
+    /* RGBA: the colour as stored, whatever the alpha (alpha 100 read 255 as 0.39 before) */
+    char rgba_path[4200];
+    snprintf(rgba_path, sizeof rgba_path, "%s/rgba.png", g_tmp);
+    unsigned char rgba[2 * 2 * 4];
+    for (int i = 0; i < 4; i++) rgba[4 * i] = rgba[4 * i + 1] = rgba[4 * i + 2] = 255, rgba[4 * i + 3] = 100;
+    assert_true(sb_image_write_u8(rgba_path, 2, 2, 4, rgba, &err));
+    int w, h;
+    float *rgb;
+    assert_true(sb_image_read_rgb(rgba_path, &w, &h, &rgb, &err));
+    for (int i = 0; i < 3 * w * h; i++) assert_float_equal(rgb[i], 1.0f, 1e-6);
+    free(rgb);
+}
+
 int main(void) {
-    const struct CMUnitTest tests[] = {cmocka_unit_test(test_bad_input), cmocka_unit_test(test_three_scored),
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_bad_input), cmocka_unit_test(test_image_reader),
+                                       cmocka_unit_test(test_three_scored),
                                        cmocka_unit_test(test_babylon_scored),
                                        cmocka_unit_test(test_wrong_camera_refused)};
     return cmocka_run_group_tests_name("score", tests, setup, teardown);
