@@ -467,6 +467,13 @@ static void jw_number(sb_jw *w, double v, int digits) {
 
 void sb_jw_num(sb_jw *w, double v) { jw_number(w, v, 6); }
 void sb_jw_num_exact(sb_jw *w, double v) { jw_number(w, v, 17); }
+void sb_jw_int(sb_jw *w, long long v) {
+    char buf[32];
+    snprintf(buf, sizeof buf, "%lld", v);
+    jw_sep(w);
+    sb_jw_raw(w, buf);
+}
+void sb_jw_kint(sb_jw *w, const char *key, long long v) { sb_jw_key(w, key), sb_jw_int(w, v); }
 
 void sb_jw_bool(sb_jw *w, bool b) {
     jw_sep(w);

@@ -86,9 +86,11 @@ void sb_jw_key(sb_jw *w, const char *key);
 void sb_jw_str(sb_jw *w, const char *s);    /* NULL: "" */
 void sb_jw_num(sb_jw *w, double v);         /* %.6g */
 void sb_jw_num_exact(sb_jw *w, double v);   /* %.17g: reads back as the same double */
+void sb_jw_int(sb_jw *w, long long v);      /* every digit: a count, an index, a length */
 void sb_jw_bool(sb_jw *w, bool b);
 void sb_jw_null(sb_jw *w);
 /* "key": value in one call. */
 void sb_jw_kstr(sb_jw *w, const char *key, const char *s);
 void sb_jw_knum(sb_jw *w, const char *key, double v);
+void sb_jw_kint(sb_jw *w, const char *key, long long v);
 void sb_jw_kbool(sb_jw *w, const char *key, bool b);

@@ -85,9 +85,9 @@ static void json_document(const sb_cameras_req *r, sb_jw *j) {
     sb_jw_obj(j);
     sb_jw_kstr(j, "scene", r->scene_name);
     sb_jw_kstr(j, "path", r->path_name);
-    sb_jw_knum(j, "frames", o->frames);
-    sb_jw_knum(j, "width", o->width);
-    sb_jw_knum(j, "height", o->height);
+    sb_jw_kint(j, "frames", o->frames);
+    sb_jw_kint(j, "width", o->width);
+    sb_jw_kint(j, "height", o->height);
     sb_jw_kstr(j, "conventions", conventions);
     sb_v3 sun;
     sb_jw_key(j, "sun");
@@ -104,7 +104,7 @@ static void json_document(const sb_cameras_req *r, sb_jw *j) {
     for (int k = 0, n = lamp_count(r->scene); k < n; k++) {
         const sb_light *l = sb_scene_point_light(r->scene, k, NULL);
         sb_jw_obj(j);
-        sb_jw_knum(j, "index", k);
+        sb_jw_kint(j, "index", k);
         sb_jw_kstr(j, "type", l->type == SB_LIGHT_SPOT ? "spot" : "point");
         jw_vec(j, "position", sb_v3_add(l->position, r->scene->origin));
         sb_jw_key(j, "range"), sb_jw_num_exact(j, l->range > 0 ? l->range : 0);
@@ -121,7 +121,7 @@ static void json_document(const sb_cameras_req *r, sb_jw *j) {
         double t;
         sb_camera cam = camera_of(r, i, false, &t);
         sb_jw_obj(j);
-        sb_jw_knum(j, "frame", i);
+        sb_jw_kint(j, "frame", i);
         sb_jw_key(j, "progress"), sb_jw_num_exact(j, sb_path_progress(i, o->frames));
         jw_camera(j, &cam, t, o->width, o->height);
         if (has_twins(r)) {
@@ -167,9 +167,9 @@ static void gbuf_write(const gbuf *g, sb_jw *j) {
     sb_jw_arr(j);
     for (int k = 0; k < g->count; k++) {
         sb_jw_obj(j);
-        sb_jw_knum(j, "buffer", 0);
-        sb_jw_knum(j, "byteOffset", (double)g->acc[k].at);
-        sb_jw_knum(j, "byteLength", (double)g->acc[k].bytes);
+        sb_jw_kint(j, "buffer", 0);
+        sb_jw_kint(j, "byteOffset", (long long)g->acc[k].at);
+        sb_jw_kint(j, "byteLength", (long long)g->acc[k].bytes);
         sb_jw_end_obj(j);
     }
     sb_jw_end_arr(j);
@@ -178,9 +178,9 @@ static void gbuf_write(const gbuf *g, sb_jw *j) {
     for (int k = 0; k < g->count; k++) {
         const gacc *a = &g->acc[k];
         sb_jw_obj(j);
-        sb_jw_knum(j, "bufferView", k);
-        sb_jw_knum(j, "componentType", 5126);   /* FLOAT */
-        sb_jw_knum(j, "count", a->count);
+        sb_jw_kint(j, "bufferView", k);
+        sb_jw_kint(j, "componentType", 5126);   /* FLOAT */
+        sb_jw_kint(j, "count", a->count);
         sb_jw_kstr(j, "type", types[a->comps]);
         if (a->comps == 1) {
             sb_jw_key(j, "min"), sb_jw_arr(j), sb_jw_num_exact(j, a->lo), sb_jw_end_arr(j);
@@ -197,7 +197,7 @@ static void gbuf_write(const gbuf *g, sb_jw *j) {
     sb_jw_key(j, "buffers");
     sb_jw_arr(j);
     sb_jw_obj(j);
-    sb_jw_knum(j, "byteLength", (double)g->bytes.n);
+    sb_jw_kint(j, "byteLength", (long long)g->bytes.n);
     sb_jw_kstr(j, "uri", uri);
     sb_jw_end_obj(j);
     sb_jw_end_arr(j);
@@ -225,7 +225,7 @@ static void light_node(sb_jw *j, const char *name, int light, const sb_v3 *pos, 
     sb_jw_obj(j);
     sb_jw_key(j, "KHR_lights_punctual");
     sb_jw_obj(j);
-    sb_jw_knum(j, "light", light);
+    sb_jw_kint(j, "light", light);
     sb_jw_end_obj(j);
     sb_jw_end_obj(j);
     sb_jw_end_obj(j);
@@ -242,19 +242,23 @@ static void gltf_document(const sb_cameras_req *r, sb_jw *j) {
     int acc[2][3];              /* per camera node: times, translations, rotations */
     double near = INFINITY, far = 0, fov = 0;
     for (int c = 0; c < cams; c++) {
+        int m = 0;   /* keys: glTF's times increase strictly, so a frame at the time of the last key (a path of one
+                        key, whose every frame is at 0) is that key's camera and is not keyed again */
         for (int i = 0; i < n; i++) {
             double t;
             sb_camera cam = camera_of(r, i, c == 1, &t);
-            times[i] = (float)t;
-            pos[3 * i] = (float)cam.pos.x, pos[3 * i + 1] = (float)cam.pos.y, pos[3 * i + 2] = (float)cam.pos.z;
-            rot[4 * i] = (float)cam.rot.x, rot[4 * i + 1] = (float)cam.rot.y, rot[4 * i + 2] = (float)cam.rot.z;
-            rot[4 * i + 3] = (float)cam.rot.w;
             near = fmin(near, cam.znear), far = fmax(far, cam.zfar);
             if (c == 0 && i == 0) fov = cam.fov_deg;
+            if (m > 0 && !((float)t > times[m - 1])) continue;
+            times[m] = (float)t;
+            pos[3 * m] = (float)cam.pos.x, pos[3 * m + 1] = (float)cam.pos.y, pos[3 * m + 2] = (float)cam.pos.z;
+            rot[4 * m] = (float)cam.rot.x, rot[4 * m + 1] = (float)cam.rot.y, rot[4 * m + 2] = (float)cam.rot.z;
+            rot[4 * m + 3] = (float)cam.rot.w;
+            m++;
         }
-        acc[c][0] = gbuf_add(&g, times, n, 1);
-        acc[c][1] = gbuf_add(&g, pos, n, 3);
-        acc[c][2] = gbuf_add(&g, rot, n, 4);
+        acc[c][0] = gbuf_add(&g, times, m, 1);
+        acc[c][1] = gbuf_add(&g, pos, m, 3);
+        acc[c][2] = gbuf_add(&g, rot, m, 4);
     }
     sb_jw_obj(j);
     sb_jw_key(j, "asset");
@@ -265,9 +269,9 @@ static void gltf_document(const sb_cameras_req *r, sb_jw *j) {
     sb_jw_obj(j);
     sb_jw_kstr(j, "scene", r->scene_name);
     sb_jw_kstr(j, "path", r->path_name);
-    sb_jw_knum(j, "frames", n);
-    sb_jw_knum(j, "width", o->width);
-    sb_jw_knum(j, "height", o->height);
+    sb_jw_kint(j, "frames", n);
+    sb_jw_kint(j, "width", o->width);
+    sb_jw_kint(j, "height", o->height);
     sb_jw_kstr(j, "conventions", "glTF's; the cameras' znear and zfar hold every frame's (the tool derives them per "
                                  "frame: the JSON export has each), yfov is the first frame's");
     sb_jw_end_obj(j);
@@ -276,7 +280,7 @@ static void gltf_document(const sb_cameras_req *r, sb_jw *j) {
     sb_jw_arr(j);
     sb_jw_str(j, "KHR_lights_punctual");
     sb_jw_end_arr(j);
-    sb_jw_knum(j, "scene", 0);
+    sb_jw_kint(j, "scene", 0);
     sb_jw_key(j, "scenes");
     sb_jw_arr(j);
     sb_jw_obj(j);
@@ -294,7 +298,7 @@ static void gltf_document(const sb_cameras_req *r, sb_jw *j) {
         sb_camera cam = camera_of(r, 0, c == 1, &t);
         sb_jw_obj(j);
         sb_jw_kstr(j, "name", c ? "camera twin" : "camera");
-        sb_jw_knum(j, "camera", 0);
+        sb_jw_kint(j, "camera", 0);
         jw_floats(j, "translation", (double[3]){cam.pos.x, cam.pos.y, cam.pos.z}, 3);
         jw_floats(j, "rotation", (double[4]){cam.rot.x, cam.rot.y, cam.rot.z, cam.rot.w}, 4);
         sb_jw_end_obj(j);
@@ -342,7 +346,8 @@ static void gltf_document(const sb_cameras_req *r, sb_jw *j) {
         sb_jw_obj(j);
         sb_jw_kstr(j, "type", l->type == SB_LIGHT_SPOT ? "spot" : "point");
         jw_floats(j, "color", (double[3]){l->color[0], l->color[1], l->color[2]}, 3);
-        if (l->intensity > 0) sb_jw_key(j, "intensity"), sb_jw_num_exact(j, l->intensity);
+        /* always written: an engine reads a missing intensity as 1, a lit lamp (-0 as 0) */
+        sb_jw_key(j, "intensity"), sb_jw_num_exact(j, l->intensity == 0 ? 0.0 : l->intensity);
         if (l->range > 0) sb_jw_key(j, "range"), sb_jw_num_exact(j, l->range);
         if (l->type == SB_LIGHT_SPOT) {
             sb_jw_key(j, "spot");
@@ -366,10 +371,10 @@ static void gltf_document(const sb_cameras_req *r, sb_jw *j) {
     for (int c = 0; c < cams; c++)
         for (int k = 0; k < 2; k++) {
             sb_jw_obj(j);
-            sb_jw_knum(j, "sampler", 2 * c + k);
+            sb_jw_kint(j, "sampler", 2 * c + k);
             sb_jw_key(j, "target");
             sb_jw_obj(j);
-            sb_jw_knum(j, "node", c);
+            sb_jw_kint(j, "node", c);
             sb_jw_kstr(j, "path", k ? "rotation" : "translation");
             sb_jw_end_obj(j);
             sb_jw_end_obj(j);
@@ -380,8 +385,8 @@ static void gltf_document(const sb_cameras_req *r, sb_jw *j) {
     for (int c = 0; c < cams; c++)
         for (int k = 0; k < 2; k++) {
             sb_jw_obj(j);
-            sb_jw_knum(j, "input", acc[c][0]);
-            sb_jw_knum(j, "output", acc[c][1 + k]);
+            sb_jw_kint(j, "input", acc[c][0]);
+            sb_jw_kint(j, "output", acc[c][1 + k]);
             sb_jw_kstr(j, "interpolation", "LINEAR");
             sb_jw_end_obj(j);
         }

@@ -279,6 +279,12 @@ static int cmd_cameras(const sb_cli *c) {
         sb_scene_free(&scene);
         return bad_file(&err);
     }
+    if (c->o.twins && c->o.run.flicker_dt <= 0) {   /* it would drop the twins without a word */
+        sb_path_free(&p);
+        sb_scene_free(&scene);
+        return bad("cameras: --twins needs --flicker-dt above 0 (a twin is a frame --flicker-dt of path time later)%s",
+                   "");
+    }
     sb_cameras_req req = {.scene_name = c->pos[0], .path_name = c->pos[1], .scene = &scene, .path = &p,
                           .opts = &c->o.run, .twins = c->o.twins, .format = (sb_cameras_format)c->o.format};
     char *doc = sb_cameras_document(&req);
@@ -287,6 +293,10 @@ static int cmd_cameras(const sb_cli *c) {
     free(doc);
     sb_path_free(&p);
     sb_scene_free(&scene);
+    if (fflush(stdout) != 0 || ferror(stdout)) {   /* a full disk, /dev/full: the document is not whole */
+        fprintf(stderr, "shadowbench: cameras: the document could not be written: %s\n", strerror(errno));
+        return SB_EXIT_WRITE;
+    }
     return SB_EXIT_OK;
 }
 

@@ -12,6 +12,7 @@
  *   cameras (float precision), the sun's node shines along -sun, the lamp's node stands at the lamp; a twin
  *   camera node with --twins.
  * - A path that is not there: one line, exit 2. */
+#include <libgen.h>
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -237,6 +238,60 @@ static void test_gltf(void **st) {
     sb_json_free(&doc);
 }
 
+/* What the export must not get wrong in silence: a path of one key (every frame at time 0) keyed once, so its times
+ * increase strictly and the tool's own loader reads it back to the same camera (it wrote 0,0,0 and the loader
+ * dropped them); every count and length written with all its digits (past about 31k frames a byteLength came out
+ * as 6 significant digits); a lamp's intensity written even where it is 0 (an engine reads a missing one as 1). */
+static void test_gltf_exact(void **st) {
+    (void)st;
+    char cmd[12288], file[512], path[512], a[8192], b[8192];
+    snprintf(path, sizeof path, "%s/one.path", g_tmp);
+    FILE *pf = fopen(path, "w");
+    assert_non_null(pf);
+    fputs("fov 60\nlook 0   -5 4.5 -4   -0.8 0 -0.8\n", pf);
+    fclose(pf);
+    snprintf(file, sizeof file, "%s/one.gltf", g_tmp);
+    snprintf(cmd, sizeof cmd, "%s cameras plane-box %s --frames 3 --size 160x90 --format gltf > %s", test_binary(),
+             path, file);
+    assert_int_equal(system(cmd), 0);
+    snprintf(cmd, sizeof cmd, "%s path %s plane-box --frames 3 --size 160x90", test_binary(), path);
+    assert_int_equal(run_capture(cmd, a, sizeof a), 0);
+    snprintf(cmd, sizeof cmd, "%s path '%s#camera=0' plane-box --frames 3 --size 160x90", test_binary(), file);
+    if (run_capture(cmd, b, sizeof b) != 0) fail_msg("the export of a one-key path does not load back: %s", b);
+    double ra[8][16], rb[8][16];
+    assert_int_equal(csv_rows(a, ra, 8), 3);
+    assert_int_equal(csv_rows(b, rb, 8), 3);
+    for (int i = 0; i < 3; i++)
+        for (int k = 3; k < 6; k++) assert_true(fabs(ra[i][k] - rb[i][k]) < 1e-5 * (1 + fabs(ra[i][k])));
+    /* 31,251 frames: the buffer of 1,000,032 bytes has that byteLength (6 digits wrote 1000030, and the tool refused
+       its own export) */
+    snprintf(file, sizeof file, "%s/long.gltf", g_tmp);
+    snprintf(cmd, sizeof cmd, "%s cameras plane-box plane-box --frames 31251 --size 160x90 --format gltf > %s && "
+             "%s path '%s#camera=0' plane-box --frames 3 --size 160x90 > /dev/null", test_binary(), file, test_binary(),
+             file);
+    assert_int_equal(system(cmd), 0);
+    /* a lamp of intensity 0 (plane-box-lamp's, its glb's JSON changed): written as 0, not left to the default 1 */
+    char bin_dir[4096], glb[4200], dark[4200];
+    snprintf(bin_dir, sizeof bin_dir, "%s", test_binary());
+    snprintf(glb, sizeof glb, "%s/plane-box-lamp.glb", dirname(bin_dir));
+    snprintf(dark, sizeof dark, "%s/dark.glb", g_tmp);
+    snprintf(cmd, sizeof cmd, "python3 -c 'import json, struct, sys; b = open(sys.argv[1], \"rb\").read(); "
+             "n = struct.unpack_from(\"<I\", b, 12)[0]; d = json.loads(b[20:20 + n]); "
+             "[l.__setitem__(\"intensity\", 0) for l in d[\"extensions\"][\"KHR_lights_punctual\"][\"lights\"]]; "
+             "j = json.dumps(d).encode(); j += b\" \" * (-len(j) %% 4); rest = b[20 + n:]; "
+             "open(sys.argv[2], \"wb\").write(struct.pack(\"<III\", 0x46546C67, 2, 12 + 8 + len(j) + len(rest)) + "
+             "struct.pack(\"<II\", len(j), 0x4E4F534A) + j + rest)' %s %s", glb, dark);
+    assert_int_equal(system(cmd), 0);
+    snprintf(cmd, sizeof cmd, "%s cameras %s plane-box-lamp --frames 2 --size 160x90 --format gltf", test_binary(), dark);
+    assert_int_equal(run_capture(cmd, b, sizeof b), 0);
+    if (!strstr(b, "\"intensity\":0")) fail_msg("no intensity 0 in:\n%s", b);
+    /* the document that cannot be written whole: exit 4, said; twins that would be dropped: refused */
+    expect_cli_exit(4, "could not be written", "(%s cameras plane-box plane-box --frames 2 --size 160x90 > /dev/full)",
+                    test_binary());
+    expect_cli_fail("--twins needs --flicker-dt above 0",
+                    "%s cameras plane-box plane-box --frames 2 --size 160x90 --twins --flicker-dt 0", test_binary());
+}
+
 static void test_bad_input(void **st) {
     (void)st;
     expect_cli_fail("no-such.path", "%s cameras plane-box %s/no-such.path", test_binary(), g_tmp);
@@ -245,6 +300,7 @@ static void test_bad_input(void **st) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_conventions), cmocka_unit_test(test_rerendered),
-                                       cmocka_unit_test(test_gltf), cmocka_unit_test(test_bad_input)};
+                                       cmocka_unit_test(test_gltf), cmocka_unit_test(test_gltf_exact),
+                                       cmocka_unit_test(test_bad_input)};
     return cmocka_run_group_tests_name("engines", tests, setup, teardown);
 }
