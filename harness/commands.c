@@ -488,6 +488,19 @@ static int cmd_score(const sb_cli *c) {
         return bad("score: --mask FILE is needed: the renderer's mask of the pixels it drew is how score checks that "
                    "its cameras are the exported ones%s", "");
     if (c->o.run.error_every <= 0) return bad("score: --error-every 0 scores nothing%s", "");
+    /* a renderer's name and its parameters are data every writer prints (CSV, the report, compare's table) */
+    const char *names[2][2] = {{"--renderer", c->o.renderer}, {"--params", c->o.renderer_params}};
+    for (int k = 0; k < 2; k++) {
+        const char *v = names[k][1];
+        if (!v) continue;
+        if (!*v) return bad("score: %s is empty (leave it out for the default)", names[k][0]);
+        for (const unsigned char *q = (const unsigned char *)v; *q; q++)
+            if (*q < 0x20 || *q == 0x7f) {
+                fprintf(stderr, "shadowbench: score: %s holds a control character (byte %u at %d): a name is one line "
+                                "of text\n", names[k][0], *q, (int)(q - (const unsigned char *)v));
+                return SB_EXIT_BAD_INPUT;
+            }
+    }
     char name[256];   /* DIR's last part ("out/frames/" names frames) */
     const char *dir = c->pos[2];
     snprintf(name, sizeof name, "%s", dir);

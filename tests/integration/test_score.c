@@ -235,6 +235,14 @@ static void test_bad_input(void **st) {
                     "%s score plane-box plane-box %s/white --mask 'mask_%%04d.png' --frames 2 --size 160x90", bin, g_tmp);
     expect_cli_fail("--lights is not an option of score", "%s score plane-box plane-box %s/white --mask 'mask_%%04d.png' %s --lights lamps",
                     bin, g_tmp, common);
+    expect_cli_fail("--renderer is empty", "%s score plane-box plane-box %s/white --mask 'mask_%%04d.png' %s --renderer ''",
+                    bin, g_tmp, common);
+    expect_cli_fail("--renderer holds a control character (byte 10 at 3)",
+                    "%s score plane-box plane-box %s/white --mask 'mask_%%04d.png' %s --renderer \"$(printf 'one\\ntwo')\"",
+                    bin, g_tmp, common);
+    expect_cli_fail("--params holds a control character (byte 9 at 5)",
+                    "%s score plane-box plane-box %s/white --mask 'mask_%%04d.png' %s --params \"$(printf 'map=1\\tx')\"",
+                    bin, g_tmp, common);
     expect_cli_fail("no such folder of frames", "%s score plane-box plane-box %s/nowhere --mask 'mask_%%04d.png' %s", bin,
                     g_tmp, common);
     /* a file that is no image where frame 0's visibility should be */
