@@ -323,6 +323,18 @@ bool read_channel(Ctx &c, const tinygltf::Animation &an, const tinygltf::Animati
         }
     size_t k = dst.in.size();
     bool cubic = smp.interpolation == "CUBICSPLINE";
+    if (cubic && k > 0 && dst.out.size() == k * (size_t)ncomp) {   // the values without their tangents
+        *skip = where + ": a CUBICSPLINE sampler has three values a key (in-tangent, value, out-tangent), this one "
+                        "one (" + std::to_string(k) + " keys, " + std::to_string(k) + " values): left out";
+        return true;
+    }
+    if (k > 0 && !(dst.in[0] >= 0)) {   // glTF 2.0: time[0] >= 0
+        char what[160];
+        snprintf(what, sizeof what, "/input: key 0 is at %.6g s, before 0 (glTF's key times start at 0 or later): "
+                                    "left out", dst.in[0]);
+        *skip = where + what;
+        return true;
+    }
     if (k == 0 || dst.out.size() != (cubic ? 3 : 1) * k * (size_t)ncomp) {
         *skip = where + ": the sampler's output count (" + std::to_string(dst.out.size() / (size_t)ncomp) +
                 " values) does not match its input count (" + std::to_string(k) + " key times): left out";
