@@ -418,7 +418,11 @@ struct Loader {
                 std::string where = "/animations/0/channels/" + std::to_string(ci);
                 bool w = ch.target_path == "weights";
                 int ncomp = ch.target_path == "rotation" ? 4 : w ? (int)weights[ni].size() : 3;
-                if (ncomp == 0) continue;
+                if (ncomp == 0) {
+                    left_out(where + ": a weights channel on node " + std::to_string(ni) +
+                             ", whose mesh has no morph weights: nothing for it to move: left out");
+                    continue;
+                }
                 Channel chan;
                 std::string skip;
                 if (!read_channel(c, an, ch, where, ncomp, chan, &skip)) return false;
@@ -1020,6 +1024,12 @@ bool Loader::clips() {
             std::string where = "/animations/" + std::to_string(ai) + "/channels/" + std::to_string(ci), skip;
             if (ncomp > 64) {   // as --pose reads it: left out, said (never dropped in silence)
                 left_out(where + ": " + std::to_string(ncomp) + " morph weights, more than the 64 played: not applied");
+                mm->skipped++;
+                continue;
+            }
+            if (ncomp == 0 && path == PATH_W) {   // never dropped in silence: the scene would say "nothing moves"
+                left_out(where + ": a weights channel on node " + std::to_string(ni) +
+                         ", whose mesh has no morph weights: nothing for it to move: left out");
                 mm->skipped++;
                 continue;
             }

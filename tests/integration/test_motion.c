@@ -487,13 +487,18 @@ static void test_bad_input(void **st) {
     assert_non_null(strstr(g_out, "key times do not increase (key 2): left out"));
     assert_non_null(strstr(g_out, "animation: nothing moves"));
     /* the same triangle, its key times -1, 0, 1 (before 0: glTF's start at 0), then at 0, 1, 2 with its three
-       translations read as a CUBICSPLINE's (one value a key where it has three): each left out with its own cause */
-    const char *cases[][2] = {{"", "key 0 is at -1 s, before 0 (glTF's key times start at 0 or later): left out"},
+       translations read as a CUBICSPLINE's (one value a key where it has three), then as morph weights of a mesh
+       that has none (dropped with no word: "nothing moves"): each left out with its own cause */
+    const char *cases[][3] = {{"", "key 0 is at -1 s, before 0 (glTF's key times start at 0 or later): left out",
+                               "translation"},
                               {",\"interpolation\":\"CUBICSPLINE\"",
-                               "a CUBICSPLINE sampler has three values a key (in-tangent, value, out-tangent), this one one"}};
-    for (int i = 0; i < 2; i++) {
+                               "a CUBICSPLINE sampler has three values a key (in-tangent, value, out-tangent), this one one",
+                               "translation"},
+                              {"", "a weights channel on node 0, whose mesh has no morph weights: nothing for it to move",
+                               "weights"}};
+    for (int i = 0; i < 3; i++) {
         float buf[21] = {0, 0, 0, 1, 0, 0, 0, 1, 0, -1, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0};
-        if (i == 1) buf[9] = 0, buf[10] = 1, buf[11] = 2;
+        if (i >= 1) buf[9] = 0, buf[10] = 1, buf[11] = 2;
         char b64[200];
         test_base64((const unsigned char *)buf, sizeof buf, b64);
         f = fopen(file, "w");
@@ -506,9 +511,9 @@ static void test_bad_input(void **st) {
                    "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\",\"min\":[0,0,0],"
                    "\"max\":[1,1,0]},{\"bufferView\":1,\"componentType\":5126,\"count\":3,\"type\":\"SCALAR\"},"
                    "{\"bufferView\":2,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
-                   "\"animations\":[{\"channels\":[{\"sampler\":0,\"target\":{\"node\":0,\"path\":\"translation\"}}],"
+                   "\"animations\":[{\"channels\":[{\"sampler\":0,\"target\":{\"node\":0,\"path\":\"%s\"}}],"
                    "\"samplers\":[{\"input\":1,\"output\":2%s}]}]}",
-                b64, cases[i][0]);
+                b64, cases[i][2], cases[i][0]);
         fclose(f);
         assert_int_equal(sh("%s info %s", bin, file), 0);
         if (!strstr(g_out, cases[i][1])) fail_msg("expected \"%s\" in:\n%s", cases[i][1], g_out);
