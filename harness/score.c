@@ -21,6 +21,8 @@ bool sb_score_pattern_ok(const char *pattern, sb_err *err) {
         while (*q >= '0' && *q <= '9') q++;
         if (*q != 'd' || q - p > 4) return sb_fail(err, "'%s': a frame's number is %%d or %%0Nd (e.g. vis_%%04d.png), "
                                                    "not '%.*s'", pattern, (int)(q - p + (*q != 0)), p);
+        if (atoi(p + 1) > 16)   /* %999d would name a file of 999 characters, mostly spaces */
+            return sb_fail(err, "'%s': a frame's number is at most 16 digits wide, not %d", pattern, atoi(p + 1));
         conversions++;
         p = q;
     }

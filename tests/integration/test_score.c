@@ -229,6 +229,9 @@ static void test_bad_input(void **st) {
     expect_cli_fail("--mask FILE is needed", "%s score plane-box plane-box %s/white %s", bin, g_tmp, common);
     expect_cli_fail("needs one %d", "%s score plane-box plane-box %s/white --mask mask.png %s", bin, g_tmp, common);
     expect_cli_fail("not '%s'", "%s score plane-box plane-box %s/white --mask 'mask_%%s.png' %s", bin, g_tmp, common);
+    expect_cli_fail("at most 16 digits wide, not 999",
+                    "%s score plane-box plane-box %s/white --mask 'mask_%%04d.png' --pattern 'vis_%%999d.png' %s", bin,
+                    g_tmp, common);
     expect_cli_fail("frame 2 of 3", "%s score plane-box plane-box %s/white --mask 'mask_%%04d.png' --frames 3 --size " SIZE,
                     bin, g_tmp);
     expect_cli_fail("320x180, the run's --size is 160x90",
