@@ -813,17 +813,6 @@ static bool flip_input(const char *path, int *w, int *h, float **rgb, sb_err *er
 static int cmd_flip(const sb_cli *c) {
     if (c->npos != 2) return bad_usage(c);
     sb_err err;
-    if (c->o.map) {   /* the map's folder before any work: a missing one is named, not the temporary file */
-        char dir[4096];
-        snprintf(dir, sizeof dir, "%s", c->o.map);
-        char *slash = strrchr(dir, '/');
-        if (slash) *(slash == dir ? slash + 1 : slash) = 0;
-        struct stat st;
-        if (slash && (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode))) {
-            fprintf(stderr, "shadowbench: flip: --map %s: no such folder %s\n", c->o.map, dir);
-            return SB_EXIT_BAD_INPUT;
-        }
-    }
     for (int i = 0; c->o.map && i < 2; i++)   /* the map over an input would replace the image it measured */
         if (sb_same_file(c->o.map, c->pos[i])) {
             fprintf(stderr, "shadowbench: flip: --map %s is the input %s: it would be written over (give the map a "
@@ -847,17 +836,21 @@ static int cmd_flip(const sb_cli *c) {
     float *map = c->o.map ? sb_xmalloc(sizeof(float) * n) : NULL;
     sb_flip_stats st = sb_flip(img[0], img[1], w[0], h[0], c->o.ppd, map);
     free(img[0]), free(img[1]);
+    if (map) {   /* the map first: a map that cannot be written (its folder named) leaves no figures half-said */
+        unsigned char *grey = sb_xmalloc(n);
+        for (int y = 0; y < h[0]; y++)   /* read top row first; written from rows given bottom-up (image.h) */
+            for (int x = 0; x < w[0]; x++)
+                grey[(size_t)(h[0] - 1 - y) * w[0] + x] = (unsigned char)lroundf(255 * map[(size_t)y * w[0] + x]);
+        bool ok = sb_image_write_u8(c->o.map, w[0], h[0], 1, grey, &err);
+        free(grey);
+        free(map);
+        if (!ok) {   /* the inputs were good: the write failed */
+            fprintf(stderr, "shadowbench: %s\n", err.msg);
+            return SB_EXIT_WRITE;
+        }
+    }
     printf("mean %.6f\np95 %.6f\nmax %.6f\n", st.mean, st.p95, st.max);
-    if (!map) return SB_EXIT_OK;
-    unsigned char *grey = sb_xmalloc(n);
-    for (int y = 0; y < h[0]; y++)   /* read top row first; written from rows given bottom-up (image.h) */
-        for (int x = 0; x < w[0]; x++)
-            grey[(size_t)(h[0] - 1 - y) * w[0] + x] = (unsigned char)lroundf(255 * map[(size_t)y * w[0] + x]);
-    bool ok = sb_image_write_u8(c->o.map, w[0], h[0], 1, grey, &err);
-    free(grey);
-    free(map);
-    if (!ok) fprintf(stderr, "shadowbench: %s\n", err.msg);
-    return ok ? SB_EXIT_OK : SB_EXIT_WRITE;   /* the inputs were good: the write failed */
+    return SB_EXIT_OK;
 }
 
 static int cmd_help(const sb_cli *c) {

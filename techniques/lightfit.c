@@ -219,37 +219,45 @@ static void slice_planes(const sb_v3 c[8], double planes[6][4]) {
     }
 }
 
-static double slice_nearest_receiver(const sb_scene *s, const double (*planes)[4], const sb_v3 corners[8], sb_v3 eye,
-                                     sb_v3 fwd);
-static void slice_receiver_points(const sb_scene *s, const double (*planes)[4], const sb_v3 corners[8],
-                                  point_list *out);
+static double slice_receivers(const sb_scene *s, const double (*planes)[4], const sb_v3 corners[8], sb_v3 eye,
+                              sb_v3 fwd, bool nearest, point_list *out);
 
 void sb_light_fit_lispsm(const sb_scene *s, sb_v3 sun, sb_v3 eye, sb_v3 forward, double zn, double zf,
                          const sb_v3 *pts, int n, int res, double min_gamma_deg, bool receivers, sb_light_fit *out) {
     sun = sb_v3_norm(sun);
     double cos_g = sb_v3_dot(sb_v3_norm(forward), sun), sin_g = sqrt(fmax(0, 1 - cos_g * cos_g));
-    /* the uniform fit first (alone when the view is along the light: no useful warp); its caster extension and
-       receiver window bound the body */
-    if (receivers && n == 8) sb_light_fit_receivers(s, sun, pts, res, out);
+    /* no useful warp with the view along the light (or no slice of 8 corners): the uniform fit alone */
+    const bool warps = n == 8 && sin_g >= sin(min_gamma_deg * SB_PI / 180) && zn > 0;
+    /* one scan of the slice's receivers serves the uniform fit (receivers), the warp's body and its n_opt */
+    double planes[6][4], zr = 1e300;
+    point_list recv = {0};
+    if (n == 8 && (receivers || warps)) {
+        slice_planes(pts, planes);
+        zr = slice_receivers(s, (const double(*)[4])planes, pts, eye, forward, warps, &recv);
+    }
+    /* the uniform fit first: its caster extension and receiver window bound the body */
+    if (receivers && recv.n) sb_light_fit_points(s, sun, recv.p, recv.n, res, out);
     else sb_light_fit_points(s, sun, pts, n, res, out);
-    if (sin_g < sin(min_gamma_deg * SB_PI / 180) || zn <= 0) return;
-    if (out->empty) return;
+    if (!warps || out->empty) {
+        free(recv.p);
+        return;
+    }
     /* light view whose up axis is the view direction projected perpendicular to the light */
     sb_v3 fwd = sb_v3_scale(sun, -1);
     sb_v3 up = sb_v3_norm(sb_v3_sub(forward, sb_v3_scale(fwd, sb_v3_dot(forward, fwd))));
     sb_v3 right = sb_v3_norm(sb_v3_cross(fwd, up));
     up = sb_v3_cross(right, fwd);
     sb_m4 lv = sb_m4_view(sb_v3_make(0, 0, 0), right, up, fwd);
-    /* body: the slice clipped to the scene's box (its vertices), and the same points pushed toward
-       the light to the top of the scene (so every caster over the receivers is inside the warped
-       frustum). The warp is fitted to these points: the box's corners would widen the near end of
-       the map to the whole body and waste the resolution the warp gives it. */
-    if (n != 8) return; /* keep the uniform fit */
-    double planes[6][4];
-    slice_planes(pts, planes);
+    /* body: the receivers inside the slice (fit=receivers: what is there), else the slice clipped to the scene's
+       box (where the scene can be), and the same points pushed toward the light to the top of the scene (so every
+       caster over the receivers is inside the warped frustum). The warp is fitted to these points: the box's
+       corners would widen the near end of the map to the whole body and waste the resolution the warp gives it. */
     point_list body = {0};
-    if (receivers) slice_receiver_points(s, (const double(*)[4])planes, pts, &body);   /* what is there */
-    if (!body.n) box_clip_vertices(&s->bounds, (const double(*)[4])planes, pts, &body);  /* where the scene can be */
+    if (receivers && recv.n) body = recv;
+    else {
+        free(recv.p);
+        box_clip_vertices(&s->bounds, (const double(*)[4])planes, pts, &body);
+    }
     sb_v3 blo = {1e300, 1e300, 1e300}, bhi = {-1e300, -1e300, -1e300};
     for (int i = 0; i < body.n; i++) {
         body.p[i] = sb_m4_point(lv, body.p[i]);
@@ -271,7 +279,6 @@ void sb_light_fit_lispsm(const sb_scene *s, sb_v3 sun, sb_v3 eye, sb_v3 forward,
     /* n_opt from the nearest receiver the slice shows, not the camera's near plane: a slice whose nearest visible
        surface is metres away (a camera above the ground, the view's first cascade) is warped as that surface
        needs, not for a near plane nothing is at (Wimmer et al.'s z_n is the body's near) */
-    double zr = slice_nearest_receiver(s, (const double(*)[4])planes, pts, eye, forward);
     if (zr < zf && zr > zn) zn = zr;
     double nopt = (zn + sqrt(zn * zf)) / sin_g;
     nopt = fmax(nopt, 1e-4 * d);
@@ -543,32 +550,23 @@ static double nearest_receiver(const sb_scene *s, const double (*planes)[4], sb_
     return best;
 }
 
-/* The nearest view depth of a front face inside the slice (planes, corners); 1e300 when it shows none. */
-static double slice_nearest_receiver(const sb_scene *s, const double (*planes)[4], const sb_v3 corners[8], sb_v3 eye,
-                                     sb_v3 fwd) {
-    draw_depth *near = sb_xmalloc(sizeof *near * (s->draw_count + 1));
-    point_list clipped = {0};
-    receiver_scan rs = {s, planes, corners, &clipped, eye, fwd, near, 0};
+/* The receivers a slice shows (planes, corners): the vertices of each draw's box clipped to it into out, and, when
+ * nearest, the nearest view depth of a front face inside it (1e300 when it shows none, or not asked). */
+static double slice_receivers(const sb_scene *s, const double (*planes)[4], const sb_v3 corners[8], sb_v3 eye,
+                              sb_v3 fwd, bool nearest, point_list *out) {
+    draw_depth *near = nearest ? sb_xmalloc(sizeof *near * (s->draw_count + 1)) : NULL;
+    receiver_scan rs = {s, planes, corners, out, eye, fwd, near, 0};
     sb_scene_cull(s, planes, 6, scan_receiver, &rs);
-    double z = nearest_receiver(s, planes, eye, fwd, near, rs.near_count);
+    double z = near ? nearest_receiver(s, planes, eye, fwd, near, rs.near_count) : 1e300;
     free(near);
-    free(clipped.p);
     return z;
-}
-
-/* The vertices of (each draw's box ∩ the slice with planes and corners). */
-static void slice_receiver_points(const sb_scene *s, const double (*planes)[4], const sb_v3 corners[8],
-                                  point_list *out) {
-    sb_v3 none = {0, 0, 0};
-    receiver_scan rs = {s, planes, corners, out, none, none, NULL, 0};
-    sb_scene_cull(s, planes, 6, scan_receiver, &rs);
 }
 
 void sb_light_fit_receivers(const sb_scene *s, sb_v3 sun, const sb_v3 corners[8], int res, sb_light_fit *out) {
     double planes[6][4];
     slice_planes(corners, planes);
     point_list pts = {0};
-    slice_receiver_points(s, (const double(*)[4])planes, corners, &pts);
+    slice_receivers(s, (const double(*)[4])planes, corners, sb_v3_make(0, 0, 0), sb_v3_make(0, 0, 0), false, &pts);
     if (pts.n) sb_light_fit_points(s, sun, pts.p, pts.n, res, out);
     else sb_light_fit_points(s, sun, corners, 8, res, out);   /* no receiver: the slice (the caller skips it) */
     free(pts.p);
