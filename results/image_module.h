@@ -23,5 +23,12 @@ typedef bool (*sb_image_module_fn)(const char *path, int w, int h, int channels,
 typedef bool (*sb_image_module_read_fn)(const char *path, int *w, int *h, float **pixels, char *err, size_t err_len);
 
 /* The most pixels an image read from outside may claim (16384 x 16384), checked on its header before anything is
- * allocated. */
+ * allocated (the fuzzer's build of the reader sets a smaller one). */
+#ifndef SB_IMAGE_MAX_PIXELS
 #define SB_IMAGE_MAX_PIXELS (16384.0 * 16384.0)
+#endif
+/* And what it claims against what the file holds: deflate (PNG, EXR's zip) packs at most 1032 bytes in one, so a
+ * header whose pixels as stored come to more than this many bytes per byte of file (above a floor of
+ * SB_IMAGE_RATIO_FLOOR bytes, where a small image of one colour sits) claims what no data behind it holds. */
+#define SB_IMAGE_MAX_RATIO 4096.0
+#define SB_IMAGE_RATIO_FLOOR (64.0 * 1024 * 1024)

@@ -98,6 +98,14 @@ extern "C" bool SB_IMAGE_MODULE_READ_ENTRY(const char *path, int *w, int *h, flo
         return sb_fail(&e, "%s: %dx%d with %d channels: more than the %.0f pixels (16384 x 16384) and 16 channels "
                        "an image may have here", path, spec.width, spec.height, nc, (double)SB_IMAGE_MAX_PIXELS);
     }
+    struct stat st;
+    double stored = (double)spec.width * spec.height * nc * spec.format.size();
+    if (stat(path, &st) == 0 && stored > SB_IMAGE_RATIO_FLOOR && stored > SB_IMAGE_MAX_RATIO * (double)st.st_size) {
+        in->close();
+        return sb_fail(&e, "%s: its header claims %dx%d with %d channels (%.0f bytes) in a file of %lld bytes: more "
+                       "than %.0f bytes a byte, which no image format packs", path, spec.width, spec.height, nc,
+                       stored, (long long)st.st_size, SB_IMAGE_MAX_RATIO);
+    }
     std::unique_ptr<float[]> all(new (std::nothrow) float[(size_t)spec.width * spec.height * nc]);
     if (!all) {
         in->close();

@@ -7,6 +7,10 @@ set -euo pipefail
 start=$PWD
 fuzzer=$(realpath "$1") name=$2 src=$3 secs=${4:-5}
 work=$(mktemp -d)
+# leaks inside the libraries a harness reads through (each named with its cause there)
+export LSAN_OPTIONS=suppressions=$src/tests/fuzz/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}
+# (a leak's stack through libstdc++ is cut short by the fast unwinder, before the frame a suppression names)
+[[ $name == image ]] && export ASAN_OPTIONS=${ASAN_OPTIONS:+$ASAN_OPTIONS:}fast_unwind_on_malloc=0
 trap 'rm -rf "$work"' EXIT
 mkdir -p "$work/corpus"
 cp "$src/tests/fuzz/corpus/$name"/* "$work/corpus/" 2>/dev/null || true

@@ -285,6 +285,15 @@ static void test_image_reader(void **st) {
                                 "%s/huge.png", g_tmp), 0);
     expect_cli_fail("huge.png: 60000x60000 with 1 channels: more than the 268435456 pixels",
                     "%s flip %s/huge.png %s/huge.png", bin, g_tmp, g_tmp);
+    /* within the pixel limit but more than its file could hold (8000 x 8000 RGB, 192 MB, in 100 bytes): refused
+       on its header against the file's length, before 768 MB of floats are allocated */
+    assert_int_equal(run_logged(g_out, sizeof g_out,
+                                "python3 -c 'import struct, zlib, sys; h = struct.pack(\">IIBBBBB\", 8000, 8000, 8, 2, 0, 0, 0); "
+                                "c = lambda t, d: struct.pack(\">I\", len(d)) + t + d + struct.pack(\">I\", zlib.crc32(t + d)); "
+                                "open(sys.argv[1], \"wb\").write(b\"\\x89PNG\\r\\n\\x1a\\n\" + c(b\"IHDR\", h) + c(b\"IDAT\", zlib.compress(bytes(64))) + c(b\"IEND\", b\"\"))' "
+                                "%s/claims.png", g_tmp), 0);
+    expect_cli_fail("claims.png: its header claims 8000x8000 with 3 channels (192000000 bytes) in a file of",
+                    "%s flip %s/claims.png %s/claims.png", bin, g_tmp, g_tmp);
     /* NaN in a float image: refused with its pixel (score read it as shadow: err_rate 0.0027 -> 0.50) */
     char nan_path[4200], ok_path[4200];
     snprintf(nan_path, sizeof nan_path, "%s/nan.exr", g_tmp);
