@@ -6,6 +6,7 @@
 #include <signal.h>
 
 #include <errno.h>
+#include <limits.h>
 #include <fcntl.h>
 #include <math.h>
 #include <stdlib.h>
@@ -418,4 +419,27 @@ const int sb_exit_status_count = (int)SB_COUNT(sb_exit_statuses);
 bool sb_same_file(const char *a, const char *b) {
     struct stat sa, sb;
     return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
+bool sb_path_within(const char *path, const char *dir) {
+    struct stat sd, sp;
+    if (stat(dir, &sd) != 0 || !S_ISDIR(sd.st_mode)) return false;
+    char cur[PATH_MAX];
+    snprintf(cur, sizeof cur, "%s", path);
+    /* up from path to the first folder that exists, then up from there to the root, looking for dir's inode */
+    while (stat(cur, &sp) != 0) {
+        char *slash = strrchr(cur, '/');
+        if (!slash) snprintf(cur, sizeof cur, ".");
+        else if (slash == cur) cur[1] = 0;
+        else *slash = 0;
+    }
+    char real[PATH_MAX];
+    if (!realpath(cur, real)) return false;
+    for (;;) {
+        if (stat(real, &sp) == 0 && sp.st_dev == sd.st_dev && sp.st_ino == sd.st_ino) return true;
+        char *slash = strrchr(real, '/');
+        if (!slash || (slash == real && !real[1])) return false;
+        if (slash == real) real[1] = 0;
+        else *slash = 0;
+    }
 }

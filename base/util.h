@@ -76,10 +76,13 @@ int sb_interrupted(void);
 const char *sb_interrupt_name(void);
 void sb_result_write_failed(void);
 bool sb_result_writes_failed(void);
-/* Copies a file, written atomically (sb_write_file_atomic). */
 /* Whether two paths name one file, by any spelling (./, .., a symlink, a hard link): both exist, with one device and
  * inode. An output that is one of a command's inputs is refused with it. */
 bool sb_same_file(const char *a, const char *b);
+/* Whether path (which need not exist yet: its nearest existing folder decides) is the folder dir or lies under
+ * it, by any spelling. A folder a command writes that is, or is in, one of its input folders is refused with it. */
+bool sb_path_within(const char *path, const char *dir);
+/* Copies a file, written atomically (sb_write_file_atomic). */
 bool sb_copy_file(const char *from, const char *to, sb_err *err);
 bool sb_mkdir_p(const char *path, sb_err *err);
 /* Makes BASE/<UTC time> (or <UTC time>-2, -3, ... when taken) into out. */

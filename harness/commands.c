@@ -785,6 +785,10 @@ static int cmd_report(const sb_cli *c) {
     const char *site = c->o.out;
     sb_site_opts so = {.dir = c->npos == 1 ? c->pos[0] : NULL, .out = site, .recent = c->o.recent};
     if (!so.dir) so.history = history_path(c, pbuf, sizeof pbuf);
+    /* the site is a folder of its own: never the set it shows, nor in it, nor the history file */
+    if (so.dir ? sb_path_within(site, so.dir) : sb_same_file(site, so.history))
+        return bad("report: --out %s is its input or in it: the site's pages would be written among "
+                   "its files (give a folder of its own)", site);
     sb_err err;
     if (!sb_site_write(&so, &err)) return bad_file(&err);   /* a set or history it could not read, or a page not written */
     printf("%s/index.html\n", site);

@@ -577,6 +577,16 @@ bool sb_merge(const char *const *dirs, int n, const char *out_dir, sb_err *err) 
     int nrows = 0;
     bool ok = true;
     char *hdr_line = NULL;
+    /* the merged set is a folder of its own: never one of its inputs (by any spelling), nor a run's own set */
+    char meta[4400];
+    snprintf(meta, sizeof meta, "%s/meta", out_dir);
+    for (int i = 0; ok && i < n; i++)
+        if (sb_path_within(out_dir, dirs[i]))
+            ok = sb_fail(err, "%s: --out is the input set %s or in it: the merge would write over it (give a new "
+                              "folder)", out_dir, dirs[i]);
+    if (ok && access(meta, F_OK) == 0)
+        ok = sb_fail(err, "%s: --out holds a run's own results set (its meta): the merge would write over its summary "
+                          "(give a new folder)", out_dir);
     for (int i = 0; ok && i < n; i++) {
         if (!(ok = load_summary(&t[i], dirs[i], err))) break;
         if (sb_table_col(&t[i], "run_index") < 0) ok = sb_fail(err, "%s: summary has no run_index column", dirs[i]);

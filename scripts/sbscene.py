@@ -5,7 +5,9 @@ tool's own rules in one place:
 - a .gltf's buffers are read only from inside the scene's folder (the loader's rule; `--allow-external-uris`
   lifts it), a data: URI decoded;
 - the output is a .glb that is not the input, is not overwritten without --force, and is written to a
-  temporary name in its folder, then renamed: nothing is half-written;
+  temporary name in its folder, loaded there by the tool's own loader (`shadowbench info`, the binary
+  SHADOWBENCH names, default build/shadowbench), then renamed: nothing is half-written, and nothing the tool
+  would refuse is written at all;
 - numbers are finite and within the range the tool reads back (the JSON never holds NaN or Infinity).
 """
 import base64
@@ -13,6 +15,7 @@ import json
 import math
 import os
 import struct
+import subprocess
 import sys
 import tempfile
 
@@ -174,15 +177,38 @@ def glb_bytes(doc, binary):
     return struct.pack("<III", 0x46546C67, 2, 12 + len(chunks)) + chunks
 
 
+def shadowbench():
+    """The binary whose loader the scripts answer to."""
+    return os.environ.get("SHADOWBENCH", os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "build",
+                                                      "shadowbench"))
+
+
+def check_loads(tmp, path):
+    """The tool's own loader reads the file at tmp (to be renamed to path), or Bad with its reason. Without a
+    built binary, a one-line note says the file is unchecked."""
+    tool = shadowbench()
+    if not os.access(tool, os.X_OK):
+        print("note: %s not loaded by the tool before writing (no binary at %s: scripts/build, or SHADOWBENCH)"
+              % (path, tool), file=sys.stderr)
+        return
+    env = dict(os.environ, SB_SCENE_CACHE="off")
+    p = subprocess.run([tool, "info", tmp], capture_output=True, text=True, env=env)
+    if p.returncode:
+        why = (p.stderr.strip().splitlines() or ["shadowbench info exited %d" % p.returncode])[-1]
+        why = why.replace("shadowbench: ", "", 1).replace(tmp, path)
+        raise Bad("%s: not written: the tool would refuse it (%s)" % (path, why))
+
+
 def write_glb(path, doc, binary):
-    """The .glb written to a temporary name in its folder, then renamed over path."""
+    """The .glb written to a temporary name in its folder, loaded there by the tool, then renamed over path."""
     data = glb_bytes(doc, binary)
-    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(os.path.abspath(path)), prefix=".", suffix=".part")
+    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(os.path.abspath(path)), prefix=".", suffix=".part.glb")
     try:
         with os.fdopen(fd, "wb") as f:
             f.write(data)
             f.flush()
             os.fsync(f.fileno())
+        check_loads(tmp, path)
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

@@ -2,7 +2,8 @@
  * (scripts/sbscene.py): OUT equal to IN and an existing OUT without --force are refused with the input's bytes
  * untouched; a .gltf's buffer outside its folder is refused (the loader's rule) unless --allow-external-uris;
  * a missing file, a folder, broken JSON, a non-finite or out-of-range number, an unknown option: one line and
- * exit 2 each, never a traceback and never a half-written file; --help on each; what they write loads. */
+ * exit 2 each, never a traceback and never a half-written file; --help on each; what they write loads (the
+ * tool's loader reads it before it is renamed into place). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -36,7 +37,7 @@ static long file_size(const char *path) {
 /* No temporary left in the scratch folder (a half-written output). */
 static void nothing_half_written(void) {
     char cmd[300];
-    snprintf(cmd, sizeof cmd, "ls -a %s | grep -c '\\.part$\\|\\.tmp$'", g_tmp);
+    snprintf(cmd, sizeof cmd, "ls -a %s | grep -c '\\.part$\\|\\.part\\.glb$\\|\\.tmp$'", g_tmp);
     assert_int_equal(run_capture(cmd, g_out, sizeof g_out), 1);   /* grep -c: 0 lines found, exit 1 */
     assert_int_equal(atoi(g_out), 0);
 }
@@ -126,11 +127,43 @@ static void test_bad_input_one_line(void **st) {
     }
 }
 
+/* What a script writes, the tool loads (issue 65): the output is loaded by the tool's own loader under its
+ * temporary name before the rename. A floor at the loader's bound (place-movers wrote a level whose movers stood
+ * past 1e12) and a document whose `scene` is -1 (tile-gltf copied it) are refused, nothing written; without a
+ * binary a one-line note says the file went unchecked. */
+static void test_outputs_load(void **st) {
+    (void)st;
+    char in[4096], neg[4096], out[4096];
+    snprintf(in, sizeof in, "%s/pb3.glb", g_tmp);
+    snprintf(neg, sizeof neg, "%s/neg.glb", g_tmp);
+    snprintf(out, sizeof out, "%s/loads.glb", g_tmp);
+    copy_bundled("plane-box.glb", in);
+    expect_cli_fail("loads.glb: not written: the tool would refuse it", "%s %s %s/movers.glb 2 %s --floor 1e12",
+                    script("place-movers"), in, getenv("SB_DATA_DIR"), out);
+    assert_int_equal(access(out, F_OK), -1);
+    assert_int_equal(run_logged(g_out, sizeof g_out,
+                                "python3 -c 'import json, struct, sys; d = open(sys.argv[1], \"rb\").read(); "
+                                "n = struct.unpack(\"<I\", d[12:16])[0]; j = json.loads(d[20:20 + n]); j[\"scene\"] = -1; "
+                                "b = json.dumps(j).encode(); b += b\" \" * (-len(b) %% 4); "
+                                "c = struct.pack(\"<II\", len(b), 0x4E4F534A) + b + d[20 + n:]; "
+                                "open(sys.argv[2], \"wb\").write(struct.pack(\"<III\", 0x46546C67, 2, 12 + len(c)) + c)' %s %s",
+                                in, neg), 0);
+    expect_cli_fail("/scene: -1 is negative", "%s %s %s 2", script("tile-gltf"), neg, out);
+    assert_int_equal(access(out, F_OK), -1);
+    nothing_half_written();
+    /* no binary: written, with the note */
+    assert_int_equal(run_logged(g_out, sizeof g_out, "SHADOWBENCH=%s/none %s/scripts/tile-gltf %s %s 2", g_tmp,
+                                getenv("SB_SOURCE_ROOT"), in, out), 0);
+    assert_non_null(strstr(g_out, "not loaded by the tool before writing (no binary at"));
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s info %s", test_binary(), out), 0);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_outputs_never_overwrite),
         cmocka_unit_test(test_buffers_stay_in_the_folder),
         cmocka_unit_test(test_bad_input_one_line),
+        cmocka_unit_test(test_outputs_load),
     };
     return cmocka_run_group_tests_name("scripts", tests, setup, teardown);
 }

@@ -109,6 +109,44 @@ static void test_damaged_sets_refused(void **st) {
     assert_int_equal(sh("%s history check %s --history %s --quiet", test_binary(), good, hist), 0);
 }
 
+/* No output over an input (issue 65): report's site and merge's set are folders of their own. A site written into
+ * the set it shows (or a merge into one of its inputs) mixed its files with the set's; merge rewrote the set's
+ * manifest to list a meta.1 of its own. Each refused by every spelling (.., a symlink, a folder below), the set
+ * and history left byte for byte. */
+static void test_output_over_input(void **st) {
+    (void)st;
+    char set[4096], hist[4200], before[256];
+    const char *b = test_binary();
+    make_set("input", set, sizeof set);
+    snprintf(hist, sizeof hist, "%s/over.sqlite", g_tmp);
+    assert_int_equal(sh("%s history add %s --history %s --quiet", b, set, hist), 0);
+    assert_int_equal(sh("cd %s && cat * %s | cksum", set, hist), 0);
+    snprintf(before, sizeof before, "%s", g_out);
+    assert_int_equal(sh("ln -sfn %s %s/link", set, g_tmp), 0);
+    const char *name = strrchr(set, '/') + 1;
+    char spell[3][4400];
+    snprintf(spell[0], sizeof spell[0], "%s", set);
+    snprintf(spell[1], sizeof spell[1], "%s/../%s/./site", set, name);
+    snprintf(spell[2], sizeof spell[2], "%s/link/new/deeper", g_tmp);
+    for (int i = 0; i < 3; i++) {
+        expect_cli_fail("is its input or in it", "%s report %s --out %s", b, set, spell[i]);
+        expect_cli_fail("the merge would write over it", "%s merge %s --out %s", b, set, spell[i]);
+    }
+    expect_cli_fail("is its input or in it", "%s report --history %s --out %s", b, hist, hist);
+    /* a merge's output is new: another run's own set is not written over */
+    char other[4096];
+    make_set("other", other, sizeof other);
+    expect_cli_fail("holds a run's own results set", "%s merge %s --out %s", b, set, other);
+    assert_int_equal(sh("cd %s && cat * %s | cksum", set, hist), 0);
+    assert_string_equal(before, g_out);
+    char deeper[4400];
+    snprintf(deeper, sizeof deeper, "%s/new", set);
+    assert_false(exists(deeper));
+    /* and the same commands with a folder of their own go on as before */
+    assert_int_equal(sh("%s merge %s --out %s/merged", b, set, g_tmp), 0);
+    assert_int_equal(sh("%s report %s/merged --out %s/site", b, g_tmp, g_tmp), 0);
+}
+
 /* Every bad input in one line, with the exit status the table says. */
 static void test_bad_input_one_line(void **st) {
     (void)st;
@@ -270,7 +308,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_damaged_sets_refused), cmocka_unit_test(test_bad_input_one_line),
         cmocka_unit_test(test_equals_spelling),      cmocka_unit_test(test_same_name_two_folders),
-        cmocka_unit_test(test_map_the_gl_refuses),
+        cmocka_unit_test(test_map_the_gl_refuses),   cmocka_unit_test(test_output_over_input),
     };
     return cmocka_run_group_tests_name("trust", tests, setup, teardown);
 }
