@@ -431,10 +431,31 @@ void sb_jw_end_obj(sb_jw *w) { jw_close(w, '}'); }
 void sb_jw_arr(sb_jw *w) { jw_open(w, '['); }
 void sb_jw_end_arr(sb_jw *w) { jw_close(w, ']'); }
 
+/* The bytes of one well-formed UTF-8 character at p (1 to 4), or 0 where they are none (a stray continuation, a
+ * cut or overlong sequence, a surrogate, past U+10FFFF). */
+static int utf8_char(const unsigned char *p) {
+    if (p[0] < 0x80) return 1;
+    int n = p[0] >= 0xf0 && p[0] <= 0xf4 ? 4 : p[0] >= 0xe0 ? 3 : p[0] >= 0xc2 && p[0] < 0xe0 ? 2 : 0;
+    if (!n || (p[0] >= 0xf0 && n != 4)) return 0;
+    unsigned cp = p[0] & (0x7f >> n);
+    for (int i = 1; i < n; i++) {
+        if ((p[i] & 0xc0) != 0x80) return 0;
+        cp = cp << 6 | (p[i] & 0x3f);
+    }
+    static const unsigned least[5] = {0, 0, 0x80, 0x800, 0x10000};
+    return cp < least[n] || cp > 0x10ffff || (cp >= 0xd800 && cp <= 0xdfff) ? 0 : n;
+}
+
 static void jw_string(sb_jw *w, const char *s) {
     jw_put(w, "\"", 1);
     for (const unsigned char *p = (const unsigned char *)(s ? s : ""); *p; p++) {
         char e[8];
+        if (*p >= 0x80) {   /* JSON is UTF-8: a byte that is no character of it is written as U+FFFD */
+            int n = utf8_char(p);
+            if (n) jw_put(w, (const char *)p, (size_t)n), p += n - 1;
+            else jw_put(w, "\\ufffd", 6);
+            continue;
+        }
         if (*p == '"' || *p == '\\') e[0] = '\\', e[1] = (char)*p, e[2] = 0;
         else if (*p == '\n') strcpy(e, "\\n");
         else if (*p == '<') strcpy(e, "\\u003c");   /* never "</script>" inside a script */

@@ -421,6 +421,23 @@ bool sb_same_file(const char *a, const char *b) {
     return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
 }
 
+void sb_say_line(FILE *f, const char *text) {
+    fputs("shadowbench: ", f);
+    for (const unsigned char *q = (const unsigned char *)text; *q; q++)
+        if (*q < 0x20 || *q == 0x7f) fprintf(f, "\\x%02x", *q);
+        else fputc(*q, f);
+    fputc('\n', f);
+}
+
+bool sb_name_check(const char *what, const char *name, sb_err *err) {
+    if (!*name) return sb_fail(err, "%s is empty: a name is one line of text", what);
+    for (const unsigned char *q = (const unsigned char *)name; *q; q++)
+        if (*q < 0x20 || *q == 0x7f)
+            return sb_fail(err, "%s holds a control character (byte %u at %d): a name is one line of text", what, *q,
+                           (int)(q - (const unsigned char *)name));
+    return true;
+}
+
 bool sb_path_within(const char *path, const char *dir) {
     struct stat sd, sp;
     if (stat(dir, &sd) != 0 || !S_ISDIR(sd.st_mode)) return false;

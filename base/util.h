@@ -79,6 +79,12 @@ bool sb_result_writes_failed(void);
 /* Whether two paths name one file, by any spelling (./, .., a symlink, a hard link): both exist, with one device and
  * inode. An output that is one of a command's inputs is refused with it. */
 bool sb_same_file(const char *a, const char *b);
+/* A name every writer prints (a scene's, a path's, a renderer's): not empty and without control characters (a
+ * newline splits a table's row, an escape sequence rewrites the terminal). false: err says "WHAT holds ...". */
+bool sb_name_check(const char *what, const char *name, sb_err *err);
+/* "shadowbench: TEXT" and a newline on f, every control character of TEXT written as \xNN (a file name with an
+ * escape sequence or a newline in a refusal neither rewrites the terminal nor splits the line). */
+void sb_say_line(FILE *f, const char *text);
 /* Whether path (which need not exist yet: its nearest existing folder decides) is the folder dir or lies under
  * it, by any spelling. A folder a command writes that is, or is in, one of its input folders is refused with it. */
 bool sb_path_within(const char *path, const char *dir);

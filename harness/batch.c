@@ -85,6 +85,9 @@ static bool scene_line(parse *ps, char **tok, int n) {
     sb_batch *b = ps->b;
     if (n < 3 || n > 4) return sb_fail(ps->err, "%s:%d: expected 'scene NAME FILE [PATH-NAME]'", ps->file, ps->line);
     if (find_scene(b, tok[1]) >= 0) return sb_fail(ps->err, "%s:%d: scene '%s' is defined twice", ps->file, ps->line, tok[1]);
+    sb_err why;   /* the scene's and its path's names: every result's scene and path columns */
+    if (!sb_name_check("the scene's name", tok[1], &why) || (n == 4 && !sb_name_check("the path's name", tok[3], &why)))
+        return sb_fail(ps->err, "%s:%d: %s", ps->file, ps->line, why.msg);
     b->scenes = sb_xrealloc(b->scenes, (size_t)(b->nscenes + 1) * sizeof *b->scenes);
     sb_batch_scene *sc = &b->scenes[b->nscenes++];
     memset(sc, 0, sizeof *sc);
@@ -528,7 +531,7 @@ static void run_scenes(sb_batch *b, const bool *selected, const bool *done, int 
             snprintf(s->scene_name, sizeof s->scene_name, "%s", bs->name);
             snprintf(s->path_name, sizeof s->path_name, "%s", bs->path_label);
         } else {
-            fprintf(stderr, "shadowbench: %s\n", err.msg);
+            sb_say_line(stderr, err.msg);
         }
         /* a group of runs a light: each light's runs together (a soft-shadow section after the hard one),
            the reference given that light's size before them */
@@ -617,7 +620,7 @@ int sb_batch_main(const sb_batch_cmd *cmd) {
     sb_err err;
     sb_batch b;
     if (!sb_batch_load(&b, cmd->file, cmd->base, cmd->cli, &err)) {
-        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        sb_say_line(stderr, err.msg);
         return SB_EXIT_BAD_INPUT;
     }
     int rc = SB_EXIT_OK, nsel = 0;
@@ -655,14 +658,14 @@ int sb_batch_main(const sb_batch_cmd *cmd) {
         bool ok = sb_resume_check(cmd->resume, identity, ids, b.nruns, &err);
         free(ids);
         if (!ok) {
-            fprintf(stderr, "shadowbench: %s\n", err.msg);
+            sb_say_line(stderr, err.msg);
             rc = SB_EXIT_BAD_INPUT;
             goto out;
         }
     }
     char dir[4096], sum_path[4200];
     if (!results_dir(cmd, &b, dir, sizeof dir, &err)) {
-        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        sb_say_line(stderr, err.msg);
         rc = cmd->resume ? SB_EXIT_BAD_INPUT : SB_EXIT_WRITE;   /* --out was writable when the command began */
         goto out;
     }
@@ -670,14 +673,14 @@ int sb_batch_main(const sb_batch_cmd *cmd) {
     sb_session s;
     memset(&s, 0, sizeof s);
     if (!sb_context_create(&s.ctx, b.opts.backend, &err) || !sb_session_clocks(&s, &b.opts, &err)) {
-        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        sb_say_line(stderr, err.msg);
         sb_clocks_close(s.clocks);
         sb_context_destroy(&s.ctx);
         rc = SB_EXIT_FAILED;
         goto out;
     }
     if (!write_meta(cmd, dir, &s, &b, nsel, identity, &err) || !sb_columns_write(dir, &err))
-        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        sb_say_line(stderr, err.msg);
     snprintf(sum_path, sizeof sum_path, "%s/summary.csv", dir);
     sb_summary sum;
     sb_summary_open(&sum, sum_path);
@@ -685,11 +688,11 @@ int sb_batch_main(const sb_batch_cmd *cmd) {
     int todo = 0;
     for (int i = 0; i < b.nruns; i++) todo += selected[i] && !done[i];
     if (cmd->resume) sb_log("resuming %s: %d run(s) complete, %d to do", dir, nsel - todo, todo);
-    if (!sb_summary_flush(&sum, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
+    if (!sb_summary_flush(&sum, &err)) sb_say_line(stderr, err.msg);
     double t0 = sb_now_ms();
     run_scenes(&b, selected, done, todo, dir, &s, &sum);
     rerun_unstable(&b, selected, dir, &s, &sum);
-    if (!sb_summary_flush(&sum, &err) || !sb_resultset_seal(dir, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
+    if (!sb_summary_flush(&sum, &err) || !sb_resultset_seal(dir, &err)) sb_say_line(stderr, err.msg);
     double wall_s = (sb_now_ms() - t0) / 1e3;
     printf("%s\n", dir);
     /* how much of the batch the GPU spent on what is measured: the rest is the harness's */

@@ -34,9 +34,9 @@ static const char *const default_out = "out";
 
 /* Bad input: one line, exit 2. */
 static int bad(const char *fmt, const char *a) {
-    fprintf(stderr, "shadowbench: ");
-    fprintf(stderr, fmt, a);
-    fputc('\n', stderr);
+    char line[SB_ERR_LEN + 512];
+    snprintf(line, sizeof line, fmt, a);
+    sb_say_line(stderr, line);
     return SB_EXIT_BAD_INPUT;
 }
 
@@ -51,7 +51,7 @@ static int bad_usage(const sb_cli *c) {
 /* A file the command was given could not be used: one line, exit 2 (4 when
  * what failed was writing a result, which sb_result_writes_failed knows). */
 static int bad_file(const sb_err *err) {
-    fprintf(stderr, "shadowbench: %s\n", err->msg);
+    sb_say_line(stderr, err->msg);
     return sb_result_writes_failed() ? SB_EXIT_WRITE : SB_EXIT_BAD_INPUT;
 }
 
@@ -185,7 +185,7 @@ static int cmd_info(const sb_cli *c) {
     sb_backends_available(have ? &ctx : NULL, avail, sizeof avail);
     printf("shadowbench %s\nbackends available: %s\n", c->version, avail[0] ? avail : "none");
     if (!have) {
-        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        sb_say_line(stderr, err.msg);
         return SB_EXIT_FAILED;
     }
     printf("backend: %s (%s)\nGL vendor: %s\nGL renderer: %s\nGL version: %s\nsoftware rasterizer: %s\n",
@@ -251,7 +251,7 @@ static int cmd_path(const sb_cli *c) {
     int flagged = 0, rc = SB_EXIT_OK;
     char text[2048] = "";   /* the flagged frames */
     if (have_scene && !(check = check_cameras(c, &scene, &p, &flagged, text, sizeof text, &err))) {
-        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        sb_say_line(stderr, err.msg);
         rc = SB_EXIT_FAILED;
     } else if (flagged && c->o.run.strict_path) {   /* refused: the one-line error, no table */
         fprintf(stderr, "shadowbench: %s: %s (--strict-path)\n", c->pos[0], text);
@@ -372,7 +372,7 @@ static int run_into(const sb_cli *c, sb_session *s, const char *dir, const sb_ru
         sb_run_again(s, specs, index, m, dir, &sum, attempt);
     }
     sb_err err;
-    if (!sb_summary_flush(&sum, &err) || !sb_resultset_seal(dir, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
+    if (!sb_summary_flush(&sum, &err) || !sb_resultset_seal(dir, &err)) sb_say_line(stderr, err.msg);
     free(specs);
     free(index);
     printf("%s\n", dir);
@@ -427,7 +427,7 @@ static int cmd_run(const sb_cli *c) {
     sb_run_opts o = c->o.run;
     sb_run_opts_finish(&o);
     if (!sb_session_open(&s, &o, c->pos[0], c->pos[1], &err)) {
-        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        sb_say_line(stderr, err.msg);
         free(runs);
         int rc = s.files_refused ? SB_EXIT_BAD_INPUT : SB_EXIT_FAILED;
         sb_session_close(&s);
@@ -439,15 +439,15 @@ static int cmd_run(const sb_cli *c) {
     sb_cli_set_identity(&as_read, c->cmd, c->pos, c->npos, identity, sizeof identity);
     int rc;
     if (!check_runs(c, &s, runs, &nruns, identity, &err)) {
-        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        sb_say_line(stderr, err.msg);
         rc = SB_EXIT_BAD_INPUT;   /* nothing written */
     } else if (!results_folder(c, dir, sizeof dir, &err)) {
-        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        sb_say_line(stderr, err.msg);
         rc = SB_EXIT_WRITE;   /* checked writable before: a write that failed since */
     } else {
         command_line(c, cmdline, sizeof cmdline);
         if (!sb_session_write_meta(&s, dir, cmdline, c->version, c->commit, identity, &err))
-            fprintf(stderr, "shadowbench: %s\n", err.msg);
+            sb_say_line(stderr, err.msg);
         sb_session_keep_reference(&s, dir);
         log_session(&s);
         rc = run_into(c, &s, dir, runs, nruns);
@@ -494,12 +494,9 @@ static int cmd_score(const sb_cli *c) {
         const char *v = names[k][1];
         if (!v) continue;
         if (!*v) return bad("score: %s is empty (leave it out for the default)", names[k][0]);
-        for (const unsigned char *q = (const unsigned char *)v; *q; q++)
-            if (*q < 0x20 || *q == 0x7f) {
-                fprintf(stderr, "shadowbench: score: %s holds a control character (byte %u at %d): a name is one line "
-                                "of text\n", names[k][0], *q, (int)(q - (const unsigned char *)v));
-                return SB_EXIT_BAD_INPUT;
-            }
+        char what[32];
+        snprintf(what, sizeof what, "score: %s", names[k][0]);
+        if (!sb_name_check(what, v, &err)) return bad("%s", err.msg);
     }
     char name[256];   /* DIR's last part ("out/frames/" names frames) */
     const char *dir = c->pos[2];
@@ -522,7 +519,7 @@ static int cmd_score(const sb_cli *c) {
     sb_session s;
     memset(&s, 0, sizeof s);
     if (!sb_session_open(&s, &o, c->pos[0], c->pos[1], &err)) {
-        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        sb_say_line(stderr, err.msg);
         int rc = s.files_refused ? SB_EXIT_BAD_INPUT : SB_EXIT_FAILED;
         sb_session_close(&s);
         return rc;
@@ -535,12 +532,12 @@ static int cmd_score(const sb_cli *c) {
     sb_cli_set_identity(&c->o, c->cmd, c->pos, c->npos, identity, sizeof identity);
     int rc;
     if (!results_folder(c, out, sizeof out, &err)) {
-        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        sb_say_line(stderr, err.msg);
         rc = SB_EXIT_WRITE;
     } else {
         command_line(c, cmdline, sizeof cmdline);
         if (!sb_session_write_meta(&s, out, cmdline, c->version, c->commit, identity, &err))
-            fprintf(stderr, "shadowbench: %s\n", err.msg);
+            sb_say_line(stderr, err.msg);
         sb_session_keep_reference(&s, out);
         log_session(&s);
         rc = run_into(c, &s, out, &spec, 1);
@@ -666,7 +663,7 @@ static int cmd_history_add(const sb_cli *c) {
         sb_err err;
         double t0 = sb_now_ms();
         if (!sb_history_add(h, c->pos[i], &a, &err)) {
-            fprintf(stderr, "shadowbench: %s\n", err.msg);
+            sb_say_line(stderr, err.msg);
             rc = SB_EXIT_BAD_INPUT;   /* not a results set, or a damaged one; the others are still added */
             continue;
         }
@@ -849,7 +846,7 @@ static int cmd_flip(const sb_cli *c) {
         free(grey);
         free(map);
         if (!ok) {   /* the inputs were good: the write failed */
-            fprintf(stderr, "shadowbench: %s\n", err.msg);
+            sb_say_line(stderr, err.msg);
             return SB_EXIT_WRITE;
         }
     }

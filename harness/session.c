@@ -26,6 +26,18 @@ static void base_name(const char *path, char *out, size_t len) {
     if (dot && dot != out && !strchr(dot, '#')) *dot = 0;
 }
 
+/* The names the scene and path files give every result (their base names): one line of text each. */
+static bool names_check(const char *scene, const char *path, sb_err *err) {
+    const char *files[2] = {scene, path};
+    for (int i = 0; i < 2; i++) {
+        char name[256], what[4400];
+        base_name(files[i], name, sizeof name);
+        snprintf(what, sizeof what, "%s: its name (the %s column of every result)", files[i], i ? "path" : "scene");
+        if (!sb_name_check(what, name, err)) return false;
+    }
+    return true;
+}
+
 /* ---- sessions ---- */
 
 /* The path check (pathcheck.h): its flagged frames in path_note; refused with --strict-path. */
@@ -65,7 +77,7 @@ bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, con
     sb_path p;
     sb_scene_opts so = sb_run_scene_opts(o);
     s->files_refused = true;
-    if (!sb_scene_load(&sc, scene, &so, err)) return false;
+    if (!names_check(scene, path, err) || !sb_scene_load(&sc, scene, &so, err)) return false;
     if (!sb_path_load(&p, path, &sc, err)) {
         sb_scene_free(&sc);
         return false;
@@ -87,6 +99,7 @@ bool sb_session_open(sb_session *s, const sb_run_opts *o, const char *scene, con
     base_name(path, s->path_name, sizeof s->path_name);
     return true;
 }
+
 
 bool sb_session_clocks(sb_session *s, const sb_run_opts *o, sb_err *err) {
     if (s->clocks) return true;

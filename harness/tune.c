@@ -407,7 +407,7 @@ static bool run_rung(tune *t, int rung) {
     snprintf(sum_path, sizeof sum_path, "%s/summary.csv", dir);
     sb_err err;
     if (!sb_mkdir_p(dir, &err) || !sb_columns_write(dir, &err)) {
-        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        sb_say_line(stderr, err.msg);
         return false;
     }
     const char **ids = sb_xcalloc((size_t)t->n, sizeof *ids);
@@ -462,9 +462,9 @@ static bool run_rung(tune *t, int rung) {
         }
         cand *c = &t->c[order[k]];
         sb_run_one(s, &c->spec, dir, &sum, order[k], k, todo);
-        if (!sb_summary_flush(&sum, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
+        if (!sb_summary_flush(&sum, &err)) sb_say_line(stderr, err.msg);
     }
-    if (!sb_summary_flush(&sum, &err) || !sb_resultset_seal(dir, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
+    if (!sb_summary_flush(&sum, &err) || !sb_resultset_seal(dir, &err)) sb_say_line(stderr, err.msg);
     sb_summary_free(&sum);
     read_rung(t, rung, sum_path);
     free(ids);
@@ -495,7 +495,7 @@ static void warm_session(tune *t) {
     snprintf(sum_path, sizeof sum_path, "%s/summary.csv", dir);
     sb_err err;
     if (!sb_mkdir_p(dir, &err)) {
-        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        sb_say_line(stderr, err.msg);
         return;
     }
     sb_run_opts keep = s->opts;
@@ -505,7 +505,7 @@ static void warm_session(tune *t) {
     sb_summary sum;
     sb_summary_open(&sum, sum_path);
     sb_run_one(s, &t->c[first].spec, dir, &sum, first, 0, 1);
-    if (!sb_summary_flush(&sum, &err)) fprintf(stderr, "shadowbench: %s\n", err.msg);
+    if (!sb_summary_flush(&sum, &err)) sb_say_line(stderr, err.msg);
     sb_summary_free(&sum);
     s->opts = keep;
     t->warm_frames = t->rung_frames[0] + 8;
@@ -1001,7 +1001,7 @@ int sb_tune_main(const sb_tune_cmd *cmd) {
     t.last_rung = -1;
     sb_err err;
     if (!make_candidates(&t, &err)) {
-        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        sb_say_line(stderr, err.msg);
         return SB_EXIT_BAD_INPUT;
     }
     if (cmd->opts->error_every <= 0) {
@@ -1013,7 +1013,7 @@ int sb_tune_main(const sb_tune_cmd *cmd) {
     t.warmup = cmd->opts->warmup < 0 ? 1 : cmd->opts->warmup;
     t.final_reps = t.nrungs == 1 ? FINAL_PASSES : 1;   /* one rung: it is the last */
     if (!sb_session_open(&t.s, cmd->opts, cmd->scene, cmd->path ? cmd->path : "auto", &err)) {
-        fprintf(stderr, "shadowbench: %s\n", err.msg);
+        sb_say_line(stderr, err.msg);
         int rc = t.s.files_refused ? SB_EXIT_BAD_INPUT : SB_EXIT_FAILED;
         sb_session_close(&t.s);
         free(t.c);
@@ -1022,7 +1022,7 @@ int sb_tune_main(const sb_tune_cmd *cmd) {
     if (cmd->resume) {
         snprintf(t.dir, sizeof t.dir, "%s", cmd->resume);
         if (cmd->identity && !sb_resume_check(t.dir, cmd->identity, NULL, -1, &err)) {   /* nothing written */
-            fprintf(stderr, "shadowbench: %s\n", err.msg);
+            sb_say_line(stderr, err.msg);
             sb_session_close(&t.s);
             free(t.c);
             return SB_EXIT_BAD_INPUT;
@@ -1031,7 +1031,7 @@ int sb_tune_main(const sb_tune_cmd *cmd) {
         char base[4200];
         snprintf(base, sizeof base, "%s/tune-%s", cmd->out, t.s.scene_name);
         if (!sb_make_stamped_dir(base, t.dir, sizeof t.dir, &err)) {
-            fprintf(stderr, "shadowbench: %s\n", err.msg);
+            sb_say_line(stderr, err.msg);
             sb_session_close(&t.s);
             free(t.c);
             return SB_EXIT_WRITE;   /* the results folder could not be made */
@@ -1085,7 +1085,7 @@ int sb_tune_main(const sb_tune_cmd *cmd) {
     ratios_to(&t, rung, chosen);
     mark_front(&t);
     bool ok = write_csv(&t, &err) && write_front(&t, chosen, met, &err) && write_bench(&t, &v, &err);
-    if (!ok) fprintf(stderr, "shadowbench: %s\n", err.msg);
+    if (!ok) sb_say_line(stderr, err.msg);
     print_report(&t, &v);
     sb_session_close(&t.s);
     free(t.c);

@@ -194,12 +194,35 @@ static void test_every_command_exit_2(void **st) {
     assert_int_not_equal(access(x, F_OK), 0);
 }
 
+/* A name every result holds is one line of text (issue 65): a scene file named with an escape sequence, and a batch
+ * scene name holding one, are refused before anything runs, the refusal showing the byte as \\x1b (never the raw
+ * sequence, which rewrote the terminal in compare's table). */
+static void test_names_refused(void **st) {
+    (void)st;
+    const char *b = test_binary(), *t = g_tmp;
+    char esc[256], bench[256];
+    snprintf(esc, sizeof esc, "%s/a\x1b[31mb.glb", t);
+    copy_bundled("plane-box.glb", esc);
+    const char *out = expect_cli_fail("its name (the scene column of every result) holds a control character (byte 27 "
+                                      "at 1)", "%s run '%s' plane-box sm --frames 2 --out %s/names", b, esc, t);
+    assert_non_null(strstr(out, "a\\x1b[31mb.glb"));
+    assert_null(strchr(out, 0x1b));
+    snprintf(bench, sizeof bench, "%s/esc.bench", t);
+    write_text(bench, "scene pb\x1b]0;title\x07 plane-box\nsm\n");
+    expect_cli_fail("esc.bench:1: the scene's name holds a control character (byte 27 at 2)", "%s batch %s --out %s/names",
+                    b, bench, t);
+    char names[300];
+    snprintf(names, sizeof names, "%s/names", t);
+    assert_int_not_equal(access(names, F_OK), 0);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_truncated_glb),     cmocka_unit_test(test_nan_vertex),
         cmocka_unit_test(test_bad_index),         cmocka_unit_test(test_unknown_parameter),
         cmocka_unit_test(test_unused_number_beyond_int),
         cmocka_unit_test(test_malformed_path),    cmocka_unit_test(test_every_command_exit_2),
+        cmocka_unit_test(test_names_refused),
     };
     return cmocka_run_group_tests_name("badinput", tests, setup, teardown);
 }

@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "support.h"
+#include "json.h"
 #include "util.h"
 
 /* Runs fn in a child with stderr in a pipe; returns its exit status and output. */
@@ -76,8 +77,33 @@ static void test_run_capture_reads_everything(void **st) {
     assert_string_equal(small + strlen(small) - 5, "5000\n");
 }
 
+/* Names as data (issue 65): the JSON writer writes UTF-8 as it is and a byte that is none of it as U+FFFD (a scene
+ * file named with byte 0xff made the cameras' export no JSON), control characters as escapes; the name check
+ * refuses control characters and an empty name; a refusal's line shows a control character as \\xNN. */
+static void test_names_as_data(void **st) {
+    (void)st;
+    sb_jw j = {0};
+    sb_jw_str(&j, "a\xff\xc3\xa9\xe2\x82\xac\xf0\x9f\x98\x80\xed\xa0\x80\xc0\xaf\xe2\x82\x1b<\n\"");
+    assert_string_equal(j.buf, "\"a\\ufffd\xc3\xa9\xe2\x82\xac\xf0\x9f\x98\x80\\ufffd\\ufffd\\ufffd\\ufffd\\ufffd\\ufffd"
+                               "\\ufffd\\u001b\\u003c\\n\\\"\"");
+    sb_jw_free(&j);
+    sb_err err;
+    assert_true(sb_name_check("the name", "towers \xc3\xa9", &err));
+    assert_false(sb_name_check("the name", "", &err));
+    assert_false(sb_name_check("the name", "a\x1b[31mb", &err));
+    assert_string_equal(err.msg, "the name holds a control character (byte 27 at 1): a name is one line of text");
+    assert_false(sb_name_check("the name", "a\x7f", &err));
+    char buf[256] = "";
+    FILE *f = fmemopen(buf, sizeof buf, "w");
+    assert_non_null(f);
+    sb_say_line(f, "x\x1b[2Jy\nz");
+    fclose(f);
+    assert_string_equal(buf, "shadowbench: x\\x1b[2Jy\\x0az\n");
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_out_of_memory_is_one_line_and_exit_1),
-                                       cmocka_unit_test(test_run_capture_reads_everything)};
+                                       cmocka_unit_test(test_run_capture_reads_everything),
+                                       cmocka_unit_test(test_names_as_data)};
     return cmocka_run_group_tests_name("util", tests, NULL, NULL);
 }
