@@ -930,6 +930,19 @@ static bool check_skins(ck *c) {
         if (!field(c, s, p.s, "joints", SB_JSON_ARRAY, true, &joints)) return false;
         if (joints->count == 0) return fail(c, at(p.s, "joints").s, "a skin needs at least one joint");
         if (!index_list(c, s, p.s, "joints", K_NODE, NULL)) return false;
+        /* each node once (glTF's uniqueItems): a joint listed twice gets two inverse bind matrices for one node */
+        unsigned char *seen = sb_xcalloc((size_t)c->n[K_NODE] / 8 + 1, 1);
+        for (uint32_t k = 0; k < joints->count; k++) {
+            uint64_t jn;
+            sb_json_u64(&joints->items[k], &jn);
+            if (seen[jn / 8] & (1u << (jn % 8))) {
+                free(seen);
+                return fail(c, at_i(at(p.s, "joints").s, k).s, "node %llu is listed twice (a skin's joints are unique)",
+                            (unsigned long long)jn);
+            }
+            seen[jn / 8] |= (unsigned char)(1u << (jn % 8));
+        }
+        free(seen);
         if (!get_index(c, s, p.s, "skeleton", false, K_NODE, &root)) return false;
         if (!get_index(c, s, p.s, "inverseBindMatrices", false, K_ACCESSOR, &ibm)) return false;
         if (ibm >= 0) {

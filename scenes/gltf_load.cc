@@ -689,7 +689,17 @@ struct Loader {
         for (size_t v = 0; v < nv; v++) {
             double sum = 0;
             for (int set = 0; set < d.skin_sets; set++)
-                for (int k = 0; k < 4; k++) sum += d.weights[set][4 * v + k];
+                for (int k = 0; k < 4; k++) {
+                    double wv = d.weights[set][4 * v + k];
+                    if (wv < 0) {   // glTF: never negative (a negative weight pushes the vertex away from its joint)
+                        char num[32];
+                        snprintf(num, sizeof num, "%g", wv);
+                        return fail(where + "/attributes/WEIGHTS_" + std::to_string(set),
+                                    "weight " + std::to_string(k) + " of vertex " + std::to_string(v) + " is " + num +
+                                        " (glTF: joint weights are not negative)");
+                    }
+                    sum += wv;
+                }
             if (!(fabs(sum) > 1e-6))   // glTF: a vertex's weights sum to 1; none at all would put it at the origin
                 return fail(where + "/attributes/WEIGHTS_0", "the weights of vertex " + std::to_string(v) +
                                                                  " sum to 0 (glTF: to 1): it would collapse to the origin");
@@ -1134,7 +1144,13 @@ bool Loader::light(int ni) {
           fabs(l.position.z) <= SB_SCENE_MAX_COORD))
         return fail("/nodes/" + std::to_string(ni), "its light stands beyond 1e12 from the origin, which the "
                                                     "rasterizer and the reference hold");
-    l.direction = sb_v3_norm(sb_m4_dir(world[ni], sb_v3_make(0, 0, -1)));
+    sb_v3 dir = sb_m4_dir(world[ni], sb_v3_make(0, 0, -1));
+    if (l.type != SB_LIGHT_POINT && !(sb_v3_len(dir) > 1e-12)) {   /* a sun or spot that points nowhere lights nothing */
+        left_out("/nodes/" + std::to_string(ni) + ": its " + (l.type == SB_LIGHT_SPOT ? "spot" : "directional") +
+                 " light " + std::to_string(li) + " has no direction (the node's world transform scales its -Z to 0)");
+        return true;
+    }
+    l.direction = sb_v3_norm(dir);
     for (int k = 0; k < 3; k++) l.color[k] = k < (int)L.color.size() ? (float)L.color[k] : 1.0f;
     l.intensity = L.intensity;
     l.range = L.range;

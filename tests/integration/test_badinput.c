@@ -216,13 +216,58 @@ static void test_names_refused(void **st) {
     assert_int_not_equal(access(names, F_OK), 0);
 }
 
+/* A spot light (or a sun) whose node scales its -Z to 0 points nowhere: it lit nothing and a run scored err_rate 0,
+ * status ok. Left out with its place, in info and every run's warnings; a point light there keeps its place. */
+static void test_light_without_direction(void **st) {
+    (void)st;
+    char file[300];
+    snprintf(file, sizeof file, "%s/spot0.gltf", g_tmp);
+    write_text(file, "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":[\"KHR_lights_punctual\"],"
+                     "\"extensions\":{\"KHR_lights_punctual\":{\"lights\":[{\"type\":\"spot\",\"intensity\":9,\"spot\":{}},"
+                     "{\"type\":\"point\",\"intensity\":9}]}},\"scene\":0,\"scenes\":[{\"nodes\":[0,1,2]}],"
+                     "\"nodes\":[{\"mesh\":0},{\"translation\":[0,2,0],\"scale\":[0,0,0],"
+                     "\"extensions\":{\"KHR_lights_punctual\":{\"light\":0}}},{\"translation\":[0,2,0],\"scale\":[0,0,0],"
+                     "\"extensions\":{\"KHR_lights_punctual\":{\"light\":1}}}],"
+                     "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],"
+                     "\"buffers\":[{\"byteLength\":36,\"uri\":\"data:application/octet-stream;base64,"
+                     "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA\"}],"
+                     "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
+                     "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\","
+                     "\"min\":[0,0,0],\"max\":[1,1,0]}]}");
+    char out[8192];
+    assert_int_equal(run_logged(out, sizeof out, "SB_SCENE_CACHE=off %s info %s", test_binary(), file), 0);
+    assert_non_null(strstr(out, "/nodes/1: its spot light 0 has no direction (the node's world transform scales its -Z "
+                                "to 0)"));
+    assert_non_null(strstr(out, "lights: 1"));   /* the point light kept */
+    assert_null(strstr(out, "/nodes/2:"));
+}
+
+/* A skin's rules the loader holds a real file to (conf-skin.glb, one rule broken each): a joint listed twice (glTF's
+ * uniqueItems) and a negative weight were played without a word; each is refused with its place, exit 2. */
+static void test_skin_rules(void **st) {
+    (void)st;
+    const char *edits[][2] = {
+        {"doc[\"skins\"][0][\"joints\"] = [1, 1]", "/skins/0/joints/1: node 1 is listed twice (a skin's joints are unique)"},
+        {"f32(doc[\"meshes\"][1][\"primitives\"][0][\"attributes\"][\"WEIGHTS_0\"], 5, [1.25, -0.25, 0, 0])",
+         "/meshes/1/primitives/0/attributes/WEIGHTS_0: weight 1 of vertex 5 is -0.25 (glTF: joint weights are not negative)"},
+    };
+    for (int i = 0; i < 2; i++) {
+        char out[8192], file[300];
+        snprintf(file, sizeof file, "%s/skin%d.glb", g_tmp, i);
+        assert_int_equal(run_logged(out, sizeof out, "python3 %s/tests/support/glb_edit.py %s/conf-skin.glb %s '%s'",
+                                    getenv("SB_SOURCE_ROOT"), getenv("SB_DATA_DIR"), file, edits[i][0]), 0);
+        expect_cli_fail(edits[i][1], "SB_SCENE_CACHE=off %s info %s", test_binary(), file);
+    }
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_truncated_glb),     cmocka_unit_test(test_nan_vertex),
         cmocka_unit_test(test_bad_index),         cmocka_unit_test(test_unknown_parameter),
         cmocka_unit_test(test_unused_number_beyond_int),
         cmocka_unit_test(test_malformed_path),    cmocka_unit_test(test_every_command_exit_2),
-        cmocka_unit_test(test_names_refused),
+        cmocka_unit_test(test_names_refused),     cmocka_unit_test(test_light_without_direction),
+        cmocka_unit_test(test_skin_rules),
     };
     return cmocka_run_group_tests_name("badinput", tests, setup, teardown);
 }

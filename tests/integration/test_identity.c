@@ -77,6 +77,15 @@ static void test_resume_of_another_command(void **st) {
     free(after);
     free(before);
     free(manifest);
+    /* a meta whose line is garbage with control bytes (an escape sequence that clears the screen, a bell): the
+       refusal shows them as \xNN, never raw (they were printed as they were) */
+    assert_int_equal(run_logged(g_out, sizeof g_out, "cp -r %s %s/garbled && sed -i 's/^set: --size .*/set: --size "
+                                "\\x1b[2Jx\\x07/' %s/garbled/meta", dir, g_tmp, g_tmp), 0);
+    o = expect_cli_fail("--size: the set was made with \\x1b[2Jx\\x07, this command gives 64x36",
+                        "%s run towers-night towers-night cube:res=256 dpsm:res=256 --frames 2 --size 64x36 --warmup 0 "
+                        "--error-every 0 --quiet --lights 0,2 --resume %s/garbled", test_binary(), g_tmp);
+    assert_null(strchr(o, 0x1b));
+    assert_null(strchr(o, 0x07));
 }
 
 /* tune's folder knows its search: --resume with another bound is refused, nothing written. */
