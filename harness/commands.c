@@ -820,6 +820,11 @@ static int cmd_flip(const sb_cli *c) {
                             "file of its own)\n", c->o.map, c->pos[i]);
             return SB_EXIT_BAD_INPUT;
         }
+    if (c->o.map) {   /* the writer picks the format by the name's extension: a name without one writes nothing */
+        const char *slash = strrchr(c->o.map, '/'), *dot = strrchr(c->o.map, '.');
+        if (!dot || (slash && dot < slash) || !dot[1] || dot == (slash ? slash + 1 : c->o.map))
+            return bad("flip: --map %s has no extension to choose its format by (.png, .exr, ...)", c->o.map);
+    }
     int w[2], h[2];
     float *img[2] = {NULL, NULL};
     for (int i = 0; i < 2; i++)

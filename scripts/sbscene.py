@@ -209,6 +209,9 @@ def write_glb(path, doc, binary):
             f.flush()
             os.fsync(f.fileno())
         check_loads(tmp, path)
+        umask = os.umask(0)   # mkstemp's file is 0600: the scene gets the mode any new file would (0666 less umask)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

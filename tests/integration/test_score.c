@@ -322,6 +322,10 @@ static void test_image_reader(void **st) {
     assert_int_equal(run_logged(g_out, sizeof g_out, "cksum < %s/white/vis_0000.png", g_tmp), 0);
     snprintf(after, sizeof after, "%.63s", g_out);
     assert_string_equal(before, after);
+    /* a map named without an extension (/dev/full): refused before anything is computed (it ran, then failed on
+       "no image writer for /dev/full.tmp" with exit 4) */
+    expect_cli_fail("--map /dev/full has no extension to choose its format by", "%s flip %s/white/vis_0000.png "
+                    "%s/white/vis_0001.png --map /dev/full", bin, g_tmp, g_tmp);
     char nodir[4200];
     snprintf(nodir, sizeof nodir, "%s/nodir/m.png: no such folder %s/nodir", g_tmp, g_tmp);
     expect_cli_exit(4, nodir, "%s flip %s/white/vis_0000.png %s/white/vis_0001.png --map %s/nodir/m.png", bin, g_tmp,

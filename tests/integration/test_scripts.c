@@ -156,6 +156,12 @@ static void test_outputs_load(void **st) {
                                 getenv("SB_SOURCE_ROOT"), in, out), 0);
     assert_non_null(strstr(g_out, "not loaded by the tool before writing (no binary at"));
     assert_int_equal(run_logged(g_out, sizeof g_out, "%s info %s", test_binary(), out), 0);
+    /* with the mode of any new file (the temporary's 0600 made the scene unreadable to anyone else) */
+    mode_t mask = umask(0);
+    umask(mask);
+    struct stat sto;
+    assert_int_equal(stat(out, &sto), 0);
+    assert_int_equal(sto.st_mode & 0777, 0666 & ~mask);
 }
 
 int main(void) {
