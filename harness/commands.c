@@ -677,14 +677,19 @@ static int cmd_history_add(const sb_cli *c) {
     return rc;
 }
 
-/* A night by its id or commit; a commit no night ran (one bisect named): the first night whose commit holds it. */
-static long long night_of(sb_history *h, const char *what, sb_err *err) {
+/* A night by its id or commit; a commit no night ran (one bisect named): the first night whose commit holds it.
+ * *first: that night is the history's first and was named by a commit (no night before it ran without it). */
+static long long night_of(sb_history *h, const char *what, bool *first, sb_err *err) {
+    *first = false;
     long long night = sb_history_find_night(h, what, err);
-    if (night != 0) return night;
+    if (night < 0) return night;
+    char *end;
+    bool by_id = night > 0 && strtoll(what, &end, 10) == night && !*end;
     sb_history_night *n = NULL;
     int nn = sb_history_nights(h, &n, err);
     for (int i = 0; i < nn && !night; i++)
         if (n[i].commit[0] && sb_git_is_ancestor(what, n[i].commit)) night = n[i].id;
+    *first = !by_id && nn > 0 && night == n[0].id;
     sb_history_nights_free(n, nn);
     return night;
 }
@@ -695,9 +700,13 @@ static int cmd_history_annotate(const sb_cli *c) {
     if (!h) return SB_EXIT_BAD_INPUT;
     const char *what = c->pos[0];
     sb_err err;
-    long long night = night_of(h, what, &err);
+    bool first;
+    long long night = night_of(h, what, &first, &err);
     int rc = SB_EXIT_OK, added = 0;
     if (night < 0) rc = bad_file(&err);
+    else if (night > 0 && first && c->o.restart)   /* a change older than the history restarts none of its series */
+        sb_log("%s: the history's first night (%lld) already ran it: no series of this history restarts there, "
+               "nothing noted (--restart)", what, night);
     else if (night == 0)
         rc = bad("history annotate: '%s' is no night of the history, and no night ran that commit or one after "
                  "it (`history list` names the nights and their commits)", what);

@@ -238,6 +238,9 @@ const sb_option sb_options[] = {
      .help = "the series the note is about (a glob, or text in the series' name)"},
     {.name = "--accept", .kind = SB_OPT_FLAG, .commands = SB_IN(SB_CMD_HISTORY_ANNOTATE), .field = F(accept),
      .help = "the change starting on that night was meant (listed as accepted; no exit 1)"},
+    {.name = "--restart", .kind = SB_OPT_FLAG, .commands = SB_IN(SB_CMD_HISTORY_ANNOTATE), .field = F(restart),
+     .help = "by COMMIT: noted only where the history restarts, a night before having run without it (a change older "
+             "than the history's first night is none of its nights' doing: nothing noted, exit 0)"},
     {.name = "--ppd", .kind = SB_OPT_NUM, .arg = "N", .min = 1, .max = 1000, .def = "67.0206",
      .commands = SB_IN(SB_CMD_FLIP), .field = F(ppd),
      .help = "pixels per degree of the viewing condition (the paper's: a 0.7 m wide 3840-pixel display from 0.7 m)"},

@@ -100,7 +100,7 @@ typedef enum sb_identity {
 } sb_identity;
 
 /* Every option's parsed value, and which were given. */
-#define SB_OPTION_MAX 80
+#define SB_OPTION_MAX 88
 typedef struct sb_cli_opts {
     bool given[SB_OPTION_MAX]; /* by row of sb_options; first, so that no row's
                                   field is at offset 0 (0: none) */
@@ -112,7 +112,7 @@ typedef struct sb_cli_opts {
     int format; /* --format: an sb_output_format */
     int recent, pairs, nights;
     double noise_floor, threshold, max_err, max_flicker, max_flip, max_mb, budget_ms, time_limit_s, ppd;
-    bool dry_run, quiet, verbose, accept, yes, twins, all_pairs;
+    bool dry_run, quiet, verbose, accept, restart, yes, twins, all_pairs;
 } sb_cli_opts;
 
 /* A command's own default of a row (a list ends with def NULL). */

@@ -15,7 +15,9 @@ machines whose unchanged nights moved by 39 % and 45 % failed them).
   begins (over 5+3 nights it is not found: said in docs/history.md).
 - `history check` by B's band: the night replayed at 1.0x is within it for every figure, at 3x beyond it
   for every run's final_ms.
-- history D is A with night 11 on another driver (its meta says so), annotated and accepted.
+- history D is A with night 11 on another driver (its meta says so), annotated and accepted; a note by a commit
+  the history's first night already ran is not put with --restart (scripts/bench's notes), and is where a
+  night before ran without it.
 - adding a set twice changes nothing; a history of an older schema is migrated; a newer one and broken
   input are refused in one line.
 - the report of A is opened in headless Chromium: every page kind loads with no script error, draws its
@@ -219,6 +221,24 @@ def main():
     db.close()
     check(same_note == 1 and "already had this note" in p.stderr, "the same note twice: kept once, said (%d, %s)" %
           (same_note, p.stderr.strip()))
+    # --restart (scripts/bench's notes of the project's own changes): a change the history's first night already
+    # ran restarts none of its series (a new user's night 1 showed six such notes): nothing noted, exit 0; where a
+    # night before ran without it, noted on the first night that ran it
+    p = sb("history", "annotate", commit[:10], "a change older than the history", "--restart", "--history", D)
+    db = sqlite3.connect(D)
+    older = db.execute("SELECT count(*) FROM annotations WHERE text = 'a change older than the history'").fetchone()[0]
+    db.close()
+    check(older == 0 and "already ran it" in p.stderr and "nothing noted" in p.stderr,
+          "annotate --restart, a commit of the first night: nothing noted (%d, %s)" % (older, p.stderr.strip()))
+    R = os.path.join(WORK, "restart.sqlite")
+    for k, (name, sha) in enumerate([("r-before", "0" * 40), ("r-after", commit)]):
+        night = replay(rendered, name, 1.0 + k / 100, 20 + k)   # another set each (a set is added once)
+        meta = open(os.path.join(night, "meta")).read()
+        open(os.path.join(night, "meta"), "w").write(re.sub(r"(?m)^commit: .*$", "commit: " + sha, meta))
+        sb("history", "add", night, "--history", R)
+    p = sb("history", "annotate", commit[:10], "restarts here", "--restart", "--history", R)
+    check("night 2 annotated" in p.stderr, "annotate --restart: noted on the night that first ran it (%s)" %
+          p.stderr.strip())
     p = sb("history", "annotate", "no-such-night", "x", "--history", D, ok=(2,))
     check(len(p.stderr.strip().splitlines()) == 1 and "no-such-night" in p.stderr, "annotate an unknown night: exit 2, one line")
     # a branch against the nights: the rendered night as it was (1.0x) within B's band for every figure (exit 0),

@@ -121,7 +121,7 @@ static void test_output_over_input(void **st) {
     snprintf(hist, sizeof hist, "%s/over.sqlite", g_tmp);
     assert_int_equal(sh("%s history add %s --history %s --quiet", b, set, hist), 0);
     assert_int_equal(sh("cd %s && cat * %s | cksum", set, hist), 0);
-    snprintf(before, sizeof before, "%s", g_out);
+    snprintf(before, sizeof before, "%.200s", g_out);
     assert_int_equal(sh("ln -sfn %s %s/link", set, g_tmp), 0);
     const char *name = strrchr(set, '/') + 1;
     char spell[3][4400];
