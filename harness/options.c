@@ -153,8 +153,9 @@ const sb_option sb_options[] = {
      .field = RUN(order), .help = "order of a scene's runs and repetitions (interleave: A1 B1 A2 B2 ...)"},
     {.name = "--rerun-unstable", .kind = SB_OPT_INT, .arg = "N", .max = 10, .def = "0", .with = SB_CMDF_MATRIX, RUN_OPT,
      .field = RUN(rerun_unstable),
-     .help = "run again, at the end, each run flagged unstable (its timings disturbed), up to N times: the figures "
-             "of a stable attempt are the run's, every attempt's frames kept"},
+     .help = "run again, at the end, each run flagged unstable (its timings disturbed), up to N times, within a "
+             "quarter of the night's time (a disturbed night waits for a calm probe first): the figures of a stable "
+             "attempt are the run's, every attempt's frames kept"},
     {.name = "--seed", .kind = SB_OPT_SEED, .arg = "N", .min = 1, .max = 1.8e19,
      .def_help = "chosen, in the summary's seed column", .cmd_defs = OWN_DEFAULTS(OWN(SB_CMD_TUNE, "1")),
      .with = SB_CMDF_MEASURE, RUN_OPT, .field = RUN(seed), .help = "shuffle's seed"},

@@ -854,6 +854,23 @@ int sb_summary_unstable(const sb_summary *sum, char ***ids) {
     return n;
 }
 
+int sb_summary_rerun_runs(const sb_summary *sum, char ***ids, sb_rerun_run **runs) {
+    sb_table t;
+    int n = 0;
+    *ids = NULL, *runs = NULL;
+    if (!rows_table(sum, &t)) return 0;
+    for (int r = 0; r < t.nrows; r++)
+        if (sb_status_of(sb_table_get(&t, r, "status")) == SB_STATUS_OK) {
+            *ids = sb_xrealloc(*ids, sizeof **ids * (size_t)(n + 1));
+            *runs = sb_xrealloc(*runs, sizeof **runs * (size_t)(n + 1));
+            (*ids)[n] = sb_strdup(sb_table_get(&t, r, "run_id"));
+            const char *w = sb_table_get(&t, r, "run_wall_s");
+            (*runs)[n++] = (sb_rerun_run){*w ? strtod(w, NULL) : NAN, !strcmp(sb_table_get(&t, r, "stable"), "no")};
+        }
+    sb_table_free(&t);
+    return n;
+}
+
 bool sb_summary_stable(const sb_summary *sum, const char *run_id) {
     sb_table t;
     bool stable = false;

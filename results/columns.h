@@ -8,6 +8,7 @@
  * per-frame column summarised by a set of statistics, named
  * <frame column>_<statistic> (gpu_ms_median, err_rate_p95, ...). */
 #pragma once
+#include "stability.h"
 #include "csv.h"
 #include "error.h"
 #include "stage.h"
@@ -211,6 +212,9 @@ void sb_summary_add_line(sb_summary *sum, const char *line, sb_status status);
 bool sb_summary_flush(sb_summary *sum, sb_err *err);
 /* The runs of the summary that ended ok but unstable (their ids, malloc'd each; free the array too). */
 int sb_summary_unstable(const sb_summary *sum, char ***ids);
+/* The set's ok runs in order, for the re-run plan (stability.h): ids[i] (strdup'd) and runs[i] (its wall time and
+ * whether it ended unstable); both arrays malloc'd. */
+int sb_summary_rerun_runs(const sb_summary *sum, char ***ids, sb_rerun_run **runs);
 /* Takes a run's row out (it runs again); its counts with it. False when there is none. */
 bool sb_summary_drop(sb_summary *sum, const char *run_id);
 /* Whether the run's row says stable=yes. */

@@ -119,3 +119,56 @@ int sb_stability_replay_find(const char *text, const char *technique, int attemp
     }
     return found;
 }
+
+typedef struct by_cost {
+    double s;
+    int i;
+} by_cost;
+
+static int cheaper(const void *a, const void *b) {
+    const by_cost *x = a, *y = b;
+    return x->s < y->s ? -1 : x->s > y->s ? 1 : x->i - y->i;
+}
+
+void sb_rerun_plan_make(const sb_rerun_run *runs, int n, const double *probe, int np, double night_s, double spent_s,
+                        double tol, bool *rerun, sb_rerun_plan *out) {
+    memset(out, 0, sizeof *out);
+    out->runs = n;
+    /* the calm: the 10th percentile of the night's finite probes (a night busy for three quarters of its runs still
+       has its calm ones below it) */
+    double *p = sb_xmalloc(sizeof(double) * (size_t)(np > 0 ? np : 1));
+    int nf = 0;
+    for (int i = 0; i < np; i++)
+        if (isfinite(probe[i]) && probe[i] > 0) p[nf++] = probe[i];
+    out->calm_ms = nf ? sb_percentile_select(p, nf, 0.10) : NAN;
+    free(p);
+    for (int i = 0, streak = 0; i < np; i++) {
+        bool busy = isfinite(out->calm_ms) && isfinite(probe[i]) && probe[i] > out->calm_ms * (1 + tol);
+        streak = busy ? streak + 1 : 0;
+        if (streak > out->busy_streak) out->busy_streak = streak;
+    }
+    double known = 0;
+    int nknown = 0;
+    for (int i = 0; i < n; i++) {
+        out->unstable += runs[i].unstable;
+        if (isfinite(runs[i].wall_s)) known += runs[i].wall_s, nknown++;
+    }
+    int stretch = np / 5 > 3 ? np / 5 : 3;
+    out->disturbed = out->unstable > SB_RERUN_DISTURBED * n && out->busy_streak >= stretch;
+    double budget = SB_RERUN_SHARE * night_s;
+    out->budget_s = (budget > SB_RERUN_FLOOR_S ? budget : SB_RERUN_FLOOR_S) - spent_s;
+    /* cheapest first, while they fit */
+    by_cost *c = sb_xmalloc(sizeof *c * (size_t)(n > 0 ? n : 1));
+    int nc = 0;
+    for (int i = 0; i < n; i++) {
+        rerun[i] = false;
+        if (runs[i].unstable) c[nc++] = (by_cost){isfinite(runs[i].wall_s) ? runs[i].wall_s : nknown ? known / nknown : 0, i};
+    }
+    qsort(c, (size_t)nc, sizeof *c, cheaper);
+    for (int k = 0; k < nc && out->planned_s + c[k].s <= out->budget_s; k++) {
+        rerun[c[k].i] = true;
+        out->planned_s += c[k].s;
+        out->chosen++;
+    }
+    free(c);
+}

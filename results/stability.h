@@ -52,3 +52,37 @@ typedef struct sb_stability_replay {
  * malformed line anywhere in text, why says which ("line N: ..."). */
 int sb_stability_replay_find(const char *text, const char *technique, int attempt, sb_stability_replay *out,
                              char *why, size_t len);
+
+/* What to run again when a night ends with unstable runs (batch --rerun-unstable), decided on the night's own
+ * figures (a pure function: tests replay them). A night is *disturbed* when more than SB_RERUN_DISTURBED of its
+ * runs ended unstable and the calibration probe stayed above the night's calm (its 10th percentile) by more than
+ * tol for a stretch of at least 3 runs and a fifth of them: the machine was busy for minutes, not a frame, and
+ * running again at once would meet the same load (the batch then waits, at most SB_RERUN_WAIT of the night's time,
+ * for the probe to come back to calm, or says the night was disturbed and runs nothing again). Re-runs, cheapest
+ * first by their first attempt's wall time, take at most SB_RERUN_SHARE of the night's time (at least
+ * SB_RERUN_FLOOR_S: a small night's one or two re-runs are not refused). */
+#define SB_RERUN_DISTURBED 0.25
+#define SB_RERUN_SHARE 0.25
+#define SB_RERUN_FLOOR_S 30.0
+#define SB_RERUN_WAIT 0.10
+
+typedef struct sb_rerun_run {
+    double wall_s;   /* the run's first attempt (NaN: unknown, counted as the night's mean) */
+    bool unstable;
+} sb_rerun_run;
+
+typedef struct sb_rerun_plan {
+    bool disturbed;
+    int unstable, runs;     /* unstable runs of the night's runs */
+    int busy_streak;        /* the longest stretch of runs whose probe stood above calm */
+    double calm_ms;         /* the night's calm probe: its 10th percentile (NaN: no probe) */
+    double budget_s;        /* the time re-runs may take */
+    double planned_s;       /* what the chosen re-runs took the first time */
+    int chosen;             /* runs to run again (rerun[i] true), within the budget */
+} sb_rerun_plan;
+
+/* runs[n]: the night's runs in order; probe[np]: its calibration probes in order (calib_before of each attempt);
+ * night_s: the night's time so far; spent_s: re-runs' time already spent; tol: the batch tolerance the verdict
+ * used. rerun[n] (caller's) gets the runs to run again. */
+void sb_rerun_plan_make(const sb_rerun_run *runs, int n, const double *probe, int np, double night_s, double spent_s,
+                        double tol, bool *rerun, sb_rerun_plan *out);

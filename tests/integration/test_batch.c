@@ -496,6 +496,46 @@ static void test_unstable_run_again(void **st) {
     sb_table_free(&t);
 }
 
+/* A disturbed night, replayed (issue 67): 8 runs, the first two at a calm probe (5 ms), the other six at 20 ms with
+ * the probe moving under them (unstable): the machine busy for six runs in a row, not a frame. Re-running them at
+ * once would meet the same load: the batch waits for a calm probe (replayed as technique calm-probe) at most a tenth
+ * of the night's time. Never calm: it says the night was disturbed and runs nothing again (every row attempt 1).
+ * Calm at once: it says so and runs the six again (attempt 2 at a probe within the night's: recovered). */
+static void test_disturbed_night(void **st) {
+    (void)st;
+    char bench[300], replay[300];
+    snprintf(bench, sizeof bench, "%s/disturbed.bench", g_tmp);
+    snprintf(replay, sizeof replay, "%s/disturbed.replay", g_tmp);
+    write_text(bench, "scene plane-box plane-box\npath plane-box plane-box\n"
+                      "defaults --frames 2 --size 64x36 --warmup 0 --error-every 0 --rerun-unstable 1\n"
+                      "sm:res=256\nsm:res=512\npssm:res=256\nsdsm:res=256\nlispsm:res=256\ntsm:res=256\n"
+                      "psm:res=256\nnone\n");
+    for (int calm = 0; calm < 2; calm++) {
+        write_text(replay, calm ? "calm-probe * 5 5 1\nsm * 5 5 5\n* 1 20 28 5\n* * 16 16 5\n"
+                                : "calm-probe * 20 20 1\nsm * 5 5 5\n* 1 20 28 5\n* * 16 16 5\n");
+        setenv("SB_REPLAY_TIMINGS", replay, 1);
+        int rc = sh("%s batch %s --out %s/disturbed-%d", test_binary(), bench, g_tmp, calm);
+        unsetenv("SB_REPLAY_TIMINGS");
+        assert_true(rc == 0 || rc == 5);   /* 5: unstable runs left (the exit-status table) */
+        assert_non_null(strstr(g_out, "the night was disturbed: 6 of 8 runs unstable, the calibration probe above its "
+                                      "calm 5 ms by more than 35% for 6 runs in a row"));
+        assert_non_null(strstr(g_out, calm ? "calm again after" : "no run run again, its 6 unstable run(s) stay stable=no"));
+        char dir[4096];
+        snprintf(dir, sizeof dir, "%s", last_line_of(g_out));
+        sb_table t;
+        summary_table(dir, &t);
+        assert_int_equal(t.nrows, 8);
+        int again = 0, unstable = 0;
+        for (int r = 0; r < t.nrows; r++) {
+            again += atoi(sb_table_get(&t, r, "attempt")) == 2;
+            unstable += !strcmp(sb_table_get(&t, r, "stable"), "no");
+        }
+        assert_int_equal(again, calm ? 6 : 0);
+        assert_int_equal(unstable, calm ? 0 : 6);
+        sb_table_free(&t);
+    }
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_dry_run_and_full_batch),
@@ -507,6 +547,7 @@ int main(void) {
         cmocka_unit_test(test_bad_batch_files),
         cmocka_unit_test(test_light_lines),
         cmocka_unit_test(test_unstable_run_again),
+        cmocka_unit_test(test_disturbed_night),
         cmocka_unit_test(test_report),
     };
     return cmocka_run_group_tests_name("batch", tests, setup, teardown);

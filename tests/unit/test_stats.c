@@ -214,11 +214,71 @@ static void test_stability_replay(void **st) {
     }
 }
 
+/* The re-run plan on replayed nights (issue 67), exact answers:
+ *  - a disturbed night: 25 of 40 runs unstable, the probe at twice its calm for those 25 runs in a row: disturbed,
+ *    and no more re-runs than a quarter of the night's time buys (10 of 25 at 10 s each in a 400 s night);
+ *  - a calm night with a few disturbed runs (3 of 40, the probe up for one run at a time): not disturbed, all 3;
+ *  - half the runs unstable with a flat probe (frames drifted, the machine calm): not disturbed, the budget decides;
+ *  - 12 unstable with the probe up for 2 runs only (a blip): not disturbed;
+ *  - cheapest first; a small night's floor of 30 s; time already spent counts against the budget. */
+static void test_rerun_plan(void **st) {
+    (void)st;
+    enum { N = 40 };
+    sb_rerun_run runs[N];
+    double probe[N];
+    bool rerun[N];
+    sb_rerun_plan p;
+    for (int i = 0; i < N; i++) runs[i] = (sb_rerun_run){10, i >= 10 && i < 35}, probe[i] = i >= 10 && i < 35 ? 20 : 10;
+    sb_rerun_plan_make(runs, N, probe, N, 400, 0, 0.35, rerun, &p);
+    assert_true(p.disturbed);
+    assert_int_equal(p.unstable, 25);
+    assert_int_equal(p.busy_streak, 25);
+    assert_float_equal(p.calm_ms, 10, 1e-12);
+    assert_float_equal(p.budget_s, 100, 1e-12);
+    assert_int_equal(p.chosen, 10);
+    for (int i = 0; i < N; i++) assert_int_equal(rerun[i], i >= 10 && i < 20);   /* equal costs: in order */
+    /* a calm night, three runs disturbed one at a time */
+    for (int i = 0; i < N; i++)
+        runs[i] = (sb_rerun_run){10, i == 5 || i == 20 || i == 31}, probe[i] = i == 5 || i == 20 ? 20 : 10;
+    sb_rerun_plan_make(runs, N, probe, N, 400, 0, 0.35, rerun, &p);
+    assert_false(p.disturbed);
+    assert_int_equal(p.chosen, 3);
+    assert_true(rerun[5] && rerun[20] && rerun[31]);
+    /* half unstable, the probe flat: not disturbed, the budget decides */
+    for (int i = 0; i < N; i++) runs[i] = (sb_rerun_run){10, i % 2 == 0}, probe[i] = 10;
+    sb_rerun_plan_make(runs, N, probe, N, 400, 0, 0.35, rerun, &p);
+    assert_false(p.disturbed);
+    assert_int_equal(p.busy_streak, 0);
+    assert_int_equal(p.chosen, 10);
+    /* a blip: 12 unstable, the probe up for 2 runs */
+    for (int i = 0; i < N; i++) runs[i] = (sb_rerun_run){10, i < 12}, probe[i] = i == 3 || i == 4 ? 30 : 10;
+    sb_rerun_plan_make(runs, N, probe, N, 400, 0, 0.35, rerun, &p);
+    assert_false(p.disturbed);
+    assert_int_equal(p.busy_streak, 2);
+    /* cheapest first: 5 + 5 + 20 fit 50 s, the 50 s run does not; NaN costs the mean of the known */
+    sb_rerun_run four[4] = {{50, true}, {5, true}, {20, true}, {5, true}};
+    double flat[4] = {10, 10, 10, 10};
+    sb_rerun_plan_make(four, 4, flat, 4, 200, 0, 0.35, rerun, &p);
+    assert_int_equal(p.chosen, 3);
+    assert_float_equal(p.planned_s, 30, 1e-12);
+    assert_true(!rerun[0] && rerun[1] && rerun[2] && rerun[3]);
+    /* a small night: 20 s, two 5 s re-runs fit the 30 s floor; then 28 s already spent leaves 2 s: none */
+    sb_rerun_run two[2] = {{5, true}, {5, true}};
+    sb_rerun_plan_make(two, 2, flat, 2, 20, 0, 0.35, rerun, &p);
+    assert_int_equal(p.chosen, 2);
+    sb_rerun_plan_make(two, 2, flat, 2, 20, 28, 0.35, rerun, &p);
+    assert_int_equal(p.chosen, 0);
+    /* every run of a night unstable but its probe calm (frame drift): not disturbed */
+    sb_rerun_plan_make(two, 2, flat, 2, 20, 0, 0.35, rerun, &p);
+    assert_false(p.disturbed);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_known_values), cmocka_unit_test(test_t_quantiles),
                                        cmocka_unit_test(test_stability_verdict),
                                        cmocka_unit_test(test_stability_replay),
                                        cmocka_unit_test(test_percentile_select),
-                                       cmocka_unit_test(test_paired_verdicts)};
+                                       cmocka_unit_test(test_paired_verdicts),
+                                       cmocka_unit_test(test_rerun_plan)};
     return cmocka_run_group_tests_name("stats", tests, NULL, NULL);
 }
