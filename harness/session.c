@@ -6,6 +6,7 @@
 #include "motion.h"
 
 #include "pathcheck.h"
+#include "pose.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -475,9 +476,9 @@ void sb_render_camera_jittered(sb_session *s, sb_instance *in, sb_frame *f, cons
     f->scratch = s->scratch;
     f->cmds = s->cmds;
     f->eval = eval;
-    if (sb_gpu_pose_pending(&s->gpu)) {   /* the pose's GPU pass, in the first frame drawn at it */
+    if (sb_pose_pending(s->gpu.pose, s->gpu.scene)) {   /* the pose's GPU pass, in the first frame drawn at it */
         sb_stage_begin(f, SB_STAGE_POSE);
-        sb_gpu_pose_run(&s->gpu);
+        sb_pose_run(s->gpu.pose, s->gpu.scene, s->gpu.vbo);
         sb_stage_end(f, SB_STAGE_POSE);
     }
     if (sb_scene_moves(&s->scene)) {

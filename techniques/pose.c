@@ -4,7 +4,7 @@
  * vertices only where something reads it (sb_scene_sync_vertices). Placements the GPU cannot pose (the CPU's
  * face normals, a negative skin weight) are posed on the CPU by sb_scene_pose and sent as before; so is every
  * placement where this GL's storage blocks cannot hold the rest data. */
-#include "render.h"
+#include "pose.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -37,6 +37,7 @@ typedef struct sb_gpu_pose {
     uint32_t dispatch_rows;       /* rest rows a dispatch poses at most */
     uint32_t dispatches;          /* the last pose's (a test reads it: sb_gpu_pose_dispatches) */
     uint8_t *cpu_draw;            /* per draw: a moving draw the CPU poses (sent from the scene's vertices) */
+    const uint32_t *vbase;        /* per draw: its first vertex in the vertex buffer (the owner's, kept current) */
     bool mapped;                  /* places_gpu and chunks hold the vertex buffer's numbering as uploaded */
     bool pending;                 /* a pose not yet run (sb_gpu_update_motion) */
 } sb_gpu_pose;
@@ -59,8 +60,8 @@ static GLuint storage(const void *data, size_t bytes) {
     return b;
 }
 
-bool sb_gpu_pose_init(sb_gpu *g, sb_err *err) {
-    const sb_scene *s = g->scene;
+bool sb_pose_create(sb_gpu_pose **out, const sb_scene *s, const uint32_t *vbase, sb_err *err) {
+    *out = NULL;
     const sb_pose_data *d = sb_motion_gpu_data(s);
     if (!d) return true;
     GLint64 block = block_bytes();
@@ -83,6 +84,7 @@ bool sb_gpu_pose_init(sb_gpu *g, sb_err *err) {
     if (!prog) return false;
     sb_gpu_pose *p = sb_xcalloc(1, sizeof *p);
     p->data = d;
+    p->vbase = vbase;
     p->prog = prog;
     p->block = block;
     p->u_rows = glGetUniformLocation(prog, "u_rows");
@@ -110,23 +112,21 @@ bool sb_gpu_pose_init(sb_gpu *g, sb_err *err) {
     for (uint32_t k = 0; k < s->draw_count; k++)
         p->cpu_draw[k] = s->draws[k].motion != SB_DRAW_STILL && !gpu_vertex[s->draws[k].first_vertex];
     free(gpu_vertex);
-    g->pose = p;
+    *out = p;
     return true;
 }
 
 /* The vertex buffer's numbering as uploaded now (sb_gpu_share may upload it again), and the dispatches: runs of
  * placements whose rest rows and vertex range each fit a storage block. */
-static void pose_map(const sb_gpu *g) {
-    sb_gpu_pose *p = g->pose;
+static void pose_map(sb_gpu_pose *p, const sb_scene *s) {
     const sb_pose_data *d = p->data;
-    const sb_scene *s = g->scene;
     const GLint align = p->align;
     /* room for aligned starts */
     const GLint64 block = p->block - align - (GLint64)p->rows_aligned * SB_POSE_REST_FLOATS * 4;
     for (uint32_t i = 0; i < d->place_count; i++) {
         p->places_gpu[i] = d->places[i];
         uint32_t dr = d->place_draw[i];
-        p->places_gpu[i].first = sb_gpu_draw_vertex_base(g, dr) + (d->places[i].first - s->draws[dr].first_vertex);
+        p->places_gpu[i].first = p->vbase[dr] + (d->places[i].first - s->draws[dr].first_vertex);
     }
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, p->places);
     glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, (GLsizeiptr)(sizeof(sb_pose_place) * d->place_count), p->places_gpu);
@@ -155,23 +155,21 @@ static void pose_map(const sb_gpu *g) {
     p->mapped = true;
 }
 
-void sb_gpu_pose_remap(const sb_gpu *g) {
-    if (g->pose) g->pose->mapped = false, g->pose->pending = true;
+void sb_pose_remap(sb_gpu_pose *p) {
+    if (p) p->mapped = false, p->pending = true;
 }
 
-void sb_gpu_pose_due(const sb_gpu *g) {
-    if (g->pose) g->pose->pending = true;
+void sb_pose_due(sb_gpu_pose *p) {
+    if (p) p->pending = true;
 }
 
-bool sb_gpu_pose_pending(const sb_gpu *g) { return g->pose && g->pose->pending && !isnan(g->scene->pose_time); }
+bool sb_pose_pending(const sb_gpu_pose *p, const sb_scene *s) { return p && p->pending && !isnan(s->pose_time); }
 
-bool sb_gpu_pose_run(const sb_gpu *g) {
-    sb_gpu_pose *p = g->pose;
-    const sb_scene *s = g->scene;
-    if (!sb_gpu_pose_pending(g)) return false;
+bool sb_pose_run(sb_gpu_pose *p, const sb_scene *s, GLuint vbo) {
+    if (!sb_pose_pending(p, s)) return false;
     p->pending = false;
     const sb_pose_data *d = p->data;
-    if (!p->mapped) pose_map(g);
+    if (!p->mapped) pose_map(p, s);
     sb_motion_gpu_frame(s, p->palette_cpu, p->weights_cpu);
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, p->palette);
     glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, (GLsizeiptr)d->palette_count * 64, p->palette_cpu);
@@ -188,7 +186,7 @@ bool sb_gpu_pose_run(const sb_gpu *g) {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 12, p->weights);
     for (uint32_t k = 0; k < p->chunk_count; k++) {
         const pose_chunk *c = &p->chunks[k];
-        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 13, g->vbo, c->vtx_off, c->vtx_len);
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 13, vbo, c->vtx_off, c->vtx_len);
         glUniform1ui(p->u_vertex_base, (GLuint)(c->vtx_off / 4));
         for (uint32_t done = 0; done < c->rows;) {
             uint32_t rows = c->rows - done;
@@ -209,15 +207,14 @@ bool sb_gpu_pose_run(const sb_gpu *g) {
     return true;
 }
 
-void sb_gpu_pose_dispatches(const sb_gpu *g, uint32_t *chunks, uint32_t *dispatches) {
-    *chunks = g->pose ? g->pose->chunk_count : 0;
-    *dispatches = g->pose ? g->pose->dispatches : 0;
+void sb_pose_dispatches(const sb_gpu_pose *p, uint32_t *chunks, uint32_t *dispatches) {
+    *chunks = p ? p->chunk_count : 0;
+    *dispatches = p ? p->dispatches : 0;
 }
 
-bool sb_gpu_pose_leaves(const sb_gpu *g, uint32_t d) { return !g->pose || g->pose->cpu_draw[d]; }
+bool sb_pose_leaves(const sb_gpu_pose *p, uint32_t d) { return !p || p->cpu_draw[d]; }
 
-void sb_gpu_pose_free(sb_gpu *g) {
-    sb_gpu_pose *p = g->pose;
+void sb_pose_free(sb_gpu_pose *p) {
     if (!p) return;
     glDeleteProgram(p->prog);
     GLuint bufs[] = {p->places, p->rest, p->morph, p->palette, p->weights};
@@ -228,5 +225,4 @@ void sb_gpu_pose_free(sb_gpu *g) {
     free(p->chunks);
     free(p->cpu_draw);
     free(p);
-    g->pose = NULL;
 }

@@ -1,6 +1,8 @@
 /* render.c - scene upload, render target, the final-pass program, counted draw submission. */
 #include "render.h"
 
+#include "pose.h"
+
 #include <math.h>
 
 #include <stdlib.h>
@@ -224,8 +226,8 @@ static void upload_geometry_as(const sb_gpu *g, int mode) {
  * copy, which may hold an older pose. */
 static void upload_geometry(const sb_gpu *g, int mode) {
     upload_geometry_as(g, mode);
-    sb_gpu_pose_remap(g);
-    sb_gpu_pose_run(g);
+    sb_pose_remap(g->pose);
+    sb_pose_run(g->pose, g->scene, g->vbo);
 }
 
 /* Materials as alpha.glsl's SbMaterial and the texels as an R8UI buffer texture. */
@@ -348,23 +350,97 @@ void sb_gpu_update_motion(const sb_gpu *g) {
     for (uint32_t d = 0; d < s->draw_count; d++) {
         const sb_draw *dr = &s->draws[d];
         if (dr->motion == SB_DRAW_STILL || dr->first_vertex == done || gm->vbase[d] == UINT32_MAX ||
-            !sb_gpu_pose_leaves(g, d))
+            !sb_pose_leaves(g->pose, d))
             continue;
         glBufferSubData(GL_ARRAY_BUFFER, (GLintptr)gm->vbase[d] * SB_VERTEX_BYTES,
                         (GLsizeiptr)dr->vertex_count * SB_VERTEX_BYTES, sb_vertex(s, dr->first_vertex));
         done = dr->first_vertex;
     }
-    sb_gpu_pose_due(g);   /* the GPU poses its vertices in the next frame drawn (sb_render_camera) */
+    sb_pose_due(g->pose);   /* the GPU poses its vertices in the next frame drawn (sb_render_camera) */
     if (g->facing) g->facing->valid = false;   /* an open moving draw faces the light otherwise now */
 }
 
-uint32_t sb_gpu_draw_vertex_base(const sb_gpu *g, uint32_t d) { return g->geom->vbase[d]; }
 
 void sb_gpu_share(const sb_gpu *g, bool planar) {
     int mode = planar ? SHARE_NONE : SHARE_WHOLE;
     if (!g->scene->instance_draws || g->geom->mode >= mode) return;
     upload_geometry(g, mode);
     facing_reset(g);
+}
+
+/* The VAO's attributes: the vertex buffer's (position, normal, texture coordinates and material), and per draw,
+ * read at the draw's baseInstance, its instance transform, colour and mask (the divisor exceeds any draw's
+ * instances: 8 cascades, 6 faces, so every instance of a draw reads its own entry). */
+static void vertex_arrays(sb_gpu *g) {
+    const sb_scene *s = g->scene;
+    glBindBuffer(GL_ARRAY_BUFFER, g->xform_buf);
+    for (int r = 0; r < 3; r++) {   /* an instance's transform (common.glsl's sb_world): per draw, three rows */
+        glEnableVertexAttribArray(6 + r);
+        glVertexAttribPointer(6 + r, 4, GL_FLOAT, GL_FALSE, 48, (void *)(16 * (size_t)r));
+        glVertexAttribDivisor(6 + r, SB_DRAW_DIVISOR);
+    }
+    glBindBuffer(GL_ARRAY_BUFFER, g->vbo);
+    glEnableVertexAttribArray(0);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, SB_VERTEX_BYTES, (void *)0);
+    glEnableVertexAttribArray(1);
+    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, SB_VERTEX_BYTES, (void *)12);
+    glEnableVertexAttribArray(2);   /* texture coordinates and material: the alpha test (alpha.glsl) */
+    glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, SB_VERTEX_BYTES, (void *)24);
+    glEnableVertexAttribArray(3);
+    glVertexAttribIPointer(3, 1, GL_UNSIGNED_INT, SB_VERTEX_BYTES, (void *)32);
+    float *colors = sb_xmalloc(sizeof(float) * 4 * (s->draw_count + 1));
+    for (uint32_t d = 0; d < s->draw_count; d++) memcpy(colors + 4 * d, s->draws[d].color, 4 * sizeof(float));
+    glGenBuffers(1, &g->color_buf);
+    glBindBuffer(GL_ARRAY_BUFFER, g->color_buf);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(sizeof(float) * 4 * (s->draw_count + 1)), colors, GL_STATIC_DRAW);
+    free(colors);
+    glEnableVertexAttribArray(4);
+    glVertexAttribPointer(4, 4, GL_FLOAT, GL_FALSE, 16, (void *)0);
+    glVertexAttribDivisor(4, SB_DRAW_DIVISOR);
+    glGenBuffers(1, &g->mask_buf);
+    glBindBuffer(GL_ARRAY_BUFFER, g->mask_buf);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(s->draw_count + 4), NULL, GL_STREAM_DRAW);
+    glEnableVertexAttribArray(5);
+    glVertexAttribIPointer(5, 1, GL_UNSIGNED_BYTE, 1, (void *)0);
+    glVertexAttribDivisor(5, SB_DRAW_DIVISOR);
+    glGenBuffers(1, &g->indirect_buf);
+}
+
+/* The camera's render targets (colour, visibility, depth and stencil, positions, aux, base colour) on one FBO. */
+static bool render_targets(sb_gpu *g, int w, int h, sb_err *err) {
+    g->color_tex = make_tex(GL_RGBA8, w, h);
+    g->vis_tex = make_tex(GL_R8, w, h);
+    g->depth_tex = make_tex(GL_DEPTH32F_STENCIL8, w, h);   /* stencil: shadow volumes */
+    g->pos_tex = make_tex(GL_RGBA32F, w, h);
+    g->aux_tex = make_tex(GL_RGBA32F, w, h);
+    g->base_tex = make_tex(GL_RGBA8, w, h);
+    glGenFramebuffers(1, &g->fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, g->fbo);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, g->color_tex, 0);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, g->vis_tex, 0);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT2, GL_TEXTURE_2D, g->pos_tex, 0);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT3, GL_TEXTURE_2D, g->aux_tex, 0);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT4, GL_TEXTURE_2D, g->base_tex, 0);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_TEXTURE_2D, g->depth_tex, 0);
+    const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    glDrawBuffers(2, bufs);
+    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        return sb_fail(err, "render target %dx%d is incomplete (out of memory or unsupported size?)", w, h);
+    return true;
+}
+
+/* The z-pass programs: without the alpha test, and with it where the scene has alpha-tested draws. */
+static bool zpass_programs(sb_gpu *g, sb_err *err) {
+    const char *vs[] = {sb_shader_scene_vert};
+    const char *fs[] = {sb_shader_depth_frag};
+    for (int a = 0; a < (g->scene->alpha_tested_draws ? 2 : 1); a++) {
+        g->zpass_prog[a] = sb_gpu_program(a ? "zpass (alpha-tested draws)" : "zpass", a ? NULL : sb_opaque_define(g),
+                                          vs, 1, fs, 1, err);
+        if (!g->zpass_prog[a]) return false;
+        g->zpass_u_view[a] = glGetUniformLocation(g->zpass_prog[a], "u_view");
+        g->zpass_u_proj[a] = glGetUniformLocation(g->zpass_prog[a], "u_proj");
+    }
+    return true;
 }
 
 bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int h, sb_v3 sun, sb_err *err) {
@@ -391,85 +467,13 @@ bool sb_gpu_init(sb_gpu *g, const sb_context *ctx, const sb_scene *s, int w, int
         g->facing->count = sb_xcalloc(s->draw_count, sizeof(uint32_t));
         facing_reset(g);
     }
-    glBindBuffer(GL_ARRAY_BUFFER, g->xform_buf);
-    for (int r = 0; r < 3; r++) {   /* an instance's transform (common.glsl's sb_world): per draw, three rows */
-        glEnableVertexAttribArray(6 + r);
-        glVertexAttribPointer(6 + r, 4, GL_FLOAT, GL_FALSE, 48, (void *)(16 * (size_t)r));
-        glVertexAttribDivisor(6 + r, SB_DRAW_DIVISOR);
-    }
-    glBindBuffer(GL_ARRAY_BUFFER, g->vbo);
-    glEnableVertexAttribArray(0);
-    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, SB_VERTEX_BYTES, (void *)0);
-    glEnableVertexAttribArray(1);
-    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, SB_VERTEX_BYTES, (void *)12);
-    glEnableVertexAttribArray(2);   /* texture coordinates and material: the alpha test (alpha.glsl) */
-    glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, SB_VERTEX_BYTES, (void *)24);
-    glEnableVertexAttribArray(3);
-    glVertexAttribIPointer(3, 1, GL_UNSIGNED_INT, SB_VERTEX_BYTES, (void *)32);
-    /* per draw, read at the draw's baseInstance: the divisor exceeds any draw's instances (8 cascades, 6 faces),
-       so every instance of a draw reads its own entry */
-    float *colors = sb_xmalloc(sizeof(float) * 4 * (s->draw_count + 1));
-    for (uint32_t d = 0; d < s->draw_count; d++) memcpy(colors + 4 * d, s->draws[d].color, 4 * sizeof(float));
-    glGenBuffers(1, &g->color_buf);
-    glBindBuffer(GL_ARRAY_BUFFER, g->color_buf);
-    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(sizeof(float) * 4 * (s->draw_count + 1)), colors, GL_STATIC_DRAW);
-    free(colors);
-    glEnableVertexAttribArray(4);
-    glVertexAttribPointer(4, 4, GL_FLOAT, GL_FALSE, 16, (void *)0);
-    glVertexAttribDivisor(4, SB_DRAW_DIVISOR);
-    glGenBuffers(1, &g->mask_buf);
-    glBindBuffer(GL_ARRAY_BUFFER, g->mask_buf);
-    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(s->draw_count + 4), NULL, GL_STREAM_DRAW);
-    glEnableVertexAttribArray(5);
-    glVertexAttribIPointer(5, 1, GL_UNSIGNED_BYTE, 1, (void *)0);
-    glVertexAttribDivisor(5, SB_DRAW_DIVISOR);
-    glGenBuffers(1, &g->indirect_buf);
-
-    g->color_tex = make_tex(GL_RGBA8, w, h);
-    g->vis_tex = make_tex(GL_R8, w, h);
-    g->depth_tex = make_tex(GL_DEPTH32F_STENCIL8, w, h);   /* stencil: shadow volumes */
-    g->pos_tex = make_tex(GL_RGBA32F, w, h);
-    g->aux_tex = make_tex(GL_RGBA32F, w, h);
-    g->base_tex = make_tex(GL_RGBA8, w, h);
-    glGenFramebuffers(1, &g->fbo);
-    glBindFramebuffer(GL_FRAMEBUFFER, g->fbo);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, g->color_tex, 0);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, g->vis_tex, 0);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT2, GL_TEXTURE_2D, g->pos_tex, 0);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT3, GL_TEXTURE_2D, g->aux_tex, 0);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT4, GL_TEXTURE_2D, g->base_tex, 0);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_TEXTURE_2D, g->depth_tex, 0);
-    const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
-    glDrawBuffers(2, bufs);
-    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
-        sb_gpu_free(g);
-        return sb_fail(err, "render target %dx%d is incomplete (out of memory or unsupported size?)", w, h);
-    }
-    if (!upload_alpha(g, s, err)) {
-        sb_gpu_free(g);
-        return false;
-    }
-    const char *vs[] = {sb_shader_scene_vert};
-    const char *fs[] = {sb_shader_depth_frag};
-    for (int a = 0; a < (s->alpha_tested_draws ? 2 : 1); a++) {
-        g->zpass_prog[a] = sb_gpu_program(a ? "zpass (alpha-tested draws)" : "zpass", a ? NULL : sb_opaque_define(g),
-                                          vs, 1, fs, 1, err);
-        if (!g->zpass_prog[a]) {
-            sb_gpu_free(g);
-            return false;
-        }
-        g->zpass_u_view[a] = glGetUniformLocation(g->zpass_prog[a], "u_view");
-        g->zpass_u_proj[a] = glGetUniformLocation(g->zpass_prog[a], "u_proj");
-    }
-    if (!sb_gpu_pose_init(g, err)) {   /* a moving scene's posing pass */
-        sb_gpu_free(g);
-        return false;
-    }
-    if (!sb_gl_check("creating GPU resources", err)) {
-        sb_gpu_free(g);
-        return false;
-    }
-    return true;
+    vertex_arrays(g);
+    /* the targets, the alpha test's data, the z-pass, a moving scene's posing pass (handed the vertex buffer's
+       numbering, which upload_geometry keeps current) */
+    bool ok = render_targets(g, w, h, err) && upload_alpha(g, s, err) && zpass_programs(g, err) &&
+              sb_pose_create(&g->pose, s, g->geom->vbase, err) && sb_gl_check("creating GPU resources", err);
+    if (!ok) sb_gpu_free(g);
+    return ok;
 }
 
 void sb_gpu_free(sb_gpu *g) {
@@ -487,7 +491,8 @@ void sb_gpu_free(sb_gpu *g) {
     if (g->mat_ssbo) glDeleteBuffers(1, &g->mat_ssbo);
     if (g->texel_buf) glDeleteBuffers(1, &g->texel_buf);
     if (g->texel_tex) glDeleteTextures(1, &g->texel_tex);
-    sb_gpu_pose_free(g);
+    sb_pose_free(g->pose);
+    g->pose = NULL;
     if (g->facing) {
         free(g->facing->count);
         free(g->facing->indices);

@@ -61,7 +61,7 @@ typedef struct sb_gpu {
     GLuint color_buf, mask_buf;
     bool indirect;                      /* --submit indirect: a pass's draws are one glMultiDrawElementsIndirect */
     GLuint indirect_buf;                /* its commands (rewritten at every flush) */
-    struct sb_gpu_pose *pose;           /* a moving scene's posing pass (pose.c; NULL: the CPU poses) */
+    struct sb_gpu_pose *pose;           /* a moving scene's posing pass (pose.h; NULL: the CPU poses) */
 } sb_gpu;
 
 /* What a technique's create gets: the session (read-only), the run's size,
@@ -158,24 +158,7 @@ void sb_gpu_share(const sb_gpu *g, bool planar);
  * (pose.c) or sent from the CPU's pose (the placements the GPU leaves), and the light-facing order of open ones
  * made again when next needed. */
 void sb_gpu_update_motion(const sb_gpu *g);
-/* Where draw d's first vertex lies in the vertex buffer as uploaded now (UINT32_MAX: it is drawn shared). */
-uint32_t sb_gpu_draw_vertex_base(const sb_gpu *g, uint32_t d);
 
-/* The GPU's posing pass (pose.c): made at sb_gpu_init for a moving scene (nothing for a still one or where the
- * GL's storage blocks cannot hold the data: then the CPU poses). sb_gpu_update_motion makes a pose due; the
- * first frame drawn at it runs it as its stage SB_STAGE_POSE (sb_render_camera), timed like every stage, and
- * sb_gpu_pose_run runs a due pose at once (false: none due, or no pass). Told when the vertex buffer was
- * uploaded again (its numbering may change, and it holds the CPU's copy): it poses again at once. */
-bool sb_gpu_pose_init(sb_gpu *g, sb_err *err);
-void sb_gpu_pose_due(const sb_gpu *g);
-bool sb_gpu_pose_pending(const sb_gpu *g);
-bool sb_gpu_pose_run(const sb_gpu *g);
-void sb_gpu_pose_remap(const sb_gpu *g);
-/* The last pose's runs of placements (each a range of the vertex buffer) and dispatches (tests). */
-void sb_gpu_pose_dispatches(const sb_gpu *g, uint32_t *chunks, uint32_t *dispatches);
-/* Whether the CPU poses moving draw d (no pass, or a placement the pass leaves): its vertices are sent. */
-bool sb_gpu_pose_leaves(const sb_gpu *g, uint32_t d);
-void sb_gpu_pose_free(sb_gpu *g);
 void sb_gpu_free(sb_gpu *g);
 /* The final-pass program with the technique's visibility GLSL. */
 bool sb_final_prog_create(sb_final_prog *fp, const sb_gpu *g, const char *label, const char *vis_glsl,
@@ -270,11 +253,7 @@ void sb_count_draw(sb_frame *f, uint64_t triangles, int instances);
 void sb_gpu_readback(const sb_gpu *g, float *depth, unsigned char *vis, unsigned char *rgba);
 /* Reads the evaluation targets (4 floats a pixel each; either may be NULL). */
 void sb_gpu_readback_eval(const sb_gpu *g, float *pos, float *aux);
-/* Whether the evaluation targets hold geometry at pixel i (aux: a normal there; cleared to 0 where nothing drew). */
-static inline bool sb_eval_has_geometry(const float *aux, size_t i) {
-    const float *a = aux + 4 * i;
-    return a[0] * a[0] + a[1] * a[1] + a[2] * a[2] > 0.25f;
-}
+/* Whether they hold geometry at a pixel: sb_eval_has_geometry (reference/error.h). */
 
 /* The camera pass's light (final.frag, and the shaded frames of --flip, eval.c): base colour x (ambient + direct
  * x N.L x visibility); at most 1, so no tone map. */

@@ -28,6 +28,7 @@
 
 #include "eval.h"
 #include "motion.h"
+#include "pose.h"
 #include "reference.h"
 #include "scene_load.h"
 #include "support.h"
@@ -263,9 +264,9 @@ static void gpu_equals_cpu(const char *file, const char *anim, bool by_gpu, long
         sb_motion_stats ms = sb_motion_statistics(sc->motion);
         if (groups) assert_int_equal(ms.pose_groups, groups);   /* the pose's work in that many threads' shares */
         if (groups) assert_int_equal(ms.lone_places, 0);
-        assert_true(sb_gpu_pose_run(&s.gpu) == by_gpu);   /* as the next frame drawn would */
+        assert_true(sb_pose_run(s.gpu.pose, s.gpu.scene, s.gpu.vbo) == by_gpu);   /* as the next frame drawn would */
         uint32_t chunks, dispatches;
-        sb_gpu_pose_dispatches(&s.gpu, &chunks, &dispatches);
+        sb_pose_dispatches(s.gpu.pose, &chunks, &dispatches);
         if (block) assert_true(chunks >= 2 && dispatches > chunks);   /* split as small blocks ask */
         else assert_true(chunks == by_gpu && dispatches == by_gpu);
         assert_int_equal(sb_scene_cpu_poses(sc), cpu0);   /* the pose alone: the GPU's (or the CPU-only ones') */
