@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "flip.h"
+#include "resolve.h"
 #include "timing.h"
 
 /* A sequence resolved through TAA: its last resolved frame, linear shaded colour and visibility. */
@@ -32,19 +33,6 @@ struct sb_taa_buf {
     unsigned char *eval_ref;    /* the evaluated frame's reference: which pixels it scores */
 };
 
-void sb_taa_jitter(int k, double *jx, double *jy) {
-    double r[2] = {0, 0};
-    const int base[2] = {2, 3};
-    for (int d = 0; d < 2; d++) {
-        double f = 1;
-        for (int i = k + 1; i > 0; i /= base[d]) {
-            f /= base[d];
-            r[d] += f * (i % base[d]);
-        }
-    }
-    *jx = r[0] - 0.5, *jy = r[1] - 0.5;
-}
-
 void sb_taa_buf_free(struct sb_taa_buf *t) {
     if (!t) return;
     free(t->vis), free(t->ref), free(t->base), free(t->pos), free(t->aux), free(t->eval_ref);
@@ -68,66 +56,13 @@ static struct sb_taa_buf *taa_buf(int w, int h) {
     return t;
 }
 
-/* Origin-relative point p through a view-projection to pixel coordinates (x right, y up from the bottom row, pixel
- * centres at integers); false behind the camera. */
-static bool to_pixel(const sb_m4 *vp, const float *p, int w, int h, double *sx, double *sy) {
-    const double *m = vp->m;
-    double x = m[0] * p[0] + m[4] * p[1] + m[8] * p[2] + m[12], y = m[1] * p[0] + m[5] * p[1] + m[9] * p[2] + m[13],
-           cw = m[3] * p[0] + m[7] * p[1] + m[11] * p[2] + m[15];
-    if (cw <= 1e-9) return false;
-    *sx = (x / cw * 0.5 + 0.5) * w - 0.5;
-    *sy = (y / cw * 0.5 + 0.5) * h - 0.5;
-    return true;
-}
-
-/* One resolve of the current shading `cur` (0: the technique's, 1: the reference's) into sequence q: its history
- * reprojected to the current frame by each pixel's surface point, clamped to the current frame's 3x3
- * neighbourhood and blended (SB_TAA_ALPHA); no history (the first frame, the sky, a point the last frame did not
- * hold): the current frame. */
+/* One resolve of the current shading `cur` (0: the technique's, 1: the reference's) into sequence q (resolve.h):
+ * its history reprojected to the current frame by each pixel's surface point, clamped and blended. */
 static void resolve(struct sb_taa_buf *t, int cur, int q_index) {
-    const int w = t->w, h = t->h;
     taa_seq *q = &t->seq[q_index];
-    const float *C = t->cur_rgb[cur], *V = t->cur_vis[cur];
-    for (int y = 0; y < h; y++)
-        for (int x = 0; x < w; x++) {
-            const size_t i = (size_t)y * w + x;
-            float *o = t->out_rgb + 3 * i;
-            memcpy(o, C + 3 * i, sizeof(float) * 3);
-            t->out_vis[i] = V[i];
-            double sx, sy;
-            if (!q->have || !sb_eval_has_geometry(t->aux, i) || !to_pixel(&t->prev_vp, t->pos + 4 * i, w, h, &sx, &sy) || sx < 0 ||
-                sy < 0 || sx > w - 1 || sy > h - 1)
-                continue;
-            /* the history, bilinear */
-            int x0 = (int)sx, y0 = (int)sy, x1 = x0 + 1 < w ? x0 + 1 : x0, y1 = y0 + 1 < h ? y0 + 1 : y0;
-            double fx = sx - x0, fy = sy - y0, wt[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
-            size_t at[4] = {(size_t)y0 * w + x0, (size_t)y0 * w + x1, (size_t)y1 * w + x0, (size_t)y1 * w + x1};
-            double H[4] = {0, 0, 0, 0};
-            for (int s = 0; s < 4; s++) {
-                for (int c = 0; c < 3; c++) H[c] += wt[s] * q->rgb[3 * at[s] + c];
-                H[3] += wt[s] * q->vis[at[s]];
-            }
-            /* the current frame's neighbourhood */
-            double lo[4] = {INFINITY, INFINITY, INFINITY, INFINITY}, hi[4] = {-INFINITY, -INFINITY, -INFINITY, -INFINITY};
-            for (int dy = -1; dy <= 1; dy++)
-                for (int dx = -1; dx <= 1; dx++) {
-                    int nx = x + dx, ny = y + dy;
-                    if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
-                    size_t j = (size_t)ny * w + nx;
-                    for (int c = 0; c < 4; c++) {
-                        double v = c < 3 ? C[3 * j + c] : V[j];
-                        lo[c] = fmin(lo[c], v), hi[c] = fmax(hi[c], v);
-                    }
-                }
-            for (int c = 0; c < 4; c++) {
-                double hc = fmin(fmax(H[c], lo[c]), hi[c]), now = c < 3 ? C[3 * i + c] : V[i];
-                double v = hc + SB_TAA_ALPHA * (now - hc);
-                if (c < 3) o[c] = (float)v;
-                else t->out_vis[i] = (float)v;
-            }
-        }
-    memcpy(q->rgb, t->out_rgb, sizeof(float) * 3 * (size_t)w * h);
-    memcpy(q->vis, t->out_vis, sizeof(float) * (size_t)w * h);
+    sb_taa_frame f = {.w = t->w, .h = t->h, .rgb = t->cur_rgb[cur], .vis = t->cur_vis[cur], .pos = t->pos,
+                      .aux = t->aux, .prev_vp = &t->prev_vp};
+    sb_taa_resolve(&f, q->have, q->rgb, q->vis, t->out_rgb, t->out_vis);
     q->have = true;
 }
 

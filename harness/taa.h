@@ -28,12 +28,9 @@
  * Without --taa nothing of this runs: every figure and run id as before. */
 #pragma once
 #include "eval.h"
+#include "resolve.h"   /* the per-pixel resolve and the jitter (reference/) */
 
 #define SB_TAA_FRAMES 8         /* display frames resolved up to the evaluated one */
-#define SB_TAA_ALPHA 0.1        /* the current frame's weight in the blend */
-
-/* The k-th jitter of the sequence, in pixels in (-0.5, 0.5): Halton bases 2 and 3, from index 1. */
-void sb_taa_jitter(int k, double *jx, double *jy);
 
 /* The display frames and resolved sequences of a run's evaluation (made on first use into *t, w x h; free with
  * sb_taa_buf_free, NULL: nothing). */

@@ -186,8 +186,7 @@ static void geometry_check(const sb_reference *r, const sb_eval_view *v, const u
             geo_sample *s = &smp[ns];
             s->pixel = i;
             pixel_ray(v, x + 0.5, y + 0.5, s->from, to[ns]);
-            const float *a = v->aux + 4 * (size_t)i;
-            s->sky = a[0] * a[0] + a[1] * a[1] + a[2] * a[2] < 0.25f;
+            s->sky = !sb_eval_has_geometry(v->aux, (size_t)i);
             if (!s->sky) memcpy(s->to, v->pos + 4 * (size_t)i, sizeof s->to);
             else memcpy(s->to, to[ns], sizeof s->to);
             memcpy(from[ns], s->from, sizeof from[ns]);

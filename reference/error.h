@@ -11,6 +11,13 @@
 
 #include "reference.h"
 
+/* Whether the evaluation targets hold a surface at pixel i (aux: 4 floats a pixel, a normal there; cleared to 0
+ * where nothing drew: the sky). */
+static inline bool sb_eval_has_geometry(const float *aux, size_t i) {
+    const float *a = aux + 4 * i;
+    return a[0] * a[0] + a[1] * a[1] + a[2] * a[2] > 0.25f;
+}
+
 typedef struct sb_error_metrics {
     long pixels;                       /* evaluated */
     double err_rate, false_shadow, false_lit, vis_mae;
