@@ -231,24 +231,30 @@ static void light_node(sb_jw *j, const char *name, int light, const sb_v3 *pos, 
     sb_jw_end_obj(j);
 }
 
-static void gltf_document(const sb_cameras_req *r, sb_jw *j) {
-    const sb_run_opts *o = r->opts;
-    const int n = o->frames, cams = has_twins(r) ? 2 : 1, lamps = lamp_count(r->scene);
-    sb_v3 sun = {0, 0, 0};   /* read only with have_sun (release builds cannot see that) */
-    const bool have_sun = sun_of(r, &sun);
-    gbuf g = {0};
+/* What the glTF export shares between its parts: the camera nodes, the lights and the keys' accessors. */
+typedef struct gltf_parts {
+    int cams, lamps;
+    bool have_sun;
+    sb_v3 sun;                  /* read only with have_sun */
+    int acc[2][3];              /* per camera node: the accessors of its times, translations, rotations */
+    double near, far, fov;      /* every frame's near and far, the first frame's field of view */
+} gltf_parts;
+
+/* The keys: each camera's translations and rotations at the frames' times, as accessors in g. glTF's times
+ * increase strictly, so a frame at the time of the last key (a path of one key, whose every frame is at 0) is that
+ * key's camera and is not keyed again. */
+static void gltf_keys(const sb_cameras_req *r, gltf_parts *gp, gbuf *g) {
+    const int n = r->opts->frames;
     float *times = sb_xmalloc(sizeof(float) * (size_t)n), *pos = sb_xmalloc(sizeof(float) * 3 * (size_t)n),
           *rot = sb_xmalloc(sizeof(float) * 4 * (size_t)n);
-    int acc[2][3];              /* per camera node: times, translations, rotations */
-    double near = INFINITY, far = 0, fov = 0;
-    for (int c = 0; c < cams; c++) {
-        int m = 0;   /* keys: glTF's times increase strictly, so a frame at the time of the last key (a path of one
-                        key, whose every frame is at 0) is that key's camera and is not keyed again */
+    gp->near = INFINITY, gp->far = 0, gp->fov = 0;
+    for (int c = 0; c < gp->cams; c++) {
+        int m = 0;
         for (int i = 0; i < n; i++) {
             double t;
             sb_camera cam = camera_of(r, i, c == 1, &t);
-            near = fmin(near, cam.znear), far = fmax(far, cam.zfar);
-            if (c == 0 && i == 0) fov = cam.fov_deg;
+            gp->near = fmin(gp->near, cam.znear), gp->far = fmax(gp->far, cam.zfar);
+            if (c == 0 && i == 0) gp->fov = cam.fov_deg;
             if (m > 0 && !((float)t > times[m - 1])) continue;
             times[m] = (float)t;
             pos[3 * m] = (float)cam.pos.x, pos[3 * m + 1] = (float)cam.pos.y, pos[3 * m + 2] = (float)cam.pos.z;
@@ -256,11 +262,18 @@ static void gltf_document(const sb_cameras_req *r, sb_jw *j) {
             rot[4 * m + 3] = (float)cam.rot.w;
             m++;
         }
-        acc[c][0] = gbuf_add(&g, times, m, 1);
-        acc[c][1] = gbuf_add(&g, pos, m, 3);
-        acc[c][2] = gbuf_add(&g, rot, m, 4);
+        gp->acc[c][0] = gbuf_add(g, times, m, 1);
+        gp->acc[c][1] = gbuf_add(g, pos, m, 3);
+        gp->acc[c][2] = gbuf_add(g, rot, m, 4);
     }
-    sb_jw_obj(j);
+    free(times);
+    free(pos);
+    free(rot);
+}
+
+/* asset (what made it and from what), the extension used, the one scene of every node. */
+static void gltf_header(const sb_cameras_req *r, const gltf_parts *gp, sb_jw *j) {
+    const sb_run_opts *o = r->opts;
     sb_jw_key(j, "asset");
     sb_jw_obj(j);
     sb_jw_kstr(j, "version", "2.0");
@@ -269,7 +282,7 @@ static void gltf_document(const sb_cameras_req *r, sb_jw *j) {
     sb_jw_obj(j);
     sb_jw_kstr(j, "scene", r->scene_name);
     sb_jw_kstr(j, "path", r->path_name);
-    sb_jw_kint(j, "frames", n);
+    sb_jw_kint(j, "frames", o->frames);
     sb_jw_kint(j, "width", o->width);
     sb_jw_kint(j, "height", o->height);
     sb_jw_kstr(j, "conventions", "glTF's; the cameras' znear and zfar hold every frame's (the tool derives them per "
@@ -286,14 +299,17 @@ static void gltf_document(const sb_cameras_req *r, sb_jw *j) {
     sb_jw_obj(j);
     sb_jw_key(j, "nodes");
     sb_jw_arr(j);
-    for (int k = 0; k < cams + have_sun + lamps; k++) sb_jw_num(j, k);
+    for (int k = 0; k < gp->cams + gp->have_sun + gp->lamps; k++) sb_jw_num(j, k);
     sb_jw_end_arr(j);
     sb_jw_end_obj(j);
     sb_jw_end_arr(j);
-    /* nodes: the camera (and its twin), the sun, the lamps */
+}
+
+/* nodes: the camera (and its twin) at the first frame, the sun, the lamps; then the one camera. */
+static void gltf_nodes(const sb_cameras_req *r, const gltf_parts *gp, sb_jw *j) {
     sb_jw_key(j, "nodes");
     sb_jw_arr(j);
-    for (int c = 0; c < cams; c++) {
+    for (int c = 0; c < gp->cams; c++) {
         double t;
         sb_camera cam = camera_of(r, 0, c == 1, &t);
         sb_jw_obj(j);
@@ -303,16 +319,16 @@ static void gltf_document(const sb_cameras_req *r, sb_jw *j) {
         jw_floats(j, "rotation", (double[4]){cam.rot.x, cam.rot.y, cam.rot.z, cam.rot.w}, 4);
         sb_jw_end_obj(j);
     }
-    if (have_sun) {
-        sb_v3 travel = sb_v3_scale(sun, -1);
+    if (gp->have_sun) {
+        sb_v3 travel = sb_v3_scale(gp->sun, -1);
         light_node(j, "sun", 0, NULL, &travel);
     }
-    for (int k = 0; k < lamps; k++) {
+    for (int k = 0; k < gp->lamps; k++) {
         const sb_light *l = sb_scene_point_light(r->scene, k, NULL);
         char name[32];
         snprintf(name, sizeof name, "lamp %d", k);
         sb_v3 at = sb_v3_add(l->position, r->scene->origin);
-        light_node(j, name, have_sun + k, &at, l->type == SB_LIGHT_SPOT ? &l->direction : NULL);
+        light_node(j, name, gp->have_sun + k, &at, l->type == SB_LIGHT_SPOT ? &l->direction : NULL);
     }
     sb_jw_end_arr(j);
     sb_jw_key(j, "cameras");
@@ -321,27 +337,30 @@ static void gltf_document(const sb_cameras_req *r, sb_jw *j) {
     sb_jw_kstr(j, "type", "perspective");
     sb_jw_key(j, "perspective");
     sb_jw_obj(j);
-    sb_jw_key(j, "yfov"), sb_jw_num_exact(j, fov * SB_PI / 180);
-    sb_jw_key(j, "aspectRatio"), sb_jw_num_exact(j, (double)o->width / o->height);
-    sb_jw_key(j, "znear"), sb_jw_num_exact(j, near);
-    sb_jw_key(j, "zfar"), sb_jw_num_exact(j, far);
+    sb_jw_key(j, "yfov"), sb_jw_num_exact(j, gp->fov * SB_PI / 180);
+    sb_jw_key(j, "aspectRatio"), sb_jw_num_exact(j, (double)r->opts->width / r->opts->height);
+    sb_jw_key(j, "znear"), sb_jw_num_exact(j, gp->near);
+    sb_jw_key(j, "zfar"), sb_jw_num_exact(j, gp->far);
     sb_jw_end_obj(j);
     sb_jw_end_obj(j);
     sb_jw_end_arr(j);
-    /* lights */
+}
+
+/* the lights (KHR_lights_punctual): the sun, then each lamp with every value written explicitly. */
+static void gltf_lights(const sb_cameras_req *r, const gltf_parts *gp, sb_jw *j) {
     sb_jw_key(j, "extensions");
     sb_jw_obj(j);
     sb_jw_key(j, "KHR_lights_punctual");
     sb_jw_obj(j);
     sb_jw_key(j, "lights");
     sb_jw_arr(j);
-    if (have_sun) {
+    if (gp->have_sun) {
         sb_jw_obj(j);
         sb_jw_kstr(j, "name", "sun");
         sb_jw_kstr(j, "type", "directional");
         sb_jw_end_obj(j);
     }
-    for (int k = 0; k < lamps; k++) {
+    for (int k = 0; k < gp->lamps; k++) {
         const sb_light *l = sb_scene_point_light(r->scene, k, NULL);
         sb_jw_obj(j);
         sb_jw_kstr(j, "type", l->type == SB_LIGHT_SPOT ? "spot" : "point");
@@ -361,14 +380,17 @@ static void gltf_document(const sb_cameras_req *r, sb_jw *j) {
     sb_jw_end_arr(j);
     sb_jw_end_obj(j);
     sb_jw_end_obj(j);
-    /* the path: each camera node's translation and rotation keyed at the frames' times */
+}
+
+/* the path: each camera node's translation and rotation keyed at the frames' times (gltf_keys' accessors). */
+static void gltf_path(const gltf_parts *gp, sb_jw *j) {
     sb_jw_key(j, "animations");
     sb_jw_arr(j);
     sb_jw_obj(j);
     sb_jw_kstr(j, "name", "path");
     sb_jw_key(j, "channels");
     sb_jw_arr(j);
-    for (int c = 0; c < cams; c++)
+    for (int c = 0; c < gp->cams; c++)
         for (int k = 0; k < 2; k++) {
             sb_jw_obj(j);
             sb_jw_kint(j, "sampler", 2 * c + k);
@@ -382,23 +404,32 @@ static void gltf_document(const sb_cameras_req *r, sb_jw *j) {
     sb_jw_end_arr(j);
     sb_jw_key(j, "samplers");
     sb_jw_arr(j);
-    for (int c = 0; c < cams; c++)
+    for (int c = 0; c < gp->cams; c++)
         for (int k = 0; k < 2; k++) {
             sb_jw_obj(j);
-            sb_jw_kint(j, "input", acc[c][0]);
-            sb_jw_kint(j, "output", acc[c][1 + k]);
+            sb_jw_kint(j, "input", gp->acc[c][0]);
+            sb_jw_kint(j, "output", gp->acc[c][1 + k]);
             sb_jw_kstr(j, "interpolation", "LINEAR");
             sb_jw_end_obj(j);
         }
     sb_jw_end_arr(j);
     sb_jw_end_obj(j);
     sb_jw_end_arr(j);
+}
+
+static void gltf_document(const sb_cameras_req *r, sb_jw *j) {
+    gltf_parts gp = {.cams = has_twins(r) ? 2 : 1, .lamps = lamp_count(r->scene)};
+    gp.have_sun = sun_of(r, &gp.sun);
+    gbuf g = {0};
+    gltf_keys(r, &gp, &g);
+    sb_jw_obj(j);
+    gltf_header(r, &gp, j);
+    gltf_nodes(r, &gp, j);
+    gltf_lights(r, &gp, j);
+    gltf_path(&gp, j);
     gbuf_write(&g, j);
     sb_jw_end_obj(j);
     sb_wbuf_free(&g.bytes);
-    free(times);
-    free(pos);
-    free(rot);
 }
 
 char *sb_cameras_document(const sb_cameras_req *r) {

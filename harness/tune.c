@@ -988,6 +988,64 @@ static void print_report(const tune *t, const verdict *v) {
     free(vv);
 }
 
+/* The search's folder: --resume's (its meta the same search's) or a new stamped one, and its meta; 0: ready, else
+ * the exit status (said). */
+static int open_folder(tune *t) {
+    const sb_tune_cmd *cmd = t->cmd;
+    sb_err err;
+    if (cmd->resume) {
+        snprintf(t->dir, sizeof t->dir, "%s", cmd->resume);
+        if (cmd->identity && !sb_resume_check(t->dir, cmd->identity, NULL, -1, &err)) {   /* nothing written */
+            sb_say_line(stderr, err.msg);
+            return SB_EXIT_BAD_INPUT;
+        }
+    } else {
+        char base[4200];
+        snprintf(base, sizeof base, "%s/tune-%s", cmd->out, t->s.scene_name);
+        if (!sb_make_stamped_dir(base, t->dir, sizeof t->dir, &err)) {
+            sb_say_line(stderr, err.msg);
+            return SB_EXIT_WRITE;   /* the results folder could not be made */
+        }
+    }
+    if (cmd->identity) {   /* what the search is, for a resume to match (its rungs are results sets of their own) */
+        char path[4400], text[8400];
+        snprintf(path, sizeof path, "%s/meta", t->dir);
+        int n = snprintf(text, sizeof text, "command: tune %s\n%s", cmd->scene, cmd->identity);
+        if (!sb_write_file_atomic(path, text, (size_t)(n < (int)sizeof text ? n : (int)sizeof text - 1), &err))
+            sb_say_line(stderr, err.msg);
+    }
+    return 0;
+}
+
+/* The rungs, successive halving: each rung's best go on to the next; the last rung run (-1: none) */
+static int climb(tune *t) {
+    int final_rung = -1, k1 = 0, k2 = 0;
+    bool in_time = true;
+    for (int r = 0; r < t->nrungs && in_time; r++) {
+        in_time = run_rung(t, r);
+        if (!in_time) break;
+        final_rung = r;
+        if (r == t->nrungs - 1) break;
+        if (r == 0) {
+            int runnable = 0;
+            for (int i = 0; i < t->n; i++) runnable += measured_at(&t->c[i], 0);
+            plan_keep(t, runnable, &k1, &k2);
+            sb_log("tune: %d of %d can run here; %d go on to rung 1, %d to the last rung (%d pass(es) each)",
+                   runnable, t->n, k1, k2, t->final_reps);
+            if (k1 > 0) {
+                promote(t, 0, k1, k1 / 2, 0.5);
+            } else {   /* straight to the last rung */
+                promote(t, 0, k2, k2, 0.5);
+                r = t->nrungs - 2;
+            }
+        } else {
+            promote(t, r, k2, k2, 0.2);
+        }
+    }
+    t->out_of_time = !in_time;
+    return final_rung;
+}
+
 int sb_tune_main(const sb_tune_cmd *cmd) {
     if ((cmd->max_err > 0) == (cmd->budget_ms > 0)) {
         fprintf(stderr, "shadowbench: tune needs one of --max-err E or --budget-ms B\n");
@@ -1012,70 +1070,23 @@ int sb_tune_main(const sb_tune_cmd *cmd) {
     plan_frames(&t);
     t.warmup = cmd->opts->warmup < 0 ? 1 : cmd->opts->warmup;
     t.final_reps = t.nrungs == 1 ? FINAL_PASSES : 1;   /* one rung: it is the last */
+    int rc = 0;
     if (!sb_session_open(&t.s, cmd->opts, cmd->scene, cmd->path ? cmd->path : "auto", &err)) {
         sb_say_line(stderr, err.msg);
-        int rc = t.s.files_refused ? SB_EXIT_BAD_INPUT : SB_EXIT_FAILED;
+        rc = t.s.files_refused ? SB_EXIT_BAD_INPUT : SB_EXIT_FAILED;
+    }
+    if (rc || (rc = open_folder(&t)) != 0) {
         sb_session_close(&t.s);
         free(t.c);
         return rc;
-    }
-    if (cmd->resume) {
-        snprintf(t.dir, sizeof t.dir, "%s", cmd->resume);
-        if (cmd->identity && !sb_resume_check(t.dir, cmd->identity, NULL, -1, &err)) {   /* nothing written */
-            sb_say_line(stderr, err.msg);
-            sb_session_close(&t.s);
-            free(t.c);
-            return SB_EXIT_BAD_INPUT;
-        }
-    } else {
-        char base[4200];
-        snprintf(base, sizeof base, "%s/tune-%s", cmd->out, t.s.scene_name);
-        if (!sb_make_stamped_dir(base, t.dir, sizeof t.dir, &err)) {
-            sb_say_line(stderr, err.msg);
-            sb_session_close(&t.s);
-            free(t.c);
-            return SB_EXIT_WRITE;   /* the results folder could not be made */
-        }
-    }
-    if (cmd->identity) {   /* what the search is, for a resume to match (its rungs are results sets of their own) */
-        char path[4400], text[8400];
-        snprintf(path, sizeof path, "%s/meta", t.dir);
-        int n = snprintf(text, sizeof text, "command: tune %s\n%s", cmd->scene, cmd->identity);
-        sb_err we;
-        if (!sb_write_file_atomic(path, text, (size_t)(n < (int)sizeof text ? n : (int)sizeof text - 1), &we))
-            fprintf(stderr, "shadowbench: %s\n", we.msg);
     }
     sb_session_keep_reference(&t.s, t.dir);   /* OUT/tune-SCENE/.reference: reruns and --resume cast no ray twice */
     memory_bound(&t);
     sb_log("tune: %d candidate(s), rungs of %d/%d/%d frames, seed %llu, results in %s", t.n, t.rung_frames[0],
            t.nrungs > 1 ? t.rung_frames[1] : t.rung_frames[0], t.rung_frames[t.nrungs - 1],
            (unsigned long long)cmd->opts->seed, t.dir);
-    int final_rung = -1;
-    bool in_time = true;
     warm_session(&t);
-    int k1 = 0, k2 = 0;
-    for (int r = 0; r < t.nrungs && in_time; r++) {
-        in_time = run_rung(&t, r);
-        if (!in_time) break;
-        final_rung = r;
-        if (r == t.nrungs - 1) break;
-        if (r == 0) {
-            int runnable = 0;
-            for (int i = 0; i < t.n; i++) runnable += measured_at(&t.c[i], 0);
-            plan_keep(&t, runnable, &k1, &k2);
-            sb_log("tune: %d of %d can run here; %d go on to rung 1, %d to the last rung (%d pass(es) each)",
-                   runnable, t.n, k1, k2, t.final_reps);
-            if (k1 > 0) {
-                promote(&t, 0, k1, k1 / 2, 0.5);
-            } else {   /* straight to the last rung */
-                promote(&t, 0, k2, k2, 0.5);
-                r = t.nrungs - 2;
-            }
-        } else {
-            promote(&t, r, k2, k2, 0.2);
-        }
-    }
-    t.out_of_time = !in_time;
+    int final_rung = climb(&t);
     int rung = t.out_of_time ? t.last_rung : final_rung;
     verdict v = rung >= 0 ? decide(&t, rung) : (verdict){.chosen = -1, .other = -1, .missed = -1};
     if (!t.out_of_time && v.met && v.other < 0 && !confirm(&t, &v, &rung)) t.out_of_time = true;

@@ -36,111 +36,97 @@ static bool add_key(sb_path *p, int *cap, sb_path_key k) {
     return true;
 }
 
+/* A key or look line's numbers v[1..nt-1] as a key; false: said. */
+static bool path_key(bool is_key, const double *v, int nt, const char *name, int lineno, sb_path_key *k, sb_err *err) {
+    const int want = is_key ? 9 : 8;
+    *k = (sb_path_key){0};
+    k->t = v[1];
+    k->pos = sb_v3_make(v[2], v[3], v[4]);
+    if (is_key) {
+        sb_quat q = {v[5], v[6], v[7], v[8]};
+        double l = sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
+        if (l < 1e-6) return sb_fail(err, "%s:%d: orientation quaternion has zero length", name, lineno);
+        k->rot = sb_quat_norm(q);
+    } else {
+        sb_v3 dir = sb_v3_sub(sb_v3_make(v[5], v[6], v[7]), k->pos);
+        if (sb_v3_len(dir) < 1e-12) return sb_fail(err, "%s:%d: look target equals the position", name, lineno);
+        k->rot = sb_quat_look(dir, sb_v3_make(0, 1, 0));
+    }
+    if (nt == want + 1) {
+        k->fov_deg = v[want];
+        if (k->fov_deg <= 0 || k->fov_deg >= 179) return sb_fail(err, "%s:%d: fov must be in (0, 179) degrees", name, lineno);
+    }
+    return true;
+}
+
+/* One line of a path file (its comment cut): a directive and its numbers into p; false: said. */
+static bool path_line(sb_path *p, int *cap, char *buf, const char *name, int lineno, sb_err *err) {
+    char *tok[16];
+    int nt = 0;
+    for (char *t = strtok(buf, " \t\r,"); t && nt < 16; t = strtok(NULL, " \t\r,")) tok[nt++] = t;
+    if (nt == 0) return true;
+    double v[16];
+    for (int i = 1; i < nt; i++) {
+        if (!sb_parse_double(tok[i], &v[i]))
+            return sb_fail(err, "%s:%d: '%s' is not a finite number (field %d of '%s')", name, lineno, tok[i], i + 1,
+                           tok[0]);
+        /* beyond this, interpolation overflows (found by fuzzing); far beyond any scene */
+        if (fabs(v[i]) > SB_PATH_MAX_COORD)
+            return sb_fail(err, "%s:%d: '%s' is out of range (field %d of '%s': |value| <= %g)", name, lineno, tok[i],
+                           i + 1, tok[0], SB_PATH_MAX_COORD);
+    }
+    if (strcmp(tok[0], "fov") == 0 || strcmp(tok[0], "near") == 0 || strcmp(tok[0], "far") == 0) {
+        if (nt != 2 || v[1] <= 0 || (tok[0][0] == 'f' && tok[0][1] == 'o' && v[1] >= 179))
+            return sb_fail(err, "%s:%d: expected '%s VALUE' with a positive value%s", name, lineno, tok[0],
+                           tok[0][1] == 'o' ? " below 179 degrees" : "");
+        if (tok[0][1] == 'o') p->fov_deg = v[1];
+        else if (tok[0][1] == 'e') p->znear = v[1];
+        else p->zfar = v[1];
+        return true;
+    }
+    bool is_key = strcmp(tok[0], "key") == 0, is_look = strcmp(tok[0], "look") == 0;
+    if (!is_key && !is_look)
+        return sb_fail(err, "%s:%d: unknown directive '%s' (expected key, look, fov, near or far)", name, lineno, tok[0]);
+    int want = is_key ? 9 : 8;
+    if (nt != want && nt != want + 1)
+        return sb_fail(err, "%s:%d: '%s' takes %s, got %d numbers", name, lineno, tok[0],
+                       is_key ? "T PX PY PZ QX QY QZ QW [FOV]" : "T PX PY PZ TX TY TZ [FOV]", nt - 1);
+    sb_path_key k;
+    if (!path_key(is_key, v, nt, name, lineno, &k, err)) return false;
+    if (p->key_count > 0 && !(k.t > p->keys[p->key_count - 1].t))
+        return sb_fail(err, "%s:%d: time %g does not increase (previous key at %g)", name, lineno, k.t,
+                       p->keys[p->key_count - 1].t);
+    return add_key(p, cap, k);
+}
+
 bool sb_path_parse(sb_path *p, const char *name, const char *text, sb_err *err) {
     memset(p, 0, sizeof *p);
     p->file = sb_strdup(name);
     p->fov_deg = 60;
     p->content_hash = sb_fnv1a(SB_FNV_SEED, text, strlen(text));
     int cap = 0, lineno = 0;
-    const char *line = text;
-    while (*line) {
+    bool ok = true;
+    for (const char *line = text; ok && *line;) {
         lineno++;
         const char *eol = strchr(line, '\n');
         size_t len = eol ? (size_t)(eol - line) : strlen(line);
         char buf[1024];
         if (len >= sizeof buf) {
-            sb_path_free(p);
-            return sb_fail(err, "%s:%d: line too long", name, lineno);
+            ok = sb_fail(err, "%s:%d: line too long", name, lineno);
+            break;
         }
         memcpy(buf, line, len);
         buf[len] = 0;
         line = eol ? eol + 1 : line + len;
         char *hash = strchr(buf, '#');
         if (hash) *hash = 0;
-        char *tok[16];
-        int nt = 0;
-        for (char *t = strtok(buf, " \t\r,"); t && nt < 16; t = strtok(NULL, " \t\r,")) tok[nt++] = t;
-        if (nt == 0) continue;
-        double v[16];
-        for (int i = 1; i < nt; i++) {
-            if (!sb_parse_double(tok[i], &v[i])) {
-                sb_path_free(p);
-                return sb_fail(err, "%s:%d: '%s' is not a finite number (field %d of '%s')", name, lineno, tok[i], i + 1,
-                               tok[0]);
-            }
-            /* beyond this, interpolation overflows (found by fuzzing); far beyond any scene */
-            if (fabs(v[i]) > SB_PATH_MAX_COORD) {
-                sb_path_free(p);
-                return sb_fail(err, "%s:%d: '%s' is out of range (field %d of '%s': |value| <= %g)", name, lineno,
-                               tok[i], i + 1, tok[0], SB_PATH_MAX_COORD);
-            }
-        }
-        if (strcmp(tok[0], "fov") == 0 || strcmp(tok[0], "near") == 0 || strcmp(tok[0], "far") == 0) {
-            if (nt != 2 || v[1] <= 0 || (tok[0][0] == 'f' && tok[0][1] == 'o' && v[1] >= 179)) {
-                sb_path_free(p);
-                return sb_fail(err, "%s:%d: expected '%s VALUE' with a positive value%s", name, lineno, tok[0],
-                               tok[0][1] == 'o' ? " below 179 degrees" : "");
-            }
-            if (tok[0][1] == 'o') p->fov_deg = v[1];
-            else if (tok[0][1] == 'e') p->znear = v[1];
-            else p->zfar = v[1];
-            continue;
-        }
-        bool is_key = strcmp(tok[0], "key") == 0, is_look = strcmp(tok[0], "look") == 0;
-        if (!is_key && !is_look) {
-            sb_path_free(p);
-            return sb_fail(err, "%s:%d: unknown directive '%s' (expected key, look, fov, near or far)", name, lineno,
-                           tok[0]);
-        }
-        int want = is_key ? 9 : 8;
-        if (nt != want && nt != want + 1) {
-            sb_path_free(p);
-            return sb_fail(err, "%s:%d: '%s' takes %s, got %d numbers", name, lineno, tok[0],
-                           is_key ? "T PX PY PZ QX QY QZ QW [FOV]" : "T PX PY PZ TX TY TZ [FOV]", nt - 1);
-        }
-        sb_path_key k = {0};
-        k.t = v[1];
-        k.pos = sb_v3_make(v[2], v[3], v[4]);
-        if (is_key) {
-            sb_quat q = {v[5], v[6], v[7], v[8]};
-            double l = sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
-            if (l < 1e-6) {
-                sb_path_free(p);
-                return sb_fail(err, "%s:%d: orientation quaternion has zero length", name, lineno);
-            }
-            k.rot = sb_quat_norm(q);
-        } else {
-            sb_v3 dir = sb_v3_sub(sb_v3_make(v[5], v[6], v[7]), k.pos);
-            if (sb_v3_len(dir) < 1e-12) {
-                sb_path_free(p);
-                return sb_fail(err, "%s:%d: look target equals the position", name, lineno);
-            }
-            k.rot = sb_quat_look(dir, sb_v3_make(0, 1, 0));
-        }
-        if (nt == want + 1) {
-            k.fov_deg = v[want];
-            if (k.fov_deg <= 0 || k.fov_deg >= 179) {
-                sb_path_free(p);
-                return sb_fail(err, "%s:%d: fov must be in (0, 179) degrees", name, lineno);
-            }
-        }
-        if (p->key_count > 0 && !(k.t > p->keys[p->key_count - 1].t)) {
-            double prev = p->keys[p->key_count - 1].t;
-            sb_path_free(p);
-            return sb_fail(err, "%s:%d: time %g does not increase (previous key at %g)", name, lineno, k.t, prev);
-        }
-        add_key(p, &cap, k);
+        ok = path_line(p, &cap, buf, name, lineno, err);
     }
-    if (p->key_count == 0) {
-        sb_path_free(p);
-        return sb_fail(err, "%s: no keyframes (expected 'key' or 'look' lines)", name);
-    }
-    if (p->znear > 0 && p->zfar > 0 && p->zfar <= p->znear) {
-        double zn = p->znear, zf = p->zfar;
-        sb_path_free(p);
-        return sb_fail(err, "%s: far (%g) must exceed near (%g)", name, zf, zn);
-    }
-    return true;
+    if (ok && p->key_count == 0) ok = sb_fail(err, "%s: no keyframes (expected 'key' or 'look' lines)", name);
+    if (ok && p->znear > 0 && p->zfar > 0 && p->zfar <= p->znear)
+        ok = sb_fail(err, "%s: far (%g) must exceed near (%g)", name, p->zfar, p->znear);
+    if (!ok) sb_path_free(p);
+    return ok;
 }
 
 /* ---- built-in paths stay outside the model ---- */

@@ -748,6 +748,9 @@ struct Loader {
     }
 
     bool clips();
+    bool clips_played(std::vector<char> &plays);
+    bool clip_channels(sb_motion *mm, size_t ai, std::set<std::pair<int, int>> &claimed, std::vector<char> &animated);
+    void clips_unplayed(const sb_motion *mm);
 
     bool prim(int node, int mesh, int pi, const std::vector<sb_m4> &instances);
     bool skin_moves(int si);
@@ -975,98 +978,85 @@ bool Loader::skin_moves(int si) {
 // The clips that play (sb_scene_opts.anim): their channels read, the nodes they move marked. With every clip
 // playing, a node's translation (rotation, scale, weights) is the first clip's that animates it: files hold
 // clips meant one at a time (a character's walk and run), and the first is what a viewer shows.
-bool Loader::clips() {
+static std::string clip_name(const tinygltf::Model &m, size_t ai) {
+    return m.animations[ai].name.empty() ? std::to_string(ai) : m.animations[ai].name;
+}
+
+// Which clips play: all, or those --anim names (each a clip of the file, named once).
+bool Loader::clips_played(std::vector<char> &plays) {
     const tinygltf::Model &m = *c.m;
-    size_t nn = m.nodes.size();
-    moves.assign(nn, 0);
-    morphs.assign(nn, 0);
-    if (opts->anim == SB_ANIM_LIST && m.animations.empty())
-        return fail("/animations", std::string("--anim ") + opts->anim_clips + ": the file has no animation clip");
-    if (opts->pose || opts->anim == SB_ANIM_NONE || m.animations.empty()) return true;
-    auto clip_name = [&](size_t ai) { return m.animations[ai].name.empty() ? std::to_string(ai) : m.animations[ai].name; };
-    std::vector<char> plays(m.animations.size(), opts->anim == SB_ANIM_ALL);
-    if (opts->anim == SB_ANIM_LIST) {
-        std::string list = opts->anim_clips, all;
-        for (size_t ai = 0; ai < m.animations.size(); ai++) all += (ai ? ", " : "") + clip_name(ai);
-        for (size_t at = 0; at <= list.size();) {
-            size_t comma = list.find(',', at);
-            std::string name = list.substr(at, comma == std::string::npos ? std::string::npos : comma - at);
-            at = comma == std::string::npos ? list.size() + 1 : comma + 1;
-            size_t ai = 0;
-            while (ai < m.animations.size() && clip_name(ai) != name) ai++;
-            if (ai == m.animations.size())
-                return fail("/animations", "--anim " + name + ": no clip of that name (its clips: " + all + ")");
-            if (plays[ai]) return fail("/animations", "--anim " + list + ": clip " + name + " named twice");
-            plays[ai] = 1;
+    plays.assign(m.animations.size(), opts->anim == SB_ANIM_ALL);
+    if (opts->anim != SB_ANIM_LIST) return true;
+    std::string list = opts->anim_clips, all;
+    for (size_t ai = 0; ai < m.animations.size(); ai++) all += (ai ? ", " : "") + clip_name(m, ai);
+    for (size_t at = 0; at <= list.size();) {
+        size_t comma = list.find(',', at);
+        std::string name = list.substr(at, comma == std::string::npos ? std::string::npos : comma - at);
+        at = comma == std::string::npos ? list.size() + 1 : comma + 1;
+        size_t ai = 0;
+        while (ai < m.animations.size() && clip_name(m, ai) != name) ai++;
+        if (ai == m.animations.size())
+            return fail("/animations", "--anim " + name + ": no clip of that name (its clips: " + all + ")");
+        if (plays[ai]) return fail("/animations", "--anim " + list + ": clip " + name + " named twice");
+        plays[ai] = 1;
+    }
+    return true;
+}
+
+// Clip ai's channels into mm: each (node, path) played by the first clip that claims it; what cannot be played
+// as written is left out and said.
+bool Loader::clip_channels(sb_motion *mm, size_t ai, std::set<std::pair<int, int>> &claimed,
+                           std::vector<char> &animated) {
+    const tinygltf::Model &m = *c.m;
+    const size_t nn = m.nodes.size();
+    const auto &an = m.animations[ai];
+    MoClip clip;
+    clip.name = clip_name(m, ai);
+    std::set<int> nodes;
+    for (size_t ci = 0; ci < an.channels.size(); ci++) {
+        const auto &ch = an.channels[ci];
+        int ni = ch.target_node, path = ch.target_path == "translation" ? PATH_T : ch.target_path == "rotation" ? PATH_R
+                                       : ch.target_path == "scale" ? PATH_S : ch.target_path == "weights" ? PATH_W : -1;
+        if (ni < 0 || ni >= (int)nn || path < 0) continue;   // a pointer channel: left out by the check, said
+        int ncomp = path == PATH_R ? 4 : path == PATH_W ? (int)weights[ni].size() : 3;
+        std::string where = "/animations/" + std::to_string(ai) + "/channels/" + std::to_string(ci), skip;
+        if (ncomp > 64) {   // as --pose reads it: left out, said (never dropped in silence)
+            left_out(where + ": " + std::to_string(ncomp) + " morph weights, more than the 64 played: not applied");
+            mm->skipped++;
+            continue;
         }
-    }
-    std::unique_ptr<sb_motion> mm(new sb_motion);
-    mm->parent = parent;
-    mm->rest.resize(nn);
-    mm->has_matrix.resize(nn);
-    mm->rest_local.resize(nn);
-    mm->rest_weights = weights;
-    for (size_t i = 0; i < nn; i++) {
-        mm->rest[i] = node_trs(m.nodes[i]);
-        mm->has_matrix[i] = m.nodes[i].matrix.size() == 16;
-        mm->rest_local[i] = node_local(m.nodes[i]);
-    }
-    std::vector<std::vector<int>> children(nn);   // parents first: roots, then breadth-first
-    for (size_t i = 0; i < nn; i++)
-        if (parent[i] >= 0) children[parent[i]].push_back((int)i);
-        else mm->topo.push_back((int)i);
-    for (size_t k = 0; k < mm->topo.size(); k++)
-        for (int ch : children[mm->topo[k]]) mm->topo.push_back(ch);
-    std::set<std::pair<int, int>> claimed;
-    std::vector<char> animated(nn);
-    for (size_t ai = 0; ai < m.animations.size(); ai++) {
-        if (!plays[ai]) continue;
-        const auto &an = m.animations[ai];
-        MoClip clip;
-        clip.name = clip_name(ai);
-        std::set<int> nodes;
-        for (size_t ci = 0; ci < an.channels.size(); ci++) {
-            const auto &ch = an.channels[ci];
-            int ni = ch.target_node, path = ch.target_path == "translation" ? PATH_T : ch.target_path == "rotation" ? PATH_R
-                                           : ch.target_path == "scale" ? PATH_S : ch.target_path == "weights" ? PATH_W : -1;
-            if (ni < 0 || ni >= (int)nn || path < 0) continue;   // a pointer channel: left out by the check, said
-            int ncomp = path == PATH_R ? 4 : path == PATH_W ? (int)weights[ni].size() : 3;
-            std::string where = "/animations/" + std::to_string(ai) + "/channels/" + std::to_string(ci), skip;
-            if (ncomp > 64) {   // as --pose reads it: left out, said (never dropped in silence)
-                left_out(where + ": " + std::to_string(ncomp) + " morph weights, more than the 64 played: not applied");
-                mm->skipped++;
-                continue;
-            }
-            if (ncomp == 0 && path == PATH_W) {   // never dropped in silence: the scene would say "nothing moves"
-                left_out(where + ": a weights channel on node " + std::to_string(ni) +
-                         ", whose mesh has no morph weights: nothing for it to move: left out");
-                mm->skipped++;
-                continue;
-            }
-            if (ncomp == 0 || !claimed.insert({ni, path}).second) continue;
-            MoChannel mc{(int)mm->clips.size(), ni, path, {}};
-            if (!read_channel(c, an, ch, where, ncomp, mc.ch, &skip)) return false;
-            if (!skip.empty()) {
-                left_out(skip);
-                mm->skipped++;
-                continue;
-            }
-            clip.duration = std::max(clip.duration, mc.ch.in.back());
-            clip.channels++;
-            nodes.insert(ni);
-            animated[ni] = 1;
-            (path == PATH_W ? morphs : moves)[ni] = 1;
-            mm->channels.push_back(std::move(mc));
-            mm->channels.back().ch.s.in = mm->channels.back().ch.in.data();   // the sampler reads its own arrays
-            mm->channels.back().ch.s.out = mm->channels.back().ch.out.data();
+        if (ncomp == 0 && path == PATH_W) {   // never dropped in silence: the scene would say "nothing moves"
+            left_out(where + ": a weights channel on node " + std::to_string(ni) +
+                     ", whose mesh has no morph weights: nothing for it to move: left out");
+            mm->skipped++;
+            continue;
         }
-        clip.nodes = (uint32_t)nodes.size();
-        mm->clips.push_back(clip);
+        if (ncomp == 0 || !claimed.insert({ni, path}).second) continue;
+        MoChannel mc{(int)mm->clips.size(), ni, path, {}};
+        if (!read_channel(c, an, ch, where, ncomp, mc.ch, &skip)) return false;
+        if (!skip.empty()) {
+            left_out(skip);
+            mm->skipped++;
+            continue;
+        }
+        clip.duration = std::max(clip.duration, mc.ch.in.back());
+        clip.channels++;
+        nodes.insert(ni);
+        animated[ni] = 1;
+        (path == PATH_W ? morphs : moves)[ni] = 1;
+        mm->channels.push_back(std::move(mc));
+        mm->channels.back().ch.s.in = mm->channels.back().ch.in.data();   // the sampler reads its own arrays
+        mm->channels.back().ch.s.out = mm->channels.back().ch.out.data();
     }
-    for (int ni : mm->topo)   // a node under a moving one moves
-        if (parent[ni] >= 0 && moves[parent[ni]]) moves[ni] = 1;
-    // what the clips would move that the tool does not play: said, never silent
-    for (size_t ni = 0; ni < nn; ni++)
+    clip.nodes = (uint32_t)nodes.size();
+    mm->clips.push_back(clip);
+    return true;
+}
+
+// What the clips would move that the tool does not play: said, never silent (a moved light, a mirroring scale key).
+void Loader::clips_unplayed(const sb_motion *mm) {
+    const tinygltf::Model &m = *c.m;
+    for (size_t ni = 0; ni < m.nodes.size(); ni++)
         if (moves[ni] && m.nodes[ni].extensions.count("KHR_lights_punctual"))
             left_out("/nodes/" + std::to_string(ni) + ": its light is moved by a clip; lights stay where the file "
                      "places them (the shadows and the reference are of that place)");
@@ -1086,6 +1076,42 @@ bool Loader::clips() {
             }
         }
     }
+}
+
+bool Loader::clips() {
+    const tinygltf::Model &m = *c.m;
+    size_t nn = m.nodes.size();
+    moves.assign(nn, 0);
+    morphs.assign(nn, 0);
+    if (opts->anim == SB_ANIM_LIST && m.animations.empty())
+        return fail("/animations", std::string("--anim ") + opts->anim_clips + ": the file has no animation clip");
+    if (opts->pose || opts->anim == SB_ANIM_NONE || m.animations.empty()) return true;
+    std::vector<char> plays;
+    if (!clips_played(plays)) return false;
+    std::unique_ptr<sb_motion> mm(new sb_motion);
+    mm->parent = parent;
+    mm->rest.resize(nn);
+    mm->has_matrix.resize(nn);
+    mm->rest_local.resize(nn);
+    mm->rest_weights = weights;
+    for (size_t i = 0; i < nn; i++) {
+        mm->rest[i] = node_trs(m.nodes[i]);
+        mm->has_matrix[i] = m.nodes[i].matrix.size() == 16;
+        mm->rest_local[i] = node_local(m.nodes[i]);
+    }
+    std::vector<std::vector<int>> children(nn);   // parents first: roots, then breadth-first
+    for (size_t i = 0; i < nn; i++)
+        if (parent[i] >= 0) children[parent[i]].push_back((int)i);
+        else mm->topo.push_back((int)i);
+    for (size_t k = 0; k < mm->topo.size(); k++)
+        for (int ch : children[mm->topo[k]]) mm->topo.push_back(ch);
+    std::set<std::pair<int, int>> claimed;
+    std::vector<char> animated(nn);
+    for (size_t ai = 0; ai < m.animations.size(); ai++)
+        if (plays[ai] && !clip_channels(mm.get(), ai, claimed, animated)) return false;
+    for (int ni : mm->topo)   // a node under a moving one moves
+        if (parent[ni] >= 0 && moves[parent[ni]]) moves[ni] = 1;
+    clips_unplayed(mm.get());
     for (char a : animated) mm->animated_nodes += a;
     mm->skin_joints.resize(m.skins.size());
     mm->skin_ibm.resize(m.skins.size());
@@ -1504,9 +1530,8 @@ std::map<std::string, int> attributes_of(const sb_json *o) {
 }
 
 // The checked document into tinygltf's model (buffers and images read as it goes).
-bool build_model(const sb_json *root, Source &src, const char *file, tinygltf::Model &m, Document &doc,
-                 const sb_scene_opts *opts, ImageStore *images, sb_err *err) {
-    if (!read_buffers(root, src, file, doc, err)) return false;
+// The buffer views and accessors (a sparse accessor's fields as tinygltf's ints); false: said.
+static bool model_accessors(const sb_json *root, const char *file, tinygltf::Model &m, sb_err *err) {
     each(root, "bufferViews", [&](const sb_json *o) {
         tinygltf::BufferView v;
         v.buffer = int_of(o, "buffer", -1);
@@ -1541,7 +1566,11 @@ bool build_model(const sb_json *root, Source &src, const char *file, tinygltf::M
         }
         m.accessors.push_back(a);
     });
-    if (!ok) return sb_fail(err, "%s: a sparse accessor's count or offset is beyond 2^31 - 1, which is not supported", file);
+    return ok || sb_fail(err, "%s: a sparse accessor's count or offset is beyond 2^31 - 1, which is not supported", file);
+}
+
+// The meshes and their primitives, the nodes, the skins.
+static void model_meshes(const sb_json *root, tinygltf::Model &m) {
     each(root, "meshes", [&](const sb_json *o) {
         tinygltf::Mesh mesh;
         each(o, "primitives", [&](const sb_json *q) {
@@ -1578,6 +1607,10 @@ bool build_model(const sb_json *root, Source &src, const char *file, tinygltf::M
         s.joints = ints_of(o, "joints");
         m.skins.push_back(std::move(s));
     });
+}
+
+// The animations: their samplers and channels.
+static void model_animations(const sb_json *root, tinygltf::Model &m) {
     each(root, "animations", [&](const sb_json *o) {
         tinygltf::Animation an;
         an.name = str_of(o, "name", "");
@@ -1598,6 +1631,10 @@ bool build_model(const sb_json *root, Source &src, const char *file, tinygltf::M
         });
         m.animations.push_back(std::move(an));
     });
+}
+
+// The materials (the alpha test's part), textures, samplers and images.
+static void model_materials(const sb_json *root, tinygltf::Model &m) {
     each(root, "materials", [&](const sb_json *o) {
         tinygltf::Material mat;
         mat.alphaMode = str_of(o, "alphaMode", "OPAQUE");
@@ -1627,6 +1664,10 @@ bool build_model(const sb_json *root, Source &src, const char *file, tinygltf::M
         m.samplers.push_back(s);
     });
     each(root, "images", [&](const sb_json *) { m.images.emplace_back(); });
+}
+
+// The cameras, the lights (KHR_lights_punctual) and the scenes.
+static void model_cameras_lights(const sb_json *root, tinygltf::Model &m) {
     each(root, "cameras", [&](const sb_json *o) {
         tinygltf::Camera c;
         c.type = str_of(o, "type", "");
@@ -1654,6 +1695,15 @@ bool build_model(const sb_json *root, Source &src, const char *file, tinygltf::M
         m.scenes.push_back(std::move(sc));
     });
     m.defaultScene = int_of(root, "scene", -1);
+}
+
+bool build_model(const sb_json *root, Source &src, const char *file, tinygltf::Model &m, Document &doc,
+                 const sb_scene_opts *opts, ImageStore *images, sb_err *err) {
+    if (!read_buffers(root, src, file, doc, err) || !model_accessors(root, file, m, err)) return false;
+    model_meshes(root, m);
+    model_animations(root, m);
+    model_materials(root, m);
+    model_cameras_lights(root, m);
     return read_images(root, src, file, m, doc, opts, images);
 }
 
