@@ -794,7 +794,7 @@ static void test_full_disk(void **st) {
     snprintf(bench, sizeof bench, "%s/tiny.bench", g_tmp);
     FILE *f = fopen(bench, "w");
     fputs("scene towers towers\npath towers towers\ndefaults --frames 8 --warmup 0 --error-every 4 --size 160x90\n"
-          "sm\npssm\nsdsm\n", f);
+          "sm:res=512\npssm:res=512\nsdsm:res=512\n", f);   /* small maps: the disk fills with the same rows */
     fclose(f);
     /* the clean set, on the real disk */
     char clean[4096];
@@ -835,8 +835,9 @@ static void test_full_disk(void **st) {
 
     /* a run the same way: exit 4 into the tiny one, then run --resume with room completes it */
     rc = sh("unshare -rm sh -c 'D=%s/rdisk; mkdir -p $D && mount -t tmpfs -o size=28k tmpfs $D && "
-            "%s run towers towers sm pssm sdsm --frames 8 --warmup 0 --error-every 4 --size 160x90 --out $D --quiet "
-            "> %s/rdir.txt; echo first=$?; mount -o remount,size=64m $D && %s run towers towers sm pssm sdsm --frames 8 "
+            "%s run towers towers sm:res=512 pssm:res=512 sdsm:res=512 --frames 8 --warmup 0 --error-every 4 "
+            "--size 160x90 --out $D --quiet > %s/rdir.txt; echo first=$?; mount -o remount,size=64m $D && "
+            "%s run towers towers sm:res=512 pssm:res=512 sdsm:res=512 --frames 8 "
             "--warmup 0 --error-every 4 --size 160x90 --quiet --resume $(tail -n 1 %s/rdir.txt); echo second=$?; "
             "find $D -name \"*.tmp\" | sed s/^/LEFT-BEHIND:/; cp $(tail -n 1 %s/rdir.txt)/summary.csv %s/rresumed.csv'",
             g_tmp, test_binary(), g_tmp, test_binary(), g_tmp, g_tmp, g_tmp);

@@ -230,13 +230,15 @@ static void test_every_mode_on_shared_geometry(void **st) {
     assert_int_equal(p.nc, 0);
     /* planar last: its receiver pass draws by scene triangle numbers, so it leaves nothing shared for the runs
        after it (sb_gpu_share), which would then pass whatever their vertex stages do */
-    const char *specs = "sm pssm:layered=off,gs,vs,on sdsm:layered=off,gs,vs,on volumes lispsm tsm "
-                        "psm psm:cube=on:layered=off,gs,vs,on virtual raycast cube:light=7:layered=off,gs,vs,on "
-                        "dpsm:light=7 atlas:res=256 planar";
+    /* maps of 512 texels (256 a lamp's face): a caster drawn at the wrong tile moves thousands of pixels at any
+       resolution, and the default 2048s took 2.5 s of these 4.5 s a set on llvmpipe */
+    const char *specs = "sm:res=512 pssm:res=512:layered=off,gs,vs,on sdsm:res=512:layered=off,gs,vs,on volumes "
+                        "lispsm:res=512 tsm:res=512 psm:res=512 psm:res=512:cube=on:layered=off,gs,vs,on virtual raycast "
+                        "cube:res=256:light=7:layered=off,gs,vs,on dpsm:res=256:light=7 atlas:res=256 planar";
     /* one indirect call a pass goes through the same vertex stages: every stage there once (the layered ones, the
        lamps', virtual's pages, the atlas's tiles), not every parameter again */
-    const char *indirect = "sm pssm:layered=gs,vs psm:cube=on:layered=vs virtual cube:light=7:layered=gs,vs dpsm:light=7 "
-                           "atlas:res=256 planar";
+    const char *indirect = "sm:res=512 pssm:res=512:layered=gs,vs psm:res=512:cube=on:layered=vs virtual "
+                           "cube:res=256:light=7:layered=gs,vs dpsm:res=256:light=7 atlas:res=256 planar";
     const char *submits[] = {"direct", "indirect"}, *sets[] = {specs, indirect};
     for (int k = 0; k < 2; k++) {
         char run[8192], tag[64];
