@@ -51,7 +51,7 @@ void sb_gl_links_copy(const sb_gl_links *l, GLuint from, GLuint to);
  * GL_OUT_OF_MEMORY, and deleted (a renderer's total memory is the GPU-memory
  * check's; this is its limit on one texture, which llvmpipe, for one, puts at
  * 2 GiB). When it does not, *layers_fit says how many layers of that size it
- * allocates. */
+ * allocates (found to within a 32nd: a count that does, a few more may). */
 bool sb_gl_allocates(GLenum format, int width, int height, int layers, int *layers_fit);
 /* Bytes a texel of a sized internal format takes (the depth and colour formats the shadow maps use; 4 else). */
 int sb_gl_texel_bytes(GLenum format);

@@ -17,7 +17,8 @@
 #include "support.h"
 #include "table.h"
 
-#define SPECS "sm:stable=off sm:stable=on pssm:stable=off pssm:stable=on sdsm raycast volumes"
+#define SPECS "sm:res=1024:stable=off sm:res=1024:stable=on pssm:res=1024:stable=off pssm:res=1024:stable=on sdsm:res=1024 " \
+              "raycast volumes"
 #define COMMON "--frames 9 --error-every 2 --size 320x180 --warmup 0 --quiet"
 
 static char g_out[65536], g_pan[4096];   /* g_pan: test_pan's folder (the pan, twins on) */

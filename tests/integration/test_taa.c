@@ -81,7 +81,7 @@ static void test_still_converges(void **st) {
 static void test_flicker_through_taa(void **st) {
     (void)st;
     sb_table t;
-    run("towers", "auto", "pssm:stable=off", "--taa on", "auto", &t, false);
+    run("towers", "auto", "pssm:res=1024:stable=off", "--taa on", "auto", &t, false);
     double raw = cell(&t, "pssm", "stable=off", "flicker_rate_mean"), res = cell(&t, "pssm", "stable=off", "taa_flicker_rate_mean");
     print_message("towers auto, pssm:stable=off: flicker_rate %.6g raw, %.6g through TAA\n", raw, res);
     assert_true(raw > 0);
@@ -89,7 +89,8 @@ static void test_flicker_through_taa(void **st) {
        1.39x) */
     assert_true(res < 0.75 * raw);
     sb_table_free(&t);
-    run("towers", test_data("towers-pan.path"), "sm:stable=off sm:stable=on", "--taa on", "pan", &t, false);
+    run("towers", test_data("towers-pan.path"), "sm:res=1024:stable=off sm:res=1024:stable=on", "--taa on", "pan", &t,
+        false);
     double off = cell(&t, "sm", "stable=off", "taa_flicker_rate_mean"), on = cell(&t, "sm", "stable=on", "taa_flicker_rate_mean");
     print_message("towers pan, through TAA: sm:stable=off %.6g, stable=on %.6g\n", off, on);
     assert_true(off > 0);
@@ -100,9 +101,9 @@ static void test_flicker_through_taa(void **st) {
 static void test_off_keeps_figures(void **st) {
     (void)st;
     sb_table a, b, c;
-    run("plane-box", "plane-box", "sm pssm", "", "none", &a, true);
-    run("plane-box", "plane-box", "sm pssm", "--taa off", "off", &b, true);
-    run("plane-box", "plane-box", "sm pssm", "--taa on", "on", &c, true);
+    run("plane-box", "plane-box", "sm:res=1024 pssm:res=1024", "", "none", &a, true);
+    run("plane-box", "plane-box", "sm:res=1024 pssm:res=1024", "--taa off", "off", &b, true);
+    run("plane-box", "plane-box", "sm:res=1024 pssm:res=1024", "--taa on", "on", &c, true);
     const char *same[] = {"run_id", "err_rate_mean", "flicker_rate_mean", "draw_calls_mean", "vis_mae_mean"};
     for (int r = 0; r < a.nrows; r++) {
         for (size_t k = 0; k < sizeof same / sizeof *same; k++)
