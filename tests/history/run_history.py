@@ -61,7 +61,7 @@ def sb(*args, ok=(0,)):
 
 def render(name, images=False):
     """The one rendered night: three shadowed runs on plane-box, into WORK/name/<stamp>."""
-    args = ["run", "plane-box", "plane-box", "sm", "sm:filter=pcf3", "pssm", "--frames", "24", "--size", "960x540",
+    args = ["run", "plane-box", "plane-box", "sm", "sm:filter=pcf3", "pssm", "--frames", "24", "--size", "480x270",
             "--error-every", "12", "--quiet", "--out", os.path.join(WORK, name)]
     if images:
         args += ["--images", "12"]
