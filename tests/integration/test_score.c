@@ -265,6 +265,17 @@ static void test_bad_input(void **st) {
     sb_table_free(&t);
 }
 
+/* A PNG in g_tmp whose header claims w x h pixels of a colour type (0 grey, 2 RGB) with 64 bytes of data behind
+ * it. */
+static void png_claiming(const char *name, int w, int h, int colour) {
+    assert_int_equal(run_logged(g_out, sizeof g_out,
+                                "python3 -c 'import struct, zlib, sys; h = struct.pack(\">IIBBBBB\", %d, %d, 8, %d, 0, 0, 0); "
+                                "c = lambda t, d: struct.pack(\">I\", len(d)) + t + d + struct.pack(\">I\", zlib.crc32(t + d)); "
+                                "open(sys.argv[1], \"wb\").write(b\"\\x89PNG\\r\\n\\x1a\\n\" + c(b\"IHDR\", h) + "
+                                "c(b\"IDAT\", zlib.compress(bytes(64))) + c(b\"IEND\", b\"\"))' %s/%s",
+                                w, h, colour, g_tmp, name), 0);
+}
+
 /* The one reader of images from outside (sb_image_read_rgb: score's frames, flip's images): a device behind a
  * link, a header that claims more pixels than any data behind it, NaN, each one line with exit 2 and nothing
  * allocated or spun on; an alpha channel read as stored, never multiplied in. */
@@ -278,20 +289,12 @@ static void test_image_reader(void **st) {
                     "timeout 20 %s score plane-box plane-box %s/device --mask 'mask_%%04d.png' %s", bin, g_tmp, common);
     expect_cli_fail("not a regular file (a folder)", "%s flip %s/device %s/device/mask_0000.png", bin, g_tmp, g_tmp);
     /* a PNG header claiming 60000 x 60000 with no data: refused on its header (it aborted on std::bad_alloc) */
-    assert_int_equal(run_logged(g_out, sizeof g_out,
-                                "python3 -c 'import struct, zlib, sys; h = struct.pack(\">IIBBBBB\", 60000, 60000, 8, 0, 0, 0, 0); "
-                                "c = lambda t, d: struct.pack(\">I\", len(d)) + t + d + struct.pack(\">I\", zlib.crc32(t + d)); "
-                                "open(sys.argv[1], \"wb\").write(b\"\\x89PNG\\r\\n\\x1a\\n\" + c(b\"IHDR\", h) + c(b\"IDAT\", zlib.compress(bytes(64))) + c(b\"IEND\", b\"\"))' "
-                                "%s/huge.png", g_tmp), 0);
+    png_claiming("huge.png", 60000, 60000, 0);
     expect_cli_fail("huge.png: 60000x60000 with 1 channels: more than the 268435456 pixels",
                     "%s flip %s/huge.png %s/huge.png", bin, g_tmp, g_tmp);
     /* within the pixel limit but more than its file could hold (8000 x 8000 RGB, 192 MB, in 100 bytes): refused
        on its header against the file's length, before 768 MB of floats are allocated */
-    assert_int_equal(run_logged(g_out, sizeof g_out,
-                                "python3 -c 'import struct, zlib, sys; h = struct.pack(\">IIBBBBB\", 8000, 8000, 8, 2, 0, 0, 0); "
-                                "c = lambda t, d: struct.pack(\">I\", len(d)) + t + d + struct.pack(\">I\", zlib.crc32(t + d)); "
-                                "open(sys.argv[1], \"wb\").write(b\"\\x89PNG\\r\\n\\x1a\\n\" + c(b\"IHDR\", h) + c(b\"IDAT\", zlib.compress(bytes(64))) + c(b\"IEND\", b\"\"))' "
-                                "%s/claims.png", g_tmp), 0);
+    png_claiming("claims.png", 8000, 8000, 2);
     expect_cli_fail("claims.png: its header claims 8000x8000 with 3 channels (192000000 bytes) in a file of",
                     "%s flip %s/claims.png %s/claims.png", bin, g_tmp, g_tmp);
     /* NaN in a float image: refused with its pixel (score read it as shadow: err_rate 0.0027 -> 0.50) */
