@@ -273,13 +273,18 @@ static int teardown(void **state) {
     return tmp_remove(g_tmp);
 }
 
-int main(void) {
-    const struct CMUnitTest tests[] = {
+/* Three programs' worth in one (the suite runs each group as a test of its own, beside the others): the sun's
+ * sweep with the rule and the cover ("sweep"), the lamps' ("sweep-lamps"), and LiSPSM's rule ("sweep-lispsm"). */
+int main(int argc, char **argv) {
+    const struct CMUnitTest sun[] = {
         cmocka_unit_test(test_rule),
         cmocka_unit_test(test_pairwise_covers),
         cmocka_unit_test(test_sun),
-        cmocka_unit_test(test_lamps),
-        cmocka_unit_test(test_lispsm_rule),
     };
-    return cmocka_run_group_tests(tests, setup, teardown);
+    const struct CMUnitTest lamps[] = {cmocka_unit_test(test_lamps)};
+    const struct CMUnitTest lispsm[] = {cmocka_unit_test(test_lispsm_rule)};
+    const char *group = argc > 1 ? argv[1] : "";
+    if (!strcmp(group, "lamps")) return cmocka_run_group_tests_name("sweep-lamps", lamps, setup, teardown);
+    if (!strcmp(group, "lispsm")) return cmocka_run_group_tests_name("sweep-lispsm", lispsm, setup, teardown);
+    return cmocka_run_group_tests_name("sweep", sun, setup, teardown);
 }
