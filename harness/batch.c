@@ -1,5 +1,4 @@
 /* batch.c - batch file parsing, matrix expansion, shards. */
-#define _DEFAULT_SOURCE /* usleep */
 #include "scene_load.h"
 #include "batch.h"
 
@@ -581,75 +580,20 @@ static bool reload_scene(const sb_batch *b, sb_batch_scene *bs, sb_err *err) {
     return false;
 }
 
-/* The calibration probe now: measured (a probe of its own: the scenes' are closed), or replayed from
- * SB_REPLAY_TIMINGS as technique "calm-probe", attempt k (the test seam of stability.h). NaN: none. */
-static double probe_now(sb_session *s, int k) {
-    const char *file = getenv("SB_REPLAY_TIMINGS");
-    if (file && *file) {
-        char *text = sb_read_file(file, NULL, NULL), why[200];
-        sb_stability_replay rp;
-        int found = text ? sb_stability_replay_find(text, "calm-probe", k, &rp, why, sizeof why) : 0;
-        free(text);
-        if (found > 0) return rp.calib_before;
-    }
-    sb_calib c;
-    sb_err err;
-    memset(&c, 0, sizeof c);
-    if (!sb_calib_init(&c, &s->ctx, s->ctx.has_timer_query && !s->ctx.software, &err)) return NAN;
-    double ms = sb_calib_measure(&c);
-    sb_calib_free(&c);
-    return ms;
-}
-
-/* A disturbed night waits for the probe to come back to calm (three probes in a row within tol of it), a probe a
- * second for at most wait_s; true: calm again. */
-static bool wait_for_calm(sb_session *s, double calm_ms, double tol, double wait_s, double *waited_s, double *last_ms) {
-    double t0 = sb_now_ms();
-    *last_ms = NAN;
-    for (int k = 1, calm = 0; !sb_interrupted(); k++) {
-        *last_ms = probe_now(s, k);
-        calm = isfinite(*last_ms) && *last_ms <= calm_ms * (1 + tol) ? calm + 1 : 0;
-        *waited_s = (sb_now_ms() - t0) / 1e3;
-        if (calm >= 3) return true;
-        if (!calm && *waited_s + 1 > wait_s) return false;   /* a calm probe is checked twice more, budget or not */
-        usleep(calm ? 200000 : 1000000);
-    }
-    return false;
-}
-
 /* The runs that ended unstable, run again at the batch's end (--rerun-unstable N), scene by scene, each with its
  * line's light; up to N attempts more, planned on the night's figures (sb_rerun_plan_make: a disturbed night waits
  * for calm or says so and runs nothing again; re-runs take at most a stated share of the night's time). */
 static void rerun_unstable(sb_batch *b, const bool *selected, const char *dir, sb_session *s, sb_summary *sum,
                            double night_t0) {
-    const double night_s = (sb_now_ms() - night_t0) / 1e3, tol = s->ctx.software ? 0.35 : 0.15;
+    const double night_s = (sb_now_ms() - night_t0) / 1e3;
     const int nprobe = sum->ncalib;   /* the first attempts' probes: the night as it ran */
     double spent_s = 0;
     for (int attempt = 2; attempt <= 1 + b->opts.rerun_unstable && !sb_interrupted(); attempt++) {
-        char **ids = NULL;
-        sb_rerun_run *rr = NULL;
-        int nu = sb_summary_rerun_runs(sum, &ids, &rr), again = 0;
-        bool *pick = sb_xcalloc((size_t)nu + 1, sizeof *pick);
-        sb_rerun_plan plan;
-        sb_rerun_plan_make(rr, nu, sum->calib, nprobe, night_s, spent_s, tol, pick, &plan);
-        bool go = plan.unstable > 0;
-        if (go && attempt == 2 && plan.disturbed) {
-            double waited = 0, last = NAN;
-            char what[400];
-            snprintf(what, sizeof what, "the night was disturbed: %d of %d runs unstable, the calibration probe above "
-                     "its calm %.3g ms by more than %.0f%% for %d runs in a row", plan.unstable, plan.runs,
-                     plan.calm_ms, 100 * tol, plan.busy_streak);
-            go = wait_for_calm(s, plan.calm_ms, tol, SB_RERUN_WAIT * night_s, &waited, &last);
-            if (go) sb_log("%s; calm again after %.0f s: running again what %.0f%% of the night's time buys", what,
-                           waited, 100 * SB_RERUN_SHARE);
-            else
-                sb_log("%s; not calm within %.0f s (%.0f%% of the night's time; the probe %.3g ms): no run run again, "
-                       "its %d unstable run(s) stay stable=no", what, waited, 100 * SB_RERUN_WAIT, last, plan.unstable);
-        }
-        if (go && plan.chosen < plan.unstable)
-            sb_log("%d of %d unstable run(s) not run again (attempt %d): re-runs take at most %.0f%% of the night's "
-                   "%.0f s (at least %.0f s), %.0f s of it spent", plan.unstable - plan.chosen, plan.unstable, attempt,
-                   100 * SB_RERUN_SHARE, night_s, SB_RERUN_FLOOR_S, spent_s);
+        sb_rerun_round round;
+        bool go = sb_rerun_round_plan(s, sum, nprobe, night_s, spent_s, attempt, &round), again = false;
+        char **ids = round.ids;
+        const bool *pick = round.pick;
+        const int nu = round.n;
         double t0 = sb_now_ms();
         for (int sc = 0; go && sc < b->nscenes && !sb_interrupted(); sc++) {
             sb_batch_scene *bs = &b->scenes[sc];
@@ -672,15 +616,12 @@ static void rerun_unstable(sb_batch *b, const bool *selected, const char *dir, s
                 if (!sb_session_set_lights(s, br->lights, &err)) continue;   /* it ran with them before */
                 const sb_run_spec *spec = &br->spec;
                 sb_run_again(s, &spec, &br->index, 1, dir, sum, attempt);
-                again++;
+                again = true;
             }
             if (open) sb_session_close_scene(s);
         }
         spent_s += (sb_now_ms() - t0) / 1e3;
-        for (int u = 0; u < nu; u++) free(ids[u]);
-        free(ids);
-        free(rr);
-        free(pick);
+        sb_rerun_round_free(&round);
         if (!again) break;
     }
 }

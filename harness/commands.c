@@ -356,20 +356,28 @@ static int run_into(const sb_cli *c, sb_session *s, const char *dir, const sb_ru
     const sb_run_spec **specs = sb_xmalloc(sizeof *specs * (size_t)(nruns ? nruns : 1));
     int *index = sb_xmalloc(sizeof *index * (size_t)(nruns ? nruns : 1));
     int todo = runs_to_do(c, s, &sum, dir, runs, nruns, specs, index);
+    const double t0 = sb_now_ms();
     sb_run_group(s, specs, index, todo, dir, &sum, 0, todo);
+    /* the runs flagged unstable, run again while the session is open: planned as a batch's are (a share of the
+       command's time, a disturbed machine waited for or said) */
+    const double night_s = (sb_now_ms() - t0) / 1e3;
+    const int nprobe = sum.ncalib;
+    double spent_s = 0;
     for (int attempt = 2; attempt <= 1 + s->opts.rerun_unstable && !sb_interrupted(); attempt++) {
-        char **ids = NULL;   /* the runs flagged unstable, run again while the session is open */
-        int nu = sb_summary_unstable(&sum, &ids), m = 0;
-        for (int i = 0; i < nruns; i++) {
-            char id[17];
-            sb_session_run_id(s, &runs[i], id);
-            for (int u = 0; u < nu; u++)
-                if (!strcmp(ids[u], id)) specs[m] = &runs[i], index[m++] = i;
-        }
-        for (int u = 0; u < nu; u++) free(ids[u]);
-        free(ids);
+        sb_rerun_round round;
+        int m = 0;
+        if (sb_rerun_round_plan(s, &sum, nprobe, night_s, spent_s, attempt, &round))
+            for (int i = 0; i < nruns; i++) {
+                char id[17];
+                sb_session_run_id(s, &runs[i], id);
+                for (int u = 0; u < round.n; u++)
+                    if (round.pick[u] && !strcmp(round.ids[u], id)) specs[m] = &runs[i], index[m++] = i;
+            }
+        sb_rerun_round_free(&round);
         if (!m) break;
+        const double a0 = sb_now_ms();
         sb_run_again(s, specs, index, m, dir, &sum, attempt);
+        spent_s += (sb_now_ms() - a0) / 1e3;
     }
     sb_err err;
     if (!sb_summary_flush(&sum, &err) || !sb_resultset_seal(dir, &err)) sb_say_line(stderr, err.msg);

@@ -674,3 +674,80 @@ void sb_run_again(sb_session *s, const sb_run_spec *const *specs, const int *run
     for (int k = 0; k < n; k++) sum->recovered += sb_summary_stable(sum, ids[k]);
     free(ids);
 }
+
+/* The calibration probe now: measured (a probe of its own), or replayed from
+ * SB_REPLAY_TIMINGS as technique "calm-probe", attempt k (the test seam of stability.h). NaN: none. */
+static double probe_now(sb_session *s, int k) {
+    const char *file = getenv("SB_REPLAY_TIMINGS");
+    if (file && *file) {
+        char *text = sb_read_file(file, NULL, NULL), why[200];
+        sb_stability_replay rp;
+        int found = text ? sb_stability_replay_find(text, "calm-probe", k, &rp, why, sizeof why) : 0;
+        free(text);
+        if (found > 0) return rp.calib_before;
+    }
+    sb_calib c;
+    sb_err err;
+    memset(&c, 0, sizeof c);
+    if (!sb_calib_init(&c, &s->ctx, s->ctx.has_timer_query && !s->ctx.software, &err)) return NAN;
+    double ms = sb_calib_measure(&c);
+    sb_calib_free(&c);
+    return ms;
+}
+
+/* A disturbed night waits for the probe to come back to calm (three probes in a row within tol of it), a probe a
+ * second for at most wait_s; true: calm again. */
+static bool wait_for_calm(sb_session *s, double calm_ms, double tol, double wait_s, double *waited_s, double *last_ms) {
+    double t0 = sb_now_ms();
+    *last_ms = NAN;
+    for (int k = 1, calm = 0; !sb_interrupted(); k++) {
+        *last_ms = probe_now(s, k);
+        calm = isfinite(*last_ms) && *last_ms <= calm_ms * (1 + tol) ? calm + 1 : 0;
+        *waited_s = (sb_now_ms() - t0) / 1e3;
+        if (calm >= 3) return true;
+        if (!calm && *waited_s + 1 > wait_s) return false;   /* a calm probe is checked twice more, budget or not */
+        nanosleep(&(struct timespec){.tv_sec = calm ? 0 : 1, .tv_nsec = calm ? 200000000L : 0}, NULL);
+    }
+    return false;
+}
+
+/* The re-runs of one attempt, planned on the figures so far (sb_rerun_plan_make), said in the log: a disturbed night
+ * (at attempt 2) waits for calm or says so and runs nothing again; re-runs take at most a stated share of the
+ * night's time. */
+bool sb_rerun_round_plan(sb_session *s, sb_summary *sum, int nprobe, double night_s, double spent_s, int attempt,
+                         sb_rerun_round *out) {
+    const double tol = s->ctx.software ? 0.35 : 0.15;
+    sb_rerun_run *rr = NULL;
+    memset(out, 0, sizeof *out);
+    out->n = sb_summary_rerun_runs(sum, &out->ids, &rr);
+    out->pick = sb_xcalloc((size_t)out->n + 1, sizeof *out->pick);
+    sb_rerun_plan plan;
+    sb_rerun_plan_make(rr, out->n, sum->calib, nprobe, night_s, spent_s, tol, out->pick, &plan);
+    free(rr);
+    bool go = plan.unstable > 0;
+    if (go && attempt == 2 && plan.disturbed) {
+        double waited = 0, last = NAN;
+        char what[400];
+        snprintf(what, sizeof what, "the night was disturbed: %d of %d runs unstable, the calibration probe above "
+                 "its calm %.3g ms by more than %.0f%% for %d runs in a row", plan.unstable, plan.runs,
+                 plan.calm_ms, 100 * tol, plan.busy_streak);
+        go = wait_for_calm(s, plan.calm_ms, tol, SB_RERUN_WAIT * night_s, &waited, &last);
+        if (go) sb_log("%s; calm again after %.0f s: running again what %.0f%% of the night's time buys", what,
+                       waited, 100 * SB_RERUN_SHARE);
+        else
+            sb_log("%s; not calm within %.0f s (%.0f%% of the night's time; the probe %.3g ms): no run run again, "
+                   "its %d unstable run(s) stay stable=no", what, waited, 100 * SB_RERUN_WAIT, last, plan.unstable);
+    }
+    if (go && plan.chosen < plan.unstable)
+        sb_log("%d of %d unstable run(s) not run again (attempt %d): re-runs take at most %.0f%% of the night's "
+               "%.0f s (at least %.0f s), %.0f s of it spent", plan.unstable - plan.chosen, plan.unstable, attempt,
+               100 * SB_RERUN_SHARE, night_s, SB_RERUN_FLOOR_S, spent_s);
+    return go;
+}
+
+void sb_rerun_round_free(sb_rerun_round *r) {
+    for (int u = 0; u < r->n; u++) free(r->ids[u]);
+    free(r->ids);
+    free(r->pick);
+    memset(r, 0, sizeof *r);
+}

@@ -34,6 +34,20 @@ int sb_run_group(sb_session *s, const sb_run_spec *const *specs, const int *run_
  * (at attempt 2) and those stable now (recovered). */
 void sb_run_again(sb_session *s, const sb_run_spec *const *specs, const int *run_index, int n, const char *out_dir,
                   sb_summary *sum, int attempt);
+/* One attempt's re-runs (--rerun-unstable), for `run` and `batch` alike: the unstable runs' ids (n of them) and
+ * which of them go again (pick[u]). */
+typedef struct sb_rerun_round {
+    char **ids;
+    bool *pick;
+    int n;
+} sb_rerun_round;
+/* Plans attempt `attempt`'s re-runs on the summary's figures so far (sb_rerun_plan_make: at most a stated share of
+ * the night's night_s seconds, spent_s of it spent on re-runs already; nprobe: the first attempts' calibration
+ * probes), a disturbed night (attempt 2) first waiting for a calm machine within its budget; the decisions said in
+ * the log. False: nothing is to run again. Free the round with sb_rerun_round_free either way. */
+bool sb_rerun_round_plan(sb_session *s, sb_summary *sum, int nprobe, double night_s, double spent_s, int attempt,
+                         sb_rerun_round *out);
+void sb_rerun_round_free(sb_rerun_round *r);
 /* Says what a run or batch command's summary holds (counts and folder) and,
  * after a SIGINT/SIGTERM, where the completed rows are and how to resume
  * (even with --quiet); returns the command's exit status: 128 + the signal

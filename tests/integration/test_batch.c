@@ -500,7 +500,8 @@ static void test_unstable_run_again(void **st) {
  * the probe moving under them (unstable): the machine busy for six runs in a row, not a frame. Re-running them at
  * once would meet the same load: the batch waits for a calm probe (replayed as technique calm-probe) at most a tenth
  * of the night's time. Never calm: it says the night was disturbed and runs nothing again (every row attempt 1).
- * Calm at once: it says so and runs the six again (attempt 2 at a probe within the night's: recovered). */
+ * Calm at once: it says so and runs the six again (attempt 2 at a probe within the night's: recovered). The same runs as
+ * one `run --rerun-unstable 1` command are planned alike (before, `run` re-ran every unstable run at once). */
 static void test_disturbed_night(void **st) {
     (void)st;
     char bench[300], replay[300];
@@ -510,11 +511,16 @@ static void test_disturbed_night(void **st) {
                       "defaults --frames 2 --size 64x36 --warmup 0 --error-every 0 --rerun-unstable 1\n"
                       "sm:res=256\nsm:res=512\npssm:res=256\nsdsm:res=256\nlispsm:res=256\ntsm:res=256\n"
                       "psm:res=256\nnone\n");
-    for (int calm = 0; calm < 2; calm++) {
+    /* a batch, then the same runs as one `run` command: the one plan decides both (sb_rerun_round_plan) */
+    for (int k = 0; k < 4; k++) {
+        const int calm = k % 2;
         write_text(replay, calm ? "calm-probe * 5 5 1\nsm * 5 5 5\n* 1 20 28 5\n* * 16 16 5\n"
                                 : "calm-probe * 20 20 1\nsm * 5 5 5\n* 1 20 28 5\n* * 16 16 5\n");
         setenv("SB_REPLAY_TIMINGS", replay, 1);
-        int rc = sh("%s batch %s --out %s/disturbed-%d", test_binary(), bench, g_tmp, calm);
+        int rc = k < 2 ? sh("%s batch %s --out %s/disturbed-%d", test_binary(), bench, g_tmp, k)
+                       : sh("%s run plane-box plane-box sm:res=256 sm:res=512 pssm:res=256 sdsm:res=256 lispsm:res=256 "
+                            "tsm:res=256 psm:res=256 none --frames 2 --size 64x36 --warmup 0 --error-every 0 "
+                            "--rerun-unstable 1 --out %s/disturbed-%d", test_binary(), g_tmp, k);
         unsetenv("SB_REPLAY_TIMINGS");
         assert_true(rc == 0 || rc == 5);   /* 5: unstable runs left (the exit-status table) */
         assert_non_null(strstr(g_out, "the night was disturbed: 6 of 8 runs unstable, the calibration probe above its "
