@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "table.h"
+#include "runkey.h"
 
 static int find_path(const sb_batch *b, const char *name) {
     for (int i = 0; i < b->npaths; i++)
@@ -438,14 +439,15 @@ bool sb_resume_check(const char *dir, const char *identity, const char *const *i
     int foreign = 0, first = -1;
     for (int r = 0; r < old.nrows; r++) {
         bool mine = false;
-        for (int i = 0; i < n && !mine; i++) mine = ids[i] && !strcmp(ids[i], sb_table_get(&old, r, "run_id"));
+        for (int i = 0; i < n && !mine; i++) mine = ids[i] && !strcmp(ids[i], sb_run_key_id(&old, r));
         if (!mine && !foreign++) first = r;
     }
+    sb_run_key k;
+    sb_run_key_of(&old, first, &k);
     bool ok = !foreign ||
               sb_fail(err, "--resume %s: its summary.csv holds %d run(s) this command does not make (run_id %s: %s %s): "
                            "resume a set with the command that made it%s, or leave --resume out for a set of its own",
-                      dir, foreign, sb_table_get(&old, first, "run_id"), sb_table_get(&old, first, "technique"),
-                      sb_table_get(&old, first, "params"), command);
+                      dir, foreign, k.run_id, k.technique, k.params, command);
     sb_table_free(&old);
     return ok;
 }
@@ -458,7 +460,7 @@ int sb_summary_keep_complete(sb_summary *sum, const char *dir, const char *const
     int kept = 0;
     if (!sb_table_load(&old, sum->path, &err)) return 0;
     for (int r = 0; r < old.nrows; r++) {
-        const char *id = sb_table_get(&old, r, "run_id");
+        const char *id = sb_run_key_id(&old, r);
         sb_status st = sb_status_of(sb_table_get(&old, r, "status"));
         for (int i = 0; i < n; i++) {
             if (!ids[i] || done[i] || strcmp(ids[i], id)) continue;

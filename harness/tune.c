@@ -36,6 +36,7 @@
 #include "site.h"
 #include "stats.h"
 #include "table.h"
+#include "runkey.h"
 
 /* A formatted line into a text buffer. */
 static void __attribute__((format(printf, 2, 3))) line(sb_csv *c, const char *fmt, ...) {
@@ -284,7 +285,7 @@ static void read_rung(tune *t, int rung, const char *sum_path) {
     sb_err err;
     if (!sb_table_load(&tb, sum_path, &err)) return;
     for (int r = 0; r < tb.nrows; r++) {
-        const char *id = sb_table_get(&tb, r, "run_id");
+        const char *id = sb_run_key_id(&tb, r);
         for (int i = 0; i < t->n; i++) {
             cand *c = &t->c[i];
             if (strcmp(c->run_id[rung], id)) continue;

@@ -13,6 +13,7 @@
 #include "stats.h"
 #include "table.h"
 #include "technique.h"
+#include "runkey.h"
 
 const char *const sb_stat_names[SB_STAT_COUNT] = {"mean", "median", "p95", "p99", "std", "ci95", "min", "max"};
 
@@ -848,7 +849,7 @@ int sb_summary_unstable(const sb_summary *sum, char ***ids) {
     for (int r = 0; r < t.nrows; r++)
         if (sb_status_of(sb_table_get(&t, r, "status")) == SB_STATUS_OK && !strcmp(sb_table_get(&t, r, "stable"), "no")) {
             *ids = sb_xrealloc(*ids, sizeof **ids * (size_t)(n + 1));
-            (*ids)[n++] = sb_strdup(sb_table_get(&t, r, "run_id"));
+            (*ids)[n++] = sb_strdup(sb_run_key_id(&t, r));
         }
     sb_table_free(&t);
     return n;
@@ -863,7 +864,7 @@ int sb_summary_rerun_runs(const sb_summary *sum, char ***ids, sb_rerun_run **run
         if (sb_status_of(sb_table_get(&t, r, "status")) == SB_STATUS_OK) {
             *ids = sb_xrealloc(*ids, sizeof **ids * (size_t)(n + 1));
             *runs = sb_xrealloc(*runs, sizeof **runs * (size_t)(n + 1));
-            (*ids)[n] = sb_strdup(sb_table_get(&t, r, "run_id"));
+            (*ids)[n] = sb_strdup(sb_run_key_id(&t, r));
             const char *w = sb_table_get(&t, r, "run_wall_s");
             (*runs)[n++] = (sb_rerun_run){*w ? strtod(w, NULL) : NAN, !strcmp(sb_table_get(&t, r, "stable"), "no")};
         }
@@ -876,7 +877,7 @@ bool sb_summary_stable(const sb_summary *sum, const char *run_id) {
     bool stable = false;
     if (!rows_table(sum, &t)) return false;
     for (int r = 0; r < t.nrows; r++)
-        if (!strcmp(sb_table_get(&t, r, "run_id"), run_id)) stable = !strcmp(sb_table_get(&t, r, "stable"), "yes");
+        if (!strcmp(sb_run_key_id(&t, r), run_id)) stable = !strcmp(sb_table_get(&t, r, "stable"), "yes");
     sb_table_free(&t);
     return stable;
 }
@@ -888,7 +889,7 @@ bool sb_summary_drop(sb_summary *sum, const char *run_id) {
     sb_columns_summary_header(&rows);
     bool dropped = false;
     for (int r = 0; r < t.nrows; r++) {
-        if (!dropped && !strcmp(sb_table_get(&t, r, "run_id"), run_id)) {
+        if (!dropped && !strcmp(sb_run_key_id(&t, r), run_id)) {
             sb_status st = sb_status_of(sb_table_get(&t, r, "status"));
             sum->count--;
             sum->failed -= st == SB_STATUS_FAILED;

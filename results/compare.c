@@ -12,6 +12,7 @@
 #include "csv.h"
 #include "columns.h"
 #include "resultset.h"
+#include "runkey.h"
 #include "technique.h"
 #include "table.h"
 
@@ -27,53 +28,13 @@ static bool load_summary(sb_table *t, const char *where, sb_err *err) {
     if (!is_dir && slash && !strcmp(slash + 1, "summary.csv")) *slash = 0;
     if ((is_dir || (slash && !slash[0])) && !sb_resultset_verify(dir, err)) return false;
     if (!sb_table_load(t, path, err)) return false;
-    const char *need[] = {"run_id", "scene", "path", "technique", "params", "status"};
-    for (size_t i = 0; i < SB_COUNT(need); i++)
-        if (sb_table_col(t, need[i]) < 0) {
-            sb_table_free(t);
-            return sb_fail(err, "%s: not a shadowbench summary (no '%s' column)", path, need[i]);
-        }
+    const char *missing = sb_run_key_missing(t, false);
+    if (!missing && sb_table_col(t, "status") < 0) missing = "status";
+    if (missing) {
+        sb_table_free(t);
+        return sb_fail(err, "%s: not a shadowbench summary (no '%s' column)", path, missing);
+    }
     return true;
-}
-
-static int cmp_str(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
-
-/* "b=2:a=1" -> "a=1:b=2" */
-static void sorted_params(const char *params, char *out, size_t len) {
-    char buf[2048], *items[64];
-    int n = 0;
-    snprintf(buf, sizeof buf, "%s", params);
-    for (char *t = strtok(buf, ":"); t && n < 64; t = strtok(NULL, ":")) items[n++] = t;
-    qsort(items, (size_t)n, sizeof(char *), cmp_str);
-    out[0] = 0;
-    for (int i = 0; i < n; i++) {
-        size_t l = strlen(out);
-        snprintf(out + l, len - l, "%s%s", i ? ":" : "", items[i]);
-    }
-}
-
-void sb_compare_run_key(const sb_table *t, int r, char *out, size_t len) {
-    char p[2048];
-    sorted_params(sb_table_get(t, r, "params"), p, sizeof p);
-    snprintf(out, len, "%s|%s|%s|%s", sb_table_get(t, r, "scene"), sb_table_get(t, r, "path"),
-             sb_table_get(t, r, "technique"), p);
-    /* a light with a size is another comparison: its runs match their own kind (none: the keys of before) */
-    const char *light = sb_table_get(t, r, "light");   /* "" in a set from before the column */
-    if (*light) {
-        size_t l = strlen(out);
-        snprintf(out + l, len - l, "|%s", light);
-    }
-    /* clips that play otherwise than the file says (another speed, some held still): another comparison */
-    const char *anim = sb_table_get(t, r, "anim");   /* "" in a set from before the column, and by default */
-    if (*anim) {
-        size_t l = strlen(out);
-        snprintf(out + l, len - l, "|anim=%s", anim);
-    }
-    /* draws issued indirectly are another series of timings (direct, or a set from before the column: as before) */
-    if (!strcmp(sb_table_get(t, r, "submit"), "indirect")) {
-        size_t l = strlen(out);
-        snprintf(out + l, len - l, "|indirect");
-    }
 }
 
 typedef struct {
@@ -113,11 +74,10 @@ static void header(FILE *out, int format, const char *a, const char *b) {
         fprintf(out, "| scene | path | technique | params | metric | %s | %s | ratio | verdict |\n|---|---|---|---|---|---:|---:|---:|---|\n", a, b);
 }
 
-static void row(FILE *out, int format, const sb_table *t, int r, const char *params, const char *m, double a, double b,
+static void row(FILE *out, int format, const sb_run_key *k, const char *params, const char *m, double a, double b,
                 const char *verdict) {
     double ratio = a != 0 ? b / a : (b == 0 ? 1 : INFINITY);
-    const char *scene = sb_table_get(t, r, "scene"), *path = sb_table_get(t, r, "path"),
-               *tech = sb_table_get(t, r, "technique");
+    const char *scene = k->scene, *path = k->path, *tech = k->technique;
     if (format == SB_OUTPUT_CSV) {
         sb_csv c = {0};
         sb_csv_str(&c, scene);
@@ -170,21 +130,21 @@ int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FIL
     double thr = o->threshold_pct / 100.0;
     int regressions = 0, matched = 0, shaky = 0;
     header(out, o->format, "base", "new");
+    sb_run_key *keys_a = sb_run_keys(&A), *keys_b = sb_run_keys(&B);
+    char (*text_a)[4096] = sb_xmalloc(sizeof *text_a * (size_t)(A.nrows ? A.nrows : 1));
+    for (int r = 0; r < A.nrows; r++) sb_run_key_text(&keys_a[r], text_a[r], sizeof text_a[r]);
     for (int rb = 0; rb < B.nrows; rb++) {
         if (sb_status_of(sb_table_get(&B, rb, "status")) != SB_STATUS_OK) continue;
-        char kb[4096], ka[4096];
-        sb_compare_run_key(&B, rb, kb, sizeof kb);
+        char kb[4096];
+        sb_run_key_text(&keys_b[rb], kb, sizeof kb);
         int ra = -1;
-        for (int r = 0; r < A.nrows && ra < 0; r++) {
-            if (sb_status_of(sb_table_get(&A, r, "status")) != SB_STATUS_OK) continue;
-            sb_compare_run_key(&A, r, ka, sizeof ka);
-            if (!strcmp(ka, kb)) ra = r;
-        }
+        for (int r = 0; r < A.nrows && ra < 0; r++)
+            if (sb_status_of(sb_table_get(&A, r, "status")) == SB_STATUS_OK && !strcmp(text_a[r], kb)) ra = r;
         if (ra < 0) continue;
         matched++;
         char params[2048];
-        sorted_params(sb_table_get(&B, rb, "params"), params, sizeof params);
-        const char *light = sb_table_get(&B, rb, "light");   /* a sized light's runs say so beside their parameters */
+        sb_run_key_sorted_params(keys_b[rb].params, params, sizeof params);
+        const char *light = keys_b[rb].light;   /* a sized light's runs say so beside their parameters */
         if (*light) {
             size_t l = strlen(params);
             snprintf(params + l, sizeof params - l, " (%s)", light);
@@ -198,15 +158,18 @@ int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FIL
                              (b.lower_worse ? b.mean + b.ci < a.mean - a.ci : b.mean - b.ci > a.mean + a.ci);
             if (!isnan(a.ci) && (unstable_row(&A, ra) || unstable_row(&B, rb))) { /* a timing of an unstable run */
                 shaky++;
-                row(out, o->format, &B, rb, params, metrics[k], a.center, b.center, "UNSTABLE");
+                row(out, o->format, &keys_b[rb], params, metrics[k], a.center, b.center, "UNSTABLE");
                 continue;
             }
             bool regressed = worse && separated;
             regressions += regressed;
-            row(out, o->format, &B, rb, params, metrics[k], a.center, b.center,
+            row(out, o->format, &keys_b[rb], params, metrics[k], a.center, b.center,
                 regressed ? "REGRESSED" : worse ? "worse, within noise" : "ok");
         }
     }
+    free(text_a);
+    free(keys_a);
+    free(keys_b);
     if (o->format == SB_OUTPUT_TEXT && matched)   /* none matched: the one line below says it */
         fprintf(out, "%d run(s) matched, %d regression(s) beyond %.3g%%, %d timing(s) UNSTABLE\n", matched, regressions,
                 o->threshold_pct, shaky);
@@ -359,41 +322,39 @@ static void cell_num(char *out, double v) {
 }
 
 /* Do runs ra and rb form a pair for key (A's value va, B's vb)? */
-static bool is_pair(const sb_table *t, int ra, int rb, const char *key, const char *va, const char *vb) {
-    const char *pa = sb_table_get(t, ra, "params"), *pb = sb_table_get(t, rb, "params");
+static bool is_pair(const sb_table *t, const sb_run_key *keys, int ra, int rb, const char *key, const char *va,
+                    const char *vb) {
+    const sb_run_key *A = &keys[ra], *B = &keys[rb];
+    const char *pa = A->params, *pb = B->params;
     char v[256];
     if (ra == rb || sb_status_of(sb_table_get(t, ra, "status")) != SB_STATUS_OK ||
         sb_status_of(sb_table_get(t, rb, "status")) != SB_STATUS_OK)
         return false;
-    if (strcmp(sb_table_get(t, ra, "scene"), sb_table_get(t, rb, "scene")) ||
-        strcmp(sb_table_get(t, ra, "path"), sb_table_get(t, rb, "path")))
-        return false;
+    if (strcmp(A->scene, B->scene) || strcmp(A->path, B->path)) return false;
     /* runs of other lights (a section of the set with --lights or a sized light) or of another animation are
        another comparison, never a pair ("" in a set from before the columns: as before) */
-    if (strcmp(sb_table_get(t, ra, "light"), sb_table_get(t, rb, "light")) ||
-        strcmp(sb_table_get(t, ra, "anim"), sb_table_get(t, rb, "anim")))
-        return false;
+    if (strcmp(A->light, B->light) || strcmp(A->anim, B->anim)) return false;
     if (!strcmp(key, "technique")) {
         /* techniques whose parameters mean different things (pssm's res is a cascade's, virtual's a page grid's)
            pair by what each side names: technique=pssm:res=2048:layered=off,virtual:cache=on */
         const char *qa = strchr(va, ':'), *qb = strchr(vb, ':');
         size_t la = qa ? (size_t)(qa - va) : strlen(va), lb = qb ? (size_t)(qb - vb) : strlen(vb);
-        const char *ta = sb_table_get(t, ra, "technique"), *tb = sb_table_get(t, rb, "technique");
+        const char *ta = A->technique, *tb = B->technique;
         if (strlen(ta) != la || strncmp(ta, va, la) || strlen(tb) != lb || strncmp(tb, vb, lb)) return false;
         return qa || qb ? meets(ta, pa, qa ? qa + 1 : "") && meets(tb, pb, qb ? qb + 1 : "") : agree(pa, pb, NULL);
     }
-    const char *tech = sb_table_get(t, ra, "technique");
-    return !strcmp(tech, sb_table_get(t, rb, "technique")) && run_param(tech, pa, key, v, sizeof v) &&
+    const char *tech = A->technique;
+    return !strcmp(tech, B->technique) && run_param(tech, pa, key, v, sizeof v) &&
            !strcmp(v, va) && run_param(tech, pb, key, v, sizeof v) && !strcmp(v, vb) && agree(pa, pb, key);
 }
 
 /* The table: scene (and path where it is not the scene's), technique (unless it
  * is the key), the parameters that are not the same in every pair, then for each
  * metric A's, B's and their ratio, and a verdict. */
-static void pairs_table(const sb_table *t, const pair_row *rows, int n, const char *key, const char *la,
-                        const char *lb, const char *const *metrics, int nm, sb_pair_table *tb) {
+static void pairs_table(const sb_table *t, const sb_run_key *keys, const pair_row *rows, int n, const char *key,
+                        const char *la, const char *lb, const char *const *metrics, int nm, sb_pair_table *tb) {
     bool by_tech = !strcmp(key, "technique"), show_path = false;
-    for (int i = 0; i < n; i++) show_path |= strcmp(sb_table_get(t, rows[i].a, "scene"), sb_table_get(t, rows[i].a, "path")) != 0;
+    for (int i = 0; i < n; i++) show_path |= strcmp(keys[rows[i].a].scene, keys[rows[i].a].path) != 0;
     int k = 0;
     snprintf(tb->head[k++], sizeof tb->head[0], "scene");
     if (show_path) snprintf(tb->head[k++], sizeof tb->head[0], "path");
@@ -417,9 +378,9 @@ static void pairs_table(const sb_table *t, const pair_row *rows, int n, const ch
         char (*cell)[160] = tb->cells[i];
         const pair_row *p = &rows[i];
         int c = 0;
-        snprintf(cell[c++], 160, "%s", sb_table_get(t, p->a, "scene"));
-        if (show_path) snprintf(cell[c++], 160, "%s", sb_table_get(t, p->a, "path"));
-        if (!by_tech) snprintf(cell[c++], 160, "%s", sb_table_get(t, p->a, "technique"));
+        snprintf(cell[c++], 160, "%s", keys[p->a].scene);
+        if (show_path) snprintf(cell[c++], 160, "%s", keys[p->a].path);
+        if (!by_tech) snprintf(cell[c++], 160, "%s", keys[p->a].technique);
         char *lab = cell[c];
         c += varying;
         for (int j = 0; varying && j < p->nitems; j++)
@@ -458,17 +419,18 @@ int sb_compare_pair_table(const sb_table *t, const sb_compare_opts *o, sb_pair_t
     bool by_tech = !strcmp(key, "technique");
     pair_row *rows = NULL;
     int n = 0;
+    sb_run_key *keys = sb_run_keys(t);
     for (int ra = 0; ra < t->nrows; ra++)
         for (int rb = 0; rb < t->nrows; rb++) {
-            if (!is_pair(t, ra, rb, key, va, vb)) continue;
+            if (!is_pair(t, keys, ra, rb, key, va, vb)) continue;
             rows = sb_xrealloc(rows, (size_t)(n + 1) * sizeof *rows);
             pair_row *p = &rows[n++];
             memset(p, 0, sizeof *p);
             p->a = ra;
             p->b = rb;
             bool own = by_tech && (strchr(va, ':') || strchr(vb, ':'));   /* parameters of their own meaning */
-            add_items(p, sb_table_get(t, ra, "params"), by_tech ? NULL : key, own ? sb_table_get(t, ra, "technique") : NULL);
-            add_items(p, sb_table_get(t, rb, "params"), by_tech ? NULL : key, own ? sb_table_get(t, rb, "technique") : NULL);
+            add_items(p, keys[ra].params, by_tech ? NULL : key, own ? keys[ra].technique : NULL);
+            add_items(p, keys[rb].params, by_tech ? NULL : key, own ? keys[rb].technique : NULL);
             qsort(p->items, (size_t)p->nitems, sizeof p->items[0], cmp_item);
         }
     char la[300], lb[300];
@@ -478,7 +440,7 @@ int sb_compare_pair_table(const sb_table *t, const sb_compare_opts *o, sb_pair_t
         la[strcspn(la, ":")] = 0;
         lb[strcspn(lb, ":")] = 0;
     }
-    pairs_table(t, rows, n, key, la, lb, metrics, nm, tb);
+    pairs_table(t, keys, rows, n, key, la, lb, metrics, nm, tb);
     for (int j = 0; n && j < rows[0].nitems; j++)
         if (shared_item(rows, n, rows[0].items[j])) {
             size_t l = strlen(tb->shared);
@@ -486,6 +448,7 @@ int sb_compare_pair_table(const sb_table *t, const sb_compare_opts *o, sb_pair_t
         }
     snprintf(tb->caption, sizeof tb->caption, "%d pair(s) %s=%s against %s=%s", n, key, vb, key, va);
     free(rows);
+    free(keys);
     return n;
 }
 
@@ -602,7 +565,9 @@ bool sb_merge(const char *const *dirs, int n, const char *out_dir, sb_err *err) 
     ok = ok && check_shards(dirs, n, t, err) && sb_mkdir_p(out_dir, err);
     for (int i = 0; ok && i < n; i++) {
         for (int r = 0; ok && r < t[i].nrows; r++) {
-            const char *id = sb_table_get(&t[i], r, "run_id");
+            sb_run_key key;
+            sb_run_key_of(&t[i], r, &key);
+            const char *id = key.run_id;
             for (int k = 0; k < nrows; k++)
                 if (!strncmp(rows[k].line, id, strlen(id)) && rows[k].line[strlen(id)] == ',')
                     ok = sb_fail(err, "%s: run %s is also in another folder", dirs[i], id);

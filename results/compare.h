@@ -45,8 +45,6 @@ struct sb_table;
 int sb_compare_pair_table(const struct sb_table *summary, const sb_compare_opts *o, sb_pair_table *out, sb_err *err);
 void sb_pair_table_free(sb_pair_table *t);
 struct sb_table;
-/* The key `compare` joins runs by: scene|path|technique|parameters sorted by name. */
-void sb_compare_run_key(const struct sb_table *t, int r, char *out, size_t len);
 /* Merges results folders (shards) into out_dir: per-run CSVs copied, summary
  * rows in matrix order (run_index). */
 bool sb_merge(const char *const *dirs, int n, const char *out_dir, sb_err *err);

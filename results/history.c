@@ -18,6 +18,7 @@
 #include "context.h"
 #include "csv.h"
 #include "resultset.h"
+#include "runkey.h"
 #include "stats.h"
 
 /* ---- series ---- */
@@ -52,17 +53,19 @@ void sb_series_parse(const char *key, sb_series *s) {
 }
 
 void sb_series_of_row(const sb_table *t, int r, const char *host, const char *renderer, sb_series *s) {
-    char key[3072];
-    sb_compare_run_key(t, r, key, sizeof key);   /* scene|path|technique|params[|light][|indirect] */
-    char rest[4096];
-    snprintf(rest, sizeof rest, "%s|%s|%s|%s|%sx%s|", host, renderer, sb_table_get(t, r, "scene"),
-             sb_table_get(t, r, "path"), sb_table_get(t, r, "width"), sb_table_get(t, r, "height"));
-    /* the key's technique and what follows it */
-    const char *kp = key;
-    for (int bars = 0; bars < 2 && (kp = strchr(kp, '|')); bars++) kp++;
-    size_t l = strlen(rest);
-    snprintf(rest + l, sizeof rest - l, "%s", kp ? kp : "");
-    sb_series_parse(rest, s);
+    sb_run_key k;
+    sb_run_key_of(t, r, &k);
+    memset(s, 0, sizeof *s);
+    snprintf(s->host, sizeof s->host, "%s", host);
+    snprintf(s->renderer, sizeof s->renderer, "%s", renderer);
+    snprintf(s->scene, sizeof s->scene, "%s", k.scene);
+    snprintf(s->path, sizeof s->path, "%s", k.path);
+    snprintf(s->size, sizeof s->size, "%sx%s", k.width, k.height);
+    snprintf(s->technique, sizeof s->technique, "%s", k.technique);
+    sb_run_key_sorted_params(k.params, s->params, sizeof s->params);
+    snprintf(s->light, sizeof s->light, "%s", k.light);
+    snprintf(s->anim, sizeof s->anim, "%s", k.anim);
+    s->indirect = sb_run_key_indirect(&k);
 }
 
 /* The parameters with what follows them in the key (the text a label's items come from). */
@@ -128,7 +131,9 @@ static int count_images(const char *dir) {
 static void set_host(const char *meta, const sb_table *t, char *host, size_t hlen, char *renderer, size_t rlen) {
     meta_field(meta, "host", host, hlen);
     if (!host[0]) snprintf(host, hlen, "unknown");
-    snprintf(renderer, rlen, "%s", t->nrows ? sb_table_get(t, 0, "renderer") : "");
+    sb_run_key k;
+    sb_run_key_of(t, 0, &k);   /* no rows: every field "" */
+    snprintf(renderer, rlen, "%s", k.renderer);
     if (!renderer[0]) meta_field(meta, "gl_renderer", renderer, rlen);
 }
 
@@ -156,10 +161,9 @@ static bool set_read(set_in *s, const char *dir, sb_err *err) {
     snprintf(s->sum_path, sizeof s->sum_path, "%s/summary.csv", dir);
     s->sum_text = sb_read_file(s->sum_path, &s->sum_len, err);
     if (!s->sum_text || !sb_table_parse(&s->t, s->sum_path, s->sum_text, err)) return false;
-    const char *need[] = {"run_id", "scene", "path", "technique", "params", "status", "width", "height"};
-    for (size_t i = 0; i < SB_COUNT(need); i++)
-        if (sb_table_col(&s->t, need[i]) < 0)
-            return sb_fail(err, "%s: not a shadowbench summary (no '%s' column)", s->sum_path, need[i]);
+    const char *missing = sb_run_key_missing(&s->t, true);
+    if (!missing && sb_table_col(&s->t, "status") < 0) missing = "status";
+    if (missing) return sb_fail(err, "%s: not a shadowbench summary (no '%s' column)", s->sum_path, missing);
     s->meta = read_meta(dir);
     set_host(s->meta, &s->t, s->host, sizeof s->host, s->renderer, sizeof s->renderer);
     meta_field(s->meta, "version", s->version, sizeof s->version);
@@ -192,12 +196,13 @@ static bool store_run(sb_history *h, long long night, const set_in *s, int r, sb
     int nm = 0;
     for (int c = 0; c < t->cols; c++)
         if (*t->rows[r][c] && sb_parse_double(t->rows[r][c], &values[nm])) names[nm++] = t->header[c];
-    const char *run_id = sb_table_get(t, r, "run_id");
+    sb_run_key k;
+    sb_run_key_of(t, r, &k);
+    const char *run_id = k.run_id;
     char fpath[4200];
     snprintf(fpath, sizeof fpath, "%s/%s.csv", s->dir, run_id);
     char *frames = *run_id ? sb_read_file(fpath, NULL, NULL) : NULL;
-    sb_history_run_in in = {.run_id = run_id, .series = key, .scene = sb_table_get(t, r, "scene"),
-                            .path = sb_table_get(t, r, "path"), .technique = sb_table_get(t, r, "technique"),
+    sb_history_run_in in = {.run_id = run_id, .series = key, .scene = k.scene, .path = k.path, .technique = k.technique,
                             .params = params, .size = se.size, .status = sb_table_get(t, r, "status"),
                             .reason = sb_table_get(t, r, "reason"), .stable = sb_table_get(t, r, "stable"),
                             .warnings = sb_table_get(t, r, "warnings"), .line = t->lines[r],

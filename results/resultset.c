@@ -12,6 +12,7 @@
 #include "columns.h"
 #include "csv.h"
 #include "table.h"
+#include "runkey.h"
 
 #define MANIFEST_HEAD "# shadowbench results set manifest 1: name, bytes, FNV-1a 64 of the bytes, CSV rows (-1: not a CSV)"
 
@@ -149,7 +150,7 @@ static bool check_frames(const char *dir, const entry *e, int n, sb_err *err) {
     bool ok = true;
     for (int r = 0; ok && r < t.nrows; r++) {
         long frames = 0, repeats = 1;
-        const char *id = sb_table_get(&t, r, "run_id");
+        const char *id = sb_run_key_id(&t, r);
         if (sb_status_of(sb_table_get(&t, r, "status")) != SB_STATUS_OK || !sb_parse_int(sb_table_get(&t, r, "frames"), &frames)) continue;
         if (!sb_parse_int(sb_table_get(&t, r, "repeats"), &repeats)) repeats = 1;
         char name[300];
