@@ -46,14 +46,17 @@ static void render_targets(sb_session *s, sb_instance *in, int pf, int n, int re
     sb_timer timer;
     sb_timer_init(&timer, SB_TIMING_SYNC, 1, 1);
     for (int k = replay; k >= 0; k--) {
-        if (pf - k < 0) continue;
+        /* before the path's first frame, the first frame itself: the timed pass reached it after warm-up frames
+           of it, so a technique that reads an earlier frame's figures (sdsm's latency) has them of this view, not
+           of whatever the evaluation drew last (a camera cut: 8x the error on desert's frame 0) */
+        const int at = pf - k < 0 ? 0 : pf - k;
         memset(f, 0, sizeof *f);
         f->eval_light = light;
-        f->anim_ms = sb_session_pose(s, sb_session_frame_time(s, pf - k, n));
+        f->anim_ms = sb_session_pose(s, sb_session_frame_time(s, at, n));
         sb_timer_frame_begin(&timer, 0);
-        sb_camera cam = sb_path_camera(&s->path, pf - k, n, (double)s->opts.width / s->opts.height, &s->scene);
-        f->index = pf - k;
-        f->progress = sb_path_progress(pf - k, n);
+        sb_camera cam = sb_path_camera(&s->path, at, n, (double)s->opts.width / s->opts.height, &s->scene);
+        f->index = at;
+        f->progress = sb_path_progress(at, n);
         sb_render_camera(s, in, f, &cam, (*seq)++, &timer, k == 0);
     }
     sb_timer_free(&timer);
