@@ -33,6 +33,10 @@ bool sb_csm_check(const sb_csm_desc *d, const char *name, sb_err *err) {
     if (d->fit == SB_FIT_RECEIVERS && (d->warp == SB_WARP_TSM || d->stable))
         return sb_fail(err, "%sfit=receivers cannot be combined with %s", name,
                        d->stable ? "stable=on (the sphere is the fit)" : "warp=tsm (its trapezoid is the fit)");
+    if (d->warp && d->filter == SB_FILTER_PCSS)   /* measured: docs/techniques.md, the conformance sweep */
+        return sb_fail(err, "%sfilter=pcss cannot be combined with a perspective warp (its blocker search and penumbra "
+                            "width read depths and texel sizes that the warp makes non-uniform: 11x warp=none's error "
+                            "on overhangs)", name);
     if (d->cache && !d->stable)
         return sb_fail(err, "%scache=on needs stable=on (an unstable fit moves every frame: nothing could be reused)",
                        name);

@@ -12,7 +12,11 @@
  * partitions), and empty partitions are skipped on the GPU.
  * splits=cpu: the statistics are read back `latency` frames late (0 stalls:
  * how the Brno thesis did it, which is why its cascade time included the CPU
- * waiting) and the CPU fits and culls per cascade like PSSM. */
+ * waiting) and the CPU fits and culls per cascade like PSSM. Statistics of a
+ * view the camera has cut away from (SDSM_CUT_*: turned or moved far since)
+ * say nothing of this one: that frame splits as if it had none, the way
+ * engines drop temporal history at a camera cut. */
+#include <math.h>
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
@@ -49,9 +53,16 @@ typedef struct depth_stats {
     uint32_t bounds[8][4];
 } depth_stats;
 
+/* A camera cut, for statistics read `latency` frames late: the view turned by more than SDSM_CUT_DEG, or moved by
+ * more than SDSM_CUT_DEPTH of its depth range (far - near). Measured: a frame a third of overhangs' path after the
+ * statistics' frame split by them had 9x the error of one split without (docs/techniques.md). */
+#define SDSM_CUT_DEG 20.0
+#define SDSM_CUT_DEPTH 0.1
+
 typedef struct {
     sb_csm csm;
     int partition, tight, latency;
+    sb_camera ring_cam[3];      /* splits=cpu: the camera of each copy in the ring (latency is at most 2) */
     bool gpu;
     double guard;
     GLuint stats;               /* SSBO binding 1 */
@@ -279,6 +290,11 @@ static void cpu_splits(sdsm_state *s, sb_frame *f) {
         glGetBufferSubData(GL_COPY_READ_BUFFER, (GLintptr)((f->seq - s->latency) % (s->latency + 1)) * (GLintptr)sizeof st,
                            sizeof st, &st);
     }
+    if (have && s->latency > 0) {   /* statistics of a view this one has cut away from: as if there were none */
+        const sb_camera *then = &s->ring_cam[(f->seq - s->latency) % (s->latency + 1)], *now = &f->cam;
+        double turn = sb_v3_dot(then->forward, now->forward), moved = sb_v3_len(sb_v3_sub(then->pos, now->pos));
+        have = turn >= cos(SDSM_CUT_DEG * SB_PI / 180) && moved <= SDSM_CUT_DEPTH * (now->zfar - now->znear);
+    }
     if (have && st.samples == 0) { /* all sky: nothing to shadow */
         for (int k = 0; k <= c->count; k++) splits[k] = f->cam.znear;
     } else if (have) {
@@ -292,7 +308,7 @@ static void cpu_splits(sdsm_state *s, sb_frame *f) {
             splits[0] = fmin(splits[0], f->cam.znear);
             splits[c->count] = fmax(splits[c->count], f->cam.zfar);
         }
-    } else { /* before the first readback: the whole view, logarithmically */
+    } else { /* before the first readback, or after a cut: the whole view, logarithmically */
         sb_split_distances(1.0, c->count, f->cam.znear, f->cam.zfar, splits);
     }
     sb_csm_fit(c, f, splits);
@@ -326,6 +342,7 @@ static void sdsm_frame(void *state, sb_frame *f) {
         glBindBuffer(GL_COPY_WRITE_BUFFER, s->ring);
         glCopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER, 0,
                             (GLintptr)(f->seq % (s->latency + 1)) * (GLintptr)sizeof(depth_stats), sizeof(depth_stats));
+        s->ring_cam[f->seq % (s->latency + 1)] = f->cam;
     }
     glActiveTexture(GL_TEXTURE0);
     sb_stage_end(f, SB_STAGE_MINMAX);
