@@ -251,7 +251,7 @@ static void sweep_scenes(const char *var, const char *def, const char *bases, co
 static void test_sun(void **state) {
     (void)state;
     sweep_scenes("SB_SWEEP_SCENES", "towers",
-                 "sm:res=1024 lispsm:res=1024 tsm:res=1024 psm:res=1024 pssm:res=1024 sdsm:res=1024", "--size 96x54", 3);
+                 "sm:res=512 lispsm:res=512 tsm:res=512 psm:res=512 pssm:res=512 sdsm:res=512", "--size 96x54", 3);
 }
 
 static void test_lamps(void **state) {
