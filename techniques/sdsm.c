@@ -54,8 +54,9 @@ typedef struct depth_stats {
 } depth_stats;
 
 /* A camera cut, for statistics read `latency` frames late: the view turned by more than SDSM_CUT_DEG, or moved by
- * more than SDSM_CUT_DEPTH of its depth range (far - near). Measured: a frame a third of overhangs' path after the
- * statistics' frame split by them had 9x the error of one split without (docs/techniques.md). */
+ * more than SDSM_CUT_DEPTH of its depth range (far - near). Measured on a frame a third of overhangs' path after the
+ * statistics' frame (pcf5, warp=tsm): err_rate 0.0107 split by them, 0.0066 split as a first frame is, 0.0048 at
+ * latency=0 (docs/techniques.md). */
 #define SDSM_CUT_DEG 20.0
 #define SDSM_CUT_DEPTH 0.1
 
