@@ -16,7 +16,7 @@ frame, the files `shadowbench score SCENE PATH OUT --mask mask_%04d.png`
 reads. The page (three-shadows.html) is served on localhost from a scratch
 folder; three comes from npm (scripts/setup installs it here). Prints the
 renderer and what it drew; exit 2 with one line when something is missing,
-1 when the page fails.
+1 when the page fails. SB_ENGINE_LOG=1 prints the page's own log too.
 """
 import argparse
 import base64
