@@ -366,6 +366,11 @@ static void check_geometry(sb_run *r) {
 /* The test seam SB_REPLAY_TIMINGS (stability.h): the probe and frame times the verdict judges, from the file's
  * line for this run's technique and attempt. False: no seam or no line (the measured ones stand), or a failed run
  * (the file unreadable or malformed). */
+/* How far a probe may stray from the batch's before a run is unstable, and a night's probe from its calm before
+ * the night is disturbed: one tolerance for both. A software rasterizer shares the CPU with everything else on the
+ * machine: wider tolerances there (stability.h's defaults are a GPU's). */
+static double batch_tol(const sb_session *s) { return s->ctx.software ? 0.35 : SB_BATCH_TOL; }
+
 static bool replayed_timings(sb_run *r, double *ms, double *before, double *after) {
     const char *file = getenv("SB_REPLAY_TIMINGS");
     if (!file || !*file) return false;
@@ -403,12 +408,11 @@ static bool judge_stability(sb_run *r) {
         free(ms);
         return false;
     }
-    /* a software rasterizer shares the CPU with everything else on the machine: wider tolerances */
     const bool sw = r->s->ctx.software;
     sb_stability_in in = {.calib_before = before, .calib_after = after,
                           .batch_calib = r->sum->calib, .nbatch = r->sum->ncalib, .frame_ms = ms, .n = r->done,
                           .per_repeat = r->s->opts.frames, .probe_tol = sw ? 0.25 : 0.10,
-                          .batch_tol = sw ? 0.35 : 0.15, .drift_tol = sw ? 0.20 : 0.05};
+                          .batch_tol = batch_tol(r->s), .drift_tol = sw ? 0.20 : 0.05};
     r->info.stable = sb_stability(&in, r->info.unstable_reason, sizeof r->info.unstable_reason) ? "yes" : "no";
     free(ms);
     r->info.calib_ms_before = r->calib_before;
@@ -716,7 +720,7 @@ static bool wait_for_calm(sb_session *s, double calm_ms, double tol, double wait
  * night's time. */
 bool sb_rerun_round_plan(sb_session *s, sb_summary *sum, int nprobe, double night_s, double spent_s, int attempt,
                          sb_rerun_round *out) {
-    const double tol = s->ctx.software ? 0.35 : 0.15;
+    const double tol = batch_tol(s);
     sb_rerun_run *rr = NULL;
     memset(out, 0, sizeof *out);
     out->n = sb_summary_rerun_runs(sum, &out->ids, &rr);

@@ -841,20 +841,6 @@ static bool rows_table(const sb_summary *sum, sb_table *t) {
     return sb_table_parse(t, "summary", sum->rows.buf ? sum->rows.buf : "", &e);
 }
 
-int sb_summary_unstable(const sb_summary *sum, char ***ids) {
-    sb_table t;
-    int n = 0;
-    *ids = NULL;
-    if (!rows_table(sum, &t)) return 0;
-    for (int r = 0; r < t.nrows; r++)
-        if (sb_status_of(sb_table_get(&t, r, "status")) == SB_STATUS_OK && !strcmp(sb_table_get(&t, r, "stable"), "no")) {
-            *ids = sb_xrealloc(*ids, sizeof **ids * (size_t)(n + 1));
-            (*ids)[n++] = sb_strdup(sb_run_key_id(&t, r));
-        }
-    sb_table_free(&t);
-    return n;
-}
-
 int sb_summary_rerun_runs(const sb_summary *sum, char ***ids, sb_rerun_run **runs) {
     sb_table t;
     int n = 0;

@@ -210,8 +210,6 @@ void sb_summary_add_calib(sb_summary *sum, double calib_ms);
 /* A row kept as it was from an earlier summary (resume), counted by its status. */
 void sb_summary_add_line(sb_summary *sum, const char *line, sb_status status);
 bool sb_summary_flush(sb_summary *sum, sb_err *err);
-/* The runs of the summary that ended ok but unstable (their ids, malloc'd each; free the array too). */
-int sb_summary_unstable(const sb_summary *sum, char ***ids);
 /* The set's ok runs in order, for the re-run plan (stability.h): ids[i] (strdup'd) and runs[i] (its wall time and
  * whether it ended unstable); both arrays malloc'd. */
 int sb_summary_rerun_runs(const sb_summary *sum, char ***ids, sb_rerun_run **runs);
