@@ -24,7 +24,9 @@ static int by_first(const void *a, const void *b) {
 }
 
 /* The draw a triangle belongs to (the draws' ranges sorted by their first triangle). */
-static const sb_draw *draw_of(const sb_scene *s, const draw_start *ds, uint32_t tri) {
+static const sb_draw *draw_of(const sb_scene *s, const draw_start *ds, const sb_ref_hit *h) {
+    if (h->draw != UINT32_MAX) return &s->draws[h->draw];   /* the reference knew it (an instance's run is shared) */
+    uint32_t tri = h->prim;
     size_t lo = 0, hi = s->draw_count;
     while (hi - lo > 1) {
         size_t mid = (lo + hi) / 2;
@@ -85,20 +87,20 @@ int sb_path_check_frames(const sb_reference *r, const sb_scene *s, const sb_path
         for (int k = 0; k < SPHERE; k++) {
             if (!isfinite(h[k].t)) continue;
             met++;
-            const sb_draw *d = draw_of(s, ds, h[k].prim);
+            const sb_draw *d = draw_of(s, ds, &h[k]);
             if (!h[k].front && d && !d->double_sided) backs++, back_node = d->node;
         }
         for (int k = 0; k < 5; k++) {
             const sb_ref_hit *q = &h[SPHERE + 1 + k];
             if (isfinite(q->t) && q->t < reach[(size_t)f * RAYS + SPHERE + 1 + k]) {
-                const sb_draw *d = draw_of(s, ds, q->prim);
+                const sb_draw *d = draw_of(s, ds, q);
                 v = (sb_path_frame){SB_PATH_NEAR, d ? (int64_t)d->node : -1};
             }
         }
         const sb_ref_hit *up = &h[SPHERE];
         /* the ray meets the back of a surface: the surface's front, turned from the ray, faces up */
         if (isfinite(up->t) && !up->front) {
-            const sb_draw *d = draw_of(s, ds, up->prim);
+            const sb_draw *d = draw_of(s, ds, up);
             v = (sb_path_frame){SB_PATH_BELOW, d ? (int64_t)d->node : -1};
         }
         /* surrounded (3 of 4 directions meet something: not merely under a sheet of ground) and mostly by backs */

@@ -368,6 +368,7 @@ static void first_hits(job *j) {
         sb_ref_hit *h = &j->hits[i];
         h->t = INFINITY;
         h->front = false;
+        h->draw = UINT32_MAX;
         memset(h->n, 0, sizeof h->n);
         if (!(len > 0)) continue;
         struct RTCRayHit rh = {.ray = {.org_x = o[0], .org_y = o[1], .org_z = o[2], .dir_x = d[0] / len,
@@ -380,10 +381,18 @@ static void first_hits(job *j) {
         /* the scene's triangle: a draw's own (world) copy, also where the ray met a repeat of another's */
         unsigned gid = rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID ? rh.hit.instID[0] : rh.hit.geomID;
         h->prim = (j->r->geom_first ? j->r->geom_first[gid] : 0) + rh.hit.primID;
-        /* the front face from the triangle's own winding (counter-clockwise, as glTF and GL say) */
+        h->draw = j->r->geom_first ? gid : UINT32_MAX;   /* attached a geometry a draw, in draw order */
+        /* the front face from the triangle's own winding (counter-clockwise, as glTF and GL say), as placed */
         const sb_scene *sc = j->r->src;
         const uint32_t *ix = sc->indices + 3 * (size_t)h->prim;
-        const float *a = sb_vertex(sc, ix[0]), *b = sb_vertex(sc, ix[1]), *c = sb_vertex(sc, ix[2]);
+        float a[3], b[3], c[3];
+        if (h->draw != UINT32_MAX) {
+            const sb_draw *dr = &sc->draws[h->draw];
+            sb_draw_point(sc, dr, ix[0], a), sb_draw_point(sc, dr, ix[1], b), sb_draw_point(sc, dr, ix[2], c);
+        } else {
+            memcpy(a, sb_vertex(sc, ix[0]), sizeof a), memcpy(b, sb_vertex(sc, ix[1]), sizeof b);
+            memcpy(c, sb_vertex(sc, ix[2]), sizeof c);
+        }
         float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
         float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
         float nl = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);

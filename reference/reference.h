@@ -95,7 +95,9 @@ typedef struct sb_ref_hit {
     float t;                    /* distance from from[i] (INFINITY: nothing hit) */
     float n[3];                 /* geometric normal of the hit triangle, facing the ray's origin */
     bool front;                 /* the triangle's front (counter-clockwise) face is the one facing the origin */
-    uint32_t prim;              /* the triangle (index into the scene's triangles) */
+    uint32_t prim;              /* the triangle in the scene's index array (an instance's: its proto's) */
+    uint32_t draw;              /* the draw it is of where the reference traces draws apart (shared or moving
+                                   geometry), else UINT32_MAX (the draw whose run holds prim) */
 } sb_ref_hit;
 void sb_reference_rays(const sb_reference *r, const float (*from)[3], const float (*to)[3], int n, sb_ref_hit *out,
                        int threads);

@@ -226,59 +226,57 @@ bool sb_xform_translation_only(const float x[12]) {
 const float sb_xform_identity[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
 
 void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p) {
-    uint32_t base = s->vertex_count;
-    uint32_t cap = s->build_cap;
-    s->build_pos = grow(s->build_pos, &cap, base + p->vertex_count, 3 * sizeof(double));
-    s->vertices = grow(s->vertices, &s->vertex_cap, base + p->vertex_count, SB_VERTEX_BYTES);
-    s->build_cap = cap;
-    for (uint32_t v = 0; v < p->vertex_count; v++) {
-        memcpy(s->build_pos + 3 * (size_t)(base + v), p->positions + 3 * (size_t)v, 3 * sizeof(double));
-        float *out = sb_vertex(s, base + v);
-        memset(out, 0, SB_VERTEX_BYTES);
-        if (p->normals) {
-            sb_v3 n = sb_v3_norm(sb_v3_make(p->normals[3 * v], p->normals[3 * v + 1], p->normals[3 * v + 2]));
-            out[3] = (float)n.x;
-            out[4] = (float)n.y;
-            out[5] = (float)n.z;
-        }
-        if (p->uv) {
-            out[6] = (float)p->uv[2 * v];
-            out[7] = (float)p->uv[2 * v + 1];
-        }
-        memcpy(out + 8, &p->material, 4);
-    }
-    if (!p->normals) face_normals(s, p, base);
-    s->vertex_count += p->vertex_count;
-
-    uint32_t first = s->index_count;
-    s->indices = grow(s->indices, &s->index_cap, first + p->index_count, sizeof(uint32_t));
-    for (uint32_t i = 0; i < p->index_count; i++) s->indices[first + i] = base + p->indices[i];
-    s->index_count += p->index_count;
-
-    s->draws = grow(s->draws, &s->draw_cap, s->draw_count + 1, sizeof(sb_draw));
-    sb_draw *d = &s->draws[s->draw_count++];
-    memset(d, 0, sizeof *d);
-    d->first_index = first;
-    d->index_count = p->index_count;
-    memcpy(d->color, p->color, sizeof d->color);
-    d->double_sided = p->double_sided;
-    d->closed = !p->double_sided && (p->closed_known ? p->closed_known == 2 : prim_closed(p));
-    d->material = p->material;
-    d->node = p->node;
-    d->first_vertex = base;
-    d->vertex_count = p->vertex_count;
-    d->proto = s->draw_count - 1;
-    memcpy(d->xform, sb_xform_identity, sizeof d->xform);
-    const sb_draw *of = p->instance_of && p->instance_of < s->draw_count ? &s->draws[p->instance_of - 1] : NULL;
-    if (of && of->proto == p->instance_of - 1 && of->vertex_count == p->vertex_count &&
-        of->index_count == p->index_count && of->double_sided == d->double_sided && of->closed == d->closed &&
-        of->material == d->material && similarity(p->relative)) {
-        d->proto = p->instance_of - 1;
-        s->build_rel = grow(s->build_rel, &s->build_rel_cap, s->draw_count, 12 * sizeof(double));
-        double *rel = s->build_rel + 12 * (size_t)(s->draw_count - 1);
+    bool double_sided = p->double_sided, closed = !double_sided && (p->closed_known ? p->closed_known == 2 : prim_closed(p));
+    const sb_draw *of = p->instance_of && p->instance_of <= s->draw_count ? &s->draws[p->instance_of - 1] : NULL;
+    bool instance = of && of->proto == p->instance_of - 1 && of->vertex_count == p->vertex_count &&
+                    of->index_count == p->index_count && of->double_sided == double_sided && of->closed == closed &&
+                    of->material == p->material && similarity(p->relative);
+    sb_draw d = {.double_sided = double_sided, .closed = closed, .material = p->material, .node = p->node,
+                 .proto = s->draw_count};
+    memcpy(d.color, p->color, sizeof d.color);
+    memcpy(d.xform, sb_xform_identity, sizeof d.xform);
+    if (instance) {   /* its proto's triangles and vertices, placed by its transform: not copied */
+        d.proto = p->instance_of - 1;
+        d.first_index = of->first_index, d.index_count = of->index_count;
+        d.first_vertex = of->first_vertex, d.vertex_count = of->vertex_count;
+        s->build_rel = grow(s->build_rel, &s->build_rel_cap, s->draw_count + 1, 12 * sizeof(double));
+        double *rel = s->build_rel + 12 * (size_t)s->draw_count;
         for (int r = 0; r < 3; r++)
             for (int c = 0; c < 4; c++) rel[4 * r + c] = p->relative[c * 4 + r];
+    } else {
+        uint32_t base = s->vertex_count;
+        uint32_t cap = s->build_cap;
+        s->build_pos = grow(s->build_pos, &cap, base + p->vertex_count, 3 * sizeof(double));
+        s->vertices = grow(s->vertices, &s->vertex_cap, base + p->vertex_count, SB_VERTEX_BYTES);
+        s->build_cap = cap;
+        for (uint32_t v = 0; v < p->vertex_count; v++) {
+            memcpy(s->build_pos + 3 * (size_t)(base + v), p->positions + 3 * (size_t)v, 3 * sizeof(double));
+            float *out = sb_vertex(s, base + v);
+            memset(out, 0, SB_VERTEX_BYTES);
+            if (p->normals) {
+                sb_v3 n = sb_v3_norm(sb_v3_make(p->normals[3 * v], p->normals[3 * v + 1], p->normals[3 * v + 2]));
+                out[3] = (float)n.x;
+                out[4] = (float)n.y;
+                out[5] = (float)n.z;
+            }
+            if (p->uv) {
+                out[6] = (float)p->uv[2 * v];
+                out[7] = (float)p->uv[2 * v + 1];
+            }
+            memcpy(out + 8, &p->material, 4);
+        }
+        if (!p->normals) face_normals(s, p, base);
+        s->vertex_count += p->vertex_count;
+        uint32_t first = s->index_count;
+        s->indices = grow(s->indices, &s->index_cap, first + p->index_count, sizeof(uint32_t));
+        for (uint32_t i = 0; i < p->index_count; i++) s->indices[first + i] = base + p->indices[i];
+        s->index_count += p->index_count;
+        d.first_index = first, d.index_count = p->index_count;
+        d.first_vertex = base, d.vertex_count = p->vertex_count;
     }
+    s->draws = grow(s->draws, &s->draw_cap, s->draw_count + 1, sizeof(sb_draw));
+    sb_draw *dp = &s->draws[s->draw_count++];
+    *dp = d;
     /* its box, while its positions are at hand (chunking gives its pieces their own): over the vertices its
        triangles use, each once (an index is read three times a vertex or so, a position once) */
     double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
@@ -293,7 +291,7 @@ void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p) {
         }
     }
     free(used);
-    d->box = (sb_aabb){{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
+    dp->box = (sb_aabb){{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
 }
 
 /* ---- chunking: split a draw's triangles at the centroid median until small ---- */
@@ -422,22 +420,33 @@ static void split_order(uint32_t *idx, double *cen, tri_key *k, uint32_t first, 
     split_order(idx + 3 * (size_t)half, cen + 3 * (size_t)half, k, first + half, n - half, out);
 }
 
-/* An instance's chunks are its proto's: its index run is the proto's reordered run moved to its own vertices,
- * cut where the proto's was, so chunk c of the one repeats chunk c of the other triangle for triangle. */
+/* The box of triangles [first_index, first_index + count) placed by an instance's world transform (rows). */
+static sb_aabb placed_range_box(const sb_scene *s, uint32_t first_index, uint32_t count, const double *rel) {
+    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+    for (uint32_t i = first_index; i < first_index + count; i++) {
+        const double *p = s->build_pos + 3 * (size_t)s->indices[i];
+        for (int k = 0; k < 3; k++) {
+            double q = rel[4 * k] * p[0] + rel[4 * k + 1] * p[1] + rel[4 * k + 2] * p[2] + rel[4 * k + 3];
+            lo[k] = q < lo[k] ? q : lo[k];
+            hi[k] = q > hi[k] ? q : hi[k];
+        }
+    }
+    return (sb_aabb){{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
+}
+
+/* An instance's chunks are its proto's: chunk c of the one is chunk c of the other's index run, placed by the
+ * instance's transform. */
 static void chunk_instance(sb_scene *s, uint32_t di, const uint32_t *extra_first, const uint32_t *extra_n) {
     sb_draw d = s->draws[di];
-    const sb_draw *pd = &s->draws[d.proto];
     uint32_t p = d.proto, k = 1 + extra_n[p];
     if (k == 1) return;   /* the proto was not cut: neither is this */
-    uint32_t pfirst = pd->first_index, delta = d.first_vertex - pd->first_vertex;   /* chunk 0 starts the run */
     for (uint32_t c = 0; c < k; c++) {
         uint32_t pci = c ? extra_first[p] + c - 1 : p;
         const sb_draw pc = s->draws[pci];
         sb_draw nd = d;
-        nd.first_index = d.first_index + (pc.first_index - pfirst);
+        nd.first_index = pc.first_index;
         nd.index_count = pc.index_count;
-        for (uint32_t i = 0; i < pc.index_count; i++) s->indices[nd.first_index + i] = s->indices[pc.first_index + i] + delta;
-        nd.box = tri_range_box(s, nd.first_index, nd.index_count);
+        nd.box = placed_range_box(s, nd.first_index, nd.index_count, s->build_rel + 12 * (size_t)di);
         nd.proto = pci;
         if (c == 0) {
             s->draws[di] = nd;
@@ -564,7 +573,7 @@ bool sb_scene_finish(sb_scene *s, sb_err *err) {
     }
     if (!(area > 0))
         snprintf(s->degenerate, sizeof s->degenerate, "all %u triangles have zero area (a zero scale, or every vertex "
-                 "at one point)", s->index_count / 3);
+                 "at one point)", (unsigned)sb_scene_triangles(s));
     free(s->build_pos);
     s->build_pos = NULL;
     double t1 = sb_now_ms();
@@ -661,10 +670,11 @@ static uint32_t group_of(group_table *tab, plane_group **g, uint32_t *ng, uint32
     return (*ng)++;
 }
 
-/* Triangle t's unit normal, plane distance and area (0: degenerate). */
-static double tri_plane(const sb_scene *s, uint32_t t, sb_v3 *n, double *d) {
-    const float *a = sb_vertex(s, s->indices[3 * t]), *b = sb_vertex(s, s->indices[3 * t + 1]),
-                *c = sb_vertex(s, s->indices[3 * t + 2]);
+/* Triangle t's unit normal, plane distance and area (0: degenerate); t of the placed numbering (sb_tri_map). */
+static double tri_plane(const sb_scene *s, const sb_tri_map *m, uint32_t t, sb_v3 *n, double *d) {
+    float p[9];
+    sb_scene_triangle(s, m, t, p);
+    const float *a = p, *b = p + 3, *c = p + 6;
     sb_v3 x = sb_v3_cross(sb_v3_make(b[0] - a[0], b[1] - a[1], b[2] - a[2]),
                           sb_v3_make(c[0] - a[0], c[1] - a[1], c[2] - a[2]));
     double len = sb_v3_len(x);
@@ -686,10 +696,13 @@ void sb_scene_find_planes(sb_scene *s) {
 }
 
 static void find_planes(sb_scene *s) {
-    uint32_t ntri = s->index_count / 3;
+    uint64_t all = sb_scene_triangles(s);
     sb_v3 ext = sb_v3_sub(s->bounds.hi, s->bounds.lo);
     double face = fmax(ext.x * ext.y, fmax(ext.y * ext.z, ext.x * ext.z)), diag = sb_v3_len(ext);
-    if (ntri == 0 || face <= 0) return;
+    if (all == 0 || all >= UINT32_MAX || face <= 0) return;
+    uint32_t ntri = (uint32_t)all;
+    sb_tri_map m;
+    sb_tri_map_make(s, &m);
     /* 1: the triangles by quantised normal alone (few groups): a plane's area is at most its normal's, so only
      * triangles of a normal with 0.1 face or more can be in a large plane */
     uint32_t *normal_of = sb_xmalloc(sizeof(uint32_t) * ntri);
@@ -699,7 +712,7 @@ static void find_planes(sb_scene *s) {
     group_table tab = {sb_xcalloc(1024, sizeof(uint64_t)), 1023, 0};
     for (uint32_t t = 0; t < ntri; t++) {
         sb_v3 n;
-        double d, area = tri_plane(s, t, &n, &d);
+        double d, area = tri_plane(s, &m, t, &n, &d);
         normal_of[t] = UINT32_MAX;
         if (area <= 0) continue;
         int64_t key[4] = {round_key(n.x * 1e3), round_key(n.y * 1e3), round_key(n.z * 1e3), 0};
@@ -748,7 +761,7 @@ static void find_planes(sb_scene *s) {
         free(p->tris);
         sb_v3 n;
         double d;
-        tri_plane(s, grp->head, &n, &d);
+        tri_plane(s, &m, grp->head, &n, &d);
         p->n[0] = n.x;
         p->n[1] = n.y;
         p->n[2] = n.z;
@@ -762,9 +775,112 @@ static void find_planes(sb_scene *s) {
     free(big);
     free(next);
     free(g);
+    sb_tri_map_free(&m);
 }
 
-uint64_t sb_scene_triangles(const sb_scene *s) { return s->index_count / 3; }
+uint64_t sb_scene_triangles(const sb_scene *s) {
+    uint64_t n = s->index_count / 3;
+    for (uint32_t d = 0; d < s->draw_count && s->instance_draws; d++)
+        if (SB_DRAW_IS_INSTANCE(s, d)) n += s->draws[d].index_count / 3;
+    return n;
+}
+
+void sb_tri_map_make(const sb_scene *s, sb_tri_map *m) {
+    m->n = 0;
+    m->draw = sb_xmalloc(sizeof(uint32_t) * (s->instance_draws + 1));
+    m->first = sb_xmalloc(sizeof(uint64_t) * (s->instance_draws + 1));
+    uint64_t at = s->index_count / 3;
+    for (uint32_t d = 0; d < s->draw_count && m->n < s->instance_draws; d++) {
+        if (!SB_DRAW_IS_INSTANCE(s, d)) continue;
+        m->draw[m->n] = d;
+        m->first[m->n++] = at;
+        at += s->draws[d].index_count / 3;
+    }
+    m->first[m->n] = at;
+}
+
+void sb_tri_map_free(sb_tri_map *m) {
+    free(m->draw);
+    free(m->first);
+    memset(m, 0, sizeof *m);
+}
+
+void sb_scene_triangle(const sb_scene *s, const sb_tri_map *m, uint64_t t, float out[9]) {
+    const sb_draw *d = NULL;
+    const uint32_t *ix;
+    if (t < s->index_count / 3) {
+        ix = s->indices + 3 * t;
+    } else {
+        uint32_t lo = 0, hi = m->n;   /* the last k with first[k] <= t */
+        while (hi - lo > 1) {
+            uint32_t mid = (lo + hi) / 2;
+            if (m->first[mid] <= t) lo = mid;
+            else hi = mid;
+        }
+        d = &s->draws[m->draw[lo]];
+        ix = s->indices + d->first_index + 3 * (t - m->first[lo]);
+    }
+    for (int k = 0; k < 3; k++) {
+        if (d) sb_draw_point(s, d, ix[k], out + 3 * k);
+        else memcpy(out + 3 * k, sb_vertex(s, ix[k]), 3 * sizeof(float));
+    }
+}
+
+void sb_scene_flatten(const sb_scene *s, const uint8_t *which, sb_scene_flat *out) {
+    memset(out, 0, sizeof *out);
+    out->first = sb_xmalloc(sizeof(uint32_t) * (s->draw_count + 1));
+    for (uint32_t d = 0; d < s->draw_count; d++) out->first[d] = s->draws[d].first_index;
+    uint64_t nv = s->vertex_count, ni = s->index_count;
+    for (uint32_t d = 0; d < s->draw_count && s->instance_draws; d++)
+        if (SB_DRAW_IS_INSTANCE(s, d) && (!which || which[d])) nv += s->draws[d].index_count, ni += s->draws[d].index_count;
+    out->vertices = s->vertices, out->vertex_count = s->vertex_count;
+    out->indices = s->indices, out->index_count = s->index_count;
+    if (ni == s->index_count) return;
+    /* each expanded draw's vertices: those its triangles use, once (a chunk's of its primitive's) */
+    float *v = sb_xmalloc(SB_VERTEX_BYTES * (size_t)nv);
+    uint32_t *ix = sb_xmalloc(sizeof(uint32_t) * (size_t)ni);
+    memcpy(v, s->vertices, (size_t)s->vertex_count * SB_VERTEX_BYTES);
+    memcpy(ix, s->indices, (size_t)s->index_count * sizeof(uint32_t));
+    uint32_t *seen = sb_xcalloc(s->vertex_count ? s->vertex_count : 1, sizeof(uint32_t)), *at = sb_xmalloc(
+        sizeof(uint32_t) * (s->vertex_count ? s->vertex_count : 1));
+    uint32_t vn = s->vertex_count, in = s->index_count;
+    for (uint32_t d = 0; d < s->draw_count; d++) {
+        const sb_draw *dr = &s->draws[d];
+        if (!SB_DRAW_IS_INSTANCE(s, d) || (which && !which[d])) continue;
+        out->first[d] = in;
+        const float *x = dr->xform;
+        for (uint32_t i = 0; i < dr->index_count; i++) {
+            uint32_t src = s->indices[dr->first_index + i];
+            if (seen[src] != d + 1) {   /* placed: the position by the transform, the normal turned (a similarity) */
+                seen[src] = d + 1;
+                at[src] = vn;
+                float *o = v + (size_t)SB_VERTEX_FLOATS * vn++;
+                const float *p = sb_vertex(s, src);
+                memcpy(o, p, SB_VERTEX_BYTES);
+                sb_draw_point(s, dr, src, o);
+                float n[3];
+                for (int r = 0; r < 3; r++) n[r] = x[4 * r] * p[3] + x[4 * r + 1] * p[4] + x[4 * r + 2] * p[5];
+                float len = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+                for (int r = 0; r < 3; r++) o[3 + r] = len > 0 ? n[r] / len : 0;
+            }
+            ix[in++] = at[src];
+        }
+    }
+    free(seen);
+    free(at);
+    out->vertices = v, out->vertex_count = vn;
+    out->indices = ix, out->index_count = in;
+    out->owned = true;
+}
+
+void sb_scene_flat_free(sb_scene_flat *f) {
+    if (f->owned) {
+        free((void *)f->vertices);
+        free((void *)f->indices);
+    }
+    free(f->first);
+    memset(f, 0, sizeof *f);
+}
 
 double sb_scene_cpu_bytes(const sb_scene *s) {
     double b = (double)s->vertex_count * SB_VERTEX_BYTES + (double)s->index_count * sizeof(uint32_t) +
@@ -965,7 +1081,7 @@ void sb_scene_info(const sb_scene *s, FILE *out) {
     fprintf(out, "instancing (EXT_mesh_gpu_instancing): %u nodes, %u instances (expanded)\n", f->instanced_nodes,
             f->instances);
     fprintf(out, "shared geometry: %u of %u draws repeat another's triangles under a rotation, uniform scale and "
-            "translation (one copy on the GPU and in the reference's BVH)\n", s->instance_draws, s->draw_count);
+            "translation (held once: on the CPU, the GPU and in the reference's BVH)\n", s->instance_draws, s->draw_count);
     fprintf(out, "Draco-compressed primitives: %u (decoded)\n", f->draco);
     fprintf(out, "vertex-colour alpha on alpha-tested primitives: %u (ignored)\n", f->vertex_alpha_ignored);
     fprintf(out, "degenerate: %s\n", s->degenerate[0] ? s->degenerate : "no");
@@ -1034,8 +1150,9 @@ double sb_scene_raycast(const sb_scene *s, sb_v3 o, sb_v3 d, double tmax, bool *
             if (!sb_ray_box(&dr->box, o, inv, best < tmax ? best : tmax)) continue;
             for (uint32_t k = dr->first_index; k + 2 < dr->first_index + dr->index_count; k += 3) {
                 sb_v3 n;
-                double t = ray_tri(sb_vertex(s, s->indices[k]), sb_vertex(s, s->indices[k + 1]),
-                                   sb_vertex(s, s->indices[k + 2]), o, d, &n);
+                float p[9];
+                for (int c = 0; c < 3; c++) sb_draw_point(s, dr, s->indices[k + c], p + 3 * c);
+                double t = ray_tri(p, p + 3, p + 6, o, d, &n);
                 if (t < best && t < tmax) {
                     best = t;
                     if (backface) *backface = !dr->double_sided && dr->closed && sb_v3_dot(n, d) > 0;

@@ -28,8 +28,9 @@ typedef struct sb_draw {
     uint32_t first_vertex, vertex_count;    /* the vertices of its primitive (every chunk of it names them all) */
     /* Instancing: a draw that repeats another's triangles under a similarity transform names that draw (`proto`,
      * whose own proto is itself) and the transform, origin-relative, as three rows of a 3x4 matrix (identity
-     * otherwise). Its own vertices are on the CPU as any draw's (every CPU reader sees world positions); the GPU
-     * buffers and the reference's BVH hold the proto's once and draw or trace it through the transform. */
+     * otherwise). The scene holds the triangles once: an instance's index run and vertex range are its proto's
+     * (first_index, index_count, first_vertex and vertex_count name them), placed by the transform wherever they
+     * are read (sb_draw_point on the CPU; the GPU and the reference's BVH draw or trace them through it). */
     uint32_t proto;
     float xform[12];
     uint8_t motion;         /* sb_draw_motion: whether a playing clip moves it, and how */
@@ -279,6 +280,45 @@ int32_t sb_scene_add_texture(sb_scene *s, uint32_t w, uint32_t h, const uint8_t 
 bool sb_material_covers(const sb_scene *s, uint32_t m, float u, float v);
 /* The first float of vertex i. */
 static inline float *sb_vertex(const sb_scene *s, uint32_t i) { return s->vertices + (size_t)SB_VERTEX_FLOATS * i; }
+/* Vertex v of draw d's triangles (an index of its run) where the draw places it, origin-relative: an instance's
+ * through its transform (d is one of s->draws). */
+static inline void sb_draw_point(const sb_scene *s, const sb_draw *d, uint32_t v, float out[3]) {
+    const float *p = sb_vertex(s, v);
+    if (d->proto == (uint32_t)(d - s->draws)) {
+        out[0] = p[0], out[1] = p[1], out[2] = p[2];
+        return;
+    }
+    const float *x = d->xform;
+    for (int r = 0; r < 3; r++) out[r] = x[4 * r] * p[0] + x[4 * r + 1] * p[1] + x[4 * r + 2] * p[2] + x[4 * r + 3];
+}
+/* The scene's triangles as numbered where one number names one placed triangle (the planes' tris, planar's
+ * index buffer): the index array's own, t < index_count / 3, then every instance draw's in draw order, each
+ * draw's in its run's order. How many there are is sb_scene_triangles. */
+/* Every triangle placed with vertices of its own, for what needs the world's triangles as one array (the
+ * volumes' silhouettes, the GPU's copy of draws that cannot share): the scene's own vertices and indices (the
+ * scene's arrays themselves where no draw is an instance), then, for each instance draw `which` names (NULL:
+ * every one), in draw order, its triangles on vertices placed by its transform (normals turned with it). */
+typedef struct sb_scene_flat {
+    const float *vertices;       /* SB_VERTEX_FLOATS each */
+    uint32_t vertex_count;
+    const uint32_t *indices;
+    uint32_t index_count;
+    uint32_t *first;             /* per draw: its first index in indices (an instance not expanded: its proto's) */
+    bool owned;                  /* the arrays are the flat's own (sb_scene_flat_free frees them) */
+} sb_scene_flat;
+void sb_scene_flatten(const sb_scene *s, const uint8_t *which, sb_scene_flat *out);
+void sb_scene_flat_free(sb_scene_flat *f);
+/* The instance draws of that numbering: draw[k] the k-th instance draw, first[k] its first triangle's number
+ * (first[n]: one past the last). */
+typedef struct sb_tri_map {
+    uint32_t n;
+    uint32_t *draw;
+    uint64_t *first;
+} sb_tri_map;
+void sb_tri_map_make(const sb_scene *s, sb_tri_map *m);
+void sb_tri_map_free(sb_tri_map *m);
+/* Triangle t of that numbering placed: its three corners' positions (9 floats, origin-relative). */
+void sb_scene_triangle(const sb_scene *s, const sb_tri_map *m, uint64_t t, float out[9]);
 void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p);
 /* Finds the large planar receivers (a plane holding at least 10% of the area of
  * the bounds' largest face) once: later calls return at once. A load does not search

@@ -137,13 +137,16 @@ static bool read_scene(sb_rbuf *r, sb_scene *s) {
         if (d->first_index > s->index_count || d->index_count > s->index_count - d->first_index ||
             d->material >= s->material_count || d->first_vertex > s->vertex_count ||
             d->vertex_count > s->vertex_count - d->first_vertex || d->proto >= s->draw_count ||
-            s->draws[d->proto].proto != d->proto || s->draws[d->proto].index_count != d->index_count)
+            s->draws[d->proto].proto != d->proto || s->draws[d->proto].index_count != d->index_count ||
+            (d->proto != i && (s->draws[d->proto].first_index != d->first_index ||
+                               s->draws[d->proto].first_vertex != d->first_vertex)))
             return false;
         s->instance_draws += d->proto != i;
     }
+    uint64_t placed = sb_scene_triangles(s);
     for (uint32_t i = 0; i < s->plane_count; i++)
         for (uint32_t k = 0; k < s->planes[i].tri_count; k++)
-            if (s->planes[i].tris[k] >= s->index_count / 3) return false;
+            if (s->planes[i].tris[k] >= placed) return false;
     for (uint32_t i = 0; i < s->material_count; i++)
         if (s->materials[i].texture >= (int32_t)s->texture_count) return false;
     for (uint32_t i = 0; i < s->texture_count; i++)

@@ -534,7 +534,8 @@ static double nearest_receiver(const sb_scene *s, const double (*planes)[4], sb_
         for (uint32_t i = 0; i + 2 < dr->index_count; i += 3) {
             sb_v3 poly[2][16];
             for (int v = 0; v < 3; v++) {
-                const float *p = sb_vertex(s, s->indices[dr->first_index + i + v]);
+                float p[3];
+                sb_draw_point(s, dr, s->indices[dr->first_index + i + v], p);
                 poly[0][v] = sb_v3_make(p[0], p[1], p[2]);
             }
             sb_v3 nrm = sb_v3_cross(sb_v3_sub(poly[0][1], poly[0][0]), sb_v3_sub(poly[0][2], poly[0][0]));

@@ -64,7 +64,7 @@ static bool planar_load(const sb_gpu *g, void **data, sb_err *err) {
         for (int r = 0; r < 3; r++) m.m[12 + r] = -Ld[r] * pl->d / nl;
         sb_m4_to_float(m, s->flatten[k]);
         uint32_t *idx = sb_xmalloc(sizeof(uint32_t) * 3 * pl->tri_count);
-        for (uint32_t t = 0; t < pl->tri_count; t++) memcpy(idx + 3 * t, sc->indices + 3 * (size_t)pl->tris[t], 12);
+        for (uint32_t t = 0; t < pl->tri_count; t++) sb_gpu_triangle(g, pl->tris[t], idx + 3 * t);
         glGenBuffers(1, &s->plane_ibo[k]);
         glBindBuffer(GL_COPY_WRITE_BUFFER, s->plane_ibo[k]); /* not through a VAO's element binding */
         glBufferData(GL_COPY_WRITE_BUFFER, (GLsizeiptr)(12 * (size_t)pl->tri_count), idx, GL_STATIC_DRAW);

@@ -129,7 +129,7 @@ struct sb_gpu_geom {
     uint32_t *first;            /* per draw: its first index in the GPU's index buffer */
     uint32_t *vbase;            /* per draw: where its first vertex (sb_draw.first_vertex) is in the vertex buffer */
     uint32_t index_count;       /* the GPU's index buffer */
-    uint32_t *orig;             /* that buffer as uploaded (NULL: the scene's own indices, nothing shared) */
+    uint32_t *orig;             /* that buffer as uploaded (NULL: the scene's own indices, no instance copied) */
 };
 
 static bool shares(const sb_scene *s, uint32_t d, int mode) {
@@ -138,39 +138,43 @@ static bool shares(const sb_scene *s, uint32_t d, int mode) {
     return dr->double_sided || dr->closed || (mode == SHARE_ALL && sb_xform_translation_only(dr->xform));
 }
 
-/* The vertices kept on the GPU (keep: 1 a vertex, may be NULL) and how many vertices and indices that is. */
-static void gpu_counts(const sb_scene *s, int mode, uint8_t *keep, uint64_t *vertices, uint64_t *indices) {
-    *vertices = 0, *indices = 0;
-    bool own_keep = !keep;
-    if (own_keep) keep = sb_xcalloc(s->vertex_count ? s->vertex_count : 1, 1);
-    for (uint32_t d = 0; d < s->draw_count; d++) {
-        if (shares(s, d, mode)) continue;
-        const sb_draw *dr = &s->draws[d];
-        *indices += dr->index_count;
-        memset(keep + dr->first_vertex, 1, dr->vertex_count);
+/* Per draw, 1 where an instance cannot share its proto's GPU copy under `mode` (drawn from vertices of its own,
+ * placed: sb_scene_flatten); NULL when no instance is so. */
+static uint8_t *own_copies(const sb_scene *s, int mode) {
+    uint8_t *which = NULL;
+    for (uint32_t d = 0; d < s->draw_count && s->instance_draws; d++) {
+        if (!SB_DRAW_IS_INSTANCE(s, d) || shares(s, d, mode)) continue;
+        if (!which) which = sb_xcalloc(s->draw_count, 1);
+        which[d] = 1;
     }
-    for (uint32_t v = 0; v < s->vertex_count; v++) *vertices += keep[v];
-    if (own_keep) free(keep);
+    return which;
 }
 
 double sb_gpu_scene_bytes(const sb_scene *s) {
     uint64_t nv = s->vertex_count, ni = s->index_count;
-    if (s->instance_draws) gpu_counts(s, SHARE_ALL, NULL, &nv, &ni);
+    uint8_t *which = own_copies(s, SHARE_ALL);
+    if (which) {
+        sb_scene_flat f;
+        sb_scene_flatten(s, which, &f);
+        nv = f.vertex_count, ni = f.index_count;
+        sb_scene_flat_free(&f);
+        free(which);
+    }
     double b = (double)nv * SB_VERTEX_BYTES + (double)ni * sizeof(uint32_t) + (double)(s->draw_count + 1) * 48;
     if (s->alpha_tested_draws > 0)
         b += (double)s->material_count * sizeof(packed_material) + (s->texel_count ? s->texel_count : 1);
     return b;
 }
 
-/* (Re)fills the vertex, index and per-draw transform buffers for sharing `mode`. */
+/* (Re)fills the vertex, index and per-draw transform buffers for sharing `mode`: the scene's own triangles as
+ * they are, then an instance that cannot share on vertices of its own (its triangles then numbered as
+ * sb_scene_flatten numbers them, planar's receivers among them under SHARE_NONE). */
 static void upload_geometry_as(const sb_gpu *g, int mode) {
     const sb_scene *s = g->scene;
     struct sb_gpu_geom *gm = g->geom;
     gm->mode = mode;
     free(gm->orig);
     gm->orig = NULL;
-    bool any = false;
-    for (uint32_t d = 0; d < s->draw_count && !any; d++) any = shares(s, d, mode);
     float *xf = sb_xmalloc(sizeof(float) * 12 * (s->draw_count + 1));
     for (uint32_t d = 0; d <= s->draw_count; d++)
         memcpy(xf + 12 * (size_t)d, d < s->draw_count && shares(s, d, mode) ? s->draws[d].xform : sb_xform_identity,
@@ -178,48 +182,26 @@ static void upload_geometry_as(const sb_gpu *g, int mode) {
     glBindBuffer(GL_ARRAY_BUFFER, g->xform_buf);
     glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(sizeof(float) * 12 * (s->draw_count + 1)), xf, GL_STATIC_DRAW);
     free(xf);
-    if (!any) {   /* every draw its own vertices: the scene's arrays as they are */
-        for (uint32_t d = 0; d < s->draw_count; d++) gm->first[d] = s->draws[d].first_index;
-        for (uint32_t d = 0; d < s->draw_count; d++) gm->vbase[d] = s->draws[d].first_vertex;
-        gm->index_count = s->index_count;
-        glBindBuffer(GL_ARRAY_BUFFER, g->vbo);
-        glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)s->vertex_count * SB_VERTEX_BYTES, s->vertices, GL_STATIC_DRAW);
-        glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g->ibo);
-        glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)s->index_count * sizeof(uint32_t), s->indices,
-                     GL_STATIC_DRAW);
-        return;
-    }
-    uint8_t *keep = sb_xcalloc(s->vertex_count ? s->vertex_count : 1, 1);
-    uint64_t nv, ni;
-    gpu_counts(s, mode, keep, &nv, &ni);
-    uint32_t *remap = sb_xmalloc(sizeof(uint32_t) * (s->vertex_count ? s->vertex_count : 1));
-    float *vb = sb_xmalloc(SB_VERTEX_BYTES * (size_t)(nv ? nv : 1));
-    uint32_t k = 0;
-    for (uint32_t v = 0; v < s->vertex_count; v++) {
-        if (!keep[v]) continue;
-        memcpy(vb + (size_t)SB_VERTEX_FLOATS * k, sb_vertex(s, v), SB_VERTEX_BYTES);
-        remap[v] = k++;
-    }
-    free(keep);
-    uint32_t *ib = sb_xmalloc(sizeof(uint32_t) * (size_t)(ni ? ni : 1)), at = 0;
+    uint8_t *which = own_copies(s, mode);
+    sb_scene_flat f;
+    if (which) sb_scene_flatten(s, which, &f);
+    else f = (sb_scene_flat){s->vertices, s->vertex_count, s->indices, s->index_count, NULL, false};
     for (uint32_t d = 0; d < s->draw_count; d++) {
-        if (shares(s, d, mode)) continue;
         const sb_draw *dr = &s->draws[d];
-        gm->first[d] = at;
-        for (uint32_t i = 0; i < dr->index_count; i++) ib[at++] = remap[s->indices[dr->first_index + i]];
+        gm->first[d] = f.first ? f.first[d] : dr->first_index;   /* a shared instance: its proto's run */
+        gm->vbase[d] = SB_DRAW_IS_INSTANCE(s, d) ? UINT32_MAX : dr->first_vertex;
     }
-    for (uint32_t d = 0; d < s->draw_count; d++)
-        if (shares(s, d, mode)) gm->first[d] = gm->first[s->draws[d].proto];
-    for (uint32_t d = 0; d < s->draw_count; d++)   /* a draw drawn from its own vertices keeps them in order */
-        gm->vbase[d] = shares(s, d, mode) ? UINT32_MAX : remap[s->draws[d].first_vertex];
-    free(remap);
-    gm->index_count = at;
+    gm->index_count = f.index_count;
     glBindBuffer(GL_ARRAY_BUFFER, g->vbo);
-    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)nv * SB_VERTEX_BYTES, vb, GL_STATIC_DRAW);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)f.vertex_count * SB_VERTEX_BYTES, f.vertices, GL_STATIC_DRAW);
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g->ibo);
-    glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)at * sizeof(uint32_t), ib, GL_STATIC_DRAW);
-    free(vb);
-    gm->orig = ib;
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)f.index_count * sizeof(uint32_t), f.indices, GL_STATIC_DRAW);
+    if (f.owned) {
+        gm->orig = (uint32_t *)f.indices;   /* kept: the facing order's source */
+        free((void *)f.vertices);
+    }
+    free(f.first);
+    free(which);
 }
 
 /* upload_geometry_as, then the moving vertices posed again where the GPU poses them: the upload sent the CPU's
@@ -284,8 +266,9 @@ typedef struct sb_facing {
     uint32_t *indices;          /* the scene's index buffer as uploaded */
 } sb_facing;
 
-static bool faces_light(const sb_scene *s, const uint32_t *t, const double light[4]) {
-    const float *a = sb_vertex(s, t[0]), *b = sb_vertex(s, t[1]), *c = sb_vertex(s, t[2]);
+static bool faces_light(const sb_scene *s, const sb_draw *dr, const uint32_t *t, const double light[4]) {
+    float a[3], b[3], c[3];
+    sb_draw_point(s, dr, t[0], a), sb_draw_point(s, dr, t[1], b), sb_draw_point(s, dr, t[2], c);
     double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
     double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
     double L[3] = {light[0], light[1], light[2]};
@@ -306,11 +289,11 @@ static void arrange_for(const sb_gpu *g, const double light[4]) {
         fc->count[d] = dr->index_count / 3;
         if (dr->double_sided || dr->closed || shares(s, d, gm->mode)) continue;
         if (dr->motion != SB_DRAW_STILL) sb_scene_sync_vertices(s);   /* which way it faces: the CPU's pose */
-        /* which way a triangle faces from the scene's own (world) vertices; what moves is its GPU copy */
+        /* which way a triangle faces from the scene's vertices as the draw places them; what moves is its GPU copy */
         const uint32_t *flat = s->indices + dr->first_index, *src = orig + gm->first[d];
         uint32_t *dst = fc->indices + gm->first[d], n = dr->index_count / 3, front = 0, back = 0;
         for (uint32_t t = 0; t < n; t++)
-            memcpy(faces_light(s, flat + 3 * t, light) ? dst + 3 * front++ : rest + 3 * back++, src + 3 * t, 12);
+            memcpy(faces_light(s, dr, flat + 3 * t, light) ? dst + 3 * front++ : rest + 3 * back++, src + 3 * t, 12);
         memcpy(dst + 3 * front, rest, 12 * (size_t)back);
         fc->count[d] = front;
     }
@@ -360,6 +343,11 @@ void sb_gpu_update_motion(const sb_gpu *g) {
     if (g->facing) g->facing->valid = false;   /* an open moving draw faces the light otherwise now */
 }
 
+
+void sb_gpu_triangle(const sb_gpu *g, uint32_t t, uint32_t out[3]) {
+    const uint32_t *ix = g->geom->orig ? g->geom->orig : g->scene->indices;
+    memcpy(out, ix + 3 * (size_t)t, 3 * sizeof(uint32_t));
+}
 
 void sb_gpu_share(const sb_gpu *g, bool planar) {
     int mode = planar ? SHARE_NONE : SHARE_WHOLE;

@@ -68,6 +68,8 @@ typedef struct {
     uint32_t v;
 } weld_key;
 
+static const float *flat_vertex(const sb_scene_flat *f, uint32_t i) { return f->vertices + (size_t)SB_VERTEX_FLOATS * i; }
+
 static int cmp_weld(const void *x, const void *y) {
     const weld_key *p = x, *q = y;
     int c = memcmp(p->p, q->p, sizeof p->p);
@@ -75,12 +77,12 @@ static int cmp_weld(const void *x, const void *y) {
 }
 
 /* Welded ids: vertices with equal coordinates share one (meshes split vertices per face). */
-static uint32_t *weld(const sb_scene *sc) {
+static uint32_t *weld(const sb_scene_flat *sc) {
     uint32_t nv = sc->vertex_count;
     weld_key *k = sb_xmalloc(sizeof *k * (nv ? nv : 1));
     uint32_t *id = sb_xmalloc(sizeof(uint32_t) * (nv ? nv : 1));
     for (uint32_t i = 0; i < nv; i++) {
-        memcpy(k[i].p, sb_vertex(sc, (uint32_t)i), sizeof k[i].p);
+        memcpy(k[i].p, flat_vertex(sc, i), sizeof k[i].p);
         k[i].v = i;
     }
     qsort(k, nv, sizeof *k, cmp_weld);
@@ -92,7 +94,7 @@ static uint32_t *weld(const sb_scene *sc) {
 
 /* Per triangle edge slot, 1 where the volume gets a side quad: an edge between
  * a lit and an unlit triangle, or an open edge of a lit one. */
-static uint8_t *silhouettes(const sb_scene *sc, const uint32_t *wid, const uint8_t *lit, uint32_t *open_edges) {
+static uint8_t *silhouettes(const sb_scene_flat *sc, const uint32_t *wid, const uint8_t *lit, uint32_t *open_edges) {
     uint32_t ntri = sc->index_count / 3;
     edge *edges = sb_xmalloc(sizeof(edge) * 3 * (size_t)(ntri ? ntri : 1));
     for (uint32_t t = 0; t < ntri; t++)
@@ -143,25 +145,25 @@ static void push4(vbuf *b, const float *p, float w, const float *off) {
 }
 
 /* Per scene draw: the sides (from the lit triangle's edge, extruded to infinity), then the light caps. */
-static void build_geometry(volumes_geo *geo, const sb_scene *sc, sb_v3 sun, const uint8_t *lit, const uint8_t *sil,
-                           vbuf *vb) {
+static void build_geometry(volumes_geo *geo, const sb_scene *scene, const sb_scene_flat *sc, sb_v3 sun,
+                           const uint8_t *lit, const uint8_t *sil, vbuf *vb) {
     const float L[3] = {(float)sun.x, (float)sun.y, (float)sun.z};
-    float eps = (float)(sb_v3_len(sb_v3_sub(sc->bounds.hi, sc->bounds.lo)) * 1e-5);
+    float eps = (float)(sb_v3_len(sb_v3_sub(scene->bounds.hi, scene->bounds.lo)) * 1e-5);
     const float off[3] = {-L[0] * eps, -L[1] * eps, -L[2] * eps}, away[3] = {-L[0], -L[1], -L[2]}, zero[3] = {0, 0, 0};
-    uint32_t nd = sc->draw_count;
+    uint32_t nd = scene->draw_count;
     geo->side_first = sb_xcalloc(nd + 1, sizeof(uint32_t));
     geo->side_count = sb_xcalloc(nd + 1, sizeof(uint32_t));
     geo->cap_first = sb_xcalloc(nd + 1, sizeof(uint32_t));
     geo->cap_count = sb_xcalloc(nd + 1, sizeof(uint32_t));
     for (uint32_t d = 0; d < nd; d++) {
-        const sb_draw *dr = &sc->draws[d];
-        uint32_t t0 = dr->first_index / 3, t1 = (dr->first_index + dr->index_count) / 3;
+        const sb_draw *dr = &scene->draws[d];
+        uint32_t t0 = sc->first[d] / 3, t1 = (sc->first[d] + dr->index_count) / 3;
         geo->side_first[d] = (uint32_t)(vb->n / 4);
         for (uint32_t t = t0; t < t1; t++) {
             const uint32_t *ix = sc->indices + 3 * (size_t)t;
             for (int e = 0; e < 3; e++) {
                 if (!sil[3 * (size_t)t + e]) continue;
-                const float *a = sb_vertex(sc, ix[e]), *b = sb_vertex(sc, ix[(e + 1) % 3]);
+                const float *a = flat_vertex(sc, ix[e]), *b = flat_vertex(sc, ix[(e + 1) % 3]);
                 /* the side is the lit triangle's neighbour across a -> b: it runs b -> a */
                 push4(vb, b, 1, off);
                 push4(vb, a, 1, off);
@@ -176,7 +178,7 @@ static void build_geometry(volumes_geo *geo, const sb_scene *sc, sb_v3 sun, cons
         for (uint32_t t = t0; t < t1; t++) {
             if (!lit[t]) continue;
             const uint32_t *ix = sc->indices + 3 * (size_t)t;
-            for (int k = 0; k < 3; k++) push4(vb, sb_vertex(sc, ix[k]), 1, off);
+            for (int k = 0; k < 3; k++) push4(vb, flat_vertex(sc, ix[k]), 1, off);
         }
         geo->cap_count[d] = (uint32_t)(vb->n / 4) - geo->cap_first[d];
     }
@@ -198,26 +200,28 @@ static void volumes_unload(void *data) {
 
 /* Silhouettes for the session's sun, their vertex buffer and the programs: once per scene. */
 static bool volumes_load(const sb_gpu *g, void **data, sb_err *err) {
-    const sb_scene *sc = g->scene;
+    const sb_scene *scene = g->scene;
     volumes_geo *geo = sb_xcalloc(1, sizeof *geo);
     *data = geo;
-    sb_scene_sync_vertices(sc);   /* the silhouettes of the pose the scene holds */
+    sb_scene_sync_vertices(scene);   /* the silhouettes of the pose the scene holds */
+    sb_scene_flat flat, *sc = &flat;   /* every triangle as placed: an instance's silhouette is its own */
+    sb_scene_flatten(scene, NULL, &flat);
     uint32_t ntri = sc->index_count / 3, *wid = weld(sc);
     uint8_t *lit = sb_xcalloc(ntri ? ntri : 1, 1);
     for (uint32_t t = 0; t < ntri; t++) {
         const uint32_t *ix = sc->indices + 3 * (size_t)t;
-        const float *a = sb_vertex(sc, ix[0]), *b = sb_vertex(sc, ix[1]),
-                    *c = sb_vertex(sc, ix[2]);
+        const float *a = flat_vertex(sc, ix[0]), *b = flat_vertex(sc, ix[1]), *c = flat_vertex(sc, ix[2]);
         sb_v3 n = sb_v3_cross(sb_v3_make(b[0] - a[0], b[1] - a[1], b[2] - a[2]),
                               sb_v3_make(c[0] - a[0], c[1] - a[1], c[2] - a[2]));
         lit[t] = sb_v3_dot(n, g->sun) > 0;
     }
     uint8_t *sil = silhouettes(sc, wid, lit, &geo->open_edges);
     vbuf vb = {0};
-    build_geometry(geo, sc, g->sun, lit, sil, &vb);
+    build_geometry(geo, scene, sc, g->sun, lit, sil, &vb);
     free(sil);
     free(lit);
     free(wid);
+    sb_scene_flat_free(&flat);
     glGenVertexArrays(1, &geo->vao);
     glBindVertexArray(geo->vao);
     glGenBuffers(1, &geo->vbo);

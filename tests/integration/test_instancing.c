@@ -4,7 +4,7 @@
  * drawn and traced from its own vertices. The two must give the same
  * pictures and figures, frame by frame, up to the rounding of where a copy's
  * vertices lie (a few pixels of an error rate), while the shared one holds a
- * fraction of the GPU memory:
+ * fraction of the memory, on the GPU and on the CPU:
  *  - towers tiled 3 x 3 with the tiles turned (closed meshes: shared even
  *    when turned), cascades per cascade and layered, SDSM;
  *  - zdm2 tiled 2 x 1 (open single-sided meshes moved only: their
@@ -57,12 +57,13 @@ static void tile(const char *src, const char *dst, const char *how) {
     assert_int_equal(system(cmd), 0);
 }
 
-/* The scene's shared draws and GPU bytes. */
-static double gpu_bytes(const char *path, uint32_t *shared) {
+/* The scene's shared draws, GPU bytes and CPU bytes (its arrays). */
+static double gpu_bytes(const char *path, uint32_t *shared, double *cpu) {
     sb_scene s;
     sb_err err;
     assert_true(sb_scene_load(&s, path, NULL, &err));
     *shared = s.instance_draws;
+    *cpu = sb_scene_cpu_bytes(&s);
     double b = sb_gpu_scene_bytes(&s);
     sb_scene_free(&s);
     return b;
@@ -72,7 +73,8 @@ static double gpu_bytes(const char *path, uint32_t *shared) {
 typedef struct pair {
     char shared[4096], copies[4096];
     uint32_t ns, nc;
-    double bs, bc;
+    double bs, bc;              /* GPU bytes */
+    double cs, cc;              /* CPU bytes */
 } pair;
 
 static void tile_pair(const char *src, const char *name, const char *how, pair *p) {
@@ -82,10 +84,10 @@ static void tile_pair(const char *src, const char *name, const char *how, pair *
     snprintf(copies_how, sizeof copies_how, "%s --copies", how);
     tile(src, p->shared, how);
     tile(src, p->copies, copies_how);
-    p->bs = gpu_bytes(p->shared, &p->ns);
-    p->bc = gpu_bytes(p->copies, &p->nc);
-    print_message("%s %s: %u shared draws, GPU %.2f MiB; copies: %u, %.2f MiB\n", name, how, p->ns,
-                  p->bs / 1048576.0, p->nc, p->bc / 1048576.0);
+    p->bs = gpu_bytes(p->shared, &p->ns, &p->cs);
+    p->bc = gpu_bytes(p->copies, &p->nc, &p->cc);
+    print_message("%s %s: %u shared draws, GPU %.2f MiB, CPU %.2f MiB; copies: %u, %.2f MiB, %.2f MiB\n", name, how,
+                  p->ns, p->bs / 1048576.0, p->cs / 1048576.0, p->nc, p->bc / 1048576.0, p->cc / 1048576.0);
 }
 
 /* The two results folders run for run and frame for frame: counts equal within count_tol (relative), error
@@ -147,6 +149,7 @@ static void test_towers_turned(void **st) {
     assert_true(p.ns >= 500);
     assert_int_equal(p.nc, 0);
     assert_true(p.bs < 0.25 * p.bc);
+    assert_true(p.cs < 0.25 * p.cc);   /* the CPU holds each mesh once too */
     const char *specs = "sm:res=512 pssm:res=512 pssm:res=512:layered=gs sdsm:res=512";
     render(p.shared, specs, "320x180", "towers-shared", a, sizeof a);
     render(p.copies, specs, "320x180", "towers-copies", b, sizeof b);
@@ -166,6 +169,7 @@ static void test_zdm2_open_moved(void **st) {
     assert_true(p.ns >= 16);
     assert_int_equal(p.nc, 0);
     assert_true(p.bs < 0.55 * p.bc);
+    assert_true(p.cs < 0.55 * p.cc);
     render(p.shared, "sm:res=1024 pssm:res=1024", "320x180", "zdm2-shared", a, sizeof a);
     render(p.copies, "sm:res=1024 pssm:res=1024", "320x180", "zdm2-copies", b, sizeof b);
     /* a copy chunked on its own may cut its triangles elsewhere, and an edge-on one face the sun either way */
@@ -204,8 +208,9 @@ static void test_lamp_between_copies(void **st) {
     write_walls(shared, true);
     write_walls(copies, false);
     uint32_t ns, nc;
-    gpu_bytes(shared, &ns);
-    gpu_bytes(copies, &nc);
+    double cpu;
+    gpu_bytes(shared, &ns, &cpu);
+    gpu_bytes(copies, &nc, &cpu);
     assert_int_equal(ns, 1);
     assert_int_equal(nc, 0);
     render(shared, "cube dpsm", "320x180", "walls-shared", a, sizeof a);

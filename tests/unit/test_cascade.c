@@ -198,8 +198,10 @@ static void culling(const char *scene) {
                 if (!culled) submitted += dr->index_count / 3;
                 for (uint32_t t = dr->first_index; t < dr->first_index + dr->index_count; t += 3) {
                     const uint32_t *ix = r.scene.indices + t;
-                    if (!triangle_casts(&r.csm.fit[k], sb_vertex(&r.scene, ix[0]), sb_vertex(&r.scene, ix[1]),
-                                        sb_vertex(&r.scene, ix[2])))
+                    float a[3], b[3], c[3];
+                    sb_draw_point(&r.scene, dr, ix[0], a), sb_draw_point(&r.scene, dr, ix[1], b);
+                    sb_draw_point(&r.scene, dr, ix[2], c);
+                    if (!triangle_casts(&r.csm.fit[k], a, b, c))
                         continue;
                     necessary++;
                     if (culled) fail_msg("%s: draw %u culled from cascade %d but triangle %u casts into it", scene, d, k, t / 3);
