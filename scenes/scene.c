@@ -226,7 +226,8 @@ bool sb_xform_translation_only(const float x[12]) {
 const float sb_xform_identity[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
 
 void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p) {
-    bool double_sided = p->double_sided, closed = !double_sided && (p->closed_known ? p->closed_known == 2 : prim_closed(p));
+    bool double_sided = p->double_sided;
+    bool closed = !double_sided && (p->closed_known ? p->closed_known == 2 : prim_closed(p));
     const sb_draw *of = p->instance_of && p->instance_of <= s->draw_count ? &s->draws[p->instance_of - 1] : NULL;
     bool instance = of && of->proto == p->instance_of - 1 && of->vertex_count == p->vertex_count &&
                     of->index_count == p->index_count && of->double_sided == double_sided && of->closed == closed &&

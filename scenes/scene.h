@@ -261,7 +261,7 @@ typedef struct sb_prim_desc {
                                     primitive already added: the answer does not change with the transform) */
     /* Another placement of a primitive already added (0: none): 1 + the draw index it was added as, and the
      * world transform from that placement to this one (4x4 column-major). The same vertices and triangles in
-     * the same order, so the GPU and the rays can keep one copy when the transform is a similarity that keeps
+     * the same order, so the scene keeps one copy (CPU, GPU, rays) when the transform is a similarity that keeps
      * the winding (sb_scene_add_prim decides; otherwise it is a copy like any other). */
     uint32_t instance_of;
     double relative[16];

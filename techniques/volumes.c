@@ -68,7 +68,9 @@ typedef struct {
     uint32_t v;
 } weld_key;
 
-static const float *flat_vertex(const sb_scene_flat *f, uint32_t i) { return f->vertices + (size_t)SB_VERTEX_FLOATS * i; }
+static const float *flat_vertex(const sb_scene_flat *f, uint32_t i) {
+    return f->vertices + (size_t)SB_VERTEX_FLOATS * i;
+}
 
 static int cmp_weld(const void *x, const void *y) {
     const weld_key *p = x, *q = y;
