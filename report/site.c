@@ -381,14 +381,15 @@ typedef struct site_data {
     int nnotes;
     sb_history_night *nights;
     int nn;
-    char **keys, **labels;
+    sb_series *series;          /* in the order of their keys */
+    char **keys, **labels;      /* their key texts (what the pages name them by) and short names */
     int ns;
 } site_data;
 
 /* One metric of a series: its nights ([night, date, value, ci, stable, commit]) and its changes. */
 static bool jseries_metric(sb_jw *j, sb_history *h, const site_data *d, int s, const char *metric, sb_err *err) {
     sb_history_point *pt = NULL;
-    int np = sb_history_points(h, d->keys[s], metric, &pt, err);
+    int np = sb_history_points(h, &d->series[s], metric, &pt, err);
     if (np < 0) return false;
     sb_jw_key(j, metric);
     sb_jw_obj(j);
@@ -447,6 +448,7 @@ static void site_data_free(site_data *d) {
     for (int s = 0; s < d->ns; s++) free(d->keys[s]), free(d->labels[s]);
     free(d->keys);
     free(d->labels);
+    free(d->series);
     free(d->ch);
     free(d->notes);
     if (d->nn > 0) sb_history_nights_free(d->nights, d->nn);
@@ -460,8 +462,14 @@ static bool site_data_read(sb_history *h, int recent, site_data *d, sb_err *err)
     if (d->nch >= 0) d->nnotes = sb_history_notes(h, &d->notes, err);
     if (d->nch >= 0 && d->nnotes >= 0) d->nn = sb_history_nights(h, &d->nights, err);
     if (d->nch < 0 || d->nnotes < 0 || d->nn < 0) return false;
-    d->keys = sb_history_series_keys(h, &d->ns);
-    d->labels = sb_history_labels(d->keys, d->ns);
+    d->series = sb_history_series(h, &d->ns);
+    d->keys = sb_xcalloc((size_t)(d->ns ? d->ns : 1), sizeof *d->keys);
+    for (int s = 0; s < d->ns; s++) {
+        char key[8192];
+        sb_series_key(&d->series[s], key, sizeof key);
+        d->keys[s] = sb_strdup(key);
+    }
+    d->labels = sb_history_labels(d->series, d->ns);
     return true;
 }
 

@@ -21,53 +21,6 @@
 #include "runkey.h"
 #include "stats.h"
 
-/* ---- series ---- */
-
-void sb_series_key(const sb_series *s, char *out, size_t len) {
-    snprintf(out, len, "%s|%s|%s|%s|%s|%s|%s%s%s%s%s%s", s->host, s->renderer, s->scene, s->path, s->size, s->technique,
-             s->params, s->light[0] ? "|" : "", s->light, s->anim[0] ? "|anim=" : "", s->anim,
-             s->indirect ? "|indirect" : "");
-}
-
-/* Field k of a '|'-separated text into out; returns where the next field starts (NULL: none). */
-static const char *next_field(const char *p, char *out, size_t len) {
-    size_t n = strcspn(p, "|");
-    snprintf(out, len, "%.*s", (int)n, p);
-    return p[n] ? p + n + 1 : NULL;
-}
-
-void sb_series_parse(const char *key, sb_series *s) {
-    memset(s, 0, sizeof *s);
-    char *fields[] = {s->host, s->renderer, s->scene, s->path, s->size, s->technique, s->params};
-    size_t sizes[] = {sizeof s->host, sizeof s->renderer, sizeof s->scene, sizeof s->path, sizeof s->size,
-                      sizeof s->technique, sizeof s->params};
-    const char *p = key;
-    for (size_t k = 0; k < SB_COUNT(fields) && p; k++) p = next_field(p, fields[k], sizes[k]);
-    while (p) {   /* what follows the parameters: a sized light, the submission */
-        char extra[sizeof s->light];
-        p = next_field(p, extra, sizeof extra);
-        if (!strcmp(extra, "indirect")) s->indirect = true;
-        else if (!strncmp(extra, "anim=", 5)) snprintf(s->anim, sizeof s->anim, "%.*s", (int)sizeof s->anim - 1, extra + 5);
-        else snprintf(s->light, sizeof s->light, "%s", extra);
-    }
-}
-
-void sb_series_of_row(const sb_table *t, int r, const char *host, const char *renderer, sb_series *s) {
-    sb_run_key k;
-    sb_run_key_of(t, r, &k);
-    memset(s, 0, sizeof *s);
-    snprintf(s->host, sizeof s->host, "%s", host);
-    snprintf(s->renderer, sizeof s->renderer, "%s", renderer);
-    snprintf(s->scene, sizeof s->scene, "%s", k.scene);
-    snprintf(s->path, sizeof s->path, "%s", k.path);
-    snprintf(s->size, sizeof s->size, "%sx%s", k.width, k.height);
-    snprintf(s->technique, sizeof s->technique, "%s", k.technique);
-    sb_run_key_sorted_params(k.params, s->params, sizeof s->params);
-    snprintf(s->light, sizeof s->light, "%s", k.light);
-    snprintf(s->anim, sizeof s->anim, "%s", k.anim);
-    s->indirect = sb_run_key_indirect(&k);
-}
-
 /* The parameters with what follows them in the key (the text a label's items come from). */
 static void params_text(const sb_series *s, char *out, size_t len) {
     snprintf(out, len, "%s%s%s%s%s%s", s->params, s->light[0] ? "|" : "", s->light, s->anim[0] ? "|anim=" : "", s->anim,
@@ -188,9 +141,6 @@ static bool store_run(sb_history *h, long long night, const set_in *s, int r, sb
     const sb_table *t = &s->t;
     sb_series se;
     sb_series_of_row(t, r, s->host, s->renderer, &se);
-    char key[4096], params[3072];
-    sb_series_key(&se, key, sizeof key);
-    params_text(&se, params, sizeof params);
     const char **names = sb_xmalloc(sizeof *names * (size_t)(t->cols ? t->cols : 1));
     double *values = sb_xmalloc(sizeof *values * (size_t)(t->cols ? t->cols : 1));
     int nm = 0;
@@ -202,8 +152,7 @@ static bool store_run(sb_history *h, long long night, const set_in *s, int r, sb
     char fpath[4200];
     snprintf(fpath, sizeof fpath, "%s/%s.csv", s->dir, run_id);
     char *frames = *run_id ? sb_read_file(fpath, NULL, NULL) : NULL;
-    sb_history_run_in in = {.run_id = run_id, .series = key, .scene = k.scene, .path = k.path, .technique = k.technique,
-                            .params = params, .size = se.size, .status = sb_table_get(t, r, "status"),
+    sb_history_run_in in = {.run_id = run_id, .series = &se, .status = sb_table_get(t, r, "status"),
                             .reason = sb_table_get(t, r, "reason"), .stable = sb_table_get(t, r, "stable"),
                             .warnings = sb_table_get(t, r, "warnings"), .line = t->lines[r],
                             .run_index = atoi(sb_table_get(t, r, "run_index")), .nmetrics = nm,
@@ -312,7 +261,9 @@ typedef struct walk {
     sb_metric_cols mc;
     sb_history_night *nights;
     int nn, *rank, recent;
-    char key[4096];
+    sb_series series;           /* the series walked (none before the first: !started) */
+    bool started;
+    char key[4096];             /* its key text */
     double *x, *w, *ci, *tmp;
     int *at_night, k;
     sb_history_change *ch;
@@ -324,7 +275,7 @@ static void add_change(walk *wk, const sb_cp_change *cp) {
     sb_history_change *o = &wk->ch[wk->nch++];
     memset(o, 0, sizeof *o);
     snprintf(o->key, sizeof o->key, "%s", wk->key);
-    sb_series_parse(wk->key, &o->series);
+    o->series = wk->series;
     snprintf(o->metric, sizeof o->metric, "%s", wk->metric);
     const sb_history_night *a = &wk->nights[wk->at_night[cp->at - 1]], *b = &wk->nights[wk->at_night[cp->at]];
     o->night_before = a->id;
@@ -355,19 +306,19 @@ static void detect(walk *wk) {
     }
     for (int i = 0; i < wk->k; i++)
         if (typical > 0 && wk->ci[i] > 2 * typical) wk->w[i] *= (2 * typical / wk->ci[i]) * (2 * typical / wk->ci[i]);
-    sb_series s;
-    sb_series_parse(wk->key, &s);
-    sb_cp_opts o = {.relative = true, .noise_floor = wk->mc.ci[0] ? noise_floor(wk->q, s.renderer) : 0};
+    sb_cp_opts o = {.relative = true, .noise_floor = wk->mc.ci[0] ? noise_floor(wk->q, wk->series.renderer) : 0};
     sb_cp_change cps[64];
     int nc = sb_changepoints(wk->x, wk->w, wk->k, &o, cps, 64, NULL);
     for (int c = 0; c < nc && c < 64; c++) add_change(wk, &cps[c]);
 }
 
-static void take_figure(const char *key, const sb_history_point *p, void *arg) {
+static void take_figure(const sb_series *series, const sb_history_point *p, void *arg) {
     walk *wk = arg;
-    if (strcmp(key, wk->key)) {
+    if (!wk->started || !sb_series_equal(series, &wk->series)) {
         detect(wk);
-        snprintf(wk->key, sizeof wk->key, "%s", key);
+        wk->series = *series;
+        sb_series_key(series, wk->key, sizeof wk->key);
+        wk->started = true;
         wk->k = 0;
     }
     int ni = 0;
@@ -417,11 +368,12 @@ static void walk_free(walk *wk) {
 /* Each change's label (as the report names its series) and what is known of its night (machine, annotations). */
 static bool describe_changes(sb_history *h, sb_history_change *ch, int nch, sb_err *err) {
     int ns = 0;
-    char **all = sb_history_series_keys(h, &ns), **labels = sb_history_labels(all, ns);
+    sb_series *all = sb_history_series(h, &ns);
+    char **labels = sb_history_labels(all, ns);
     for (int c = 0; c < nch; c++)
         for (int i = 0; i < ns; i++)
-            if (!strcmp(all[i], ch[c].key)) snprintf(ch[c].label, sizeof ch[c].label, "%s", labels[i]);
-    for (int i = 0; i < ns; i++) free(all[i]), free(labels[i]);
+            if (sb_series_equal(&all[i], &ch[c].series)) snprintf(ch[c].label, sizeof ch[c].label, "%s", labels[i]);
+    for (int i = 0; i < ns; i++) free(labels[i]);
     free(all);
     free(labels);
     sb_history_note *notes = NULL;
@@ -451,7 +403,7 @@ int sb_history_changes(sb_history *h, const sb_history_query *q, sb_history_chan
     for (int mi = 0; ok && mi < nm; mi++) {
         wk.metric = metrics[mi];
         sb_columns_metric(metrics[mi], &wk.mc);
-        wk.key[0] = 0;
+        wk.started = false;
         wk.k = 0;
         ok = sb_history_each_figure(h, wk.mc.center, wk.mc.ci, q->since, take_figure, &wk, err);
         if (ok) detect(&wk);
@@ -493,13 +445,11 @@ static void own_items(const sb_series *f, const char (*ptext)[2048], int n, int 
     }
 }
 
-char **sb_history_labels(char *const *keys, int n) {
+char **sb_history_labels(const sb_series *f, int n) {
     char **out = sb_xcalloc((size_t)(n ? n : 1), sizeof *out);
-    sb_series *f = sb_xmalloc(sizeof *f * (size_t)(n ? n : 1));
     char(*ptext)[2048] = sb_xmalloc(sizeof *ptext * (size_t)(n ? n : 1));
     bool hosts = false;
     for (int i = 0; i < n; i++) {
-        sb_series_parse(keys[i], &f[i]);
         params_text(&f[i], ptext[i], sizeof ptext[i]);
         if (i && strcmp(f[i].host, f[0].host)) hosts = true;
     }
@@ -512,7 +462,6 @@ char **sb_history_labels(char *const *keys, int n) {
                  hosts ? f[i].host : "");
         out[i] = sb_strdup(buf);
     }
-    free(f);
     free(ptext);
     return out;
 }
@@ -570,11 +519,12 @@ void sb_history_print_changes(const sb_history_change *c, int n, int format, FIL
     }
 }
 
-int sb_history_points(sb_history *h, const char *series_key, const char *metric, sb_history_point **out, sb_err *err) {
+int sb_history_points(sb_history *h, const sb_series *series, const char *metric, sb_history_point **out,
+                      sb_err *err) {
     *out = NULL;
     sb_metric_cols mc;
     if (!sb_columns_metric(metric, &mc)) return sb_fail(err, "unknown metric '%s'", metric), -1;
-    return sb_history_points_of(h, series_key, mc.center, mc.ci, out, err);
+    return sb_history_points_of(h, series, mc.center, mc.ci, out, err);
 }
 
 /* ---- annotations and what changed on the machine ---- */
@@ -700,12 +650,12 @@ static band band_of(const sb_history_point *p, int k, double x, const sb_metric_
 
 /* One figure of one run against its series' newest nights: printed; 1 when beyond the band on the worse side,
  * 0 within or better, -1 not compared, -2 on a database error. */
-static int check_figure(sb_history *h, const char *key, const char *label, const char *metric, double x, int nights,
-                        double floor, FILE *out, sb_err *err) {
+static int check_figure(sb_history *h, const sb_series *series, const char *label, const char *metric, double x,
+                        int nights, double floor, FILE *out, sb_err *err) {
     sb_metric_cols mc;
     sb_columns_metric(metric, &mc);
     sb_history_point *p = NULL;
-    int np = sb_history_points_of(h, key, mc.center, mc.ci, &p, err);
+    int np = sb_history_points_of(h, series, mc.center, mc.ci, &p, err);
     if (np < 0) return -2;
     int from = np > nights ? np - nights : 0, k = np - from;
     if (k < 3) {
@@ -729,17 +679,16 @@ int sb_history_check(sb_history *h, const char *dir, const sb_history_query *q, 
     if (nm < 0 || !set_read(&s, dir, err)) return nm < 0 ? -1 : (set_free(&s), -1);
     double floor = noise_floor(q, s.renderer);
     int ns = 0, regressions = 0, compared = 0, rc = 0;
-    char **all = sb_history_series_keys(h, &ns), **labels = sb_history_labels(all, ns);
+    sb_series *all = sb_history_series(h, &ns);
+    char **labels = sb_history_labels(all, ns);
     fprintf(out, "%-44s %-14s %10s %10s %23s %8s %6s  %s\n", "series", "metric", "this set", "nights", "band",
             "change", "z", "verdict");
     for (int r = 0; rc >= 0 && r < s.t.nrows; r++) {
         sb_series se;
-        char key[4096];
         sb_series_of_row(&s.t, r, s.host, s.renderer, &se);
-        sb_series_key(&se, key, sizeof key);
         const char *label = NULL;
         for (int i = 0; i < ns; i++)
-            if (!strcmp(all[i], key)) label = labels[i];
+            if (sb_series_equal(&all[i], &se)) label = labels[i];
         sb_status st = sb_status_of(sb_table_get(&s.t, r, "status"));
         if (!label)
             fprintf(out, "%s %s %s: no series in the history (a new run): nothing to compare\n", se.scene,
@@ -750,13 +699,13 @@ int sb_history_check(sb_history *h, const char *dir, const sb_history_query *q, 
             sb_metric_cols mc;
             double x;
             if (!sb_columns_metric(metrics[mi], &mc) || !sb_parse_double(sb_table_get(&s.t, r, mc.center), &x)) continue;
-            rc = check_figure(h, key, label, metrics[mi], x, nights, floor, out, err);
+            rc = check_figure(h, &se, label, metrics[mi], x, nights, floor, out, err);
             regressions += rc > 0;
             compared += rc >= 0;
             rc = rc == -2 ? -1 : 0;
         }
     }
-    for (int i = 0; i < ns; i++) free(all[i]), free(labels[i]);
+    for (int i = 0; i < ns; i++) free(labels[i]);
     free(all);
     free(labels);
     set_free(&s);

@@ -12,23 +12,8 @@
 #include <stdio.h>
 
 #include "history_store.h"
+#include "series.h"
 #include "table.h"
-
-/* A series: the runs of one setting on one machine over the nights. Stored
- * under its key "host|renderer|scene|path|WxH|technique|params[|light][|indirect]". */
-typedef struct sb_series {
-    char host[256], renderer[256], scene[256], path[512], size[32], technique[64];
-    char params[1024];          /* canonical, sorted: "filter=pcf3:res=2048" */
-    char light[1200];           /* a light with a size ("sun 0.53 deg, 64 rays"), lights ("lights lamps (6)"); "": none */
-    char anim[300];             /* what plays, where not the default (the anim column); "": the default */
-    bool indirect;              /* --submit indirect */
-} sb_series;
-/* The key it is stored under. */
-void sb_series_key(const sb_series *s, char *out, size_t len);
-/* A key back into its fields. */
-void sb_series_parse(const char *key, sb_series *out);
-/* A summary row's series on a host and renderer. */
-void sb_series_of_row(const sb_table *t, int r, const char *host, const char *renderer, sb_series *out);
 
 typedef struct sb_history_added {
     long long night;        /* its id */
@@ -70,13 +55,14 @@ typedef struct sb_history_query {
 /* Runs change-point detection per series and metric. *out (freed by the
  * caller) gets every change, series by series. Returns how many, or -1. */
 int sb_history_changes(sb_history *h, const sb_history_query *q, sb_history_change **out, sb_err *err);
-/* Short names of series keys [0..n) (each malloc'd): the parameters every series of
+/* Short names of series [0..n) (each malloc'd): the parameters every series of
  * the same technique shares are left out, and the host unless there are several. */
-char **sb_history_labels(char *const *keys, int n);
+char **sb_history_labels(const sb_series *series, int n);
 /* Prints changes as a table (format: SB_OUTPUT_TEXT or _CSV of compare.h). */
 void sb_history_print_changes(const sb_history_change *c, int n, int format, FILE *out);
 /* A series' points of a metric (by its name in the column table), oldest first; returns how many (free *out), or -1. */
-int sb_history_points(sb_history *h, const char *series_key, const char *metric, sb_history_point **out, sb_err *err);
+int sb_history_points(sb_history *h, const sb_series *series, const char *metric, sb_history_point **out,
+                      sb_err *err);
 
 /* ---- annotations, and what changed on the machine ---- */
 

@@ -38,22 +38,107 @@ static bool exec(sb_history *h, const char *sql, sb_err *err) {
     return false;
 }
 
+/* ---- a series' columns ---- */
+
+/* The runs' series columns, in the order sb_series_key joins them (the SQL function sb_series_key takes them so). */
+#define SERIES_COLS "host, renderer, scene, path, size, technique, params, light, anim, indirect"
+#define SERIES_COLS_R "r.host, r.renderer, r.scene, r.path, r.size, r.technique, r.params, r.light, r.anim, r.indirect"
+#define SERIES_NCOLS 10
+
+static void copy_col(char *dst, size_t len, sqlite3_stmt *st, int i);
+
+/* Columns [first, first + SERIES_NCOLS) of a row as a series. */
+static void read_series(sqlite3_stmt *st, int first, sb_series *s) {
+    memset(s, 0, sizeof *s);
+    char *texts[] = {s->host, s->renderer, s->scene, s->path, s->size, s->technique, s->params, s->light, s->anim};
+    size_t sizes[] = {sizeof s->host, sizeof s->renderer, sizeof s->scene, sizeof s->path, sizeof s->size,
+                      sizeof s->technique, sizeof s->params, sizeof s->light, sizeof s->anim};
+    for (int k = 0; k < (int)SB_COUNT(texts); k++) copy_col(texts[k], sizes[k], st, first + k);
+    s->indirect = sqlite3_column_int(st, first + SERIES_NCOLS - 1) != 0;
+}
+
+static bool bind_text(sqlite3_stmt *st, int i, const char *s);
+
+/* A series into parameters [first, first + SERIES_NCOLS). */
+static bool bind_series(sqlite3_stmt *st, int first, const sb_series *s) {
+    const char *texts[] = {s->host, s->renderer, s->scene, s->path, s->size, s->technique, s->params, s->light,
+                           s->anim};
+    for (int k = 0; k < (int)SB_COUNT(texts); k++)
+        if (!bind_text(st, first + k, texts[k])) return false;
+    return sqlite3_bind_int(st, first + SERIES_NCOLS - 1, s->indirect) == SQLITE_OK;
+}
+
+/* sb_series_key(SERIES_COLS): the key text, what series are ordered by (as schema 3 ordered its one column). */
+static void sql_series_key(sqlite3_context *ctx, int n, sqlite3_value **v) {
+    sb_series s;
+    memset(&s, 0, sizeof s);
+    char *texts[] = {s.host, s.renderer, s.scene, s.path, s.size, s.technique, s.params, s.light, s.anim};
+    size_t sizes[] = {sizeof s.host, sizeof s.renderer, sizeof s.scene, sizeof s.path, sizeof s.size,
+                      sizeof s.technique, sizeof s.params, sizeof s.light, sizeof s.anim};
+    for (int k = 0; k < (int)SB_COUNT(texts) && k < n; k++) {
+        const char *t = (const char *)sqlite3_value_text(v[k]);
+        snprintf(texts[k], sizes[k], "%s", t ? t : "");
+    }
+    s.indirect = n == SERIES_NCOLS && sqlite3_value_int(v[SERIES_NCOLS - 1]) != 0;
+    char key[8192];
+    sb_series_key(&s, key, sizeof key);
+    sqlite3_result_text(ctx, key, -1, SQLITE_TRANSIENT);
+}
+
+/* Schema 4: each run's joined series text parsed into its columns once, then the text dropped. */
+static bool series_columns(sb_history *h, sb_err *err) {
+    sqlite3_stmt *q, *u;
+    if (sqlite3_prepare_v2(h->db, "SELECT id, series FROM runs", -1, &q, NULL) != SQLITE_OK)
+        return db_fail(h, err, "reading the runs' series");
+    if (sqlite3_prepare_v2(h->db, "UPDATE runs SET host = ?1, renderer = ?2, scene = ?3, path = ?4, size = ?5, "
+                           "technique = ?6, params = ?7, light = ?8, anim = ?9, indirect = ?10 WHERE id = ?11",
+                           -1, &u, NULL) != SQLITE_OK) {
+        sqlite3_finalize(q);
+        return db_fail(h, err, "preparing the runs' series columns");
+    }
+    bool ok = true;
+    while (ok && sqlite3_step(q) == SQLITE_ROW) {
+        sb_series se;
+        const char *key = (const char *)sqlite3_column_text(q, 1);
+        sb_series_parse(key ? key : "", &se);
+        ok = bind_series(u, 1, &se) && sqlite3_bind_int64(u, 11, sqlite3_column_int64(q, 0)) == SQLITE_OK &&
+             sqlite3_step(u) == SQLITE_DONE;
+        sqlite3_reset(u);
+    }
+    sqlite3_finalize(q);
+    sqlite3_finalize(u);
+    if (!ok) return db_fail(h, err, "writing the runs' series columns");
+    return exec(h, "DROP INDEX runs_series; ALTER TABLE runs DROP COLUMN series;"
+                   "CREATE INDEX runs_series ON runs(technique, scene, size);", err);
+}
+
 /* The schema, one step a version: step k takes a file from version k-1 to k.
    Version 1 kept the summary rows; 2 added each run's per-frame CSV and the
-   night's image count; 3 the annotations (`history annotate`). */
-static const char *const migrations[SB_HISTORY_SCHEMA] = {
-    "CREATE TABLE nights(id INTEGER PRIMARY KEY, set_key TEXT UNIQUE NOT NULL, dir TEXT, date TEXT, host TEXT,"
-    " renderer TEXT, version TEXT, git_commit TEXT, header TEXT, meta TEXT, added TEXT);"
-    "CREATE TABLE runs(id INTEGER PRIMARY KEY, night INTEGER NOT NULL REFERENCES nights(id), run_id TEXT,"
-    " run_index INTEGER, series TEXT, scene TEXT, path TEXT, technique TEXT, params TEXT, size TEXT, status TEXT,"
-    " reason TEXT, stable TEXT, warnings TEXT, line TEXT);"
-    "CREATE TABLE metrics(run INTEGER NOT NULL, name TEXT NOT NULL, value REAL, PRIMARY KEY(run, name)) WITHOUT ROWID;"
-    "CREATE INDEX runs_night ON runs(night);"
-    "CREATE INDEX runs_series ON runs(series);",
-    "CREATE TABLE frames(run INTEGER PRIMARY KEY, csv TEXT);"
-    "ALTER TABLE nights ADD COLUMN images INTEGER NOT NULL DEFAULT 0;",
-    "CREATE TABLE annotations(id INTEGER PRIMARY KEY, night INTEGER NOT NULL REFERENCES nights(id), git_commit TEXT,"
-    " series TEXT NOT NULL DEFAULT '', text TEXT NOT NULL, accept INTEGER NOT NULL DEFAULT 0, added TEXT);",
+   night's image count; 3 the annotations (`history annotate`); 4 a run's series in typed columns (host,
+   renderer, scene, path, size, technique, sorted params, light, anim, indirect) instead of one joined text,
+   each run's text parsed into them once (series_columns). */
+static bool series_columns(sb_history *h, sb_err *err);
+static const struct migration {
+    const char *sql;
+    bool (*then)(sb_history *h, sb_err *err);   /* what SQL alone cannot do (NULL: nothing) */
+} migrations[SB_HISTORY_SCHEMA] = {
+    {"CREATE TABLE nights(id INTEGER PRIMARY KEY, set_key TEXT UNIQUE NOT NULL, dir TEXT, date TEXT, host TEXT,"
+     " renderer TEXT, version TEXT, git_commit TEXT, header TEXT, meta TEXT, added TEXT);"
+     "CREATE TABLE runs(id INTEGER PRIMARY KEY, night INTEGER NOT NULL REFERENCES nights(id), run_id TEXT,"
+     " run_index INTEGER, series TEXT, scene TEXT, path TEXT, technique TEXT, params TEXT, size TEXT, status TEXT,"
+     " reason TEXT, stable TEXT, warnings TEXT, line TEXT);"
+     "CREATE TABLE metrics(run INTEGER NOT NULL, name TEXT NOT NULL, value REAL, PRIMARY KEY(run, name)) WITHOUT ROWID;"
+     "CREATE INDEX runs_night ON runs(night);"
+     "CREATE INDEX runs_series ON runs(series);", NULL},
+    {"CREATE TABLE frames(run INTEGER PRIMARY KEY, csv TEXT);"
+     "ALTER TABLE nights ADD COLUMN images INTEGER NOT NULL DEFAULT 0;", NULL},
+    {"CREATE TABLE annotations(id INTEGER PRIMARY KEY, night INTEGER NOT NULL REFERENCES nights(id), git_commit TEXT,"
+     " series TEXT NOT NULL DEFAULT '', text TEXT NOT NULL, accept INTEGER NOT NULL DEFAULT 0, added TEXT);", NULL},
+    {"ALTER TABLE runs ADD COLUMN host TEXT NOT NULL DEFAULT '';"
+     "ALTER TABLE runs ADD COLUMN renderer TEXT NOT NULL DEFAULT '';"
+     "ALTER TABLE runs ADD COLUMN light TEXT NOT NULL DEFAULT '';"
+     "ALTER TABLE runs ADD COLUMN anim TEXT NOT NULL DEFAULT '';"
+     "ALTER TABLE runs ADD COLUMN indirect INTEGER NOT NULL DEFAULT 0;", series_columns},
 };
 
 static int user_version(sb_history *h) {
@@ -76,7 +161,8 @@ static bool migrate(sb_history *h, sb_err *err) {
         char sql[256];
         snprintf(sql, sizeof sql, "PRAGMA user_version = %d", v + 1);
         if (!exec(h, "BEGIN IMMEDIATE", err)) return false;
-        if (!exec(h, migrations[v], err) || !exec(h, sql, err)) {
+        if (!exec(h, migrations[v].sql, err) || (migrations[v].then && !migrations[v].then(h, err)) ||
+            !exec(h, sql, err)) {
             sqlite3_exec(h->db, "ROLLBACK", NULL, NULL, NULL);
             return false;
         }
@@ -136,6 +222,9 @@ sb_history *sb_history_open(const char *path, bool write, sb_err *err) {
     ok = ok && (sqlite3_create_function(h->db, "sb_status", 1, SQLITE_UTF8 | SQLITE_DETERMINISTIC, NULL, sql_status,
                                         NULL, NULL) == SQLITE_OK ||
                 db_fail(h, err, "cannot register sb_status"));
+    ok = ok && (sqlite3_create_function(h->db, "sb_series_key", SERIES_NCOLS, SQLITE_UTF8 | SQLITE_DETERMINISTIC, NULL,
+                                        sql_series_key, NULL, NULL) == SQLITE_OK ||
+                db_fail(h, err, "cannot register sb_series_key"));
     /* a file that is not a database fails on its first read */
     ok = ok && exec(h, "SELECT count(*) FROM sqlite_master", err) && (write ? migrate(h, err) : check_version(h, err));
     if (!ok) {
@@ -242,16 +331,14 @@ static bool insert_frames(sb_history *h, long long run, const char *csv, sb_err 
 }
 
 bool sb_history_insert_run(sb_history *h, long long night, const sb_history_run_in *r, sb_err *err) {
-    const char *texts[] = {r->run_id, r->series, r->scene, r->path, r->technique, r->params, r->size, r->status,
-                           r->reason, r->stable, r->warnings, r->line};
+    const char *texts[] = {r->run_id, r->status, r->reason, r->stable, r->warnings, r->line};
     sqlite3_stmt *st = prepare_texts(h,
-                                     "INSERT INTO runs(run_id, series, scene, path, technique, params, size, status, "
-                                     "reason, stable, warnings, line, night, run_index) "
-                                     "VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?)",
+                                     "INSERT INTO runs(run_id, status, reason, stable, warnings, line, night, run_index, "
+                                     SERIES_COLS ") VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)",
                                      texts, (int)SB_COUNT(texts), err);
     if (!st) return false;
-    bool ok = sqlite3_bind_int64(st, 13, night) == SQLITE_OK && sqlite3_bind_int(st, 14, r->run_index) == SQLITE_OK &&
-              sqlite3_step(st) == SQLITE_DONE;
+    bool ok = sqlite3_bind_int64(st, 7, night) == SQLITE_OK && sqlite3_bind_int(st, 8, r->run_index) == SQLITE_OK &&
+              bind_series(st, 9, r->series) && sqlite3_step(st) == SQLITE_DONE;
     sqlite3_finalize(st);
     if (!ok) return db_fail(h, err, "adding a run");
     long long id = sqlite3_last_insert_rowid(h->db);
@@ -345,16 +432,16 @@ bool sb_history_night_frames(sb_history *h, long long night, void (*fn)(const ch
     return true;
 }
 
-char **sb_history_series_keys(sb_history *h, int *n) {
+sb_series *sb_history_series(sb_history *h, int *n) {
     *n = 0;
-    char **out = NULL;
+    sb_series *out = NULL;
     sqlite3_stmt *st;
-    if (sqlite3_prepare_v2(h->db, "SELECT DISTINCT series FROM runs ORDER BY series", -1, &st, NULL) != SQLITE_OK)
+    if (sqlite3_prepare_v2(h->db, "SELECT DISTINCT " SERIES_COLS " FROM runs ORDER BY sb_series_key(" SERIES_COLS ")",
+                           -1, &st, NULL) != SQLITE_OK)
         return NULL;
     while (sqlite3_step(st) == SQLITE_ROW) {
         out = sb_xrealloc(out, sizeof *out * (size_t)(*n + 1));
-        const char *s = (const char *)sqlite3_column_text(st, 0);
-        out[(*n)++] = sb_strdup(s ? s : "");
+        read_series(st, 0, &out[(*n)++]);
     }
     sqlite3_finalize(st);
     return out;
@@ -371,18 +458,24 @@ static void read_point(sqlite3_stmt *st, int first, sb_history_point *p) {
     copy_col(p->commit, sizeof p->commit, st, first + 5);
 }
 
-int sb_history_points_of(sb_history *h, const char *series_key, const char *center, const char *ci,
+int sb_history_points_of(sb_history *h, const sb_series *series, const char *center, const char *ci,
                          sb_history_point **out, sb_err *err) {
     *out = NULL;
-    const char *texts[] = {series_key, center, ci && ci[0] ? ci : "-"};
+    const char *texts[] = {center, ci && ci[0] ? ci : "-"};
     char sql[1024];
     snprintf(sql, sizeof sql,
              "SELECT r.night, n.date, r.stable, c.value, i.value, n.git_commit FROM runs r "
-             "JOIN nights n ON n.id = r.night JOIN metrics c ON c.run = r.id AND c.name = ?2 "
-             "LEFT JOIN metrics i ON i.run = r.id AND i.name = ?3 WHERE r.series = ?1 AND "
-             "sb_status(r.status) = %d ORDER BY n.date, n.id", SB_STATUS_OK);
-    sqlite3_stmt *st = prepare_texts(h, sql, texts, 3, err);
+             "JOIN nights n ON n.id = r.night JOIN metrics c ON c.run = r.id AND c.name = ?1 "
+             "LEFT JOIN metrics i ON i.run = r.id AND i.name = ?2 WHERE r.host = ?3 AND r.renderer = ?4 AND "
+             "r.scene = ?5 AND r.path = ?6 AND r.size = ?7 AND r.technique = ?8 AND r.params = ?9 AND r.light = ?10 "
+             "AND r.anim = ?11 AND r.indirect = ?12 AND sb_status(r.status) = %d ORDER BY n.date, n.id",
+             SB_STATUS_OK);
+    sqlite3_stmt *st = prepare_texts(h, sql, texts, 2, err);
     if (!st) return -1;
+    if (!bind_series(st, 3, series)) {
+        sqlite3_finalize(st);
+        return db_fail(h, err, "binding a series"), -1;
+    }
     int n = 0;
     while (sqlite3_step(st) == SQLITE_ROW) {
         *out = sb_xrealloc(*out, sizeof **out * (size_t)(n + 1));
@@ -393,23 +486,26 @@ int sb_history_points_of(sb_history *h, const char *series_key, const char *cent
 }
 
 bool sb_history_each_figure(sb_history *h, const char *center, const char *ci, const char *since,
-                            void (*fn)(const char *series_key, const sb_history_point *p, void *arg), void *arg,
+                            void (*fn)(const sb_series *series, const sb_history_point *p, void *arg), void *arg,
                             sb_err *err) {
     const char *texts[] = {center, ci && ci[0] ? ci : "-", since ? since : ""};
     char sql[1024];
     snprintf(sql, sizeof sql,
-             "SELECT r.series, r.night, n.date, r.stable, c.value, i.value, n.git_commit "
+             "SELECT r.night, n.date, r.stable, c.value, i.value, n.git_commit, " SERIES_COLS_R " "
              "FROM runs r JOIN nights n ON n.id = r.night JOIN metrics c ON c.run = r.id AND c.name = ?1 "
              "LEFT JOIN metrics i ON i.run = r.id AND i.name = ?2 "
-             "WHERE sb_status(r.status) = %d AND n.date >= ?3 ORDER BY r.series, n.date, n.id", SB_STATUS_OK);
+             "WHERE sb_status(r.status) = %d AND n.date >= ?3 ORDER BY sb_series_key(" SERIES_COLS_R "), n.date, n.id",
+             SB_STATUS_OK);
     sqlite3_stmt *st = prepare_texts(h, sql, texts, 3, err);
     if (!st) return false;
+    sb_series *se = sb_xmalloc(sizeof *se);
     while (sqlite3_step(st) == SQLITE_ROW) {
         sb_history_point p;
-        read_point(st, 1, &p);
-        const char *s = (const char *)sqlite3_column_text(st, 0);
-        fn(s ? s : "", &p, arg);
+        read_point(st, 0, &p);
+        read_series(st, 6, se);
+        fn(se, &p, arg);
     }
+    free(se);
     sqlite3_finalize(st);
     return true;
 }

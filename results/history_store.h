@@ -9,9 +9,10 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "series.h"
 #include "util.h"
 
-#define SB_HISTORY_SCHEMA 3
+#define SB_HISTORY_SCHEMA 4
 
 typedef struct sb_history sb_history;
 
@@ -37,8 +38,8 @@ typedef struct sb_history_night_in {
     int images;
 } sb_history_night_in;
 typedef struct sb_history_run_in {
-    const char *run_id, *series, *scene, *path, *technique, *params, *size, *status, *reason, *stable, *warnings,
-        *line;
+    const sb_series *series;           /* kept in typed columns, one a field */
+    const char *run_id, *status, *reason, *stable, *warnings, *line;
     int run_index;
     int nmetrics;
     const char *const *metric_names;   /* nmetrics numeric cells of the row */
@@ -72,8 +73,8 @@ char *sb_history_night_summary(sb_history *h, const sb_history_night *night, sb_
 /* A night's per-frame CSVs, one call of fn a run. */
 bool sb_history_night_frames(sb_history *h, long long night, void (*fn)(const char *run_id, const char *csv, void *arg),
                              void *arg, sb_err *err);
-/* The stored series keys, sorted (free each and the array); NULL with *n 0 when there are none. */
-char **sb_history_series_keys(sb_history *h, int *n);
+/* The stored series in the order of their key texts (free() the array); NULL with *n 0 when there are none. */
+sb_series *sb_history_series(sb_history *h, int *n);
 
 /* One figure of a metric: a night of a series (the ok runs only). */
 typedef struct sb_history_point {
@@ -84,12 +85,12 @@ typedef struct sb_history_point {
 } sb_history_point;
 /* A series' points of a metric (its centre column and CI column; ci "" none), oldest first; returns how many (free
  * *out), or -1. */
-int sb_history_points_of(sb_history *h, const char *series_key, const char *center, const char *ci,
+int sb_history_points_of(sb_history *h, const sb_series *series, const char *center, const char *ci,
                          sb_history_point **out, sb_err *err);
-/* Every ok run's figure of a metric from the nights dated `since` on (NULL: all), ordered by series, then night
- * date: fn is called once a figure, with its series key. */
+/* Every ok run's figure of a metric from the nights dated `since` on (NULL: all), ordered by series (their key
+ * texts), then night date: fn is called once a figure, with its series. */
 bool sb_history_each_figure(sb_history *h, const char *center, const char *ci, const char *since,
-                            void (*fn)(const char *series_key, const sb_history_point *p, void *arg), void *arg,
+                            void (*fn)(const sb_series *series, const sb_history_point *p, void *arg), void *arg,
                             sb_err *err);
 
 /* NIGHT|COMMIT: a night's id, else the first night that ran a commit starting

@@ -18,7 +18,8 @@ machines whose unchanged nights moved by 39 % and 45 % failed them).
 - history D is A with night 11 on another driver (its meta says so), annotated and accepted; a note by a commit
   the history's first night already ran is not put with --restart (scripts/bench's notes), and is where a
   night before ran without it.
-- adding a set twice changes nothing; a history of an older schema is migrated; a newer one and broken
+- adding a set twice changes nothing; a history of an older schema is migrated (version 1; version 3 as 26f3f92
+  wrote it, to the same regressions and report data: history_v3.sql); a newer one and broken
   input are refused in one line.
 - the report of A is opened in headless Chromium: every page kind loads with no script error, draws its
   charts, the night's table holds every run, the regressions list holds night 11, the images of the
@@ -27,6 +28,7 @@ machines whose unchanged nights moved by 39 % and 45 % failed them).
 usage: run_history.py SHADOWBENCH SOURCE_ROOT BUILD_ROOT
 """
 import csv
+import hashlib
 import io
 import os
 import random
@@ -109,6 +111,65 @@ def replay(src, name, factor, day):
     open(os.path.join(dst, "meta"), "w").write(re.sub(r"(?m)^date: .*$", "date: 2026-01-%02dT03:00:00Z" % day, meta))
     os.unlink(os.path.join(dst, "manifest"))
     return dst
+
+
+SERIES_COLS = "host, renderer, scene, path, size, technique, params, light, anim, indirect"
+
+
+def series_key(r):
+    """A series' key text from its columns (SERIES_COLS), as shadowbench joins it (series.h)."""
+    host, renderer, scene, path, size, tech, params, light, anim, indirect = r
+    return "|".join([host, renderer, scene, path, size, tech, params]) + ("|" + light if light else "") + \
+        ("|anim=" + anim if anim else "") + ("|indirect" if indirect else "")
+
+
+def report_digests(site):
+    """(file, sha256) of each of the report's data files, the history's path ("source") left out."""
+    out = []
+    for name in sorted(os.listdir(os.path.join(site, "data"))):
+        text = re.sub(r'"source":"[^"]*"', '"source":""', open(os.path.join(site, "data", name)).read())
+        out.append((name, hashlib.sha256(text.encode()).hexdigest()))
+    return out
+
+
+def schema_3():
+    """A history as 26f3f92 wrote it (schema 3: a run's series one joined text; tests/history/make_v3_fixture.py)
+    is migrated by a write that changes nothing (a note it already has) to typed series columns: each run's
+    columns join back to its old text, and its regressions (CSV and text) and its report's data are what 26f3f92
+    said of it (history_v3.expected)."""
+    old = os.path.join(WORK, "v3.sqlite")
+    db = sqlite3.connect(old)
+    db.executescript(open(os.path.join(SRC, "tests", "history", "history_v3.sql")).read())
+    db.commit()
+    before = {r[0]: r[1] for r in db.execute("SELECT id, series FROM runs")}
+    db.close()
+    p = sb("history", "annotate", "2", "a note on night 2", "--history", old)
+    db = sqlite3.connect(old)
+    v = db.execute("PRAGMA user_version").fetchone()[0]
+    cols = [r[1] for r in db.execute("PRAGMA table_info(runs)")]
+    after = {r[0]: series_key(r[1:]) for r in db.execute("SELECT id, %s FROM runs" % SERIES_COLS)}
+    notes = db.execute("SELECT count(*) FROM annotations").fetchone()[0]
+    db.close()
+    check(v == 4 and "series" not in cols and "already had this note" in p.stderr and notes == 2,
+          "a version 3 history is migrated to 4: no joined series column, its notes kept (v%d, %d notes)" % (v, notes))
+    check(len(before) == 54 and before == after, "each of its %d runs' series columns join back to its old text (%d "
+          "differ)" % (len(before), sum(before[k] != after.get(k) for k in before)))
+    exp = open(os.path.join(SRC, "tests", "history", "history_v3.expected")).read()
+    head, rest = exp.split("\n", 1)
+    want_csv, rest = rest.split("# the same as text\n")
+    want_text, want_report = rest.split("# the report's data files: sha256 of each, its \"source\" emptied\n")
+    metrics = re.search(r"--metric ([^:\s]+)", head).group(1)
+    args = ["history", "regressions", "--history", old, "--recent", "3", "--metric", metrics]
+    got_csv = sb(*args, "--format", "csv", ok=(0, 1))
+    got_text = sb(*args, ok=(0, 1))
+    check(got_csv.stdout == want_csv and "exit %d" % got_csv.returncode in head and "note: pssm slower" in want_text,
+          "its regressions as CSV are 26f3f92's, the accepted note too (exit %d)" % got_csv.returncode)
+    check(got_text.stdout == want_text, "its regressions as text are 26f3f92's")
+    site = os.path.join(WORK, "site-v3")
+    sb("report", "--history", old, "--out", site)
+    got = "".join("%s %s\n" % (d, n) for n, d in report_digests(site))
+    check(got == want_report and want_report.count("series-") == 6, "its report's %d data files are 26f3f92's (%d "
+          "differ)" % (len(want_report.splitlines()), len(set(got.splitlines()) ^ set(want_report.splitlines())) // 2))
 
 
 def regressions(hist, *extra):
@@ -266,8 +327,9 @@ def main():
     kept = db.execute("SELECT count(*) FROM nights WHERE set_key = 'v1-night'").fetchone()[0]
     frames = db.execute("SELECT count(*) FROM frames").fetchone()[0]
     db.close()
-    check(v == 3 and kept == 1 and frames == 3, "a version 1 history is migrated to 3, its night kept (v%d, %d, %d frames)"
+    check(v == 4 and kept == 1 and frames == 3, "a version 1 history is migrated to 4, its night kept (v%d, %d, %d frames)"
           % (v, kept, frames))
+    schema_3()
     newer = os.path.join(WORK, "v99.sqlite")
     db = sqlite3.connect(newer)
     db.execute("PRAGMA user_version = 99")
@@ -285,7 +347,7 @@ def main():
     C = os.path.join(WORK, "c.sqlite")
     sb("history", "add", base[0], other, "--history", C)
     db = sqlite3.connect(C)
-    nseries = db.execute("SELECT count(DISTINCT series) FROM runs").fetchone()[0]
+    nseries = db.execute("SELECT count(*) FROM (SELECT DISTINCT %s FROM runs)" % SERIES_COLS).fetchone()[0]
     db.close()
     check(nseries == 6, "two machines' nights stay separate series (%d series of 3 runs each)" % nseries)
 
@@ -311,7 +373,7 @@ def main():
     db = sqlite3.connect(A)
     run_ids = [r[0] for r in db.execute("SELECT run_id FROM runs WHERE night = ?", (last,))]
     pssm_run = db.execute("SELECT run_id FROM runs WHERE night = ? AND technique = 'pssm'", (last,)).fetchone()[0]
-    series = sorted(r[0] for r in db.execute("SELECT DISTINCT series FROM runs"))
+    series = sorted(series_key(r) for r in db.execute("SELECT DISTINCT %s FROM runs" % SERIES_COLS))
     db.close()
     pssm_series = [i for i, s in enumerate(series) if "|pssm|" in s][0]   # sorted as the report numbers them
     pages = {
