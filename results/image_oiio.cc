@@ -6,7 +6,9 @@
 #include <OpenImageIO/imageio.h>
 
 #include <cstdarg>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <cstdlib>
 #include <memory>
 #include <new>
@@ -40,6 +42,63 @@ std::string one_line(std::string m) {
     for (char &ch : m)
         if (ch == '\n' || ch == '\r') ch = ';';
     return m;
+}
+
+// A null-terminated text of at most max bytes from f (false: the file ended first, or it is longer).
+bool read_cstr(std::FILE *f, size_t max, std::string *out) {
+    out->clear();
+    for (int c; (c = std::fgetc(f)) != EOF;) {
+        if (c == 0) return true;
+        if (out->size() >= max) return false;
+        out->push_back((char)c);
+    }
+    return false;
+}
+
+// An OpenEXR header's attributes each declare their value's size, and OpenEXR allocates that much before it
+// reads the value (a fuzzed 60-byte file declared 1.9 GB): each declared size is checked against the bytes the
+// file has left first. True for a file that is no OpenEXR file (its own reader answers for it).
+bool exr_header_fits(const char *path, long long file_size, std::string *why) {
+    std::FILE *f = std::fopen(path, "rb");
+    if (!f) return true;
+    unsigned char head[8];
+    bool ok = true;
+    if (std::fread(head, 1, 8, f) == 8 && head[0] == 0x76 && head[1] == 0x2f && head[2] == 0x31 && head[3] == 0x01) {
+        bool multipart = head[5] & 0x10;   /* version field bit 12 */
+        std::string name, type;
+        for (bool first = true;;) {   /* first: the next name opens a header (an empty one ends a multi-part list) */
+            if (!read_cstr(f, 255, &name)) {
+                *why = "its header is cut short";
+                ok = false;
+                break;
+            }
+            if (name.empty()) {
+                if (!multipart || first) break;
+                first = true;
+                continue;
+            }
+            first = false;
+            unsigned char sz[4];
+            if (!read_cstr(f, 255, &type) || std::fread(sz, 1, 4, f) != 4) {
+                *why = "its header is cut short";
+                ok = false;
+                break;
+            }
+            long long size = (long long)(int32_t)(sz[0] | sz[1] << 8 | sz[2] << 16 | (uint32_t)sz[3] << 24);
+            long long left = file_size - std::ftell(f);
+            if (size < 0 || size > left) {
+                for (char &ch : name)
+                    if ((unsigned char)ch < 32 || (unsigned char)ch > 126) ch = '?';   /* said on one line */
+                *why = "its header's attribute '" + name + "' declares " + std::to_string(size) + " bytes, and " +
+                       std::to_string(left < 0 ? 0 : left) + " follow in the file";
+                ok = false;
+                break;
+            }
+            std::fseek(f, (long)size, SEEK_CUR);
+        }
+    }
+    std::fclose(f);
+    return ok;
 }
 
 // Written under a temporary name with the same extension (OIIO picks the
@@ -82,11 +141,24 @@ bool write_to(const char *path, int w, int h, int channels, OIIO::TypeDesc type,
 extern "C" bool SB_IMAGE_MODULE_READ_ENTRY(const char *path, int *w, int *h, float **pixels, char *err, size_t err_len) {
     sb_err e{err, err_len};
     *pixels = nullptr;
-    OIIO::ImageSpec hints;
+    OIIO::ImageSpec hints, spec;
     hints.attribute("oiio:UnassociatedAlpha", 1);   /* values as stored: an alpha channel is never multiplied in */
-    auto in = OIIO::ImageInput::open(path, &hints);
-    if (!in) return sb_fail(&e, "%s: cannot read: %s", path, one_line(OIIO::geterror()).c_str());
-    const OIIO::ImageSpec &spec = in->spec();
+    /* the reader its extension names, and no other: given the file, OpenImageIO tries every format on one its
+       own reader refuses (DICOM's among them, whose dictionary took a fuzzed .exr past 2 GB); given the
+       extension alone, it makes that format's reader */
+    const char *dot = std::strrchr(path, '.'), *slash = std::strrchr(path, '/');
+    if (!dot || (slash && dot < slash) || !dot[1])
+        return sb_fail(&e, "%s: no extension to tell its image format by (.png, .exr, ...)", path);
+    struct stat fst;
+    std::string bad;
+    if (stat(path, &fst) == 0 && !exr_header_fits(path, (long long)fst.st_size, &bad))
+        return sb_fail(&e, "%s: cannot read: %s", path, bad.c_str());
+    auto in = OIIO::ImageInput::create(dot + 1, false, &hints);
+    if (!in) return sb_fail(&e, "%s: no image reader for its extension (%s)", path, one_line(OIIO::geterror()).c_str());
+    if (!in->open(path, spec, hints)) {
+        std::string why = one_line(in->geterror());
+        return sb_fail(&e, "%s: cannot read: %s", path, why.empty() ? "not an image of its extension's format" : why.c_str());
+    }
     int nc = spec.nchannels;
     if (spec.width <= 0 || spec.height <= 0 || nc < 1 || spec.depth > 1) {
         in->close();
