@@ -7,9 +7,6 @@
 
 #include "gl.h"
 
-const char *const sb_stage_names[SB_STAGE_COUNT] = {"zpass", "minmax", "cascade", "final", "volumes", "rays",
-                                                             "clusters", "pose"};
-
 const char *sb_timing_name(sb_timing_mode m) {
     return m == SB_TIMING_QUERIES ? "queries" : m == SB_TIMING_SYNC ? "sync" : "auto";
 }
@@ -68,7 +65,7 @@ void sb_timer_free(sb_timer *t) {
 }
 
 static unsigned *slot_queries(sb_timer *t, int slot) { return t->queries + (size_t)slot * SB_TIMER_QUERIES; }
-enum { FRAME_BEGIN = SB_STAGE_COUNT * 2, FRAME_END };
+enum { FRAME_BEGIN = SB_TIMER_STAGES * 2, FRAME_END };
 #define ENDED (1u << 31) /* slot_mask: the frame's end timestamp was written */
 
 /* Waits for the slot's fence (the GPU has finished that frame); the time is the CPU's wait. */
@@ -87,15 +84,15 @@ static void collect(sb_timer *t, int frame, int slot) {
     unsigned *q = slot_queries(t, slot);
     sb_stage_times *out = frame >= 0 && frame < t->frames ? &t->times[frame] : NULL;
     double covered = 0;
-    for (int s = 0; s < SB_STAGE_COUNT; s++) {
-        if (!(mask & SB_STAGE_BIT(s))) continue;
+    for (int s = 0; s < SB_TIMER_STAGES; s++) {
+        if (!(mask & (1u << s))) continue;
         GLuint64 a = 0, b = 0;
         glGetQueryObjectui64v(q[2 * s], GL_QUERY_RESULT, &a);
         glGetQueryObjectui64v(q[2 * s + 1], GL_QUERY_RESULT, &b);
         covered += (double)(b - a) * 1e-6;
         if (out) {
             out->ms[s] = (double)(b - a) * 1e-6;
-            out->mask |= SB_STAGE_BIT(s);
+            out->mask |= (1u << s);
         }
     }
     if (mask & ENDED) {
@@ -136,7 +133,7 @@ void sb_timer_frame_end(sb_timer *t) {
     if (t->current >= 0 && t->current < t->frames) t->times[t->current].cpu_wait_ms = t->wait_ms;
 }
 
-void sb_timer_stage_begin(sb_timer *t, sb_stage s) {
+void sb_timer_stage_begin(sb_timer *t, int s) {
     if (t->mode == SB_TIMING_QUERIES) {
         int slot = sb_ring_slot_of(&t->ring, t->current);
         glQueryCounter(slot_queries(t, slot)[2 * s], GL_TIMESTAMP);
@@ -145,11 +142,11 @@ void sb_timer_stage_begin(sb_timer *t, sb_stage s) {
     }
 }
 
-void sb_timer_stage_end(sb_timer *t, sb_stage s) {
+void sb_timer_stage_end(sb_timer *t, int s) {
     if (t->mode == SB_TIMING_QUERIES) {
         int slot = sb_ring_slot_of(&t->ring, t->current);
         glQueryCounter(slot_queries(t, slot)[2 * s + 1], GL_TIMESTAMP);
-        t->slot_mask[slot] |= SB_STAGE_BIT(s);
+        t->slot_mask[slot] |= (1u << s);
     } else {
         double w0 = sb_now_ms();
         glFinish();
@@ -157,7 +154,7 @@ void sb_timer_stage_end(sb_timer *t, sb_stage s) {
         t->wait_ms += now - w0;
         sb_stage_times *out = &t->times[t->current];
         out->ms[s] += now - t->t0[s];
-        out->mask |= SB_STAGE_BIT(s);
+        out->mask |= (1u << s);
         out->ready = true;
     }
 }

@@ -15,7 +15,9 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "stage.h"
+
+/* The stages a frame can time: numbered slots of the ring (the techniques name them: techniques/stage.h). */
+#define SB_TIMER_STAGES 8
 
 typedef enum sb_timing_mode { SB_TIMING_AUTO, SB_TIMING_QUERIES, SB_TIMING_SYNC } sb_timing_mode;
 
@@ -36,8 +38,8 @@ int sb_ring_claim(sb_ring *r, int frame, int *slot);
 int sb_ring_slot_of(const sb_ring *r, int frame);
 
 typedef struct sb_stage_times {
-    double ms[SB_STAGE_COUNT];
-    unsigned mask;      /* stages measured */
+    double ms[SB_TIMER_STAGES];
+    unsigned mask;      /* stages measured (bit s: slot s) */
     bool ready;
     double cpu_wait_ms; /* CPU time blocked on the GPU before and in this frame */
     double gpu_idle_ms; /* queries: GPU span of the frame not covered by a stage (NaN in sync mode) */
@@ -52,12 +54,12 @@ typedef struct sb_timer {
     sb_stage_times *times;      /* per frame, `frames` long */
     int frames;
     int current;
-    double t0[SB_STAGE_COUNT];
+    double t0[SB_TIMER_STAGES];
     double wait_ms;             /* time this frame spent blocked on the GPU */
 } sb_timer;
 
 /* Queries a frame's slot holds: a begin and end a stage, then the frame's own begin and end. */
-#define SB_TIMER_QUERIES (SB_STAGE_COUNT * 2 + 2)
+#define SB_TIMER_QUERIES (SB_TIMER_STAGES * 2 + 2)
 
 void sb_timer_init(sb_timer *t, sb_timing_mode resolved, int ring, int frames);
 void sb_timer_free(sb_timer *t);
@@ -66,7 +68,7 @@ void sb_timer_free(sb_timer *t);
 void sb_timer_frame_begin(sb_timer *t, int frame);
 /* Ends the current frame: its end timestamp and fence (queries mode). */
 void sb_timer_frame_end(sb_timer *t);
-void sb_timer_stage_begin(sb_timer *t, sb_stage s);
-void sb_timer_stage_end(sb_timer *t, sb_stage s);
+void sb_timer_stage_begin(sb_timer *t, int stage);
+void sb_timer_stage_end(sb_timer *t, int stage);
 /* Collects every outstanding frame (end of a pass of the path: waits for each). */
 void sb_timer_drain(sb_timer *t);

@@ -240,10 +240,11 @@ bool sb_eval_flicker(sb_session *s, sb_instance *in, int pf, int n, int *seq, sb
     const sb_reference *ref = sb_session_reference(s, err);
     if (!ref) return false;
     sb_flicker_view v = {.w = b->w, .h = b->h, .vis = b->vis, .ref = b->ref, .pos = b->pos, .aux = b->aux,
-                         .eye = look.eye, .light = f->shade_light, .counters = &f->counters,
+                         .eye = look.eye, .light = f->shade_light,
+                         .splits = {f->counters.split_count, f->counters.splits},
                          .twin_vis = b->twin_vis, .twin_pos = b->twin_pos, .twin_depth = b->twin_depth,
                          .twin_view_proj = tw.view_proj, .twin_proj = tw.proj, .twin_light = tw.shade_light,
-                         .twin_counters = &tw.counters, .looked_up = looked, .image = b->flicker,
+                         .twin_splits = {tw.counters.split_count, tw.counters.splits}, .looked_up = looked, .image = b->flicker,
                          .scene_moved = sb_scene_moves(&s->scene)};
     b->flicker_drawn = sb_evaluate_flicker(ref, &v, m, s->opts.threads) && b->flicker;
     return true;

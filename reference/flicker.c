@@ -5,11 +5,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-double sb_split_jitter(const sb_counters *a, const sb_counters *b) {
-    if (a->split_count <= 0 || a->split_count != b->split_count) return NAN;
+double sb_split_jitter(const sb_splits *a, const sb_splits *b) {
+    if (a->count <= 0 || a->count != b->count) return NAN;
     double j = 0;
-    for (int k = 0; k < a->split_count; k++)
-        if (a->splits[k] > 0) j = fmax(j, fabs(b->splits[k] - a->splits[k]) / a->splits[k]);
+    for (int k = 0; k < a->count; k++)
+        if (a->far[k] > 0) j = fmax(j, fabs(b->far[k] - a->far[k]) / a->far[k]);
     return j;
 }
 
@@ -72,7 +72,7 @@ static void count_point(const sb_flicker_view *v, const unsigned char *ref2, siz
 bool sb_evaluate_flicker(const sb_reference *r, const sb_flicker_view *v, sb_error_metrics *m, int threads) {
     m->flicker_rate = m->flicker_vis = m->ref_flicker = NAN;
     m->flicker_points = 0;
-    m->split_jitter = sb_split_jitter(v->counters, v->twin_counters);
+    m->split_jitter = sb_split_jitter(&v->splits, &v->twin_splits);
     sb_m4 inv_proj;
     if (!v->looked_up || !sb_m4_invert(v->twin_proj, &inv_proj)) return false;
     const size_t np = (size_t)v->w * v->h;

@@ -10,7 +10,12 @@
 #include <stdbool.h>
 
 #include "error.h"
-#include "stage.h"
+
+/* A frame's cascade split distances (view-space far distance of each; count 0: none). */
+typedef struct sb_splits {
+    int count;
+    const double *far;
+} sb_splits;
 
 /* The frame and its twin, as read back (w x h pixels, rows bottom-up). */
 typedef struct sb_flicker_view {
@@ -20,14 +25,14 @@ typedef struct sb_flicker_view {
     const float *pos, *aux;            /* its positions and normals (4 floats a pixel) */
     sb_v3 eye;                         /* its camera, origin-relative */
     const double *light;               /* its shaded light (sb_reference_visibility_light) */
-    const sb_counters *counters;       /* its split distances */
+    sb_splits splits;                  /* its split distances */
     /* the twin */
     const unsigned char *twin_vis;     /* its lookup of the frame's points */
     const float *twin_pos;             /* the positions that lookup drew (another surface: not compared) */
     const float *twin_depth;           /* its own camera's depth (which points it sees) */
     sb_m4 twin_view_proj, twin_proj;   /* its camera (origin-relative) */
     const double *twin_light;
-    const sb_counters *twin_counters;
+    sb_splits twin_splits;
     bool looked_up;                    /* the twin's final pass was a lookup (not split by a stencil) */
     bool scene_moved;           /* the twin's scene is posed otherwise (its clips play): the reference is cast again */
     unsigned char *image;              /* optional, 3 bytes a pixel: the points that flipped (lit -> shadowed red,
@@ -35,7 +40,7 @@ typedef struct sb_flicker_view {
 } sb_flicker_view;
 
 /* The largest relative change of a split distance between two frames (NaN: no splits). */
-double sb_split_jitter(const sb_counters *a, const sb_counters *b);
+double sb_split_jitter(const sb_splits *a, const sb_splits *b);
 
 /* Fills m's flicker_rate, flicker_vis, ref_flicker, split_jitter and
  * flicker_points: over the evaluated points the twin's camera also sees (in

@@ -95,8 +95,11 @@ typedef struct sb_run_row {
     unsigned stages;
 } sb_run_row;
 
-/* The statistics (SB_STAT_*) and a column's flags (SB_COL_STAGE_TIME, SB_USE_*, SB_LOWER_WORSE) are stage.h's: a
- * technique's own counters (sb_counter_def) declare theirs with them. */
+/* The statistics (SB_STAT_*) and a column's uses (SB_USE_*, SB_LOWER_WORSE) are techniques/stage.h's: a
+ * technique's own counters (sb_counter_def) declare theirs with them. A column's own flag: */
+enum {
+    SB_COL_STAGE_TIME = 1u << 0,    /* a per-frame stage time (<stage>_ms): plots stack these */
+};
 extern const char *const sb_stat_names[SB_STAT_COUNT];   /* "mean", "median", ... in bit order */
 
 /* What a column stands for, where a consumer needs one figure of a kind

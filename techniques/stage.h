@@ -1,8 +1,12 @@
 /* stage.h - the stages of a frame that are timed, and what a frame counts as
- * it submits: the vocabulary the timer, the techniques and the results share. */
+ * it submits: the vocabulary the techniques and the results share. The timer
+ * (gl/timing.h) keeps a ring of numbered stage slots and knows none of these
+ * names; the summary columns a counter or stage has are results/columns.h's. */
 #pragma once
 #include <stdbool.h>
 #include <stdint.h>
+
+#include "timing.h"
 
 typedef enum sb_stage {
     SB_STAGE_ZPASS,     /* camera depth pre-pass */
@@ -16,6 +20,7 @@ typedef enum sb_stage {
     SB_STAGE_COUNT
 } sb_stage;
 
+_Static_assert(SB_STAGE_COUNT <= SB_TIMER_STAGES, "the timer's ring has a slot for every stage");
 #define SB_STAGE_BIT(s) (1u << (s))
 extern const char *const sb_stage_names[SB_STAGE_COUNT];
 
@@ -29,11 +34,9 @@ enum {
 };
 #define SB_STAT_COUNT 8
 
-/* A column's flags. The SB_USE_ bits make a column a default metric of a
- * command: which ones `compare`, `compare --pair`, `history regressions` and
- * the report's trend charts use when no --metric says. */
+/* What a counter declares of its use (sb_counter_def.flags; bit 0 is a column's own, results/columns.h's). The SB_USE_ bits make it a default metric of a command: which ones `compare`, `compare --pair`,
+ * `history regressions` and the report's trend charts use when no --metric says. */
 enum {
-    SB_COL_STAGE_TIME = 1u << 0,    /* a per-frame stage time (<stage>_ms): plots stack these */
     SB_USE_COMPARE = 1u << 1,       /* compare BASE NEW */
     SB_USE_PAIR = 1u << 2,          /* compare --pair, the report's pair tables */
     SB_USE_HISTORY = 1u << 3,       /* history regressions */
