@@ -687,8 +687,11 @@ static int cmd_history_add(const sb_cli *c) {
 
 /* A night by its id or commit; a commit no night ran (one bisect named): the first night whose commit holds it.
  * *first: that night is the history's first and was named by a commit (no night before it ran without it). */
-static long long night_of(sb_history *h, const char *what, bool *first, sb_err *err) {
+/* The night NIGHT|COMMIT names (0: none, -1: *err), whether it is the history's first by a commit, and the commit
+ * a note on it is filed under: the one typed, or the night's own where a night's number was typed. */
+static long long night_of(sb_history *h, const char *what, bool *first, char *commit, size_t len, sb_err *err) {
     *first = false;
+    snprintf(commit, len, "%s", what);
     long long night = sb_history_find_night(h, what, err);
     if (night < 0) return night;
     char *end;
@@ -697,6 +700,8 @@ static long long night_of(sb_history *h, const char *what, bool *first, sb_err *
     int nn = sb_history_nights(h, &n, err);
     for (int i = 0; i < nn && !night; i++)
         if (n[i].commit[0] && sb_git_is_ancestor(what, n[i].commit)) night = n[i].id;
+    for (int i = 0; i < nn && by_id; i++)
+        if (n[i].id == night) snprintf(commit, len, "%s", n[i].commit);
     *first = !by_id && nn > 0 && night == n[0].id;
     sb_history_nights_free(n, nn);
     return night;
@@ -709,7 +714,8 @@ static int cmd_history_annotate(const sb_cli *c) {
     const char *what = c->pos[0];
     sb_err err;
     bool first;
-    long long night = night_of(h, what, &first, &err);
+    char commit[128];
+    long long night = night_of(h, what, &first, commit, sizeof commit, &err);
     int rc = SB_EXIT_OK, added = 0;
     if (night < 0) rc = bad_file(&err);
     else if (night > 0 && first && c->o.restart)   /* a change older than the history restarts none of its series */
@@ -718,7 +724,7 @@ static int cmd_history_annotate(const sb_cli *c) {
     else if (night == 0)
         rc = bad("history annotate: '%s' is no night of the history, and no night ran that commit or one after "
                  "it (`history list` names the nights and their commits)", what);
-    else if ((added = sb_history_store_annotation(h, night, what, c->o.series ? c->o.series : "", c->pos[1],
+    else if ((added = sb_history_store_annotation(h, night, commit, c->o.series ? c->o.series : "", c->pos[1],
                                                   c->o.accept, &err)) < 0)
         rc = bad_file(&err);
     else

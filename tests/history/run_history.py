@@ -262,6 +262,12 @@ def main():
     check(want in p.stdout, "history D: the text table says it too")
     # annotations: accepting pssm's change leaves sm's; accepting the night leaves none (exit 0)
     p = sb("history", "annotate", str(step), "pssm slower on purpose", "--series", "pssm", "--accept", "--history", D)
+    db = sqlite3.connect(D)
+    filed, ran = db.execute("SELECT a.git_commit, n.git_commit FROM annotations a JOIN nights n ON n.id = a.night "
+                            "WHERE a.text = 'pssm slower on purpose'").fetchone()
+    db.close()
+    check(filed == ran and len(ran) >= 7, "a note by night number is filed under that night's commit (%s, ran %s)" %
+          (filed, ran))
     rc, rows, err = regressions(D, "--metric", metrics)
     pssm = [r for r in rows if r["series"].split()[1] == "pssm"]
     others = [r for r in rows if r["series"].split()[1] != "pssm"]
