@@ -295,6 +295,60 @@ static bool scored_frames(sb_run *r) {
     return true;
 }
 
+/* The test seam SB_REPLAY_FRAME_MS: each measured frame of [first, r->done) has its stage times scaled so that its
+ * gpu_ms is the file's cost for the run's setting within +-2 % (a fixed jitter by run id and frame), so that tests
+ * of what tune decides from frame times (test_tune) hold it to exact costs whatever runs beside them. The file's
+ * lines are "TECHNIQUE[:ITEM...] MS" ('#' a comment): the first whose technique is the run's and whose items are
+ * all among its parameters wins; no line, the measured times stand. False: a failed run (the file unreadable or a
+ * line malformed). */
+static bool replayed_frame_costs(sb_run *r, int first) {
+    const char *file = getenv("SB_REPLAY_FRAME_MS");
+    if (!file || !*file || r->done <= first) return true;
+    sb_err e;
+    char *text = sb_read_file(file, NULL, &e);
+    if (!text) return fail_run(r, "SB_REPLAY_FRAME_MS: %s", e.msg);
+    char have[1100];
+    snprintf(have, sizeof have, ":%s:", r->params);
+    double cost = NAN;
+    int line = 0;
+    for (char *p = text, *next; p && *p && isnan(cost); p = next) {
+        next = strchr(p, '\n');
+        if (next) *next++ = 0;
+        line++;
+        char spec[512];
+        double ms;
+        if (*p == '#' || strspn(p, " \t\r") == strlen(p)) continue;
+        if (sscanf(p, "%511s %lf", spec, &ms) != 2 || !(ms > 0)) {
+            free(text);
+            char where[400];
+            snprintf(where, sizeof where, "%.360s:%d", file, line);
+            return fail_run(r, "SB_REPLAY_FRAME_MS %s: not \"TECHNIQUE[:ITEM...] MS\"", where);
+        }
+        char *item = strchr(spec, ':');
+        if (item) *item++ = 0;
+        bool match = !strcmp(spec, r->spec->tech->name);
+        for (char *it = item ? strtok(item, ":") : NULL; match && it; it = strtok(NULL, ":")) {
+            char want[300];
+            snprintf(want, sizeof want, ":%s:", it);
+            match = strstr(have, want) != NULL;
+        }
+        if (match) cost = ms;
+    }
+    free(text);
+    if (isnan(cost)) return true;
+    uint64_t seed = sb_fnv1a(SB_FNV_SEED, r->run_id, strlen(r->run_id));
+    for (int i = first; i < r->done; i++) {
+        sb_stage_times *t = &r->timer.times[i];
+        double now = sb_columns_gpu_ms(t), u = (double)(sb_mix64(seed ^ (uint64_t)i) >> 11) * 0x1p-53;
+        double k = now > 0 ? cost * (1 + 0.02 * (2 * u - 1)) / now : 0;
+        for (int st = 0; st < SB_STAGE_COUNT && k > 0; st++) t->ms[st] *= k;
+    }
+    if (first == 0)
+        sb_run_warn(&r->info, "its frame times are replayed from %s (SB_REPLAY_FRAME_MS, a test seam), not measured",
+                    file);
+    return true;
+}
+
 bool sb_run_pass(sb_run *r, int index, int total) {
     if (r->failed || r->finished) return false;
     if (r->s->score) return scored_frames(r);
@@ -304,7 +358,8 @@ bool sb_run_pass(sb_run *r, int index, int total) {
     if (first || !r->keep_instance) warm_up(r);
     if (interrupt_run(r, "in the warm-up")) return false;
     if (first) r->calib_before = sb_calib_measure(&r->s->calib);
-    bool ok = measured_frames(r, r->repeats, index, total);
+    int first_frame = r->done;
+    bool ok = measured_frames(r, r->repeats, index, total) && replayed_frame_costs(r, first_frame);
     if (ok) r->repeats++;
     r->calib_after = sb_calib_measure(&r->s->calib);
     if (!r->keep_instance) drop_instance(r);

@@ -740,6 +740,8 @@ int sb_columns_night(const char **out, int max) {
     return n;
 }
 
+double sb_columns_gpu_ms(const sb_stage_times *t) { return gpu_ms(t); }
+
 double sb_columns_gpu_ci_pct(const sb_stage_times *times, int n, int per_repeat) {
     double *v = sb_xmalloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
     int m = 0;

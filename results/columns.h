@@ -188,6 +188,8 @@ int sb_columns_night(const char **out, int max);
  * path's time is known, not how much frames differ along the path. With one,
  * the samples are the frames. */
 double sb_columns_gpu_ci_pct(const sb_stage_times *times, int n, int per_repeat);
+/* A frame's gpu_ms: the sum of its measured stages. */
+double sb_columns_gpu_ms(const sb_stage_times *t);
 
 /* The summary rows of one invocation (summary.csv), rewritten atomically
  * after every run. */

@@ -1,6 +1,10 @@
 /* `shadowbench tune` against what its candidates measure side by side: the
- * test times a handful of settings whose costs differ clearly (towers at
- * 320x180, 17 frames, three interleaved passes each) and asserts that tune
+ * test renders a handful of settings (towers at 320x180, 17 frames, three
+ * interleaved passes each) whose frame times are replayed at known costs that
+ * differ clearly (SB_REPLAY_FRAME_MS, a seam of the run loop: each frame's
+ * gpu_ms set to its setting's cost within +-2 %, so a neighbour's load cannot
+ * reach the verdicts and the test runs beside others; their errors are
+ * rendered and evaluated for real), and asserts that tune
  * recommends the cheapest one meeting an error bound every time where the next
  * is 1.8x dearer (no miss allowed), and where it is 1.3x to 1.8x dearer an
  * answer that follows from tune's own figures; it says how sure it is ("1.4x
@@ -17,6 +21,7 @@
 #include <stdint.h>
 #include <cmocka.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -62,9 +67,18 @@ static void label_of(const char *tech, const char *params, char *out, size_t len
     }
 }
 
+/* The settings' frame costs (ms), as llvmpipe drew them here alone: 1.3x to 2x apart, sm 2048 dearer than pssm
+ * 4 x 512 (the grid and every tune below read them through SB_REPLAY_FRAME_MS). */
+static const char g_costs[] = "sm:res=256 5.8\nsm:res=512 7.6\nsm:res=1024 10.1\nsm:res=2048 19.7\npssm:res=512 15.6\n";
+
 static int setup(void **st) {
     (void)st;
     if (tmp_folder(g_tmp, sizeof g_tmp, "sbtune")) return -1;
+    char costs[128];
+    snprintf(costs, sizeof costs, "%s/costs", g_tmp);
+    FILE *f = fopen(costs, "w");
+    if (!f || fputs(g_costs, f) < 0 || fclose(f) != 0) return -1;
+    setenv("SB_REPLAY_FRAME_MS", costs, 1);
     /* every setting, three passes interleaved, the error of every frame */
     if (sh("%s run towers auto " SPECS " " COMMON " --warmup 1 --error-every 1 --repeat 3 --order interleave --out %s/grid",
            test_binary(), g_tmp))
@@ -456,9 +470,9 @@ static void test_bad_input(void **st) {
     expect_cli_fail("no such results folder", "%s tune towers auto sm --max-err 0.1 --resume /nonexistent/x", bin);
 }
 
-/* Two groups, two tests of the suite (tests/meson.build): `tune` (its labels against its own grid, the tie, the
- * budget: the timings of live runs) runs alone; `tune-search` (argument "search": bad input, the seed's plan, a
- * search stopped by its time limit and resumed, which hold whatever the timings) beside other tests, with no grid. */
+/* Two groups, two tests of the suite (tests/meson.build), both beside other tests: `tune` (its labels against its
+ * own grid, the tie, the budget: on replayed frame costs); `tune-search` (argument "search": bad input, the seed's
+ * plan, a search stopped by its time limit and resumed, which hold whatever the timings: live), with no grid. */
 static int setup_scratch(void **st) {
     (void)st;
     return tmp_folder(g_tmp, sizeof g_tmp, "sbtune");
