@@ -5,6 +5,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <stddef.h>
 #include <sqlite3.h>
 #include <stdlib.h>
 #include <string.h>
@@ -45,15 +46,20 @@ static bool exec(sb_history *h, const char *sql, sb_err *err) {
 #define SERIES_COLS_R "r.host, r.renderer, r.scene, r.path, r.size, r.technique, r.params, r.light, r.anim, r.indirect"
 #define SERIES_NCOLS 10
 
+/* The series' text fields in SERIES_COLS order (indirect, the last column, is a number): where each lies in
+ * sb_series and its room. */
+#define SERIES_FIELD(m) {offsetof(sb_series, m), sizeof(((sb_series *)0)->m)}
+static const struct { size_t at, len; } series_text[SERIES_NCOLS - 1] = {
+    SERIES_FIELD(host), SERIES_FIELD(renderer), SERIES_FIELD(scene), SERIES_FIELD(path), SERIES_FIELD(size),
+    SERIES_FIELD(technique), SERIES_FIELD(params), SERIES_FIELD(light), SERIES_FIELD(anim),
+};
+
 static void copy_col(char *dst, size_t len, sqlite3_stmt *st, int i);
 
 /* Columns [first, first + SERIES_NCOLS) of a row as a series. */
 static void read_series(sqlite3_stmt *st, int first, sb_series *s) {
     memset(s, 0, sizeof *s);
-    char *texts[] = {s->host, s->renderer, s->scene, s->path, s->size, s->technique, s->params, s->light, s->anim};
-    size_t sizes[] = {sizeof s->host, sizeof s->renderer, sizeof s->scene, sizeof s->path, sizeof s->size,
-                      sizeof s->technique, sizeof s->params, sizeof s->light, sizeof s->anim};
-    for (int k = 0; k < (int)SB_COUNT(texts); k++) copy_col(texts[k], sizes[k], st, first + k);
+    for (int k = 0; k < SERIES_NCOLS - 1; k++) copy_col((char *)s + series_text[k].at, series_text[k].len, st, first + k);
     s->indirect = sqlite3_column_int(st, first + SERIES_NCOLS - 1) != 0;
 }
 
@@ -61,10 +67,8 @@ static bool bind_text(sqlite3_stmt *st, int i, const char *s);
 
 /* A series into parameters [first, first + SERIES_NCOLS). */
 static bool bind_series(sqlite3_stmt *st, int first, const sb_series *s) {
-    const char *texts[] = {s->host, s->renderer, s->scene, s->path, s->size, s->technique, s->params, s->light,
-                           s->anim};
-    for (int k = 0; k < (int)SB_COUNT(texts); k++)
-        if (!bind_text(st, first + k, texts[k])) return false;
+    for (int k = 0; k < SERIES_NCOLS - 1; k++)
+        if (!bind_text(st, first + k, (const char *)s + series_text[k].at)) return false;
     return sqlite3_bind_int(st, first + SERIES_NCOLS - 1, s->indirect) == SQLITE_OK;
 }
 
@@ -72,12 +76,9 @@ static bool bind_series(sqlite3_stmt *st, int first, const sb_series *s) {
 static void sql_series_key(sqlite3_context *ctx, int n, sqlite3_value **v) {
     sb_series s;
     memset(&s, 0, sizeof s);
-    char *texts[] = {s.host, s.renderer, s.scene, s.path, s.size, s.technique, s.params, s.light, s.anim};
-    size_t sizes[] = {sizeof s.host, sizeof s.renderer, sizeof s.scene, sizeof s.path, sizeof s.size,
-                      sizeof s.technique, sizeof s.params, sizeof s.light, sizeof s.anim};
-    for (int k = 0; k < (int)SB_COUNT(texts) && k < n; k++) {
+    for (int k = 0; k < SERIES_NCOLS - 1 && k < n; k++) {
         const char *t = (const char *)sqlite3_value_text(v[k]);
-        snprintf(texts[k], sizes[k], "%s", t ? t : "");
+        snprintf((char *)&s + series_text[k].at, series_text[k].len, "%s", t ? t : "");
     }
     s.indirect = n == SERIES_NCOLS && sqlite3_value_int(v[SERIES_NCOLS - 1]) != 0;
     char key[8192];

@@ -671,10 +671,60 @@ static uint32_t group_of(group_table *tab, plane_group **g, uint32_t *ng, uint32
     return (*ng)++;
 }
 
-/* Triangle t's unit normal, plane distance and area (0: degenerate); t of the placed numbering (sb_tri_map). */
+/* The instance draws of the placed numbering (scene.h): draw[k] the k-th instance draw, first[k] its first
+ * triangle's number (first[n]: one past the last). */
+typedef struct sb_tri_map {
+    uint32_t n;
+    uint32_t *draw;
+    uint64_t *first;
+} sb_tri_map;
+
+static void tri_map_make(const sb_scene *s, sb_tri_map *m) {
+    m->n = 0;
+    m->draw = sb_xmalloc(sizeof(uint32_t) * (s->instance_draws + 1));
+    m->first = sb_xmalloc(sizeof(uint64_t) * (s->instance_draws + 1));
+    uint64_t at = s->index_count / 3;
+    for (uint32_t d = 0; d < s->draw_count && m->n < s->instance_draws; d++) {
+        if (!SB_DRAW_IS_INSTANCE(s, d)) continue;
+        m->draw[m->n] = d;
+        m->first[m->n++] = at;
+        at += s->draws[d].index_count / 3;
+    }
+    m->first[m->n] = at;
+}
+
+static void tri_map_free(sb_tri_map *m) {
+    free(m->draw);
+    free(m->first);
+    memset(m, 0, sizeof *m);
+}
+
+/* Triangle t of the placed numbering: its three corners' positions (9 floats, origin-relative). */
+static void placed_triangle(const sb_scene *s, const sb_tri_map *m, uint64_t t, float out[9]) {
+    const sb_draw *d = NULL;
+    const uint32_t *ix;
+    if (t < s->index_count / 3) {
+        ix = s->indices + 3 * t;
+    } else {
+        uint32_t lo = 0, hi = m->n;   /* the last k with first[k] <= t */
+        while (hi - lo > 1) {
+            uint32_t mid = (lo + hi) / 2;
+            if (m->first[mid] <= t) lo = mid;
+            else hi = mid;
+        }
+        d = &s->draws[m->draw[lo]];
+        ix = s->indices + d->first_index + 3 * (t - m->first[lo]);
+    }
+    for (int k = 0; k < 3; k++) {
+        if (d) sb_draw_point(s, d, ix[k], out + 3 * k);
+        else memcpy(out + 3 * k, sb_vertex(s, ix[k]), 3 * sizeof(float));
+    }
+}
+
+/* Triangle t's unit normal, plane distance and area (0: degenerate); t of the placed numbering. */
 static double tri_plane(const sb_scene *s, const sb_tri_map *m, uint32_t t, sb_v3 *n, double *d) {
     float p[9];
-    sb_scene_triangle(s, m, t, p);
+    placed_triangle(s, m, t, p);
     const float *a = p, *b = p + 3, *c = p + 6;
     sb_v3 x = sb_v3_cross(sb_v3_make(b[0] - a[0], b[1] - a[1], b[2] - a[2]),
                           sb_v3_make(c[0] - a[0], c[1] - a[1], c[2] - a[2]));
@@ -703,7 +753,7 @@ static void find_planes(sb_scene *s) {
     if (all == 0 || all >= UINT32_MAX || face <= 0) return;
     uint32_t ntri = (uint32_t)all;
     sb_tri_map m;
-    sb_tri_map_make(s, &m);
+    tri_map_make(s, &m);
     /* 1: the triangles by quantised normal alone (few groups): a plane's area is at most its normal's, so only
      * triangles of a normal with 0.1 face or more can be in a large plane */
     uint32_t *normal_of = sb_xmalloc(sizeof(uint32_t) * ntri);
@@ -776,7 +826,7 @@ static void find_planes(sb_scene *s) {
     free(big);
     free(next);
     free(g);
-    sb_tri_map_free(&m);
+    tri_map_free(&m);
 }
 
 uint64_t sb_scene_triangles(const sb_scene *s) {
@@ -784,47 +834,6 @@ uint64_t sb_scene_triangles(const sb_scene *s) {
     for (uint32_t d = 0; d < s->draw_count && s->instance_draws; d++)
         if (SB_DRAW_IS_INSTANCE(s, d)) n += s->draws[d].index_count / 3;
     return n;
-}
-
-void sb_tri_map_make(const sb_scene *s, sb_tri_map *m) {
-    m->n = 0;
-    m->draw = sb_xmalloc(sizeof(uint32_t) * (s->instance_draws + 1));
-    m->first = sb_xmalloc(sizeof(uint64_t) * (s->instance_draws + 1));
-    uint64_t at = s->index_count / 3;
-    for (uint32_t d = 0; d < s->draw_count && m->n < s->instance_draws; d++) {
-        if (!SB_DRAW_IS_INSTANCE(s, d)) continue;
-        m->draw[m->n] = d;
-        m->first[m->n++] = at;
-        at += s->draws[d].index_count / 3;
-    }
-    m->first[m->n] = at;
-}
-
-void sb_tri_map_free(sb_tri_map *m) {
-    free(m->draw);
-    free(m->first);
-    memset(m, 0, sizeof *m);
-}
-
-void sb_scene_triangle(const sb_scene *s, const sb_tri_map *m, uint64_t t, float out[9]) {
-    const sb_draw *d = NULL;
-    const uint32_t *ix;
-    if (t < s->index_count / 3) {
-        ix = s->indices + 3 * t;
-    } else {
-        uint32_t lo = 0, hi = m->n;   /* the last k with first[k] <= t */
-        while (hi - lo > 1) {
-            uint32_t mid = (lo + hi) / 2;
-            if (m->first[mid] <= t) lo = mid;
-            else hi = mid;
-        }
-        d = &s->draws[m->draw[lo]];
-        ix = s->indices + d->first_index + 3 * (t - m->first[lo]);
-    }
-    for (int k = 0; k < 3; k++) {
-        if (d) sb_draw_point(s, d, ix[k], out + 3 * k);
-        else memcpy(out + 3 * k, sb_vertex(s, ix[k]), 3 * sizeof(float));
-    }
 }
 
 void sb_scene_flatten(const sb_scene *s, const uint8_t *which, sb_scene_flat *out) {

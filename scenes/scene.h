@@ -291,9 +291,6 @@ static inline void sb_draw_point(const sb_scene *s, const sb_draw *d, uint32_t v
     const float *x = d->xform;
     for (int r = 0; r < 3; r++) out[r] = x[4 * r] * p[0] + x[4 * r + 1] * p[1] + x[4 * r + 2] * p[2] + x[4 * r + 3];
 }
-/* The scene's triangles as numbered where one number names one placed triangle (the planes' tris, planar's
- * index buffer): the index array's own, t < index_count / 3, then every instance draw's in draw order, each
- * draw's in its run's order. How many there are is sb_scene_triangles. */
 /* Every triangle placed with vertices of its own, for what needs the world's triangles as one array (the
  * volumes' silhouettes, the GPU's copy of draws that cannot share): the scene's own vertices and indices (the
  * scene's arrays themselves where no draw is an instance), then, for each instance draw `which` names (NULL:
@@ -308,17 +305,9 @@ typedef struct sb_scene_flat {
 } sb_scene_flat;
 void sb_scene_flatten(const sb_scene *s, const uint8_t *which, sb_scene_flat *out);
 void sb_scene_flat_free(sb_scene_flat *f);
-/* The instance draws of that numbering: draw[k] the k-th instance draw, first[k] its first triangle's number
- * (first[n]: one past the last). */
-typedef struct sb_tri_map {
-    uint32_t n;
-    uint32_t *draw;
-    uint64_t *first;
-} sb_tri_map;
-void sb_tri_map_make(const sb_scene *s, sb_tri_map *m);
-void sb_tri_map_free(sb_tri_map *m);
-/* Triangle t of that numbering placed: its three corners' positions (9 floats, origin-relative). */
-void sb_scene_triangle(const sb_scene *s, const sb_tri_map *m, uint64_t t, float out[9]);
+/* The placed triangles' numbering (the planes' tris, and the GPU's index buffer once no draw shares: planar's
+ * receivers): the index array's own, t < index_count / 3, then every instance draw's in draw order, each in its
+ * run's order; sb_scene_triangles counts them. sb_scene_flatten with every draw lays them out so. */
 void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p);
 /* Finds the large planar receivers (a plane holding at least 10% of the area of
  * the bounds' largest face) once: later calls return at once. A load does not search

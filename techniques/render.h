@@ -155,7 +155,7 @@ double sb_gpu_scene_bytes(const sb_scene *s);
  * session; the pictures are the same either way. */
 void sb_gpu_share(const sb_gpu *g, bool planar);
 /* Triangle t's three vertices in the GPU's buffers as uploaded: after sb_gpu_share(g, true), t numbers the
- * scene's placed triangles (sb_tri_map: the planes' tris). */
+ * scene's placed triangles (scene.h: the planes' tris). */
 void sb_gpu_triangle(const sb_gpu *g, uint32_t t, uint32_t out[3]);
 /* After sb_scene_pose moved the scene: the moving draws' vertices into the vertex buffer, posed there by the GPU
  * (pose.c) or sent from the CPU's pose (the placements the GPU leaves), and the light-facing order of open ones
