@@ -16,8 +16,9 @@
 #include <stdint.h>
 
 
-/* The stages a frame can time: numbered slots of the ring (the techniques name them: techniques/stage.h). */
-#define SB_TIMER_STAGES 8
+/* The stages a frame can time: numbered slots of the ring (the techniques declare and name them: techniques/stage.h;
+ * eight are declared, the rest is room for a technique's own). */
+#define SB_TIMER_STAGES 12
 
 typedef enum sb_timing_mode { SB_TIMING_AUTO, SB_TIMING_QUERIES, SB_TIMING_SYNC } sb_timing_mode;
 

@@ -501,7 +501,7 @@ static void fail_runs(const sb_batch *b, int i, const char *renderer, const char
                         .status = SB_STATUS_FAILED,
                         .reason = why, .frames = b->opts.frames, .warmup = b->opts.warmup, .width = b->opts.width,
                         .height = b->opts.height};
-    sb_summary_add_outcome(sum, &info, r->spec.tech->stages, NULL, NULL, 0);
+    sb_summary_add_outcome(sum, &info, sb_technique_stage_mask(r->spec.tech), NULL, NULL, 0);
 }
 
 static bool results_dir(const sb_batch_cmd *cmd, const sb_batch *b, char *dir, size_t len, sb_err *err) {

@@ -129,8 +129,8 @@ static int cmd_techniques(const sb_cli *c) {
     for (int i = 0; i < sb_technique_count(); i++) {
         const sb_technique *t = sb_technique_at(i);
         printf("%s - %s\n  stages:", t->name, t->summary);
-        for (int s = 0; s < SB_STAGE_COUNT; s++)
-            if (t->stages & SB_STAGE_BIT(s)) printf(" %s", sb_stage_names[s]);
+        for (int s = 0; s < sb_stage_count(); s++)
+            if (sb_technique_stage_mask(t) & SB_STAGE_BIT(s)) printf(" %s", sb_stage_at(s)->name);
         printf("\n");
         for (int k = 0; k < t->param_count; k++) {
             const sb_param_def *p = &t->params[k];

@@ -12,6 +12,7 @@
 #include "eval.h"
 #include "taa.h"
 #include "image.h"
+#include "pose.h"
 #include "reference.h"
 #include "columns.h"
 #include "score.h"
@@ -115,10 +116,11 @@ struct sb_run {
     sb_err err;
 };
 
-/* The stages a run's rows time: none for a scored renderer's frames. */
-/* The stages a run's frames may time: its technique's, and the posing pass where the GPU poses a moving scene. */
+/* The stages a run's frames may time: its technique's, and the posing pass where the GPU poses a moving scene (none
+ * for a scored renderer's frames). */
 static unsigned run_stages(const sb_run *r) {
-    return r->s->score ? 0 : r->spec->tech->stages | (r->s->gpu.pose ? SB_STAGE_BIT(SB_STAGE_POSE) : 0);
+    if (r->s->score) return 0;
+    return sb_technique_stage_mask(r->spec->tech) | (r->s->gpu.pose ? SB_STAGE_BIT(sb_stage_slot(&sb_stage_pose)) : 0);
 }
 
 static bool fail_run(sb_run *r, const char *fmt, const char *what) {
@@ -145,7 +147,7 @@ static bool ensure_instance(sb_run *r) {
     int frames = (o->warmup < 0 ? SB_WARMUP_AUTO_CAP : o->warmup) + o->frames * (r->keep_instance ? r->capacity / o->frames : 1);
     /* and the evaluation pass's: per evaluated frame, the frames it replays (sdsm: at most its latency, 2),
        the frame and its flicker twin (what a technique keeps per frame, sdsm's splits, covers them too) */
-    for (int pf = 0; pf < o->frames; pf++) frames += eval_frame_wanted(o, pf) ? 4 + (o->taa ? SB_TAA_FRAMES + 1 : 0) : 0;
+    for (int pf = 0; pf < o->frames; pf++) frames += eval_frame_wanted(o, pf) ? 4 + sb_taa_frames(o) : 0;
     if (!r->calibrated) { /* once per run, before its first frame */
         if (!sb_autobias_choose(r->s, r->spec, &r->used, r->info.auto_params, sizeof r->info.auto_params, NULL, &r->err))
             return fail_run(r, "auto offsets: %s", r->err.msg);
@@ -341,7 +343,7 @@ static bool replayed_frame_costs(sb_run *r, int first) {
         sb_stage_times *t = &r->timer.times[i];
         double now = sb_columns_gpu_ms(t), u = (double)(sb_mix64(seed ^ (uint64_t)i) >> 11) * 0x1p-53;
         double k = now > 0 ? cost * (1 + 0.02 * (2 * u - 1)) / now : 0;
-        for (int st = 0; st < SB_STAGE_COUNT && k > 0; st++) t->ms[st] *= k;
+        for (int st = 0; st < SB_TIMER_STAGES && k > 0; st++) t->ms[st] *= k;
     }
     if (first == 0)
         sb_run_warn(&r->info, "its frame times are replayed from %s (SB_REPLAY_FRAME_MS, a test seam), not measured",
@@ -382,8 +384,9 @@ bool sb_run_wants_more(const sb_run *r) {
 /* A technique with shadow stages that drew no caster in any measured frame
  * measured nothing a user asked about: said in the run's warnings. */
 static void check_shadows_drawn(sb_run *r) {
-    const unsigned shadow = SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_VOLUMES);
-    if (!(r->spec->tech->stages & shadow)) return;
+    bool shadow = false;
+    for (int k = 0; k < r->spec->tech->stage_count; k++) shadow |= r->spec->tech->stages[k]->shadow;
+    if (!shadow) return;
     for (int i = 0; i < r->done; i++)
         if (r->recs[i].counters.shadow_triangles) return;
     sb_run_warn(&r->info, "no shadow-casting triangle was drawn in any frame (nothing in view casts toward the light)");
@@ -455,7 +458,7 @@ static bool judge_stability(sb_run *r) {
     for (int i = 0; i < r->done; i++) {
         const sb_stage_times *t = &r->timer.times[i];
         ms[i] = 0;
-        for (int k = 0; k < SB_STAGE_COUNT; k++)
+        for (int k = 0; k < SB_TIMER_STAGES; k++)
             if (t->mask & SB_STAGE_BIT(k)) ms[i] += t->ms[k];
     }
     double before = r->calib_before, after = r->calib_after;
@@ -550,17 +553,7 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
         r->info.timing = "";
         r->info.shadow_mb = NAN;
     }
-    if (o->sun_size > 0 || o->lamp_radius > 0) {
-        char sun[40] = "", lamp[40] = "";
-        if (o->sun_size > 0) snprintf(sun, sizeof sun, "sun %g deg, ", o->sun_size);
-        if (o->lamp_radius > 0) snprintf(lamp, sizeof lamp, "lamp %g, ", o->lamp_radius);
-        snprintf(r->info.light, sizeof r->info.light, "%s%s%d rays", sun, lamp, o->ref_samples);
-    }
-    if (s->lights.count) {   /* --lights: a series of its own */
-        size_t used = strlen(r->info.light);
-        snprintf(r->info.light + used, sizeof r->info.light - used, "%slights %s (%d)", used ? "; " : "", o->lights,
-                 s->lights.count);
-    }
+    sb_session_light_label(s, r->info.light, sizeof r->info.light);
     const char *skip = sb_skip_reason(s, spec->tech, spec);
     if (skip) {
         r->finished = true;

@@ -288,6 +288,21 @@ bool sb_spec_lights_check(const sb_scene *sc, const sb_run_spec *rs, const char 
     return true;
 }
 
+void sb_session_light_label(const sb_session *s, char *out, size_t len) {
+    const sb_run_opts *o = &s->opts;
+    out[0] = 0;
+    if (o->sun_size > 0 || o->lamp_radius > 0) {
+        char sun[40] = "", lamp[40] = "";
+        if (o->sun_size > 0) snprintf(sun, sizeof sun, "sun %g deg, ", o->sun_size);
+        if (o->lamp_radius > 0) snprintf(lamp, sizeof lamp, "lamp %g, ", o->lamp_radius);
+        snprintf(out, len, "%s%s%d rays", sun, lamp, o->ref_samples);
+    }
+    if (s->lights.count) {
+        size_t used = strlen(out);
+        snprintf(out + used, len - used, "%slights %s (%d)", used ? "; " : "", o->lights, s->lights.count);
+    }
+}
+
 bool sb_session_set_lights(sb_session *s, const char *spec, sb_err *err) {
     s->opts.lights = spec;
     memset(&s->lights, 0, sizeof s->lights);
@@ -477,9 +492,9 @@ void sb_render_camera_jittered(sb_session *s, sb_instance *in, sb_frame *f, cons
     f->cmds = s->cmds;
     f->eval = eval;
     if (sb_pose_pending(s->gpu.pose, s->gpu.scene)) {   /* the pose's GPU pass, in the first frame drawn at it */
-        sb_stage_begin(f, SB_STAGE_POSE);
+        sb_stage_begin(f, &sb_stage_pose);
         sb_pose_run(s->gpu.pose, s->gpu.scene, s->gpu.vbo);
-        sb_stage_end(f, SB_STAGE_POSE);
+        sb_stage_end(f, &sb_stage_pose);
     }
     if (sb_scene_moves(&s->scene)) {
         motion_since(s, in, f);

@@ -79,6 +79,9 @@ void sb_session_keep_reference(sb_session *s, const char *results_dir);
 /* The shadow storage a run of rs holds on this session's scene: its parameters' (sb_spec_shadow_bytes), a map set a
  * lamp where it keeps one each (--lights). */
 double sb_session_shadow_bytes(const sb_session *s, const sb_run_spec *rs);
+/* The light column of the session's runs: the sun's and lamps' sizes and the reference's rays where given, and
+ * --lights' set (each a series of its own); "" for a point sun and the scene's one light. */
+void sb_session_light_label(const sb_session *s, char *out, size_t len);
 /* A batch's runs of another --lights (NULL: none): read against the open scene; false with the reason. */
 bool sb_session_set_lights(sb_session *s, const char *spec, sb_err *err);
 /* The set's one name (sb_light_set_text), interned: "+1", "01" and "1" are one set, one run id. */

@@ -269,7 +269,7 @@ static void run_row(sb_session *s, const char *spec, int frames, row_result *r) 
     }
     sb_eval_buf b;
     sb_eval_buf_init(&b, &s->gpu, false);
-    bool cascades = runs[0].tech->stages & SB_STAGE_BIT(SB_STAGE_CASCADE);
+    bool cascades = sb_technique_times(runs[0].tech, &sb_stage_cascade);
     double err_sum = 0;
     int seq = 0;
     for (int i = 0; i < frames && r->pass; i++) {

@@ -33,6 +33,8 @@ struct sb_taa_buf {
     unsigned char *eval_ref;    /* the evaluated frame's reference: which pixels it scores */
 };
 
+int sb_taa_frames(const sb_run_opts *o) { return o->taa ? SB_TAA_FRAMES + 1 : 0; }
+
 void sb_taa_buf_free(struct sb_taa_buf *t) {
     if (!t) return;
     free(t->vis), free(t->ref), free(t->base), free(t->pos), free(t->aux), free(t->eval_ref);

@@ -32,6 +32,10 @@
 
 #define SB_TAA_FRAMES 8         /* display frames resolved up to the evaluated one */
 
+/* The frames --taa renders for an evaluated frame beyond the frame and its flicker twin (0 without it): what a
+ * run's instance makes room for. */
+int sb_taa_frames(const sb_run_opts *o);
+
 /* The display frames and resolved sequences of a run's evaluation (made on first use into *t, w x h; free with
  * sb_taa_buf_free, NULL: nothing). */
 typedef struct sb_taa_buf sb_taa_buf;

@@ -35,7 +35,7 @@ static bool has(unsigned stages, int s) { return stages & SB_STAGE_BIT(s); }
 
 static double gpu_ms(const sb_stage_times *t) {
     double sum = 0;
-    for (int s = 0; s < SB_STAGE_COUNT; s++)
+    for (int s = 0; s < SB_TIMER_STAGES; s++)
         if (t->mask & SB_STAGE_BIT(s)) sum += t->ms[s];
     return sum;
 }
@@ -52,7 +52,7 @@ static sb_cell f_u32(const sb_frame_row *r, int off) { return integer(COUNTER(r,
 static sb_cell f_u64(const sb_frame_row *r, int off) { return integer((long long)COUNTER(r, off, uint64_t)); }
 /* a shadow-map counter: empty for a technique without maps (no cascade stage) */
 static sb_cell f_maps(const sb_frame_row *r, int off) {
-    return has(r->stages, SB_STAGE_CASCADE) ? integer(COUNTER(r, off, int)) : empty();
+    return has(r->stages, sb_stage_slot(&sb_stage_cascade)) ? integer(COUNTER(r, off, int)) : empty();
 }
 /* a motion counter: empty where nothing moves */
 static sb_cell f_motion(const sb_frame_row *r, int off) {
@@ -106,14 +106,14 @@ static sb_cell f_error(const sb_frame_row *r, int off) {
  * its figure in the frame record). */
 #define COL(n, g, a, d) {.name = n, .get = g, .arg = a, .doc = d}
 #define METRIC(n, g, a, u, st, fl, d) {.name = n, .get = g, .arg = a, .unit = u, .stats = st, .flags = fl, .doc = d}
-/* a stage's time: named "<stage>_ms" from sb_stage_names (sb_frame_cols) */
-#define STAGE_MS(s, fl, d) METRIC(NULL, f_stage_ms, s, "ms", SB_STATS_TIMING, SB_COL_STAGE_TIME | (fl), d)
 #define ERROR(n, field, u, st, fl, d) METRIC(n, f_error, offsetof(sb_error_metrics, field), u, st, fl, d)
 #define SPLIT(k) COL("split_" #k, f_split, k - 1, "view-space far distance of cascade " #k " this frame")
 #define ALL_USES (SB_USE_COMPARE | SB_USE_HISTORY | SB_USE_REPORT)
 /* a counter of sb_counters: its field, and the getter that reads its type (f_u32, f_u64, f_maps, f_motion) */
 #define COUNT(n, g, field, st, fl, d) METRIC(n, g, offsetof(sb_counters, field), "count", st, fl, d)
 #define ERR_STATS (SB_STAT_MEAN | SB_STAT_P95)
+/* a shared stage's draws: arg is its slot (sb_frame_cols) */
+#define STAGE_DRAWS(st, d) {.name = #st "_draw_calls", .get = f_stage_draws, .stage = &sb_stage_##st, .doc = d}
 
 static const sb_frame_col frame_cols[] = {
     COL("frame", f_frame, 0, "frame of the path (0..frames-1)"),
@@ -143,18 +143,8 @@ static const sb_frame_col frame_cols[] = {
           "draws whose box changed since the technique's previous frame (empty: nothing in the scene moves)"),
     /* here: every technique's own counters, in the order of the technique list (sb_frame_cols) */
     {.name = NULL, .get = f_own},
-    STAGE_MS(SB_STAGE_ZPASS, 0, "camera depth pre-pass"),
-    STAGE_MS(SB_STAGE_MINMAX, 0, "depth reduction"),
-    STAGE_MS(SB_STAGE_CASCADE, ALL_USES | SB_USE_NIGHT, "all shadow-map rendering"),
-    STAGE_MS(SB_STAGE_FINAL, ALL_USES | SB_USE_NIGHT, "camera pass with the shadow lookup"),
-    STAGE_MS(SB_STAGE_VOLUMES, 0, "stencil shadow volumes (and planar casters)"),
-    STAGE_MS(SB_STAGE_RAYS, 0, "CPU ray casting (raycast)"),
-    STAGE_MS(SB_STAGE_CLUSTERS, 0,
-             "lamps found by cluster: the light grid (each screen tile and depth slice's lamps) built on the CPU and "
-             "sent (atlas grid=on)"),
-    STAGE_MS(SB_STAGE_POSE, 0,
-             "the posing pass: a moving scene's skinned, morphing and rigid vertices posed by the GPU once a pose, in "
-             "the first frame drawn at it (empty: nothing moves, or the CPU poses every placement)"),
+    /* here: every declared stage's time, "<stage>_ms", in slot order (sb_frame_cols; the rows: stage.h) */
+    {.name = NULL, .get = f_stage_ms, .unit = "ms", .stats = SB_STATS_TIMING, .flags = SB_COL_STAGE_TIME},
     {.name = "gpu_ms", .get = f_gpu_ms, .unit = "ms", .stats = SB_STATS_TIMING | SB_STAT_MIN, .role = SB_ROLE_TIME,
      .flags = ALL_USES | SB_USE_PAIR | SB_USE_NIGHT, .doc = "sum of the stage times"},
     METRIC("anim_ms", f_anim_ms, 0, "ms", SB_STATS_TIMING, 0,
@@ -169,10 +159,10 @@ static const sb_frame_col frame_cols[] = {
            "queries: the frame's GPU span not covered by a stage (the GPU waiting for the CPU)"),
     METRIC("gpu_clock_mhz", f_gpu_clock, 0, "MHz", SB_STAT_MIN | SB_STAT_MEDIAN | SB_STAT_MAX, SB_LOWER_WORSE,
            "the GPU's graphics clock at the frame's end (empty: not readable)"),
-    COL("zpass_draw_calls", f_stage_draws, SB_STAGE_ZPASS, "draw calls of the z-pass"),
-    COL("cascade_draw_calls", f_stage_draws, SB_STAGE_CASCADE, "draw calls of the cascade stage"),
-    COL("final_draw_calls", f_stage_draws, SB_STAGE_FINAL, "draw calls of the final pass"),
-    COL("volumes_draw_calls", f_stage_draws, SB_STAGE_VOLUMES, "draw calls of the volumes stage"),
+    STAGE_DRAWS(zpass, "draw calls of the z-pass"),
+    STAGE_DRAWS(cascade, "draw calls of the cascade stage"),
+    STAGE_DRAWS(final, "draw calls of the final pass"),
+    STAGE_DRAWS(volumes, "draw calls of the volumes stage"),
     SPLIT(1), SPLIT(2), SPLIT(3), SPLIT(4), SPLIT(5), SPLIT(6), SPLIT(7), SPLIT(8),
     COL("eval_pixels", f_eval_pixels, 0, "pixels evaluated against the reference (lit-facing, not sky)"),
     {.name = "err_rate", .get = f_error, .arg = offsetof(sb_error_metrics, err_rate), .unit = "share",
@@ -224,7 +214,6 @@ static const sb_frame_col frame_cols[] = {
           "share of sampled evaluated pixels whose reference changes when cast from the ray's exact hit point"),
 };
 
-/* The frame table with the stage rows named from sb_stage_names ("<stage>_ms"), made once. */
 /* A technique with more counters of its own than a frame holds (SB_MAX_OWN_COUNTERS), or more in all than the
  * table: the build's own mistake, found by any test that writes a frame. */
 static void too_many(const char *tech) {
@@ -234,8 +223,8 @@ static void too_many(const char *tech) {
 }
 
 const sb_frame_col *sb_frame_cols(int *count) {
-    static sb_frame_col cols[SB_COUNT(frame_cols) + SB_MAX_OWN_COLS];
-    static char stage_names[SB_STAGE_COUNT][32];
+    static sb_frame_col cols[SB_COUNT(frame_cols) + SB_MAX_OWN_COLS + SB_TIMER_STAGES];
+    static char stage_names[SB_TIMER_STAGES][32];
     static int n;
     if (!n)
         for (size_t k = 0; k < SB_COUNT(frame_cols); k++) {
@@ -259,11 +248,19 @@ const sb_frame_col *sb_frame_cols(int *count) {
                 }
                 continue;
             }
-            cols[n] = frame_cols[k];
-            if (cols[n].flags & SB_COL_STAGE_TIME) {
-                snprintf(stage_names[cols[n].arg], sizeof stage_names[0], "%s_ms", sb_stage_names[cols[n].arg]);
-                cols[n].name = stage_names[cols[n].arg];
+            if (frame_cols[k].flags & SB_COL_STAGE_TIME) {   /* every declared stage, in slot order */
+                for (int slot = 0; slot < sb_stage_count(); slot++) {
+                    const sb_stage_def *d = sb_stage_at(slot);
+                    snprintf(stage_names[slot], sizeof stage_names[0], "%s_ms", d->name);
+                    cols[n] = frame_cols[k];
+                    cols[n].name = stage_names[slot], cols[n].arg = slot, cols[n].stage = d;
+                    cols[n].flags |= d->flags, cols[n].doc = d->doc;
+                    n++;
+                }
+                continue;
             }
+            cols[n] = frame_cols[k];
+            if (cols[n].stage) cols[n].arg = sb_stage_slot(cols[n].stage);
             n++;
         }
     *count = n;

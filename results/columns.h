@@ -82,7 +82,7 @@ typedef struct sb_cell {
 typedef struct sb_frame_row {
     const sb_frame_rec *rec;
     const sb_stage_times *t;
-    unsigned stages;            /* the technique's SB_STAGE_BIT()s */
+    unsigned stages;            /* the run's stages: SB_STAGE_BIT(slot) each (sb_technique_stage_mask) */
 } sb_frame_row;
 
 /* What a per-run column reads: the run and its n measured frames (none when
@@ -127,6 +127,7 @@ typedef struct sb_frame_col {
     const char *unit;           /* "ms", "share", "count", ... (NULL: not a number) */
     sb_col_role role;
     const char *chart;          /* the report's run page draws it in the chart of this title (NULL: none) */
+    const sb_stage_def *stage;  /* a stage's column (its time, its draws): arg is the stage's slot */
 } sb_frame_col;
 
 /* A per-run column of the summary. The series rows (get NULL, stats set) are
@@ -143,7 +144,8 @@ typedef struct sb_run_col {
     sb_col_role role;
 } sb_run_col;
 
-/* The per-frame columns in order (the stage times named from sb_stage_names; a table made once, in static storage). */
+/* The per-frame columns in order (every technique's own counters and every declared stage's time among them; a table
+ * made once, in static storage). */
 const sb_frame_col *sb_frame_cols(int *count);
 /* The summary's columns in order, the series expanded (a table built once, in static storage). */
 const sb_run_col *sb_run_cols(int *count);

@@ -437,7 +437,7 @@ static void atlas_frame(void *state, sb_frame *f) {
     int first, end;
     sb_frame_light_range(f, s->count, &first, &end);
     int only = f->eval_light ? first : -1;
-    sb_stage_begin(f, SB_STAGE_CASCADE);
+    sb_stage_begin(f, &sb_stage_cascade);
     int n = allocate(s, f), rendered = 0, cached = 0;
     invalidate_moved(s, f);
     /* the stale check draws every tile afresh into an atlas of its own, leaving the kept one as it was */
@@ -477,17 +477,17 @@ static void atlas_frame(void *state, sb_frame *f) {
         }
     glBindBuffer(GL_TEXTURE_BUFFER, s->buf);
     if (shown) glBufferSubData(GL_TEXTURE_BUFFER, 0, (GLsizeiptr)shown * LREC * 16, s->records);
-    sb_stage_end(f, SB_STAGE_CASCADE);
+    sb_stage_end(f, &sb_stage_cascade);
 
     /* grid=on: each cluster's lamps among those records, as the camera pass will see them */
     if (d->grid) {
-        sb_stage_begin(f, SB_STAGE_CLUSTERS);
+        sb_stage_begin(f, &sb_stage_clusters);
         uint32_t items = sb_lightgrid_build(&s->grid, f, s->shown_pos, s->shown_range, shown);
         sb_count(&f->counters, &atlas_counters[C_GRID], items);
-        sb_stage_end(f, SB_STAGE_CLUSTERS);
+        sb_stage_end(f, &sb_stage_clusters);
     }
 
-    sb_stage_begin(f, SB_STAGE_FINAL);
+    sb_stage_begin(f, &sb_stage_final);
     if (only >= 0) sb_frame_shade_light_of(f, s->lamps[only].light);   /* what the evaluation scores */
     glUseProgram(s->fp.prog);
     glActiveTexture(GL_TEXTURE0);
@@ -502,7 +502,7 @@ static void atlas_frame(void *state, sb_frame *f) {
     glUniform1f(s->u_bias, (float)d->bias);
     glUniform1f(s->u_normal, (float)d->normal);
     sb_final_pass(f, &s->fp, false);
-    sb_stage_end(f, SB_STAGE_FINAL);
+    sb_stage_end(f, &sb_stage_final);
 }
 
 static void atlas_destroy(void *state) {
@@ -554,7 +554,7 @@ const sb_technique sb_technique_atlas = {
     .params = atlas_params,
     .param_count = (int)SB_COUNT(atlas_params),
     .desc_size = sizeof(atlas_desc),
-    .stages = SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_CLUSTERS) | SB_STAGE_BIT(SB_STAGE_FINAL),
+    SB_STAGES(&sb_stage_cascade, &sb_stage_clusters, &sb_stage_final),
     .needs = SB_NEEDS_POINT_LIGHT,
     .lights = SB_LIGHTS_EVERY_LAMP,
     .state_size = sizeof(atlas_state),

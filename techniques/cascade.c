@@ -461,13 +461,13 @@ void sb_csm_render(sb_csm *c, sb_frame *f) {
 }
 
 void sb_csm_draw(sb_csm *c, sb_frame *f) {
-    sb_stage_begin(f, SB_STAGE_CASCADE);
+    sb_stage_begin(f, &sb_stage_cascade);
     sb_csm_cull(c, f, NULL);
     sb_csm_render(c, f);
-    sb_stage_end(f, SB_STAGE_CASCADE);
-    sb_stage_begin(f, SB_STAGE_FINAL);
+    sb_stage_end(f, &sb_stage_cascade);
+    sb_stage_begin(f, &sb_stage_final);
     sb_csm_final(c, f, false);
-    sb_stage_end(f, SB_STAGE_FINAL);
+    sb_stage_end(f, &sb_stage_final);
 }
 
 void sb_csm_final(sb_csm *c, sb_frame *f, bool reuse_depth) {

@@ -205,7 +205,7 @@ extern const sb_counter_def sb_csm_counters[SB_CSM_COUNTER_COUNT];
     {                                                                                                          \
         .name = NAME, .summary = SUMMARY, .params = PARAMS, .param_count = (int)SB_COUNT(PARAMS),              \
         .desc_size = sizeof(DESC_T), .desc_defaults = DEFAULTS,                                                \
-        .stages = SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_FINAL), .needs = SB_NEEDS_SUN,       \
+        SB_STAGES(&sb_stage_cascade, &sb_stage_final), .needs = SB_NEEDS_SUN,                                  \
         .state_size = sizeof(sb_csm_state), .check = sb_csm_technique_check,                                   \
         .supported = sb_csm_technique_supported, .shadow_bytes = sb_csm_technique_shadow_bytes,                \
         .create = sb_csm_technique_create,                                                                     \

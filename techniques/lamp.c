@@ -7,6 +7,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+const sb_stage_def sb_stage_clusters = {
+    .name = "clusters",
+    .doc = "lamps found by cluster: the light grid (each screen tile and depth slice's lamps) built on the CPU and "
+           "sent (atlas grid=on)"};
+
 const sb_counter_def sb_lamp_counters[1] = {SB_GRID_ITEMS_COUNTER};
 
 /* grid=on with more than one light: the lamps' maps in one texture, their pass through the light grid */
@@ -289,7 +294,7 @@ void sb_lamp_technique_frame(void *state, sb_frame *f) {
     /* every light, or the one an evaluation pass scores */
     int first, end;
     sb_frame_light_range(f, s->count, &first, &end);
-    sb_stage_begin(f, SB_STAGE_CASCADE);
+    sb_stage_begin(f, &sb_stage_cascade);
     sb_shadow_depth_state((float)s->d->slope);
     glDisable(GL_CULL_FACE);
     glBindVertexArray(f->gpu->vao);
@@ -298,23 +303,23 @@ void sb_lamp_technique_frame(void *state, sb_frame *f) {
     glDisable(GL_POLYGON_OFFSET_FILL);
     f->counters.cascades_rendered = rendered;
     f->counters.cascades_skipped = k->maps * (end - first) - rendered;
-    sb_stage_end(f, SB_STAGE_CASCADE);
+    sb_stage_end(f, &sb_stage_cascade);
 
     /* grid=on, a timed frame: every lamp in one pass through the grid (an evaluation pass adds the lamps one by
        one, uncut: the per-light way the test holds this one's image to) */
     if (s->array && !f->eval) {
-        sb_stage_begin(f, SB_STAGE_CLUSTERS);
+        sb_stage_begin(f, &sb_stage_clusters);
         uint32_t items = sb_lightgrid_build(s->grid, f, s->grid_pos, s->grid_range, s->count);
         sb_count(&f->counters, &sb_lamp_counters[0], items);
-        sb_stage_end(f, SB_STAGE_CLUSTERS);
-        sb_stage_begin(f, SB_STAGE_FINAL);
+        sb_stage_end(f, &sb_stage_clusters);
+        sb_stage_begin(f, &sb_stage_final);
         shade_all(s, f);
-        sb_stage_end(f, SB_STAGE_FINAL);
+        sb_stage_end(f, &sb_stage_final);
         return;
     }
-    sb_stage_begin(f, SB_STAGE_FINAL);
+    sb_stage_begin(f, &sb_stage_final);
     for (int i = first; i < end; i++) shade(sb_lamp_light(s, i), f, i == first);
-    sb_stage_end(f, SB_STAGE_FINAL);
+    sb_stage_end(f, &sb_stage_final);
 }
 
 static void free_maps(sb_lamp_state *l) {

@@ -14,6 +14,9 @@
 #include "lightgrid.h"
 #include "render.h"
 
+/* The lamps' own stage: the light grid built and sent (grid=on). */
+extern const sb_stage_def sb_stage_clusters;
+
 /* Every lamp setting; a lamp technique's parameters are rows of this struct. */
 typedef struct sb_lamp_desc {
     int res, light, filter, layered;   /* layered: only where the kind has it (SB_LAYERED_*) */
@@ -128,7 +131,7 @@ void sb_lamp_technique_destroy(void *state);
     {                                                                                                              \
         .name = NAME, .summary = SUMMARY, .params = PARAMS, .param_count = (int)SB_COUNT(PARAMS),                  \
         .desc_size = sizeof(sb_lamp_desc),                                                                         \
-        .stages = SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_CLUSTERS) | SB_STAGE_BIT(SB_STAGE_FINAL),   \
+        SB_STAGES(&sb_stage_cascade, &sb_stage_clusters, &sb_stage_final),                                         \
         .counters = sb_lamp_counters, .counter_count = 1,                                                           \
         .needs = SB_NEEDS_POINT_LIGHT, .lights = SB_LIGHTS_LAMPS, .state_size = sizeof(STATE_T), .supported = sb_lamp_technique_supported,    \
         .shadow_bytes = sb_lamp_technique_shadow_bytes,                                                            \

@@ -15,10 +15,10 @@ static bool none_create(void *state, const sb_run_ctx *rc, const void *desc, sb_
 
 static void none_frame(void *state, sb_frame *f) {
     none_state *s = state;
-    sb_stage_begin(f, SB_STAGE_FINAL);
+    sb_stage_begin(f, &sb_stage_final);
     glUseProgram(s->fp.prog);
     sb_final_pass(f, &s->fp, false);
-    sb_stage_end(f, SB_STAGE_FINAL);
+    sb_stage_end(f, &sb_stage_final);
 }
 
 static void none_destroy(void *state) {
@@ -29,7 +29,7 @@ static void none_destroy(void *state) {
 const sb_technique sb_technique_none = {
     .name = "none",
     .summary = "no shadows; the baseline cost of the camera pass",
-    .stages = SB_STAGE_BIT(SB_STAGE_FINAL),
+    SB_STAGES(&sb_stage_final),
     .traits = SB_TRAIT_NO_SHADOWS,
     .stress = "",
     .state_size = sizeof(none_state),

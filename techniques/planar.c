@@ -100,11 +100,11 @@ static void planar_frame(void *state, sb_frame *f) {
     const sb_gpu *g = f->gpu;
     const sb_scene *sc = g->scene;
 
-    sb_stage_begin(f, SB_STAGE_ZPASS);
+    sb_stage_begin(f, &sb_stage_zpass);
     sb_zpass(f);
-    sb_stage_end(f, SB_STAGE_ZPASS);
+    sb_stage_end(f, &sb_stage_zpass);
 
-    sb_stage_begin(f, SB_STAGE_VOLUMES);
+    sb_stage_begin(f, &sb_stage_volumes);
     glBindFramebuffer(GL_FRAMEBUFFER, g->fbo);
     glDrawBuffer(GL_NONE);
     glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
@@ -144,11 +144,11 @@ static void planar_frame(void *state, sb_frame *f) {
     glStencilMask(0xff);
     glEnable(GL_DEPTH_TEST);
     glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-    sb_stage_end(f, SB_STAGE_VOLUMES);
+    sb_stage_end(f, &sb_stage_volumes);
 
-    sb_stage_begin(f, SB_STAGE_FINAL);
+    sb_stage_begin(f, &sb_stage_final);
     sb_final_pass_stencil(f, &s->fp, s->u_lit, 0x80);   /* the shadow bit */
-    sb_stage_end(f, SB_STAGE_FINAL);
+    sb_stage_end(f, &sb_stage_final);
 }
 
 static void planar_destroy(void *state) { (void)state; }
@@ -156,7 +156,7 @@ static void planar_destroy(void *state) { (void)state; }
 const sb_technique sb_technique_planar = {
     .name = "planar",
     .summary = "planar projected shadows onto the scene's large planes, with the stencil (Blinn 1988)",
-    .stages = SB_STAGE_BIT(SB_STAGE_ZPASS) | SB_STAGE_BIT(SB_STAGE_VOLUMES) | SB_STAGE_BIT(SB_STAGE_FINAL),
+    SB_STAGES(&sb_stage_zpass, &sb_stage_volumes, &sb_stage_final),
     .needs = SB_NEEDS_SUN | SB_NEEDS_PLANE,
     .state_size = sizeof(planar_state),
     .load = planar_load,

@@ -14,6 +14,11 @@
 #include "shaders.h"
 #include "util.h"
 
+const sb_stage_def sb_stage_pose = {
+    .name = "pose",
+    .doc = "the posing pass: a moving scene's skinned, morphing and rigid vertices posed by the GPU once a pose, in "
+           "the first frame drawn at it (empty: nothing moves, or the CPU poses every placement)"};
+
 #define POSE_GROUP 64        /* pose.comp's local size */
 #define POSE_MAX_GROUPS 65535u
 

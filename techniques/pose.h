@@ -7,9 +7,13 @@
 
 #include "gl.h"
 #include "scene.h"
+#include "stage.h"
 #include "util.h"
 
 typedef struct sb_gpu_pose sb_gpu_pose;
+
+/* The posing pass's stage (pose_ms): the run adds it to any technique's stages where the GPU poses the scene. */
+extern const sb_stage_def sb_stage_pose;
 
 /* Made for a moving scene: *out NULL for a still one, or where the GL's storage blocks cannot hold the data (then
  * the CPU poses every placement, said). vbase[d]: where draw d's first vertex lies in the vertex buffer as uploaded
@@ -19,7 +23,7 @@ bool sb_pose_create(sb_gpu_pose **out, const sb_scene *s, const uint32_t *vbase,
 /* The vertex buffer was uploaded again (its numbering in vbase may have changed, and it holds the CPU's copy): the
  * pass poses again at the next sb_pose_run. */
 void sb_pose_remap(sb_gpu_pose *p);
-/* sb_scene_pose moved the scene: a pose is due (run in the first frame drawn at it, as stage SB_STAGE_POSE). */
+/* sb_scene_pose moved the scene: a pose is due (run in the first frame drawn at it, as stage sb_stage_pose). */
 void sb_pose_due(sb_gpu_pose *p);
 bool sb_pose_pending(const sb_gpu_pose *p, const sb_scene *s);
 /* Runs a due pose into vbo at once; false: none due (or p NULL). */

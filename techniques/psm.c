@@ -106,7 +106,7 @@ const sb_technique sb_technique_psm = {
     .param_count = (int)SB_COUNT(psm_params),
     .desc_size = sizeof(psm_desc),
     .desc_defaults = &psm_defaults,
-    .stages = SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_FINAL),
+    SB_STAGES(&sb_stage_cascade, &sb_stage_final),
     .needs = SB_NEEDS_SUN,
     .state_size = sizeof(psm_state),
     .check = psm_check,

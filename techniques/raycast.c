@@ -21,6 +21,9 @@
 #include "reference.h"
 #include "shaders.h"
 
+/* Its own stage: the readback of the position pass and the rays. */
+static const sb_stage_def stage_rays = {.name = "rays", .doc = "CPU ray casting (raycast)"};
+
 typedef struct raycast_desc {
     int threads, light;
 } raycast_desc;
@@ -111,15 +114,15 @@ static void raycast_frame(void *state, sb_frame *f) {
     /* the camera pass with the evaluation targets: positions and normals. Its
        depth test is the final pass's (LEQUAL: of equal depths the last drawn
        wins), so both passes put the same triangle in every pixel. */
-    sb_stage_begin(f, SB_STAGE_ZPASS);
+    sb_stage_begin(f, &sb_stage_zpass);
     bool eval = f->eval;
     f->eval = true;
     glUseProgram(s->fp.prog);
     sb_gbuffer_pass(f, &s->fp);
     f->eval = eval;
-    sb_stage_end(f, SB_STAGE_ZPASS);
+    sb_stage_end(f, &sb_stage_zpass);
 
-    sb_stage_begin(f, SB_STAGE_RAYS);
+    sb_stage_begin(f, &stage_rays);
     sb_gpu_readback_eval(g, s->pos, s->aux);
     for (int i = first; i < end; i++) {
         shade(s, f, i);
@@ -134,9 +137,9 @@ static void raycast_frame(void *state, sb_frame *f) {
     glBindTexture(GL_TEXTURE_2D, s->tex);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
     glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, w, h, GL_RED, GL_UNSIGNED_BYTE, s->vis);   /* the first light's */
-    sb_stage_end(f, SB_STAGE_RAYS);
+    sb_stage_end(f, &stage_rays);
 
-    sb_stage_begin(f, SB_STAGE_FINAL);
+    sb_stage_begin(f, &sb_stage_final);
     for (int i = first; i < end; i++) {   /* the first clears and lays the ambient, each further one adds its light */
         shade(s, f, i);
         glUseProgram(s->fp.prog);
@@ -147,7 +150,7 @@ static void raycast_frame(void *state, sb_frame *f) {
         if (i == first) sb_final_pass(f, &s->fp, true);
         else sb_final_pass_add(f, &s->fp);
     }
-    sb_stage_end(f, SB_STAGE_FINAL);
+    sb_stage_end(f, &sb_stage_final);
 }
 
 static void raycast_destroy(void *state) {
@@ -168,7 +171,7 @@ const sb_technique sb_technique_raycast = {
     .params = raycast_params,
     .param_count = (int)SB_COUNT(raycast_params),
     .desc_size = sizeof(raycast_desc),
-    .stages = SB_STAGE_BIT(SB_STAGE_ZPASS) | SB_STAGE_BIT(SB_STAGE_RAYS) | SB_STAGE_BIT(SB_STAGE_FINAL),
+    SB_STAGES(&sb_stage_zpass, &stage_rays, &sb_stage_final),
     .needs = SB_NEEDS_REFERENCE,
     .traits = SB_TRAIT_EXACT,
     .lights = SB_LIGHTS_ANY,

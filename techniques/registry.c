@@ -6,6 +6,7 @@
 
 #include <stdlib.h>
 
+#include "pose.h"
 #include "technique.h"
 
 #define SB_TECHNIQUE(name) extern const sb_technique sb_technique_##name;
@@ -103,6 +104,59 @@ bool sb_params_role(const sb_params *p, sb_param_role role, double *out) {
             *out = p->v[i].num;
             return true;
         }
+    return false;
+}
+
+/* ---- the stages: every declared one, each once, in slot order ---- */
+
+static const sb_stage_def *stage_list[SB_TIMER_STAGES];
+static int stage_n;
+
+static void add_stage(const sb_stage_def *d, const char *who) {
+    for (int k = 0; k < stage_n; k++)
+        if (stage_list[k] == d) return;
+    if (stage_n == SB_TIMER_STAGES) {   /* the build's own mistake, found by any test that times a frame */
+        fprintf(stderr, "shadowbench: %s: stage '%s' is one more than the timer's ring holds (SB_TIMER_STAGES, %d)\n",
+                who, d->name, SB_TIMER_STAGES);
+        abort();
+    }
+    stage_list[stage_n++] = d;
+}
+
+static void make_stages(void) {
+    if (stage_n) return;
+    for (int k = 0; k < sb_stages_shared_count; k++) add_stage(sb_stages_shared[k], "stage.c");
+    for (size_t i = 0; i < SB_COUNT(all); i++)
+        for (int k = 0; k < all[i]->stage_count; k++) add_stage(all[i]->stages[k], all[i]->name);
+    add_stage(&sb_stage_pose, "pose.c");
+}
+
+int sb_stage_count(void) {
+    make_stages();
+    return stage_n;
+}
+
+const sb_stage_def *sb_stage_at(int slot) {
+    make_stages();
+    return slot >= 0 && slot < stage_n ? stage_list[slot] : NULL;
+}
+
+int sb_stage_slot(const sb_stage_def *def) {
+    make_stages();
+    for (int k = 0; k < stage_n; k++)
+        if (stage_list[k] == def) return k;
+    return -1;
+}
+
+unsigned sb_technique_stage_mask(const sb_technique *t) {
+    unsigned m = 0;
+    for (int k = 0; k < t->stage_count; k++) m |= SB_STAGE_BIT(sb_stage_slot(t->stages[k]));
+    return m;
+}
+
+bool sb_technique_times(const sb_technique *t, const sb_stage_def *def) {
+    for (int k = 0; k < t->stage_count; k++)
+        if (t->stages[k] == def) return true;
     return false;
 }
 

@@ -587,23 +587,29 @@ void sb_frame_shade_light_of(sb_frame *f, int idx) {
     shade_spot(f, NULL);
 }
 
-void sb_stage_begin(sb_frame *f, sb_stage s) {
+void sb_stage_begin(sb_frame *f, const sb_stage_def *s) {
+    int slot = sb_stage_slot(s);
+    if (slot < 0) {
+        fprintf(stderr, "shadowbench: stage '%s' is timed but declared by no technique (sb_technique.stages)\n", s->name);
+        abort();
+    }
     f->stage = s;
-    sb_timer_stage_begin(f->timer, s);
+    f->stage_slot = slot;
+    sb_timer_stage_begin(f->timer, slot);
 }
-void sb_stage_end(sb_frame *f, sb_stage s) {
+void sb_stage_end(sb_frame *f, const sb_stage_def *s) {
     sb_submit_flush(f);
-    sb_timer_stage_end(f->timer, s);
+    sb_timer_stage_end(f->timer, f->stage == s ? f->stage_slot : sb_stage_slot(s));
 }
 
-static bool shadow_stage(const sb_frame *f) { return f->stage == SB_STAGE_CASCADE || f->stage == SB_STAGE_VOLUMES; }
+static bool shadow_stage(const sb_frame *f) { return f->stage && f->stage->shadow; }
 
 /* A draw (what the GPU draws: a mesh range, its instances) and an API call are counted apart: with
    --submit indirect one call issues a pass's draws. */
 static void count_draws(sb_frame *f, uint64_t triangles, int instances) {
     uint64_t tris = triangles * (uint64_t)(instances > 1 ? instances : 1);
     f->counters.draw_calls++;
-    f->counters.stage_draw_calls[f->stage]++;
+    f->counters.stage_draw_calls[f->stage_slot]++;
     f->counters.triangles += tris;
     if (shadow_stage(f)) {
         f->counters.shadow_draw_calls++;

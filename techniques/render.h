@@ -119,7 +119,8 @@ typedef struct sb_frame {
     uint32_t *cmds;                     /* --submit indirect: the pass's pending commands, 5 words each (at most
                                            draw_count: a pass issues each draw once between flushes) */
     uint32_t cmd_count;
-    sb_stage stage;                     /* the stage being recorded (for draw counts) */
+    const sb_stage_def *stage;          /* the stage being recorded (for draw counts), and its slot */
+    int stage_slot;
     sb_counters counters;
     const sb_look *look;                /* the flicker twin's lookup (NULL: the frame's own camera) */
     bool look_depth;                    /* the target's depth is the look camera's (a G-buffer pass drew it) */
@@ -181,8 +182,10 @@ void sb_final_prog_free(sb_final_prog *fp);
 void sb_frame_setup(sb_frame *f, const sb_gpu *g, const sb_camera *cam);
 /* After sb_frame_setup: the image shifted by (jx, jy) pixels (TAA's jitter): proj, view_proj and the frustum. */
 void sb_frame_jitter(sb_frame *f, double jx, double jy);
-void sb_stage_begin(sb_frame *f, sb_stage s);
-void sb_stage_end(sb_frame *f, sb_stage s);
+/* A stage of the frame, timed in its slot (sb_stage_slot); a stage no technique declares is the build's mistake
+ * (said, and the process aborts). */
+void sb_stage_begin(sb_frame *f, const sb_stage_def *s);
+void sb_stage_end(sb_frame *f, const sb_stage_def *s);
 /* Draws every camera-visible draw into the render target with fp (already
  * in use, technique uniforms set). Clears colour, visibility and, unless
  * reuse_depth (a z-pass filled it; tested with LEQUAL), depth. Counts draws. */

@@ -320,11 +320,11 @@ static void sdsm_frame(void *state, sb_frame *f) {
     const sb_gpu *g = f->gpu;
     sb_csm *c = &s->csm;
 
-    sb_stage_begin(f, SB_STAGE_ZPASS);
+    sb_stage_begin(f, &sb_stage_zpass);
     sb_zpass(f);
-    sb_stage_end(f, SB_STAGE_ZPASS);
+    sb_stage_end(f, &sb_stage_zpass);
 
-    sb_stage_begin(f, SB_STAGE_MINMAX);
+    sb_stage_begin(f, &sb_stage_minmax);
     reset_stats(s);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, c->block);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, s->stats);
@@ -346,9 +346,9 @@ static void sdsm_frame(void *state, sb_frame *f) {
         s->ring_cam[f->seq % (s->latency + 1)] = f->cam;
     }
     glActiveTexture(GL_TEXTURE0);
-    sb_stage_end(f, SB_STAGE_MINMAX);
+    sb_stage_end(f, &sb_stage_minmax);
 
-    sb_stage_begin(f, SB_STAGE_CASCADE);
+    sb_stage_begin(f, &sb_stage_cascade);
     if (s->gpu) {
         /* the GPU's partitions are unknown here: cull against the whole view's light volume */
         sb_v3 corners[8];
@@ -365,11 +365,11 @@ static void sdsm_frame(void *state, sb_frame *f) {
     if (s->gpu) { /* rendered/skipped and splits are known after the run (collect) */
         f->counters.cascades_rendered = f->counters.cascades_skipped = 0;
     }
-    sb_stage_end(f, SB_STAGE_CASCADE);
+    sb_stage_end(f, &sb_stage_cascade);
 
-    sb_stage_begin(f, SB_STAGE_FINAL);
+    sb_stage_begin(f, &sb_stage_final);
     sb_csm_final(c, f, true);
-    sb_stage_end(f, SB_STAGE_FINAL);
+    sb_stage_end(f, &sb_stage_final);
 }
 
 /* splits=gpu: after the timed frames, one readback of every frame's splits and flags. */
@@ -414,8 +414,7 @@ const sb_technique sb_technique_sdsm = {
     .param_count = (int)SB_COUNT(sdsm_params),
     .desc_size = sizeof(sdsm_desc),
     .desc_defaults = &sdsm_defaults,
-    .stages = SB_STAGE_BIT(SB_STAGE_ZPASS) | SB_STAGE_BIT(SB_STAGE_MINMAX) | SB_STAGE_BIT(SB_STAGE_CASCADE) |
-              SB_STAGE_BIT(SB_STAGE_FINAL),
+    SB_STAGES(&sb_stage_zpass, &sb_stage_minmax, &sb_stage_cascade, &sb_stage_final),
     .needs = SB_NEEDS_SUN,
     .history = sdsm_history,
     .state_size = sizeof(sdsm_state),

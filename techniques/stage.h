@@ -8,21 +8,29 @@
 
 #include "timing.h"
 
-typedef enum sb_stage {
-    SB_STAGE_ZPASS,     /* camera depth pre-pass */
-    SB_STAGE_MINMAX,    /* depth reduction */
-    SB_STAGE_CASCADE,   /* all shadow-map rendering */
-    SB_STAGE_FINAL,     /* camera pass with shadow lookup */
-    SB_STAGE_VOLUMES,   /* stencil shadow volumes */
-    SB_STAGE_RAYS,      /* CPU ray casting */
-    SB_STAGE_CLUSTERS,  /* lamps found by cluster: the light grid built and sent (atlas grid=on) */
-    SB_STAGE_POSE,      /* a moving scene's posing pass: its moving vertices posed by the GPU (pose.c) */
-    SB_STAGE_COUNT
-} sb_stage;
+/* A timed stage of a frame: a column <name>_ms and a slot of the timer's ring. A technique declares the stages it
+ * times (sb_technique.stages), as it declares its counters: the rows below are the shared machinery's (a camera
+ * pass, the cascade and volume passes: every technique that draws one names the same row), a stage only one
+ * technique's machinery has stands in its file (raycast.c's rays, lamp.c's clusters), and the run's posing pass
+ * is pose.c's. The columns and slots are every declared stage's, each once, in one order (sb_stage_at,
+ * technique.h): these rows, then each technique's own in the technique list's order, then the posing pass. */
+typedef struct sb_stage_def {
+    const char *name;           /* its column: "<name>_ms" */
+    bool shadow;                /* a shadow stage: its draws count in shadow_draw_calls, shadow_triangles */
+    unsigned flags;             /* its column's SB_USE_* (a default metric of commands), below */
+    const char *doc;
+} sb_stage_def;
 
-_Static_assert(SB_STAGE_COUNT <= SB_TIMER_STAGES, "the timer's ring has a slot for every stage");
-#define SB_STAGE_BIT(s) (1u << (s))
-extern const char *const sb_stage_names[SB_STAGE_COUNT];
+extern const sb_stage_def sb_stage_zpass;      /* camera depth pre-pass */
+extern const sb_stage_def sb_stage_minmax;     /* depth reduction */
+extern const sb_stage_def sb_stage_cascade;    /* all shadow-map rendering */
+extern const sb_stage_def sb_stage_final;      /* camera pass with shadow lookup */
+extern const sb_stage_def sb_stage_volumes;    /* stencil shadow volumes and planar casters */
+/* The shared rows in their order (the first slots). */
+extern const sb_stage_def *const sb_stages_shared[];
+extern const int sb_stages_shared_count;
+
+#define SB_STAGE_BIT(slot) (1u << (slot))
 
 #define SB_MAX_CASCADES 8
 
@@ -68,7 +76,7 @@ typedef struct sb_counter_def {
 typedef struct sb_counters {
     uint32_t draw_calls, shadow_draw_calls;         /* draws (a mesh range and its instances); shadow: cascade and
                                                        volumes stages */
-    uint32_t stage_draw_calls[SB_STAGE_COUNT];
+    uint32_t stage_draw_calls[SB_TIMER_STAGES];      /* by stage slot (sb_stage_slot) */
     uint32_t api_calls, shadow_api_calls;           /* GL draw calls issued: with --submit indirect one issues many draws */
     uint64_t triangles, shadow_triangles;           /* triangles x instances submitted */
     int cascades_rendered, cascades_skipped;

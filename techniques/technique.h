@@ -106,6 +106,11 @@ typedef struct sb_params {
 /* "res=2048:filter=pcf3:..." in table order (a late parameter only when not at its default) */
 void sb_params_canonical(const sb_params *p, char *out, size_t len);
 
+/* A technique's stages (sb_technique.stages): SB_STAGES(&sb_stage_cascade, &sb_stage_final). */
+#define SB_STAGES(...)                                                                                       \
+    .stages = (const sb_stage_def *const[]){__VA_ARGS__},                                                      \
+    .stage_count = (int)(sizeof((const sb_stage_def *const[]){__VA_ARGS__}) / sizeof(const sb_stage_def *))
+
 enum { SB_LIGHTS_SUN, SB_LIGHTS_LAMPS, SB_LIGHTS_ANY, SB_LIGHTS_EVERY_LAMP };
 
 struct sb_gpu;
@@ -119,7 +124,9 @@ typedef struct sb_technique {
     int param_count;
     size_t desc_size;               /* the parameter struct */
     const void *desc_defaults;      /* copied into it before the parameters (NULL: zeros) */
-    unsigned stages;                /* SB_STAGE_BIT()s it reports */
+    /* the stages its frames time, each a row (stage.h): the shared machinery's or its own; SB_STAGES(...) */
+    const sb_stage_def *const *stages;
+    int stage_count;
     unsigned needs;                 /* SB_NEEDS_* */
     unsigned traits;                /* SB_TRAIT_* */
     /* what --lights may name for it: SB_LIGHTS_SUN (0: the sun alone, as before), SB_LIGHTS_LAMPS (point and spot
@@ -178,6 +185,15 @@ bool sb_params_role(const sb_params *p, sb_param_role role, double *out);
 /* Every technique's parameters as markdown tables (`shadowbench techniques --format markdown`: the generated part
  * of docs/techniques.md, which a test holds to the tables). */
 void sb_techniques_markdown(FILE *out);
+/* Every declared stage, each once, in slot order (stage.h): the shared rows, each technique's own in the list's
+ * order, the posing pass. A stage's slot is its place here (-1: declared by no technique); a technique's stage
+ * mask has bit slot for each stage it declares. */
+int sb_stage_count(void);
+const sb_stage_def *sb_stage_at(int slot);
+int sb_stage_slot(const sb_stage_def *def);
+unsigned sb_technique_stage_mask(const sb_technique *t);
+/* Whether a technique times a stage. */
+bool sb_technique_times(const sb_technique *t, const sb_stage_def *def);
 /* The first technique with a trait, or NULL. */
 const sb_technique *sb_technique_with(unsigned trait);
 /* The technique's parameter struct: its defaults, then every value at its offset. */

@@ -668,11 +668,11 @@ static void virtual_frame(void *state, sb_frame *f) {
     virtual_state *s = state;
     const sb_gpu *g = f->gpu;
 
-    sb_stage_begin(f, SB_STAGE_ZPASS);
+    sb_stage_begin(f, &sb_stage_zpass);
     sb_zpass(f);
-    sb_stage_end(f, SB_STAGE_ZPASS);
+    sb_stage_end(f, &sb_stage_zpass);
 
-    sb_stage_begin(f, SB_STAGE_MINMAX);
+    sb_stage_begin(f, &sb_stage_minmax);
     if (!s->fitted || memcmp(&s->sun, &g->sun, sizeof s->sun)) {   /* a light that moved: every page again */
         invalidate(s);
         fit_clipmap(s, f);
@@ -690,9 +690,9 @@ static void virtual_frame(void *state, sb_frame *f) {
             int e = w * 32 + __builtin_ctz(bits), l = e / (P * P), y = e / P % P, x = e % P;
             s->need[needed++] = (page_key){l, s->origin[l][0] + x, s->origin[l][1] + y, false};
         }
-    sb_stage_end(f, SB_STAGE_MINMAX);
+    sb_stage_end(f, &sb_stage_minmax);
 
-    sb_stage_begin(f, SB_STAGE_CASCADE);
+    sb_stage_begin(f, &sb_stage_cascade);
     int held = needed, given_up = coarsen_to_fit(s, &held);
     pool_tally t = {0};
     update_pool(s, f, held, split ? CASTERS_STILL : CASTERS_ALL, &t);
@@ -702,9 +702,9 @@ static void virtual_frame(void *state, sb_frame *f) {
     const double counts[] = {[C_NEEDED] = needed, [C_RENDERED] = t.drawn, [C_CACHED] = held - t.drawn - t.left_out,
                              [C_OVERFLOW] = given_up + t.left_out_own, [C_STAND_IN] = t.stand_ins};
     for (int k = C_NEEDED; k <= C_STAND_IN; k++) sb_count(&f->counters, &virtual_counters[k], counts[k]);
-    sb_stage_end(f, SB_STAGE_CASCADE);
+    sb_stage_end(f, &sb_stage_cascade);
 
-    sb_stage_begin(f, SB_STAGE_FINAL);
+    sb_stage_begin(f, &sb_stage_final);
     glUseProgram(s->fp.prog);
     set_clipmap_uniforms(s, f, &s->final_clip);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, s->table_buf);
@@ -719,7 +719,7 @@ static void virtual_frame(void *state, sb_frame *f) {
     glUniform1f(s->u_normal, (float)s->d.normal);
     glUniform3f(s->u_light, (float)g->sun.x, (float)g->sun.y, (float)g->sun.z);
     sb_final_pass(f, &s->fp, true);
-    sb_stage_end(f, SB_STAGE_FINAL);
+    sb_stage_end(f, &sb_stage_final);
     overlay_done(s);
     if (f->bypass_cache) invalidate(s);   /* ... and keeps none of them */
 }
@@ -771,8 +771,7 @@ const sb_technique sb_technique_virtual = {
     .params = virtual_params,
     .param_count = (int)SB_COUNT(virtual_params),
     .desc_size = sizeof(virtual_desc),
-    .stages = SB_STAGE_BIT(SB_STAGE_ZPASS) | SB_STAGE_BIT(SB_STAGE_MINMAX) | SB_STAGE_BIT(SB_STAGE_CASCADE) |
-              SB_STAGE_BIT(SB_STAGE_FINAL),
+    SB_STAGES(&sb_stage_zpass, &sb_stage_minmax, &sb_stage_cascade, &sb_stage_final),
     .needs = SB_NEEDS_SUN,
     .state_size = sizeof(virtual_state),
     .check = virtual_check,

@@ -272,11 +272,11 @@ static void volumes_frame(void *state, sb_frame *f) {
     const sb_gpu *g = f->gpu;
     const sb_scene *sc = g->scene;
 
-    sb_stage_begin(f, SB_STAGE_ZPASS);
+    sb_stage_begin(f, &sb_stage_zpass);
     sb_zpass(f);
-    sb_stage_end(f, SB_STAGE_ZPASS);
+    sb_stage_end(f, &sb_stage_zpass);
 
-    sb_stage_begin(f, SB_STAGE_VOLUMES);
+    sb_stage_begin(f, &sb_stage_volumes);
     bool zfail = s->mode == MODE_ZFAIL || (s->mode == MODE_AUTO && camera_in_shadow(s, f));
     glBindFramebuffer(GL_FRAMEBUFFER, g->fbo);
     glDrawBuffer(GL_NONE);
@@ -308,11 +308,11 @@ static void volumes_frame(void *state, sb_frame *f) {
     glDisable(GL_DEPTH_CLAMP);
     glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
     f->counters.cascades_rendered = 0;
-    sb_stage_end(f, SB_STAGE_VOLUMES);
+    sb_stage_end(f, &sb_stage_volumes);
 
-    sb_stage_begin(f, SB_STAGE_FINAL);
+    sb_stage_begin(f, &sb_stage_final);
     sb_final_pass_stencil(f, &geo->fp, geo->u_lit, 0xff);
-    sb_stage_end(f, SB_STAGE_FINAL);
+    sb_stage_end(f, &sb_stage_final);
 }
 
 static void volumes_destroy(void *state) { (void)state; /* everything is the scene's (load) */ }
@@ -323,7 +323,7 @@ const sb_technique sb_technique_volumes = {
     .params = volumes_params,
     .param_count = (int)SB_COUNT(volumes_params),
     .desc_size = sizeof(volumes_desc),
-    .stages = SB_STAGE_BIT(SB_STAGE_ZPASS) | SB_STAGE_BIT(SB_STAGE_VOLUMES) | SB_STAGE_BIT(SB_STAGE_FINAL),
+    SB_STAGES(&sb_stage_zpass, &sb_stage_volumes, &sb_stage_final),
     .needs = SB_NEEDS_SUN | SB_NEEDS_CLOSED | SB_NEEDS_REFERENCE,
     .state_size = sizeof(volumes_state),
     .load = volumes_load,

@@ -94,13 +94,13 @@ static void test_columns_documented(void **st) {
     free(gen);
 }
 
-/* The cell of column `name` in a frame row written by the column table (header and row in one buffer). */
-static void frame_cell_of(const sb_frame_rec *rec, const char *name, char *out, size_t len) {
+/* The cell of column `name` in a frame row of stage times t, of a run timing `stages`, written by the column table
+ * (header and row in one buffer). */
+static void stage_cell_of(const sb_frame_rec *rec, const sb_stage_times *t, unsigned stages, const char *name,
+                          char *out, size_t len) {
     sb_csv c = {0};
     sb_columns_frame_header(&c);
-    sb_stage_times t;
-    memset(&t, 0, sizeof t);
-    sb_columns_frame_row(&c, rec, &t, SB_STAGE_BIT(SB_STAGE_CASCADE) | SB_STAGE_BIT(SB_STAGE_FINAL));
+    sb_columns_frame_row(&c, rec, t, stages);
     char *row = strchr(c.buf, '\n') + 1;
     int want = -1, k = 0;
     for (char *h = c.buf; h < row - 1; k++) {
@@ -112,6 +112,73 @@ static void frame_cell_of(const sb_frame_rec *rec, const char *name, char *out, 
     for (int i = 0; i < want; i++) row = strchr(row, ',') + 1;
     snprintf(out, len, "%.*s", (int)strcspn(row, ",\n"), row);
     sb_csv_free(&c);
+}
+
+/* The same, of a cascade technique's frame with no stage measured. */
+static void frame_cell_of(const sb_frame_rec *rec, const char *name, char *out, size_t len) {
+    sb_stage_times t;
+    memset(&t, 0, sizeof t);
+    stage_cell_of(rec, &t, sb_technique_stage_mask(sb_technique_find("sm")), name, out, len);
+}
+
+/* Stages are columns because techniques declare them (sb_technique.stages), as counters are: each declared stage is
+ * one "<stage>_ms" column with its row's doc and uses, in one order that keeps the CSV's (the shared rows, each
+ * technique's own in the list's order, the posing pass); a technique's mask is its declared stages' slots; a frame
+ * fills the times of its run's stages and leaves the others empty. */
+static void test_declared_stages(void **st) {
+    (void)st;
+    static const char *const order[] = {"zpass", "minmax", "cascade", "final", "volumes", "rays", "clusters", "pose"};
+    assert_int_equal(sb_stage_count(), 8);
+    int nf, seen = 0;
+    const sb_frame_col *fc = sb_frame_cols(&nf);
+    for (int k = 0; k < nf; k++) {
+        if (!(fc[k].flags & SB_COL_STAGE_TIME)) continue;
+        char want[40];
+        snprintf(want, sizeof want, "%s_ms", order[seen]);
+        assert_string_equal(fc[k].name, want);
+        const sb_stage_def *d = sb_stage_at(seen);
+        assert_string_equal(d->name, order[seen]);
+        assert_ptr_equal(fc[k].stage, d);
+        assert_int_equal(fc[k].arg, seen);
+        assert_string_equal(fc[k].doc, d->doc);
+        assert_int_equal(fc[k].flags, SB_COL_STAGE_TIME | d->flags);
+        seen++;
+    }
+    assert_int_equal(seen, 8);
+    for (int t = 0; t < sb_technique_count(); t++) {   /* a technique's mask: its declared stages' slots, no other */
+        const sb_technique *tech = sb_technique_at(t);
+        unsigned want = 0;
+        assert_true(tech->stage_count >= 1);
+        for (int k = 0; k < tech->stage_count; k++) {
+            int slot = sb_stage_slot(tech->stages[k]);
+            assert_true(slot >= 0 && slot < sb_stage_count() - 1);   /* the last slot is the posing pass's */
+            assert_true(sb_technique_times(tech, tech->stages[k]));
+            want |= SB_STAGE_BIT(slot);
+        }
+        assert_int_equal(sb_technique_stage_mask(tech), want);
+    }
+    static const sb_stage_def stray = {.name = "stray"};   /* declared by no technique: no slot */
+    assert_int_equal(sb_stage_slot(&stray), -1);
+    assert_false(sb_technique_times(sb_technique_find("raycast"), &sb_stage_volumes));
+
+    /* raycast's frame: its own rays_ms and the shared zpass_ms filled, volumes' empty; gpu_ms their sum */
+    const sb_technique *rc = sb_technique_find("raycast");
+    assert_non_null(rc);
+    sb_frame_rec rec;
+    memset(&rec, 0, sizeof rec);
+    sb_stage_times t;
+    memset(&t, 0, sizeof t);
+    for (int slot = 0; slot < sb_stage_count(); slot++)
+        if (sb_technique_stage_mask(rc) & SB_STAGE_BIT(slot)) t.ms[slot] = 1.5, t.mask |= SB_STAGE_BIT(slot);
+    char cell[64];
+    stage_cell_of(&rec, &t, sb_technique_stage_mask(rc), "rays_ms", cell, sizeof cell);
+    assert_string_equal(cell, "1.5");
+    stage_cell_of(&rec, &t, sb_technique_stage_mask(rc), "zpass_ms", cell, sizeof cell);
+    assert_string_equal(cell, "1.5");
+    stage_cell_of(&rec, &t, sb_technique_stage_mask(rc), "volumes_ms", cell, sizeof cell);
+    assert_string_equal(cell, "");
+    stage_cell_of(&rec, &t, sb_technique_stage_mask(rc), "gpu_ms", cell, sizeof cell);
+    assert_float_equal(atof(cell), 4.5, 1e-12);
 }
 
 /* A technique's own counters (sb_technique.counters) are columns because it declares them: each row of each
@@ -209,7 +276,7 @@ static void test_own_counters(void **st) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_columns_documented), cmocka_unit_test(test_own_counters), cmocka_unit_test(test_quoting),
+        cmocka_unit_test(test_columns_documented), cmocka_unit_test(test_own_counters), cmocka_unit_test(test_declared_stages), cmocka_unit_test(test_quoting),
         cmocka_unit_test(test_atomic_file)};
     return cmocka_run_group_tests_name("csv", tests, NULL, NULL);
 }
