@@ -11,7 +11,7 @@
 #include "options.h"
 #include "eval.h"
 #include "taa.h"
-#include "image.h"
+#include "frame_images.h"
 #include "pose.h"
 #include "reference.h"
 #include "columns.h"

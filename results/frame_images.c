@@ -3,7 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "image.h"
+#include "frame_images.h"
 
 bool sb_images_write_frame(const char *dir, const char *run_id, int frame, int w, int h, const unsigned char *rgba,
                            const unsigned char *vis, const unsigned char *ref, const float *pos, const float *aux,

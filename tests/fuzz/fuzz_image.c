@@ -1,4 +1,4 @@
-/* libFuzzer harness: the reader of images from outside (results/image_oiio.cc's entry, built into this harness
+/* libFuzzer harness: the reader of images from outside (base/image_oiio.cc's entry, built into this harness
  * with a limit of 2048 x 2048 pixels so that what it accepts fits the fuzzer's memory). The bytes are written to a
  * file named .png or .exr by their magic (OpenImageIO picks its reader by the name, then tries the others). An
  * image accepted has a size within the limit and every value written (NaN is image_dl.c's to refuse); a refusal

@@ -1,5 +1,5 @@
 /* image_module.h - the contract between the binary and the image module
- * (libsbimages.so, results/image_oiio.cc), which results/image_dl.c opens
+ * (libsbimages.so, base/image_oiio.cc), which base/image_dl.c opens
  * at run time: one C function, rows bottom-up as image.h says. */
 #pragma once
 #include <stdbool.h>

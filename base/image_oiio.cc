@@ -1,6 +1,6 @@
-// image_oiio.cc - the OpenImageIO adapter: the only C++ on the results side.
+// image_oiio.cc - the OpenImageIO adapter: the only C++ of the base layer.
 // Built as a module of its own (libsbimages.so beside the binary), opened by
-// results/image_dl.c only when --images asks for images: OpenImageIO links
+// base/image_dl.c only when --images asks for images: OpenImageIO links
 // about 250 libraries, and a process that writes no image should not pay for
 // loading them. Its one entry point is plain C and uses nothing of the binary.
 #include <OpenImageIO/imageio.h>
