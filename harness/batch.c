@@ -294,7 +294,7 @@ static void expand_matrix(parse *ps) {
                         b->nruns++;
                         continue;
                     }
-                    char params[1024];
+                    char params[SB_PARAMS_TEXT_LEN];
                     sb_params_canonical(&rs[r].params, params, sizeof params);
                     sb_log("note: %s:%d: %s:%s on %s is run %d of the matrix already (run_id %s): run once", ps->file,
                            ps->lines[l].line, rs[r].tech->name, params, sc->name, twin, br->run_id);
@@ -411,7 +411,7 @@ static void print_dry_run(const sb_batch *b, const bool *selected, int nsel, boo
     for (int i = 0; i < b->nruns; i++) {
         if (!selected[i]) continue;
         const sb_batch_run *r = &b->runs[i];
-        char params[1024];
+        char params[SB_PARAMS_TEXT_LEN];
         sb_params_canonical(&r->spec.params, params, sizeof params);
         printf("%d,%s,%s,%s,%s,%s,%.3g\n", r->index, r->run_id, b->scenes[r->scene].name,
                b->scenes[r->scene].path_label, r->spec.tech->name, params, r->cost);
@@ -493,7 +493,7 @@ static void keep_complete_runs(const sb_batch *b, const char *dir, const bool *s
 static void fail_runs(const sb_batch *b, int i, const char *renderer, const char *why, sb_summary *sum) {
     const sb_batch_run *r = &b->runs[i];
     const sb_batch_scene *bs = &b->scenes[r->scene];
-    char params[1024];
+    char params[SB_PARAMS_TEXT_LEN];
     sb_params_canonical(&r->spec.params, params, sizeof params);
     sb_run_info info = {.run_id = r->run_id, .run_index = r->index, .scene = bs->name, .path = bs->path_label,
                         .technique = r->spec.tech->name, .params = params, .backend = sb_backend_name(b->opts.backend),

@@ -131,11 +131,12 @@ static int cmd_techniques(const sb_cli *c) {
         printf("%s - %s\n  stages:", t->name, t->summary);
         for (int s = 0; s < sb_stage_count(); s++)
             if (sb_technique_stage_mask(t) & SB_STAGE_BIT(s)) printf(" %s", sb_stage_at(s)->name);
-        printf("\n");
+        printf("%s\n", t->stage_count ? "" : " none (nothing of it is timed)");
         for (int k = 0; k < t->param_count; k++) {
             const sb_param_def *p = &t->params[k];
-            if (p->kind == SB_PARAM_ENUM)
-                printf("  %-8s %-28s default %-6s %s\n", p->name, p->choices, p->def, p->help);
+            if (p->kind == SB_PARAM_ENUM || p->kind == SB_PARAM_TEXT)
+                printf("  %-8s %-28s default %-6s %s\n", p->name, p->kind == SB_PARAM_TEXT ? "text" : p->choices,
+                       p->kind == SB_PARAM_TEXT && !*p->def ? "(none)" : p->def, p->help);
             else {
                 char range[64];
                 snprintf(range, sizeof range, "%s %g..%g%s", p->kind == SB_PARAM_INT ? "int" : "float", p->min, p->max,
@@ -386,6 +387,10 @@ static int run_into(const sb_cli *c, sb_session *s, const char *dir, const sb_ru
     printf("%s\n", dir);
     int rc = sb_summary_conclude(&sum, dir, "the same command with");
     sb_summary_free(&sum);
+    if (s->input_refused[0]) {   /* bad input: said even with --quiet (the run's reason holds it too) */
+        fprintf(stderr, "shadowbench: %s: %s\n", c->cmd->name, s->input_refused);
+        rc = SB_EXIT_BAD_INPUT;
+    }
     return rc;
 }
 
@@ -405,7 +410,7 @@ static bool check_runs(const sb_cli *c, sb_session *s, sb_run_spec *runs, int *n
         for (int k = 0; k < n && twin < 0; k++)
             if (!strcmp(idbuf[k], idbuf[n])) twin = k;
         if (twin >= 0) {
-            char params[1024];
+            char params[SB_PARAMS_TEXT_LEN];
             sb_params_canonical(&runs[i].params, params, sizeof params);
             sb_log("note: %s:%s is given twice (run_id %s): run once", runs[i].tech->name, params, idbuf[n]);
             continue;
@@ -467,26 +472,20 @@ static int cmd_run(const sb_cli *c) {
 
 /* ---- score: another renderer's frames ---- */
 
-/* The frames score reads are there (each scored frame's visibility and mask), and the first is of the run's size:
- * checked before anything is written. */
-static bool score_files(const sb_score_src *src, const sb_run_opts *o, sb_err *err) {
-    char path[2200];
-    for (int pf = 0; pf < o->frames; pf += o->error_every)
-        for (int k = 0; k < 2; k++) {
-            sb_score_file(src, k ? src->mask : src->pattern, pf, path, sizeof path);
-            if (access(path, R_OK) != 0)
-                return sb_fail(err, "%s: frame %d of %d: %s (--frames %d --error-every %d)", path, pf, o->frames,
-                               strerror(errno), o->frames, o->error_every);
-        }
-    int w, h;
-    float *rgb;
-    sb_score_file(src, src->pattern, 0, path, sizeof path);
-    if (!sb_image_read_rgb(path, &w, &h, &rgb, err)) return false;
-    free(rgb);
-    if (w != o->width || h != o->height)
-        return sb_fail(err, "%s: %dx%d, the run's --size is %dx%d (the size the cameras were exported at)", path, w, h,
-                       o->width, o->height);
-    return true;
+/* The score technique's spec of the command's words (score.h): its parameters set one by one, so a folder, a
+ * pattern or the renderer's settings may hold what a spec's text divides on (':', ','). */
+static bool score_spec(const sb_cli *c, sb_run_spec *spec, sb_err *err) {
+    const sb_technique *t = sb_technique_find("score");
+    const char *values[][2] = {{"dir", c->pos[2]}, {"vis", c->o.pattern}, {"mask", c->o.mask},
+                               {"renderer", c->o.renderer}, {"settings", c->o.renderer_params}};
+    sb_spec_defaults(spec, t);
+    for (size_t k = 0; k < SB_COUNT(values); k++)
+        for (int i = 0; values[k][1] && i < t->param_count; i++)
+            if (!strcmp(t->params[i].name, values[k][0]) &&
+                !sb_param_set(&spec->params, i, &t->params[i], values[k][1], t->name, err))
+                return false;
+    sb_spec_bind(spec);
+    return t->check(spec->desc, err);
 }
 
 static int cmd_score(const sb_cli *c) {
@@ -506,24 +505,13 @@ static int cmd_score(const sb_cli *c) {
         snprintf(what, sizeof what, "score: %s", names[k][0]);
         if (!sb_name_check(what, v, &err)) return bad("%s", err.msg);
     }
-    char name[256];   /* DIR's last part ("out/frames/" names frames) */
-    const char *dir = c->pos[2];
-    snprintf(name, sizeof name, "%s", dir);
-    for (size_t l = strlen(name); l > 1 && name[l - 1] == '/';) name[--l] = 0;
-    const char *base = strrchr(name, '/');
-    if (base && base[1]) memmove(name, base + 1, strlen(base));
-    sb_score_src src = {.dir = dir, .pattern = c->o.pattern, .mask = c->o.mask,
-                        .renderer = c->o.renderer ? c->o.renderer : name,
-                        .params = c->o.renderer_params ? c->o.renderer_params : ""};
-    struct stat st;
-    if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)) return bad("score: %s: no such folder of frames", dir);
-    if (!sb_score_pattern_ok(src.pattern, &err) || !sb_score_pattern_ok(src.mask, &err))
-        return bad("score: %s", err.msg);
-    if (!sb_images_available()) return bad("score: reading the frames needs images: %s", sb_images_unavailable_reason());
+    sb_run_spec spec;
+    if (!score_spec(c, &spec, &err)) return bad("score: %s", err.msg);
     sb_run_opts o = c->o.run;
     o.warmup = 0;
     sb_run_opts_finish(&o);
-    if (!score_files(&src, &o, &err)) return bad_file(&err);
+    if (!sb_score_files_present(c->pos[2], c->o.pattern, c->o.mask, o.frames, o.error_every, o.width, o.height, &err))
+        return bad_file(&err);
     sb_session s;
     memset(&s, 0, sizeof s);
     if (!sb_session_open(&s, &o, c->pos[0], c->pos[1], &err)) {
@@ -532,10 +520,6 @@ static int cmd_score(const sb_cli *c) {
         sb_session_close(&s);
         return rc;
     }
-    s.score = &src;
-    /* the tool's own frames without shadows: what the renderer's visibility replaces (score.h) */
-    sb_run_spec spec;
-    sb_spec_defaults(&spec, sb_technique_with(SB_TRAIT_NO_SHADOWS));
     char out[4096], cmdline[2048], identity[8192];
     sb_cli_set_identity(&c->o, c->cmd, c->pos, c->npos, identity, sizeof identity);
     int rc;
@@ -549,10 +533,6 @@ static int cmd_score(const sb_cli *c) {
         sb_session_keep_reference(&s, out);
         log_session(&s);
         rc = run_into(c, &s, out, &spec, 1);
-        if (src.refused) {   /* bad input: said even with --quiet (the run's reason holds it too) */
-            fprintf(stderr, "shadowbench: score: %s\n", src.why);
-            rc = SB_EXIT_BAD_INPUT;
-        }
     }
     sb_session_close(&s);
     return rc;

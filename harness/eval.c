@@ -6,7 +6,6 @@
 #include <string.h>
 
 #include "flip.h"
-#include "score.h"
 
 void sb_eval_buf_init(sb_eval_buf *b, const sb_gpu *g, bool rgba) {
     memset(b, 0, sizeof *b);
@@ -135,9 +134,12 @@ static bool eval_light(sb_session *s, sb_instance *in, int pf, int n, int replay
     sb_m4 inv;
     sb_eval_view view;
     render_targets(s, in, pf, n, replay, seq, b, f, true, &inv, &view, light, light > 1 && !last);
-    long scored_px = 0, misaligned_px = 0;   /* `score`: the renderer's visibility instead of the technique's */
-    if (s->score && !sb_score_frame(s->score, pf, b->w, b->h, b->aux, b->vis, &scored_px, &misaligned_px, err))
+    long checked_px = 0, misaligned_px = 0;   /* the technique's own check of its input (check_frame) */
+    if (in->tech->check_frame &&
+        !in->tech->check_frame(in->state, pf, b->w, b->h, b->aux, &checked_px, &misaligned_px, err)) {
+        if (!s->input_refused[0]) snprintf(s->input_refused, sizeof s->input_refused, "%s", err->msg);
         return false;
+    }
     const bool flip = s->opts.flip && light == 0;   /* --lights: not over several lights (docs/error.md) */
     if (flip) {   /* now: the stale check draws again */
         if (!b->base) b->base = sb_xmalloc(4 * (size_t)b->w * b->h);
@@ -149,8 +151,8 @@ static bool eval_light(sb_session *s, sb_instance *in, int pf, int n, int replay
     const sb_reference *ref = sb_session_reference(s, err);   /* refit to the frame's pose */
     if (!ref) return false;
     sb_evaluate_frame(ref, s->ref_cache, &view, b->vis, b->ref, m, s->opts.threads);
-    if (scored_px) {   /* the renderer's mask against the geometry counts with the rays' own check */
-        m->geom_samples += scored_px, m->geom_mismatches += misaligned_px;
+    if (checked_px) {   /* counted with the rays' own check of the geometry */
+        m->geom_samples += checked_px, m->geom_mismatches += misaligned_px;
         m->geom_mismatch = (double)m->geom_mismatches / m->geom_samples;
     }
     m->stale_px = caches_in_motion(s, in) ? stale_share(s, in, seq, b, f) : NAN;
@@ -202,8 +204,8 @@ bool sb_eval_flicker(sb_session *s, sb_instance *in, int pf, int n, int *seq, sb
     m->flicker_points = 0;
     b->flicker_drawn = false;
     const double dt = s->opts.flicker_dt;
-    /* --lights: not measured over several lights (docs/error.md); `score`: the renderer's twins are not read yet */
-    if (dt <= 0 || in->rc.lights || s->score) return true;
+    /* --lights: not measured over several lights (docs/error.md); another renderer's frames have no twin */
+    if (dt <= 0 || in->rc.lights || (in->tech->traits & SB_TRAIT_FOREIGN)) return true;
     const size_t np = (size_t)b->w * b->h;
     if (!b->twin_vis) {
         b->twin_vis = sb_xmalloc(np);

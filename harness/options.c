@@ -811,7 +811,7 @@ static uint64_t identity_blocks(uint64_t h, const sb_run_opts *o) {
 }
 
 void sb_run_id(uint64_t scene_hash, uint64_t path_hash, const sb_run_opts *o, const sb_run_spec *spec, char out[17]) {
-    char params[1024];
+    char params[SB_PARAMS_TEXT_LEN];
     sb_params_canonical(&spec->params, params, sizeof params);
     uint64_t h = SB_FNV_SEED;
     h = sb_fnv1a(h, &scene_hash, sizeof scene_hash);

@@ -15,7 +15,6 @@
 #include "pose.h"
 #include "reference.h"
 #include "columns.h"
-#include "score.h"
 #include "stability.h"
 #include "stats.h"
 
@@ -25,12 +24,6 @@ void sb_session_run_id(const sb_session *s, const sb_run_spec *spec, char out[17
     sb_run_spec as_run = *spec;   /* the id of the run sb_run_begin makes of it */
     sb_spec_light_size(&as_run, s->opts.sun_size);
     sb_run_id(s->scene.content_hash, s->path.content_hash, &s->opts, &as_run, out);
-    if (s->score) {   /* another renderer's frames: its name and settings are the run */
-        uint64_t h = sb_fnv1a(0xcbf29ce484222325ull, out, 16);
-        h = sb_fnv1a(h, s->score->renderer, strlen(s->score->renderer) + 1);
-        h = sb_fnv1a(h, s->score->params, strlen(s->score->params) + 1);
-        snprintf(out, 17, "%016llx", (unsigned long long)h);
-    }
 }
 
 static void progress_line(const sb_session *s, int index, int total, const char *tech, int frame, int frames,
@@ -98,7 +91,7 @@ struct sb_run {
     sb_run_spec used;           /* spec with its "auto" values chosen (autobias.h) */
     bool calibrated;
     sb_summary *sum;
-    char run_id[17], params[1024], csv_path[4096], out_dir[4096];
+    char run_id[17], params[SB_PARAMS_TEXT_LEN], csv_path[4096], out_dir[4096];
     sb_run_info info;
     sb_instance in;
     bool have_instance, keep_instance;   /* matrix order: one instance for every repetition */
@@ -117,10 +110,10 @@ struct sb_run {
 };
 
 /* The stages a run's frames may time: its technique's, and the posing pass where the GPU poses a moving scene (none
- * for a scored renderer's frames). */
+ * for a technique that times nothing: another renderer's frames). */
 static unsigned run_stages(const sb_run *r) {
-    if (r->s->score) return 0;
-    return sb_technique_stage_mask(r->spec->tech) | (r->s->gpu.pose ? SB_STAGE_BIT(sb_stage_slot(&sb_stage_pose)) : 0);
+    const unsigned own = sb_technique_stage_mask(r->spec->tech);
+    return own ? own | (r->s->gpu.pose ? SB_STAGE_BIT(sb_stage_slot(&sb_stage_pose)) : 0) : 0;
 }
 
 static bool fail_run(sb_run *r, const char *fmt, const char *what) {
@@ -281,15 +274,15 @@ static bool measured_frames(sb_run *r, int rep, int index, int total) {
     return true;
 }
 
-/* `score`: another renderer's frames, nothing timed here: the path's frames recorded as scored (no timings or
- * counts), the evaluation pass to fill their errors. */
-static bool scored_frames(sb_run *r) {
+/* A technique that declares no stage (another renderer's frames): nothing to time, the path's frames recorded
+ * untimed (no timings or counts), the evaluation pass to fill their errors. */
+static bool untimed_frames(sb_run *r) {
     const int N = r->s->opts.frames;
     for (int j = 0; j < N; j++) {
         sb_frame_rec *rec = &r->recs[j];
         rec->frame = j;
         rec->progress = sb_path_progress(j, N);
-        rec->scored = true;
+        rec->untimed = true;
         rec->start_s = rec->gpu_clock_mhz = rec->cpu_ms = rec->wall_ms = rec->anim_ms = NAN;
     }
     r->done = N;
@@ -309,7 +302,7 @@ static bool replayed_frame_costs(sb_run *r, int first) {
     sb_err e;
     char *text = sb_read_file(file, NULL, &e);
     if (!text) return fail_run(r, "SB_REPLAY_FRAME_MS: %s", e.msg);
-    char have[1100];
+    char have[SB_PARAMS_TEXT_LEN + 2];
     snprintf(have, sizeof have, ":%s:", r->params);
     double cost = NAN;
     int line = 0;
@@ -353,7 +346,7 @@ static bool replayed_frame_costs(sb_run *r, int first) {
 
 bool sb_run_pass(sb_run *r, int index, int total) {
     if (r->failed || r->finished) return false;
-    if (r->s->score) return scored_frames(r);
+    if (!run_stages(r)) return untimed_frames(r);
     const sb_run_opts *o = &r->s->opts;
     bool first = r->repeats == 0;
     if (!ensure_instance(r)) return false;
@@ -516,7 +509,7 @@ static bool finish_run(sb_run *r) {
     if (r->s->scene.unused[0])   /* what the file holds and the run does not draw: every run of the scene says it */
         sb_run_warn(&r->info, "the scene file holds parts nothing draws, left out: %s", r->s->scene.unused);
     check_geometry(r);
-    return r->s->score || judge_stability(r);   /* a scored renderer's frames: nothing timed to judge */
+    return !run_stages(r) || judge_stability(r);   /* nothing timed, nothing to judge */
 }
 
 sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir, sb_summary *sum, int run_index,
@@ -546,13 +539,12 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
         .shadow_mb = sb_session_shadow_bytes(s, spec) / 1048576.0,
         .calib_ms_before = NAN, .calib_ms_after = NAN, .eval_s = NAN, .ref_refit_ms = NAN, .stable = "", .unstable_reason = "",
     };
-    if (s->score) {   /* the renderer's name and settings; the tool drew none of its frames and holds none of its maps */
-        r->info.technique = s->score->renderer;
-        r->info.params = s->score->params;
-        r->info.renderer = s->score->renderer;
-        r->info.timing = "";
-        r->info.shadow_mb = NAN;
+    if (spec->tech->label) {   /* another renderer's frames: its name and settings */
+        sb_label l = {spec->tech->name, r->params, s->ctx.renderer};
+        spec->tech->label(spec->desc, &l);
+        r->info.technique = l.technique, r->info.params = l.params, r->info.renderer = l.renderer;
     }
+    if (!run_stages(r)) r->info.timing = "";   /* nothing timed */
     sb_session_light_label(s, r->info.light, sizeof r->info.light);
     const char *skip = sb_skip_reason(s, spec->tech, spec);
     if (skip) {

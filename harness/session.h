@@ -48,7 +48,9 @@ typedef struct sb_session {
     char clocks_mode[64];       /* what the summary's clocks column says */
     bool files_refused;         /* sb_session_open failed on the scene or path file (bad input), not on the GL */
     int attempt;                /* the attempt the runs begun now are (0, 1: the first; --rerun-unstable) */
-    struct sb_score_src *score; /* `score`: the runs are another renderer's frames (score.h); NULL otherwise */
+    /* a technique refused a frame's input files (sb_technique.check_frame: score's mask that does not line up): the
+       first line; the command exits 2 (bad input) */
+    char input_refused[SB_ERR_LEN];
 } sb_session;
 
 /* Above these shares a run's warnings say its error figures cannot be trusted

@@ -9,7 +9,7 @@
 typedef struct {
     int param;                  /* index into the technique's table */
     int nvalues;
-    char values[MAX_VALUES][32];
+    const char *values[MAX_VALUES];   /* in the spec's copy */
 } axis;
 
 static void list_params(const sb_technique *t, char *out, size_t len) {
@@ -53,7 +53,7 @@ double sb_spec_shadow_bytes(const sb_run_spec *rs) {
 static bool check_combination(const sb_run_spec *rs, const char *pre, sb_err *err) {
     sb_err e;
     if (rs->tech->check(rs->desc, &e)) return true;
-    char canon[1024];
+    char canon[SB_PARAMS_TEXT_LEN];
     sb_params_canonical(&rs->params, canon, sizeof canon);
     return sb_fail(err, "%s%s:%s: %s", pre, rs->tech->name, canon, e.msg);
 }
@@ -61,7 +61,7 @@ static bool check_combination(const sb_run_spec *rs, const char *pre, sb_err *er
 bool sb_spec_expand(const char *spec, const char *where, sb_run_spec **runs, int *count, sb_err *err) {
     char pre[256];
     snprintf(pre, sizeof pre, "%s%s", where ? where : "", where ? ": " : "");
-    char buf[1024];
+    char buf[4096];
     if (strlen(spec) >= sizeof buf) return sb_fail(err, "%sspec too long", pre);
     snprintf(buf, sizeof buf, "%s", spec);
     char *save = NULL;
@@ -101,7 +101,7 @@ bool sb_spec_expand(const char *spec, const char *where, sb_run_spec **runs, int
             sb_params probe;
             sb_err e;
             if (!sb_param_set(&probe, 0, &t->params[pi], v, t->name, &e)) return sb_fail(err, "%s%s", pre, e.msg);
-            snprintf(ax->values[ax->nvalues++], 32, "%s", v);
+            ax->values[ax->nvalues++] = v;
         }
         if (!ax->nvalues) return sb_fail(err, "%s%s: no value for '%s'", pre, t->name, opt);
     }

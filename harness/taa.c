@@ -136,7 +136,8 @@ static bool display_frame(sb_session *s, sb_instance *in, struct sb_taa_buf *t, 
 bool sb_eval_taa(sb_session *s, sb_instance *in, int pf, int n, int *seq, sb_taa_buf **tb, int w, int h,
                  sb_error_metrics *m, sb_err *err) {
     m->taa_flip_mean = m->taa_flicker_rate = NAN;
-    if (!s->opts.taa || in->rc.lights || s->score) return true;   /* --lights, score: not resolved (taa.h) */
+    /* --lights, another renderer's frames (none between the path's): not resolved (taa.h) */
+    if (!s->opts.taa || in->rc.lights || (in->tech->traits & SB_TRAIT_FOREIGN)) return true;
     if (!*tb) *tb = taa_buf(w, h);
     struct sb_taa_buf *t = *tb;
     const size_t np = (size_t)t->w * t->h;

@@ -135,9 +135,9 @@ static void short_label(const sb_run_spec *r, char *out, size_t len) {
     sb_params_defaults(&def, r->tech);
     snprintf(out, len, "%s", r->tech->name);
     for (int i = 0; i < r->params.count; i++) {
-        if (!strcmp(r->params.v[i].text, def.v[i].text)) continue;
+        if (!strcmp(sb_param_text(&r->params, i), sb_param_text(&def, i))) continue;
         size_t l = strlen(out);
-        snprintf(out + l, len - l, ":%s=%s", r->params.v[i].def->name, r->params.v[i].text);
+        snprintf(out + l, len - l, ":%s=%s", r->params.v[i].def->name, sb_param_text(&r->params, i));
     }
 }
 
@@ -197,7 +197,7 @@ static bool make_candidates(tune *t, sb_err *err) {
         for (int i = 0; i < sb_technique_count(); i++) {
             const sb_technique *tq = sb_technique_at(i);
             bool want = cmd->techniques ? in_list(cmd->techniques, tq->name)
-                                        : !(tq->traits & (SB_TRAIT_NO_SHADOWS | SB_TRAIT_EXACT));
+                                        : !(tq->traits & (SB_TRAIT_NO_SHADOWS | SB_TRAIT_EXACT | SB_TRAIT_FOREIGN));
             if (!want) continue;
             char spec[1024];
             default_grid(tq, spec, sizeof spec);

@@ -489,10 +489,10 @@ void sb_columns_frame_header(sb_csv *c) {
     sb_csv_end_row(c);
 }
 
-/* A frame's cell: a scored frame (another renderer's, `score`) has its place on the path and its error figures,
+/* A frame's cell: an untimed frame (another renderer's, `score`) has its place on the path and its error figures,
  * nothing the tool would have timed or counted drawing it. */
 static sb_cell frame_cell(const sb_frame_col *col, const sb_frame_row *r) {
-    if (r->rec->scored && col->get != f_error && col->get != f_eval_pixels &&
+    if (r->rec->untimed && col->get != f_error && col->get != f_eval_pixels &&
         (!col->name || (strcmp(col->name, "frame") && strcmp(col->name, "repeat") && strcmp(col->name, "progress"))))
         return empty();
     return col->get(r, col->arg);

@@ -25,7 +25,8 @@ typedef struct sb_frame_rec {
     double cpu_ms, wall_ms;
     double anim_ms;             /* posing the scene at the frame's time (NaN: nothing moves) */
     bool evaluated;
-    bool scored;                /* another renderer's frame (`score`): only the frame and its error figures are known */
+    bool untimed;               /* a frame of a run that times nothing (another renderer's, `score`): only the frame
+                                   and its error figures are known */
     sb_error_metrics err;
 } sb_frame_rec;
 

@@ -38,9 +38,9 @@ int sb_technique_index(const sb_technique *t) {
 void sb_params_canonical(const sb_params *p, char *out, size_t len) {
     out[0] = 0;
     for (int i = 0; i < p->count; i++) {
-        if (p->v[i].def->late && !strcmp(p->v[i].text, p->v[i].def->def)) continue;
+        if (p->v[i].def->late && !strcmp(sb_param_text(p, i), p->v[i].def->def)) continue;
         size_t n = strlen(out);
-        snprintf(out + n, len - n, "%s%s=%s", n ? ":" : "", p->v[i].def->name, p->v[i].text);
+        snprintf(out + n, len - n, "%s%s=%s", n ? ":" : "", p->v[i].def->name, sb_param_text(p, i));
     }
 }
 
@@ -51,6 +51,18 @@ bool sb_param_set(sb_params *p, int i, const sb_param_def *d, const char *value,
         p->v[i].automatic = true;
         sb_parse_double(d->def, &p->v[i].num);
         snprintf(p->v[i].text, sizeof p->v[i].text, "auto");
+        return true;
+    }
+    if (d->kind == SB_PARAM_TEXT) {
+        for (const char *c = value; *c; c++)
+            if ((unsigned char)*c < 32 || *c == 127)
+                return sb_fail(err, "%s:%s: the value holds a control character (byte %d at %d)", tech, d->name,
+                               (unsigned char)*c, (int)(c - value) + 1);
+        if (strlen(value) > SB_PARAM_TEXT_MAX)
+            return sb_fail(err, "%s:%s: the value is %zu characters, more than %d", tech, d->name, strlen(value),
+                           SB_PARAM_TEXT_MAX);
+        p->v[i].str = sb_intern(value);
+        snprintf(p->v[i].text, sizeof p->v[i].text, "%s", value);
         return true;
     }
     if (d->kind == SB_PARAM_ENUM) {
@@ -172,7 +184,9 @@ void sb_params_bind(const sb_params *p, const sb_technique *t, void *desc) {
     for (int i = 0; i < p->count; i++) {
         const sb_param_def *d = p->v[i].def;
         char *field = (char *)desc + d->offset;
-        if (d->kind == SB_PARAM_FLOAT && d->size == sizeof(double)) {
+        if (d->kind == SB_PARAM_TEXT && d->size == sizeof(const char *)) {
+            memcpy(field, &p->v[i].str, sizeof(const char *));
+        } else if (d->kind == SB_PARAM_FLOAT && d->size == sizeof(double)) {
             memcpy(field, &p->v[i].num, sizeof(double));
         } else if (d->size == sizeof(int)) {
             int v = (int)p->v[i].num;
@@ -203,11 +217,12 @@ void sb_techniques_markdown(FILE *out) {
             const sb_param_def *p = &t->params[k];
             char values[160];
             if (p->kind == SB_PARAM_ENUM) snprintf(values, sizeof values, "%s", p->choices);
+            else if (p->kind == SB_PARAM_TEXT) snprintf(values, sizeof values, "text");
             else snprintf(values, sizeof values, "%s %g..%g%s", p->kind == SB_PARAM_INT ? "int" : "float", p->min,
                           p->max, p->can_auto ? " or auto" : "");
             fprintf(out, "| `%s` | ", p->name);
             md(out, values);
-            fprintf(out, " | %s | %s | ", p->def, p->tune ? p->tune : "");
+            fprintf(out, " | %s | %s | ", p->kind == SB_PARAM_TEXT && !*p->def ? "(none)" : p->def, p->tune ? p->tune : "");
             md(out, p->help);
             fputs(" |\n", out);
         }

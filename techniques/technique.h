@@ -35,7 +35,9 @@ enum {
     SB_NEEDS_REFERENCE = 1u << 4,   /* the Embree reference (sb_run_ctx.reference) */
 };
 
-typedef enum sb_param_kind { SB_PARAM_INT, SB_PARAM_FLOAT, SB_PARAM_ENUM } sb_param_kind;
+/* TEXT: a string (a folder, a file pattern, a name): in a spec it holds no ':' or ',' (they divide options and
+ * values); its field is a const char * (the value interned: alive for the process). */
+typedef enum sb_param_kind { SB_PARAM_INT, SB_PARAM_FLOAT, SB_PARAM_ENUM, SB_PARAM_TEXT } sb_param_kind;
 
 /* What a parameter is to the shared machinery that reasons about cost without rendering (batch's cost model). */
 typedef enum sb_param_role {
@@ -50,10 +52,13 @@ typedef enum sb_param_role {
 enum {
     SB_TRAIT_NO_SHADOWS = 1u << 0,  /* draws no shadow at all (none): the baseline; tune and the error bounds skip it */
     SB_TRAIT_EXACT = 1u << 1,       /* the exact reference itself (raycast): nothing to tune; held to a tighter bound */
+    /* another renderer's shadows, read from files for the path's frames (score): nothing of it is timed here (it
+       declares no stage), it has no frame between the path's (no flicker twin, no TAA), tune does not search it */
+    SB_TRAIT_FOREIGN = 1u << 2,
 };
 
 /* One parameter: INT and ENUM values (the choice's index) go to an int field
- * at `offset` of the technique's parameter struct, FLOAT to a double. */
+ * at `offset` of the technique's parameter struct, FLOAT to a double, TEXT to a const char *. */
 typedef struct sb_param_def {
     const char *name;
     sb_param_kind kind;
@@ -85,11 +90,17 @@ typedef struct sb_param_def {
     {SB_PARAM_ROW_(T, f, SB_PARAM_FLOAT, def, lo, hi, NULL, help), .can_auto = true, __VA_ARGS__}
 #define SB_PARAM_E(T, f, def, choices, help, ...) \
     {SB_PARAM_ROW_(T, f, SB_PARAM_ENUM, def, 0, 0, choices, help), __VA_ARGS__}
+/* A TEXT parameter; def is a string literal. */
+#define SB_PARAM_T(T, f, def_text, help_text, ...)                                                                 \
+    {.name = #f, .kind = SB_PARAM_TEXT, .def = def_text, .help = help_text, .offset = offsetof(T, f),              \
+     .size = sizeof(((T *)0)->f), __VA_ARGS__}
 /* An ENUM added after series began (sb_param_def.late): written in the canonical text only when not its default. */
 #define SB_PARAM_E_LATE(T, f, def, choices, help, ...) \
     {SB_PARAM_ROW_(T, f, SB_PARAM_ENUM, def, 0, 0, choices, help), .late = true, __VA_ARGS__}
 
 #define SB_MAX_PARAMS 32
+#define SB_PARAM_TEXT_MAX 512   /* characters of a TEXT value */
+#define SB_PARAMS_TEXT_LEN 4096 /* a canonical parameter text's buffer (sb_params_canonical): every value fits */
 
 /* Concrete values of one technique's parameters, in table order. */
 typedef struct sb_params {
@@ -97,11 +108,17 @@ typedef struct sb_params {
     struct {
         const sb_param_def *def;
         double num;         /* INT/FLOAT value, or the enum's choice index (auto: the default) */
-        char text[32];      /* canonical text */
+        char text[32];      /* canonical text (TEXT: str) */
+        const char *str;    /* TEXT: the value (interned) */
         bool automatic;     /* "auto": calibrated per run before it is bound */
         bool given;         /* written in the spec, not a default */
     } v[SB_MAX_PARAMS];
 } sb_params;
+
+/* Parameter i's value as text (its canonical text; a TEXT parameter's whole value). */
+static inline const char *sb_param_text(const sb_params *p, int i) {
+    return p->v[i].def->kind == SB_PARAM_TEXT ? p->v[i].str : p->v[i].text;
+}
 
 /* "res=2048:filter=pcf3:..." in table order (a late parameter only when not at its default) */
 void sb_params_canonical(const sb_params *p, char *out, size_t len);
@@ -116,6 +133,11 @@ enum { SB_LIGHTS_SUN, SB_LIGHTS_LAMPS, SB_LIGHTS_ANY, SB_LIGHTS_EVERY_LAMP };
 struct sb_gpu;
 struct sb_frame;
 struct sb_run_ctx;
+
+/* What a run's rows call it (sb_technique.label): interned or static strings. */
+typedef struct sb_label {
+    const char *technique, *params, *renderer;
+} sb_label;
 
 typedef struct sb_technique {
     const char *name;
@@ -144,6 +166,9 @@ typedef struct sb_technique {
     int (*history)(const void *desc);
     size_t state_size;
     bool (*check)(const void *desc, sb_err *err);
+    /* (optional, no GL) what its rows call a run where that is not its name, its canonical parameters and the GL's
+       renderer: another renderer's frames (score) are that renderer's, named by its parameters */
+    void (*label)(const void *desc, sb_label *out);
     bool (*supported)(const struct sb_run_ctx *rc, const void *desc, sb_err *why);
     /* (optional, no GL) the shadow storage a run of these parameters holds resident, in bytes: maps in their
        formats, moments and their blur copies, cube faces and paraboloids. One estimate, read by the GPU-memory
@@ -154,6 +179,12 @@ typedef struct sb_technique {
     void (*unload)(void *data);
     bool (*create)(void *state, const struct sb_run_ctx *rc, const void *desc, sb_err *err);
     void (*frame)(void *state, struct sb_frame *f);
+    /* (optional) after an evaluated frame's targets are read back (w x h; aux: the normals target, 0 where nothing
+       was drawn): its own check of the frame's input against the tool's geometry, the pixels it compared and those
+       that disagree counted with the rays' geometry check. false: the input is refused with one line naming the
+       file (bad input: the command exits 2) */
+    bool (*check_frame)(void *state, int frame, int w, int h, const float *aux, long *samples, long *mismatches,
+                        sb_err *err);
     /* (optional) its own counters, at most SB_MAX_OWN_COUNTERS: a frame column each, empty in every other
        technique's rows, summarised as each row says (sb_counter_def, stage.h); its frame counts them with
        sb_count(&f->counters, &ROW, v) and its warn hook reads them back with sb_counted */

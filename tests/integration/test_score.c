@@ -165,6 +165,28 @@ static void test_three_scored(void **st) {
     assert_string_equal(sb_table_get(&t, 0, "params"), "map=2048:type=basic");
     assert_true(err > 0 && err < 0.01);   /* a box's shadow on a plane, a 2048 map: its outline's pixels */
 
+    /* the same frames as a technique's spec through `run`: the same run (its id from the one rule, the command's
+       and the spec's alike), the same error to every digit */
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s score plane-box plane-box %s/three --mask 'mask_%%04d.png' "
+                                "--frames %d --size " SIZE " --quiet --out %s/by-cmd --renderer three.js --params map=2048",
+                                test_binary(), g_tmp, FRAMES, g_tmp), 0);
+    sb_table by_cmd, by_spec;
+    summary_table(last_line_of(g_out), &by_cmd);
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s run plane-box plane-box 'score:dir=%s/three:mask=mask_%%04d.png:"
+                                "renderer=three.js:settings=map=2048' --frames %d --size " SIZE " --error-every 1 --quiet "
+                                "--out %s/by-spec", test_binary(), g_tmp, FRAMES, g_tmp), 0);
+    summary_table(last_line_of(g_out), &by_spec);
+    print_message("run ids: score %s, run score:... %s\n", sb_table_get(&by_cmd, 0, "run_id"),
+                  sb_table_get(&by_spec, 0, "run_id"));
+    assert_string_equal(sb_table_get(&by_spec, 0, "run_id"), sb_table_get(&by_cmd, 0, "run_id"));
+    assert_string_equal(sb_table_get(&by_spec, 0, "technique"), "three.js");
+    assert_string_equal(sb_table_get(&by_spec, 0, "params"), "map=2048");
+    assert_string_equal(sb_table_get(&by_spec, 0, "err_rate_mean"), sb_table_get(&t, 0, "err_rate_mean"));
+    assert_string_equal(sb_table_get(&by_spec, 0, "err_rate_mean"), sb_table_get(&by_cmd, 0, "err_rate_mean"));
+    assert_true(strcmp(sb_table_get(&by_cmd, 0, "run_id"), sb_table_get(&t, 0, "run_id")));   /* its settings differ */
+    sb_table_free(&by_cmd);
+    sb_table_free(&by_spec);
+
     /* by hand: the tool's reference images of the same cameras, the renderer's frames against them */
     sb_table r;
     char ref_dir[4096];
@@ -291,6 +313,14 @@ static void test_bad_input(void **st) {
     assert_string_equal(sb_table_get(&t, 0, "status"), "failed");
     assert_non_null(strstr(sb_table_get(&t, 0, "reason"), "differ at"));
     sb_table_free(&t);
+    /* score is a technique: through `run` its spec is checked as any technique's, and a frame it refuses is bad
+       input there too */
+    expect_cli_fail("dir=FOLDER is needed", "%s run plane-box plane-box score %s", bin, common);
+    expect_cli_fail("mask=PATTERN is needed", "%s run plane-box plane-box score:dir=%s/white %s", bin, g_tmp, common);
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s run plane-box plane-box 'score:dir=%s/white:mask=mask_%%04d.png' "
+                                "%s --error-every 1 --quiet --out %s/refused-run", bin, g_tmp, common, g_tmp), 2);
+    assert_non_null(strstr(g_out, "shadowbench: run: "));
+    assert_non_null(strstr(g_out, "white/mask_0000.png: frame 0: the mask and the tool's geometry differ at"));
 }
 
 /* A PNG in g_tmp whose header claims w x h pixels of a colour type (0 grey, 2 RGB) with 64 bytes of data behind
