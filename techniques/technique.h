@@ -11,7 +11,11 @@
  *   load       (optional) work per scene that depends on no parameter, done
  *              once per scene and shared by its runs (unload frees it);
  *   create, frame, destroy; collect (optional) for counters known only after
- *              the timed frames.
+ *              the timed frames;
+ *   check_frame (optional) its own check of an evaluated frame's input;
+ *   label      (optional) what its rows call a run (score: the renderer's).
+ * Its stages are rows it declares (SB_STAGES, stage.h), as its counters are;
+ * a technique that declares none is timed never (another renderer's frames).
  * Whatever it does, its final pass writes one screen-space visibility target
  * (1 lit ... 0 shadowed) beside colour; the error metrics and images read
  * that. Counters and warnings of its own are rows and a hook in its file
