@@ -65,7 +65,7 @@ const sb_option sb_options[] = {
     {.name = "--timing", .kind = SB_OPT_CHOICE, .arg = "auto|queries|sync", .def = "auto", .with = SB_CMDF_CONTEXT,
      .of_set = true, RUN_OPT, .field = RUN(timing), .help = "stage timing (auto: sync on software rasterizers)"},
     {.name = "--submit", .kind = SB_OPT_CHOICE, .arg = "direct|indirect", .def = "direct", .with = SB_CMDF_MEASURE,
-     .of_set = true, RUN_OPT, .identity = SB_ID_NAMED, .field = RUN(submit),
+     .of_set = true, RUN_OPT, .identity = SB_ID_NAMED, .id_column = "submit", .field = RUN(submit),
      .help = "one GL call per draw, or one glMultiDrawElementsIndirect per pass and layer (draw_calls counts draws, "
              "api_calls the calls)"},
     {.name = "--ring", .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 16, .def = "3", .with = SB_CMDF_CONTEXT, RUN_OPT,
@@ -112,7 +112,7 @@ const sb_option sb_options[] = {
     {.name = "--lights", .kind = SB_OPT_TEXT, .arg = "sun|lamps|all|LIST", .def = NULL,
      .of_set = true,
      .def_help = "the light the technique shadows alone: the sun; light= of cube and dpsm", .with = SB_CMDF_MEASURE,
-     RUN_OPT, .line_option = true, .identity = SB_ID_TEXT, .field = RUN(lights),
+     RUN_OPT, .line_option = true, .identity = SB_ID_TEXT, .id_column = "light", .field = RUN(lights),
      .help = "the lights a run shadows and scores, each with its own shadows: every point and spot light (lamps), "
              "the sun and every lamp (all), or a list such as sun,0,3 (lamps by number in file order)"},
     {.name = "--ref-samples", .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 4096, .def = "64",
@@ -824,11 +824,13 @@ void sb_run_id(uint64_t scene_hash, uint64_t path_hash, const sb_run_opts *o, co
 
 /* ---- a results set's identity ---- */
 
-/* A row's value as text ("1280x720", "lamps", "auto"; "" for a text not given or a value given none). */
-static void value_text(const sb_option *opt, const sb_cli_opts *o, char *out, size_t len) {
-    const void *p = (const char *)o + opt->field;
+/* A row's value as text ("1280x720", "lamps", "auto"; "" for a text not given or a value given none), its fields
+ * where at() finds them in o (an sb_cli_opts, or a run's sb_run_opts). */
+static void value_at(const sb_option *opt, const void *o, const void *(*at)(const void *o, size_t field), char *out,
+                     size_t len) {
+    const void *p = at(o, opt->field);
     out[0] = 0;
-    if (opt->given_field && !*(const bool *)((const char *)o + opt->given_field)) return;   /* not given: none */
+    if (opt->given_field && !*(const bool *)at(o, opt->given_field)) return;   /* not given: none */
     switch (opt->kind) {
     case SB_OPT_FLAG: snprintf(out, len, "%s", *(const bool *)p ? "on" : "off"); break;
     case SB_OPT_INT:
@@ -838,11 +840,30 @@ static void value_text(const sb_option *opt, const sb_cli_opts *o, char *out, si
     case SB_OPT_SEED: snprintf(out, len, "%llu", (unsigned long long)*(const uint64_t *)p); break;
     case SB_OPT_CHOICE: choice_name(opt, *(const int *)p, out, len); break;
     case SB_OPT_TEXT: snprintf(out, len, "%s", *(const char *const *)p ? *(const char *const *)p : ""); break;
-    case SB_OPT_SIZE: snprintf(out, len, "%dx%d", *(const int *)p, *(const int *)((const char *)o + opt->field2)); break;
-    case SB_OPT_ANGLES:
-        snprintf(out, len, "%.15g,%.15g", *(const double *)p, *(const double *)((const char *)o + opt->field2));
-        break;
+    case SB_OPT_SIZE: snprintf(out, len, "%dx%d", *(const int *)p, *(const int *)at(o, opt->field2)); break;
+    case SB_OPT_ANGLES: snprintf(out, len, "%.15g,%.15g", *(const double *)p, *(const double *)at(o, opt->field2)); break;
     default: snprintf(out, len, "%.15g", *(const double *)p);
+    }
+}
+
+static const void *cli_at(const void *o, size_t field) { return (const char *)o + field; }
+static const void *run_at(const void *o, size_t field) { return run_field(o, field); }
+static void value_text(const sb_option *opt, const sb_cli_opts *o, char *out, size_t len) {
+    value_at(opt, o, cli_at, out, len);
+}
+
+void sb_run_options_text(const sb_run_opts *o, char *out, size_t len) {
+    out[0] = 0;
+    for (int i = 0; i < sb_option_count; i++) {
+        const sb_option *opt = &sb_options[i];
+        if (opt->id_column || (opt->identity != SB_ID_GIVEN && opt->identity != SB_ID_NAMED &&
+                               opt->identity != SB_ID_TEXT))
+            continue;
+        char v[600];
+        value_at(opt, o, run_at, v, sizeof v);
+        if (!v[0] || (opt->identity == SB_ID_NAMED && opt->def && !strcmp(v, opt->def))) continue;   /* default */
+        size_t n = strlen(out);
+        snprintf(out + n, len - n, "%s%s %s", n ? " " : "", opt->name, v);
     }
 }
 

@@ -141,6 +141,10 @@ typedef struct sb_option {
     bool run_option; /* a run option: a batch file's `defaults` line takes it */
     bool line_option; /* and a batch run line after its specs (a section of the file with its own value) */
     sb_identity identity; /* how it enters a run's identity */
+    /* the summary column of its own that carries it into a run's key (runkey.h) and series: NULL for the rest,
+       which the run_options column carries (sb_run_options_text); DIM rows are the measurement's dimensions (in the
+       run id; size in width and height, the backend in renderer) and LIGHT rows the light column's */
+    const char *id_column;
     int id_slot; /* SB_ID_DIM: its place in the dimensions block */
     size_t field, field2; /* offsets in sb_cli_opts (field2: SIZE's height,
                              ANGLES' elevation) */
@@ -188,6 +192,10 @@ void sb_line_options_text(char *out, size_t len);
  * A set's meta holds them; --resume compares them (sb_set_identity_differs). */
 void sb_cli_set_identity(const sb_cli_opts *o, const sb_command_def *cmd, const char *const *words, int nwords,
                          char *out, size_t len);
+/* The run options that make a run another run and have no summary column of their own (sb_option.id_column), as
+ * "--sun 30,45 --taa on" ("" at their defaults): the run_options column, part of a run's key and series. A new
+ * identity row is in it by being a row. */
+void sb_run_options_text(const sb_run_opts *o, char *out, size_t len);
 /* The first line of `now` whose KEY the set's `was` lines give another value (or lack while now has one): false
  * when they agree; true with "KEY: the set was made with A; this command gives B" in what. Lines of `was` whose KEY
  * `now` lacks are passed over (an option of an older or newer shadowbench). */

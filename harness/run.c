@@ -546,6 +546,7 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
     }
     if (!run_stages(r)) r->info.timing = "";   /* nothing timed */
     sb_session_light_label(s, r->info.light, sizeof r->info.light);
+    sb_run_options_text(o, r->info.run_options, sizeof r->info.run_options);
     const char *skip = sb_skip_reason(s, spec->tech, spec);
     if (skip) {
         r->finished = true;

@@ -390,6 +390,9 @@ static const sb_run_col run_cols[] = {
     INFO("anim", r_str, anim, "what of a file's animation plays (--anim, --anim-speed): empty for a still file or "
                               "every clip at speed 1, none for clips held still, else the clips (all, or their "
                               "names) and \" xS\" at another speed; a series of its own"),
+    INFO("run_options", r_chars, run_options, "the run options that make it another run and have no column of their "
+                                              "own, as given (\"--sun 30,45 --taa on\"); empty at their defaults; a "
+                                              "series of its own"),
     INFO("backend", r_str, backend, "egl or osmesa"),
     INFO("renderer", r_str, renderer, "GL_RENDERER"),
     INFO("timing", r_str, timing, "queries or sync: the timing mode used"),

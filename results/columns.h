@@ -65,6 +65,7 @@ typedef struct sb_run_info {
     char warnings[512];         /* what the tool cannot stand behind in an ok run ("; "-separated, "" if nothing) */
     char auto_params[160];      /* values calibrated for "auto" parameters ("bias=0.5:normal=0.125"; "" if none) */
     char light[1200];           /* the light's size when it has one ("sun 0.53 deg, 64 rays"; "" a light of no size) */
+    char run_options[640];      /* the identity options without a column of their own ("--sun 30,45"; "": defaults) */
 } sb_run_info;
 
 /* Adds a note to the run's warnings. */

@@ -177,8 +177,8 @@ int sb_compare(const char *base, const char *next, const sb_compare_opts *o, FIL
     sb_table_free(&A);
     sb_table_free(&B);
     if (matched == 0) {
-        sb_fail(err, "no runs of %s match %s (same scene, path, technique, parameters, light and animation)", next,
-                base);
+        sb_fail(err, "no runs of %s match %s (same scene, path, technique, parameters, light, animation and run "
+                "options)", next, base);
         return -1;
     }
     return regressions;
@@ -331,9 +331,10 @@ static bool is_pair(const sb_table *t, const sb_run_key *keys, int ra, int rb, c
         sb_status_of(sb_table_get(t, rb, "status")) != SB_STATUS_OK)
         return false;
     if (strcmp(A->scene, B->scene) || strcmp(A->path, B->path)) return false;
-    /* runs of other lights (a section of the set with --lights or a sized light) or of another animation are
-       another comparison, never a pair ("" in a set from before the columns: as before) */
-    if (strcmp(A->light, B->light) || strcmp(A->anim, B->anim)) return false;
+    /* runs of other lights (a section of the set with --lights or a sized light), of another animation or of other
+       identity options (run_options) are another comparison, never a pair ("" in a set from before the columns: as
+       before) */
+    if (strcmp(A->light, B->light) || strcmp(A->anim, B->anim) || strcmp(A->run_options, B->run_options)) return false;
     if (!strcmp(key, "technique")) {
         /* techniques whose parameters mean different things (pssm's res is a cascade's, virtual's a page grid's)
            pair by what each side names: technique=pssm:res=2048:layered=off,virtual:cache=on */

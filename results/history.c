@@ -23,8 +23,8 @@
 
 /* The parameters with what follows them in the key (the text a label's items come from). */
 static void params_text(const sb_series *s, char *out, size_t len) {
-    snprintf(out, len, "%s%s%s%s%s%s", s->params, s->light[0] ? "|" : "", s->light, s->anim[0] ? "|anim=" : "", s->anim,
-             s->indirect ? "|indirect" : "");
+    snprintf(out, len, "%s%s%s%s%s%s%s%s", s->params, s->light[0] ? "|" : "", s->light, s->anim[0] ? "|anim=" : "",
+             s->anim, s->indirect ? "|indirect" : "", s->run_options[0] ? "|" : "", s->run_options);
 }
 
 /* ---- a results set as a night ---- */

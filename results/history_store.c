@@ -42,16 +42,17 @@ static bool exec(sb_history *h, const char *sql, sb_err *err) {
 /* ---- a series' columns ---- */
 
 /* The runs' series columns, in the order sb_series_key joins them (the SQL function sb_series_key takes them so). */
-#define SERIES_COLS "host, renderer, scene, path, size, technique, params, light, anim, indirect"
-#define SERIES_COLS_R "r.host, r.renderer, r.scene, r.path, r.size, r.technique, r.params, r.light, r.anim, r.indirect"
-#define SERIES_NCOLS 10
+#define SERIES_COLS "host, renderer, scene, path, size, technique, params, light, anim, run_options, indirect"
+#define SERIES_COLS_R \
+    "r.host, r.renderer, r.scene, r.path, r.size, r.technique, r.params, r.light, r.anim, r.run_options, r.indirect"
+#define SERIES_NCOLS 11
 
 /* The series' text fields in SERIES_COLS order (indirect, the last column, is a number): where each lies in
  * sb_series and its room. */
 #define SERIES_FIELD(m) {offsetof(sb_series, m), sizeof(((sb_series *)0)->m)}
 static const struct { size_t at, len; } series_text[SERIES_NCOLS - 1] = {
     SERIES_FIELD(host), SERIES_FIELD(renderer), SERIES_FIELD(scene), SERIES_FIELD(path), SERIES_FIELD(size),
-    SERIES_FIELD(technique), SERIES_FIELD(params), SERIES_FIELD(light), SERIES_FIELD(anim),
+    SERIES_FIELD(technique), SERIES_FIELD(params), SERIES_FIELD(light), SERIES_FIELD(anim), SERIES_FIELD(run_options),
 };
 
 static void copy_col(char *dst, size_t len, sqlite3_stmt *st, int i);
@@ -86,7 +87,8 @@ static void sql_series_key(sqlite3_context *ctx, int n, sqlite3_value **v) {
     sqlite3_result_text(ctx, key, -1, SQLITE_TRANSIENT);
 }
 
-/* Schema 4: each run's joined series text parsed into its columns once, then the text dropped. */
+/* Schema 4: each run's joined series text parsed into its columns once, then the text dropped (the columns schema 4
+ * has: every series field but run_options, which schema 5 adds). */
 static bool series_columns(sb_history *h, sb_err *err) {
     sqlite3_stmt *q, *u;
     if (sqlite3_prepare_v2(h->db, "SELECT id, series FROM runs", -1, &q, NULL) != SQLITE_OK)
@@ -102,7 +104,9 @@ static bool series_columns(sb_history *h, sb_err *err) {
         sb_series se;
         const char *key = (const char *)sqlite3_column_text(q, 1);
         sb_series_parse(key ? key : "", &se);
-        ok = bind_series(u, 1, &se) && sqlite3_bind_int64(u, 11, sqlite3_column_int64(q, 0)) == SQLITE_OK &&
+        for (int k = 0; ok && k < 9; k++) ok = bind_text(u, 1 + k, (const char *)&se + series_text[k].at);
+        ok = ok && sqlite3_bind_int(u, 10, se.indirect) == SQLITE_OK &&
+             sqlite3_bind_int64(u, 11, sqlite3_column_int64(q, 0)) == SQLITE_OK &&
              sqlite3_step(u) == SQLITE_DONE;
         sqlite3_reset(u);
     }
@@ -117,7 +121,8 @@ static bool series_columns(sb_history *h, sb_err *err) {
    Version 1 kept the summary rows; 2 added each run's per-frame CSV and the
    night's image count; 3 the annotations (`history annotate`); 4 a run's series in typed columns (host,
    renderer, scene, path, size, technique, sorted params, light, anim, indirect) instead of one joined text,
-   each run's text parsed into them once (series_columns). */
+   each run's text parsed into them once (series_columns); 5 the identity options without a column of their own
+   (run_options: "--sun 30,45"; '' for every run before it, as every run then was keyed). */
 static bool series_columns(sb_history *h, sb_err *err);
 static const struct migration {
     const char *sql;
@@ -140,6 +145,7 @@ static const struct migration {
      "ALTER TABLE runs ADD COLUMN light TEXT NOT NULL DEFAULT '';"
      "ALTER TABLE runs ADD COLUMN anim TEXT NOT NULL DEFAULT '';"
      "ALTER TABLE runs ADD COLUMN indirect INTEGER NOT NULL DEFAULT 0;", series_columns},
+    {"ALTER TABLE runs ADD COLUMN run_options TEXT NOT NULL DEFAULT '';", NULL},
 };
 
 static int user_version(sb_history *h) {
@@ -335,7 +341,7 @@ bool sb_history_insert_run(sb_history *h, long long night, const sb_history_run_
     const char *texts[] = {r->run_id, r->status, r->reason, r->stable, r->warnings, r->line};
     sqlite3_stmt *st = prepare_texts(h,
                                      "INSERT INTO runs(run_id, status, reason, stable, warnings, line, night, run_index, "
-                                     SERIES_COLS ") VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)",
+                                     SERIES_COLS ") VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)",
                                      texts, (int)SB_COUNT(texts), err);
     if (!st) return false;
     bool ok = sqlite3_bind_int64(st, 7, night) == SQLITE_OK && sqlite3_bind_int(st, 8, r->run_index) == SQLITE_OK &&
@@ -469,7 +475,8 @@ int sb_history_points_of(sb_history *h, const sb_series *series, const char *cen
              "JOIN nights n ON n.id = r.night JOIN metrics c ON c.run = r.id AND c.name = ?1 "
              "LEFT JOIN metrics i ON i.run = r.id AND i.name = ?2 WHERE r.host = ?3 AND r.renderer = ?4 AND "
              "r.scene = ?5 AND r.path = ?6 AND r.size = ?7 AND r.technique = ?8 AND r.params = ?9 AND r.light = ?10 "
-             "AND r.anim = ?11 AND r.indirect = ?12 AND sb_status(r.status) = %d ORDER BY n.date, n.id",
+             "AND r.anim = ?11 AND r.run_options = ?12 AND r.indirect = ?13 AND sb_status(r.status) = %d "
+             "ORDER BY n.date, n.id",
              SB_STATUS_OK);
     sqlite3_stmt *st = prepare_texts(h, sql, texts, 2, err);
     if (!st) return -1;

@@ -12,7 +12,7 @@
 #include "series.h"
 #include "util.h"
 
-#define SB_HISTORY_SCHEMA 4
+#define SB_HISTORY_SCHEMA 5
 
 typedef struct sb_history sb_history;
 

@@ -9,14 +9,15 @@
 
 /* The identity columns, in sb_run_key's order: the only place their names are read. */
 static const char *const key_cols[] = {"run_id", "scene", "path", "technique", "params", "light",
-                                       "anim", "submit", "renderer", "width", "height"};
+                                       "anim", "submit", "renderer", "width", "height", "run_options"};
 #define KEY_FIELDS (sizeof key_cols / sizeof key_cols[0])
 
 static void fill(const sb_table *t, int r, const int *col, sb_run_key *k) {
     const char *v[KEY_FIELDS];
     for (size_t i = 0; i < KEY_FIELDS; i++) v[i] = col[i] < 0 || r < 0 || r >= t->nrows ? "" : t->rows[r][col[i]];
     *k = (sb_run_key){.run_id = v[0], .scene = v[1], .path = v[2], .technique = v[3], .params = v[4], .light = v[5],
-                      .anim = v[6], .submit = v[7], .renderer = v[8], .width = v[9], .height = v[10]};
+                      .anim = v[6], .submit = v[7], .renderer = v[8], .width = v[9], .height = v[10],
+                      .run_options = v[11]};
 }
 
 static void columns(const sb_table *t, int *col) {
@@ -25,7 +26,7 @@ static void columns(const sb_table *t, int *col) {
 
 const char *sb_run_key_missing(const sb_table *t, bool sized) {
     for (size_t i = 0; i < KEY_FIELDS; i++)
-        if ((i < 5 || (sized && i >= 9)) && sb_table_col(t, key_cols[i]) < 0) return key_cols[i];
+        if ((i < 5 || (sized && (i == 9 || i == 10))) && sb_table_col(t, key_cols[i]) < 0) return key_cols[i];
     return NULL;
 }
 
@@ -69,6 +70,7 @@ bool sb_run_key_indirect(const sb_run_key *k) { return !strcmp(k->submit, "indir
 void sb_run_key_text(const sb_run_key *k, char *out, size_t len) {
     char p[2048];
     sb_run_key_sorted_params(k->params, p, sizeof p);
-    snprintf(out, len, "%s|%s|%s|%s%s%s%s%s%s", k->scene, k->path, k->technique, p, *k->light ? "|" : "", k->light,
-             *k->anim ? "|anim=" : "", k->anim, sb_run_key_indirect(k) ? "|indirect" : "");
+    snprintf(out, len, "%s|%s|%s|%s%s%s%s%s%s%s%s", k->scene, k->path, k->technique, p, *k->light ? "|" : "", k->light,
+             *k->anim ? "|anim=" : "", k->anim, sb_run_key_indirect(k) ? "|indirect" : "", *k->run_options ? "|" : "",
+             k->run_options);
 }

@@ -19,6 +19,9 @@ typedef struct sb_run_key {
     const char *submit;                 /* "indirect": another series of timings */
     const char *renderer;
     const char *width, *height;
+    const char *run_options;            /* the identity options without a column of their own ("--sun 30,45"): the
+                                           option table's rows, whatever they are; "" at their defaults and in a set
+                                           from before the column */
 } sb_run_key;
 
 /* The first identity column a summary must have and t lacks (NULL: none missing): the run, scene, path,
@@ -34,7 +37,8 @@ sb_run_key *sb_run_keys(const sb_table *t);
 void sb_run_key_sorted_params(const char *params, char *out, size_t len);
 /* What two sets' runs are matched by: scene|path|technique|sorted params, then |light where the run's light is
  * sized or a section's, |anim=A where the clips play otherwise than the file says, |indirect where its draws were
- * issued indirectly (each left out where empty or direct: the keys of sets from before those columns). */
+ * issued indirectly, |--OPTION VALUE... where other identity options are not at their defaults (each left out
+ * where empty or direct: the keys of sets from before those columns). */
 void sb_run_key_text(const sb_run_key *k, char *out, size_t len);
 /* Whether the run's draws were issued indirectly. */
 bool sb_run_key_indirect(const sb_run_key *k);

@@ -8,9 +8,9 @@
 #include "util.h"
 
 void sb_series_key(const sb_series *s, char *out, size_t len) {
-    snprintf(out, len, "%s|%s|%s|%s|%s|%s|%s%s%s%s%s%s", s->host, s->renderer, s->scene, s->path, s->size, s->technique,
-             s->params, s->light[0] ? "|" : "", s->light, s->anim[0] ? "|anim=" : "", s->anim,
-             s->indirect ? "|indirect" : "");
+    snprintf(out, len, "%s|%s|%s|%s|%s|%s|%s%s%s%s%s%s%s%s", s->host, s->renderer, s->scene, s->path, s->size,
+             s->technique, s->params, s->light[0] ? "|" : "", s->light, s->anim[0] ? "|anim=" : "", s->anim,
+             s->indirect ? "|indirect" : "", s->run_options[0] ? "|" : "", s->run_options);
 }
 
 /* Field k of a '|'-separated text into out; returns where the next field starts (NULL: none). */
@@ -31,6 +31,8 @@ void sb_series_parse(const char *key, sb_series *s) {
         char extra[sizeof s->light];
         p = next_field(p, extra, sizeof extra);
         if (!strcmp(extra, "indirect")) s->indirect = true;
+        else if (!strncmp(extra, "--", 2))
+            snprintf(s->run_options, sizeof s->run_options, "%.*s", (int)sizeof s->run_options - 1, extra);
         else if (!strncmp(extra, "anim=", 5)) snprintf(s->anim, sizeof s->anim, "%.*s", (int)sizeof s->anim - 1, extra + 5);
         else snprintf(s->light, sizeof s->light, "%s", extra);
     }
@@ -49,6 +51,7 @@ void sb_series_of_row(const sb_table *t, int r, const char *host, const char *re
     sb_run_key_sorted_params(k.params, s->params, sizeof s->params);
     snprintf(s->light, sizeof s->light, "%s", k.light);
     snprintf(s->anim, sizeof s->anim, "%s", k.anim);
+    snprintf(s->run_options, sizeof s->run_options, "%s", k.run_options);
     s->indirect = sb_run_key_indirect(&k);
 }
 
@@ -56,5 +59,5 @@ bool sb_series_equal(const sb_series *a, const sb_series *b) {
     return a->indirect == b->indirect && !strcmp(a->host, b->host) && !strcmp(a->renderer, b->renderer) &&
            !strcmp(a->scene, b->scene) && !strcmp(a->path, b->path) && !strcmp(a->size, b->size) &&
            !strcmp(a->technique, b->technique) && !strcmp(a->params, b->params) && !strcmp(a->light, b->light) &&
-           !strcmp(a->anim, b->anim);
+           !strcmp(a->anim, b->anim) && !strcmp(a->run_options, b->run_options);
 }

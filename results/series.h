@@ -1,7 +1,7 @@
 /* series.h - a series: the runs of one setting on one machine over the nights (what the history compares).
  *
  * Its identity is typed fields, kept by the history's store in columns of their own (history_store.h); the key
- * text "host|renderer|scene|path|WxH|technique|params[|light][|anim=A][|indirect]" is made from them where a
+ * text "host|renderer|scene|path|WxH|technique|params[|light][|anim=A][|indirect][|--OPTION VALUE...]" is made from them where a
  * series is named or ordered (labels, annotation patterns, bisect's match), never parsed back except from a
  * history of schema 3 or older, which kept it as one column (the migration). */
 #pragma once
@@ -15,6 +15,7 @@ typedef struct sb_series {
     char params[1024];          /* canonical, sorted: "filter=pcf3:res=2048" */
     char light[1200];           /* a light with a size ("sun 0.53 deg, 64 rays"), lights ("lights lamps (6)"); "": none */
     char anim[300];             /* what plays, where not the default (the anim column); "": the default */
+    char run_options[640];      /* the other identity options not at their defaults ("--sun 30,45"); "": none */
     bool indirect;              /* --submit indirect */
 } sb_series;
 

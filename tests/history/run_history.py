@@ -113,14 +113,14 @@ def replay(src, name, factor, day):
     return dst
 
 
-SERIES_COLS = "host, renderer, scene, path, size, technique, params, light, anim, indirect"
+SERIES_COLS = "host, renderer, scene, path, size, technique, params, light, anim, indirect, run_options"
 
 
 def series_key(r):
     """A series' key text from its columns (SERIES_COLS), as shadowbench joins it (series.h)."""
-    host, renderer, scene, path, size, tech, params, light, anim, indirect = r
+    host, renderer, scene, path, size, tech, params, light, anim, indirect, run_options = r
     return "|".join([host, renderer, scene, path, size, tech, params]) + ("|" + light if light else "") + \
-        ("|anim=" + anim if anim else "") + ("|indirect" if indirect else "")
+        ("|anim=" + anim if anim else "") + ("|indirect" if indirect else "") + ("|" + run_options if run_options else "")
 
 
 def report_digests(site):
@@ -150,8 +150,8 @@ def schema_3():
     after = {r[0]: series_key(r[1:]) for r in db.execute("SELECT id, %s FROM runs" % SERIES_COLS)}
     notes = db.execute("SELECT count(*) FROM annotations").fetchone()[0]
     db.close()
-    check(v == 4 and "series" not in cols and "already had this note" in p.stderr and notes == 2,
-          "a version 3 history is migrated to 4: no joined series column, its notes kept (v%d, %d notes)" % (v, notes))
+    check(v == 5 and "series" not in cols and "run_options" in cols and "already had this note" in p.stderr and notes == 2,
+          "a version 3 history is migrated to 5: no joined series column, its notes kept (v%d, %d notes)" % (v, notes))
     check(len(before) == 54 and before == after, "each of its %d runs' series columns join back to its old text (%d "
           "differ)" % (len(before), sum(before[k] != after.get(k) for k in before)))
     exp = open(os.path.join(SRC, "tests", "history", "history_v3.expected")).read()
@@ -333,7 +333,7 @@ def main():
     kept = db.execute("SELECT count(*) FROM nights WHERE set_key = 'v1-night'").fetchone()[0]
     frames = db.execute("SELECT count(*) FROM frames").fetchone()[0]
     db.close()
-    check(v == 4 and kept == 1 and frames == 3, "a version 1 history is migrated to 4, its night kept (v%d, %d, %d frames)"
+    check(v == 5 and kept == 1 and frames == 3, "a version 1 history is migrated to 5, its night kept (v%d, %d, %d frames)"
           % (v, kept, frames))
     schema_3()
     newer = os.path.join(WORK, "v99.sqlite")
@@ -356,6 +356,25 @@ def main():
     nseries = db.execute("SELECT count(*) FROM (SELECT DISTINCT %s FROM runs)" % SERIES_COLS).fetchone()[0]
     db.close()
     check(nseries == 6, "two machines' nights stay separate series (%d series of 3 runs each)" % nseries)
+    # a night with an identity option of no column of its own (--sun given) is a series of its own too
+    sun = os.path.join(WORK, "sun-given")
+    shutil.copytree(base[0], sun)
+    with open(os.path.join(sun, "summary.csv"), newline="") as f:
+        rows = list(csv.DictReader(f))
+    for r in rows:
+        r["run_options"] = "--sun 30,45"
+    with open(os.path.join(sun, "summary.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+        w.writeheader()
+        w.writerows(rows)
+    D = os.path.join(WORK, "d.sqlite")
+    sb("history", "add", base[0], sun, "--history", D)
+    db = sqlite3.connect(D)
+    keys = sorted(series_key(r) for r in db.execute("SELECT DISTINCT %s FROM runs" % SERIES_COLS))
+    db.close()
+    check(len(keys) == 6 and sum(k.endswith("|--sun 30,45") for k in keys) == 3,
+          "a night with --sun given keeps series of its own (%d series, %d with it)"
+          % (len(keys), sum(k.endswith("|--sun 30,45") for k in keys)))
 
     part = os.path.join(WORK, "partial")
     shutil.copytree(base[0], part)

@@ -247,7 +247,7 @@ static void test_what_plays_is_a_series(void **st) {
     assert_string_not_equal(i2, i0);
     /* compare pairs runs of the same animation only: none here, said in one line */
     expect_cli_fail("match", "%s compare %s %s", test_binary(), d0, d2);
-    expect_cli_fail("same scene, path, technique, parameters, light and animation", "%s compare %s %s", test_binary(),
+    expect_cli_fail("same scene, path, technique, parameters, light, animation and run options", "%s compare %s %s", test_binary(),
                     d0, d1);
     assert_int_equal(run_logged(g_out, sizeof g_out, "%s compare %s %s --metric shadow_draw_calls", test_binary(), d0,
                                 d3),

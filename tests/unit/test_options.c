@@ -257,6 +257,48 @@ static void test_run_identity(void **st) {
     }
 }
 
+/* Every identity option reaches a run's key: a row with a summary column of its own names one that exists, and every
+ * other row not at its default is in the run_options text (as "--NAME VALUE") by being a row: a new identity row
+ * needs nothing else to keep its runs apart in compare and the history. */
+static void test_run_options_text(void **st) {
+    (void)st;
+    sb_cli_opts c;
+    sb_err err;
+    char text[640];
+    sb_cli_defaults(&c, NULL);
+    sb_run_options_text(&c.run, text, sizeof text);
+    assert_string_equal(text, "");
+    char *tok[] = {"--sun", "10,20", "--taa", "on", "--submit", "indirect", "--frames", "7"};
+    assert_true(sb_cli_parse_tokens(&c, tok, (int)SB_COUNT(tok), "id", &err));
+    sb_run_options_text(&c.run, text, sizeof text);
+    assert_string_equal(text, "--sun 10,20 --taa on");   /* submit has its column; frames is a dimension */
+    int nrun, generic = 0;
+    const sb_run_col *rc = sb_run_cols(&nrun);
+    for (int i = 0; i < sb_option_count; i++) {
+        const sb_option *opt = &sb_options[i];
+        if (opt->identity == SB_ID_NONE || opt->identity == SB_ID_DIM || opt->identity == SB_ID_LIGHT) continue;
+        if (opt->id_column) {   /* its own column: one the summary has */
+            bool found = false;
+            for (int k = 0; k < nrun; k++) found |= !strcmp(rc[k].name, opt->id_column);
+            if (!found) print_error("%s: no summary column %s\n", opt->name, opt->id_column);
+            assert_true(found);
+            continue;
+        }
+        sb_cli_defaults(&c, NULL);
+        char *at = (char *)&c + opt->field;
+        if (opt->identity == SB_ID_GIVEN) *(bool *)((char *)&c + opt->given_field) = true;
+        else if (opt->identity == SB_ID_NAMED) *(int *)at = !strcmp(opt->def, "off") || *(int *)at == 0 ? 1 : 0;
+        else *(const char **)at = "x";
+        sb_run_options_text(&c.run, text, sizeof text);
+        char want[80];
+        snprintf(want, sizeof want, "%s ", opt->name);
+        if (strncmp(text, want, strlen(want))) print_error("%s: run_options '%s'\n", opt->name, text);
+        assert_int_equal(strncmp(text, want, strlen(want)), 0);
+        generic++;
+    }
+    assert_true(generic >= 2);   /* --sun, --taa */
+}
+
 static void test_batch_defaults_line(void **st) {
     (void)st;
     for (int i = 0; i < sb_option_count; i++) {
@@ -391,6 +433,7 @@ int main(void) {
         cmocka_unit_test(test_defaults_parse),           cmocka_unit_test(test_values_reach_their_fields),
         cmocka_unit_test(test_batch_defaults_line),      cmocka_unit_test(test_help_and_docs_name_every_option),
         cmocka_unit_test(test_run_identity),             cmocka_unit_test(test_docs_are_the_tables),
+        cmocka_unit_test(test_run_options_text),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
