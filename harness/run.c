@@ -10,8 +10,7 @@
 #include "autobias.h"
 #include "options.h"
 #include "eval.h"
-#include "taa.h"
-#include "frame_images.h"
+#include "evaluate.h"
 #include "pose.h"
 #include "reference.h"
 #include "columns.h"
@@ -34,51 +33,6 @@ static void progress_line(const sb_session *s, int index, int total, const char 
     fprintf(stderr, "\rrun %d/%d %-10s frame %d/%d  %.1fs  ETA %.1fs   ", index + 1, total, tech, frame, frames, el,
             eta);
     if (frame == frames) fputc('\n', stderr);
-}
-
-/* ---- the untimed evaluation pass: error against the reference, images ---- */
-
-static bool eval_frame_wanted(const sb_run_opts *o, int pf) {
-    return (o->error_every > 0 && pf % o->error_every == 0) || (o->images > 0 && pf % o->images == 0);
-}
-
-/* Re-renders the selected path frames with the evaluation targets bound and
- * reads them back: nothing here runs inside a timed frame. seq: after the
- * timed frames. */
-static bool evaluate(sb_session *s, sb_instance *in, int seq, const char *out_dir, const char *run_id,
-                     sb_frame_rec *recs, sb_err *err) {
-    const int n = s->opts.frames;
-    char dir[4200];
-    snprintf(dir, sizeof dir, "%s/images", out_dir);
-    if (s->opts.images > 0 && !sb_mkdir_p(dir, err)) return false;
-    sb_eval_buf b;
-    sb_eval_buf_init(&b, &s->gpu, s->opts.images > 0);
-    sb_taa_buf *taa = NULL;   /* --taa on */
-    bool ok = true;
-    for (int pf = 0; ok && pf < n; pf++) {
-        if (!eval_frame_wanted(&s->opts, pf)) continue;
-        if (sb_interrupted()) {
-            sb_fail(err, "interrupted by %s in the evaluation", sb_interrupt_name());
-            ok = false;
-            break;
-        }
-        sb_frame f;
-        sb_frame_rec *r = &recs[pf];
-        ok = sb_eval_frame(s, in, pf, n, sb_instance_history(in), &seq, &b, &f, &r->err, err) &&
-             sb_eval_flicker(s, in, pf, n, &seq, &b, &f, &r->err, err) &&
-             sb_eval_taa(s, in, pf, n, &seq, &taa, b.w, b.h, &r->err, err);
-        if (ok && s->opts.error_every > 0 && pf % s->opts.error_every == 0) {
-            r->evaluated = true;
-        }
-        if (ok && s->opts.images > 0 && pf % s->opts.images == 0)
-            ok = sb_images_write_frame(dir, run_id, pf, b.w, b.h, b.rgba, b.vis, b.ref, b.pos, b.aux, err) &&
-                 (!b.flicker_drawn || sb_images_write_flicker(dir, run_id, pf, b.w, b.h, b.flicker, err)) &&
-                 (!b.flip_drawn ||
-                  sb_images_write_shaded(dir, run_id, pf, b.w, b.h, b.shaded, b.shaded_ref, b.flip, err));
-    }
-    sb_eval_buf_free(&b);
-    sb_taa_buf_free(taa);
-    return ok;
 }
 
 /* ---- one run: passes of the path ---- */
@@ -138,9 +92,8 @@ static bool ensure_instance(sb_run *r) {
     if (r->have_instance) return true;
     const sb_run_opts *o = &r->s->opts;
     int frames = (o->warmup < 0 ? SB_WARMUP_AUTO_CAP : o->warmup) + o->frames * (r->keep_instance ? r->capacity / o->frames : 1);
-    /* and the evaluation pass's: per evaluated frame, the frames it replays (sdsm: at most its latency, 2),
-       the frame and its flicker twin (what a technique keeps per frame, sdsm's splits, covers them too) */
-    for (int pf = 0; pf < o->frames; pf++) frames += eval_frame_wanted(o, pf) ? 4 + sb_taa_frames(o) : 0;
+    /* and the evaluation pass's (what a technique keeps per frame, sdsm's splits, covers them too) */
+    frames += sb_evaluate_frames(o);
     if (!r->calibrated) { /* once per run, before its first frame */
         if (!sb_autobias_choose(r->s, r->spec, &r->used, r->info.auto_params, sizeof r->info.auto_params, NULL, &r->err))
             return fail_run(r, "auto offsets: %s", r->err.msg);
@@ -480,7 +433,7 @@ static bool finish_run(sb_run *r) {
         if (!ensure_instance(r)) return false;
         double t0 = sb_now_ms(), refit0 = r->s->ref ? r->s->ref->refit_ms : 0;
         uint32_t refits0 = r->s->ref ? r->s->ref->refits : 0;
-        bool evaluated = evaluate(r->s, &r->in, r->seq, r->out_dir, r->run_id, r->recs, &r->err);
+        bool evaluated = sb_evaluate_run(r->s, &r->in, r->seq, r->out_dir, r->run_id, r->recs, &r->err);
         r->info.eval_s = (sb_now_ms() - t0) / 1e3;
         if (r->s->ref && r->s->ref->refits > refits0)   /* a moving scene: the reference refit at each pose */
             r->info.ref_refit_ms = (r->s->ref->refit_ms - refit0) / (r->s->ref->refits - refits0);
