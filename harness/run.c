@@ -401,12 +401,7 @@ static bool replayed_timings(sb_run *r, double *ms, double *before, double *afte
 /* The stability verdict from the probe, the batch's probes and the frames' drift; false: a failed run. */
 static bool judge_stability(sb_run *r) {
     double *ms = sb_xmalloc(sizeof(double) * (size_t)(r->done ? r->done : 1));
-    for (int i = 0; i < r->done; i++) {
-        const sb_stage_times *t = &r->timer.times[i];
-        ms[i] = 0;
-        for (int k = 0; k < SB_TIMER_STAGES; k++)
-            if (t->mask & SB_STAGE_BIT(k)) ms[i] += t->ms[k];
-    }
+    for (int i = 0; i < r->done; i++) ms[i] = sb_columns_gpu_ms(&r->timer.times[i]);
     double before = r->calib_before, after = r->calib_after;
     if (!replayed_timings(r, ms, &before, &after) && r->failed) {
         free(ms);

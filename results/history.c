@@ -21,12 +21,6 @@
 #include "runkey.h"
 #include "stats.h"
 
-/* The parameters with what follows them in the key (the text a label's items come from). */
-static void params_text(const sb_series *s, char *out, size_t len) {
-    snprintf(out, len, "%s%s%s%s%s%s%s%s", s->params, s->light[0] ? "|" : "", s->light, s->anim[0] ? "|anim=" : "",
-             s->anim, s->indirect ? "|indirect" : "", s->run_options[0] ? "|" : "", s->run_options);
-}
-
 /* ---- a results set as a night ---- */
 
 /* The set's meta (a merged set: its first shard's), as text, and one field of it. */
@@ -450,7 +444,7 @@ char **sb_history_labels(const sb_series *f, int n) {
     char(*ptext)[2048] = sb_xmalloc(sizeof *ptext * (size_t)(n ? n : 1));
     bool hosts = false;
     for (int i = 0; i < n; i++) {
-        params_text(&f[i], ptext[i], sizeof ptext[i]);
+        sb_series_params_text(&f[i], ptext[i], sizeof ptext[i]);
         if (i && strcmp(f[i].host, f[0].host)) hosts = true;
     }
     for (int i = 0; i < n; i++) {

@@ -104,7 +104,8 @@ static bool series_columns(sb_history *h, sb_err *err) {
         sb_series se;
         const char *key = (const char *)sqlite3_column_text(q, 1);
         sb_series_parse(key ? key : "", &se);
-        for (int k = 0; ok && k < 9; k++) ok = bind_text(u, 1 + k, (const char *)&se + series_text[k].at);
+        for (int k = 0; ok && k < SERIES_NCOLS - 2; k++)   /* the text fields, run_options (the last) not yet */
+            ok = bind_text(u, 1 + k, (const char *)&se + series_text[k].at);
         ok = ok && sqlite3_bind_int(u, 10, se.indirect) == SQLITE_OK &&
              sqlite3_bind_int64(u, 11, sqlite3_column_int64(q, 0)) == SQLITE_OK &&
              sqlite3_step(u) == SQLITE_DONE;

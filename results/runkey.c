@@ -67,10 +67,14 @@ void sb_run_key_sorted_params(const char *params, char *out, size_t len) {
 
 bool sb_run_key_indirect(const sb_run_key *k) { return !strcmp(k->submit, "indirect"); }
 
+void sb_key_tail(const char *light, const char *anim, bool indirect, const char *run_options, char *out, size_t len) {
+    snprintf(out, len, "%s%s%s%s%s%s%s", *light ? "|" : "", light, *anim ? "|anim=" : "", anim,
+             indirect ? "|indirect" : "", *run_options ? "|" : "", run_options);
+}
+
 void sb_run_key_text(const sb_run_key *k, char *out, size_t len) {
-    char p[2048];
+    char p[2048], tail[4096];
     sb_run_key_sorted_params(k->params, p, sizeof p);
-    snprintf(out, len, "%s|%s|%s|%s%s%s%s%s%s%s%s", k->scene, k->path, k->technique, p, *k->light ? "|" : "", k->light,
-             *k->anim ? "|anim=" : "", k->anim, sb_run_key_indirect(k) ? "|indirect" : "", *k->run_options ? "|" : "",
-             k->run_options);
+    sb_key_tail(k->light, k->anim, sb_run_key_indirect(k), k->run_options, tail, sizeof tail);
+    snprintf(out, len, "%s|%s|%s|%s%s", k->scene, k->path, k->technique, p, tail);
 }

@@ -40,5 +40,8 @@ void sb_run_key_sorted_params(const char *params, char *out, size_t len);
  * issued indirectly, |--OPTION VALUE... where other identity options are not at their defaults (each left out
  * where empty or direct: the keys of sets from before those columns). */
 void sb_run_key_text(const sb_run_key *k, char *out, size_t len);
+/* What follows the parameters in a key's text, each where it applies (|light, |anim=A, |indirect, |--OPTION
+ * VALUE...): one rule for a run key's text and a series' (series.h). */
+void sb_key_tail(const char *light, const char *anim, bool indirect, const char *run_options, char *out, size_t len);
 /* Whether the run's draws were issued indirectly. */
 bool sb_run_key_indirect(const sb_run_key *k);

@@ -7,10 +7,16 @@
 #include "runkey.h"
 #include "util.h"
 
+void sb_series_params_text(const sb_series *s, char *out, size_t len) {
+    char tail[sizeof s->light + sizeof s->anim + sizeof s->run_options + 32];
+    sb_key_tail(s->light, s->anim, s->indirect, s->run_options, tail, sizeof tail);
+    snprintf(out, len, "%s%s", s->params, tail);
+}
+
 void sb_series_key(const sb_series *s, char *out, size_t len) {
-    snprintf(out, len, "%s|%s|%s|%s|%s|%s|%s%s%s%s%s%s%s%s", s->host, s->renderer, s->scene, s->path, s->size,
-             s->technique, s->params, s->light[0] ? "|" : "", s->light, s->anim[0] ? "|anim=" : "", s->anim,
-             s->indirect ? "|indirect" : "", s->run_options[0] ? "|" : "", s->run_options);
+    char p[sizeof s->params + sizeof s->light + sizeof s->anim + sizeof s->run_options + 32];
+    sb_series_params_text(s, p, sizeof p);
+    snprintf(out, len, "%s|%s|%s|%s|%s|%s|%s", s->host, s->renderer, s->scene, s->path, s->size, s->technique, p);
 }
 
 /* Field k of a '|'-separated text into out; returns where the next field starts (NULL: none). */

@@ -19,6 +19,8 @@ typedef struct sb_series {
     bool indirect;              /* --submit indirect */
 } sb_series;
 
+/* Its parameters and what follows them in the key (sb_key_tail, runkey.h): the text a label's items come from. */
+void sb_series_params_text(const sb_series *s, char *out, size_t len);
 /* Its key text (what orders series and what a pattern is matched against). */
 void sb_series_key(const sb_series *s, char *out, size_t len);
 /* A key text of a schema-3 history back into its fields. */

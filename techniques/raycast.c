@@ -37,7 +37,6 @@ static const sb_param_def raycast_params[] = {
 typedef struct {
     const sb_reference *ref;
     sb_final_prog fp;
-    GLint u_rays;
     GLuint tex;
     int threads;
     bool point;             /* toward a point light, not the sun */
@@ -85,13 +84,8 @@ static bool raycast_create(void *state, const sb_run_ctx *rc, const void *desc, 
     s->lights = rc->lights;
     s->hits = sb_xmalloc(n);
     s->vis = sb_xmalloc(n * (rc->lights ? (size_t)rc->lights->count : 1));
-    glGenTextures(1, &s->tex);
-    glBindTexture(GL_TEXTURE_2D, s->tex);
-    glTexStorage2D(GL_TEXTURE_2D, 1, GL_R8, g->width, g->height);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    if (!sb_final_prog_create(&s->fp, rc->gpu, "raycast", sb_shader_vis_raycast_glsl, NULL, err)) return false;
-    s->u_rays = glGetUniformLocation(s->fp.prog, "u_rays");
+    s->tex = sb_cpu_vis_texture(g);
+    if (!sb_final_prog_create(&s->fp, rc->gpu, "raycast", sb_shader_vis_cpu_glsl, NULL, err)) return false;
     return sb_gl_check("raycast", err);
 }
 
@@ -134,19 +128,14 @@ static void raycast_frame(void *state, sb_frame *f) {
         sb_reference_visibility_view(s->ref, f->shade_light, s->pts, s->pix, m, w, h, s->hits, s->threads);
         for (int k = 0; k < m; k++) vis[s->pix[k]] = s->hits[k];   /* 255 lit, 0 shadowed; a sized light between */
     }
-    glBindTexture(GL_TEXTURE_2D, s->tex);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, w, h, GL_RED, GL_UNSIGNED_BYTE, s->vis);   /* the first light's */
+    sb_cpu_vis_bind(s->tex, g, s->vis);   /* the first light's */
     sb_stage_end(f, &stage_rays);
 
     sb_stage_begin(f, &sb_stage_final);
     for (int i = first; i < end; i++) {   /* the first clears and lays the ambient, each further one adds its light */
         shade(s, f, i);
         glUseProgram(s->fp.prog);
-        glActiveTexture(GL_TEXTURE0);
-        glBindTexture(GL_TEXTURE_2D, s->tex);
-        if (i > first) glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, w, h, GL_RED, GL_UNSIGNED_BYTE, s->vis + (size_t)(i - first) * np);
-        glUniform1i(s->u_rays, 0);
+        sb_cpu_vis_bind(s->tex, g, i > first ? s->vis + (size_t)(i - first) * np : NULL);
         if (i == first) sb_final_pass(f, &s->fp, true);
         else sb_final_pass_add(f, &s->fp);
     }

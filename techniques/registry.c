@@ -53,11 +53,10 @@ bool sb_param_set(sb_params *p, int i, const sb_param_def *d, const char *value,
         snprintf(p->v[i].text, sizeof p->v[i].text, "auto");
         return true;
     }
-    if (d->kind == SB_PARAM_TEXT) {
-        for (const char *c = value; *c; c++)
-            if ((unsigned char)*c < 32 || *c == 127)
-                return sb_fail(err, "%s:%s: the value holds a control character (byte %d at %d)", tech, d->name,
-                               (unsigned char)*c, (int)(c - value) + 1);
+    if (d->kind == SB_PARAM_TEXT) {   /* one line of text, or empty */
+        char what[96];
+        snprintf(what, sizeof what, "%s:%s", tech, d->name);
+        if (*value && !sb_name_check(what, value, err)) return false;
         if (strlen(value) > SB_PARAM_TEXT_MAX)
             return sb_fail(err, "%s:%s: the value is %zu characters, more than %d", tech, d->name, strlen(value),
                            SB_PARAM_TEXT_MAX);

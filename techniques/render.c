@@ -106,6 +106,16 @@ static GLuint make_tex(GLenum internal, int w, int h) {
     return t;
 }
 
+GLuint sb_cpu_vis_texture(const sb_gpu *g) { return make_tex(GL_R8, g->width, g->height); }
+
+void sb_cpu_vis_bind(GLuint tex, const sb_gpu *g, const unsigned char *vis) {
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, tex);
+    if (!vis) return;
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, g->width, g->height, GL_RED, GL_UNSIGNED_BYTE, vis);
+}
+
 /* ---- the alpha test's data ---- */
 
 /* A material as alpha.glsl's SbMaterial (48 bytes). */

@@ -177,6 +177,12 @@ bool sb_final_prog_create_parts(sb_final_prog *fp, const sb_gpu *g, const char *
 const char *sb_opaque_define(const sb_gpu *g);
 int sb_draw_variant(const sb_gpu *g, uint32_t d);
 void sb_final_prog_free(sb_final_prog *fp);
+/* A visibility made on the CPU (raycast's rays, score's files): the final pass (sb_shader_vis_cpu_glsl) looks up the
+ * pixel's own texel of an R8 texture of the frame's size, its sampler on unit 0. sb_cpu_vis_texture makes the
+ * texture; sb_cpu_vis_bind binds it on unit 0, after sending it vis (a frame's worth, 255 lit, rows bottom-up)
+ * unless NULL. */
+GLuint sb_cpu_vis_texture(const sb_gpu *g);
+void sb_cpu_vis_bind(GLuint tex, const sb_gpu *g, const unsigned char *vis);
 
 /* Sets the frame's camera, matrices and planes, counters to zero and the shaded light to the sun. */
 void sb_frame_setup(sb_frame *f, const sb_gpu *g, const sb_camera *cam);

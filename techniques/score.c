@@ -139,7 +139,6 @@ static double score_shadow_bytes(const sb_technique *t, const void *desc) {
 typedef struct {
     score_desc d;
     sb_final_prog fp;
-    GLint u_files;
     GLuint tex;
     int w, h;
     unsigned char *vis;         /* the frame's visibility, 255 lit, rows bottom-up */
@@ -155,13 +154,8 @@ static bool score_create(void *state, const sb_run_ctx *rc, const void *desc, sb
     s->w = g->width, s->h = g->height;
     s->frame = -1;
     s->vis = sb_xmalloc((size_t)s->w * s->h);
-    glGenTextures(1, &s->tex);
-    glBindTexture(GL_TEXTURE_2D, s->tex);
-    glTexStorage2D(GL_TEXTURE_2D, 1, GL_R8, s->w, s->h);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    if (!sb_final_prog_create(&s->fp, g, "score", sb_shader_vis_files_glsl, NULL, err)) return false;
-    s->u_files = glGetUniformLocation(s->fp.prog, "u_files");
+    s->tex = sb_cpu_vis_texture(g);
+    if (!sb_final_prog_create(&s->fp, g, "score", sb_shader_vis_cpu_glsl, NULL, err)) return false;
     return sb_gl_check("score", err);
 }
 
@@ -191,17 +185,13 @@ static bool read_frame(score_state *s, int pf) {
 
 static void score_frame(void *state, sb_frame *f) {
     score_state *s = state;
-    if (s->frame != f->index) {
+    const bool read = s->frame != f->index;   /* a frame's files are read and sent once */
+    if (read) {
         s->frame = f->index;
         if (!read_frame(s, f->index)) memset(s->vis, 255, (size_t)s->w * s->h);   /* refused by check_frame */
     }
-    glBindTexture(GL_TEXTURE_2D, s->tex);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, s->w, s->h, GL_RED, GL_UNSIGNED_BYTE, s->vis);
     glUseProgram(s->fp.prog);
-    glActiveTexture(GL_TEXTURE0);
-    glBindTexture(GL_TEXTURE_2D, s->tex);
-    glUniform1i(s->u_files, 0);
+    sb_cpu_vis_bind(s->tex, f->gpu, read ? s->vis : NULL);
     sb_final_pass(f, &s->fp, false);
 }
 
