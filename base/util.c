@@ -79,44 +79,72 @@ void sb_log_capture(bool on) {
 
 const char *sb_log_captured(void) { return g_capture ? g_capture : ""; }
 
-char *sb_read_file(const char *path, size_t *size, sb_err *err) {
-    struct stat st;
-    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {   /* a folder opens, then reads as 2^63 bytes */
-        sb_fail(err, "%s: %s, not a file", path, S_ISDIR(st.st_mode) ? "a folder" : "a device or special file");
-        return NULL;
+int sb_open_read(const char *path, sb_err *err) {
+    if (!path || !*path) {
+        sb_fail(err, "an empty file name: nothing to read");
+        return -1;
     }
-    FILE *f = fopen(path, "rb");
-    if (!f) {
+    /* O_NONBLOCK: opening a FIFO waits for a writer, a device may wait for ever; the descriptor is checked before
+       anything is read, and made blocking again for a regular file (where the flag changes nothing anyway) */
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+    if (fd < 0) {
         sb_fail(err, "%s: cannot open: %s", path, strerror(errno));
+        return -1;
+    }
+    struct stat st;
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        int e = errno;
+        bool stated = fstat(fd, &st) == 0;
+        close(fd);
+        if (!stated) sb_fail(err, "%s: cannot stat: %s", path, strerror(e));
+        else if (S_ISDIR(st.st_mode)) sb_fail(err, "%s: a folder, not a file", path);
+        else sb_fail(err, "%s: %s, not a regular file", path,
+                     S_ISFIFO(st.st_mode) ? "a FIFO" : S_ISSOCK(st.st_mode) ? "a socket" : "a device");
+        return -1;
+    }
+    int fl = fcntl(fd, F_GETFL);
+    if (fl >= 0) fcntl(fd, F_SETFL, fl & ~O_NONBLOCK);
+    return fd;
+}
+
+bool sb_is_regular_file(const char *path) {
+    int fd = sb_open_read(path, NULL);
+    if (fd < 0) return false;
+    close(fd);
+    return true;
+}
+
+char *sb_read_file(const char *path, size_t *size, sb_err *err) {
+    int fd = sb_open_read(path, err);
+    if (fd < 0) return NULL;
+    struct stat st;
+    if (fstat(fd, &st) != 0) {
+        sb_fail(err, "%s: cannot stat: %s", path, strerror(errno));
+        close(fd);
         return NULL;
     }
-    if (fseek(f, 0, SEEK_END) != 0) {
-        fclose(f);
-        sb_fail(err, "%s: cannot seek", path);
-        return NULL;
-    }
-    long n = ftell(f);
-    rewind(f);
-    if (n < 0) {
-        fclose(f);
-        sb_fail(err, "%s: cannot read size", path);
-        return NULL;
-    }
-    char *buf = malloc((size_t)n + 1);
+    size_t n = (size_t)st.st_size;
+    char *buf = malloc(n + 1);
     if (!buf) {
-        fclose(f);
-        sb_fail(err, "%s: out of memory (%ld bytes)", path, n);
+        close(fd);
+        sb_fail(err, "%s: out of memory (%zu bytes)", path, n);
         return NULL;
     }
-    size_t got = fread(buf, 1, (size_t)n, f);
-    fclose(f);
-    if (got != (size_t)n) {
+    size_t got = 0;
+    while (got < n) {
+        ssize_t k = read(fd, buf + got, n - got);
+        if (k < 0 && errno == EINTR) continue;
+        if (k <= 0) break;
+        got += (size_t)k;
+    }
+    close(fd);
+    if (got != n) {
         free(buf);
         sb_fail(err, "%s: short read", path);
         return NULL;
     }
     buf[n] = 0;
-    if (size) *size = (size_t)n;
+    if (size) *size = n;
     return buf;
 }
 
@@ -128,7 +156,7 @@ uint64_t sb_binary_identity(void) {
 }
 
 void *sb_map_file(const char *path, size_t *size, bool writable) {
-    int fd = open(path, O_RDONLY);
+    int fd = sb_open_read(path, NULL);
     if (fd < 0) return NULL;
     struct stat st;
     void *p = NULL;

@@ -710,6 +710,7 @@ static int cmd_history_annotate(const sb_cli *c) {
     else
         sb_log("night %lld %s%s%s%s", night, added ? "annotated" : "already had this note",
                c->o.series ? " for series " : "", c->o.series ? c->o.series : "", c->o.accept ? ", accepted" : "");
+    sb_history_discard_if_new(h);   /* a history made by this open has no night to note: no file left behind */
     sb_history_close(h);
     return rc;
 }

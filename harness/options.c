@@ -56,6 +56,33 @@ static bool check_anim(const char *v, const sb_cli_opts *o, sb_err *err) {
     return true;
 }
 
+/* A path a command writes or reads: never empty (an empty --out wrote into the working folder's root, an empty
+ * --history opened a database stored nowhere). */
+static bool check_path(const char *v, const sb_cli_opts *o, sb_err *err) {
+    (void)o;
+    if (!*v) return sb_fail(err, "an empty path: name a file or folder");
+    return true;
+}
+
+/* --since: a date as the nights' are written (YYYY-MM-DD, optionally THH:MM[:SS][Z]), and a real one: the nights
+ * compare against it as text, so "yesterday" or 2026-13-45 would select every night or none in silence. */
+static bool check_date(const char *v, const sb_cli_opts *o, sb_err *err) {
+    (void)o;
+    int y, m, d, hh = 0, mm = 0, ss = 0, n = 0, len = (int)strlen(v);
+    bool ok = sscanf(v, "%4d-%2d-%2d%n", &y, &m, &d, &n) == 3 && n == 10;
+    if (ok && len > 10) {
+        int k = 0, t = sscanf(v + 10, "T%2d:%2d%n:%2d%n", &hh, &mm, &k, &ss, &k);
+        ok = t >= 2 && (v[10 + k] == 0 || (v[10 + k] == 'Z' && v[11 + k] == 0));
+    }
+    static const int days[] = {31, 29, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+    bool leap = y % 4 == 0 && (y % 100 != 0 || y % 400 == 0);
+    ok = ok && y >= 1970 && m >= 1 && m <= 12 && d >= 1 && d <= days[m - 1] && (m != 2 || d <= 28 + leap) &&
+         hh <= 23 && mm <= 59 && ss <= 60 && hh >= 0 && mm >= 0 && ss >= 0;
+    for (int i = 0; ok && i < 10; i++) ok = (i == 4 || i == 7) ? v[i] == '-' : (v[i] >= '0' && v[i] <= '9');
+    if (!ok) return sb_fail(err, "expected a date, YYYY-MM-DD or YYYY-MM-DDTHH:MM:SSZ (UTC, as `history list` shows)");
+    return true;
+}
+
 const sb_option sb_options[] = {
     /* the context and timing */
     {.name = "--backend", .kind = SB_OPT_CHOICE, .arg = "egl|osmesa", .def = "egl", .with = SB_CMDF_CONTEXT,
@@ -186,14 +213,14 @@ const sb_option sb_options[] = {
     /* where results go, and what is said */
     {.name = "--out", .kind = SB_OPT_TEXT, .arg = "DIR", .def = "out",
      .commands = SB_IN(SB_CMD_RUN) | SB_IN(SB_CMD_BATCH) | SB_IN(SB_CMD_TUNE) | SB_IN(SB_CMD_SCORE), .field = F(out),
-     .help = "results folder; run, tune and score write DIR/<UTC time>/, batch DIR/<batch name>/<UTC time>/"},
+     .help = "results folder; run, tune and score write DIR/<UTC time>/, batch DIR/<batch name>/<UTC time>/", .check = check_path},
     {.name = "--out", .kind = SB_OPT_TEXT, .arg = "DIR", .def_help = "required", .commands = SB_IN(SB_CMD_MERGE),
-     .field = F(out), .help = "the merged results set"},
+     .field = F(out), .help = "the merged results set", .check = check_path},
     {.name = "--out", .kind = SB_OPT_TEXT, .arg = "SITE", .def = "out/report", .commands = SB_IN(SB_CMD_REPORT),
-     .field = F(out), .help = "the site's folder"},
+     .field = F(out), .help = "the site's folder", .check = check_path},
     {.name = "--resume", .kind = SB_OPT_TEXT, .arg = "DIR",
      .commands = SB_IN(SB_CMD_RUN) | SB_IN(SB_CMD_BATCH) | SB_IN(SB_CMD_TUNE), .field = F(resume),
-     .help = "keep DIR's complete runs and render the rest into it"},
+     .help = "keep DIR's complete runs and render the rest into it", .check = check_path},
     {.name = "--shard", .kind = SB_OPT_TEXT, .arg = "I/N", .commands = SB_IN(SB_CMD_BATCH), .field = F(shard),
      .of_set = true, .help = "render share I of N of the matrix (cost-balanced)"},
     {.name = "--strict-path", .kind = SB_OPT_FLAG, .with = SB_CMDF_MEASURE, .commands = SB_IN(SB_CMD_PATH), RUN_OPT,
@@ -248,11 +275,11 @@ const sb_option sb_options[] = {
     {.name = "--pattern", .kind = SB_OPT_TEXT, .arg = "FILE", .def = "vis_%04d.png", .commands = SB_IN(SB_CMD_SCORE),
      .field = F(pattern),
      .help = "a frame's visibility in DIR, its number as %d or %0Nd (PNG 8 or 16 bits, or EXR: white lit, black "
-             "shadowed, grey a share of the light)"},
+             "shadowed, grey a share of the light)", .check = check_path},
     {.name = "--mask", .kind = SB_OPT_TEXT, .arg = "FILE", .def_help = "required", .commands = SB_IN(SB_CMD_SCORE),
      .field = F(mask),
      .help = "a frame's mask in DIR, numbered as --pattern: white where the renderer drew geometry, black where it "
-             "drew none (what checks that its camera is the exported one)"},
+             "drew none (what checks that its camera is the exported one)", .check = check_path},
     {.name = "--renderer", .kind = SB_OPT_TEXT, .arg = "NAME", .def_help = "DIR's name",
      .commands = SB_IN(SB_CMD_SCORE), .field = F(renderer),
      .help = "the renderer's name: the results' technique column"},
@@ -260,7 +287,7 @@ const sb_option sb_options[] = {
      .field = F(renderer_params),
      .help = "the renderer's settings as you name them (e.g. cascades=4:bias=0.001): the results' params column"},
     {.name = "--map", .kind = SB_OPT_TEXT, .arg = "FILE.png", .commands = SB_IN(SB_CMD_FLIP), .field = F(map),
-     .help = "write the per-pixel error there (grey: black 0, white 1)"},
+     .help = "write the per-pixel error there (grey: black 0, white 1)", .check = check_path},
     {.name = "--nights", .kind = SB_OPT_INT, .arg = "N", .min = 3, .max = 1000, .def = "10",
      .commands = SB_IN(SB_CMD_HISTORY_CHECK), .field = F(nights),
      .help = "how many of each series' newest nights make its band"},
@@ -270,7 +297,7 @@ const sb_option sb_options[] = {
              "is slower (a GPU-time metric's change is the same; a CPU-side one's, cpu_ms, is not the release build's)"},
     {.name = "--workdir", .kind = SB_OPT_TEXT, .arg = "DIR", .def_help = "shadowbench-bisect in the git directory",
      .commands = SB_IN(SB_CMD_BISECT), .field = F(workdir),
-     .help = "the scratch worktree, its build and every binary built (kept for the next bisect)"},
+     .help = "the scratch worktree, its build and every binary built (kept for the next bisect)", .check = check_path},
     {.name = "--format", .kind = SB_OPT_CHOICE, .arg = "text|csv|markdown", .values = compare_formats, .def = "text",
      .commands = SB_IN(SB_CMD_COMPARE), .field = F(format), .help = "how the table is written"},
     {.name = "--format", .kind = SB_OPT_CHOICE, .arg = "text|csv", .values = history_formats, .def = "text",
@@ -288,9 +315,9 @@ const sb_option sb_options[] = {
     /* history and report */
     {.name = "--history", .kind = SB_OPT_TEXT, .arg = "FILE", .def_help = "$SB_HISTORY, else out/history.sqlite",
      .commands = HISTORY_ALL | SB_IN(SB_CMD_REPORT) | SB_IN(SB_CMD_BISECT), .field = F(history),
-     .help = "the results history"},
+     .help = "the results history", .check = check_path},
     {.name = "--since", .kind = SB_OPT_TEXT, .arg = "DATE", .commands = SB_IN(SB_CMD_HISTORY_REGRESSIONS),
-     .field = F(since), .help = "only the nights from DATE on"},
+     .field = F(since), .help = "only the nights from DATE on", .check = check_date},
     {.name = "--recent", .kind = SB_OPT_INT, .arg = "N", .min = 1, .max = 10000, .def = "3",
      .commands = SB_IN(SB_CMD_HISTORY_REGRESSIONS) | SB_IN(SB_CMD_REPORT), .field = F(recent),
      .help = "a regression starting in the newest N nights is recent (exit 1, the report's index)"},
@@ -521,7 +548,15 @@ static bool take(sb_cli_opts *o, const sb_option *opt, const char *v, bool *used
         if (!v) return sb_fail(err, "%s needs a value (%s)", opt->name, opt->arg);
         *used = true;
     }
-    if (!set_value(o, opt, v, err) || (opt->check && !opt->check(v, o, err))) return false;
+    if (!set_value(o, opt, v, err)) return false;
+    if (opt->check && !opt->check(v, o, err)) {   /* the option and its value named, where the check did not */
+        if (strncmp(err->msg, opt->name, strlen(opt->name))) {
+            char why[SB_ERR_LEN];
+            snprintf(why, sizeof why, "%s", err->msg);
+            sb_fail(err, "%s '%.200s': %s", opt->name, v, why);
+        }
+        return false;
+    }
     o->given[opt - sb_options] = true;
     return true;
 }

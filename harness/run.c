@@ -323,6 +323,9 @@ bool sb_run_pass(sb_run *r, int index, int total) {
 bool sb_run_wants_more(const sb_run *r) {
     const sb_run_opts *o = &r->s->opts;
     if (r->failed || r->finished || r->repeats * o->frames >= r->capacity) return false;
+    /* untimed frames are recorded once, whatever --repeat says: a repetition would time nothing (and the loop
+       that asked for one would ask again for ever) */
+    if (!run_stages(r)) return r->repeats == 0;
     if (o->target_ci <= 0) return r->repeats < o->repeat;
     return r->repeats == 0 || sb_columns_gpu_ci_pct(r->timer.times, r->done, o->frames) > o->target_ci;
 }

@@ -1,6 +1,7 @@
 /* compare.c - compare, pairs and merge over summary tables. */
 #include "compare.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
@@ -535,6 +536,63 @@ static bool check_shards(const char *const *dirs, int n, const sb_table *t, sb_e
     return ok;
 }
 
+/* --out of a merge: a new folder, or an empty one (a set there would be mixed with the merge's files). */
+static bool fresh_out(const char *out_dir, sb_err *err) {
+    DIR *d = opendir(out_dir);
+    if (!d) {
+        if (errno == ENOENT) return true;
+        return sb_fail(err, "%s: --out cannot be used (%s): give a new folder", out_dir,
+                       errno == ENOTDIR ? "a file stands there" : strerror(errno));
+    }
+    bool empty = true;
+    for (struct dirent *de; empty && (de = readdir(d));) empty = !strcmp(de->d_name, ".") || !strcmp(de->d_name, "..");
+    closedir(d);
+    if (!empty) return sb_fail(err, "%s: --out already holds files (an earlier merge?): give a new folder", out_dir);
+    return true;
+}
+
+/* A folder of plain files this process wrote, removed (a merge that failed). */
+static void remove_flat(const char *dir) {
+    DIR *d = opendir(dir);
+    if (!d) return;
+    char path[4700];
+    for (struct dirent *de; (de = readdir(d));) {
+        if (!strcmp(de->d_name, ".") || !strcmp(de->d_name, "..")) continue;
+        snprintf(path, sizeof path, "%s/%s", dir, de->d_name);
+        unlink(path);
+    }
+    closedir(d);
+    rmdir(dir);
+}
+
+/* Every run once: no input folder given twice by any spelling, no run id in two rows (of one set or two). */
+static bool distinct_runs(const char *const *dirs, int n, const sb_table *t, sb_err *err) {
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < i; j++)
+            if (sb_same_file(dirs[i], dirs[j]))
+                return sb_fail(err, "%s: the same results set as %s, given twice: its runs would be counted twice",
+                               dirs[i], dirs[j]);
+    int total = 0;
+    for (int i = 0; i < n; i++) total += t[i].nrows;
+    const char **ids = sb_xcalloc((size_t)total + 1, sizeof *ids);
+    int *from = sb_xcalloc((size_t)total + 1, sizeof *from), k = 0;
+    bool ok = true;
+    for (int i = 0; ok && i < n; i++)
+        for (int r = 0; ok && r < t[i].nrows; r++) {
+            const char *id = sb_table_get(&t[i], r, "run_id");
+            for (int q = 0; ok && q < k; q++)
+                if (!strcmp(ids[q], id))
+                    ok = from[q] == i ? sb_fail(err, "%s: run %s is in its summary twice: the set is damaged", dirs[i], id)
+                                      : sb_fail(err, "%s: run %s is also in %s: a run is merged once (was one command "
+                                                     "run twice into two sets?)", dirs[i], id, dirs[from[q]]);
+            ids[k] = id;
+            from[k++] = i;
+        }
+    free(ids);
+    free(from);
+    return ok;
+}
+
 bool sb_merge(const char *const *dirs, int n, const char *out_dir, sb_err *err) {
     sb_table *t = sb_xcalloc((size_t)n, sizeof *t);
     merged_row *rows = NULL;
@@ -562,26 +620,29 @@ bool sb_merge(const char *const *dirs, int n, const char *out_dir, sb_err *err) 
         if (!hdr_line) hdr_line = sb_strdup(hdr);
         else if (ok && strcmp(hdr_line, hdr)) ok = sb_fail(err, "%s: summary columns differ from %s's", dirs[i], dirs[0]);
     }
-    /* nothing is written until the inputs are known to make a whole */
-    ok = ok && check_shards(dirs, n, t, err) && sb_mkdir_p(out_dir, err);
+    /* nothing is written until the inputs are known to make a whole: every shard once, no folder twice by any
+       spelling, no run id twice (a run counted twice would be stored twice by the history and matched twice by
+       compare) */
+    ok = ok && check_shards(dirs, n, t, err) && distinct_runs(dirs, n, t, err) && fresh_out(out_dir, err);
+    /* written into a folder of its own beside --out, renamed to it whole: a merge that fails leaves nothing */
+    char tmp[4400];
+    snprintf(tmp, sizeof tmp, "%s.merging-%ld", out_dir, (long)getpid());
+    bool made = ok && sb_mkdir_p(tmp, err);
+    ok = made;
     for (int i = 0; ok && i < n; i++) {
         for (int r = 0; ok && r < t[i].nrows; r++) {
             sb_run_key key;
             sb_run_key_of(&t[i], r, &key);
-            const char *id = key.run_id;
-            for (int k = 0; k < nrows; k++)
-                if (!strncmp(rows[k].line, id, strlen(id)) && rows[k].line[strlen(id)] == ',')
-                    ok = sb_fail(err, "%s: run %s is also in another folder", dirs[i], id);
             rows = sb_xrealloc(rows, (size_t)(nrows + 1) * sizeof *rows);
             rows[nrows++] = (merged_row){num(sb_table_get(&t[i], r, "run_index")), t[i].lines[r]};
-            char from[4400], to[4400];
-            snprintf(from, sizeof from, "%s/%s.csv", dirs[i], id);
-            snprintf(to, sizeof to, "%s/%s.csv", out_dir, id);
+            char from[4400], to[4500];
+            snprintf(from, sizeof from, "%s/%s.csv", dirs[i], key.run_id);
+            snprintf(to, sizeof to, "%s/%s.csv", tmp, key.run_id);
             if (access(from, R_OK) == 0) ok = sb_copy_file(from, to, err);
         }
-        char from[4400], to[4400];
+        char from[4400], to[4500];
         snprintf(from, sizeof from, "%s/meta", dirs[i]);
-        snprintf(to, sizeof to, "%s/meta.%d", out_dir, i + 1);
+        snprintf(to, sizeof to, "%s/meta.%d", tmp, i + 1);
         if (ok && access(from, R_OK) == 0) ok = sb_copy_file(from, to, err);
     }
     if (ok) {
@@ -599,12 +660,16 @@ bool sb_merge(const char *const *dirs, int n, const char *out_dir, sb_err *err) 
             p += l;
             *p++ = '\n';
         }
-        char path[4200];
-        snprintf(path, sizeof path, "%s/summary.csv", out_dir);
-        ok = sb_write_file_atomic(path, text, (size_t)(p - text), err) && sb_columns_write(out_dir, err) &&
-             sb_resultset_seal(out_dir, err);
+        char path[4500];
+        snprintf(path, sizeof path, "%s/summary.csv", tmp);
+        ok = sb_write_file_atomic(path, text, (size_t)(p - text), err) && sb_columns_write(tmp, err) &&
+             sb_resultset_seal(tmp, err);
         free(text);
     }
+    rmdir(out_dir);   /* an empty folder the user made for it (fresh_out allows no other) */
+    if (ok && rename(tmp, out_dir) != 0)
+        ok = sb_fail(err, "%s: cannot rename the merged set %s to it: %s", out_dir, tmp, strerror(errno));
+    if (!ok && made) remove_flat(tmp);
     for (int i = 0; i < n; i++) sb_table_free(&t[i]);
     free(t);
     free(rows);

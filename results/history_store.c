@@ -207,9 +207,20 @@ sb_history *sb_history_open(const char *path, bool write, sb_err *err) {
     sb_history *h = sb_xcalloc(1, sizeof *h);
     snprintf(h->path, sizeof h->path, "%s", path);
     struct stat st;
+    if (!*path) {   /* SQLite would open a temporary database, stored nowhere */
+        sb_fail(err, "an empty history path: name the history's file (--history FILE)");
+        free(h);
+        return NULL;
+    }
     bool exists = stat(path, &st) == 0;
     if (exists && S_ISDIR(st.st_mode)) {
         sb_fail(err, "%s: is a folder, not a history file", path);
+        free(h);
+        return NULL;
+    }
+    if (exists && !S_ISREG(st.st_mode)) {   /* a FIFO would be waited on for ever, a device read as a database */
+        sb_fail(err, "%s: %s, not a history file", path,
+                S_ISFIFO(st.st_mode) ? "a FIFO" : S_ISSOCK(st.st_mode) ? "a socket" : "a device");
         free(h);
         return NULL;
     }

@@ -4,6 +4,7 @@
 
 #include <dirent.h>
 #include <fcntl.h>
+#include <limits.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
@@ -11,6 +12,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "gltf_check.h"
 #include "util.h"
 
 /* Bump when what an entry holds changes meaning (the binary's identity covers layouts). */
@@ -105,11 +107,16 @@ static bool deps_hold(sb_rbuf *r, const char *scene_dir) {
         const char *p = sb_rbuf_take(r, len);
         const uint64_t *hp = sb_rbuf_take(r, sizeof(uint64_t));
         if (!p || !hp || len == 0 || len >= 2048) return r->ok = false;
-        char dp[4096 + 2048];
-        if (p[0] == '/') snprintf(dp, sizeof dp, "%.*s", (int)len, p);
-        else snprintf(dp, sizeof dp, "%s/%.*s", scene_dir, (int)len, p);
+        char rel[2048], dp[PATH_MAX];
+        snprintf(rel, sizeof rel, "%.*s", (int)len, p);
+        /* held to the rule the load held it to: a dependency kept as a path inside the scene's folder must still
+           resolve inside it, as a regular file (a buffer since made a symlink out of the folder, or a FIFO, is a
+           miss: the load then says why); one kept as an absolute path was read with --allow-external-uris, which
+           is in the entry's key */
+        sb_err e;
         size_t dn = 0;
-        unsigned char *dd = sb_map_file(dp, &dn, false);
+        unsigned char *dd = sb_file_confined(scene_dir, rel, rel[0] == '/', dp, sizeof dp, &e)
+                                ? sb_map_file(dp, &dn, false) : NULL;
         uint64_t want;
         memcpy(&want, hp, sizeof want);
         r->ok = dd && sb_hash_bytes(SB_FNV_SEED, dd, dn) == want;

@@ -184,6 +184,16 @@ static void test_three_scored(void **st) {
     assert_string_equal(sb_table_get(&by_spec, 0, "err_rate_mean"), sb_table_get(&t, 0, "err_rate_mean"));
     assert_string_equal(sb_table_get(&by_spec, 0, "err_rate_mean"), sb_table_get(&by_cmd, 0, "err_rate_mean"));
     assert_true(strcmp(sb_table_get(&by_cmd, 0, "run_id"), sb_table_get(&t, 0, "run_id")));   /* its settings differ */
+    /* --repeat 2: the untimed frames are recorded once and scored as they were (the run asked for a second pass
+       for ever, at 85 % CPU, SIGTERM unheard); under a limit, so a hang fails here and does not stall the suite */
+    sb_table rep;
+    assert_int_equal(run_logged(g_out, sizeof g_out, "timeout -s KILL 120 %s run plane-box plane-box "
+                                "'score:dir=%s/three:mask=mask_%%04d.png:renderer=three.js:settings=map=2048' --frames %d "
+                                "--size " SIZE " --error-every 1 --repeat 2 --quiet --out %s/by-spec-repeat",
+                                test_binary(), g_tmp, FRAMES, g_tmp), 0);
+    summary_table(last_line_of(g_out), &rep);
+    assert_string_equal(sb_table_get(&rep, 0, "err_rate_mean"), sb_table_get(&by_spec, 0, "err_rate_mean"));
+    sb_table_free(&rep);
     sb_table_free(&by_cmd);
     sb_table_free(&by_spec);
 
@@ -320,6 +330,11 @@ static void test_bad_input(void **st) {
     assert_int_equal(run_logged(g_out, sizeof g_out, "%s run plane-box plane-box 'score:dir=%s/white:mask=mask_%%04d.png' "
                                 "%s --error-every 1 --quiet --out %s/refused-run", bin, g_tmp, common, g_tmp), 2);
     assert_non_null(strstr(g_out, "shadowbench: run: "));
+    assert_non_null(strstr(g_out, "white/mask_0000.png: frame 0: the mask and the tool's geometry differ at"));
+    /* and with --repeat 2 the same (it spun for ever before the evaluation was reached) */
+    assert_int_equal(run_logged(g_out, sizeof g_out, "timeout -s KILL 60 %s run plane-box plane-box "
+                                "'score:dir=%s/white:mask=mask_%%04d.png' %s --repeat 2 --quiet --out %s/refused-repeat",
+                                bin, g_tmp, common, g_tmp), 2);
     assert_non_null(strstr(g_out, "white/mask_0000.png: frame 0: the mask and the tool's geometry differ at"));
 }
 

@@ -18,10 +18,12 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/types.h>
 #include <unistd.h>
 
 #include "support.h"
 #include "table.h"
+#include "util.h"
 
 SB_TEST_SCRATCH("sbtrust")
 
@@ -283,6 +285,73 @@ static void test_same_name_two_folders(void **st) {
     sb_table_free(&fa);
     sb_table_free(&fb);
     sb_table_free(&t);
+    /* what the cache read, held to the load's rules: its entry a FIFO (it blocked in open() for ever) is a miss, a
+       dependency made a FIFO or a link out of the folder (same bytes) is refused as the uncached load refuses it */
+    assert_int_equal(sh("cd %s && for e in *.sbscene; do rm $e && mkfifo $e; done", cache), 0);
+    assert_int_equal(sh("SB_SCENE_CACHE=%s timeout -s KILL 30 %s info %s/scene.gltf", cache, test_binary(), a), 0);
+    assert_non_null(strstr(g_out, "40 x 2 x 40"));
+    assert_int_equal(sh("cd %s && cp scene.bin %s/outside.bin && mv scene.bin kept.bin && ln -s %s/outside.bin scene.bin",
+                        a, g_tmp, g_tmp), 0);
+    assert_int_equal(sh("SB_SCENE_CACHE=%s %s info %s/scene.gltf", cache, test_binary(), c), 0);   /* b untouched */
+    expect_cli_fail("outside the scene's folder", "SB_SCENE_CACHE=%s %s info %s/scene.gltf", cache, test_binary(), a);
+    assert_int_equal(sh("cd %s && rm scene.bin && mkfifo scene.bin", a), 0);
+    expect_cli_fail("not a regular file", "SB_SCENE_CACHE=%s timeout -s KILL 30 %s info %s/scene.gltf", cache,
+                    test_binary(), a);
+}
+
+/* A merge counts every run once: the same set by two spellings, or one command's run in two sets, is refused
+ * before anything is written (it exited 0 with the run's row twice); a merge that fails leaves no folder, and an
+ * --out that holds files is not mixed with the merge's. */
+static void test_merge_counts_once(void **st) {
+    (void)st;
+    const char *b = test_binary();
+    char one[4096], two[4096], spelled[4400], out[4300];
+    make_set("once-a", one, sizeof one);
+    make_set("once-b", two, sizeof two);   /* the same command: the same run ids */
+    snprintf(spelled, sizeof spelled, "%s/../%s/.", one, strrchr(one, '/') + 1);
+    snprintf(out, sizeof out, "%s/once-m", g_tmp);
+    expect_cli_fail("given twice", "%s merge %s %s --out %s", b, one, spelled, out);
+    expect_cli_fail("is also in", "%s merge %s %s --out %s", b, one, two, out);
+    assert_false(exists(out));
+    assert_int_equal(sh("ls -d %s/once-m.merging-* 2>/dev/null | wc -l", g_tmp), 0);
+    assert_string_equal(g_out, "0\n");
+    /* one set: merged; merged again over it: refused, the first merge whole */
+    assert_int_equal(sh("%s merge %s --out %s", b, one, out), 0);
+    expect_cli_fail("already holds files", "%s merge %s --out %s", b, one, out);
+    sb_table t;
+    summary_table(out, &t);
+    assert_int_equal(t.nrows, 2);
+    sb_table_free(&t);
+}
+
+/* Nothing is written but where the user said, and nothing waits for ever: an empty path refused in one line, a
+ * history that is a FIFO refused (not opened), a note on a missing history leaves no history behind, a date that
+ * is none refused (it selected no night and exited 0). */
+static void test_paths_and_dates_named(void **st) {
+    (void)st;
+    const char *b = test_binary();
+    char set[4096], hist[4300], fifo[4300];
+    make_set("named", set, sizeof set);
+    expect_cli_fail("--out '': an empty path", "%s report %s --out ''", b, set);
+    expect_cli_fail("--out '': an empty path", "%s merge %s --out ''", b, set);
+    expect_cli_fail("--out '': an empty path", "%s run plane-box plane-box sm --out ''", b);
+    expect_cli_fail("--history '': an empty path", "%s history add %s --history ''", b, set);
+    expect_cli_fail("--history '': an empty path", "%s report --history '' --out %s/site-empty", b, g_tmp);
+    snprintf(fifo, sizeof fifo, "%s/history-fifo.sqlite", g_tmp);
+    assert_int_equal(mkfifo(fifo, 0644), 0);
+    expect_cli_fail("a FIFO, not a history file", "timeout -s KILL 30 %s history add %s --history %s", b, set, fifo);
+    expect_cli_fail("a FIFO, not a history file", "timeout -s KILL 30 %s history list --history %s", b, fifo);
+    snprintf(hist, sizeof hist, "%s/missing.sqlite", g_tmp);
+    expect_cli_fail("is no night of the history", "%s history annotate 1 note --history %s", b, hist);
+    assert_false(exists(hist));
+    assert_int_equal(sh("%s history add %s --history %s --quiet", b, set, hist), 0);
+    const char *not_dates[] = {"yesterday", "2026-13-45", "2026-02-30", "2025-02-29", "2026-1-5", "2026-01-05T25:00",
+                               "2026-01-05x", "20260105"};
+    for (size_t i = 0; i < SB_COUNT(not_dates); i++)
+        expect_cli_fail("expected a date", "%s history regressions --since '%s' --history %s", b, not_dates[i], hist);
+    const char *dates[] = {"2024-02-29", "2026-01-05", "2026-01-05T10:30", "2026-01-05T10:30:00Z"};
+    for (size_t i = 0; i < SB_COUNT(dates); i++)
+        assert_int_equal(sh("%s history regressions --since '%s' --history %s", b, dates[i], hist), 0);
 }
 
 /* A shadow map the GL will not allocate in one texture (llvmpipe: 2 GiB) is skipped before anything renders,
@@ -309,6 +378,7 @@ int main(void) {
         cmocka_unit_test(test_damaged_sets_refused), cmocka_unit_test(test_bad_input_one_line),
         cmocka_unit_test(test_equals_spelling),      cmocka_unit_test(test_same_name_two_folders),
         cmocka_unit_test(test_map_the_gl_refuses),   cmocka_unit_test(test_output_over_input),
+        cmocka_unit_test(test_merge_counts_once),    cmocka_unit_test(test_paths_and_dates_named),
     };
     return cmocka_run_group_tests_name("trust", tests, setup, teardown);
 }
