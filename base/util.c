@@ -449,11 +449,24 @@ bool sb_same_file(const char *a, const char *b) {
     return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
 }
 
-void sb_say_line(FILE *f, const char *text) {
-    fputs("shadowbench: ", f);
+void sb_put_controls_escaped(FILE *f, const char *text) {
     for (const unsigned char *q = (const unsigned char *)text; *q; q++)
         if (*q < 0x20 || *q == 0x7f) fprintf(f, "\\x%02x", *q);
         else fputc(*q, f);
+}
+
+const char *sb_controls_escaped(const char *text, char *out, size_t len) {
+    size_t n = 0;
+    for (const unsigned char *q = (const unsigned char *)text; *q && n + 5 < len; q++)
+        if (*q < 0x20 || *q == 0x7f) n += (size_t)snprintf(out + n, len - n, "\\x%02x", *q);
+        else out[n++] = (char)*q;
+    if (len) out[n < len ? n : len - 1] = 0;
+    return out;
+}
+
+void sb_say_line(FILE *f, const char *text) {
+    fputs("shadowbench: ", f);
+    sb_put_controls_escaped(f, text);
     fputc('\n', f);
 }
 

@@ -90,6 +90,11 @@ bool sb_name_check(const char *what, const char *name, sb_err *err);
 /* "shadowbench: TEXT" and a newline on f, every control character of TEXT written as \xNN (a file name with an
  * escape sequence or a newline in a refusal neither rewrites the terminal nor splits the line). */
 void sb_say_line(FILE *f, const char *text);
+/* Text from a file or a user (a note, a name) written where a terminal or a line-based reader sees it: each
+ * control character (a newline, an escape) as \xNN, so it can neither break a line nor drive the terminal. */
+void sb_put_controls_escaped(FILE *f, const char *text);
+/* The same into out (len bytes; cut short where it does not fit); returns out. */
+const char *sb_controls_escaped(const char *text, char *out, size_t len);
 /* Whether path (which need not exist yet: its nearest existing folder decides) is the folder dir or lies under
  * it, by any spelling. A folder a command writes that is, or is in, one of its input folders is refused with it. */
 bool sb_path_within(const char *path, const char *dir);

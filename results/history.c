@@ -84,6 +84,16 @@ static void set_host(const char *meta, const sb_table *t, char *host, size_t hle
     if (!renderer[0]) meta_field(meta, "gl_renderer", renderer, rlen);
 }
 
+/* The renderer row r's series is kept under: the row's own (a merged set may hold another renderer's scored runs
+ * beside the tool's), else the meta's GL renderer. */
+static const char *row_renderer(const char *meta, const sb_table *t, int r, char *out, size_t len) {
+    sb_run_key k;
+    sb_run_key_of(t, r, &k);
+    snprintf(out, len, "%s", k.renderer);
+    if (!out[0]) meta_field(meta, "gl_renderer", out, len);
+    return out;
+}
+
 /* A results set read for the history: its summary (text and table), its meta and what the night is filed under. */
 typedef struct set_in {
     const char *dir;
@@ -134,7 +144,8 @@ static bool set_read(set_in *s, const char *dir, sb_err *err) {
 static bool store_run(sb_history *h, long long night, const set_in *s, int r, sb_history_added *out, sb_err *err) {
     const sb_table *t = &s->t;
     sb_series se;
-    sb_series_of_row(t, r, s->host, s->renderer, &se);
+    char renderer[512];
+    sb_series_of_row(t, r, s->host, row_renderer(s->meta, t, r, renderer, sizeof renderer), &se);
     const char **names = sb_xmalloc(sizeof *names * (size_t)(t->cols ? t->cols : 1));
     double *values = sb_xmalloc(sizeof *values * (size_t)(t->cols ? t->cols : 1));
     int nm = 0;
@@ -483,8 +494,9 @@ static void print_change_csv(const sb_history_change *c, FILE *out) {
     sb_csv_str(&row, c->commit_before);
     sb_csv_str(&row, c->commit_after);
     sb_csv_str(&row, verdict_of(c));
-    sb_csv_str(&row, c->note);
-    sb_csv_str(&row, c->machine);
+    char note[3 * sizeof c->note], machine[3 * sizeof c->machine];   /* a note's line breaks and escapes as \xNN */
+    sb_csv_str(&row, sb_controls_escaped(c->note, note, sizeof note));
+    sb_csv_str(&row, sb_controls_escaped(c->machine, machine, sizeof machine));
     sb_csv_end_row(&row);
     fputs(row.buf, out);
     sb_csv_free(&row);
@@ -496,8 +508,16 @@ static void print_change_text(const sb_history_change *c, FILE *out) {
     else snprintf(commits, sizeof commits, "%.60s..%.60s", c->commit_before, c->commit_after);
     fprintf(out, "%-40s %-14s %-6lld %-20s %10.4g %10.4g %+7.1f%% %6.1f %8.2g  %-25s %s\n", c->label, c->metric,
             c->night_after, c->date_after, c->before, c->after, 100 * c->rel, c->z, c->p, commits, verdict_of(c));
-    if (c->machine[0]) fprintf(out, "    %s\n", c->machine);
-    if (c->note[0]) fprintf(out, "    note: %s\n", c->note);
+    if (c->machine[0]) {
+        fputs("    ", out);
+        sb_put_controls_escaped(out, c->machine);
+        fputc('\n', out);
+    }
+    if (c->note[0]) {   /* a note is the user's text: a newline or a terminal escape in it is shown, not obeyed */
+        fputs("    note: ", out);
+        sb_put_controls_escaped(out, c->note);
+        fputc('\n', out);
+    }
 }
 
 void sb_history_print_changes(const sb_history_change *c, int n, int format, FILE *out) {
@@ -671,7 +691,6 @@ int sb_history_check(sb_history *h, const char *dir, const sb_history_query *q, 
     const char *metrics[32];
     int nm = query_metrics(q, metrics, err);
     if (nm < 0 || !set_read(&s, dir, err)) return nm < 0 ? -1 : (set_free(&s), -1);
-    double floor = noise_floor(q, s.renderer);
     int ns = 0, regressions = 0, compared = 0, rc = 0;
     sb_series *all = sb_history_series(h, &ns);
     char **labels = sb_history_labels(all, ns);
@@ -679,7 +698,9 @@ int sb_history_check(sb_history *h, const char *dir, const sb_history_query *q, 
             "change", "z", "verdict");
     for (int r = 0; rc >= 0 && r < s.t.nrows; r++) {
         sb_series se;
-        sb_series_of_row(&s.t, r, s.host, s.renderer, &se);
+        char renderer[512];
+        sb_series_of_row(&s.t, r, s.host, row_renderer(s.meta, &s.t, r, renderer, sizeof renderer), &se);
+        double floor = noise_floor(q, se.renderer);   /* the row's renderer's, not the set's first row's */
         const char *label = NULL;
         for (int i = 0; i < ns; i++)
             if (sb_series_equal(&all[i], &se)) label = labels[i];

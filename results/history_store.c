@@ -2,6 +2,8 @@
 #include "history_store.h"
 
 #include "columns.h"
+#include "runkey.h"
+#include "table.h"
 
 #include <errno.h>
 #include <math.h>
@@ -87,12 +89,17 @@ static void sql_series_key(sqlite3_context *ctx, int n, sqlite3_value **v) {
     sqlite3_result_text(ctx, key, -1, SQLITE_TRANSIENT);
 }
 
-/* Schema 4: each run's joined series text parsed into its columns once, then the text dropped (the columns schema 4
- * has: every series field but run_options, which schema 5 adds). */
+/* Schema 4: each run's series put in its columns once, from the run's own summary row (the night's header and the
+ * run's line: its scene, path, technique and parameters as the summary wrote them; host and renderer the night's,
+ * the row's own renderer where it has one), then the joined text dropped. The joined text is never parsed: a
+ * scene named "plane|box" split it one field early. A run whose row cannot be read (no line, no header, a line
+ * that is no summary row) is left out of the migrated history with a line naming it and why (the backup beside
+ * the file keeps it). */
 static bool series_columns(sb_history *h, sb_err *err) {
     sqlite3_stmt *q, *u;
-    if (sqlite3_prepare_v2(h->db, "SELECT id, series FROM runs", -1, &q, NULL) != SQLITE_OK)
-        return db_fail(h, err, "reading the runs' series");
+    if (sqlite3_prepare_v2(h->db, "SELECT r.id, r.run_id, r.night, n.header, r.line, n.host, n.renderer FROM runs r "
+                           "LEFT JOIN nights n ON n.id = r.night", -1, &q, NULL) != SQLITE_OK)
+        return db_fail(h, err, "reading the runs' summary rows");
     if (sqlite3_prepare_v2(h->db, "UPDATE runs SET host = ?1, renderer = ?2, scene = ?3, path = ?4, size = ?5, "
                            "technique = ?6, params = ?7, light = ?8, anim = ?9, indirect = ?10 WHERE id = ?11",
                            -1, &u, NULL) != SQLITE_OK) {
@@ -100,19 +107,58 @@ static bool series_columns(sb_history *h, sb_err *err) {
         return db_fail(h, err, "preparing the runs' series columns");
     }
     bool ok = true;
+    long long *left_out = NULL;
+    int nleft = 0;
     while (ok && sqlite3_step(q) == SQLITE_ROW) {
-        sb_series se;
-        const char *key = (const char *)sqlite3_column_text(q, 1);
-        sb_series_parse(key ? key : "", &se);
-        for (int k = 0; ok && k < SERIES_NCOLS - 2; k++)   /* the text fields, run_options (the last) not yet */
-            ok = bind_text(u, 1 + k, (const char *)&se + series_text[k].at);
-        ok = ok && sqlite3_bind_int(u, 10, se.indirect) == SQLITE_OK &&
-             sqlite3_bind_int64(u, 11, sqlite3_column_int64(q, 0)) == SQLITE_OK &&
-             sqlite3_step(u) == SQLITE_DONE;
-        sqlite3_reset(u);
+        const char *header = (const char *)sqlite3_column_text(q, 3), *line = (const char *)sqlite3_column_text(q, 4);
+        const char *host = (const char *)sqlite3_column_text(q, 5), *night_renderer = (const char *)sqlite3_column_text(q, 6);
+        const char *run_id = (const char *)sqlite3_column_text(q, 1);
+        char *text = NULL, why[SB_ERR_LEN] = "";
+        sb_table t;
+        bool parsed = false;
+        sb_err e;
+        if (!header || !*header || !line || !*line) {
+            snprintf(why, sizeof why, "no summary %s kept", !line || !*line ? "line" : "header");
+        } else {
+            size_t n = strlen(header) + strlen(line) + 3;
+            text = sb_xmalloc(n);
+            snprintf(text, n, "%s\n%s\n", header, line);
+            const char *missing = NULL;
+            if (!(parsed = sb_table_parse(&t, "the run's summary row", text, &e))) snprintf(why, sizeof why, "%s", e.msg);
+            else if (t.nrows != 1) snprintf(why, sizeof why, "its line holds %d summary rows, not one", t.nrows);
+            else if ((missing = sb_run_key_missing(&t, true)))
+                snprintf(why, sizeof why, "its row has no '%s' column", missing);
+            else if (!*sb_table_get(&t, 0, "scene") || !*sb_table_get(&t, 0, "technique"))
+                snprintf(why, sizeof why, "its row names no scene or technique");
+        }
+        if (why[0]) {
+            sb_log("%s: run %s of night %lld: %s: left out of the migrated history (the backup beside it keeps it)",
+                   h->path, run_id && *run_id ? run_id : "(no id)", sqlite3_column_int64(q, 2), why);
+            left_out = sb_xrealloc(left_out, sizeof *left_out * (size_t)(nleft + 1));
+            left_out[nleft++] = sqlite3_column_int64(q, 0);
+        } else {
+            sb_run_key k;
+            sb_run_key_of(&t, 0, &k);
+            sb_series se;
+            sb_series_of_row(&t, 0, host && *host ? host : "unknown", k.renderer[0] ? k.renderer : night_renderer ? night_renderer : "", &se);
+            for (int c = 0; ok && c < SERIES_NCOLS - 2; c++)   /* the text fields, run_options (the last) not yet */
+                ok = bind_text(u, 1 + c, (const char *)&se + series_text[c].at);
+            ok = ok && sqlite3_bind_int(u, 10, se.indirect) == SQLITE_OK &&
+                 sqlite3_bind_int64(u, 11, sqlite3_column_int64(q, 0)) == SQLITE_OK && sqlite3_step(u) == SQLITE_DONE;
+            sqlite3_reset(u);
+        }
+        if (parsed) sb_table_free(&t);
+        free(text);
     }
     sqlite3_finalize(q);
     sqlite3_finalize(u);
+    for (int i = 0; ok && i < nleft; i++) {
+        char sql[256];
+        snprintf(sql, sizeof sql, "DELETE FROM metrics WHERE run = %lld; DELETE FROM frames WHERE run = %lld; "
+                 "DELETE FROM runs WHERE id = %lld;", left_out[i], left_out[i], left_out[i]);
+        ok = exec(h, sql, err);
+    }
+    free(left_out);
     if (!ok) return db_fail(h, err, "writing the runs' series columns");
     return exec(h, "DROP INDEX runs_series; ALTER TABLE runs DROP COLUMN series;"
                    "CREATE INDEX runs_series ON runs(technique, scene, size);", err);
@@ -165,6 +211,16 @@ static bool migrate(sb_history *h, sb_err *err) {
     if (v > SB_HISTORY_SCHEMA)
         return sb_fail(err, "%s: history schema version %d, newer than this shadowbench's %d: use a newer shadowbench",
                        h->path, v, SB_HISTORY_SCHEMA);
+    if (v > 0 && v < SB_HISTORY_SCHEMA && strcmp(h->path, ":memory:")) {
+        /* an older file is migrated in place, a copy of it as it was beside it first (kept: one a version) */
+        char backup[4200];
+        snprintf(backup, sizeof backup, "%s.schema-%d.bak", h->path, v);
+        sb_err e;
+        if (access(backup, F_OK) != 0 && !sb_copy_file(h->path, backup, &e))
+            return sb_fail(err, "%s: history schema version %d is migrated to %d with a backup beside it, and the "
+                           "backup could not be written: %s", h->path, v, SB_HISTORY_SCHEMA, e.msg);
+        sb_log("%s: history schema version %d migrated to %d (as it was: %s)", h->path, v, SB_HISTORY_SCHEMA, backup);
+    }
     for (; v < SB_HISTORY_SCHEMA; v++) {
         char sql[256];
         snprintf(sql, sizeof sql, "PRAGMA user_version = %d", v + 1);
@@ -203,6 +259,17 @@ static void sql_status(sqlite3_context *ctx, int n, sqlite3_value **v) {
     sqlite3_result_int(ctx, (int)sb_status_of((const char *)sqlite3_value_text(v[0])));
 }
 
+/* The SQL functions the queries use. */
+static bool register_functions(sb_history *h, sb_err *err) {
+    /* a run's status is read back as the typed status (sb_status_of), in SQL too: sb_status(r.status) */
+    return (sqlite3_create_function(h->db, "sb_status", 1, SQLITE_UTF8 | SQLITE_DETERMINISTIC, NULL, sql_status,
+                                    NULL, NULL) == SQLITE_OK ||
+            db_fail(h, err, "cannot register sb_status")) &&
+           (sqlite3_create_function(h->db, "sb_series_key", SERIES_NCOLS, SQLITE_UTF8 | SQLITE_DETERMINISTIC, NULL,
+                                    sql_series_key, NULL, NULL) == SQLITE_OK ||
+            db_fail(h, err, "cannot register sb_series_key"));
+}
+
 sb_history *sb_history_open(const char *path, bool write, sb_err *err) {
     sb_history *h = sb_xcalloc(1, sizeof *h);
     snprintf(h->path, sizeof h->path, "%s", path);
@@ -237,15 +304,24 @@ sb_history *sb_history_open(const char *path, bool write, sb_err *err) {
     int flags = write ? SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE : SQLITE_OPEN_READONLY;
     bool ok = sqlite3_open_v2(path, &h->db, flags, NULL) == SQLITE_OK || db_fail(h, err, "cannot open");
     if (ok) sqlite3_busy_timeout(h->db, 10000);
-    /* a run's status is read back as the typed status (sb_status_of), in SQL too: sb_status(r.status) */
-    ok = ok && (sqlite3_create_function(h->db, "sb_status", 1, SQLITE_UTF8 | SQLITE_DETERMINISTIC, NULL, sql_status,
-                                        NULL, NULL) == SQLITE_OK ||
-                db_fail(h, err, "cannot register sb_status"));
-    ok = ok && (sqlite3_create_function(h->db, "sb_series_key", SERIES_NCOLS, SQLITE_UTF8 | SQLITE_DETERMINISTIC, NULL,
-                                        sql_series_key, NULL, NULL) == SQLITE_OK ||
-                db_fail(h, err, "cannot register sb_series_key"));
+    ok = ok && register_functions(h, err);
     /* a file that is not a database fails on its first read */
-    ok = ok && exec(h, "SELECT count(*) FROM sqlite_master", err) && (write ? migrate(h, err) : check_version(h, err));
+    ok = ok && exec(h, "SELECT count(*) FROM sqlite_master", err);
+    /* an older history opened to read is migrated as a write would (a user who upgrades and opens the report
+       gets it), where the file can be written; else said */
+    int v = ok && !write ? user_version(h) : SB_HISTORY_SCHEMA;
+    if (ok && !write && v > 0 && v < SB_HISTORY_SCHEMA) {
+        sqlite3_close(h->db);
+        h->db = NULL;
+        ok = sqlite3_open_v2(path, &h->db, SQLITE_OPEN_READWRITE, NULL) == SQLITE_OK ||
+             sb_fail(err, "%s: history schema version %d, this shadowbench reads %d, and the file cannot be opened "
+                     "to migrate it (%s): make it writable, or run `shadowbench history add` where it is", path, v,
+                     SB_HISTORY_SCHEMA, h->db ? sqlite3_errmsg(h->db) : "no memory");
+        if (ok) sqlite3_busy_timeout(h->db, 10000);
+        ok = ok && register_functions(h, err) && migrate(h, err);
+    } else {
+        ok = ok && (write ? migrate(h, err) : check_version(h, err));
+    }
     if (!ok) {
         sb_history_discard_if_new(h);
         sb_history_close(h);

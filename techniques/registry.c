@@ -37,10 +37,19 @@ int sb_technique_index(const sb_technique *t) {
 
 void sb_params_canonical(const sb_params *p, char *out, size_t len) {
     out[0] = 0;
-    for (int i = 0; i < p->count; i++) {
+    size_t n = 0;
+    for (int i = 0; i < p->count && n + 1 < len; i++) {
         if (p->v[i].def->late && !strcmp(sb_param_text(p, i), p->v[i].def->def)) continue;
-        size_t n = strlen(out);
-        snprintf(out + n, len - n, "%s%s=%s", n ? ":" : "", p->v[i].def->name, sb_param_text(p, i));
+        n += (size_t)snprintf(out + n, len - n, "%s%s=", n ? ":" : "", p->v[i].def->name);
+        /* a TEXT value may hold what the text joins on (score's words: a renderer named "a:settings=b"): each such
+           character escaped, so that two different parameter sets never give one text (nor one run id); a value
+           without one is written as it is (every run id from before stands) */
+        for (const char *c = sb_param_text(p, i); *c && n + 2 < len; c++) {
+            if (*c == ':' || *c == ',' || *c == '\\') out[n++] = '\\';
+            out[n++] = *c;
+        }
+        if (n >= len) n = len - 1;
+        out[n] = 0;
     }
 }
 

@@ -170,6 +170,54 @@ def schema_3():
     got = "".join("%s %s\n" % (d, n) for n, d in report_digests(site))
     check(got == want_report and want_report.count("series-") == 6, "its report's %d data files are 26f3f92's (%d "
           "differ)" % (len(want_report.splitlines()), len(set(got.splitlines()) ^ set(want_report.splitlines())) // 2))
+    schema_3_damaged()
+
+
+def schema_3_damaged():
+    """The same history with a scene named "plane|box" (its joined text then splits one field early), one run whose
+    summary line is gone and one whose line is garbage, opened by a read verb: migrated in place from each row's
+    own summary line (a backup beside it), the named scene kept whole, each unreadable run left out with a line
+    that names it (they migrated without a word, shifting the figures; the read verbs refused the file)."""
+    old = os.path.join(WORK, "v3-damaged.sqlite")
+    db = sqlite3.connect(old)
+    db.executescript(open(os.path.join(SRC, "tests", "history", "history_v3.sql")).read())
+    ids = [r[0] for r in db.execute("SELECT id FROM runs WHERE scene = 'plane-box' ORDER BY id")]
+    named, gone, garbage = ids[0], ids[1], ids[2]
+    line = db.execute("SELECT line FROM runs WHERE id = ?", (named,)).fetchone()[0]
+    fields = next(csv.reader([line]))
+    header = next(csv.reader([db.execute("SELECT n.header FROM runs r JOIN nights n ON n.id = r.night WHERE r.id = ?",
+                                         (named,)).fetchone()[0]]))
+    fields[header.index("scene")] = "plane|box"
+    out = io.StringIO()
+    csv.writer(out, lineterminator="").writerow(fields)
+    db.execute("UPDATE runs SET scene = 'plane|box', line = ?, series = replace(series, '|plane-box|plane-box|', "
+               "'|plane|box|plane-box|') WHERE id = ?", (out.getvalue(), named))
+    db.execute("UPDATE runs SET line = NULL WHERE id = ?", (gone,))
+    db.execute("UPDATE runs SET line = 'garbage' WHERE id = ?", (garbage,))
+    gone_id, garbage_id = [db.execute("SELECT run_id FROM runs WHERE id = ?", (i,)).fetchone()[0] for i in (gone, garbage)]
+    total = db.execute("SELECT count(*) FROM runs").fetchone()[0]
+    db.commit()
+    db.close()
+    p = sb("history", "regressions", "--history", old, "--recent", "3", ok=(0, 1))
+    backup = old + ".schema-3.bak"
+    db = sqlite3.connect(old)
+    v = db.execute("PRAGMA user_version").fetchone()[0]
+    row = db.execute("SELECT scene, path, technique FROM runs WHERE id = ?", (named,)).fetchone()
+    left = db.execute("SELECT count(*) FROM runs WHERE id IN (?, ?)", (gone, garbage)).fetchone()[0]
+    now = db.execute("SELECT count(*) FROM runs").fetchone()[0]
+    db.close()
+    check(v == 5 and os.path.exists(backup) and "migrated to 5" in p.stderr,
+          "a version 3 history opened by a read verb is migrated in place, its backup beside it (v%d, %s)" %
+          (v, p.stderr.strip().splitlines()[:1]))
+    check(row is not None and row[0] == "plane|box" and row[1] == "plane-box" and row[2] == line.split(",")[4],
+          "a scene named plane|box migrates as its own row says: scene, path, technique (%s)" % (row,))
+    check(left == 0 and now == total - 2 and gone_id in p.stderr and garbage_id in p.stderr and
+          p.stderr.count("left out of the migrated history") == 2,
+          "the two unreadable runs are left out, each named in a line (%d left of %d; %s)" % (now, total, p.stderr.strip()))
+    bk = sqlite3.connect(backup)
+    check(bk.execute("PRAGMA user_version").fetchone()[0] == 3 and
+          bk.execute("SELECT count(*) FROM runs").fetchone()[0] == total, "the backup is the file as it was")
+    bk.close()
 
 
 def regressions(hist, *extra):
@@ -306,6 +354,15 @@ def main():
     p = sb("history", "annotate", commit[:10], "restarts here", "--restart", "--history", R)
     check("night 2 annotated" in p.stderr, "annotate --restart: noted on the night that first ran it (%s)" %
           p.stderr.strip())
+    # a note is the user's text: a terminal escape or a newline in it is shown as \xNN, never obeyed, in text and CSV
+    E = os.path.join(WORK, "escaped.sqlite")
+    shutil.copy(D, E)
+    sb("history", "annotate", str(step), "red\x1b[31m here\nsecond line", "--series", "pssm", "--history", E)
+    for fmt in ("text", "csv"):
+        p = sb("history", "regressions", "--history", E, "--metric", "final_ms", "--recent", str(AFTER), "--format", fmt,
+               ok=(0, 1))
+        check("\x1b" not in p.stdout and "red\\x1b[31m here\\x0asecond line" in p.stdout,
+              "history regressions (%s): a note's escape and newline shown as \\xNN" % fmt)
     p = sb("history", "annotate", "no-such-night", "x", "--history", D, ok=(2,))
     check(len(p.stderr.strip().splitlines()) == 1 and "no-such-night" in p.stderr, "annotate an unknown night: exit 2, one line")
     # a branch against the nights: the rendered night as it was (1.0x) within B's band for every figure (exit 0),

@@ -238,6 +238,25 @@ static void test_three_scored(void **st) {
     assert_non_null(strstr(g_out, "sm err_rate"));
     assert_non_null(strstr(g_out, "sm gpu_ms"));
     assert_non_null(strstr(g_out, "1 pair(s)"));
+    /* the history files each row of the merged set under its own renderer (every row went under the first row's:
+       the tool's llvmpipe runs judged with the noise floor of the scored renderer's) */
+    sb_table both;
+    char both_dir[4200];
+    snprintf(both_dir, sizeof both_dir, "%s/both", g_tmp);
+    summary_table(both_dir, &both);
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s history add %s --history %s/both.sqlite --quiet", test_binary(),
+                                both_dir, g_tmp), 0);
+    for (int r = 0; r < both.nrows; r++) {
+        assert_int_equal(run_logged(g_out, sizeof g_out, "python3 -c 'import sqlite3, sys; print(sqlite3.connect(sys.argv[1])"
+                                    ".execute(\"SELECT renderer FROM runs WHERE run_id = ?\", (sys.argv[2],)).fetchone()[0])' "
+                                    "%s/both.sqlite %s", g_tmp, sb_table_get(&both, r, "run_id")), 0);
+        print_message("%s: stored under %s", sb_table_get(&both, r, "technique"), g_out);
+        char want[600];
+        snprintf(want, sizeof want, "%s\n", sb_table_get(&both, r, "renderer"));
+        assert_string_equal(g_out, want);
+    }
+    assert_string_not_equal(sb_table_get(&both, 0, "renderer"), sb_table_get(&both, 1, "renderer"));
+    sb_table_free(&both);
     /* the report's run page, as a person sees it: no empty timing charts, a line that says why */
     assert_int_equal(run_logged(g_out, sizeof g_out, "%s report %s --out %s/site", test_binary(), scored, g_tmp), 0);
     assert_int_equal(run_logged(g_out, sizeof g_out, "chromium --headless --no-sandbox --disable-gpu "

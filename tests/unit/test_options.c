@@ -22,7 +22,7 @@ static const char *good_value(const sb_option *o, char *buf, size_t len) {
     switch (o->kind) {
     case SB_OPT_FLAG: return NULL;
     case SB_OPT_CHOICE: snprintf(buf, len, "%.*s", (int)strcspn(o->arg, "|"), o->arg); return buf;
-    case SB_OPT_TEXT: return "x";
+    case SB_OPT_TEXT: return strcmp(o->name, "--since") ? "x" : "2026-01-05";   /* a date the row checks */
     case SB_OPT_SIZE: return "64x32";
     case SB_OPT_ANGLES: return "30,40";
     case SB_OPT_BYTES: return "1G";
@@ -427,13 +427,61 @@ static void test_docs_are_the_tables(void **st) {
     free(help);
 }
 
+/* score's spec set from the command's words, name by name (the command does it so). */
+static void score_words(sb_run_spec *spec, const char *const words[][2], int n) {
+    const sb_technique *t = sb_technique_find("score");
+    sb_spec_defaults(spec, t);
+    sb_err err;
+    for (int k = 0; k < n; k++)
+        for (int i = 0; i < t->param_count; i++)
+            if (!strcmp(t->params[i].name, words[k][0]))
+                assert_true(sb_param_set(&spec->params, i, &t->params[i], words[k][1], t->name, &err));
+    sb_spec_bind(spec);
+}
+
+/* Two parameter sets that differ only in where a separator stands are two runs: the canonical text escapes what
+ * it joins on (renderer a:settings=b and renderer a with settings b gave one run id, and merged, one renderer's
+ * frames were lost); a text without a separator is as it was. */
+static void test_run_id_separators(void **st) {
+    (void)st;
+    sb_run_opts o;
+    sb_run_opts_defaults(&o);
+    static const char *const pairs[][2][2][2] = {
+        {{{"renderer", "a"}, {"settings", "b"}}, {{"renderer", "a:settings=b"}, {"settings", ""}}},
+        {{{"renderer", "a"}, {"settings", "x=1:y=2"}}, {{"renderer", "a:settings=x=1"}, {"settings", "y=2"}}},
+        {{{"renderer", "a,b"}, {"settings", ""}}, {{"renderer", "a"}, {"settings", ",b"}}},
+        {{{"renderer", "a\\"}, {"settings", ":b"}}, {{"renderer", "a\\:"}, {"settings", "b"}}},
+        {{{"dir", "d:renderer=r"}, {"renderer", "s"}}, {{"dir", "d"}, {"renderer", "r:renderer=s"}}},
+    };
+    for (size_t k = 0; k < SB_COUNT(pairs); k++) {
+        sb_run_spec a, b;
+        score_words(&a, pairs[k][0], 2);
+        score_words(&b, pairs[k][1], 2);
+        char ta[SB_PARAMS_TEXT_LEN], tb[SB_PARAMS_TEXT_LEN], ia[17], ib[17];
+        sb_params_canonical(&a.params, ta, sizeof ta);
+        sb_params_canonical(&b.params, tb, sizeof tb);
+        sb_run_id(1, 2, &o, &a, ia);
+        sb_run_id(1, 2, &o, &b, ib);
+        print_message("%s (%s) against %s (%s)\n", ta, ia, tb, ib);
+        assert_string_not_equal(ta, tb);
+        assert_string_not_equal(ia, ib);
+    }
+    /* no separator: the text as it always was */
+    sb_run_spec plain;
+    score_words(&plain, (const char *const[][2]){{"dir", "frames"}, {"renderer", "three.js"}}, 2);
+    char t[SB_PARAMS_TEXT_LEN];
+    sb_params_canonical(&plain.params, t, sizeof t);
+    assert_non_null(strstr(t, "dir=frames:"));
+    assert_non_null(strstr(t, ":renderer=three.js"));
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_every_option_by_command),  cmocka_unit_test(test_out_of_range_names_the_range),
         cmocka_unit_test(test_defaults_parse),           cmocka_unit_test(test_values_reach_their_fields),
         cmocka_unit_test(test_batch_defaults_line),      cmocka_unit_test(test_help_and_docs_name_every_option),
         cmocka_unit_test(test_run_identity),             cmocka_unit_test(test_docs_are_the_tables),
-        cmocka_unit_test(test_run_options_text),
+        cmocka_unit_test(test_run_options_text),         cmocka_unit_test(test_run_id_separators),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
