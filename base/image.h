@@ -13,6 +13,10 @@
  * or where the image module cannot be opened; the reason in one line. */
 bool sb_images_available(void);
 const char *sb_images_unavailable_reason(void);
+/* Whether an image can be written to path: its folder exists and is one, and a writer exists for its extension
+ * (nothing is created): what a command checks before it works, so a bad name is bad input (exit 2), not a write
+ * that failed at the end. */
+bool sb_image_can_write(const char *path, sb_err *err);
 /* channels 1..4 of unsigned bytes */
 bool sb_image_write_u8(const char *path, int w, int h, int channels, const unsigned char *pixels, sb_err *err);
 /* channels 1..4 of floats (EXR for float data) */

@@ -18,6 +18,7 @@
 
 static sb_image_module_fn g_write;
 static sb_image_module_read_fn g_read;
+static sb_image_module_can_write_fn g_can_write;
 static bool g_tried;
 static char g_why[SB_ERR_LEN];
 
@@ -46,8 +47,10 @@ static void open_module(void) {
     }
     *(void **)&g_write = dlsym(h, SB_IMAGE_MODULE_SYMBOL);
     *(void **)&g_read = dlsym(h, SB_IMAGE_MODULE_READ_SYMBOL);
-    if (!g_write || !g_read) {
-        snprintf(g_why, sizeof g_why, "%.400s has no %s", path, g_write ? SB_IMAGE_MODULE_READ_SYMBOL : SB_IMAGE_MODULE_SYMBOL);
+    *(void **)&g_can_write = dlsym(h, SB_IMAGE_MODULE_CAN_WRITE_SYMBOL);
+    if (!g_write || !g_read || !g_can_write) {
+        snprintf(g_why, sizeof g_why, "%.400s has no %s", path,
+                 !g_write ? SB_IMAGE_MODULE_SYMBOL : !g_read ? SB_IMAGE_MODULE_READ_SYMBOL : SB_IMAGE_MODULE_CAN_WRITE_SYMBOL);
         g_write = NULL;
     }
 }
@@ -66,6 +69,13 @@ static bool write_image(const char *path, int w, int h, int channels, int is_flo
     if (!sb_images_available()) return sb_fail(err, "%s: %s", path, g_why);
     char msg[SB_ERR_LEN] = "";
     if (g_write(path, w, h, channels, is_float, pixels, msg, sizeof msg)) return true;
+    return sb_fail(err, "%s", msg);
+}
+
+bool sb_image_can_write(const char *path, sb_err *err) {
+    if (!sb_images_available()) return sb_fail(err, "%s: %s", path, g_why);
+    char msg[SB_ERR_LEN] = "";
+    if (g_can_write(path, msg, sizeof msg)) return true;
     return sb_fail(err, "%s", msg);
 }
 

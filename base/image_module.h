@@ -22,6 +22,11 @@ typedef bool (*sb_image_module_fn)(const char *path, int w, int h, int channels,
 #define SB_IMAGE_MODULE_READ_SYMBOL "sb_image_module_read"
 typedef bool (*sb_image_module_read_fn)(const char *path, int *w, int *h, float **pixels, char *err, size_t err_len);
 
+/* Whether an image can be written there: its folder is one, and a writer exists for its extension (nothing is
+ * created). false with a message naming the path in err. */
+#define SB_IMAGE_MODULE_CAN_WRITE_ENTRY sb_image_module_can_write
+#define SB_IMAGE_MODULE_CAN_WRITE_SYMBOL "sb_image_module_can_write"
+typedef bool (*sb_image_module_can_write_fn)(const char *path, char *err, size_t err_len);
 /* The most pixels an image read from outside may claim (16384 x 16384), checked on its header before anything is
  * allocated (the fuzzer's build of the reader sets a smaller one). */
 #ifndef SB_IMAGE_MAX_PIXELS

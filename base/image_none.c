@@ -9,6 +9,8 @@ bool sb_images_available(void) { return false; }
 
 const char *sb_images_unavailable_reason(void) { return NO_IMAGES; }
 
+bool sb_image_can_write(const char *path, sb_err *err) { return sb_fail(err, "%s: " NO_IMAGES, path); }
+
 bool sb_image_write_u8(const char *path, int w, int h, int channels, const unsigned char *pixels, sb_err *err) {
     (void)w, (void)h, (void)channels, (void)pixels;
     return sb_fail(err, "%s: " NO_IMAGES, path);

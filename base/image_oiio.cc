@@ -202,3 +202,20 @@ extern "C" bool SB_IMAGE_MODULE_ENTRY(const char *path, int w, int h, int channe
     return is_float ? write(path, w, h, channels, OIIO::TypeDesc::FLOAT, pixels, 4, &e)
                     : write(path, w, h, channels, OIIO::TypeDesc::UINT8, pixels, 1, &e);
 }
+
+extern "C" bool SB_IMAGE_MODULE_CAN_WRITE_ENTRY(const char *path, char *err, size_t err_len) {
+    sb_err e{err, err_len};
+    std::string p(path);
+    size_t slash = p.find_last_of('/'), dot = p.find_last_of('.');
+    std::string folder = slash == std::string::npos ? "." : slash == 0 ? "/" : p.substr(0, slash);
+    struct stat st;
+    if (stat(folder.c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
+        return sb_fail(&e, "%s: no such folder %s", path, folder.c_str());
+    if (dot == std::string::npos || (slash != std::string::npos && dot < slash) || dot + 1 == p.size() ||
+        dot == (slash == std::string::npos ? 0 : slash + 1))
+        return sb_fail(&e, "%s: no extension to choose its format by (.png, .exr, ...)", path);
+    /* the writer its extension names is made, nothing is opened */
+    auto out = OIIO::ImageOutput::create(p.substr(dot + 1));
+    if (!out) return sb_fail(&e, "%s: no image writer for the extension .%s", path, p.substr(dot + 1).c_str());
+    return true;
+}

@@ -828,6 +828,8 @@ static int cmd_flip(const sb_cli *c) {
         const char *slash = strrchr(c->o.map, '/'), *dot = strrchr(c->o.map, '.');
         if (!dot || (slash && dot < slash) || !dot[1] || dot == (slash ? slash + 1 : c->o.map))
             return bad("flip: --map %s has no extension to choose its format by (.png, .exr, ...)", c->o.map);
+        sb_err werr;
+        if (!sb_image_can_write(c->o.map, &werr)) return bad("flip: --map %s", werr.msg);   /* before any work */
     }
     int w[2], h[2];
     float *img[2] = {NULL, NULL};

@@ -204,9 +204,11 @@ const sb_option sb_options[] = {
      .with = SB_CMDF_SCENES, RUN_OPT, .field = RUN(pose_time), .given_field = RUN(pose), .excludes = "--anim",
      .help = "nodes and skins at time T (seconds) of the file's first animation, frozen (no clip plays)"},
     {.name = "--anim", .kind = SB_OPT_TEXT, .arg = "all|none|NAME[,NAME]", .def = "all", .with = SB_CMDF_SCENES, RUN_OPT,
+     .cmd_defs = OWN_DEFAULTS(OWN(SB_CMD_SCORE, "none")),
      .of_set = true, .field = RUN(anim), .check = check_anim,
      .help = "which of a file's animation clips play on the path's clock (each loops; with all, a node follows the "
-             "first clip that animates it; none: the scene as today, frozen)"},
+             "first clip that animates it; none: the scene as today, frozen; score: none, as another renderer's "
+             "exported scene is drawn)"},
     {.name = "--anim-speed", .kind = SB_OPT_NUM, .arg = "X", .min = 0, .open_min = true, .max = 1e6, .def = "1",
      .of_set = true,
      .with = SB_CMDF_SCENES, RUN_OPT, .field = RUN(anim_speed), .help = "clip seconds a second of the path's clock"},

@@ -495,6 +495,12 @@ sb_run *sb_run_begin(sb_session *s, const sb_run_spec *spec, const char *out_dir
         spec->tech->label(spec->desc, &l);
         r->info.technique = l.technique, r->info.params = l.params, r->info.renderer = l.renderer;
     }
+    /* another renderer's frames against clips that play: a renderer that drew the file still is scored against
+       casters that moved (score's own default is --anim none) */
+    if ((spec->tech->traits & SB_TRAIT_FOREIGN) && s->scene.moving_draws && strcmp(s->scene.anim, "none"))
+        sb_run_warn(&r->info, "another renderer's frames are scored with the file's clips playing (--anim %s): "
+                    "frames drawn still are scored against casters that moved (--anim none scores them still)",
+                    o->anim ? o->anim : "all");
     if (!run_stages(r)) r->info.timing = "";   /* nothing timed */
     sb_session_light_label(s, r->info.light, sizeof r->info.light);
     sb_run_options_text(o, r->info.run_options, sizeof r->info.run_options);
