@@ -291,9 +291,11 @@ static bool replayed_frame_costs(sb_run *r, int first) {
         double k = now > 0 ? cost * (1 + 0.02 * (2 * u - 1)) / now : 0;
         for (int st = 0; st < SB_TIMER_STAGES && k > 0; st++) t->ms[st] *= k;
     }
-    if (first == 0)
+    if (first == 0) {
+        sb_run_mark_replayed(&r->info, "frame-costs");
         sb_run_warn(&r->info, "its frame times are replayed from %s (SB_REPLAY_FRAME_MS, a test seam), not measured",
                     file);
+    }
     return true;
 }
 
@@ -396,6 +398,7 @@ static bool replayed_timings(sb_run *r, double *ms, double *before, double *afte
     const int N = r->s->opts.frames;
     for (int i = 0; i < r->done; i++) ms[i] = rp.rep_ms[i / N < rp.nreps ? i / N : rp.nreps - 1];
     *before = rp.calib_before, *after = rp.calib_after;
+    sb_run_mark_replayed(&r->info, "timings");
     sb_run_warn(&r->info, "the stability verdict judged timings replayed from %s (SB_REPLAY_TIMINGS, a test seam), "
                 "not this run's", file);
     return true;

@@ -414,6 +414,10 @@ static const sb_run_col run_cols[] = {
                                  "and run again at the end (--rerun-unstable; the earlier attempts' frames in "
                                  "<run_id>.attempt-K.csv)"),
     INFO("warnings", r_chars, warnings, "what the tool cannot stand behind in this run, \"; \"-separated"),
+    INFO("replayed", r_chars, replayed, "where a test replayed its timings instead of measuring them: timings "
+                                        "(SB_REPLAY_TIMINGS: the stability verdict's), frame-costs (SB_REPLAY_FRAME_MS), "
+                                        "both space-separated; empty: measured (a column of its own, so that no length "
+                                        "of the warnings can drop the mark)"),
     RUN("repeats", r_repeats, 0, "repetitions of the path measured"),
     RUN("target_ci_pct", r_target_ci, 0, "--target-ci"),
     {.name = "gpu_ci_pct", .get = r_gpu_ci, .unit = "percent", .flags = SB_USE_NIGHT,
@@ -769,6 +773,12 @@ void sb_run_warn(sb_run_info *info, const char *fmt, ...) {
     va_start(ap, fmt);
     vsnprintf(info->warnings + n, sizeof info->warnings - n, fmt, ap);
     va_end(ap);
+}
+
+void sb_run_mark_replayed(sb_run_info *info, const char *what) {
+    size_t n = strlen(info->replayed), w = strlen(what);
+    if (strstr(info->replayed, what) || n + w + 2 > sizeof info->replayed) return;
+    snprintf(info->replayed + n, sizeof info->replayed - n, "%s%s", n ? " " : "", what);
 }
 
 /* ---- the summary file ---- */

@@ -63,6 +63,7 @@ typedef struct sb_run_info {
     double eval_s;              /* wall time of the untimed evaluation pass (its frames, twins, reference) */
     double ref_refit_ms;        /* a moving scene: the reference's refit to a pose, mean (NaN: none) */
     char warnings[512];         /* what the tool cannot stand behind in an ok run ("; "-separated, "" if nothing) */
+    char replayed[64];          /* the test seams its timings came from ("timings", "frame-costs"; "" measured) */
     char auto_params[160];      /* values calibrated for "auto" parameters ("bias=0.5:normal=0.125"; "" if none) */
     char light[1200];           /* the light's size when it has one ("sun 0.53 deg, 64 rays"; "" a light of no size) */
     char run_options[640];      /* the identity options without a column of their own ("--sun 30,45"; "": defaults) */
@@ -70,6 +71,8 @@ typedef struct sb_run_info {
 
 /* Adds a note to the run's warnings. */
 void sb_run_warn(sb_run_info *info, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* Marks the run's timings as replayed by a test seam ("timings", "frame-costs"): the replayed column. */
+void sb_run_mark_replayed(sb_run_info *info, const char *what);
 
 /* A cell of a row: empty, an integer, a number (%.6g) or text. */
 typedef enum sb_cell_kind { SB_CELL_EMPTY, SB_CELL_INT, SB_CELL_NUM, SB_CELL_STR } sb_cell_kind;

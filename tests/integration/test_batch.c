@@ -472,6 +472,7 @@ static void test_unstable_run_again(void **st) {
                             sm ? "frame times drifted +100% from the first repetition of the path to the last "
                                  "(beyond their 95% CI)" : "");
         assert_non_null(strstr(sb_table_get(&t, r, "warnings"), "SB_REPLAY_TIMINGS"));   /* the row says so */
+        assert_string_equal(sb_table_get(&t, r, "replayed"), "timings");   /* in a column no warning can crowd out */
         for (int k = 1; k <= 3; k++) {   /* every earlier attempt's frames kept, none beyond */
             char kept[4300];
             snprintf(kept, sizeof kept, "%s/%s.attempt-%d.csv", dir, id, k);

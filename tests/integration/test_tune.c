@@ -89,6 +89,7 @@ static int setup(void **st) {
     summary_table(dir, &t);
     for (int r = 0; r < t.nrows && g_n < MAXC; r++) {
         if (strcmp(sb_table_get(&t, r, "status"), "ok")) continue;
+        if (strcmp(sb_table_get(&t, r, "replayed"), "frame-costs")) return -1;   /* the row says its times are a test's */
         cfg *c = &g_grid[g_n++];
         key_of(&t, r, c->key, sizeof c->key);
         label_of(sb_table_get(&t, r, "technique"), sb_table_get(&t, r, "params"), c->label, sizeof c->label);
