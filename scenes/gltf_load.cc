@@ -368,6 +368,7 @@ struct Decoded {
     int closed_known = 0;   // sb_prim_desc.closed_known
     uint32_t first_draw = 0;  // 1 + the draw its first placement became (0: none yet, or it cannot be shared)
     sb_m4 first_inv;          // that placement's world transform, inverted: later ones relative to it
+    sb_m4 placed;             // and the transform itself
 };
 
 struct Loader {
@@ -848,8 +849,15 @@ bool Loader::emit(const PrimData &d, const std::vector<uint32_t> &tris_in, const
         memcpy(pd.relative, rel.m, sizeof pd.relative);
     }
     sb_scene_add_prim(s, &pd);
-    if (shared && !shared->first_draw && !collapses && sb_m4_invert(placed, &shared->first_inv))
+    /* the first placement is the one later ones are placed from; a placement larger than it (left a copy of its
+       own: sb_scene_add_prim shares none magnified) is from then on, so every shared placement is at most its
+       proto's size */
+    bool own = s->draws[s->draw_count - 1].proto == s->draw_count - 1;
+    bool larger = shared && shared->first_draw && own && fabs(det3(placed)) > fabs(det3(shared->placed)) * (1 + 1e-9);
+    if (shared && (!shared->first_draw || larger) && !collapses && sb_m4_invert(placed, &shared->first_inv)) {
         shared->first_draw = s->draw_count;
+        shared->placed = placed;
+    }
     if (!collapses && !*closed_known && !double_sided) *closed_known = s->draws[s->draw_count - 1].closed ? 2 : 1;
     return true;
 }

@@ -216,6 +216,9 @@ static bool similarity(const double *m) {
     return det > 0;
 }
 
+/* A similarity's scale (the 4x4's first column's length). */
+static double similarity_scale(const double *m) { return sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]); }
+
 bool sb_xform_translation_only(const float x[12]) {
     for (int r = 0; r < 3; r++)
         for (int c = 0; c < 3; c++)
@@ -229,9 +232,14 @@ void sb_scene_add_prim(sb_scene *s, const sb_prim_desc *p) {
     bool double_sided = p->double_sided;
     bool closed = !double_sided && (p->closed_known ? p->closed_known == 2 : prim_closed(p));
     const sb_draw *of = p->instance_of && p->instance_of <= s->draw_count ? &s->draws[p->instance_of - 1] : NULL;
+    /* shared only where the placement is as precise through the proto as its own floats are: never magnified
+       from it (a proto placed at scale 1e-6 holds its shape in floats quantized at its position, and a placement
+       at scale 1 would magnify that quantum a million times: the box drawn and traced visibly wider); a larger
+       placement is a copy of its own, and the loader places later ones from it (sb_prim_desc.instance_of) */
     bool instance = of && of->proto == p->instance_of - 1 && of->vertex_count == p->vertex_count &&
                     of->index_count == p->index_count && of->double_sided == double_sided && of->closed == closed &&
-                    of->material == p->material && similarity(p->relative);
+                    of->material == p->material && similarity(p->relative) &&
+                    similarity_scale(p->relative) <= 1 + 1e-9;
     sb_draw d = {.double_sided = double_sided, .closed = closed, .material = p->material, .node = p->node,
                  .proto = s->draw_count};
     memcpy(d.color, p->color, sizeof d.color);

@@ -16,10 +16,11 @@
 #include "util.h"
 
 /* Bump when what an entry holds changes meaning (the binary's identity covers layouts). */
-#define SB_SCENE_CACHE_VERSION 5u   /* 2: draws carry their instancing (proto, transform, vertex range); 3: the
+#define SB_SCENE_CACHE_VERSION 6u   /* 2: draws carry their instancing (proto, transform, vertex range); 3: the
                                        dependencies relative to the scene's folder, the folder in the key; 4: a
                                        scene whose clips play, with them (sb_motion_write); 5: an instance's
-                                       triangles are its proto's, held once */
+                                       triangles are its proto's, held once; 6: no placement shared magnified
+                                       from its proto */
 static const char magic[8] = {'S', 'B', 'S', 'C', 'E', 'N', 'E', '1'};
 
 bool sb_scene_cache_dir(char *out, size_t len) {

@@ -218,6 +218,46 @@ static void test_lamp_between_copies(void **st) {
     same_figures(a, b, 0, 4, 320, 180);
 }
 
+/* A floor and one box mesh placed three times: first at 1e-6 of its size far out on the floor, then twice at its
+ * size (shared: one mesh for the three nodes; else a mesh of its own each, the same vertices). */
+static void write_tiny_first(const char *path, bool shared) {
+    sb_glb_scene s = {0};
+    sb_glb_mesh *floor = sb_glb_new_mesh(&s, 0);
+    sb_glb_box(floor, -8, -0.2, -8, 8, 0, 8);
+    static const char *const placed[3] = {"\"translation\":[7.3,0,6.1],\"scale\":[1e-6,1e-6,1e-6]",
+                                          "\"translation\":[0.37,0,-0.21]", "\"translation\":[-3.1,0,2.3]"};
+    for (int k = 0; k < (shared ? 1 : 3); k++) {
+        sb_glb_mesh *box = sb_glb_new_mesh(&s, 2);
+        sb_glb_box(box, -0.7, 0, -0.7, 0.7, 1.9, 0.7);
+        box->no_node = true;
+    }
+    for (int k = 0; k < 3; k++) sb_glb_node(&s, true, "{\"mesh\":%d,%s}", shared ? 1 : 1 + k, placed[k]);
+    assert_int_equal(sb_glb_write(&s, path), 0);
+}
+
+/* Shared geometry is as precise as its copies: a placement is never drawn or traced magnified from a proto placed
+ * smaller (a first placement at 1e-6 held the box in floats quantized at its position, and the placements at
+ * scale 1 drew and traced that magnified: sm's err_rate 0.032 against the copies' 0.0016). The two full-size
+ * boxes share one copy of their own. */
+static void test_tiny_first_placement(void **st) {
+    (void)st;
+    char shared[4096], copies[4096], a[4096], b[4096];
+    snprintf(shared, sizeof shared, "%s/tiny-shared.glb", g_tmp);
+    snprintf(copies, sizeof copies, "%s/tiny-copies.glb", g_tmp);
+    write_tiny_first(shared, true);
+    write_tiny_first(copies, false);
+    uint32_t ns, nc;
+    double cpu;
+    gpu_bytes(shared, &ns, &cpu);
+    gpu_bytes(copies, &nc, &cpu);
+    print_message("shared draws: %u (copies twin %u)\n", ns, nc);
+    assert_int_equal(ns, 1);   /* the third placement from the second, the tiny first a copy of its own */
+    assert_int_equal(nc, 0);
+    render(shared, "sm:res=1024 raycast", "320x180", "tiny-shared", a, sizeof a);
+    render(copies, "sm:res=1024 raycast", "320x180", "tiny-copies", b, sizeof b);
+    same_figures(a, b, 0, 2, 320, 180);
+}
+
 /* Every technique in every draw path it has (per pass or layered by a geometry shader or by the vertex shader's
  * gl_Layer; one GL call a draw or one indirect call a pass) on towers-night tiled 2 x 1, against its copies twin:
  * a draw path that reads a shared draw's vertices without its transform (common.glsl's sb_world) draws the second
@@ -261,6 +301,7 @@ int main(void) {
         cmocka_unit_test(test_towers_turned),
         cmocka_unit_test(test_zdm2_open_moved),
         cmocka_unit_test(test_lamp_between_copies),
+        cmocka_unit_test(test_tiny_first_placement),
         cmocka_unit_test(test_every_mode_on_shared_geometry),
     };
     return cmocka_run_group_tests_name("instancing", tests, setup, teardown);
