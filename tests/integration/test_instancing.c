@@ -25,6 +25,7 @@
 #include <unistd.h>
 
 #include "glb.h"
+#include "image.h"
 #include "render.h"
 #include "scene_load.h"
 #include "support.h"
@@ -258,6 +259,87 @@ static void test_tiny_first_placement(void **st) {
     same_figures(a, b, 0, 2, 320, 180);
 }
 
+/* Two images of one frame: how many pixels differ (any channel by more than a step of 8 bits). */
+static long pixels_apart(const char *a, const char *b) {
+    int wa, ha, wb, hb;
+    float *pa, *pb;
+    sb_err err;
+    assert_true(sb_image_read_rgb(a, &wa, &ha, &pa, &err));
+    assert_true(sb_image_read_rgb(b, &wb, &hb, &pb, &err));
+    assert_int_equal(wa, wb);
+    assert_int_equal(ha, hb);
+    long n = 0;
+    for (long i = 0; i < (long)wa * ha; i++)
+        n += fabsf(pa[3 * i] - pb[3 * i]) > 1.5f / 255 || fabsf(pa[3 * i + 1] - pb[3 * i + 1]) > 1.5f / 255 ||
+             fabsf(pa[3 * i + 2] - pb[3 * i + 2]) > 1.5f / 255;
+    free(pa);
+    free(pb);
+    return n;
+}
+
+/* Every bundled scene tiled 2 x 1 by node instancing against its copies twin, in one batch: the same visibility
+ * and error images and the same err_rate, frame for frame (a sun map and a lamp's cube, each where the scene has
+ * its light). */
+static void test_every_bundled_scene_tiled(void **st) {
+    (void)st;
+    char list[8192], bench[4200];
+    assert_int_equal(run_logged(list, sizeof list, "cd %s && ls *.glb", getenv("SB_DATA_DIR")), 0);
+    snprintf(bench, sizeof bench, "%s/bundled.bench", g_tmp);
+    FILE *f = fopen(bench, "w");
+    assert_non_null(f);
+    fprintf(f, "path au auto\n");
+    int n = 0;
+    for (char *name = strtok(list, "\n"); name; name = strtok(NULL, "\n")) {
+        char src[4300], stem[256];
+        snprintf(stem, sizeof stem, "all-%.*s", (int)(strlen(name) - 4), name);   /* beside the other tests' tiles */
+        snprintf(src, sizeof src, "%s/%s", getenv("SB_DATA_DIR"), name);
+        pair p;
+        tile_pair(src, stem, "2 1", &p);
+        fprintf(f, "scene %s-s %s au\nscene %s-c %s au\n", stem, p.shared, stem, p.copies);
+        n++;
+    }
+    fprintf(f, "defaults --frames 2 --warmup 0 --size 160x90 --error-every 1 --images 1\nsm:res=512 cube:res=128\n");
+    fclose(f);
+    assert_true(n >= 16);
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s batch %s --out %s/bundled --quiet", test_binary(), bench, g_tmp),
+                     0);
+    char dir[4096];
+    snprintf(dir, sizeof dir, "%s", last_line_of(g_out));
+    sb_table t;
+    summary_table(dir, &t);
+    int compared = 0;
+    for (int r = 0; r < t.nrows; r++) {
+        const char *scene = sb_table_get(&t, r, "scene");
+        size_t len = strlen(scene);
+        if (len < 2 || strcmp(scene + len - 2, "-s")) continue;
+        int twin = -1;
+        for (int q = 0; q < t.nrows; q++)
+            if (!strncmp(sb_table_get(&t, q, "scene"), scene, len - 2) && !strcmp(sb_table_get(&t, q, "scene") + len - 2, "-c") &&
+                strlen(sb_table_get(&t, q, "scene")) == len && !strcmp(sb_table_get(&t, q, "params"), sb_table_get(&t, r, "params")) &&
+                !strcmp(sb_table_get(&t, q, "technique"), sb_table_get(&t, r, "technique")))
+                twin = q;
+        assert_true(twin >= 0);
+        assert_string_equal(sb_table_get(&t, r, "status"), sb_table_get(&t, twin, "status"));
+        if (strcmp(sb_table_get(&t, r, "status"), "ok")) continue;   /* skipped both: no light of its kind */
+        long apart = 0;
+        for (int fr = 0; fr < 2; fr++)
+            for (int k = 0; k < 2; k++) {
+                char a[4400], b[4400];
+                snprintf(a, sizeof a, "%s/images/%s_f%04d_%s.png", dir, sb_table_get(&t, r, "run_id"), fr, k ? "error" : "vis");
+                snprintf(b, sizeof b, "%s/images/%s_f%04d_%s.png", dir, sb_table_get(&t, twin, "run_id"), fr, k ? "error" : "vis");
+                apart += pixels_apart(a, b);
+            }
+        double ea = atof(sb_table_get(&t, r, "err_rate_mean")), eb = atof(sb_table_get(&t, twin, "err_rate_mean"));
+        print_message("%-22s %-6s err_rate %.6g shared, %.6g copies; %ld pixels of the images apart\n", scene,
+                      sb_table_get(&t, r, "technique"), ea, eb, apart);
+        assert_true(apart <= 4);
+        assert_true(fabs(ea - eb) * 160 * 90 <= 2);
+        compared++;
+    }
+    assert_true(compared >= 16);
+    sb_table_free(&t);
+}
+
 /* Every technique in every draw path it has (per pass or layered by a geometry shader or by the vertex shader's
  * gl_Layer; one GL call a draw or one indirect call a pass) on towers-night tiled 2 x 1, against its copies twin:
  * a draw path that reads a shared draw's vertices without its transform (common.glsl's sb_world) draws the second
@@ -302,6 +384,7 @@ int main(void) {
         cmocka_unit_test(test_zdm2_open_moved),
         cmocka_unit_test(test_lamp_between_copies),
         cmocka_unit_test(test_tiny_first_placement),
+        cmocka_unit_test(test_every_bundled_scene_tiled),
         cmocka_unit_test(test_every_mode_on_shared_geometry),
     };
     return cmocka_run_group_tests_name("instancing", tests, setup, teardown);
