@@ -217,7 +217,7 @@ const sb_option sb_options[] = {
      .commands = SB_IN(SB_CMD_RUN) | SB_IN(SB_CMD_BATCH) | SB_IN(SB_CMD_TUNE) | SB_IN(SB_CMD_SCORE), .field = F(out),
      .help = "results folder; run, tune and score write DIR/<UTC time>/, batch DIR/<batch name>/<UTC time>/", .check = check_path},
     {.name = "--out", .kind = SB_OPT_TEXT, .arg = "DIR", .def_help = "required", .commands = SB_IN(SB_CMD_MERGE),
-     .field = F(out), .help = "the merged results set", .check = check_path},
+     .field = F(out), .help = "the merged results set: a new or empty folder (written beside it, renamed to it whole)", .check = check_path},
     {.name = "--out", .kind = SB_OPT_TEXT, .arg = "SITE", .def = "out/report", .commands = SB_IN(SB_CMD_REPORT),
      .field = F(out), .help = "the site's folder", .check = check_path},
     {.name = "--resume", .kind = SB_OPT_TEXT, .arg = "DIR",

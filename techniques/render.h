@@ -62,6 +62,7 @@ typedef struct sb_gpu {
     bool indirect;                      /* --submit indirect: a pass's draws are one glMultiDrawElementsIndirect */
     GLuint indirect_buf;                /* its commands (rewritten at every flush) */
     struct sb_gpu_pose *pose;           /* a moving scene's posing pass (pose.h; NULL: the CPU poses) */
+    struct sb_gpu_pieces *pieces;       /* a software rasterizer's submission in bounded pieces (render.c; NULL: a GPU) */
 } sb_gpu;
 
 /* What a technique's create gets: the session (read-only), the run's size,

@@ -15,6 +15,9 @@ At the end the resumed set's rows equal a batch that was never stopped
 once (within 2 s, by the signal). `run` stops the same way and `run
 --resume DIR` completes its folder; so does `tune` with its `--resume DIR`.
 `stress` stops between its rows, keeping them, and removes its scenes.
+Every long command of the suite's kinds (run, batch, tune, score, info and
+run with a scene-cache entry that is a FIFO, history add on a FIFO) exits
+within 5 s of a SIGTERM.
 
 usage: interrupt.py SHADOWBENCH BUILD_ROOT
 """
@@ -24,9 +27,11 @@ import os
 import random
 import shutil
 import signal
+import struct
 import subprocess
 import sys
 import time
+import zlib
 
 BIN, BUILD = sys.argv[1:3]
 WORK = os.path.join(BUILD, "test-interrupt")
@@ -188,9 +193,75 @@ def main():
         break
     check(p.returncode == -signal.SIGINT and dt < 2,
           "a second SIGINT ends it at once (%.2f s, status %d)" % (dt, p.returncode))
+    hears_sigterm(bench)
     if failures:
         print("%d check(s) failed" % len(failures))
         sys.exit(1)
+
+
+def png(path, w, h, v):
+    """A grey PNG of w x h pixels of value v."""
+    raw = b"".join(b"\x00" + bytes([v]) * w for _ in range(h))
+    chunk = lambda t, d: struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d))
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 0, 0, 0, 0)) +
+                chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+
+
+def hears_sigterm(bench):
+    """Every wait bounded and every signal heard: each command of the kinds the suite runs, started and sent SIGTERM
+    a second in (or ended by itself before), exits within 5 s of it. Before, a scene-cache entry that is a FIFO
+    blocked in open() (57ff219: `run` still running 5 s after SIGTERM), printing "stopping after the frame in
+    flight" and going on. (score's frames here do not line up, so its runs end by themselves; test_score holds
+    `--repeat 2`, which spun for ever, on a renderer's real frames.)"""
+    white = os.path.join(WORK, "white")
+    os.makedirs(white)
+    for f in range(2):
+        png(os.path.join(white, "vis_%04d.png" % f), 96, 54, 255)
+        png(os.path.join(white, "mask_%04d.png" % f), 96, 54, 255)
+    cache = os.path.join(WORK, "fifo-cache")
+    env_cache = dict(os.environ, SB_SCENE_CACHE=cache)
+    subprocess.run([BIN, "info", "towers"], env=env_cache, capture_output=True, check=True)
+    for e in glob.glob(os.path.join(cache, "*.sbscene")):
+        os.unlink(e)
+        os.mkfifo(e)
+    fifo_history = os.path.join(WORK, "fifo.sqlite")
+    os.mkfifo(fifo_history)
+    small = ["--size", "160x90", "--quiet"]
+    cmds = [
+        ("run", [BIN, "run", "towers", "towers", "sm", "pssm", "--frames", "400", "--error-every", "100"] + small, None),
+        ("run --repeat 3", [BIN, "run", "towers", "towers", "sm", "--frames", "50", "--repeat", "3"] + small, None),
+        ("run score:... --repeat 2", [BIN, "run", "plane-box", "plane-box", "score:dir=%s:mask=mask_%%04d.png" % white,
+                                      "--frames", "2", "--repeat", "2", "--size", "96x54", "--quiet"], None),
+        ("score --repeat 2", [BIN, "score", "plane-box", "plane-box", white, "--mask", "mask_%04d.png", "--frames", "2",
+                              "--repeat", "2", "--size", "96x54", "--quiet"], None),
+        ("batch", [BIN, "batch", bench, "--quiet"], None),
+        ("tune", [BIN, "tune", "towers", "auto", "sm:res=256,512,1024", "--frames", "9", "--max-err", "0.5"] + small, None),
+        ("info, its cache entry a FIFO", [BIN, "info", "towers"], env_cache),
+        ("run, its cache entry a FIFO", [BIN, "run", "towers", "towers", "sm", "--frames", "200"] + small, env_cache),
+        ("history add, the history a FIFO", [BIN, "history", "add", WORK, "--history", fifo_history], None),
+    ]
+    for k, (name, cmd, env) in enumerate(cmds):
+        p = subprocess.Popen(cmd + (["--out", os.path.join(WORK, "term-%d" % k)] if cmd[1] in ("run", "batch", "tune", "score") else []),
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+        try:
+            p.wait(timeout=1)
+            how = "ended by itself (status %d)" % p.returncode
+            took = 0
+        except subprocess.TimeoutExpired:
+            t0 = time.time()
+            p.send_signal(signal.SIGTERM)
+            try:
+                p.wait(timeout=5)
+                took = time.time() - t0
+                how = "stopped %.1f s after SIGTERM (status %d)" % (took, p.returncode)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
+                took = float("inf")
+                how = "still running 5 s after SIGTERM: killed"
+        p.communicate()
+        check(took <= 5 and p.returncode in (0, 1, 2, 128 + signal.SIGTERM), "SIGTERM heard: %s: %s" % (name, how))
 
 
 if __name__ == "__main__":
