@@ -55,6 +55,39 @@ bool read_cstr(std::FILE *f, size_t max, std::string *out) {
     return false;
 }
 
+// The bytes OpenEXR reads for a value of this type at f's place: a fixed size for most types, a channel list's
+// entries up to its empty name, a preview's 8 bytes and its pixels; the declared size for a text, a text list and a
+// type it does not know (read as declared). -1: a value cut short or not of its type. f's place is left anywhere.
+long long value_bytes(std::FILE *f, const std::string &type, long long declared, long long left) {
+    static const struct { const char *type; int bytes; } fixed[] = {
+        {"box2i", 16}, {"box2f", 16}, {"compression", 1}, {"lineOrder", 1}, {"float", 4}, {"int", 4},
+        {"double", 8}, {"v2i", 8}, {"v2f", 8}, {"v2d", 16}, {"v3i", 12}, {"v3f", 12}, {"v3d", 24}, {"m33f", 36},
+        {"m33d", 72}, {"m44f", 64}, {"m44d", 128}, {"chromaticities", 32}, {"envmap", 1}, {"keycode", 28},
+        {"timecode", 8}, {"rational", 8}, {"tiledesc", 9}, {"deepImageState", 1}, {"floatvector", -1}};
+    for (const auto &t : fixed)
+        if (type == t.type) return t.bytes < 0 ? declared : t.bytes;
+    if (type == "chlist") {   /* name, then pixel type, linear, 3 reserved, x and y sampling: 16 bytes */
+        long long n = 0;
+        std::string ch;
+        for (;;) {
+            if (!read_cstr(f, 255, &ch)) return -1;
+            n += (long long)ch.size() + 1;
+            if (ch.empty()) return n;
+            if (std::fseek(f, 16, SEEK_CUR) != 0) return -1;
+            n += 16;
+            if (n > left) return -1;
+        }
+    }
+    if (type == "preview") {   /* width, height, then 4 bytes a pixel (allocated before they are read) */
+        unsigned char wh[8];
+        if (std::fread(wh, 1, 8, f) != 8) return -1;
+        unsigned long long w = wh[0] | wh[1] << 8 | wh[2] << 16 | (unsigned long long)wh[3] << 24;
+        unsigned long long h = wh[4] | wh[5] << 8 | wh[6] << 16 | (unsigned long long)wh[7] << 24;
+        return w * h > (unsigned long long)left ? -1 : 8 + 4 * (long long)(w * h);
+    }
+    return declared;   /* string, stringvector, and any other type: read as declared */
+}
+
 // An OpenEXR header's attributes each declare their value's size, and OpenEXR allocates that much before it
 // reads the value (a fuzzed 60-byte file declared 1.9 GB): each declared size is checked against the bytes the
 // file has left first. True for a file that is no OpenEXR file (its own reader answers for it).
@@ -85,16 +118,27 @@ bool exr_header_fits(const char *path, long long file_size, std::string *why) {
                 break;
             }
             long long size = (long long)(int32_t)(sz[0] | sz[1] << 8 | sz[2] << 16 | (uint32_t)sz[3] << 24);
-            long long left = file_size - std::ftell(f);
+            long long at = std::ftell(f), left = file_size - at;
+            for (char &ch : name)
+                if ((unsigned char)ch < 32 || (unsigned char)ch > 126) ch = '?';   /* said on one line */
             if (size < 0 || size > left) {
-                for (char &ch : name)
-                    if ((unsigned char)ch < 32 || (unsigned char)ch > 126) ch = '?';   /* said on one line */
                 *why = "its header's attribute '" + name + "' declares " + std::to_string(size) + " bytes, and " +
                        std::to_string(left < 0 ? 0 : left) + " follow in the file";
                 ok = false;
                 break;
             }
-            std::fseek(f, (long)size, SEEK_CUR);
+            /* OpenEXR reads a value of a known type by its type, not by the declared size: where the two differ it
+               goes on from another place than the next attribute (a channel list of 19 declared bytes read further,
+               then a string of 1.7 GB allocated); such a header is refused, so the checker's place is OpenEXR's */
+            long long reads = value_bytes(f, type, size, left);
+            if (reads != size) {
+                *why = "its header's attribute '" + name + "' declares " + std::to_string(size) + " bytes for a " +
+                       (type.size() < 40 ? type : "value") + ", which is " +
+                       (reads < 0 ? std::string("no value of its type") : std::to_string(reads) + " bytes");
+                ok = false;
+                break;
+            }
+            std::fseek(f, (long)(at + size), SEEK_SET);
         }
     }
     std::fclose(f);

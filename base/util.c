@@ -107,13 +107,6 @@ int sb_open_read(const char *path, sb_err *err) {
     return fd;
 }
 
-bool sb_is_regular_file(const char *path) {
-    int fd = sb_open_read(path, NULL);
-    if (fd < 0) return false;
-    close(fd);
-    return true;
-}
-
 char *sb_read_file(const char *path, size_t *size, sb_err *err) {
     int fd = sb_open_read(path, err);
     if (fd < 0) return NULL;
