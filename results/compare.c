@@ -593,7 +593,10 @@ static bool distinct_runs(const char *const *dirs, int n, const sb_table *t, sb_
     return ok;
 }
 
-bool sb_merge(const char *const *dirs, int n, const char *out_dir, sb_err *err) {
+bool sb_merge(const char *const *dirs, int n, const char *out_arg, sb_err *err) {
+    char out_dir[4096];   /* without a trailing '/': the folder written beside it is its sibling, not inside it */
+    snprintf(out_dir, sizeof out_dir, "%s", out_arg);
+    for (size_t l = strlen(out_dir); l > 1 && out_dir[l - 1] == '/'; l--) out_dir[l - 1] = 0;
     sb_table *t = sb_xcalloc((size_t)n, sizeof *t);
     merged_row *rows = NULL;
     int nrows = 0;

@@ -318,6 +318,7 @@ static void test_merge_counts_once(void **st) {
     /* one set: merged; merged again over it: refused, the first merge whole */
     assert_int_equal(sh("%s merge %s --out %s", b, one, out), 0);
     expect_cli_fail("already holds files", "%s merge %s --out %s", b, one, out);
+    assert_int_equal(sh("%s merge %s --out %s/once-slash//", b, one, g_tmp), 0);   /* written beside it, not in it */
     sb_table t;
     summary_table(out, &t);
     assert_int_equal(t.nrows, 2);
