@@ -201,22 +201,32 @@ static void write_walls(const char *path, bool shared) {
     assert_int_equal(sb_glb_write(&s, path), 0);
 }
 
-static void test_lamp_between_copies(void **st) {
-    (void)st;
-    char shared[4096], copies[4096], a[4096], b[4096];
-    snprintf(shared, sizeof shared, "%s/walls-shared.glb", g_tmp);
-    snprintf(copies, sizeof copies, "%s/walls-copies.glb", g_tmp);
-    write_walls(shared, true);
-    write_walls(copies, false);
+/* A scene of the test's own written shared and as copies (write(path, shared)): the shared one has `want_shared`
+ * shared draws, the copies none, and the two render `specs` to the same figures within `pixels`. */
+static void own_scene_twins(const char *name, void (*write)(const char *path, bool shared), uint32_t want_shared,
+                            const char *specs, double pixels) {
+    char shared[4096], copies[4096], a[4096], b[4096], tag[300];
+    snprintf(shared, sizeof shared, "%s/%s-shared.glb", g_tmp, name);
+    snprintf(copies, sizeof copies, "%s/%s-copies.glb", g_tmp, name);
+    write(shared, true);
+    write(copies, false);
     uint32_t ns, nc;
     double cpu;
     gpu_bytes(shared, &ns, &cpu);
     gpu_bytes(copies, &nc, &cpu);
-    assert_int_equal(ns, 1);
+    print_message("%s: %u shared draws (copies twin %u)\n", name, ns, nc);
+    assert_int_equal(ns, want_shared);
     assert_int_equal(nc, 0);
-    render(shared, "cube dpsm", "320x180", "walls-shared", a, sizeof a);
-    render(copies, "cube dpsm", "320x180", "walls-copies", b, sizeof b);
-    same_figures(a, b, 0, 4, 320, 180);
+    snprintf(tag, sizeof tag, "%s-shared", name);
+    render(shared, specs, "320x180", tag, a, sizeof a);
+    snprintf(tag, sizeof tag, "%s-copies", name);
+    render(copies, specs, "320x180", tag, b, sizeof b);
+    same_figures(a, b, 0, pixels, 320, 180);
+}
+
+static void test_lamp_between_copies(void **st) {
+    (void)st;
+    own_scene_twins("walls", write_walls, 1, "cube dpsm", 4);
 }
 
 /* A floor and one box mesh placed three times: first at 1e-6 of its size far out on the floor, then twice at its
@@ -242,21 +252,8 @@ static void write_tiny_first(const char *path, bool shared) {
  * boxes share one copy of their own. */
 static void test_tiny_first_placement(void **st) {
     (void)st;
-    char shared[4096], copies[4096], a[4096], b[4096];
-    snprintf(shared, sizeof shared, "%s/tiny-shared.glb", g_tmp);
-    snprintf(copies, sizeof copies, "%s/tiny-copies.glb", g_tmp);
-    write_tiny_first(shared, true);
-    write_tiny_first(copies, false);
-    uint32_t ns, nc;
-    double cpu;
-    gpu_bytes(shared, &ns, &cpu);
-    gpu_bytes(copies, &nc, &cpu);
-    print_message("shared draws: %u (copies twin %u)\n", ns, nc);
-    assert_int_equal(ns, 1);   /* the third placement from the second, the tiny first a copy of its own */
-    assert_int_equal(nc, 0);
-    render(shared, "sm:res=1024 raycast", "320x180", "tiny-shared", a, sizeof a);
-    render(copies, "sm:res=1024 raycast", "320x180", "tiny-copies", b, sizeof b);
-    same_figures(a, b, 0, 2, 320, 180);
+    /* one shared draw: the third placement from the second, the tiny first a copy of its own */
+    own_scene_twins("tiny", write_tiny_first, 1, "sm:res=1024 raycast", 2);
 }
 
 /* Two images of one frame: how many pixels differ (any channel by more than a step of 8 bits). */
