@@ -154,6 +154,43 @@ static void test_filament_scored(void **st) {
     assert_null(strchr(g_out, '\n') == NULL ? NULL : strchr(strchr(g_out, '\n') + 1, '\n'));   /* one line */
 }
 
+/* --repeat 2 of the three.js frames' spec: the untimed frames are recorded once and scored as they were (the run
+ * asked for a second pass for ever, at 85 % CPU, SIGTERM unheard); under a limit, so a hang fails here and does
+ * not stall the suite. by_spec: the same spec's run without --repeat. */
+static void repeat_scores_once(const sb_table *by_spec) {
+    sb_table rep;
+    assert_int_equal(run_logged(g_out, sizeof g_out, "timeout -s KILL 120 %s run plane-box plane-box "
+                                "'score:dir=%s/three:mask=mask_%%04d.png:renderer=three.js:settings=map=2048' --frames %d "
+                                "--size " SIZE " --error-every 1 --repeat 2 --quiet --out %s/by-spec-repeat",
+                                test_binary(), g_tmp, FRAMES, g_tmp), 0);
+    summary_table(last_line_of(g_out), &rep);
+    assert_string_equal(sb_table_get(&rep, 0, "err_rate_mean"), sb_table_get(by_spec, 0, "err_rate_mean"));
+    sb_table_free(&rep);
+}
+
+/* The history files each row of the merged set under its own renderer (every row went under the first row's:
+ * the tool's llvmpipe runs judged with the noise floor of the scored renderer's): g_tmp/both, three.js's frames
+ * merged with the tool's sm. */
+static void merged_rows_keep_renderer(void) {
+    sb_table both;
+    char both_dir[4200];
+    snprintf(both_dir, sizeof both_dir, "%s/both", g_tmp);
+    summary_table(both_dir, &both);
+    assert_int_equal(run_logged(g_out, sizeof g_out, "%s history add %s --history %s/both.sqlite --quiet", test_binary(),
+                                both_dir, g_tmp), 0);
+    for (int r = 0; r < both.nrows; r++) {
+        assert_int_equal(run_logged(g_out, sizeof g_out, "python3 -c 'import sqlite3, sys; print(sqlite3.connect(sys.argv[1])"
+                                    ".execute(\"SELECT renderer FROM runs WHERE run_id = ?\", (sys.argv[2],)).fetchone()[0])' "
+                                    "%s/both.sqlite %s", g_tmp, sb_table_get(&both, r, "run_id")), 0);
+        print_message("%s: stored under %s", sb_table_get(&both, r, "technique"), g_out);
+        char want[600];
+        snprintf(want, sizeof want, "%s\n", sb_table_get(&both, r, "renderer"));
+        assert_string_equal(g_out, want);
+    }
+    assert_string_not_equal(sb_table_get(&both, 0, "renderer"), sb_table_get(&both, 1, "renderer"));
+    sb_table_free(&both);
+}
+
 static void test_three_scored(void **st) {
     (void)st;
     if (!example_here()) skip();
@@ -184,16 +221,7 @@ static void test_three_scored(void **st) {
     assert_string_equal(sb_table_get(&by_spec, 0, "err_rate_mean"), sb_table_get(&t, 0, "err_rate_mean"));
     assert_string_equal(sb_table_get(&by_spec, 0, "err_rate_mean"), sb_table_get(&by_cmd, 0, "err_rate_mean"));
     assert_true(strcmp(sb_table_get(&by_cmd, 0, "run_id"), sb_table_get(&t, 0, "run_id")));   /* its settings differ */
-    /* --repeat 2: the untimed frames are recorded once and scored as they were (the run asked for a second pass
-       for ever, at 85 % CPU, SIGTERM unheard); under a limit, so a hang fails here and does not stall the suite */
-    sb_table rep;
-    assert_int_equal(run_logged(g_out, sizeof g_out, "timeout -s KILL 120 %s run plane-box plane-box "
-                                "'score:dir=%s/three:mask=mask_%%04d.png:renderer=three.js:settings=map=2048' --frames %d "
-                                "--size " SIZE " --error-every 1 --repeat 2 --quiet --out %s/by-spec-repeat",
-                                test_binary(), g_tmp, FRAMES, g_tmp), 0);
-    summary_table(last_line_of(g_out), &rep);
-    assert_string_equal(sb_table_get(&rep, 0, "err_rate_mean"), sb_table_get(&by_spec, 0, "err_rate_mean"));
-    sb_table_free(&rep);
+    repeat_scores_once(&by_spec);
     sb_table_free(&by_cmd);
     sb_table_free(&by_spec);
 
@@ -238,25 +266,7 @@ static void test_three_scored(void **st) {
     assert_non_null(strstr(g_out, "sm err_rate"));
     assert_non_null(strstr(g_out, "sm gpu_ms"));
     assert_non_null(strstr(g_out, "1 pair(s)"));
-    /* the history files each row of the merged set under its own renderer (every row went under the first row's:
-       the tool's llvmpipe runs judged with the noise floor of the scored renderer's) */
-    sb_table both;
-    char both_dir[4200];
-    snprintf(both_dir, sizeof both_dir, "%s/both", g_tmp);
-    summary_table(both_dir, &both);
-    assert_int_equal(run_logged(g_out, sizeof g_out, "%s history add %s --history %s/both.sqlite --quiet", test_binary(),
-                                both_dir, g_tmp), 0);
-    for (int r = 0; r < both.nrows; r++) {
-        assert_int_equal(run_logged(g_out, sizeof g_out, "python3 -c 'import sqlite3, sys; print(sqlite3.connect(sys.argv[1])"
-                                    ".execute(\"SELECT renderer FROM runs WHERE run_id = ?\", (sys.argv[2],)).fetchone()[0])' "
-                                    "%s/both.sqlite %s", g_tmp, sb_table_get(&both, r, "run_id")), 0);
-        print_message("%s: stored under %s", sb_table_get(&both, r, "technique"), g_out);
-        char want[600];
-        snprintf(want, sizeof want, "%s\n", sb_table_get(&both, r, "renderer"));
-        assert_string_equal(g_out, want);
-    }
-    assert_string_not_equal(sb_table_get(&both, 0, "renderer"), sb_table_get(&both, 1, "renderer"));
-    sb_table_free(&both);
+    merged_rows_keep_renderer();
     /* the report's run page, as a person sees it: no empty timing charts, a line that says why */
     assert_int_equal(run_logged(g_out, sizeof g_out, "%s report %s --out %s/site", test_binary(), scored, g_tmp), 0);
     assert_int_equal(run_logged(g_out, sizeof g_out, "chromium --headless --no-sandbox --disable-gpu "
