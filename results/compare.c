@@ -4,6 +4,7 @@
 #include <dirent.h>
 #include <errno.h>
 #include <math.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -630,6 +631,13 @@ bool sb_merge(const char *const *dirs, int n, const char *out_arg, sb_err *err) 
     /* written into a folder of its own beside --out, renamed to it whole: a merge that fails leaves nothing */
     char tmp[4400];
     snprintf(tmp, sizeof tmp, "%s.merging-%ld", out_dir, (long)getpid());
+    /* SIGINT and SIGTERM wait for the rename (or the removal of what was written): a stop half-way left the folder
+       beside --out behind; the merge is a bounded copy, and a signal that came meanwhile acts when it is done */
+    sigset_t stop, before;
+    sigemptyset(&stop);
+    sigaddset(&stop, SIGINT);
+    sigaddset(&stop, SIGTERM);
+    sigprocmask(SIG_BLOCK, &stop, &before);
     bool made = ok && sb_mkdir_p(tmp, err);
     ok = made;
     for (int i = 0; ok && i < n; i++) {
@@ -673,6 +681,7 @@ bool sb_merge(const char *const *dirs, int n, const char *out_arg, sb_err *err) 
     if (ok && rename(tmp, out_dir) != 0)
         ok = sb_fail(err, "%s: cannot rename the merged set %s to it: %s", out_dir, tmp, strerror(errno));
     if (!ok && made) remove_flat(tmp);
+    sigprocmask(SIG_SETMASK, &before, NULL);
     for (int i = 0; i < n; i++) sb_table_free(&t[i]);
     free(t);
     free(rows);
