@@ -447,6 +447,9 @@ static void test_run_id_separators(void **st) {
     sb_run_opts o;
     sb_run_opts_defaults(&o);
     static const char *const pairs[][2][2][2] = {
+        /* the issue's: joined unescaped, both are renderer=a:settings=b:settings= */
+        {{{"renderer", "a"}, {"settings", "b:settings="}}, {{"renderer", "a:settings=b"}, {"settings", ""}}},
+        {{{"dir", "d:vis=v"}, {"vis", "w"}}, {{"dir", "d"}, {"vis", "v:vis=w"}}},
         {{{"renderer", "a"}, {"settings", "b"}}, {{"renderer", "a:settings=b"}, {"settings", ""}}},
         {{{"renderer", "a"}, {"settings", "x=1:y=2"}}, {{"renderer", "a:settings=x=1"}, {"settings", "y=2"}}},
         {{{"renderer", "a,b"}, {"settings", ""}}, {{"renderer", "a"}, {"settings", ",b"}}},
