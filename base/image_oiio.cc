@@ -145,6 +145,16 @@ bool exr_header_fits(const char *path, long long file_size, std::string *why) {
     return ok;
 }
 
+// Whether the folder a file is to be written in exists and is one (false: said, naming it).
+bool folder_is_there(const char *path, sb_err *err) {
+    std::string p(path);
+    size_t slash = p.find_last_of('/');
+    std::string folder = slash == std::string::npos ? "." : slash == 0 ? "/" : p.substr(0, slash);
+    struct stat st;
+    if (stat(folder.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) return true;
+    return sb_fail(err, "%s: no such folder %s", path, folder.c_str());
+}
+
 // Written under a temporary name with the same extension (OIIO picks the
 // format by it), then renamed: a killed run leaves no half-written image.
 bool write(const char *path, int w, int h, int channels, OIIO::TypeDesc type, const void *pixels, size_t elem,
@@ -152,10 +162,7 @@ bool write(const char *path, int w, int h, int channels, OIIO::TypeDesc type, co
     std::string final_path(path), tmp(path);
     size_t dot = final_path.find_last_of('.'), slash = final_path.find_last_of('/');
     /* the target's folder first: a missing one is named, not the temporary file it stopped */
-    std::string folder = slash == std::string::npos ? "." : slash == 0 ? "/" : final_path.substr(0, slash);
-    struct stat st;
-    if (stat(folder.c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
-        return sb_fail(err, "%s: no such folder %s", path, folder.c_str());
+    if (!folder_is_there(path, err)) return false;
     if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) dot = final_path.size();
     tmp.insert(dot, ".tmp");
     bool ok = write_to(tmp.c_str(), w, h, channels, type, pixels, elem, err);
@@ -249,17 +256,11 @@ extern "C" bool SB_IMAGE_MODULE_ENTRY(const char *path, int w, int h, int channe
 
 extern "C" bool SB_IMAGE_MODULE_CAN_WRITE_ENTRY(const char *path, char *err, size_t err_len) {
     sb_err e{err, err_len};
-    std::string p(path);
-    size_t slash = p.find_last_of('/'), dot = p.find_last_of('.');
-    std::string folder = slash == std::string::npos ? "." : slash == 0 ? "/" : p.substr(0, slash);
-    struct stat st;
-    if (stat(folder.c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
-        return sb_fail(&e, "%s: no such folder %s", path, folder.c_str());
-    if (dot == std::string::npos || (slash != std::string::npos && dot < slash) || dot + 1 == p.size() ||
-        dot == (slash == std::string::npos ? 0 : slash + 1))
-        return sb_fail(&e, "%s: no extension to choose its format by (.png, .exr, ...)", path);
-    /* the writer its extension names is made, nothing is opened */
-    auto out = OIIO::ImageOutput::create(p.substr(dot + 1));
-    if (!out) return sb_fail(&e, "%s: no image writer for the extension .%s", path, p.substr(dot + 1).c_str());
+    if (!folder_is_there(path, &e)) return false;
+    /* the writer its extension names is made, nothing is opened (a name without one names no writer) */
+    const char *dot = std::strrchr(path, '.'), *slash = std::strrchr(path, '/');
+    std::string ext = dot && (!slash || dot > slash) ? dot + 1 : "";
+    if (ext.empty() || !OIIO::ImageOutput::create(ext))
+        return sb_fail(&e, "%s: no image writer for the extension .%s", path, ext.c_str());
     return true;
 }

@@ -79,7 +79,7 @@ void sb_log_capture(bool on) {
 
 const char *sb_log_captured(void) { return g_capture ? g_capture : ""; }
 
-int sb_open_read(const char *path, sb_err *err) {
+int sb_open_read(const char *path, size_t *size, sb_err *err) {
     if (!path || !*path) {
         sb_fail(err, "an empty file name: nothing to read");
         return -1;
@@ -92,31 +92,25 @@ int sb_open_read(const char *path, sb_err *err) {
         return -1;
     }
     struct stat st;
-    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-        int e = errno;
-        bool stated = fstat(fd, &st) == 0;
-        close(fd);
-        if (!stated) sb_fail(err, "%s: cannot stat: %s", path, strerror(e));
-        else if (S_ISDIR(st.st_mode)) sb_fail(err, "%s: a folder, not a file", path);
-        else sb_fail(err, "%s: %s, not a regular file", path,
-                     S_ISFIFO(st.st_mode) ? "a FIFO" : S_ISSOCK(st.st_mode) ? "a socket" : "a device");
-        return -1;
+    if (fstat(fd, &st) != 0) sb_fail(err, "%s: cannot stat: %s", path, strerror(errno));
+    else if (S_ISDIR(st.st_mode)) sb_fail(err, "%s: a folder, not a file", path);
+    else if (!S_ISREG(st.st_mode))
+        sb_fail(err, "%s: %s, not a regular file", path,
+                S_ISFIFO(st.st_mode) ? "a FIFO" : S_ISSOCK(st.st_mode) ? "a socket" : "a device");
+    else {
+        int fl = fcntl(fd, F_GETFL);
+        if (fl >= 0) fcntl(fd, F_SETFL, fl & ~O_NONBLOCK);
+        if (size) *size = (size_t)st.st_size;
+        return fd;
     }
-    int fl = fcntl(fd, F_GETFL);
-    if (fl >= 0) fcntl(fd, F_SETFL, fl & ~O_NONBLOCK);
-    return fd;
+    close(fd);
+    return -1;
 }
 
 char *sb_read_file(const char *path, size_t *size, sb_err *err) {
-    int fd = sb_open_read(path, err);
+    size_t n;
+    int fd = sb_open_read(path, &n, err);
     if (fd < 0) return NULL;
-    struct stat st;
-    if (fstat(fd, &st) != 0) {
-        sb_fail(err, "%s: cannot stat: %s", path, strerror(errno));
-        close(fd);
-        return NULL;
-    }
-    size_t n = (size_t)st.st_size;
     char *buf = malloc(n + 1);
     if (!buf) {
         close(fd);
@@ -149,18 +143,17 @@ uint64_t sb_binary_identity(void) {
 }
 
 void *sb_map_file(const char *path, size_t *size, bool writable) {
-    int fd = sb_open_read(path, NULL);
+    size_t n = 0;
+    int fd = sb_open_read(path, &n, NULL);
     if (fd < 0) return NULL;
-    struct stat st;
     void *p = NULL;
-    if (fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0) {
+    if (n > 0) {
         /* a writable private mapping is not populated: populating it would copy every page (the kernel breaks
            copy-on-write for each), where a reader writes a few (a moving scene's posed vertices) */
-        p = mmap(NULL, (size_t)st.st_size, PROT_READ | (writable ? PROT_WRITE : 0),
-                 MAP_PRIVATE | (writable ? 0 : MAP_POPULATE), fd, 0);
+        p = mmap(NULL, n, PROT_READ | (writable ? PROT_WRITE : 0), MAP_PRIVATE | (writable ? 0 : MAP_POPULATE), fd, 0);
         if (p == MAP_FAILED) p = NULL;
-        else *size = (size_t)st.st_size;
-        if (p && writable) madvise(p, (size_t)st.st_size, MADV_WILLNEED);
+        else *size = n;
+        if (p && writable) madvise(p, n, MADV_WILLNEED);
     }
     close(fd);
     return p;

@@ -29,8 +29,9 @@ void sb_log_capture(bool on);
 const char *sb_log_captured(void);
 
 /* The one way a file is opened for reading: without blocking (a FIFO or a device is refused, never waited on) and
- * only a regular file (through links); err names the file and what it is. A descriptor (blocking again), or -1. */
-int sb_open_read(const char *path, sb_err *err);
+ * only a regular file (through links); err names the file and what it is. A descriptor (blocking again) and, where
+ * size is given, the file's size; or -1. */
+int sb_open_read(const char *path, size_t *size, sb_err *err);
 /* Reads a whole file (through sb_open_read); returns NULL and fills err on failure. *size excludes the added NUL. */
 char *sb_read_file(const char *path, size_t *size, sb_err *err);
 /* The running binary's identity (size, time and inode of /proc/self/exe): what

@@ -68,7 +68,7 @@ static bool check_path(const char *v, const sb_cli_opts *o, sb_err *err) {
  * compare against it as text, so "yesterday" or 2026-13-45 would select every night or none in silence. */
 static bool check_date(const char *v, const sb_cli_opts *o, sb_err *err) {
     (void)o;
-    int y, m, d, hh = 0, mm = 0, ss = 0, n = 0, len = (int)strlen(v);
+    int y = 0, m = 0, d = 0, hh = 0, mm = 0, ss = 0, n = 0, len = (int)strlen(v);
     bool ok = sscanf(v, "%4d-%2d-%2d%n", &y, &m, &d, &n) == 3 && n == 10;
     if (ok && len > 10) {
         int k = 0, t = sscanf(v + 10, "T%2d:%2d%n:%2d%n", &hh, &mm, &k, &ss, &k);

@@ -677,7 +677,7 @@ bool sb_merge(const char *const *dirs, int n, const char *out_arg, sb_err *err) 
              sb_resultset_seal(tmp, err);
         free(text);
     }
-    rmdir(out_dir);   /* an empty folder the user made for it (fresh_out allows no other) */
+    if (ok) rmdir(out_dir);   /* an empty folder the user made for it (fresh_out allows no other): replaced */
     if (ok && rename(tmp, out_dir) != 0)
         ok = sb_fail(err, "%s: cannot rename the merged set %s to it: %s", out_dir, tmp, strerror(errno));
     if (!ok && made) remove_flat(tmp);

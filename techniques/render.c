@@ -21,7 +21,7 @@
 #define SB_SOFT_PIECE_TRIS 250000u
 #define SB_SOFT_PIECE_WAIT_NS 30000000000ull   /* a piece not drawn in 30 s is not waited on further */
 struct sb_gpu_pieces {
-    uint64_t tris, pending;   /* submitted since the last fence; queued in indirect commands not yet issued */
+    uint64_t tris;            /* submitted since the last fence */
     GLsync prev;              /* the last piece's fence */
 };
 
@@ -36,7 +36,6 @@ static void pieces_submitted(const sb_gpu *g, uint64_t tris) {
     }
     p->prev = now;
 }
-
 
 const char *sb_opaque_define(const sb_gpu *g) {
     return g->scene->alpha_tested_draws ? "#define SB_NO_ALPHA\n" : "";
@@ -673,7 +672,6 @@ void sb_submit(sb_frame *f, uint32_t d, int instances) {
     if (f->gpu->indirect) {   /* count, instances, first index, base vertex, base instance */
         uint32_t *c = f->cmds + 5 * (size_t)f->cmd_count++;
         c[0] = 3 * tris, c[1] = (uint32_t)n, c[2] = f->gpu->geom->first[d], c[3] = 0, c[4] = d;
-        if (f->gpu->pieces) f->gpu->pieces->pending += (uint64_t)tris * (uint64_t)n;
         return;
     }
     const void *offset = (const void *)((size_t)f->gpu->geom->first[d] * sizeof(uint32_t));
@@ -687,14 +685,17 @@ void sb_submit_flush(sb_frame *f) {
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, f->gpu->indirect_buf);
     /* a fresh store each flush: the commands of a draw still in flight are not overwritten (no wait) */
     glBufferData(GL_DRAW_INDIRECT_BUFFER, (GLsizeiptr)(20 * (size_t)f->cmd_count), f->cmds, GL_STREAM_DRAW);
-    glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_INT, NULL, (GLsizei)f->cmd_count, 0);
-    count_api_call(f);
-    f->cmd_count = 0;
-    if (f->gpu->pieces) {
-        uint64_t queued = f->gpu->pieces->pending;
-        f->gpu->pieces->pending = 0;
-        pieces_submitted(f->gpu, queued);
+    /* one call for the pass; on a software rasterizer one a piece (its commands' triangles up to the piece's size),
+       each followed by its fence */
+    for (uint32_t k = 0, end; k < f->cmd_count; k = end) {
+        uint64_t tris = 0;   /* a command's vertex count over 3, times its instances */
+        for (end = k; end < f->cmd_count && (end == k || !f->gpu->pieces || tris < SB_SOFT_PIECE_TRIS); end++)
+            tris += (uint64_t)f->cmds[5 * end] / 3 * f->cmds[5 * end + 1];
+        glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_INT, (const void *)(20 * (size_t)k), (GLsizei)(end - k), 0);
+        count_api_call(f);
+        pieces_submitted(f->gpu, tris);
     }
+    f->cmd_count = 0;
 }
 
 void sb_set_draw_masks(const sb_frame *f, const uint8_t *masks) {
